@@ -1,0 +1,1 @@
+"""The ``motionlang`` command line: a thin layer over the Python API."""

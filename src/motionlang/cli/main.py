@@ -1,0 +1,58 @@
+"""Entry point of the ``motionlang`` command.
+
+Each subcommand lives in its own module exposing ``register(subparsers)``, which adds a
+parser whose ``func`` attribute takes the parsed arguments and returns an exit code.
+Errors of motionlang's own types become one line on stderr and exit code 2.
+"""
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+from motionlang import __version__
+from motionlang.errors import MotionlangError
+
+# Modules that register subcommands; one line each, order = order in --help.
+COMMAND_MODULES = [
+    "motionlang.cli.motion_commands",   # info, render, convert
+    "motionlang.cli.data_commands",     # data ...
+    "motionlang.cli.demo",              # demo (the main job)
+]
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="motionlang",
+        description="Human whole-body motion and natural language.")
+    parser.add_argument("--version", action="version", version=f"motionlang {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name in COMMAND_MODULES:
+        try:
+            module = importlib.import_module(name)
+        except ModuleNotFoundError as exc:
+            if exc.name == name:  # a command module not written yet
+                continue
+            raise
+        module.register(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not getattr(args, "func", None):
+        parser.print_help()
+        return 1
+    try:
+        return int(args.func(args) or 0)
+    except MotionlangError as exc:
+        print(f"motionlang {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,5 @@
+"""Skeletons, rotations and the ``Motion`` type (the bottom layer of motionlang)."""
+from motionlang.kinematics.motion import Motion, concatenate
+from motionlang.kinematics.skeleton import Joint, Skeleton, detect_pairs
+
+__all__ = ["Motion", "Joint", "Skeleton", "concatenate", "detect_pairs"]
