@@ -5,7 +5,7 @@ from kit-mld-ke). Each original is tokenised without corrections
 (``motionlang.datasets.text.base_tokens``) and aligned word by word with its normalised
 version (difflib). Every aligned substitution ``wrong -> right`` (one word to one or more
 words, or to nothing) is counted; a word enters the table when it is replaced more often than
-it is kept, by its most frequent replacement.
+it is kept, by its most frequent replacement, unless it is in ``EXCLUDE`` (below).
 
 Usage::
 
@@ -22,6 +22,15 @@ from pathlib import Path
 
 from motionlang.datasets.text import base_tokens, normalize
 from motionlang.utils.atomic import atomic_write
+
+
+# The reference column was made by a spell checker that sometimes replaced a word by a
+# different, wrong one ("leftwards" -> "leotards", "trunk" -> "turn", "spining" ->
+# "shining"). Copying those would damage new text, so these source words are left alone.
+EXCLUDE = frozenset("""
+backstep baskeball buched feelering flopper fowards gitarre guitarre leftwards mingolf
+podest puch schich spining sth stiring streight strid trunk walds walzer wavs whiping wipping
+""".split())
 
 
 def read_pairs(path: Path) -> list[tuple[str, str]]:
@@ -54,7 +63,7 @@ def derive(pairs: list[tuple[str, str]]) -> dict[str, str]:
         rep, n = c.most_common(1)[0]
         # Number tokens are never rewritten (their context decides); "" needs a majority
         # of at least 2 so a one-off rewording does not delete a word everywhere.
-        if n > kept[w] and not w.isdigit() and (rep or n >= 2):
+        if n > kept[w] and not w.isdigit() and (rep or n >= 2) and w not in EXCLUDE:
             table[w] = rep
     return table
 

@@ -19,6 +19,8 @@ def test_normalize_basic_rules():
     assert normalize("walks a quater circle", corrections={}) == "walks a quater circle"
     assert normalize("walks a quater circle") == "walks a quarter circle"
     assert normalize("") == ""
+    # wrong replacements of the reference spell checker are not copied
+    assert normalize("He bends the trunk leftwards") == "he bends the trunk leftwards"
 
 
 def test_shipped_table_is_small_and_well_formed():

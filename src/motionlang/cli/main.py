@@ -18,6 +18,8 @@ COMMAND_MODULES = [
     "motionlang.cli.motion_commands",   # info, render, convert
     "motionlang.cli.data_commands",     # data ...
     "motionlang.cli.demo",              # demo (the main job)
+    "motionlang.cli.train_commands",    # train crbm | seq2seq | twostream
+    "motionlang.cli.crbm_commands",     # crbm generate | fill | reproduce
 ]
 
 

@@ -1,1 +1,12 @@
-"""motionlang.datasets"""
+"""motionlang.datasets — motion-language datasets and text.
+
+* ``text``: ``normalize``, ``tokenize``, ``Vocabulary`` (PAD/SOS/EOS/UNK = 0..3)
+* ``kitml``: KIT Motion-Language release: ``download_kitml``, ``load_kitml``, ``KitMLRecord``,
+  ``load_annotations_tmr``; splits (``random_split``, ``load_split``) from ``splits``
+* ``named``: ``cmu35_walkjog`` (Taylor et al. 2006 data), ``mit_walk``
+* ``custom``: ``load_custom`` — a folder of BVH / ASF-AMC files plus captions
+* ``cache``: ``cached`` — an ``.npz`` cache of computed arrays
+* ``download``: resumable, checksummed HTTP downloads and safe zip extraction
+
+Submodules are imported explicitly (no import-time work here).
+"""

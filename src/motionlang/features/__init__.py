@@ -1,1 +1,20 @@
-"""motionlang.features"""
+"""Feature representations of motions for the models, and the helpers they share.
+
+* :class:`AnglesFeatures` — MMM joint angles + root + active flag, 10 Hz (Plappert 2018).
+* :class:`PositionFeatures` — 21 KIT joints in the body frame + root trajectory, 12.5 Hz
+  (Ghosh et al. 2021).
+* :class:`TaylorFeatures` — root increments + per-bone exp-maps, 30 Hz (Taylor et al. 2006).
+* :class:`Normalizer`, padding/masks (:mod:`.collate`), the 21-joint map (:mod:`.joint_map`).
+"""
+from motionlang.features.angles import AnglesConfig, AnglesFeatures
+from motionlang.features.base import FeatureSet, downsample, features_from_dict
+from motionlang.features.collate import lengths_to_mask, pad_batch, unpad
+from motionlang.features.joint_map import KIT21_NAMES, KIT21_PARENTS, positions21
+from motionlang.features.normalizer import Normalizer
+from motionlang.features.positions import PositionFeatures, PositionsConfig
+from motionlang.features.taylor import TaylorConfig, TaylorFeatures
+
+__all__ = ["AnglesConfig", "AnglesFeatures", "FeatureSet", "KIT21_NAMES", "KIT21_PARENTS",
+           "Normalizer", "PositionFeatures", "PositionsConfig", "TaylorConfig",
+           "TaylorFeatures", "downsample", "features_from_dict", "lengths_to_mask",
+           "pad_batch", "positions21", "unpad"]

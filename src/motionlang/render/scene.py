@@ -93,20 +93,29 @@ def _pick_feet(points: np.ndarray, sides: list[str] | None) -> list[int]:
     return [first]
 
 
-def _forward(root: np.ndarray, points: np.ndarray, sides: list[str] | None) -> np.ndarray:
-    """Unit xy direction of travel; facing direction (from the hips) for motions in place."""
+def _forward(root: np.ndarray, points: np.ndarray,
+             pairs: list[tuple[int, int]] = ()) -> np.ndarray:
+    """Unit xy direction of travel; the facing direction for motions (nearly) in place."""
     travel = root[-1, :2] - root[0, :2]
-    if np.linalg.norm(travel) > 0.3:
+    if np.linalg.norm(travel) > 0.5:
         return travel / np.linalg.norm(travel)
-    if sides is not None and LEFT in sides and RIGHT in sides:
-        # left-to-right vector of the first joints of each side, averaged over time
-        li, ri = sides.index(LEFT), sides.index(RIGHT)
-        across = (points[:, li] - points[:, ri]).mean(axis=0)
+    if pairs:
+        # left-minus-right summed over all pairs and frames: single pairs can coincide
+        # (ASF hip nodes sit at the root) or cross (arms), the sum points to the left
+        li, ri = np.array(pairs).T
+        across = (points[:, li] - points[:, ri]).sum(axis=(0, 1))
         # forward = across x up (left = +X and forward = +Z in the canonical frame)
         fwd = np.array([across[1], -across[0]])
         if np.linalg.norm(fwd) > 1e-6:
             return fwd / np.linalg.norm(fwd)
+    if np.linalg.norm(travel) > 1e-6:
+        return travel / np.linalg.norm(travel)
     return np.array([1.0, 0.0])
+
+
+def _pair_indices(motion: Motion) -> list[tuple[int, int]]:
+    sk = motion.skeleton
+    return [(sk.index(a), sk.index(b)) for a, b in sk.pairs or [] if a in sk and b in sk]
 
 
 def build_scene(motion: Motion) -> Scene:
@@ -126,7 +135,7 @@ def build_scene(motion: Motion) -> Scene:
     root = points[:, 0]
     height = float(points[..., 2].max() - floor)
     return Scene(points=points, bones=bones, bone_sides=bone_sides, feet=feet, floor=floor,
-                 root=root, forward=_forward(root, points, sides if has_sides else None),
+                 root=root, forward=_forward(root, points, _pair_indices(motion)),
                  height=max(height, 1e-3), fps=float(motion.fps), name=motion.name)
 
 
@@ -177,3 +186,33 @@ def footsteps(scene: Scene, **kw) -> list[tuple[int, np.ndarray]]:
         for a, b in zip(edges[::2], edges[1::2]):
             steps.append((f, scene.points[a:b, f, :2].mean(axis=0)))
     return steps
+
+
+def scene_from_positions(positions: np.ndarray, fps: float = 30.0, name: str = "positions",
+                         parents: np.ndarray | None = None) -> Scene:
+    """A Scene from raw joint positions (T, J, 3) metres, canonical Y-up frame, joint 0 =
+    root (e.g. a model's output). Bones need ``parents`` (J,); sides are unknown, so feet are
+    the two lowest joints."""
+    pos = np.asarray(positions, dtype=float)
+    if pos.ndim != 3 or pos.shape[-1] != 3 or len(pos) == 0:
+        raise ValueError(f"positions must be (T, J, 3) with T > 0, got {pos.shape}")
+    points = pos @ TO_MPL.T
+    bones = [] if parents is None else [(int(p), c) for c, p in enumerate(parents) if p >= 0]
+    feet = _pick_feet(points, None)
+    floor = float(points[:, feet, 2].min())
+    root = points[:, 0]
+    return Scene(points=points, bones=bones, bone_sides=[CENTRE] * len(bones), feet=feet,
+                 floor=floor, root=root, forward=_forward(root, points),
+                 height=max(float(points[..., 2].max() - floor), 1e-3), fps=float(fps),
+                 name=name)
+
+
+def camera_basis(azim_deg: float, elev: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Screen-right, screen-up and towards-camera unit vectors (matplotlib frame, z up) of
+    a camera at matplotlib's ``(elev, azim)`` angles in degrees."""
+    az, el = np.radians(azim_deg), np.radians(elev)
+    eye = np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
+    right = np.cross([0.0, 0.0, 1.0], eye)
+    right /= np.linalg.norm(right)
+    up = np.cross(eye, right)
+    return right, up, eye

@@ -1,0 +1,254 @@
+"""``motionlang train crbm`` and ``motionlang crbm generate | fill | reproduce``.
+
+Thin wrappers over :mod:`motionlang.models.crbm` and the CMU subject-35 experiment in
+:mod:`motionlang.evaluation.crbm_reproduce`. ``--data`` is the folder holding
+``cmu35WalkJog.mat``, ``cmu35TaylorScaleBias.mat`` and ``35.asf``.
+"""
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from motionlang.errors import MotionlangError
+
+MOTION_EXTENSIONS = (".bvh", ".amc")
+RENDER_EXTENSIONS = (".gif", ".mp4")
+
+
+def _add_data(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--data", required=True, metavar="DIR",
+                   help="folder with cmu35WalkJog.mat, cmu35TaylorScaleBias.mat and 35.asf")
+
+
+def _add_crbm_options(p: argparse.ArgumentParser) -> None:
+    from motionlang.models.crbm import CRBMConfig
+    d = CRBMConfig()
+    p.add_argument("--hidden", type=int, default=d.n_hidden, help=f"hidden units (default {d.n_hidden})")
+    p.add_argument("--order", type=int, default=d.order, help=f"frames of past (default {d.order})")
+    p.add_argument("--epochs", type=int, default=d.epochs, help=f"passes over the data (default {d.epochs})")
+    p.add_argument("--batch-size", type=int, default=d.batch_size)
+    p.add_argument("--lr", type=float, default=d.lr)
+    p.add_argument("--momentum", type=float, default=d.momentum)
+    p.add_argument("--weight-decay", type=float, default=d.weight_decay)
+    p.add_argument("--seed", type=int, default=0)
+
+
+def _crbm_config(args: argparse.Namespace):
+    from motionlang.models.crbm import CRBMConfig
+    return CRBMConfig(n_hidden=args.hidden, order=args.order, epochs=args.epochs,
+                      batch_size=args.batch_size, lr=args.lr, lr_autoregressive=args.lr,
+                      momentum=args.momentum, weight_decay=args.weight_decay, seed=args.seed)
+
+
+def _load_model(path: str):
+    from motionlang.models.crbm import CRBM
+    if not Path(path).is_file():
+        raise MotionlangError(f"{path}: no such model file")
+    return CRBM.load(path)
+
+
+def _write_frames(frames: np.ndarray, out: Path, data, data_dir: str, *, name: str,
+                  start_xz=(0.0, 0.0), title: str | None = None, compare: np.ndarray | None = None
+                  ) -> None:
+    """Write (T, 59) model features as .npy, a motion file (.bvh/.amc) or an animation."""
+    from motionlang.evaluation.crbm_reproduce import frames_to_motion
+    ext = out.suffix.lower()
+    if ext == ".npy":
+        from motionlang.utils.atomic import atomic_write
+        with atomic_write(out, "wb") as fh:
+            np.save(fh, frames)
+        return
+    if ext not in MOTION_EXTENSIONS + RENDER_EXTENSIONS:
+        raise MotionlangError(f"{out}: output must be .npy, .bvh, .amc, .gif or .mp4")
+    asf = Path(data_dir) / "35.asf"
+    motion = frames_to_motion(frames, data, asf, start_xz=start_xz, name=name)
+    if ext in MOTION_EXTENSIONS:
+        from motionlang.formats import write_motion
+        write_motion(motion, out)
+        return
+    from motionlang.render import render_animation
+    if compare is None:
+        render_animation(motion, out, title=title)
+    else:
+        truth = frames_to_motion(compare, data, asf, start_xz=start_xz, name="true")
+        render_animation([truth, motion], out, title=title, labels=["true", name])
+
+
+# ------------------------------------------------------------------ train crbm
+def cmd_train(args: argparse.Namespace) -> int:
+    from motionlang.evaluation.crbm_fill import load_cmu35
+    from motionlang.evaluation.crbm_reproduce import model_frames
+    from motionlang.models.crbm import CRBM
+    data = load_cmu35(args.data)
+    seqs = [model_frames(c) for c in data.train]
+    model = CRBM(_crbm_config(args), 59).fit(seqs, show_progress=not args.quiet)
+    model.save(args.output)
+    print(f"{args.output}: {model.describe()}")
+    if args.level2:
+        from motionlang.models.crbm import CRBMConfig
+        from motionlang.models.crbm_stack import CRBMStack
+        cfg2 = dataclasses.replace(model.config, visible="binary", n_hidden=args.level2_hidden,
+                                   order=args.level2_order)
+        stack = CRBMStack.fit(model, seqs, cfg2, show_progress=not args.quiet)
+        stack.save(args.level2)
+        print(f"{args.level2}: two-level model, level 2 {stack.level2.describe()}")
+    return 0
+
+
+# ------------------------------------------------------------------ crbm generate
+def cmd_generate(args: argparse.Namespace) -> int:
+    from motionlang.evaluation.crbm_fill import load_cmu35
+    from motionlang.evaluation.crbm_generation import StyleLabeller
+    from motionlang.evaluation.crbm_reproduce import model_frames
+    model = _load_model(args.model)
+    data = load_cmu35(args.data)
+    trial = {"walk": "35_29", "jog": "35_18"}[args.start]
+    n = model.config.order
+    init = model_frames(data.test[trial])[:n]
+    gen = model.generate(init, args.frames, n_gibbs=args.gibbs, seed=args.seed,
+                         hidden_noise=args.noise)[0]
+    lab = StyleLabeller(data, model.mean, model.std)
+    labels = lab(gen[n:])
+    switches = int((labels[1:] != labels[:-1]).sum())
+    report = {"frames": args.frames, "start_style": args.start,
+              "fraction_walk": float((labels == "walk").mean()),
+              "fraction_jog": float((labels == "jog").mean()),
+              "label_changes": switches, "range_excess_std": lab.range_excess(gen[n:])}
+    _write_frames(gen, Path(args.output), data, args.data, name=f"crbm from {args.start}",
+                  start_xz=tuple(data.test[trial][0, [0, 2]]), title=f"CRBM, started from {args.start}")
+    print(json.dumps(report) if args.json else
+          f"{args.output}: {args.frames} frames from {args.start}; walk {report['fraction_walk']:.0%}, "
+          f"jog {report['fraction_jog']:.0%}, {switches} label changes, range excess "
+          f"{report['range_excess_std']:.2f} std")
+    return 0
+
+
+# ------------------------------------------------------------------ crbm fill
+def cmd_fill(args: argparse.Namespace) -> int:
+    from motionlang.evaluation.crbm_fill import load_cmu35
+    from motionlang.evaluation.crbm_reproduce import ReproduceConfig, fill_trial, train_models
+    from motionlang.models.ar import ARConfig, ARModel
+    from motionlang.evaluation.crbm_reproduce import model_frames
+    model = _load_model(args.model)
+    data = load_cmu35(args.data)
+    ar = ARModel(ARConfig(order=model.config.order), 59).fit([model_frames(c) for c in data.train])
+    cfg = ReproduceConfig(crbm=model.config, n_repeats=args.repeats, n_gibbs=args.gibbs, seed=args.seed)
+    part = args.part.replace("-", " ")
+    res = fill_trial(data, args.trial, part, model, ar, cfg)
+    out = Path(args.output)
+    title = f"{args.trial}: {part} erased from frame {res['gap_start']}"
+    if out.suffix.lower() == ".png":
+        from motionlang.evaluation.crbm_plots import plot_fill
+        plot_fill(res, out, title=title)
+    else:
+        from motionlang.evaluation.crbm_reproduce import model_frames as mf
+        frames = mf(data.test[args.trial])
+        fd = res["erased_dims59"]
+        frames[:, fd] = res["filled59"]["CRBM"][0][:, fd]
+        _write_frames(frames, out, data, args.data, name="CRBM fill-in",
+                      start_xz=tuple(data.test[args.trial][0, [0, 2]]), title=title,
+                      compare=mf(data.test[args.trial]))
+    errs = {k: round(v, 4) for k, v in res["errors"].items()}
+    print(json.dumps(errs) if args.json else f"{out}: " + ", ".join(f"{k} {v:.2f}" for k, v in errs.items()))
+    return 0
+
+
+# ------------------------------------------------------------------ crbm reproduce
+def cmd_reproduce(args: argparse.Namespace) -> int:
+    from motionlang.evaluation.crbm_reproduce import ReproduceConfig, format_table, reproduce
+    model = _load_model(args.model) if args.model else None
+    cfg = ReproduceConfig(crbm=model.config if model else _crbm_config(args),
+                          n_repeats=args.repeats, n_gibbs=args.gibbs, seed=args.seed)
+    result = reproduce(args.data, cfg, crbm=model, show_progress=not (args.quiet or args.json),
+                       keep_fills=bool(args.plots))
+    if args.plots:
+        from motionlang.evaluation.crbm_plots import plot_fill
+        folder = Path(args.plots)
+        for (trial, part), res in result.pop("fills").items():
+            slug = f"{trial}_{part.replace(' ', '_')}"
+            plot_fill(res, folder / f"{slug}.png", title=f"{trial}: {part} erased")
+            crbm_frames = res["filled59"]["CRBM"][0]
+            _gif_of_fill(trial, res, crbm_frames, folder / f"{slug}.gif", args)
+        result.pop("models")
+    if args.json:
+        print(json.dumps(result, indent=1))
+    else:
+        sys.stdout.write(format_table(result))
+    return 0
+
+
+def _gif_of_fill(trial: str, res: dict, crbm59: np.ndarray, path: Path, args) -> None:
+    """True vs CRBM-filled motion side by side (the filled frames are in the 59-space)."""
+    from motionlang.evaluation.crbm_fill import load_cmu35
+    from motionlang.evaluation.crbm_reproduce import model_frames
+    data = load_cmu35(args.data)
+    truth = model_frames(data.test[trial])
+    filled = truth.copy()
+    fd = res["erased_dims59"]
+    filled[:, fd] = crbm59[:, fd]
+    _write_frames(filled, path, data, args.data, name="CRBM fill-in",
+                  start_xz=tuple(data.test[trial][0, [0, 2]]),
+                  title=f"{trial}: gap from frame {res['gap_start']}", compare=truth)
+
+
+# ------------------------------------------------------------------ registration
+def register_train(train_sub: argparse._SubParsersAction) -> None:
+    p = train_sub.add_parser("crbm", help="train a conditional RBM on CMU subject 35 walk/jog",
+                             description="Train a CRBM (Taylor et al. 2006) on the 31 training trials.")
+    _add_data(p)
+    p.add_argument("output", metavar="OUT.npz", help="checkpoint (config + weights + normaliser)")
+    _add_crbm_options(p)
+    p.add_argument("--level2", metavar="OUT2.npz", default=None,
+                   help="also train a second level on the hidden activations; save both here")
+    p.add_argument("--level2-hidden", type=int, default=200)
+    p.add_argument("--level2-order", type=int, default=3)
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=cmd_train)
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser("crbm", help="CRBM: generate, fill in, reproduce the paper",
+                                   description="Conditional RBM on CMU subject 35 (Taylor et al. 2006).")
+    sub = parser.add_subparsers(dest="crbm_command", metavar="ACTION")
+    parser.set_defaults(func=lambda args: (parser.print_help(), 1)[1])
+
+    g = sub.add_parser("generate", help="generate motion on-line from real starting frames")
+    g.add_argument("model", metavar="MODEL.npz")
+    g.add_argument("output", metavar="OUT", help=".npy (features), .bvh/.amc, or .gif/.mp4")
+    _add_data(g)
+    g.add_argument("--start", choices=["walk", "jog"], default="walk",
+                   help="start from the walking (35_29) or jogging (35_18) test trial")
+    g.add_argument("--frames", type=int, default=1000)
+    g.add_argument("--noise", type=float, default=0.0, help="std of noise on the hidden biases")
+    g.add_argument("--gibbs", type=int, default=30, help="Gibbs updates per frame")
+    g.add_argument("--seed", type=int, default=0)
+    g.add_argument("--json", action="store_true")
+    g.set_defaults(func=cmd_generate)
+
+    f = sub.add_parser("fill", help="fill in an erased leg or upper body of a test trial")
+    f.add_argument("model", metavar="MODEL.npz")
+    f.add_argument("output", metavar="OUT", help=".png (angles plot), .npy, .bvh/.amc, or .gif/.mp4")
+    _add_data(f)
+    f.add_argument("--trial", choices=["35_29", "35_18"], default="35_29")
+    f.add_argument("--part", choices=["leg", "upper-body"], default="leg")
+    f.add_argument("--repeats", type=int, default=100)
+    f.add_argument("--gibbs", type=int, default=30)
+    f.add_argument("--seed", type=int, default=0)
+    f.add_argument("--json", action="store_true")
+    f.set_defaults(func=cmd_fill)
+
+    r = sub.add_parser("reproduce", help="the paper's missing-data table (trains unless --model)")
+    _add_data(r)
+    r.add_argument("--model", metavar="MODEL.npz", default=None, help="use this CRBM instead of training")
+    _add_crbm_options(r)
+    r.add_argument("--repeats", type=int, default=100, help="stochastic fill-ins averaged per cell")
+    r.add_argument("--gibbs", type=int, default=30)
+    r.add_argument("--plots", metavar="DIR", default=None, help="write Figure-4 plots and GIFs here")
+    r.add_argument("--json", action="store_true")
+    r.add_argument("--quiet", action="store_true")
+    r.set_defaults(func=cmd_reproduce)

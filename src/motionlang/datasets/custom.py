@@ -1,0 +1,155 @@
+"""A user's own motion-language dataset: a folder of motion files plus a captions file.
+
+Layout::
+
+    my_data/
+        captions.csv        # header "file,text"; or captions.jsonl: {"file": ..., "text": ...}
+        walk_01.bvh
+        jump/02.amc         # ASF/AMC: the .asf is found next to the .amc
+        jump/02.asf
+
+``file`` is relative to the folder; a file may have several caption lines. Motion files
+without captions are kept with no annotations, like KIT-ML records without any.
+"""
+from __future__ import annotations
+
+import csv
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from motionlang.errors import DatasetError
+
+if TYPE_CHECKING:
+    from motionlang.kinematics import Motion
+
+MOTION_EXTENSIONS = (".bvh", ".amc", ".xml")
+CAPTION_NAMES = ("captions.csv", "captions.jsonl")
+
+
+@dataclass
+class CustomRecord:
+    """One motion file and its captions (fields as ``KitMLRecord`` where they overlap).
+
+    Attributes:
+        id: path relative to the dataset folder without extension, ``/``-separated.
+        path: the motion file.
+        annotations: its captions in file order (possibly none).
+        meta: ``{"captions_lines": [...]}`` and anything the caller adds.
+    """
+    id: str
+    path: Path
+    annotations: list[str] = field(default_factory=list)
+    meta: dict = field(default_factory=dict)
+    fps: float | None = None
+
+    @property
+    def has_annotations(self) -> bool:
+        return bool(self.annotations)
+
+    def load_motion(self) -> "Motion":
+        """Read the file with ``motionlang.formats.read_motion`` (ASF found automatically)."""
+        from motionlang.formats import read_motion  # lower layer, loaded lazily
+        return read_motion(self.path, fps=self.fps)
+
+
+def _read_csv(path: Path) -> list[tuple[int, str, str]]:
+    rows = []
+    try:
+        with open(path, newline="", encoding="utf-8-sig") as fh:
+            reader = csv.reader(fh)
+            header = next(reader, None)
+            if header is None or [h.strip().lower() for h in header[:2]] != ["file", "text"]:
+                raise DatasetError(f"{path}:1: expected the header 'file,text', got {header}")
+            for row in reader:
+                line = reader.line_num
+                if not any(c.strip() for c in row):
+                    continue
+                if len(row) < 2:
+                    raise DatasetError(f"{path}:{line}: expected 2 columns (file,text), "
+                                       f"got {len(row)}")
+                rows.append((line, row[0].strip(), row[1].strip()))
+    except csv.Error as exc:
+        raise DatasetError(f"{path}: malformed CSV ({exc})") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise DatasetError(f"{path}: cannot read ({exc})") from None
+    return rows
+
+
+def _read_jsonl(path: Path) -> list[tuple[int, str, str]]:
+    try:
+        lines = path.read_text(encoding="utf-8").splitlines()
+    except (OSError, UnicodeDecodeError) as exc:
+        raise DatasetError(f"{path}: cannot read ({exc})") from None
+    rows = []
+    for lineno, line in enumerate(lines, 1):
+        if not line.strip():
+            continue
+        try:
+            obj = json.loads(line)
+        except json.JSONDecodeError as exc:
+            raise DatasetError(f"{path}:{lineno}: invalid JSON ({exc.msg})") from None
+        if not isinstance(obj, dict) or not isinstance(obj.get("file"), str) \
+                or not isinstance(obj.get("text"), str):
+            raise DatasetError(f"{path}:{lineno}: expected {{\"file\": str, \"text\": str}}")
+        rows.append((lineno, obj["file"].strip(), obj["text"].strip()))
+    return rows
+
+
+def read_captions(path: str | Path) -> list[tuple[int, str, str]]:
+    """``(line, file, text)`` rows of a captions file (``.csv`` or ``.jsonl``/``.json``)."""
+    path = Path(path)
+    if not path.is_file():
+        raise DatasetError(f"{path}: captions file not found")
+    rows = _read_csv(path) if path.suffix.lower() == ".csv" else _read_jsonl(path)
+    for line, f, text in rows:
+        if not f:
+            raise DatasetError(f"{path}:{line}: empty 'file'")
+        if not text:
+            raise DatasetError(f"{path}:{line}: empty 'text' for {f}")
+    return rows
+
+
+def load_custom(folder: str | Path, captions: str | Path | None = None, *,
+                fps: float | None = None) -> list[CustomRecord]:
+    """Records of a folder of motion files and its captions, sorted by id.
+
+    Args:
+        folder: dataset folder (motion files searched recursively).
+        captions: captions file (default: ``captions.csv`` or ``captions.jsonl`` in ``folder``).
+        fps: passed to the reader (AMC frame rate; other formats are resampled).
+
+    Raises:
+        DatasetError: missing folder or captions file, a bad row, or a row naming a motion
+            file that does not exist or is not a motion file (captions file and line named).
+    """
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise DatasetError(f"{folder}: dataset folder not found")
+    if captions is None:
+        found = [folder / n for n in CAPTION_NAMES if (folder / n).is_file()]
+        if len(found) != 1:
+            raise DatasetError(f"{folder}: expected one of {', '.join(CAPTION_NAMES)} "
+                               f"(found {len(found)}); pass captions=")
+        captions = found[0]
+    captions = Path(captions)
+    records: dict[Path, CustomRecord] = {}
+    for p in sorted(folder.rglob("*")):
+        if p.suffix.lower() in MOTION_EXTENSIONS and p.is_file():
+            rel = p.relative_to(folder)
+            if p.suffix.lower() == ".xml" and not p.name.endswith("_mmm.xml"):
+                continue  # only MMM motions; other XML (model files) is not a motion
+            records[p.resolve()] = CustomRecord(rel.with_suffix("").as_posix(), p,
+                                                meta={"captions_lines": []}, fps=fps)
+    for line, f, text in read_captions(captions):
+        target = (folder / f).resolve()
+        rec = records.get(target)
+        if rec is None:
+            why = "not found" if not target.exists() else \
+                f"not a motion file ({', '.join(MOTION_EXTENSIONS)})"
+            raise DatasetError(f"{captions}:{line}: unknown motion file {f!r} ({why} in "
+                               f"{folder})")
+        rec.annotations.append(text)
+        rec.meta["captions_lines"].append(line)
+    return sorted(records.values(), key=lambda r: r.id)

@@ -1,0 +1,142 @@
+"""Beam search and greedy decoding over words, independent of any model.
+
+A decoder is driven through one callable
+
+    step(state, prev_tokens (N,) long) -> (log_probs (N, V) float, new_state)
+
+where N = batch x beam rows and ``log_probs`` are normalised (log-softmax) next-word
+log probabilities. ``state`` is anything :func:`select_state` can reorder: tensors whose
+first dimension is N, or tuples / lists / dicts of them (other values are passed through).
+
+Every returned hypothesis ends with EOS and is ranked by its total log probability
+(sum over its tokens, EOS included); ``max_len`` caps the number of generated tokens,
+EOS included, so a hypothesis that reaches the cap is closed with EOS.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Callable, Sequence
+
+import torch
+
+Step = Callable[[Any, torch.Tensor], "tuple[torch.Tensor, Any]"]
+
+
+@dataclass(frozen=True)
+class Hypothesis:
+    """A decoded sentence: token ids (SOS excluded, EOS last) and total log probability."""
+
+    tokens: tuple[int, ...]
+    score: float
+
+
+def select_state(state: Any, index: torch.Tensor) -> Any:
+    """Rows ``index`` of every tensor in ``state`` (dim 0), recursing into containers."""
+    if isinstance(state, torch.Tensor):
+        return state.index_select(0, index)
+    if isinstance(state, tuple) and hasattr(state, "_fields"):  # namedtuple
+        return type(state)(*(select_state(s, index) for s in state))
+    if isinstance(state, (tuple, list)):
+        return type(state)(select_state(s, index) for s in state)
+    if isinstance(state, dict):
+        return {k: select_state(v, index) for k, v in state.items()}
+    return state
+
+
+def _ban(log_probs: torch.Tensor, banned: Sequence[int]) -> torch.Tensor:
+    if banned:
+        log_probs = log_probs.clone()
+        log_probs[:, list(banned)] = float("-inf")
+    return log_probs
+
+
+@torch.no_grad()
+def beam_search(step: Step, state: Any, *, batch_size: int, width: int, sos: int, eos: int,
+                max_len: int, banned: Sequence[int] = (),
+                reorder: Callable[[Any, torch.Tensor], Any] = select_state
+                ) -> list[list[Hypothesis]]:
+    """Beam search for ``batch_size`` independent inputs.
+
+    Args:
+        step: the decoder step (see module docstring).
+        state: initial decoder state with ``batch_size`` rows; it is expanded to
+            ``batch_size * width`` rows (row b * width + w is beam w of input b).
+        width: beam width W; also the number of hypotheses returned per input.
+        sos, eos: start and end token ids. ``banned``: ids never generated (PAD, SOS...).
+        max_len: at most this many generated tokens per hypothesis, EOS included.
+
+    Returns:
+        for each input, up to W hypotheses sorted by decreasing total log probability.
+
+    At every step each of the W live prefixes is extended by every word; the extensions
+    by EOS join the input's finished pool (its W best are kept) and the W best other
+    extensions stay live. Since log probabilities are <= 0 a prefix can only lose score,
+    so an input stops as soon as its best live prefix scores no more than the worst of W
+    finished hypotheses.
+    """
+    B, W = batch_size, width
+    if W < 1 or max_len < 1:
+        raise ValueError("beam width and max_len must be >= 1")
+    state = reorder(state, torch.arange(B).repeat_interleave(W))
+    prev = torch.full((B * W,), sos, dtype=torch.long)
+    # Only beam 0 is live at the start so the W copies of the empty prefix don't repeat.
+    scores = torch.full((B, W), float("-inf"))
+    scores[:, 0] = 0.0
+    tokens = torch.empty(B, W, 0, dtype=torch.long)
+    finished: list[list[Hypothesis]] = [[] for _ in range(B)]
+    done = torch.zeros(B, dtype=torch.bool)
+    for t in range(max_len):
+        log_probs, state = step(state, prev)
+        V = log_probs.shape[-1]
+        total = scores.unsqueeze(-1) + _ban(log_probs.float(), banned).view(B, W, V)
+        eos_total = total[..., eos]
+        for b, w in (torch.isfinite(eos_total) & ~done.unsqueeze(1)).nonzero().tolist():
+            finished[b].append(Hypothesis(tuple(tokens[b, w].tolist()) + (eos,),
+                                          float(eos_total[b, w])))
+        for b in range(B):
+            finished[b] = sorted(finished[b], key=lambda h: -h.score)[:W]
+        if t == max_len - 1:
+            break
+        total[..., eos] = float("-inf")
+        scores, flat = total.view(B, W * V).topk(W, dim=1)
+        beam, tok = flat // V, flat % V
+        tokens = torch.cat([tokens.gather(1, beam.unsqueeze(-1).expand(B, W, t)),
+                            tok.unsqueeze(-1)], dim=-1)
+        for b in range(B):
+            if len(finished[b]) >= W and not scores[b, 0] > finished[b][-1].score:
+                done[b] = True
+        scores[done] = float("-inf")
+        if bool(done.all()) or not bool(torch.isfinite(scores).any()):
+            break
+        state = reorder(state, (beam + torch.arange(B).unsqueeze(1) * W).view(-1))
+        prev = tok.view(-1)
+    return finished
+
+
+@torch.no_grad()
+def greedy_search(step: Step, state: Any, *, batch_size: int, sos: int, eos: int,
+                  max_len: int, banned: Sequence[int] = ()) -> list[Hypothesis]:
+    """Take the most probable word at every step; one hypothesis per input.
+
+    At the last allowed step EOS is forced (its log probability is still counted).
+    """
+    B = batch_size
+    prev = torch.full((B,), sos, dtype=torch.long)
+    score = torch.zeros(B)
+    out: list[list[int]] = [[] for _ in range(B)]
+    alive = torch.ones(B, dtype=torch.bool)
+    for t in range(max_len):
+        log_probs, state = step(state, prev)
+        log_probs = _ban(log_probs.float(), banned)
+        tok = log_probs.argmax(-1)
+        if t == max_len - 1:
+            tok = torch.full_like(tok, eos)
+        score = score + torch.where(alive, log_probs.gather(1, tok.unsqueeze(1)).squeeze(1),
+                                    torch.zeros(B))
+        for b in alive.nonzero().flatten().tolist():
+            out[b].append(int(tok[b]))
+        alive = alive & (tok != eos)
+        if not bool(alive.any()):
+            break
+        prev = tok
+    return [Hypothesis(tuple(o), float(s)) for o, s in zip(out, score)]

@@ -1,0 +1,140 @@
+"""Decoding motions from a mixture-density decoder: the sampled beam and mean decoding.
+
+A motion decoder is driven through one callable
+
+    step(state, prev_frames (N, D) float) -> (MixtureParams over N rows, new_state)
+
+giving the distribution of the next frame (in the model's feature space, usually
+normalised) and of its "active" flag. Active = 1 means the motion goes on after this frame;
+a hypothesis ends with the first frame whose sampled (or thresholded) flag is 0.
+The score of a hypothesis is its log likelihood: the sum over frames of
+log p(frame) + log P(flag), both under the model.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Callable
+
+import numpy as np
+import torch
+
+from motionlang.decoding.beam import select_state
+from motionlang.models.mdn import (MixtureParams, active_log_prob, mixture_log_prob,
+                                   mode_frame, sample)
+
+MotionStep = Callable[[Any, torch.Tensor], "tuple[MixtureParams, Any]"]
+
+
+@dataclass(frozen=True)
+class MotionHypothesis:
+    """frames: (T, D) float32 in the decoder's feature space; score: total log likelihood."""
+
+    frames: np.ndarray
+    score: float
+
+
+def _start(start: torch.Tensor | None, B: int, D: int | None) -> torch.Tensor:
+    if start is None:
+        if D is None:
+            raise ValueError("give either start frames or dim")
+        return torch.zeros(B, D)
+    start = torch.as_tensor(start, dtype=torch.float32)
+    return start.expand(B, start.shape[-1]).clone() if start.dim() == 1 else start
+
+
+@torch.no_grad()
+def sampled_beam(step: MotionStep, state: Any, *, batch_size: int, width: int,
+                 max_frames: int, samples: int = 5, start: torch.Tensor | None = None,
+                 dim: int | None = None, generator: torch.Generator | None = None,
+                 reorder: Callable[[Any, torch.Tensor], Any] = select_state
+                 ) -> list[list[MotionHypothesis]]:
+    """The sampled beam of Plappert et al. (2018) for ``batch_size`` inputs.
+
+    Args:
+        step: the decoder step (module docstring); ``state`` has ``batch_size`` rows.
+        width: W hypotheses kept and returned per input.
+        max_frames: length cap; hypotheses still active at the cap are closed there.
+        samples: S candidate (frame, flag) pairs drawn per live hypothesis and step.
+        start: first decoder input, (D,) or (batch_size, D); zeros of ``dim`` if None.
+        generator: torch RNG for reproducible sampling.
+
+    Returns:
+        for each input, up to W hypotheses sorted by decreasing log likelihood.
+
+    Each step draws S candidates for each live hypothesis; candidates whose flag is 0
+    finish, the W most likely of the others stay live. Densities can exceed 1, so unlike
+    word beams there is no early stop: decoding runs until no hypothesis is live or the cap.
+    """
+    B, W, S = batch_size, width, samples
+    prev = _start(start, B, dim)
+    D = prev.shape[-1]
+    # One live row per input at first; later up to W. ``owner`` maps rows to inputs.
+    owner = torch.arange(B)
+    frames = torch.empty(B, 0, D)
+    scores = torch.zeros(B)
+    finished: list[list[MotionHypothesis]] = [[] for _ in range(B)]
+    for t in range(max_frames):
+        params, state = step(state, prev)
+        N = len(owner)
+        x, a = sample(params, S, generator)                       # (N, S, D), (N, S)
+        rep = MixtureParams(*(p.repeat_interleave(S, 0) for p in
+                              (params.logit_pi, params.mu, params.log_sigma,
+                               params.active_logit)))
+        xf, af = x.reshape(N * S, D), a.reshape(N * S)
+        if t == max_frames - 1:
+            af = torch.zeros_like(af)                               # close everything at the cap
+        ll = mixture_log_prob(rep, xf) + active_log_prob(rep, af)
+        cand = scores.repeat_interleave(S) + ll                     # (N*S,)
+        row = torch.arange(N).repeat_interleave(S)
+        keep_rows: list[int] = []
+        for b in range(B):
+            mine = (owner[row] == b)
+            ended = (mine & (af == 0)).nonzero().flatten()
+            for i in ended.tolist():
+                r = int(row[i])
+                seq = torch.cat([frames[r], xf[i:i + 1]]).numpy().astype(np.float32)
+                finished[b].append(MotionHypothesis(seq, float(cand[i])))
+            finished[b] = sorted(finished[b], key=lambda h: -h.score)[:W]
+            going = (mine & (af == 1)).nonzero().flatten()
+            if len(going):
+                best = cand[going].topk(min(W, len(going))).indices
+                keep_rows.extend(going[best].tolist())
+        if not keep_rows:
+            break
+        keep = torch.tensor(keep_rows)
+        parent = row[keep]
+        frames = torch.cat([frames[parent], xf[keep].unsqueeze(1)], dim=1)
+        scores, owner, prev = cand[keep], owner[parent], xf[keep]
+        state = reorder(state, parent)
+    return finished
+
+
+@torch.no_grad()
+def mean_decode(step: MotionStep, state: Any, *, batch_size: int, max_frames: int,
+                start: torch.Tensor | None = None, dim: int | None = None,
+                threshold: float = 0.5) -> list[MotionHypothesis]:
+    """Deterministic decoding: each frame is the mean of the heaviest mixture component,
+    and the motion ends at the first frame whose P(active) < ``threshold`` (or the cap).
+    Scores are the log likelihood of the chosen frames and flags.
+    """
+    B = batch_size
+    prev = _start(start, B, dim)
+    out: list[list[torch.Tensor]] = [[] for _ in range(B)]
+    score = torch.zeros(B)
+    alive = torch.ones(B, dtype=torch.bool)
+    for t in range(max_frames):
+        params, state = step(state, prev)
+        x = mode_frame(params)
+        a = (torch.sigmoid(params.active_logit) >= threshold).float()
+        if t == max_frames - 1:
+            a = torch.zeros_like(a)
+        ll = mixture_log_prob(params, x) + active_log_prob(params, a)
+        score = score + torch.where(alive, ll, torch.zeros(B))
+        for b in alive.nonzero().flatten().tolist():
+            out[b].append(x[b])
+        alive = alive & (a == 1)
+        if not bool(alive.any()):
+            break
+        prev = x
+    return [MotionHypothesis(torch.stack(o).numpy().astype(np.float32), float(s))
+            for o, s in zip(out, score)]

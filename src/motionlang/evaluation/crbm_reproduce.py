@@ -1,0 +1,181 @@
+"""Reproduce the missing-data table of Taylor, Hinton & Roweis 2006 (sec. 5).
+
+Train a CRBM (and the AR(n) baseline) on the 31 training trials of CMU subject 35, erase
+one leg or the whole upper body from halfway through each test trial to its end, fill
+the gap on-line and score every method in the protocol space of :mod:`crbm_fill`.
+
+The models work on per-frame "model features": the 59 protocol values with the root's
+ground-plane position (x, z) replaced by its frame-to-frame displacement (absolute position
+is not stationary; displacement is). Erased dimensions are joint angles only, so filled
+model frames map back to the protocol space unchanged.
+"""
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from motionlang.evaluation.crbm_fill import (
+    ERASED, JOINT_CHANNELS, Cmu35, fill_error, frame_mask, hold_last_fill, load_cmu35, nearest_neighbour_fill,
+    per_frame_dims, score_space, taylor59)
+from motionlang.models.ar import ARConfig, ARModel
+from motionlang.models.crbm import CRBM, CRBMConfig
+
+PAPER = {  # Taylor et al. 2006, walking test sequence; the paper reports no jogging numbers
+    "35_29": {"nearest neighbour": {"leg": 11.68, "upper body": 22.20},
+              "CRBM": {"leg": 8.78, "upper body": 20.52}},
+}
+METHODS = ("nearest neighbour", "hold last value", "AR(n)", "CRBM")
+TRIAL_NAMES = {"35_29": "walking (35_29)", "35_18": "jogging (35_18)"}
+
+
+@dataclass
+class ReproduceConfig:
+    crbm: CRBMConfig = field(default_factory=CRBMConfig)
+    ar_order: int = 3
+    n_repeats: int = 100       # stochastic CRBM fill-ins averaged per cell
+    n_gibbs: int = 30          # alternating updates per filled frame
+    seed: int = 0
+
+
+def model_frames(channels: np.ndarray) -> np.ndarray:
+    """(T, 62) degrees -> (T, 59) model features (root x, z as per-frame displacement)."""
+    x = taylor59(channels)
+    out = x.copy()
+    if len(x) > 1:
+        out[1:, [0, 2]] = np.diff(x[:, [0, 2]], axis=0)
+        out[0, [0, 2]] = out[1, [0, 2]]  # the first frame has no predecessor: copy the next step
+    return out
+
+
+def model_frames_to_channels(frames: np.ndarray, reference: np.ndarray,
+                             start_xz: tuple[float, float] = (0.0, 0.0)) -> np.ndarray:
+    """Inverse of :func:`model_frames`: (T, 59) -> (T, 62) AMC channels in degrees.
+
+    Root x, z are integrated from the displacements starting at ``start_xz`` (ASF units);
+    root angles come back from their sine and cosine; the 12 channels the representation
+    drops (clavicles, fingers) take ``reference`` ((62,) or (T, 62), e.g. a training mean).
+    """
+    frames = np.asarray(frames, dtype=np.float64)
+    T = len(frames)
+    ch = np.array(np.broadcast_to(reference, (T, 62)), dtype=np.float64)
+    steps = frames[:, [0, 2]].copy()
+    steps[0] = 0.0
+    ch[:, [0, 2]] = np.asarray(start_xz) + np.cumsum(steps, axis=0)
+    ch[:, 1] = frames[:, 1]
+    ch[:, 3:6] = np.rad2deg(np.arctan2(frames[:, 3:6], frames[:, 6:9]))
+    ch[:, JOINT_CHANNELS] = frames[:, 9:]
+    return ch
+
+
+def frames_to_motion(frames: np.ndarray, data: Cmu35, asf_path: str | Path, *,
+                     start_xz: tuple[float, float] = (0.0, 0.0), name: str = "crbm"):
+    """(T, 59) model features -> a ``Motion`` on the subject-35 ASF skeleton at 30 Hz.
+    Channels the features drop (clavicles, fingers) take the training mean."""
+    from motionlang.formats.asf_amc import motion_from_channels, read_asf
+
+    reference = np.concatenate(data.train).mean(axis=0)
+    channels = model_frames_to_channels(frames, reference, start_xz)
+    return motion_from_channels(read_asf(asf_path), channels, data.fps, name=name)
+
+
+def train_models(data: Cmu35, cfg: ReproduceConfig, *, show_progress: bool = False
+                 ) -> tuple[CRBM, ARModel]:
+    seqs = [model_frames(c) for c in data.train]
+    crbm = CRBM(cfg.crbm, 59).fit(seqs, show_progress=show_progress)
+    ar = ARModel(ARConfig(order=cfg.ar_order), 59).fit(seqs)
+    return crbm, ar
+
+
+def fill_trial(data: Cmu35, trial: str, part: str, crbm: CRBM, ar: ARModel,
+               cfg: ReproduceConfig) -> dict:
+    """Erase ``part`` from halfway through ``trial`` and fill it with every method.
+
+    Returns {"errors": {method: error}, "crbm_std": std over repeats, "gap_start": frame,
+    "true59": (T, 59), "filled59": {method: (T, 59) or (R, T, 59) for the CRBM}}.
+    """
+    channels = data.test[trial]
+    true59 = taylor59(channels)
+    true_rows = score_space(true59, data.scale, data.bias)
+    gap = len(true_rows) // 2          # first erased pair = first erased frame
+    dims = ERASED[part]
+    fdims = per_frame_dims(dims)
+    known = frame_mask(len(true59), gap, fdims, 59)
+    train_rows = np.vstack([score_space(taylor59(c), data.scale, data.bias) for c in data.train])
+
+    def score(frames59):
+        return fill_error(true_rows, score_space(frames59, data.scale, data.bias), dims,
+                          slice(gap, None))
+
+    filled, errors = {}, {}
+    nn_rows = nearest_neighbour_fill(train_rows, true_rows[gap:], dims)
+    errors["nearest neighbour"] = fill_error(true_rows[gap:], nn_rows, dims, slice(None))
+    filled["hold last value"] = hold_last_fill(true59, known)
+    mf = model_frames(channels)
+    given = np.where(known, mf, np.nan)
+    ar_frames = true59.copy()
+    ar_frames[:, fdims] = ar.fill_in(given, known)[:, fdims]
+    filled["AR(n)"] = ar_frames
+    samples = crbm.fill_in(given, known, n_gibbs=cfg.n_gibbs, seed=cfg.seed,
+                           n_samples=cfg.n_repeats)
+    crbm_frames = np.repeat(true59[None], len(samples), axis=0)
+    crbm_frames[:, :, fdims] = samples[:, :, fdims]
+    filled["CRBM"] = crbm_frames
+    for m in ("hold last value", "AR(n)"):
+        errors[m] = score(filled[m])
+    per_rep = np.array([score(f) for f in crbm_frames])
+    errors["CRBM"] = float(per_rep.mean())
+    return {"errors": errors, "crbm_std": float(per_rep.std()), "gap_start": gap,
+            "true59": true59, "filled59": filled, "erased_dims59": fdims}
+
+
+def reproduce(data_dir: str | Path, cfg: ReproduceConfig | None = None, *,
+              crbm: CRBM | None = None, ar: ARModel | None = None,
+              show_progress: bool = False, keep_fills: bool = False) -> dict:
+    """Run the whole experiment; returns a JSON-able dict (plus "fills" if ``keep_fills``).
+
+    A given ``crbm`` (e.g. loaded from a checkpoint) is used instead of training one.
+    """
+    cfg = cfg or ReproduceConfig()
+    data = load_cmu35(data_dir)
+    if crbm is None:
+        crbm, _ = train_models(data, cfg, show_progress=show_progress)
+    if ar is None:
+        ar = ARModel(ARConfig(order=cfg.ar_order), 59).fit([model_frames(c) for c in data.train])
+    table, fills = {}, {}
+    for trial in ("35_29", "35_18"):
+        table[trial] = {}
+        for part in ERASED:
+            res = fill_trial(data, trial, part, crbm, ar, cfg)
+            table[trial][part] = {**{m: round(res["errors"][m], 4) for m in METHODS},
+                                  "CRBM std over repeats": round(res["crbm_std"], 4),
+                                  "erased frames": len(res["true59"]) - res["gap_start"]}
+            fills[(trial, part)] = res
+    out = {"table": table, "paper": PAPER,
+           "config": {**dataclasses.asdict(cfg), "crbm": dataclasses.asdict(crbm.config)},
+           "crbm_final_reconstruction_mse": crbm.history[-1] if crbm.history else None}
+    if keep_fills:
+        out["fills"] = fills
+        out["models"] = (crbm, ar)
+    return out
+
+
+def format_table(result: dict) -> str:
+    """The paper's layout: rows = methods, columns = erased part; paper's numbers beside."""
+    lines = []
+    for trial, parts in result["table"].items():
+        paper = result["paper"].get(trial, {})
+        lines.append(f"Missing data, {TRIAL_NAMES.get(trial, trial)}: squared error per erased "
+                     f"dimension, summed over the erased frames (normalised space)")
+        lines.append(f"{'method':<20}" + "".join(f"{p + ' (ours)':>20}{'paper':>8}" for p in parts))
+        for m in METHODS:
+            row = f"{m:<20}"
+            for p, cells in parts.items():
+                ref = paper.get(m, {}).get(p)
+                extra = f" ±{cells['CRBM std over repeats']:.2f}" if m == "CRBM" else ""
+                row += f"{cells[m]:>14.2f}{extra:>6}" + (f"{ref:>8.2f}" if ref is not None else f"{'-':>8}")
+            lines.append(row)
+        lines.append("")
+    return "\n".join(lines).rstrip() + "\n"

@@ -1,0 +1,120 @@
+"""Joint-position features of Ghosh et al. (2021) (two-stream text-to-motion on KIT-ML).
+
+Per frame at 12.5 Hz: the 21 KIT joints (``joint_map.KIT21_NAMES``) in the body's local
+frame — origin at the root projected on the ground, Y up, the body facing +Z — as 63
+numbers (joint-major x, y, z; the root's own local y is the root height, its local x and
+z are always 0), followed by the root's global trajectory: ground-plane step in the body
+frame of the previous frame (sideways x, forward z; metres/frame) and heading change
+(rad/frame). 66 dimensions, z-normalised (constant ones only centred).
+
+Facing direction: the horizontal perpendicular to the left->right hips + shoulders line,
+``forward = up x ((RH - LH) + (RS - LS))``, as usual for joint-position data.
+
+The inverse (:meth:`PositionFeatures.decode`) integrates heading and steps and returns
+global positions (T, 21, 3). Frame 0 is placed at ``start = (x0, z0, yaw0)``; by default at
+the origin facing +Z. :meth:`PositionFeatures.start` gives a motion's own placement, so
+``decode(encode(m), start=start(m))`` reproduces ``positions21`` exactly.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Iterable
+
+import numpy as np
+
+from motionlang.errors import MotionlangError
+from motionlang.features import root as rootlib
+from motionlang.features.base import FeatureSet, as_numpy, downsample
+from motionlang.features.joint_map import KIT21_NAMES, positions21
+from motionlang.features.normalizer import Normalizer
+from motionlang.kinematics.motion import Motion
+
+_I = {n: i for i, n in enumerate(KIT21_NAMES)}
+
+
+@dataclass
+class PositionsConfig:
+    """Options of :class:`PositionFeatures`.
+
+    Attributes:
+        fps: frame rate of the sequences (12.5 Hz in Ghosh et al. 2021).
+        joint_map: a key of ``joint_map.JOINT_MAPS``, or None to pick from joint names.
+        dtype: numpy dtype of ``encode``'s output.
+    """
+
+    fps: float = 12.5
+    joint_map: str | None = None
+    dtype: str = "float32"
+
+
+def facing_yaw(p21: np.ndarray) -> np.ndarray:
+    """(T, 21, 3) canonical positions -> (T,) heading, radians about +Y (0 = facing +Z)."""
+    across = (p21[:, _I["RH"]] - p21[:, _I["LH"]]) + (p21[:, _I["RS"]] - p21[:, _I["LS"]])
+    forward = np.cross(np.array([0.0, 1.0, 0.0]), across)
+    return np.arctan2(forward[:, 0], forward[:, 2])
+
+
+def split_global(p21: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Global (T, 21, 3) -> local (T, 21, 3), steps v (T, 2), dyaw (T,), start (3,)."""
+    yaw = facing_yaw(p21)
+    ground = p21[:, 0, [0, 2]]
+    origin = np.stack([ground[:, 0], np.zeros(len(p21)), ground[:, 1]], axis=1)
+    local = rootlib.to_heading(p21 - origin[:, None], yaw[:, None])
+    v, dyaw = rootlib.increments(ground, yaw)
+    return local, v, dyaw, np.array([ground[0, 0], ground[0, 1], yaw[0]])
+
+
+def join_global(local: np.ndarray, v: np.ndarray, dyaw: np.ndarray,
+                start=(0.0, 0.0, 0.0)) -> np.ndarray:
+    """Inverse of :func:`split_global` -> global (T, 21, 3) metres."""
+    ground, yaw = rootlib.integrate(v, dyaw, start)
+    origin = np.stack([ground[:, 0], np.zeros(len(yaw)), ground[:, 1]], axis=1)
+    return rootlib.from_heading(local, yaw[:, None]) + origin[:, None]
+
+
+class PositionFeatures(FeatureSet):
+    """Local 21-joint positions + root trajectory; ``encode`` -> (T, 66) at 12.5 Hz."""
+
+    kind = "positions"
+    Config = PositionsConfig
+
+    @property
+    def names(self) -> list[str]:
+        return [f"{j}_{c}" for j in KIT21_NAMES for c in "xyz"] + [
+            "root_vx", "root_vz", "root_dyaw"]
+
+    def _raw(self, motion: Motion) -> tuple[np.ndarray, np.ndarray]:
+        """-> un-normalised (T, 66) of ``motion`` at ``fps``, and its start (3,)."""
+        p = positions21(downsample(motion, self.fps), self.config.joint_map)
+        local, v, dyaw, start = split_global(p)
+        return np.concatenate([local.reshape(len(p), -1), v, dyaw[:, None]], axis=1), start
+
+    def fit(self, motions: Iterable[Motion]) -> "PositionFeatures":
+        motions = list(motions)
+        if not motions:
+            raise MotionlangError("PositionFeatures.fit: no motions")
+        self.normalizer = Normalizer(names=self.names).fit([self._raw(m)[0] for m in motions])
+        return self
+
+    def encode(self, motion: Motion) -> np.ndarray:
+        """Motion (any supported skeleton, any fps) -> (T, 66) normalised features."""
+        self._require_fit()
+        return self._out(self.normalizer.transform(self._raw(motion)[0]))
+
+    def start(self, motion: Motion) -> np.ndarray:
+        """(x0, z0, yaw0) of the motion's first frame: root on the ground plane, heading."""
+        return self._raw(motion)[1]
+
+    def decode(self, features, start=(0.0, 0.0, 0.0)) -> np.ndarray:
+        """Features (T, 66) -> global joint positions (T, 21, 3) metres, Y up.
+
+        Not a :class:`Motion`: positions carry no joint rotations (that would need inverse
+        kinematics). Frame 0 is placed at ``start`` (x0, z0, yaw0).
+        """
+        self._require_fit()
+        f = as_numpy(features)
+        if f.ndim != 2 or f.shape[1] != self.dim:
+            raise MotionlangError(f"position features must be (T, {self.dim}), got {f.shape}")
+        raw = self.normalizer.inverse(f)
+        local = raw[:, :63].reshape(len(raw), 21, 3)
+        return join_global(local, raw[:, 63:65], raw[:, 65], start)

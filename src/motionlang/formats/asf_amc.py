@@ -1,0 +1,465 @@
+"""Acclaim ASF (skeleton) / AMC (motion) files, as used by the CMU motion capture database.
+
+Conventions (Acclaim spec, as CMU files use them):
+
+* Lengths: ``:units length L`` means a file length ``v`` is ``v / L`` inches, so one file
+  unit is ``0.0254 / L`` metres (CMU: ``L = 0.45``). The AMC root position uses the same unit.
+* A bone's ``axis ax ay az XYZ`` gives the fixed rotation ``C = Rz(az) Ry(ay) Rx(ax)`` (the
+  letters name the order in which the rotations are applied); the bone's local rotation is
+  ``C @ M @ C^T`` with ``M`` the DOF rotations applied in the same letter order
+  (``M = Rz Ry Rx`` for ``dof rx ry rz``). The root uses its ``axis`` order the same way.
+* ``direction`` is a unit vector in the global rest frame (Y up); ``length`` its length.
+
+Skeleton model: a node per bone placed at the bone's start (the root node, then one node per
+bone, plus ``<bone>_end`` nodes at the tips of leaf bones), ``pre = C``, ``post = C^T``, and a
+node's offset is its parent bone's ``direction * length``. Because ``Skeleton`` composes a
+DOF chain left to right, a bone's DOF axes (and its ``joint_angles`` columns) are stored in
+composition order, e.g. ``rz, ry, rx`` with names ``lfemur_rz, lfemur_ry, lfemur_rx``.
+:func:`motion_to_channels` / :func:`motion_from_channels` convert to and from the flat AMC
+layout (root channels in the ASF ``order``, then each bone's DOFs in ``dof`` order, bones in
+skeleton order, which is the ASF bonedata order whenever that lists parents first — CMU does).
+"""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from motionlang.errors import MotionFormatError, SkeletonError
+from motionlang.kinematics.motion import Motion
+from motionlang.kinematics.rotations import AXES, chain
+from motionlang.kinematics.skeleton import Joint, Skeleton
+from motionlang.utils.atomic import atomic_write
+
+INCH = 0.0254
+MAX_ABS = 1e12  # largest magnitude accepted for any number in a file
+_ROT = {"rx": "x", "ry": "y", "rz": "z"}
+
+
+# ------------------------------------------------------------------------------ helpers
+def _lines(path: Path) -> list[str]:
+    try:
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise MotionFormatError(path, f"cannot read file: {exc.strerror or exc}") from None
+    return raw.decode("utf-8", errors="replace").splitlines()
+
+
+def _float(tok: str, path, line: int, what: str) -> float:
+    try:
+        v = float(tok)
+    except ValueError:
+        raise MotionFormatError(path, f"malformed number {tok[:40]!r} in {what}", line=line) from None
+    if not math.isfinite(v):
+        raise MotionFormatError(path, f"non-finite number {tok!r} in {what}", line=line)
+    if abs(v) > MAX_ABS:  # no real length or angle is this big; FK would overflow
+        raise MotionFormatError(path, f"number {tok!r} out of range in {what}", line=line)
+    return v
+
+
+def _euler(order: str, angles_rad) -> np.ndarray:
+    """Rotation applying ``order[0]`` first: e.g. ``XYZ`` -> ``Rz @ Ry @ Rx``; (3, 3)."""
+    axes = np.stack([AXES[c] for c in reversed(order.lower())])
+    return chain(axes, np.asarray(angles_rad, dtype=float)[::-1])
+
+
+def _check_order(order: str, path, line: int) -> str:
+    order = order.upper()
+    if len(order) != 3 or sorted(order) != ["X", "Y", "Z"]:
+        raise MotionFormatError(path, f"bad rotation order {order!r} (want e.g. XYZ)", line=line)
+    return order
+
+
+class _Bone:
+    def __init__(self, line: int):
+        self.line = line
+        self.name: str | None = None
+        self.direction = np.zeros(3)
+        self.length = 0.0
+        self.axis = np.zeros(3)
+        self.order = "XYZ"
+        self.dofs: list[str] = []
+
+
+# ------------------------------------------------------------------------------ ASF
+def read_asf(path: str | Path) -> Skeleton:
+    """Read an ASF skeleton (see the module docstring for the node layout).
+
+    Returns:
+        a ``Skeleton`` named ``"cmu:<file stem>"``, Y-up (``world = I``), offsets in metres,
+        ``file_unit`` = metres per ASF length unit.
+
+    Raises:
+        MotionFormatError: on any malformed content, naming the file and line.
+    """
+    path = Path(path)
+    lines = _lines(path)
+    length_scale, deg = 1.0, True
+    root_order, root_axis, root_orient = ["TX", "TY", "TZ", "RX", "RY", "RZ"], "XYZ", np.zeros(3)
+    bones: dict[str, _Bone] = {}
+    children: dict[str, list[str]] = {}
+    parent_of: dict[str, str] = {}
+    section, bone, hier_seen = None, None, False
+    for ln, text in enumerate(lines, start=1):
+        tok = text.split("#", 1)[0].split()
+        if not tok:
+            continue
+        key = tok[0].lower()
+        if key.startswith(":"):
+            if bone is not None:
+                raise MotionFormatError(path, "section starts inside an unfinished bone", line=ln)
+            section = key
+            hier_seen |= key == ":hierarchy"
+            continue
+        if section == ":units":
+            if key == "length" and len(tok) > 1:
+                length_scale = _float(tok[1], path, ln, "units length")
+                if length_scale <= 0:
+                    raise MotionFormatError(path, "units length must be positive", line=ln)
+            elif key == "angle" and len(tok) > 1:
+                if tok[1].lower() not in ("deg", "rad"):
+                    raise MotionFormatError(path, f"unknown angle unit {tok[1]!r}", line=ln)
+                deg = tok[1].lower() == "deg"
+        elif section == ":root":
+            if key == "order":
+                root_order = [t.upper() for t in tok[1:]]
+                if sorted(root_order) != sorted(["TX", "TY", "TZ", "RX", "RY", "RZ"]):
+                    raise MotionFormatError(path, f"unsupported root order {tok[1:]}", line=ln)
+            elif key == "axis":
+                root_axis = _check_order(tok[1] if len(tok) > 1 else "", path, ln)
+            elif key == "orientation":
+                if len(tok) != 4:
+                    raise MotionFormatError(path, "root orientation needs 3 values", line=ln)
+                root_orient = np.array([_float(t, path, ln, "root orientation") for t in tok[1:]])
+        elif section == ":bonedata":
+            if key == "begin":
+                if bone is not None:
+                    raise MotionFormatError(path, "'begin' inside a bone", line=ln)
+                bone = _Bone(ln)
+            elif bone is None:
+                if key != "limits" and not key.startswith("("):
+                    raise MotionFormatError(path, f"{tok[0]!r} outside begin/end", line=ln)
+            elif key == "end":
+                if not bone.name:
+                    raise MotionFormatError(path, "bone without a name", line=ln)
+                if bone.name in bones or bone.name == "root":
+                    raise MotionFormatError(path, f"duplicate bone name {bone.name!r}", line=ln)
+                bones[bone.name] = bone
+                bone = None
+            elif key == "name" and len(tok) == 2:
+                bone.name = tok[1]
+            elif key == "direction":
+                if len(tok) != 4:
+                    raise MotionFormatError(path, "direction needs 3 values", line=ln)
+                bone.direction = np.array([_float(t, path, ln, "direction") for t in tok[1:]])
+            elif key == "length":
+                if len(tok) != 2:
+                    raise MotionFormatError(path, "length needs 1 value", line=ln)
+                bone.length = _float(tok[1], path, ln, "length")
+            elif key == "axis":
+                if len(tok) != 5:
+                    raise MotionFormatError(path, "axis needs 3 angles and an order", line=ln)
+                bone.axis = np.array([_float(t, path, ln, "axis") for t in tok[1:4]])
+                bone.order = _check_order(tok[4], path, ln)
+            elif key == "dof":
+                dofs = [t.lower() for t in tok[1:]]
+                bad = [d for d in dofs if d not in _ROT]
+                if bad or len(set(dofs)) != len(dofs):
+                    raise MotionFormatError(path, f"unsupported or repeated DOFs {tok[1:]} "
+                                                  "(only rx ry rz are supported)", line=ln)
+                bone.dofs = dofs
+            elif key in ("id", "limits", "bodymass", "cofmass") or key.startswith("("):
+                pass  # limits are informative only; ids are not used for linking
+            else:
+                raise MotionFormatError(path, f"unknown bone field {tok[0]!r}", line=ln)
+        elif section == ":hierarchy":
+            if key in ("begin", "end"):
+                continue
+            par = tok[0]
+            if par != "root" and par not in bones:
+                raise MotionFormatError(path, f"unknown parent bone {par!r} in hierarchy", line=ln)
+            for child in tok[1:]:
+                if child not in bones:
+                    raise MotionFormatError(path, f"unknown bone {child!r} in hierarchy", line=ln)
+                if child in parent_of:
+                    raise MotionFormatError(path, f"bone {child!r} has two parents", line=ln)
+                parent_of[child] = par
+                children.setdefault(par, []).append(child)
+    if bone is not None:
+        raise MotionFormatError(path, "file ends inside a bone (missing 'end')", line=len(lines))
+    if not hier_seen:
+        raise MotionFormatError(path, "no :hierarchy section", line=len(lines))
+    unit = INCH / length_scale
+    ang = (lambda a: np.deg2rad(a)) if deg else (lambda a: np.asarray(a, dtype=float))
+
+    # nodes in bonedata order, parents first (stable topological order; catches cycles)
+    placed: dict[str, int] = {"root": 0}
+    joints = [Joint("root", -1, np.zeros(3), pre=_euler(root_axis, ang(root_orient)))]
+    pending = list(bones)
+    while pending:
+        # the first bone (in bonedata order) whose parent is already placed
+        name = next((n for n in pending if parent_of.get(n) in placed), None)
+        if name is None:
+            b = bones[pending[0]]
+            why = "not connected to the root" if pending[0] not in parent_of else "in a cycle"
+            raise MotionFormatError(path, f"bone {pending[0]!r} is {why} in the hierarchy",
+                                    line=b.line)
+        pending.remove(name)
+        b, par = bones[name], parent_of[name]
+        offset = np.zeros(3) if par == "root" else _bone_vector(bones[par], unit, path)
+        C = _euler(b.order, ang(b.axis))
+        comp = [d for d in reversed(b.order.lower()) if "r" + d in b.dofs]
+        placed[name] = len(joints)
+        joints.append(Joint(name, placed[par], offset,
+                            axes=np.array([AXES[d] for d in comp]).reshape(-1, 3),
+                            pre=C, post=C.T, dof_names=tuple(f"{name}_r{d}" for d in comp)))
+        if not children.get(name):
+            joints.append(Joint(f"{name}_end", len(joints) - 1, _bone_vector(b, unit, path)))
+    rot_tokens = [t for t in root_order if t.startswith("R")]
+    root_axes = np.array([AXES[c] for c in reversed(root_axis.lower())])
+    try:
+        sk = Skeleton(joints, world=np.eye(3), root_axes=root_axes, file_unit=unit,
+                      name=f"cmu:{path.stem}", mirror=np.diag([-1.0, 1.0, 1.0]))
+    except SkeletonError as exc:
+        raise MotionFormatError(path, str(exc)) from None
+    # the AMC layout, kept on the skeleton so that writers reproduce the file's channel order
+    sk.asf_layout = {"root_order": root_order, "rot_tokens": rot_tokens, "degrees": deg,
+                     "dofs": {n: list(b.dofs) for n, b in bones.items()}}
+    return sk
+
+
+def _bone_vector(b: _Bone, unit: float, path) -> np.ndarray:
+    """Bone vector (3,) in metres: direction (normalised) times length."""
+    norm = float(np.linalg.norm(b.direction))
+    if b.length != 0 and not (np.isfinite(norm) and norm > 1e-12):
+        raise MotionFormatError(path, f"bone {b.name!r} has a zero or invalid direction",
+                                line=b.line)
+    v = b.direction / norm * b.length * unit if b.length != 0 else np.zeros(3)
+    if not np.all(np.isfinite(v)):
+        raise MotionFormatError(path, f"bone {b.name!r} has a non-finite length", line=b.line)
+    return v
+
+
+# ------------------------------------------------------------------------------ channel layout
+def _layout(skeleton: Skeleton) -> tuple[list[str], list[tuple[str, int]], list[tuple[str, int, int]]]:
+    """How flat AMC channels map onto a Motion of ``skeleton``.
+
+    Returns:
+        root_order (6 tokens), root map [(kind 't'|'r', column)] per root token, and
+        bones [(name, first channel, joint-angle columns...)] flattened as a list of
+        (name, channel index, joint_angles column) triples in channel order.
+    """
+    info = getattr(skeleton, "asf_layout", None)
+    root_order = info["root_order"] if info else ["TX", "TY", "TZ", "RX", "RY", "RZ"]
+    axis_row = {}
+    for i, a in enumerate(skeleton.root_axes):
+        for c, v in AXES.items():
+            if np.allclose(a, v):
+                axis_row[c] = i
+    root_map = []
+    for t in root_order:
+        c = t[1].lower()
+        if t[0] == "T":
+            root_map.append(("t", "xyz".index(c)))
+        elif c in axis_row:
+            root_map.append(("r", axis_row[c]))
+        else:
+            raise SkeletonError(f"skeleton {skeleton.name!r} has no root rotation about {c}")
+    if len(axis_row) != len(skeleton.root_axes) or len(root_map) != 6:
+        raise SkeletonError(f"skeleton {skeleton.name!r} does not have an ASF root")
+    cols = []
+    ch = 6
+    for j, joint in enumerate(skeleton.joints):
+        if joint.ndof == 0:
+            continue
+        if info and joint.name in info["dofs"]:
+            dofs = info["dofs"][joint.name]
+        else:
+            dofs = sorted(n.rsplit("_", 1)[-1] for n in joint.dof_names)
+            if any(d not in _ROT for d in dofs):
+                raise SkeletonError(f"skeleton {skeleton.name!r} is not an ASF skeleton "
+                                    f"(joint {joint.name!r} has DOFs {joint.dof_names})")
+        start = skeleton.dof_slice(j).start
+        for d in dofs:
+            name = f"{joint.name}_{d}"
+            if name not in joint.dof_names:
+                raise SkeletonError(f"skeleton {skeleton.name!r} is not an ASF skeleton "
+                                    f"(DOF {name!r} missing)")
+            cols.append((joint.name, ch, start + joint.dof_names.index(name)))
+            ch += 1
+    if len(cols) != skeleton.ndof:
+        raise SkeletonError(f"skeleton {skeleton.name!r} is not an ASF skeleton")
+    return root_order, root_map, cols
+
+
+def motion_from_channels(skeleton: Skeleton, channels_deg: np.ndarray, fps: float,
+                         name: str | None = None) -> Motion:
+    """Build a Motion from flat AMC channels.
+
+    Args:
+        skeleton: from :func:`read_asf`.
+        channels_deg: (T, C) root position in ASF length units and angles in degrees, in
+            the ASF channel order (C = 6 + DOFs; 62 for CMU, the layout of cmu35WalkJog.mat).
+        fps: frames per second.
+    """
+    ch = np.asarray(channels_deg, dtype=float)
+    _, root_map, cols = _layout(skeleton)
+    if ch.ndim != 2 or ch.shape[1] != 6 + len(cols):
+        raise MotionFormatError(None, f"expected (T, {6 + len(cols)}) channels for skeleton "
+                                      f"{skeleton.name!r}, got {ch.shape}")
+    T = len(ch)
+    trans, rot = np.zeros((T, 3)), np.zeros((T, len(skeleton.root_axes)))
+    for i, (kind, col) in enumerate(root_map):
+        if kind == "t":
+            trans[:, col] = ch[:, i] * skeleton.file_unit
+        else:
+            rot[:, col] = np.deg2rad(ch[:, i])
+    angles = np.zeros((T, skeleton.ndof))
+    src = np.array([c for _, c, _ in cols], dtype=int)
+    dst = np.array([d for _, _, d in cols], dtype=int)
+    angles[:, dst] = np.deg2rad(ch[:, src])
+    return Motion(skeleton, float(fps), trans, rot, angles, name=name or skeleton.name,
+                  source_format="amc")
+
+
+def motion_to_channels(motion: Motion) -> np.ndarray:
+    """(T, C) flat AMC channels (root position in ASF units, angles in degrees)."""
+    sk = motion.skeleton
+    _, root_map, cols = _layout(sk)
+    T = motion.n_frames
+    out = np.empty((T, 6 + len(cols)))
+    for i, (kind, col) in enumerate(root_map):
+        out[:, i] = (motion.root_translation[:, col] / sk.file_unit if kind == "t"
+                     else np.rad2deg(motion.root_rotation[:, col]))
+    for _, c, d in cols:
+        out[:, c] = np.rad2deg(motion.joint_angles[:, d])
+    return out
+
+
+# ------------------------------------------------------------------------------ AMC
+def read_amc(path: str | Path, skeleton: Skeleton, fps: float = 120.0) -> Motion:
+    """Read an AMC motion for ``skeleton`` (from :func:`read_asf`).
+
+    Every bone with DOFs must appear once per frame with exactly its DOF count of values.
+
+    Returns:
+        Motion at ``fps`` (CMU: 120), ``source_format="amc"``, ``meta["path"]``,
+        ``meta["first_frame"]`` (the first frame number in the file).
+    """
+    path = Path(path)
+    if not (isinstance(fps, (int, float)) and math.isfinite(fps) and fps > 0):
+        raise MotionFormatError(path, f"frame rate must be positive, got {fps}")
+    lines = _lines(path)
+    try:
+        _, root_map, cols = _layout(skeleton)
+    except SkeletonError as exc:
+        raise MotionFormatError(path, str(exc)) from None
+    slots: dict[str, tuple[int, int]] = {"root": (0, 6)}
+    for name, c, _ in cols:
+        s, n = slots.get(name, (c, 0))
+        slots[name] = (s, n + 1)
+    for j in skeleton.joints:
+        if j.ndof == 0 and j.parent >= 0 and not j.name.endswith("_end"):
+            slots.setdefault(j.name, (0, 0))
+    C = 6 + len(cols)
+    info = getattr(skeleton, "asf_layout", None)
+    degrees = info["degrees"] if info else True
+    frames: list[np.ndarray] = []
+    numbers: list[int] = []
+    seen: set[str] = set()
+    row = None
+
+    def close(ln):
+        missing = [n for n, (_, k) in slots.items() if k and n not in seen]
+        if missing:
+            raise MotionFormatError(path, f"frame {numbers[-1]} lacks bone(s) {missing[:5]}",
+                                    line=ln)
+        frames.append(row)
+
+    for ln, text in enumerate(lines, start=1):
+        tok = text.split("#", 1)[0].split()
+        if not tok:
+            continue
+        if tok[0].startswith(":"):
+            if row is not None:
+                raise MotionFormatError(path, f"header {tok[0]!r} after the first frame", line=ln)
+            key = tok[0].upper()
+            if key == ":DEGREES":
+                degrees = True
+            elif key == ":RADIANS":
+                degrees = False
+            continue
+        if len(tok) == 1 and tok[0].lstrip("-").isdigit():
+            if row is not None:
+                close(ln)
+            numbers.append(int(tok[0]))
+            row, seen = np.zeros(C), set()
+            continue
+        if row is None:
+            raise MotionFormatError(path, f"expected a frame number, got {text.strip()[:40]!r}",
+                                    line=ln)
+        name = tok[0]
+        if name not in slots:
+            raise MotionFormatError(path, f"unknown bone {name[:40]!r}", line=ln)
+        if name in seen:
+            raise MotionFormatError(path, f"bone {name!r} given twice in one frame", line=ln)
+        start, n = slots[name]
+        if len(tok) - 1 != n:
+            raise MotionFormatError(path, f"bone {name!r} needs {n} values, got {len(tok) - 1}",
+                                    line=ln)
+        for i, t in enumerate(tok[1:]):
+            row[start + i] = _float(t, path, ln, f"bone {name!r}")
+        seen.add(name)
+    if row is None:
+        raise MotionFormatError(path, "no frames", line=len(lines))
+    close(len(lines))
+    ch = np.stack(frames)
+    if not degrees:
+        rot_ch = [i for i, (k, _) in enumerate(root_map) if k == "r"] + list(range(6, C))
+        ch[:, rot_ch] = np.rad2deg(ch[:, rot_ch])
+    motion = motion_from_channels(skeleton, ch, fps, name=path.stem)
+    motion.meta.update(path=str(path), first_frame=numbers[0])
+    try:
+        motion.validate(str(path))
+    except MotionFormatError as exc:
+        if exc.frame is None:
+            raise
+        raise MotionFormatError(path, exc.reason, frame=exc.frame) from None
+    return motion
+
+
+def read_asf_amc(asf_path: str | Path, amc_path: str | Path, fps: float = 120.0) -> Motion:
+    """Read a skeleton and one of its motions."""
+    return read_amc(amc_path, read_asf(asf_path), fps=fps)
+
+
+def _fmt(v: float) -> str:
+    s = f"{v:.6f}".rstrip("0").rstrip(".")
+    return "0" if s in ("-0", "") else s
+
+
+def write_amc(motion: Motion, path: str | Path) -> None:
+    """Write ``motion`` (of an ASF skeleton) as an AMC file, angles in degrees.
+
+    Raises:
+        SkeletonError: if the motion's skeleton does not come from an ASF.
+    """
+    sk = motion.skeleton
+    root_order, _, cols = _layout(sk)
+    ch = motion_to_channels(motion)
+    groups: list[tuple[str, int, int]] = []
+    for name, c, _ in cols:
+        if groups and groups[-1][0] == name:
+            groups[-1] = (name, groups[-1][1], c + 1)
+        else:
+            groups.append((name, c, c + 1))
+    first = int(motion.meta.get("first_frame", 1)) if str(motion.meta.get("first_frame", 1)) \
+        .lstrip("-").isdigit() else 1
+    with atomic_write(path) as fh:
+        fh.write(f"# written by motionlang from {motion.name}\n:FULLY-SPECIFIED\n:DEGREES\n")
+        for t in range(motion.n_frames):
+            fh.write(f"{first + t}\n")
+            fh.write("root " + " ".join(_fmt(v) for v in ch[t, :6]) + "\n")
+            for name, a, b in groups:
+                fh.write(name + " " + " ".join(_fmt(v) for v in ch[t, a:b]) + "\n")

@@ -1,0 +1,91 @@
+"""Self-describing model checkpoints: config, vocabulary, normaliser and weights in one file.
+
+A checkpoint is a plain dict that ``torch.load(..., weights_only=True)`` accepts (no
+pickled classes): ``{"kind", "config", "vocab", "normalizer", "state_dict"}``. The trainer
+wraps it as ``{"model": <that dict>, "optimizer": ...}``; :func:`read_model_dict` accepts
+both, so ``best.pt`` of a training run loads directly into a model.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+
+from motionlang.errors import MotionlangError
+from motionlang.utils.atomic import atomic_path
+
+
+def _plain(x: Any) -> Any:
+    """numpy arrays/scalars -> lists/floats so that weights-only loading accepts them."""
+    if isinstance(x, np.ndarray):
+        return x.tolist()
+    if isinstance(x, np.generic):
+        return x.item()
+    if isinstance(x, dict):
+        return {k: _plain(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_plain(v) for v in x]
+    return x
+
+
+def pack_vocab(vocab: Any) -> dict | None:
+    """A Vocabulary (has ``to_dict``) or a plain token list -> a storable dict."""
+    if vocab is None:
+        return None
+    if hasattr(vocab, "to_dict"):
+        return {"type": "Vocabulary", "data": _plain(vocab.to_dict())}
+    return {"type": "list", "data": [str(t) for t in vocab]}
+
+
+def unpack_vocab(d: dict | None) -> Any:
+    if d is None:
+        return None
+    if d["type"] == "Vocabulary":
+        from motionlang.datasets.text import Vocabulary
+        return Vocabulary.from_dict(d["data"])
+    return list(d["data"])
+
+
+def pack_normalizer(norm: Any) -> dict | None:
+    """A Normalizer (``to_dict`` or ``mean``/``std`` attributes) or a dict -> storable dict."""
+    if norm is None:
+        return None
+    if isinstance(norm, dict):
+        return {"type": "dict", "data": _plain(norm)}
+    if hasattr(norm, "to_dict"):
+        return {"type": "Normalizer", "data": _plain(norm.to_dict())}
+    return {"type": "dict", "data": _plain({"mean": norm.mean, "std": norm.std})}
+
+
+def unpack_normalizer(d: dict | None) -> Any:
+    if d is None:
+        return None
+    if d["type"] == "Normalizer":
+        try:
+            from motionlang.features.normalizer import Normalizer
+            return Normalizer.from_dict(d["data"])
+        except (ImportError, AttributeError):  # features layer without from_dict: keep the dict
+            pass
+    return d["data"]
+
+
+def write_checkpoint(payload: dict, path: str | Path) -> None:
+    """torch.save through an atomic rename (a crash never leaves a torn file)."""
+    with atomic_path(path) as tmp:
+        torch.save(payload, tmp)
+
+
+def read_model_dict(path: str | Path, kind: str) -> dict:
+    """Load a model checkpoint (or a trainer checkpoint holding one) and check its kind."""
+    try:
+        d = torch.load(path, map_location="cpu", weights_only=True)
+    except (OSError, RuntimeError, EOFError, ValueError) as exc:
+        raise MotionlangError(f"{path}: cannot read checkpoint: {exc}") from exc
+    if isinstance(d, dict) and "model" in d and isinstance(d["model"], dict):
+        d = d["model"]
+    if not isinstance(d, dict) or d.get("kind") != kind:
+        found = d.get("kind") if isinstance(d, dict) else type(d).__name__
+        raise MotionlangError(f"{path}: not a {kind} checkpoint (found {found!r})")
+    return d

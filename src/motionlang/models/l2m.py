@@ -1,0 +1,144 @@
+"""Language-to-motion seq2seq model (Plappert, Mandery & Asfour 2018, Section 4.2).
+
+Encoder: word embeddings with layer normalisation, then bidirectional GRUs; context = last
+output of the last layer (both directions). Decoder: GRUs with layer normalisation (paper:
+3 x 400), every layer fed the context, the previous frame and the previous layer's output.
+Output: a mixture of K (paper: 20) diagonal Gaussians over the next frame plus a Bernoulli
+"active" flag (1 = the motion goes on after this frame; 0 on a motion's last frame).
+Loss: the paper's stable surrogate ``-sum_k pi_k log N_k`` (or the exact mixture NLL with
+``loss="exact"``) per frame, plus the flag's binary cross-entropy. Optional additive
+attention as in :mod:`motionlang.models.m2l`.
+
+Frames are model features (usually normalised); the first decoder input is a zero frame.
+"""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import torch
+from torch import nn
+
+from motionlang.models import mdn
+from motionlang.models.checkpoint import (pack_normalizer, pack_vocab, read_model_dict,
+                                          unpack_normalizer, unpack_vocab, write_checkpoint)
+from motionlang.models.recurrent import AdditiveAttention, BiGRUEncoder, StackedDecoder
+
+
+@dataclass
+class L2MConfig:
+    """Sizes of the language-to-motion model; paper defaults except the data-given ones.
+
+    vocab_size: V (from the vocabulary); n_features: per-frame feature size F (from data).
+    """
+
+    vocab_size: int
+    n_features: int
+    embed_dim: int = 64
+    enc_hidden: int = 64
+    enc_layers: int = 2
+    dec_hidden: int = 400
+    dec_layers: int = 3
+    n_components: int = 20
+    dropout: float = 0.1
+    attention: bool = False
+    attn_dim: int = 64
+    loss: str = "surrogate"     # or "exact"
+    pad_id: int = 0
+    max_frames: int = 300       # decoding cap (frames)
+
+
+class LanguageToMotion(nn.Module):
+    """Token ids (B, L) -> mixture parameters of every next frame (B, T, ...)."""
+
+    kind = "l2m"
+
+    def __init__(self, config: L2MConfig, vocab: Any = None, normalizer: Any = None):
+        super().__init__()
+        c = self.config = config
+        if c.loss not in ("surrogate", "exact"):
+            raise ValueError(f"L2MConfig.loss must be 'surrogate' or 'exact', not {c.loss!r}")
+        self.vocab, self.normalizer = vocab, normalizer
+        self.embed = nn.Embedding(c.vocab_size, c.embed_dim, padding_idx=c.pad_id)
+        self.embed_norm = nn.LayerNorm(c.embed_dim)
+        self.drop = nn.Dropout(c.dropout)
+        self.encoder = BiGRUEncoder(c.embed_dim, c.enc_hidden, c.enc_layers, c.dropout)
+        ctx = self.encoder.out_dim
+        self.decoder = StackedDecoder(ctx + c.n_features, c.dec_hidden, c.dec_layers,
+                                      c.dropout, layer_norm=True)
+        head_in = self.decoder.out_dim
+        self.attn = None
+        if c.attention:
+            self.attn = AdditiveAttention(c.dec_hidden, ctx, c.attn_dim)
+            head_in += ctx
+        self.head = mdn.MixtureDensityHead(head_in, c.n_features, c.n_components)
+
+    def encode(self, tokens: torch.Tensor, lengths: torch.Tensor) -> dict:
+        """tokens (B, L) long, lengths (B,) -> decoder state dict (batch-first tensors)."""
+        x = self.drop(self.embed_norm(self.embed(tokens)))
+        context, memory, mask = self.encoder(x, lengths)
+        h = x.new_zeros(tokens.shape[0], self.config.dec_layers, self.config.dec_hidden)
+        return {"h": h, "context": context, "memory": memory, "mask": mask}
+
+    def _decode(self, state: dict, prev: torch.Tensor) -> tuple[mdn.MixtureParams, torch.Tensor]:
+        """prev (B, T, F) previous frames -> params with leading (B, T), hidden (B, layers, H)."""
+        T = prev.shape[1]
+        ctx = state["context"].unsqueeze(1).expand(-1, T, -1)
+        outs, h = self.decoder(torch.cat([ctx, prev], dim=-1), state["h"])
+        if self.attn is not None:
+            att, _ = self.attn(outs[..., -self.config.dec_hidden:], state["memory"],
+                               state["mask"])
+            outs = torch.cat([outs, att], dim=-1)
+        return self.head(outs), h
+
+    def forward(self, tokens: torch.Tensor, token_lengths: torch.Tensor,
+                motion: torch.Tensor) -> mdn.MixtureParams:
+        """Teacher forcing on target motion (B, T, F): params of frames 0..T-1, (B, T, ...)."""
+        prev = torch.cat([motion.new_zeros(motion.shape[0], 1, motion.shape[2]),
+                          motion[:, :-1]], dim=1)
+        params, _ = self._decode(self.encode(tokens, token_lengths), prev)
+        return params
+
+    def step(self, state: dict, prev_frames: torch.Tensor) -> tuple[mdn.MixtureParams, dict]:
+        """One decoding step: prev_frames (N, F) -> params over N rows, new state."""
+        params, h = self._decode(state, prev_frames.unsqueeze(1))
+        return params.flatten(), {**state, "h": h}
+
+    def loss(self, batch: dict) -> dict[str, torch.Tensor]:
+        """batch: ``tokens`` (B, L), ``token_lengths`` (B,), ``motion`` (B, T, F) padded,
+        ``motion_lengths`` (B,). Losses are means over valid frames; ``nll`` is the
+        frame's negative log density (surrogate or exact), ``active_bce`` the flag's."""
+        motion, lengths = batch["motion"], batch["motion_lengths"]
+        B, T, _ = motion.shape
+        params = self(batch["tokens"], batch["token_lengths"], motion).flatten()
+        t = torch.arange(T).unsqueeze(0)
+        valid = (t < lengths.unsqueeze(1)).reshape(-1)
+        active = (t < (lengths.unsqueeze(1) - 1)).reshape(-1).float()
+        x = motion.reshape(B * T, -1)
+        log_density = (mdn.surrogate_log_prob if self.config.loss == "surrogate"
+                       else mdn.mixture_log_prob)(params, x)
+        nll = -log_density[valid].mean()
+        bce = -mdn.active_log_prob(params, active)[valid].mean()
+        return {"loss": nll + bce, "nll": nll.detach(), "active_bce": bce.detach()}
+
+    def to_checkpoint(self) -> dict:
+        return {"kind": self.kind, "config": asdict(self.config),
+                "vocab": pack_vocab(self.vocab), "normalizer": pack_normalizer(self.normalizer),
+                "state_dict": self.state_dict()}
+
+    @classmethod
+    def from_checkpoint(cls, d: dict) -> "LanguageToMotion":
+        model = cls(L2MConfig(**d["config"]), unpack_vocab(d.get("vocab")),
+                    unpack_normalizer(d.get("normalizer")))
+        model.load_state_dict(d["state_dict"])
+        return model.eval()
+
+    def save(self, path: str | Path) -> None:
+        """One self-describing file (atomic write)."""
+        write_checkpoint(self.to_checkpoint(), path)
+
+    @classmethod
+    def load(cls, path: str | Path) -> "LanguageToMotion":
+        """Rebuild from a file written by :meth:`save` or by the trainer; in eval mode."""
+        return cls.from_checkpoint(read_model_dict(path, cls.kind))

@@ -1,0 +1,141 @@
+"""Motion-to-language seq2seq model (Plappert, Mandery & Asfour 2018, Section 4.1).
+
+Encoder: bidirectional GRUs over motion features (paper: 2 x 64 per direction); context =
+last output of the last layer, both directions concatenated. Decoder: GRUs (paper: 2 x 128)
+each fed the context, the embedding of the previous word (64-d) and the previous layer's
+output; a softmax over the vocabulary reads every decoder layer's output. Optional
+additive attention (``attention=True``): the top decoder layer's output queries the encoder
+outputs and the attended vector joins the softmax input.
+
+The decoder is driven word by word through :meth:`MotionToLanguage.step` so that
+``motionlang.decoding.beam`` can search it without knowing the model.
+"""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import torch
+from torch import nn
+from torch.nn import functional as F
+
+from motionlang.models.checkpoint import (pack_normalizer, pack_vocab, read_model_dict,
+                                          unpack_normalizer, unpack_vocab, write_checkpoint)
+from motionlang.models.recurrent import AdditiveAttention, BiGRUEncoder, StackedDecoder
+
+
+@dataclass
+class M2LConfig:
+    """Sizes of the motion-to-language model; paper defaults except the data-given ones.
+
+    n_features: per-frame motion feature size F (from the features/dataset, never fixed here).
+    vocab_size: V, including PAD/SOS/EOS/UNK at ids ``pad_id``/``sos_id``/``eos_id``/3.
+    """
+
+    n_features: int
+    vocab_size: int
+    enc_hidden: int = 64
+    enc_layers: int = 2
+    dec_hidden: int = 128
+    dec_layers: int = 2
+    embed_dim: int = 64
+    dropout: float = 0.4
+    attention: bool = False
+    attn_dim: int = 64
+    pad_id: int = 0
+    sos_id: int = 1
+    eos_id: int = 2
+    max_len: int = 40          # decoding cap in tokens, EOS included
+
+
+class MotionToLanguage(nn.Module):
+    """Motion features (B, T, F) -> next-word logits (B, L, V).
+
+    ``vocab`` (a ``Vocabulary`` or a token list) and ``normalizer`` ride along in the
+    checkpoint so that :meth:`load` alone rebuilds a usable model.
+    """
+
+    kind = "m2l"
+
+    def __init__(self, config: M2LConfig, vocab: Any = None, normalizer: Any = None):
+        super().__init__()
+        c = self.config = config
+        self.vocab, self.normalizer = vocab, normalizer
+        self.encoder = BiGRUEncoder(c.n_features, c.enc_hidden, c.enc_layers, c.dropout)
+        ctx = self.encoder.out_dim
+        self.embed = nn.Embedding(c.vocab_size, c.embed_dim, padding_idx=c.pad_id)
+        self.decoder = StackedDecoder(ctx + c.embed_dim, c.dec_hidden, c.dec_layers, c.dropout)
+        out_in = self.decoder.out_dim
+        self.attn = None
+        if c.attention:
+            self.attn = AdditiveAttention(c.dec_hidden, ctx, c.attn_dim)
+            out_in += ctx
+        self.drop = nn.Dropout(c.dropout)
+        self.out = nn.Linear(out_in, c.vocab_size)
+
+    # -- encoder / decoder -------------------------------------------------------------
+    def encode(self, motion: torch.Tensor, lengths: torch.Tensor) -> dict:
+        """motion (B, T, F), lengths (B,) -> decoder state with ``h`` (B, layers, H) zeros,
+        ``context`` (B, C), encoder ``memory`` (B, T, C) and its ``mask`` (B, T)."""
+        context, memory, mask = self.encoder(motion, lengths)
+        B = motion.shape[0]
+        h = motion.new_zeros(B, self.config.dec_layers, self.config.dec_hidden)
+        return {"h": h, "context": context, "memory": memory, "mask": mask}
+
+    def _decode(self, state: dict, tokens: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        """tokens (B, L) previous words -> logits (B, L, V), new hidden (B, layers, H)."""
+        L = tokens.shape[1]
+        emb = self.drop(self.embed(tokens))
+        ctx = state["context"].unsqueeze(1).expand(-1, L, -1)
+        outs, h = self.decoder(torch.cat([ctx, emb], dim=-1), state["h"])
+        if self.attn is not None:
+            top = outs[..., -self.config.dec_hidden:]
+            att, _ = self.attn(top, state["memory"], state["mask"])
+            outs = torch.cat([outs, att], dim=-1)
+        return self.out(outs), h
+
+    def forward(self, motion: torch.Tensor, lengths: torch.Tensor,
+                tokens_in: torch.Tensor) -> torch.Tensor:
+        """Teacher forcing: tokens_in (B, L) = SOS w1 ... -> logits (B, L, V)."""
+        logits, _ = self._decode(self.encode(motion, lengths), tokens_in)
+        return logits
+
+    def step(self, state: dict, prev_tokens: torch.Tensor) -> tuple[torch.Tensor, dict]:
+        """One decoding step: prev_tokens (N,) -> log probabilities (N, V), new state."""
+        logits, h = self._decode(state, prev_tokens.unsqueeze(1))
+        return F.log_softmax(logits[:, 0].float(), dim=-1), {**state, "h": h}
+
+    def loss(self, batch: dict) -> dict[str, torch.Tensor]:
+        """batch: ``motion`` (B, T, F), ``motion_lengths`` (B,), ``tokens`` (B, L) long =
+        SOS w1 .. wn EOS padded with PAD. Returns token-mean cross-entropy as ``loss``."""
+        tokens = batch["tokens"]
+        logits = self(batch["motion"], batch["motion_lengths"], tokens[:, :-1])
+        target = tokens[:, 1:]
+        ce = F.cross_entropy(logits.reshape(-1, logits.shape[-1]), target.reshape(-1),
+                             ignore_index=self.config.pad_id)
+        valid = target != self.config.pad_id
+        acc = (logits.argmax(-1) == target)[valid].float().mean()
+        return {"loss": ce, "token_acc": acc.detach()}
+
+    # -- checkpoints -------------------------------------------------------------------
+    def to_checkpoint(self) -> dict:
+        return {"kind": self.kind, "config": asdict(self.config),
+                "vocab": pack_vocab(self.vocab), "normalizer": pack_normalizer(self.normalizer),
+                "state_dict": self.state_dict()}
+
+    @classmethod
+    def from_checkpoint(cls, d: dict) -> "MotionToLanguage":
+        model = cls(M2LConfig(**d["config"]), unpack_vocab(d.get("vocab")),
+                    unpack_normalizer(d.get("normalizer")))
+        model.load_state_dict(d["state_dict"])
+        return model.eval()
+
+    def save(self, path: str | Path) -> None:
+        """One self-describing file (atomic write)."""
+        write_checkpoint(self.to_checkpoint(), path)
+
+    @classmethod
+    def load(cls, path: str | Path) -> "MotionToLanguage":
+        """Rebuild from a file written by :meth:`save` or by the trainer; in eval mode."""
+        return cls.from_checkpoint(read_model_dict(path, cls.kind))

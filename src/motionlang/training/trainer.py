@@ -1,0 +1,295 @@
+"""The shared, model-agnostic trainer of every gradient-trained motionlang model.
+
+A model only needs ``loss(batch) -> dict[str, Tensor]`` with a scalar ``"loss"`` (a mean
+over the batch's items; other entries are logged) and, for self-describing checkpoints,
+``to_checkpoint() -> dict`` (otherwise its ``state_dict`` is stored). Data is any sequence
+of items plus a ``collate(list_of_items) -> batch`` function.
+
+What it does: NAdam (default) with gradient clipping; a progress bar with loss and
+throughput (sequences/s); validation each epoch; ``last.pt`` / ``best.pt`` written
+atomically with model, optimizer, every rank's RNG states and the position (epoch, batch,
+step), so that ``fit(resume=True)`` continues bit-for-bit like an uninterrupted run with the
+same seed; ``history.json`` and ``loss_curve.png``.
+
+Data parallel: launched with ``torchrun --nproc_per_node N`` the trainer joins the gloo
+process group, gives each rank an interleaved share of every global batch, and all-reduces
+the gradients weighted by share size, so N processes follow the same trajectory as one
+process on the same global batches (up to float summation order). Only rank 0 writes files.
+"""
+from __future__ import annotations
+
+import json
+import logging
+import math
+import os
+import random
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any, Callable, Sequence
+
+import numpy as np
+import torch
+import torch.distributed as dist
+
+from motionlang.errors import MotionlangError
+from motionlang.models.checkpoint import write_checkpoint
+from motionlang.utils.atomic import atomic_path, atomic_write
+from motionlang.utils.progress import progress
+
+log = logging.getLogger(__name__)
+OPTIMIZERS = {"nadam": torch.optim.NAdam, "adam": torch.optim.Adam,
+              "adamw": torch.optim.AdamW, "sgd": torch.optim.SGD}
+
+
+@dataclass
+class TrainConfig:
+    """Options of :class:`Trainer`.
+
+    batch_size is the GLOBAL batch (split across ranks under torchrun). grad_clip is a max
+    global L2 norm (None: no clipping). checkpoint_every: also write ``last.pt`` every this
+    many steps (0: at epoch ends only). progress: None shows the bar on a terminal only.
+    """
+
+    epochs: int = 10
+    batch_size: int = 128
+    lr: float = 1e-3
+    optimizer: str = "nadam"
+    weight_decay: float = 0.0
+    grad_clip: float | None = None
+    seed: int = 0
+    out_dir: str = "runs/train"
+    checkpoint_every: int = 0
+    plot: bool = True
+    progress: bool | None = None
+
+
+def init_distributed() -> tuple[int, int]:
+    """Join the gloo process group when started by torchrun; returns (rank, world_size)."""
+    if int(os.environ.get("WORLD_SIZE", "1")) > 1 and not dist.is_initialized():
+        dist.init_process_group("gloo")
+    if dist.is_initialized():
+        return dist.get_rank(), dist.get_world_size()
+    return 0, 1
+
+
+def _rng_state() -> dict:
+    np_state = np.random.get_state()
+    py_state = random.getstate()
+    return {"torch": torch.get_rng_state(),
+            "numpy": [np_state[0], np_state[1].tolist(), *map(float, np_state[2:])],
+            "python": [py_state[0], list(py_state[1]), py_state[2]]}
+
+
+def _set_rng_state(s: dict) -> None:
+    torch.set_rng_state(s["torch"])
+    n = s["numpy"]
+    np.random.set_state((n[0], np.array(n[1], dtype=np.uint32), int(n[2]), int(n[3]), n[4]))
+    random.setstate((s["python"][0], tuple(s["python"][1]), s["python"][2]))
+
+
+class Trainer:
+    """Train ``model`` on ``train_set`` (see module docstring).
+
+    Args:
+        model: an ``nn.Module`` with ``loss(batch)``.
+        train_set, val_set: sequences of items; ``collate`` turns a list of items into a batch.
+        config: :class:`TrainConfig`.
+    """
+
+    def __init__(self, model: torch.nn.Module, train_set: Sequence, collate: Callable[[list], Any],
+                 config: TrainConfig, val_set: Sequence | None = None):
+        if len(train_set) == 0:
+            raise MotionlangError("training set is empty")
+        if config.optimizer not in OPTIMIZERS:
+            raise MotionlangError(f"unknown optimizer {config.optimizer!r}; "
+                                  f"choose from {sorted(OPTIMIZERS)}")
+        self.model, self.train_set, self.val_set = model, train_set, val_set
+        self.collate, self.config = collate, config
+        self.out_dir = Path(config.out_dir)
+        self.rank, self.world = init_distributed()
+        if self.world > 1:  # every rank starts from rank 0's weights
+            for p in model.parameters():
+                dist.broadcast(p.data, 0)
+        self.optimizer = OPTIMIZERS[config.optimizer](model.parameters(), lr=config.lr,
+                                                      weight_decay=config.weight_decay)
+        self.history: list[dict] = []
+
+    # -- data ---------------------------------------------------------------------------
+    def _batches(self, epoch: int) -> list[list[int]]:
+        """The epoch's global batches, a function of (seed, epoch) only."""
+        g = torch.Generator().manual_seed(self.config.seed * 100_003 + epoch)
+        perm = torch.randperm(len(self.train_set), generator=g).tolist()
+        bs = self.config.batch_size
+        return [perm[i:i + bs] for i in range(0, len(perm), bs)]
+
+    def _share(self, idx: list[int]) -> list[int]:
+        return idx[self.rank::self.world]
+
+    # -- one step -----------------------------------------------------------------------
+    def _train_step(self, idx: list[int]) -> dict[str, float]:
+        mine = self._share(idx)
+        self.model.train()
+        self.optimizer.zero_grad(set_to_none=False)
+        terms: dict[str, float] = {}
+        if mine:
+            out = self.model.loss(self.collate([self.train_set[i] for i in mine]))
+            out["loss"].backward()
+            terms = {k: float(v.detach()) for k, v in out.items()}
+        params = [p for p in self.model.parameters() if p.requires_grad]
+        if self.world > 1:
+            # Weight each rank's mean-gradient by its share so the sum is the global mean.
+            flat = torch.cat([p.grad.reshape(-1) for p in params]) * (len(mine) / len(idx))
+            dist.all_reduce(flat)
+            off = 0
+            for p in params:
+                n = p.numel()
+                p.grad.copy_(flat[off:off + n].view_as(p))
+                off += n
+        if self.config.grad_clip:
+            torch.nn.utils.clip_grad_norm_(params, self.config.grad_clip)
+        self.optimizer.step()
+        return terms
+
+    def _reduce(self, sums: dict[str, float], count: float) -> dict[str, float]:
+        """Item-weighted means of loss terms over all ranks."""
+        keys = sorted(sums)
+        if self.world > 1:
+            t = torch.tensor([count] + [sums[k] for k in keys], dtype=torch.float64)
+            dist.all_reduce(t)
+            count, vals = float(t[0]), t[1:].tolist()
+        else:
+            vals = [sums[k] for k in keys]
+        return {k: v / count for k, v in zip(keys, vals)} if count else {}
+
+    @torch.no_grad()
+    def validate(self) -> dict[str, float]:
+        """Item-weighted mean of every loss term over the validation set (all ranks)."""
+        if not self.val_set:
+            return {}
+        self.model.eval()
+        sums: dict[str, float] = {}
+        count = 0
+        order = list(range(len(self.val_set)))
+        bs = self.config.batch_size
+        for i in range(0, len(order), bs):
+            mine = self._share(order[i:i + bs])
+            if not mine:
+                continue
+            out = self.model.loss(self.collate([self.val_set[j] for j in mine]))
+            for k, v in out.items():
+                sums[k] = sums.get(k, 0.0) + float(v) * len(mine)
+            count += len(mine)
+        return self._reduce(sums, count)
+
+    # -- checkpoints --------------------------------------------------------------------
+    def _model_dict(self) -> dict:
+        if hasattr(self.model, "to_checkpoint"):
+            return self.model.to_checkpoint()
+        return {"kind": type(self.model).__name__, "state_dict": self.model.state_dict()}
+
+    def _save(self, name: str, pos: dict) -> None:
+        rng = [_rng_state()]
+        if self.world > 1:
+            gathered: list = [None] * self.world
+            dist.all_gather_object(gathered, rng[0])
+            rng = gathered
+        if self.rank != 0:
+            return
+        write_checkpoint({"model": self._model_dict(), "optimizer": self.optimizer.state_dict(),
+                          "rng": rng, "world_size": self.world, "history": self.history,
+                          "train_config": asdict(self.config), **pos}, self.out_dir / name)
+
+    def _load(self, path: Path) -> dict:
+        ck = torch.load(path, map_location="cpu", weights_only=True)
+        self.model.load_state_dict(ck["model"]["state_dict"])
+        self.optimizer.load_state_dict(ck["optimizer"])
+        if ck["world_size"] == self.world:
+            _set_rng_state(ck["rng"][self.rank])
+        else:
+            log.warning("%s was written by %d processes, now %d: RNG streams restart",
+                        path, ck["world_size"], self.world)
+            torch.manual_seed(self.config.seed + self.rank + ck["step"])
+        self.history = list(ck["history"])
+        return ck
+
+    # -- the loop -----------------------------------------------------------------------
+    def fit(self, resume: bool = False) -> list[dict]:
+        """Train for ``config.epochs`` epochs; with ``resume`` continue from ``last.pt``.
+
+        Returns the history: one dict per epoch with ``epoch``, ``step``, ``train`` and
+        ``val`` loss terms and ``seq_per_s``.
+        """
+        c = self.config
+        epoch, start_batch, step = 0, 0, 0
+        sums, count, best = {}, 0, math.inf
+        last = self.out_dir / "last.pt"
+        if resume and last.exists():
+            ck = self._load(last)
+            epoch, start_batch, step = ck["epoch"], ck["batch"], ck["step"]
+            sums, count, best = dict(ck["epoch_sums"]), ck["epoch_count"], ck["best"]
+            log.info("resuming from %s at epoch %d batch %d", last, epoch + 1, start_batch)
+        hide = True if self.rank else (None if c.progress is None else not c.progress)
+        while epoch < c.epochs:
+            batches = self._batches(epoch)
+            bar = progress(total=len(batches), initial=start_batch, unit="batch",
+                           desc=f"epoch {epoch + 1}/{c.epochs}", disable=hide)
+            t0, seen = time.perf_counter(), 0
+            for b in range(start_batch, len(batches)):
+                terms = self._train_step(batches[b])
+                n = len(self._share(batches[b]))
+                for k, v in terms.items():
+                    sums[k] = sums.get(k, 0.0) + v * n
+                count += n
+                step += 1
+                seen += len(batches[b])
+                bar.update(1)
+                bar.set_postfix(loss=f"{terms.get('loss', float('nan')):.4g}",
+                                seq_s=f"{seen / max(time.perf_counter() - t0, 1e-9):.0f}")
+                if c.checkpoint_every and step % c.checkpoint_every == 0 and b + 1 < len(batches):
+                    self._save("last.pt", {"epoch": epoch, "batch": b + 1, "step": step,
+                                           "epoch_sums": sums, "epoch_count": count, "best": best})
+            bar.close()
+            rate = seen / max(time.perf_counter() - t0, 1e-9)
+            train, val = self._reduce(sums, count), self.validate()
+            self.history.append({"epoch": epoch + 1, "step": step, "train": train, "val": val,
+                                 "seq_per_s": rate})
+            log.info("epoch %d: train %s val %s (%.0f seq/s)", epoch + 1, train, val, rate)
+            epoch, start_batch, sums, count = epoch + 1, 0, {}, 0
+            score = (val or train).get("loss", math.inf)
+            pos = {"epoch": epoch, "batch": 0, "step": step, "epoch_sums": {}, "epoch_count": 0}
+            if score < best:
+                best = score
+                self._save("best.pt", {**pos, "best": best})
+            self._save("last.pt", {**pos, "best": best})
+            if self.rank == 0:
+                self._write_history()
+        return self.history
+
+    def _write_history(self) -> None:
+        with atomic_write(self.out_dir / "history.json") as fh:
+            json.dump(self.history, fh, indent=1)
+        if self.config.plot:
+            plot_loss_curve(self.history, self.out_dir / "loss_curve.png")
+
+
+def plot_loss_curve(history: list[dict], path: str | Path) -> None:
+    """Train and validation loss per epoch as a PNG (atomic write)."""
+    # A bare Figure with the Agg canvas: no pyplot, so no global backend switch.
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    epochs = [h["epoch"] for h in history]
+    fig = Figure(figsize=(5, 3.2), dpi=100)
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    ax.plot(epochs, [h["train"].get("loss", np.nan) for h in history], "o-", label="train")
+    if any(h["val"] for h in history):
+        ax.plot(epochs, [h["val"].get("loss", np.nan) for h in history], "s-", label="validation")
+    ax.set_xlabel("epoch")
+    ax.set_ylabel("loss")
+    ax.grid(alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp)

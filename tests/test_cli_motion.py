@@ -1,0 +1,119 @@
+"""``motionlang info | render | convert | demo`` through ``cli.main.main``."""
+import json
+
+import imageio.v3 as iio
+import numpy as np
+import pytest
+
+from motionlang.cli import demo as demo_mod
+from motionlang.cli.main import main
+from tests.conftest import shared_file
+
+
+def run(capsys, *argv):
+    code = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_info_json_kit(capsys):
+    path = shared_file("kitml/00001_mmm.xml")
+    code, out, _ = run(capsys, "info", path, "--json")
+    assert code == 0
+    info = json.loads(out)
+    assert info["frames"] == 378 and info["fps"] == 100.0 and info["dofs"] == 44
+    assert info["duration_s"] == pytest.approx(3.78)
+    assert info["source_format"] == "mmm"
+    assert len(info["joint_names"]) == info["joints"]
+
+
+def test_info_amc_with_asf_text(capsys):
+    amc = shared_file("cmu35/35_01.amc")
+    code, out, _ = run(capsys, "info", amc, "--asf", shared_file("cmu35/35.asf"))
+    assert code == 0
+    assert "358" in out and "120" in out
+    code, out, _ = run(capsys, "info", amc, "--json", "--source-fps", "60")
+    assert json.loads(out)["fps"] == 60.0
+
+
+def test_render_gif_clip_and_strip(tmp_path, capsys):
+    src = shared_file("kitml/00001_mmm.xml")
+    gif = tmp_path / "out" / "walk.gif"
+    code, out, _ = run(capsys, "render", src, gif, "--start", "1", "--end", "1.5", "--fps", "10")
+    assert code == 0 and out.strip() == str(gif)
+    assert iio.imread(gif, index=None).shape[0] == 6  # 0.5 s at 10 fps, both ends
+    png = tmp_path / "strip.png"
+    widths = []
+    for n in (2, 5):
+        assert run(capsys, "render", src, png, "--strip", n)[0] == 0
+        widths.append(iio.imread(png).shape[1])
+    assert widths[0] < widths[1]
+    traj = tmp_path / "traj.png"
+    assert run(capsys, "render", src, traj, "--trajectory")[0] == 0 and traj.is_file()
+
+
+def test_convert_to_bvh_round_trip(tmp_path, capsys):
+    from motionlang.formats import read_motion
+
+    src = shared_file("kitml/00001_mmm.xml")
+    out = tmp_path / "walk.bvh"
+    code, _, _ = run(capsys, "convert", src, out, "--end", "1")
+    assert code == 0
+    back = read_motion(out)
+    orig = read_motion(src)[:101]
+    assert back.n_frames == 101 and back.fps == pytest.approx(100.0)
+    # the BVH may add end sites; compare the joints both skeletons have
+    common = [n for n in orig.skeleton.names if n in back.skeleton]
+    assert len(common) > 20
+    ib = [back.skeleton.index(n) for n in common]
+    io = [orig.skeleton.index(n) for n in common]
+    assert np.allclose(back.positions()[:, ib], orig.positions()[:, io], atol=2e-3)
+
+
+def test_bad_inputs_exit_2_naming_the_file(tmp_path, capsys):
+    missing = tmp_path / "nope.xml"
+    code, _, err = run(capsys, "info", missing)
+    assert code == 2 and str(missing) in err and "Traceback" not in err
+    bad = tmp_path / "bad.xml"
+    bad.write_text("<MMM><Motion><not closed")
+    out = tmp_path / "bad.gif"
+    code, _, err = run(capsys, "render", bad, out)
+    assert code == 2 and str(bad) in err
+    assert not out.exists()
+    code, _, err = run(capsys, "render", bad, tmp_path / "x.avi")
+    assert code == 2 and "x.avi" in err
+    code, _, err = run(capsys, "convert", bad, tmp_path / "x.bvh")
+    assert code == 2 and str(bad) in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.xml"]
+
+
+def test_render_empty_clip_is_an_error(tmp_path, capsys):
+    src = shared_file("kitml/00001_mmm.xml")
+    out = tmp_path / "a.gif"
+    code, _, err = run(capsys, "render", src, out, "--start", "10")
+    assert code == 2 and "no frames" in err and not out.exists()
+
+
+def test_demo_writes_three_files(tmp_path, capsys):
+    src = shared_file("cmu35/35_01.amc")
+    code, out, _ = run(capsys, "demo", "--input", src, "--out", tmp_path)
+    assert code == 0
+    written = out.split()
+    assert [p.rsplit("/", 1)[1] for p in written] == ["35_01.gif", "35_01_strip.png",
+                                                      "35_01_trajectory.png"]
+    for p in written:
+        assert iio.imread(p, index=0).size > 0
+
+
+def test_demo_without_data_says_what_to_pass(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(demo_mod, "data_dirs", lambda: [tmp_path])
+    code, _, err = run(capsys, "demo", "--out", tmp_path / "o")
+    assert code == 2 and "--input FILE" in err
+    assert not (tmp_path / "o").exists()
+
+
+def test_demo_finds_shared_data(monkeypatch, tmp_path):
+    path = shared_file("kitml/00001_mmm.xml")
+    monkeypatch.setenv(demo_mod.DATA_ENV, str(path.parents[1]))
+    monkeypatch.chdir(tmp_path)
+    assert demo_mod.find_demo_motion() == path

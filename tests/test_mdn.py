@@ -1,0 +1,73 @@
+"""Mixture density maths against torch.distributions and scipy."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+from scipy.stats import multivariate_normal
+from torch import distributions as td
+
+from motionlang.models import mdn
+
+torch.set_num_threads(1)
+
+
+def random_params(N=6, K=4, D=3, seed=0) -> mdn.MixtureParams:
+    g = torch.Generator().manual_seed(seed)
+    return mdn.MixtureParams(torch.randn(N, K, generator=g), torch.randn(N, K, D, generator=g),
+                             0.5 * torch.randn(N, K, D, generator=g), torch.randn(N, generator=g))
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_log_prob_matches_torch_distributions(seed):
+    p = random_params(seed=seed)
+    x = torch.randn(6, 3, generator=torch.Generator().manual_seed(100 + seed))
+    ref = td.MixtureSameFamily(td.Categorical(logits=p.logit_pi),
+                               td.Independent(td.Normal(p.mu, p.log_sigma.exp()), 1))
+    torch.testing.assert_close(mdn.mixture_log_prob(p, x), ref.log_prob(x), rtol=1e-5, atol=1e-5)
+
+
+def test_log_prob_matches_scipy():
+    p = random_params(N=3, K=2, D=4, seed=5)
+    x = torch.randn(3, 4, generator=torch.Generator().manual_seed(9))
+    pi = torch.softmax(p.logit_pi, -1).double().numpy()
+    for n in range(3):
+        dens = sum(pi[n, k] * multivariate_normal.pdf(
+            x[n].double().numpy(), mean=p.mu[n, k].double().numpy(),
+            cov=np.diag(np.exp(2 * p.log_sigma[n, k].double().numpy()))) for k in range(2))
+        assert float(mdn.mixture_log_prob(p, x)[n]) == pytest.approx(np.log(dens), rel=1e-5)
+
+
+def test_surrogate_is_the_weighted_lower_bound():
+    p = random_params(seed=1)
+    x = torch.randn(6, 3)
+    comp = td.Independent(td.Normal(p.mu, p.log_sigma.exp()), 1).log_prob(x.unsqueeze(1))
+    want = (torch.softmax(p.logit_pi, -1) * comp).sum(-1)
+    torch.testing.assert_close(mdn.surrogate_log_prob(p, x), want, rtol=1e-5, atol=1e-5)
+    assert (mdn.surrogate_log_prob(p, x) <= mdn.mixture_log_prob(p, x) + 1e-5).all()
+    one = mdn.MixtureParams(p.logit_pi[:, :1], p.mu[:, :1], p.log_sigma[:, :1], p.active_logit)
+    torch.testing.assert_close(mdn.surrogate_log_prob(one, x), mdn.mixture_log_prob(one, x))
+
+
+def test_active_log_prob_and_sampling_statistics():
+    p = random_params(N=2, K=2, D=2, seed=3)
+    a = torch.tensor([1.0, 0.0])
+    q = torch.sigmoid(p.active_logit)
+    torch.testing.assert_close(mdn.active_log_prob(p, a),
+                               torch.log(torch.stack([q[0], 1 - q[1]])), rtol=1e-5, atol=1e-6)
+    x, act = mdn.sample(p, 20000, torch.Generator().manual_seed(0))
+    assert x.shape == (2, 20000, 2) and act.shape == (2, 20000)
+    pi = torch.softmax(p.logit_pi, -1)
+    mean = (pi.unsqueeze(-1) * p.mu).sum(1)
+    torch.testing.assert_close(x.mean(1), mean, atol=0.05, rtol=0)
+    torch.testing.assert_close(act.mean(1), q, atol=0.02, rtol=0)
+
+
+def test_head_shapes_and_sigma_floor():
+    head = mdn.MixtureDensityHead(7, 3, 5, min_log_sigma=-2.0)
+    with torch.no_grad():
+        head.proj.bias.fill_(-100.0)
+    p = head(torch.zeros(2, 4, 7))
+    assert p.logit_pi.shape == (2, 4, 5) and p.mu.shape == (2, 4, 5, 3)
+    assert p.active_logit.shape == (2, 4) and p.log_sigma.min().item() == -2.0
+    assert p.flatten().mu.shape == (8, 5, 3)

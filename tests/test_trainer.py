@@ -1,0 +1,117 @@
+"""The shared trainer: resume equals uninterrupted, checkpoints, plots, 2-process DDP."""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import torch
+from trainer_tiny import TinyReg, collate, ddp_config, make_data
+
+from motionlang.training.trainer import TrainConfig, Trainer
+
+torch.set_num_threads(1)
+
+
+def config(out, epochs, **kw) -> TrainConfig:
+    return TrainConfig(**{"epochs": epochs, "batch_size": 8, "lr": 5e-3, "seed": 11,
+                          "grad_clip": 5.0, "out_dir": str(out), "plot": False,
+                          "progress": False, **kw})
+
+
+def run(out, epochs, resume=False, init_seed=0, fail_after=None, **kw):
+    torch.manual_seed(init_seed)
+    model = TinyReg(dropout=0.3, fail_after=fail_after)
+    trainer = Trainer(model, make_data(), collate, config(out, epochs, **kw),
+                      val_set=make_data(12, 1))
+    hist = trainer.fit(resume=resume)
+    return model, trainer, hist
+
+
+def assert_same_weights(a, b):
+    for (na, pa), (nb, pb) in zip(a.state_dict().items(), b.state_dict().items()):
+        assert na == nb and torch.equal(pa, pb), na
+
+
+def test_resume_at_epoch_end_equals_uninterrupted(tmp_path):
+    full, _, hist_full = run(tmp_path / "full", 4)
+    run(tmp_path / "part", 2)
+    # a differently initialised model: everything must come from last.pt
+    resumed, _, hist_res = run(tmp_path / "part", 4, resume=True, init_seed=99)
+    assert_same_weights(full, resumed)
+    assert [h["train"] for h in hist_full] == [h["train"] for h in hist_res]
+    assert [h["val"] for h in hist_full] == [h["val"] for h in hist_res]
+    assert len(hist_res) == 4
+
+
+def test_resume_after_mid_epoch_interruption(tmp_path):
+    full, _, hist_full = run(tmp_path / "full", 3, checkpoint_every=2)
+    with pytest.raises(KeyboardInterrupt):          # dies inside epoch 2 (5 batches/epoch)
+        run(tmp_path / "cut", 3, checkpoint_every=2, fail_after=8)
+    ck = torch.load(tmp_path / "cut" / "last.pt", weights_only=True)
+    assert (ck["epoch"], ck["batch"], ck["step"]) == (1, 3, 8)
+    resumed, _, hist_res = run(tmp_path / "cut", 3, resume=True, init_seed=5, checkpoint_every=2)
+    assert_same_weights(full, resumed)
+    assert [h["train"] for h in hist_full] == [h["train"] for h in hist_res]
+
+
+def test_outputs_and_learning(tmp_path):
+    model, trainer, hist = run(tmp_path, 6, plot=True, lr=3e-2)
+    assert hist[-1]["train"]["loss"] < 0.7 * hist[0]["train"]["loss"]
+    assert set(hist[0]["val"]) == {"loss", "mae"} and hist[0]["seq_per_s"] > 0
+    saved = json.loads((tmp_path / "history.json").read_text())
+    assert [h["epoch"] for h in saved] == list(range(1, 7))
+    png = (tmp_path / "loss_curve.png").read_bytes()
+    assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 2000
+    best = torch.load(tmp_path / "best.pt", weights_only=True)
+    vals = [h["val"]["loss"] for h in hist]
+    assert best["best"] == min(vals) and best["epoch"] == vals.index(min(vals)) + 1
+    last = torch.load(tmp_path / "last.pt", weights_only=True)
+    for k, v in model.state_dict().items():
+        assert torch.equal(last["model"]["state_dict"][k], v)
+    assert not list(tmp_path.glob(".*tmp*"))           # no temporary files left behind
+
+
+def test_trains_a_seq2seq_model_and_checkpoint_loads(tmp_path):
+    from test_seq2seq_models import make_batch, outputs, tiny
+
+    from motionlang.models.m2l import MotionToLanguage
+    batch = make_batch()
+    items = [{k: v[i] for k, v in batch.items()} for i in range(4)]
+
+    def collate_m2l(xs):
+        return {k: torch.stack([x[k] for x in xs]) for k in xs[0]}
+
+    model = tiny("m2l", True)
+    Trainer(model, items, collate_m2l, config(tmp_path, 2, batch_size=2)).fit()
+    loaded = MotionToLanguage.load(tmp_path / "last.pt")
+    torch.testing.assert_close(outputs(loaded, batch), outputs(model, batch), rtol=0, atol=0)
+
+
+def test_two_process_ddp_matches_single_process(tmp_path):
+    worker = Path(__file__).with_name("trainer_tiny.py")
+    proc = subprocess.run(
+        [sys.executable, "-m", "torch.distributed.run", "--standalone", "--nproc_per_node", "2",
+         str(worker), str(tmp_path)], capture_output=True, text=True, timeout=120,
+        env={**__import__("os").environ, "OMP_NUM_THREADS": "1"})
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    r0 = torch.load(tmp_path / "rank0.pt", weights_only=True)
+    r1 = torch.load(tmp_path / "rank1.pt", weights_only=True)
+    for k in r0:
+        assert torch.equal(r0[k], r1[k]), k                # ranks never diverge
+    torch.manual_seed(0)
+    single = TinyReg()
+    trainer = Trainer(single, make_data(), collate, ddp_config(tmp_path / "single"),
+                      val_set=make_data(16, 1))
+    hist = trainer.fit()
+    start = TinyReg()
+    moved = 0.0
+    for k, v in single.state_dict().items():
+        torch.testing.assert_close(r0[k], v, rtol=1e-4, atol=1e-5)
+        moved += float((v - start.state_dict()[k]).abs().sum())
+    assert moved > 0.1                                   # training really happened
+    ddp_hist = torch.load(tmp_path / "history.pt", weights_only=False)
+    assert ddp_hist[-1]["val"]["loss"] == pytest.approx(hist[-1]["val"]["loss"], rel=1e-4)
+    assert (tmp_path / "run" / "last.pt").exists()
