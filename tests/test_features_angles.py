@@ -80,8 +80,8 @@ def test_root_none_stands_still():
 def test_persistence_and_errors(fitted, tmp_path, tiny_motion):
     f, (m, _) = fitted
     f.save(tmp_path / "angles.json")
-    for g in (AnglesFeatures.load(tmp_path / "angles.json"), FeatureSet.load(tmp_path / "angles.json"),
-              features_from_dict(f.to_dict())):
+    path = tmp_path / "angles.json"
+    for g in (AnglesFeatures.load(path), FeatureSet.load(path), features_from_dict(f.to_dict())):
         assert isinstance(g, AnglesFeatures)
         assert np.array_equal(g.encode(m, 2), f.encode(m, 2))
         assert g.subject_height == f.subject_height

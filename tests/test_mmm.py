@@ -86,6 +86,18 @@ def test_skeleton_structure_and_scale():
         mmm_skeleton(0.0)
 
 
+def test_root_rotation_is_simox_rpy():
+    """Simox ``rpy2eigen4f(r, p, y)``: m20 = -sin p, m21 = cos p sin r, m10 = sin y cos p."""
+    from motionlang.kinematics.rotations import chain
+
+    sk = mmm_skeleton(1.0)
+    r, p, y = 0.3, -0.2, 1.1
+    R = chain(sk.root_axes, np.array([y, p, r]))  # Motion.root_rotation = (yaw, pitch, roll)
+    assert np.isclose(R[2, 0], -np.sin(p)) and np.isclose(R[2, 1], np.cos(p) * np.sin(r))
+    assert np.isclose(R[1, 0], np.sin(y) * np.cos(p)) and np.isclose(R[0, 0], np.cos(y) * np.cos(p))
+    assert np.isclose(R[2, 2], np.cos(p) * np.cos(r))
+
+
 def test_knee_flexion_moves_foot_backwards():
     sk = mmm_skeleton(1.0)
     a = np.zeros((1, 44))
@@ -277,6 +289,17 @@ def test_missing_root_position_and_bad_height(tmp_path):
     assert err.frame == 0 and "RootPosition" in err.reason
     err = _error(tmp_path, _doc(header=HEADER.replace("1.7", "tall")))
     assert "Height" in err.reason
+
+
+def test_object_motion_before_the_human(tmp_path):
+    obj = ("  <Motion name='cup'><Model><File>cup.xml</File></Model><JointOrder>"
+           "<Joint name='lid_joint'/></JointOrder></Motion>\n")
+    text = _doc().replace("  <Motion name='t'>", obj + "  <Motion name='t'>\n"
+                          "    <Model><File>mmm.xml</File></Model>", 1)
+    p = tmp_path / "two.xml"
+    p.write_text(text)
+    m = read_mmm(p)
+    assert m.meta["subject"] == "t" and np.allclose(m.angle("LKx_joint"), [-0.1, -0.3, -0.5])
 
 
 def test_missing_file(tmp_path):

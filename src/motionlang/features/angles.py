@@ -25,7 +25,7 @@ from motionlang.errors import MotionlangError, SkeletonError
 from motionlang.features import root as rootlib
 from motionlang.features.base import FeatureSet, as_numpy, downsample
 from motionlang.features.normalizer import Normalizer
-from motionlang.formats.mmm_model import MMM_DOF_ORDER, mmm_skeleton
+from motionlang.formats.mmm_model import MMM_DOF_ORDER, mmm_height, mmm_skeleton
 from motionlang.kinematics.motion import Motion
 
 ROOT_NAMES = ("root_vx", "root_vz", "root_dyaw", "root_height", "root_pitch", "root_roll")
@@ -140,7 +140,8 @@ class AnglesFeatures(FeatureSet):
         off = np.flatnonzero(f[:, -1] < 0.5)
         return max(1, int(off[0]) if len(off) else len(f))
 
-    def decode(self, features, skeleton=None, start=None, name: str = "decoded") -> Motion:
+    def decode(self, features, skeleton=None, start=(0.0, 0.0, 0.0),
+               name: str = "decoded") -> Motion:
         """Features (T, D) -> MMM :class:`Motion` at ``fps``.
 
         Frames from the first one whose active flag is below 0.5 are dropped (at least one
@@ -161,14 +162,14 @@ class AnglesFeatures(FeatureSet):
             r = raw[:, 44:50]
             traj = {"v": r[:, 0:2], "dyaw": r[:, 2], "height": r[:, 3], "pitch": r[:, 4],
                     "roll": r[:, 5]}
-            trans, rot = rootlib.trajectory_to_root(traj, sk, (0.0, 0.0, 0.0) if start is None else start)
+            trans, rot = rootlib.trajectory_to_root(traj, sk, start)
         else:
-            x0, z0, yaw0 = (0.0, 0.0, 0.0) if start is None else start
+            x0, z0, yaw0 = start
             p = np.tile([x0, self.rest_height, z0], (T, 1))
             ypr = np.tile([yaw0, 0.0, 0.0], (T, 1))
             trans, rot = rootlib.root_dofs(p, ypr, sk)
         return Motion(sk, self.fps, trans, rot, angles, name=name, source_format="mmm",
-                      meta={"height": self.subject_height, "decoded_from": self.kind})
+                      meta={"height": mmm_height(sk), "decoded_from": self.kind})
 
     # ------------------------------------------------------------------ persistence
     def _state(self) -> dict:

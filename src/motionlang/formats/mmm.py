@@ -27,11 +27,11 @@ DEFAULT_HEIGHT_M = 1.75
 DEFAULT_FPS = 100.0  # KIT records at 100 Hz; used when a file has a single frame
 
 
-def _frame_line(text: str, frame: int) -> int | None:
+def _frame_line(text: bytes, frame: int) -> int | None:
     """1-based line of the ``frame``-th ``<MotionFrame>`` (only computed on error)."""
-    for i, m in enumerate(re.finditer(r"<MotionFrame\b", text)):
+    for i, m in enumerate(re.finditer(rb"<MotionFrame\b", text)):
         if i == frame:
-            return text.count("\n", 0, m.start()) + 1
+            return text.count(b"\n", 0, m.start()) + 1
     return None
 
 
@@ -112,18 +112,21 @@ def read_mmm(path: str | Path) -> Motion:
     """
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8", errors="replace")
+        text = path.read_bytes()  # bytes: expat then honours the file's declared encoding
     except OSError as exc:
         raise MotionFormatError(path, f"cannot read file: {exc.strerror or exc}") from None
     try:
         root = ET.fromstring(text)
     except ET.ParseError as exc:
         line, _col = exc.position
-        raise MotionFormatError(path, f"invalid XML: {exc.msg if hasattr(exc, 'msg') else exc}",
-                                line=line) from None
-    motion = next((m for m in root.iter("Motion") if m.find("JointOrder") is not None), None)
-    if motion is None:
+        raise MotionFormatError(path, f"invalid XML: {exc}", line=line) from None
+    # A file may also animate objects; the human is the Motion on the model "mmm.xml".
+    candidates = [m for m in root.iter("Motion") if m.find("JointOrder") is not None]
+    if not candidates:
         raise MotionFormatError(path, "no <Motion> with a <JointOrder> found")
+    motion = next((m for m in candidates
+                   if (m.findtext("Model/File") or "").strip().lower().endswith("mmm.xml")),
+                  candidates[0])
     order = [j.get("name") for j in motion.find("JointOrder").findall("Joint")]
     height = _config_value(motion, "Height", DEFAULT_HEIGHT_M, path)
     mass_el = motion.find("ModelProcessorConfig/Mass")

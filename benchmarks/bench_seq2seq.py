@@ -1,0 +1,82 @@
+"""Speed of the Plappert et al. (2018) seq2seq models at paper size on this CPU.
+
+    .venv/bin/python benchmarks/bench_seq2seq.py [--features 50] [--vocab 1000] [--repeats 7]
+
+Prints medians of repeated runs: training throughput (sequences/s, batch 128) of M2L and L2M,
+``describe`` latency (beam width 5, batch 1, a 10 s motion at 10 Hz) and ``generate``
+latency of a 10-second motion (sampled beam, width 5, 5 samples, 100 frames at 10 Hz).
+Weights are random (speed does not depend on training); the L2M "active" bias is set high so
+every hypothesis runs the full 100 frames. Uses 1 thread unless --threads says otherwise.
+"""
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+
+import numpy as np
+import torch
+
+from motionlang.decoding.seq2seq import describe_features, generate_features
+from motionlang.models.l2m import L2MConfig, LanguageToMotion
+from motionlang.models.m2l import M2LConfig, MotionToLanguage
+from motionlang.training.collate import collate_pairs
+
+
+def median_time(fn, repeats: int) -> float:
+    fn()  # warm-up
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times)
+
+
+def fake_batch(rng, B, F, V, T=(30, 80), L=(6, 16)):
+    items = [{"motion": rng.normal(size=(int(rng.integers(*T)), F)).astype(np.float32),
+              "tokens": [1, *rng.integers(4, V, int(rng.integers(*L))).tolist(), 2]}
+             for _ in range(B)]
+    return collate_pairs(items)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--features", type=int, default=50)
+    ap.add_argument("--vocab", type=int, default=1000)
+    ap.add_argument("--repeats", type=int, default=7)
+    ap.add_argument("--threads", type=int, default=1)
+    args = ap.parse_args()
+    torch.set_num_threads(args.threads)
+    torch.manual_seed(0)
+    rng = np.random.default_rng(0)
+    F, V = args.features, args.vocab
+    m2l = MotionToLanguage(M2LConfig(n_features=F, vocab_size=V))
+    l2m = LanguageToMotion(L2MConfig(vocab_size=V, n_features=F))
+    batch = fake_batch(rng, 128, F, V)
+    for name, model in (("m2l", m2l), ("l2m", l2m)):
+        opt = torch.optim.NAdam(model.parameters(), lr=1e-3)
+        model.train()
+
+        def train_step():
+            opt.zero_grad()
+            model.loss(batch)["loss"].backward()
+            torch.nn.utils.clip_grad_norm_(model.parameters(), 25.0)
+            opt.step()
+        t = median_time(train_step, max(3, args.repeats // 2))
+        print(f"{name} train: {128 / t:8.1f} sequences/s  (batch 128, median {t * 1e3:.0f} ms/step)")
+    motion = rng.normal(size=(100, F)).astype(np.float32)
+    t = median_time(lambda: describe_features(m2l, motion, width=5, max_len=20), args.repeats)
+    print(f"describe (W=5, 100 frames, <=20 words): median {t * 1e3:.1f} ms")
+    with torch.no_grad():
+        l2m.head.proj.bias[-1] = 30.0     # always active -> full 100 frames
+    t = median_time(lambda: generate_features(l2m, [1, 5, 6, 7, 2], width=5, max_frames=100),
+                    args.repeats)
+    print(f"generate (W=5, 5 samples, 100 frames = 10 s at 10 Hz): median {t * 1e3:.1f} ms")
+    t = median_time(lambda: generate_features(l2m, [1, 5, 6, 7, 2], method="mean",
+                                              max_frames=100), args.repeats)
+    print(f"generate (mean decoding, 100 frames): median {t * 1e3:.1f} ms")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,141 @@
+"""MIT walking data (Taylor's motion.mat): layout, a plausible walker, bad input."""
+import numpy as np
+import pytest
+from scipy.io import savemat
+
+from motionlang.errors import MotionFormatError
+from motionlang.formats.mit import MIT_JOINT_NAMES, read_mit
+from tests.conftest import shared_file
+
+
+@pytest.fixture(scope="module")
+def mit():
+    return read_mit(shared_file("mit/motion.mat"))
+
+
+def test_sequences_and_layout(mit):
+    assert [m.n_frames for m in mit] == [438, 260, 3128]
+    assert all(m.fps == 30.0 and m.source_format == "mit" for m in mit)
+    sk = mit[0].skeleton
+    assert sk.names == list(MIT_JOINT_NAMES) and sk.ndof == 17 * 3
+    assert all(m.skeleton is sk for m in mit)
+    # bone lengths (mm in the file): thigh 399.43, shank 383.498, foot 178.197
+    assert np.isclose(np.linalg.norm(sk.joints[sk.index("lknee")].offset), 0.39943)
+    assert np.isclose(np.linalg.norm(sk.joints[sk.index("rankle")].offset), 0.383498)
+    assert ("lhip", "rhip") in sk.pairs and ("lwrist", "rwrist") in sk.pairs
+    # knees are hinges: only the Y (lateral) channel ever moves
+    knee = mit[2].joint_angles[:, sk.dof_slice("lknee")]
+    assert np.all(knee[:, [0, 2]] == 0) and knee[:, 1].max() > 1.0
+
+
+def test_root_round_trip_to_file_values(mit):
+    """The root rotation stored as yaw-pitch-roll rebuilds the file's matrix exactly."""
+    from scipy.io import loadmat
+
+    from motionlang.formats.mit import ROOT_AXES, ROOT_BASIS
+    from motionlang.kinematics.rotations import chain
+
+    raw = loadmat(str(shared_file("mit/motion.mat")))["Motion"][0, 1]
+    R_file = ROOT_BASIS @ chain(np.eye(3), raw[:, 0:3])
+    assert np.allclose(chain(ROOT_AXES, mit[1].root_rotation), R_file, atol=1e-9)
+    assert np.allclose(mit[1].root_translation, raw[:, 3:6] / 1000.0)
+
+
+@pytest.mark.parametrize("k", [0, 1, 2])
+def test_plausible_upright_walker(mit, k):
+    m = mit[k]
+    sk = m.skeleton
+    P = m.positions()  # canonical: Y up
+    shoulders = P[:, [sk.index("lshoulder"), sk.index("rshoulder")], 1]
+    assert 1.25 < np.median(shoulders) < 1.55  # the tree has no head
+    pelvis = P[:, 0, 1]
+    assert 0.75 < pelvis.min() and pelvis.max() < 0.95
+    feet = [sk.index(n) for n in ("lankle", "ltoes", "rankle", "rtoes")]
+    lowest = P[:, feet, 1].min(axis=1)
+    assert np.all(np.abs(lowest) < 0.1) and abs(np.median(lowest)) < 0.04
+    # left is +X canonical for a body facing +Z
+    assert np.median(P[:, sk.index("lhip"), 0] - P[:, sk.index("rhip"), 0]) > 0.15
+    # the body faces +Z (toes ahead of the ankles) ...
+    toe_ahead = P[:, sk.index("ltoes"), 2] - P[:, sk.index("lankle"), 2]
+    assert np.median(toe_ahead) > 0.05
+    # ... and walks forwards on the spot: the root stays within a metre while the foot on
+    # the ground slides backwards at walking speed (treadmill-like)
+    assert np.ptp(P[:, 0, 2]) < 1.0
+    low = np.argmin(P[:, feet, 1], axis=1)
+    v = np.diff(P[:, feet, 2], axis=0)[np.arange(m.n_frames - 1), low[:-1]] * m.fps
+    assert -1.6 < np.median(v) < -0.6
+
+
+def test_mirror_swaps_legs(mit):
+    m = mit[0][:20]
+    q = m.mirror().positions()
+    p = m.positions()
+    sk = m.skeleton
+    S = sk.world @ sk.mirror @ sk.world.T
+    assert np.allclose(q[:, sk.index("lankle")], p[:, sk.index("rankle")] @ S.T, atol=1e-9)
+
+
+def _cell(*arrays):
+    """A MATLAB 1 x n cell array (np.array would broadcast same-shaped arrays instead)."""
+    out = np.empty((1, len(arrays)), dtype=object)
+    for i, a in enumerate(arrays):
+        out[0, i] = a
+    return out
+
+
+def _mat(tmp_path, **variables):
+    path = tmp_path / "bad.mat"
+    savemat(str(path), variables)
+    return path
+
+
+def _tree(n=2):
+    nodes = np.zeros((1, n), dtype=[("children", "O"), ("parent", "O"), ("or", "O"),
+                                    ("offset", "O")])
+    for i in range(n):
+        nodes[0, i]["parent"] = np.zeros((0, 0)) if i == 0 else np.array([[i]], float)
+        nodes[0, i]["children"] = np.array([[i + 2]], float) if i < n - 1 else np.zeros((0, 0))
+        nodes[0, i]["or"] = np.array([[6 * i + 1, 6 * i + 2, 6 * i + 3]], float)
+        nodes[0, i]["offset"] = np.array([[6 * i + 4, 6 * i + 5, 6 * i + 6]], float)
+    skel = np.zeros((1, 1), dtype=[("tree", "O"), ("type", "O")])
+    skel[0, 0]["tree"] = nodes
+    skel[0, 0]["type"] = "mit"
+    return skel
+
+
+def _seq(T=4):
+    X = np.zeros((T, 12))
+    X[:, 0:2] = np.pi / 2  # standing root
+    X[:, 5] = 900.0
+    X[:, 11] = -400.0
+    return X
+
+
+def test_tiny_handmade_file(tmp_path):
+    path = _mat(tmp_path, skel=_tree(), Motion=_cell(_seq(), _seq(3)))
+    ms = read_mit(path)
+    assert [m.n_frames for m in ms] == [4, 3]
+    p = ms[0].positions()[0]
+    assert np.allclose(p[0], [0, 0.9, 0]) and np.allclose(p[1], [0, 0.5, 0], atol=1e-9)
+
+
+def test_bad_inputs(tmp_path):
+    (tmp_path / "junk.mat").write_bytes(b"not a mat file at all")
+    with pytest.raises(MotionFormatError, match="junk.mat"):
+        read_mit(tmp_path / "junk.mat")
+    with pytest.raises(MotionFormatError, match="'skel' and 'Motion'"):
+        read_mit(_mat(tmp_path, skel=_tree()))
+    wide = np.zeros((3, 13))
+    with pytest.raises(MotionFormatError, match="expected"):
+        read_mit(_mat(tmp_path, skel=_tree(), Motion=_cell(wide)))
+    nan = _seq()
+    nan[2, 7] = np.nan
+    with pytest.raises(MotionFormatError) as info:
+        read_mit(_mat(tmp_path, skel=_tree(), Motion=_cell(nan)))
+    assert info.value.frame == 2
+    moving = _seq()
+    moving[1, 11] = -300.0  # a bone that changes length
+    with pytest.raises(MotionFormatError, match="varies"):
+        read_mit(_mat(tmp_path, skel=_tree(), Motion=_cell(moving)))
+    with pytest.raises(MotionFormatError):
+        read_mit(tmp_path / "missing.mat")
