@@ -108,6 +108,25 @@ def test_rotation_convention_by_hand(tiny):
     assert m.fps == 60 and m.source_format == "amc"
 
 
+def test_radians_and_limits(tiny, tmp_path):
+    """``angle rad`` applies to the ASF axis and to AMC values; limits are kept."""
+    sk, _ = tiny
+    assert sk.asf_layout["limits"]["chest"] == [(-180, 180)] * 3
+    assert "rarm" not in sk.asf_layout["limits"]
+    rad_asf = tmp_path / "rad.asf"
+    rad_asf.write_text(TINY_ASF.replace("angle deg", "angle rad")
+                       .replace("axis 0 0 90 XYZ", f"axis 0 0 {np.pi / 2} XYZ")
+                       .replace("axis 0 0 -90 XYZ", f"axis 0 0 {-np.pi / 2} XYZ"))
+    frame = ([1, 2, 3, 10, 20, 30], [40, -50, 60], 70, -80)
+    (tmp_path / "deg.amc").write_text(tiny_amc([frame]))
+    rad = (frame[0][:3] + list(np.deg2rad(frame[0][3:])), list(np.deg2rad(frame[1])),
+           np.deg2rad(frame[2]), np.deg2rad(frame[3]))
+    (tmp_path / "rad.amc").write_text(tiny_amc([rad]).replace(":DEGREES\n", ""))
+    a = read_amc(tmp_path / "deg.amc", sk)
+    b = read_amc(tmp_path / "rad.amc", read_asf(rad_asf))
+    assert np.allclose(a.positions(), b.positions())
+
+
 def test_channels_round_trip_tiny(tiny):
     sk, tmp = tiny
     rng = np.random.default_rng(1)
@@ -240,6 +259,10 @@ def _asf_edit(old, new):
     (TINY_ASF[:TINY_ASF.index(":hierarchy")], "no :hierarchy"),
     (TINY_ASF[:TINY_ASF.index("     name larm")], "missing 'end'"),
     (_asf_edit("name rarm", "name larm"), "duplicate"),
+    (_asf_edit("(-180 180)\n  end", "(-180 180)\n           (0 1)\n  end"), "3 DOFs but 4 limits"),
+    (_asf_edit("(-180 180)\n  end", "(-180 18O)\n  end"), "malformed limits"),
+    (_asf_edit("(-180 180)\n  end", "(180 -180)\n  end"), "bad limits"),
+    (_asf_edit(":bonedata\n", ":bonedata\n  limits (0 1)\n"), "outside begin/end"),
 ])
 def test_bad_asf(tmp_path, text, words):
     path = tmp_path / "bad.asf"

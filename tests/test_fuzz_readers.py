@@ -19,7 +19,7 @@ from hypothesis import strategies as st
 
 from motionlang.errors import MotionlangError
 from motionlang.formats.asf_amc import read_amc, read_asf
-from motionlang.formats.bvh import read_bvh
+from motionlang.formats.bvh import read_bvh, write_bvh
 from motionlang.kinematics import Motion
 from tests.conftest import SHARED
 from tests.test_asf_amc import TINY_ASF, tiny_amc
@@ -54,6 +54,12 @@ def _cut_mmm(text: str, frames: int) -> str:
     return "\n".join(lines[:ends[frames - 1] + 1] + tail) + "\n"
 
 
+def _write(name: str, data: bytes) -> Path:
+    path = WORK / name
+    path.write_bytes(data)
+    return path
+
+
 def _bases() -> dict[str, list[bytes]]:
     asf, amc = SHARED / "cmu35/35.asf", SHARED / "cmu35/35_01.amc"
     real = asf.is_file() and amc.is_file()
@@ -63,14 +69,18 @@ def _bases() -> dict[str, list[bytes]]:
         "bvh": [HAND.encode()],
         "mmm": [],
     }
+    if real:  # a BVH with CMU's 38 joints, written by motionlang from two AMC frames
+        m = read_amc(_write("base.amc", bases["amc"][0]), read_asf(asf))[:2]
+        write_bvh(m, WORK / "base.bvh")
+        bases["bvh"].append((WORK / "base.bvh").read_bytes())
     mmm = SHARED / "kitml/00001_mmm.xml"
     if mmm.is_file():
         bases["mmm"].append(_cut_mmm(mmm.read_text(), 3).encode())
     return bases
 
 
-BASES = _bases()
 WORK = Path(tempfile.mkdtemp(prefix="motionlang-fuzz-"))
+BASES = _bases()
 TINY_ASF_PATH = WORK / "tiny.asf"
 TINY_ASF_PATH.write_text(TINY_ASF)
 TINY_AMC = tiny_amc([([0, 1, 2, 3, 4, 5], [10, 20, 30], 40, 50)] * 3).encode()
@@ -109,12 +119,6 @@ def mutated(draw, bases: list[bytes]) -> bytes:
             i = draw(st.integers(0, len(data)))
             data = data[:i] + draw(st.binary(max_size=24)) + data[i:]
     return data
-
-
-def _write(name: str, data: bytes) -> Path:
-    path = WORK / name
-    path.write_bytes(data)
-    return path
 
 
 def _check(read) -> None:

@@ -183,13 +183,22 @@ def test_round_trip_random(tmp_path):
     rng = np.random.default_rng(1)
     sk = mmm_skeleton(1.64)
     m = Motion(sk, 25.0, rng.normal(size=(7, 3)), rng.uniform(-3, 3, (7, 3)),
-               rng.uniform(-2, 2, (7, 44)), meta={"mass": 61.5})
+               rng.uniform(-2, 2, (7, 44)), meta={"mass": 61.5, "subject": "a<b & 'c'"})
     write_mmm(m, tmp_path / "r.xml")
     back = read_mmm(tmp_path / "r.xml")
     assert back.fps == 25.0 and back.meta["height"] == 1.64 and back.meta["mass"] == 61.5
+    assert back.meta["subject"] == "a<b & 'c'"
     assert np.allclose(back.joint_angles, m.joint_angles, rtol=1e-5, atol=1e-5)
     assert np.allclose(back.root_rotation, m.root_rotation, rtol=1e-5, atol=1e-5)
     assert np.allclose(back.root_translation, m.root_translation, rtol=1e-5, atol=1e-6)
+
+
+@pytest.mark.parametrize("fps", [30.0, 29.97, 12.5, 120.0])
+def test_frame_rate_survives_writing(tmp_path, fps):
+    sk = mmm_skeleton(1.7)
+    m = Motion(sk, fps, np.zeros((50, 3)), np.zeros((50, 3)), np.zeros((50, 44)))
+    write_mmm(m, tmp_path / "f.xml")
+    assert read_mmm(tmp_path / "f.xml").fps == pytest.approx(fps, rel=1e-6)
 
 
 def test_write_refuses_other_skeletons(tiny_motion, tmp_path):

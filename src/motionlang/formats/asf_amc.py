@@ -22,6 +22,7 @@ skeleton order, which is the ASF bonedata order whenever that lists parents firs
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -80,6 +81,31 @@ class _Bone:
         self.axis = np.zeros(3)
         self.order = "XYZ"
         self.dofs: list[str] = []
+        self.limits: list[tuple[float, float]] = []
+
+
+_LIMIT = re.compile(r"\(\s*([^\s()]+)\s+([^\s()]+)\s*\)")
+
+
+def _limits(text: str, path, line: int) -> list[tuple[float, float]]:
+    """``(lo hi)`` pairs on one line (``inf`` allowed: some ASFs leave DOFs unbounded)."""
+    body = text.strip()
+    if body.lower().startswith("limits"):
+        body = body[6:]
+    pairs = _LIMIT.findall(body)
+    if not pairs or _LIMIT.sub("", body).strip():
+        raise MotionFormatError(path, f"malformed limits {body.strip()[:40]!r}", line=line)
+    out = []
+    for lo, hi in pairs:
+        try:
+            a, b = float(lo), float(hi)
+        except ValueError:
+            raise MotionFormatError(path, f"malformed limits ({lo[:20]} {hi[:20]})",
+                                    line=line) from None
+        if math.isnan(a) or math.isnan(b) or a > b:
+            raise MotionFormatError(path, f"bad limits ({lo[:20]} {hi[:20]})", line=line)
+        out.append((a, b))
+    return out
 
 
 # ------------------------------------------------------------------------------ ASF
@@ -88,7 +114,9 @@ def read_asf(path: str | Path) -> Skeleton:
 
     Returns:
         a ``Skeleton`` named ``"cmu:<file stem>"``, Y-up (``world = I``), offsets in metres,
-        ``file_unit`` = metres per ASF length unit.
+        ``file_unit`` = metres per ASF length unit. The file's AMC layout is kept in the
+        attribute ``asf_layout`` (dict: ``root_order``, ``dofs`` per bone in file order,
+        ``limits`` per bone as (lo, hi) pairs in the file's angle unit, ``degrees``).
 
     Raises:
         MotionFormatError: on any malformed content, naming the file and line.
@@ -138,11 +166,13 @@ def read_asf(path: str | Path) -> Skeleton:
                     raise MotionFormatError(path, "'begin' inside a bone", line=ln)
                 bone = _Bone(ln)
             elif bone is None:
-                if key != "limits" and not key.startswith("("):
-                    raise MotionFormatError(path, f"{tok[0]!r} outside begin/end", line=ln)
+                raise MotionFormatError(path, f"{tok[0][:40]!r} outside begin/end", line=ln)
             elif key == "end":
                 if not bone.name:
                     raise MotionFormatError(path, "bone without a name", line=ln)
+                if bone.limits and len(bone.limits) != len(bone.dofs):
+                    raise MotionFormatError(path, f"bone {bone.name!r} has {len(bone.dofs)} "
+                                                  f"DOFs but {len(bone.limits)} limits", line=ln)
                 if bone.name in bones or bone.name == "root":
                     raise MotionFormatError(path, f"duplicate bone name {bone.name!r}", line=ln)
                 bones[bone.name] = bone
@@ -169,8 +199,10 @@ def read_asf(path: str | Path) -> Skeleton:
                     raise MotionFormatError(path, f"unsupported or repeated DOFs {tok[1:]} "
                                                   "(only rx ry rz are supported)", line=ln)
                 bone.dofs = dofs
-            elif key in ("id", "limits", "bodymass", "cofmass") or key.startswith("("):
-                pass  # limits are informative only; ids are not used for linking
+            elif key == "limits" or key.startswith("("):
+                bone.limits += _limits(text.split("#", 1)[0], path, ln)
+            elif key in ("id", "bodymass", "cofmass"):
+                pass  # ids are not used for linking; masses are not modelled
             else:
                 raise MotionFormatError(path, f"unknown bone field {tok[0]!r}", line=ln)
         elif section == ":hierarchy":
@@ -225,7 +257,8 @@ def read_asf(path: str | Path) -> Skeleton:
         raise MotionFormatError(path, str(exc)) from None
     # the AMC layout, kept on the skeleton so that writers reproduce the file's channel order
     sk.asf_layout = {"root_order": root_order, "rot_tokens": rot_tokens, "degrees": deg,
-                     "dofs": {n: list(b.dofs) for n, b in bones.items()}}
+                     "dofs": {n: list(b.dofs) for n, b in bones.items()},
+                     "limits": {n: list(b.limits) for n, b in bones.items() if b.limits}}
     return sk
 
 

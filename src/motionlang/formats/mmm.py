@@ -12,6 +12,7 @@ from __future__ import annotations
 import functools
 import re
 import xml.etree.ElementTree as ET
+from xml.sax.saxutils import escape
 from pathlib import Path
 
 import numpy as np
@@ -190,7 +191,7 @@ def _frames_template(n_dof: int, n_frames: int) -> str:
 
 def _frame_template(n_dof: int) -> str:
     zeros = "0 " * n_dof
-    return ("\t\t\t<MotionFrame>\n\t\t\t\t<Timestep>%.6g</Timestep>\n"
+    return ("\t\t\t<MotionFrame>\n\t\t\t\t<Timestep>%.10g</Timestep>\n"
             "\t\t\t\t<RootPosition>%.6g %.6g %.6g</RootPosition>\n"
             "\t\t\t\t<RootRotation>%.6g %.6g %.6g</RootRotation>\n"
             "\t\t\t\t<JointPosition>" + "%.6g " * n_dof + "</JointPosition>\n"
@@ -202,8 +203,8 @@ def _frame_template(n_dof: int) -> str:
 def write_mmm(motion: Motion, path: str | Path) -> None:
     """Write ``motion`` (on an MMM skeleton) as a KIT MMM XML file, atomically.
 
-    Values are printed with 6 significant digits, like KIT's own files; root position in
-    mm. The subject height comes from the skeleton, the mass from ``meta["mass"]``.
+    Values are printed with 6 significant digits, like KIT's own files (timesteps with 10,
+    so that long motions keep their frame rate); root position in mm. The subject height comes from the skeleton, the mass from ``meta["mass"]``.
 
     Raises:
         SkeletonError: if the motion's skeleton is not the MMM model.
@@ -222,7 +223,7 @@ def write_mmm(motion: Motion, path: str | Path) -> None:
         motion.joint_angles[:, cols]], axis=1)
     mass = motion.meta.get("mass")
     mass = f"\t\t\t<Mass>{float(mass):.6g}</Mass>\n" if mass else ""
-    name = str(motion.meta.get("subject") or motion.name).replace("'", "")
+    name = escape(str(motion.meta.get("subject") or motion.name), {"'": "&apos;", '"': "&quot;"})
     joints = "".join(f"\t\t\t<Joint name='{n}'/>\n" for n in MMM_DOF_ORDER)
     body = _frames_template(len(MMM_DOF_ORDER), T) % tuple(data.ravel().tolist())
     with atomic_write(path) as fh:

@@ -6,10 +6,12 @@ starts and ends standing; segments join at standing stances, so transitions are 
 """
 from __future__ import annotations
 
+import functools
+
 import numpy as np
-from scipy.ndimage import gaussian_filter1d
 
 from motionlang.datasets.synth import actions, arms, gait
+from motionlang.datasets.synth.actions import keyframes
 from motionlang.datasets.synth.body import Body
 from motionlang.datasets.synth.spec import UPPER_ACTIONS, Primitive
 from motionlang.datasets.synth.track import (FPS, UPPER_DOFS, Stance, Track, concat_tracks,
@@ -156,10 +158,8 @@ def build_motion(program: list[Primitive], style: dict, rng: np.random.Generator
         the motion, the program with ``start``/``end`` frames filled in, and the assembled
         track (its ``contact`` flags are the ground-truth foot contacts).
     """
-    from motionlang.formats.mmm_model import mmm_skeleton
-
     body = Body(style["height"])
-    sk = skeleton or mmm_skeleton(style["height"])
+    sk = skeleton or _skeleton(float(style["height"]))
     yaw0 = float(rng.uniform(-np.pi, np.pi))
     stance = Stance.standing(rng.uniform(-1.0, 1.0, 2), yaw0, 0.105 * body.height)
     tracks, out = [], []
@@ -169,14 +169,20 @@ def build_motion(program: list[Primitive], style: dict, rng: np.random.Generator
     for p in program:
         q = Primitive.from_dict(p.to_dict())
         if p.layer == "upper":
-            body_tr = tracks[-1]
-            body_start = out[-1].start
-            span = body_tr.n_frames
-            need = int(round(arms.natural_duration(p.action, p.count, style) * FPS))
-            off = max(0, (span - need) // 2)
+            body_tr, body_start = tracks[-1], out[-1].start
+            span = body_tr.n_frames / FPS - 0.4
+            # fit the repetitions into the body segment: fewer, then quicker
+            while q.count > 1 and arms.natural_duration(q.action, q.count, style) > span:
+                q.count -= 1
+            up_style = dict(style)
+            while arms.natural_duration(q.action, q.count, up_style) > span \
+                    and up_style["tempo"] > 0.5:
+                up_style["tempo"] *= 0.9
+            need = int(round(arms.natural_duration(q.action, q.count, up_style) * FPS))
+            off = max(0, (body_tr.n_frames - need) // 2)
             q.start = body_start + off
-            q.end = body_start + arms.apply_upper(body_tr, p.action, p.side, p.count, off,
-                                                  style, rng)
+            q.end = body_start + arms.apply_upper(body_tr, q.action, q.side, q.count, off,
+                                                  up_style, rng)
             out.append(q)
             continue
         tr, stance = _segment(body, stance, style, rng, p)
@@ -196,10 +202,23 @@ def build_motion(program: list[Primitive], style: dict, rng: np.random.Generator
     return motion, out, track
 
 
-def _add_noise(track: Track, rng: np.random.Generator, amp: float = 0.015) -> None:
-    """Slow, smooth wobble on the spine, neck and arms (legs stay exact for the feet)."""
+def _add_noise(track: Track, rng: np.random.Generator, amp: float = 0.015,
+               knot_s: float = 0.35) -> None:
+    """Slow, smooth wobble on the spine, neck and arms (legs stay exact for the feet):
+    random values every ``knot_s`` seconds, eased in between."""
     T = track.n_frames
-    noise = gaussian_filter1d(rng.normal(size=(T, len(UPPER_DOFS))), 25, axis=0, mode="nearest")
-    noise *= amp / max(float(noise.std()), 1e-9)
+    step = int(knot_s * FPS)
+    knots = rng.normal(0.0, amp, size=(T // step + 2, len(UPPER_DOFS)))
+    knots[0] = 0.0
+    kt = np.arange(len(knots)) * step
+    noise = keyframes(np.arange(T, dtype=float), kt, knots)
     for i, n in enumerate(UPPER_DOFS):
         track.upper[n] = track.upper[n] + noise[:, i]
+
+
+@functools.lru_cache(maxsize=128)
+def _skeleton(height: float):
+    """MMM skeletons per height, shared (motions never modify their skeleton)."""
+    from motionlang.formats.mmm_model import mmm_skeleton
+
+    return mmm_skeleton(height)

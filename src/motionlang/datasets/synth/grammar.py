@@ -62,8 +62,8 @@ def number(n: int, rng: np.random.Generator) -> str:
 
 
 def times(n: int, rng: np.random.Generator) -> str:
-    if n == 1 and rng.random() < 0.7:
-        return "once"
+    if n == 1:
+        return "once" if rng.random() < 0.8 else _pick(rng, ("one time", "a single time"))
     if n == 2 and rng.random() < 0.5:
         return "twice"
     return f"{number(n, rng)} times"
