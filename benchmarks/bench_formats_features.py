@@ -13,7 +13,7 @@ from _common import median_time, need_data  # noqa: E402
 
 from motionlang.features import AnglesFeatures, PositionFeatures, TaylorFeatures  # noqa: E402
 from motionlang.formats.asf_amc import read_asf_amc  # noqa: E402
-from motionlang.formats.mmm import read_mmm  # noqa: E402
+from motionlang.formats.mmm import read_mmm, write_mmm  # noqa: E402
 from motionlang.render import render_animation, render_strip  # noqa: E402
 
 
@@ -26,6 +26,7 @@ def main() -> None:
     out = Path(tempfile.mkdtemp())
     rows = [
         ("read_mmm 00001 (378 frames)", lambda: read_mmm(mmm_path), 7),
+        ("write_mmm 00001 (378 frames)", lambda: write_mmm(m, out / "w_mmm.xml"), 7),
         ("read_asf_amc 35_01 (358 frames)", lambda: read_asf_amc(asf, amc), 7),
         ("forward kinematics 00001", lambda: m.positions(), 7),
         ("angles.encode_all 00001 (10 sequences)", lambda: a.encode_all(m), 7),

@@ -32,6 +32,7 @@ FUZZ = settings(max_examples=EXAMPLES, derandomize=True, database=None,
 SPECIAL = [b"1e308", b"-1e308", b"nan", b"NaN", b"inf", b"-inf", b"1e999", b"", b"0x10",
            b"1e-400", b"123456789012345678901234567890", b"1.5.5", b"-", b"{", b"}", b"9" * 400]
 NUMBER = re.compile(rb"-?\d+(?:\.\d+)?(?:e[-+]?\d+)?")
+TOKEN = re.compile(rb"[^\s<>=']+")
 
 
 def _cut_amc(text: str, frames: int) -> str:
@@ -89,11 +90,12 @@ TINY_AMC = tiny_amc([([0, 1, 2, 3, 4, 5], [10, 20, 30], 40, 50)] * 3).encode()
 @st.composite
 def mutated(draw, bases: list[bytes]) -> bytes:
     """One of ``bases`` with 1-3 random edits: truncation, a flipped byte, a deleted,
-    duplicated or swapped line, a number replaced by an extreme or broken one, garbage."""
+    duplicated or swapped line, a number replaced by an extreme or broken one, a word
+    replaced by another word of the file, inserted garbage."""
     data = draw(st.sampled_from(bases))
     for _ in range(draw(st.integers(1, 3))):
         op = draw(st.sampled_from(["truncate", "flip", "delete", "duplicate", "swap",
-                                   "number", "number", "garbage"]))
+                                   "number", "number", "token", "garbage"]))
         lines = data.split(b"\n")
         if op == "truncate":
             data = data[:draw(st.integers(0, len(data)))]
@@ -115,6 +117,12 @@ def mutated(draw, bases: list[bytes]) -> bytes:
             if spans:
                 a, b = spans[draw(st.integers(0, len(spans) - 1))]
                 data = data[:a] + draw(st.sampled_from(SPECIAL)) + data[b:]
+        elif op == "token":  # a word replaced by another word of the file (a keyword...)
+            spans = [m.span() for m in TOKEN.finditer(data)]
+            if spans:
+                a, b = spans[draw(st.integers(0, len(spans) - 1))]
+                c, d = spans[draw(st.integers(0, len(spans) - 1))]
+                data = data[:a] + data[c:d] + data[b:]
         elif op == "garbage":
             i = draw(st.integers(0, len(data)))
             data = data[:i] + draw(st.binary(max_size=24)) + data[i:]

@@ -32,11 +32,17 @@ def test_root_round_trip_to_file_values(mit):
     """The root rotation stored as yaw-pitch-roll rebuilds the file's matrix exactly."""
     from scipy.io import loadmat
 
-    from motionlang.formats.mit import ROOT_AXES, ROOT_BASIS
-    from motionlang.kinematics.rotations import chain
+    from motionlang.formats.mit import ROOT_AXES, root_matrix
+    from motionlang.kinematics.rotations import axis_angle, chain
 
     raw = loadmat(str(shared_file("mit/motion.mat")))["Motion"][0, 1]
-    R_file = ROOT_BASIS @ chain(np.eye(3), raw[:, 0:3])
+    R_file = root_matrix(raw[:, 0:3])
+    # the convention written out: Q Rx(a) Rz(c) Ry(b) Q, Q the cycle x->y->z->x
+    x, y, z = np.eye(3)
+    Q = np.stack([y, z, x], axis=1)
+    a, b, c = raw[5, 0:3]
+    assert np.allclose(R_file[5], Q @ axis_angle(x, a) @ axis_angle(z, c) @ axis_angle(y, b) @ Q)
+    assert np.allclose(root_matrix(np.array([np.pi / 2, np.pi / 2, 0.0])), np.eye(3))
     assert np.allclose(chain(ROOT_AXES, mit[1].root_rotation), R_file, atol=1e-9)
     assert np.allclose(mit[1].root_translation, raw[:, 3:6] / 1000.0)
 
@@ -52,7 +58,8 @@ def test_plausible_upright_walker(mit, k):
     assert 0.75 < pelvis.min() and pelvis.max() < 0.95
     feet = [sk.index(n) for n in ("lankle", "ltoes", "rankle", "rtoes")]
     lowest = P[:, feet, 1].min(axis=1)
-    assert np.all(np.abs(lowest) < 0.1) and abs(np.median(lowest)) < 0.04
+    # a foot on the floor: within 8 cm in 99% of frames (the data has a few glitches)
+    assert np.percentile(np.abs(lowest), 99) < 0.08 and abs(np.median(lowest)) < 0.04
     # left is +X canonical for a body facing +Z
     assert np.median(P[:, sk.index("lhip"), 0] - P[:, sk.index("rhip"), 0]) > 0.15
     # the body faces +Z (toes ahead of the ankles) ...
@@ -62,8 +69,10 @@ def test_plausible_upright_walker(mit, k):
     # the ground slides backwards at walking speed (treadmill-like)
     assert np.ptp(P[:, 0, 2]) < 1.0
     low = np.argmin(P[:, feet, 1], axis=1)
-    v = np.diff(P[:, feet, 2], axis=0)[np.arange(m.n_frames - 1), low[:-1]] * m.fps
-    assert -1.6 < np.median(v) < -0.6
+    v = np.diff(P[:, feet], axis=0)[np.arange(m.n_frames - 1), low[:-1]] * m.fps
+    assert -1.6 < np.median(v[:, 2]) < -0.6
+    # ... and hardly sideways (the root convention was chosen by this; see mit.py)
+    assert np.median(np.abs(v[:, 0])) < 0.3
 
 
 def test_mirror_swaps_legs(mit):

@@ -9,7 +9,7 @@ from motionlang.errors import MotionFormatError, SkeletonError
 from motionlang.formats.mmm import MMM_DOF_ORDER, mmm_skeleton, read_mmm, write_mmm
 from motionlang.formats.mmm_model import mmm_height, mmm_kinematics
 from motionlang.kinematics import Motion
-from tests.conftest import shared_file, tiny_skeleton
+from tests.conftest import shared_file
 
 
 # ------------------------------------------------------------------ model facts
@@ -64,6 +64,29 @@ def test_project_copy_matches_the_reference_model():
             assert np.allclose(t / np.linalg.norm(t), node["axis"]), name
     # every recorded DOF is a revolute node of the model
     assert all(ours[n]["type"] == "revolute" for n in MMM_DOF_ORDER)
+
+
+def test_segment_lengths_agree_with_the_models_own_markers():
+    """Why the prismatic limits, not the transforms, are the segment lengths: with them the
+    model's motion-capture markers sit where Winter's anthropometry puts the landmarks."""
+    xml = ET.parse(shared_file("kitml/mmm_model.xml")).getroot()
+    sk = mmm_skeleton(1.0)
+    rot, pos = Motion(sk, 100.0, [[0, 0, 0.530]], np.zeros((1, 3)),
+                      np.zeros((1, 44))).global_transforms()
+    markers = {}
+    for node in xml.findall("RobotNode"):
+        if node.get("name") not in sk:
+            continue
+        j = sk.index(node.get("name"))
+        for sensor in node.findall("Sensor"):
+            m = sensor.find("Transform/Matrix4x4")
+            t = np.array([float(m.find(f"row{i}").get("c4")) for i in (1, 2, 3)]) / 1000.0
+            markers[sensor.get("name")] = pos[0, j] + rot[0, j] @ t
+    z = {k: v[2] for k, v in markers.items()}
+    assert abs(z["MARKER_LSHO"] - 0.818) < 0.01 and abs(z["MARKER_RSHO"] - 0.818) < 0.01
+    assert 0.10 < -markers["MARKER_LSHO"][0] < 0.14  # half the biacromial width
+    assert 0.92 < z["MARKER_LFHD"] < 1.0 and 0.80 < z["MARKER_C7"] < 0.86
+    assert abs(z["MARKER_LKNE"] - 0.285) < 0.01
 
 
 def test_skeleton_structure_and_scale():

@@ -9,7 +9,6 @@ the reference model.
 """
 from __future__ import annotations
 
-import functools
 import re
 import xml.etree.ElementTree as ET
 from xml.sax.saxutils import escape
@@ -103,8 +102,9 @@ def _config_value(motion: ET.Element, tag: str, default: float, path) -> float:
 def read_mmm(path: str | Path) -> Motion:
     """Read a KIT MMM motion file into a :class:`Motion` on :func:`mmm_skeleton`.
 
-    DOFs missing from ``<JointOrder>`` stay 0. ``meta``: ``height`` (m), ``mass`` (kg or
-    None), ``path``, ``subject`` (the ``<Motion name>``).
+    DOFs missing from ``<JointOrder>`` stay 0; a file without ``<Height>`` gets a 1.75 m
+    subject. ``meta``: ``height`` (m), ``mass`` (kg or None), ``path``, ``subject`` (the
+    ``<Motion name>``).
 
     Raises:
         MotionFormatError: unreadable XML, no JointOrder, an unknown joint name, no frames,
@@ -183,12 +183,6 @@ _HEAD = """<?xml version='1.0'?>
 _TAIL = "\t\t</MotionFrames>\n\t</Motion>\n\n</MMM>\n"
 
 
-@functools.lru_cache(maxsize=8)
-def _frames_template(n_dof: int, n_frames: int) -> str:
-    """printf template of ``n_frames`` frames (built once per length: writing is hot)."""
-    return _frame_template(n_dof) * n_frames
-
-
 def _frame_template(n_dof: int) -> str:
     zeros = "0 " * n_dof
     return ("\t\t\t<MotionFrame>\n\t\t\t\t<Timestep>%.10g</Timestep>\n"
@@ -204,7 +198,8 @@ def write_mmm(motion: Motion, path: str | Path) -> None:
     """Write ``motion`` (on an MMM skeleton) as a KIT MMM XML file, atomically.
 
     Values are printed with 6 significant digits, like KIT's own files (timesteps with 10,
-    so that long motions keep their frame rate); root position in mm. The subject height comes from the skeleton, the mass from ``meta["mass"]``.
+    so that long motions keep their frame rate); root position in mm. The subject height
+    comes from the skeleton, the mass from ``meta["mass"]``.
 
     Raises:
         SkeletonError: if the motion's skeleton is not the MMM model.
@@ -225,7 +220,8 @@ def write_mmm(motion: Motion, path: str | Path) -> None:
     mass = f"\t\t\t<Mass>{float(mass):.6g}</Mass>\n" if mass else ""
     name = escape(str(motion.meta.get("subject") or motion.name), {"'": "&apos;", '"': "&quot;"})
     joints = "".join(f"\t\t\t<Joint name='{n}'/>\n" for n in MMM_DOF_ORDER)
-    body = _frames_template(len(MMM_DOF_ORDER), T) % tuple(data.ravel().tolist())
+    # one printf over all frames: the corpus tools write thousands of files
+    body = (_frame_template(len(MMM_DOF_ORDER)) * T) % tuple(data.ravel().tolist())
     with atomic_write(path) as fh:
         fh.write(_HEAD.format(name=name, height=height, mass=mass, joints=joints))
         fh.write(body)

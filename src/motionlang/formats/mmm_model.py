@@ -13,9 +13,10 @@ Facts worth knowing about that model:
 * Every body segment is a *prismatic* node whose upper joint limit is the segment's length
   (Winter's table: trunk 40 + 60 + 188 = 288, neck 22 + 30, head 130, shoulder 87 + 23 ...);
   the translation in its ``Transform`` only gives the direction (for a few trunk nodes it
-  is twice the length). With the limits the model stands exactly 1000 mm tall, with the
-  translations 1188 mm, so the limits are what the model means. The prismatic DOFs
-  themselves never move in recorded motions and are not DOFs here.
+  is twice the length). With the limits the model stands exactly 1000 mm tall and its own
+  markers land on Winter's landmarks (acromion 818, knee 287); with the translations it
+  would be 1188 mm tall with shoulders 0.42 H wide. The prismatic DOFs themselves never
+  move in recorded motions and are not DOFs here.
 * Source frame: Z up, the body faces +Y, its left side is -X (so the sagittal mirror is
   ``diag(-1, 1, 1)``). ``world`` maps it to motionlang's canonical frame: Y up, facing +Z,
   left +X (the BVH/CMU habit).

@@ -1,8 +1,9 @@
 """Self-describing model checkpoints: config, vocabulary, normaliser and weights in one file.
 
 A checkpoint is a plain dict that ``torch.load(..., weights_only=True)`` accepts (no
-pickled classes): ``{"kind", "config", "vocab", "normalizer", "state_dict"}``. The trainer
-wraps it as ``{"model": <that dict>, "optimizer": ...}``; :func:`read_model_dict` accepts
+pickled classes): ``{"kind", "config", "vocab", "normalizer", "features", "state_dict"}``;
+the fitted feature set (whose own normaliser the data went through) rides along as its
+``to_dict``. The trainer wraps it as ``{"model": <that dict>, "optimizer": ...}``; :func:`read_model_dict` accepts
 both, so ``best.pt`` of a training run loads directly into a model.
 """
 from __future__ import annotations
@@ -69,6 +70,18 @@ def unpack_normalizer(d: dict | None) -> Any:
         except (ImportError, AttributeError):  # features layer without from_dict: keep the dict
             pass
     return d["data"]
+
+
+def pack_features(features: Any) -> dict | None:
+    """A fitted ``motionlang.features`` FeatureSet (``to_dict``) -> its JSON-ready dict."""
+    return None if features is None else _plain(features.to_dict())
+
+
+def unpack_features(d: dict | None) -> Any:
+    if d is None:
+        return None
+    from motionlang.features.base import features_from_dict
+    return features_from_dict(d)
 
 
 def write_checkpoint(payload: dict, path: str | Path) -> None:

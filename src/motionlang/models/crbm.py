@@ -229,14 +229,15 @@ class CRBM:
     # ----------------------------------------------------------------- inference
     def gibbs_frame(self, v: np.ndarray, past: np.ndarray, rng: np.random.Generator,
                     n_gibbs: int = 30, missing: np.ndarray | None = None,
-                    hidden_noise: float = 0.0) -> np.ndarray:
+                    hidden_noise: float = 0.0, mean_field: bool = False) -> np.ndarray:
         """Alternating Gibbs updates of one frame with its past fixed (all normalised).
 
         v (S, D) is the starting point (also the clamped values where ``missing`` (D,) or
         (S, D) is False); past (S, n*D). Hidden states are sampled except in the last
         update, where their probabilities give the mean-field visible (less jitter).
         ``hidden_noise`` is the std of Gaussian noise added to the hidden biases (one draw
-        per frame), the paper's way of moving between styles. Returns the new v (S, D).
+        per frame), the paper's way of moving between styles. ``mean_field`` uses hidden
+        probabilities in every update (deterministic). Returns the new v (S, D).
         """
         a_star, b_star = self.dynamic_biases(past)
         if hidden_noise > 0:
@@ -244,7 +245,7 @@ class CRBM:
         v = v.copy()
         for k in range(max(1, n_gibbs)):
             ph = self.hidden_probs(v, b_star)
-            h = ph if k == n_gibbs - 1 else (ph > rng.random(ph.shape)).astype(v.dtype)
+            h = ph if (mean_field or k == n_gibbs - 1) else (ph > rng.random(ph.shape)).astype(v.dtype)
             mean = self.visible_mean(h, a_star)
             if missing is None:
                 v = mean
@@ -272,7 +273,7 @@ class CRBM:
         return self.denormalise(out)
 
     def fill_in(self, frames: np.ndarray, known: np.ndarray, *, n_gibbs: int = 30, seed: int = 0,
-                n_samples: int = 1) -> np.ndarray:
+                n_samples: int = 1, mean_field: bool = False) -> np.ndarray:
         """Fill the unknown entries of ``frames`` (T, D) on-line, frame by frame.
 
         ``known`` is a (T, D) or (D,) boolean mask; the first ``order`` frames must be known.
@@ -301,7 +302,8 @@ class CRBM:
                 continue
             start = np.where(missing, x[:, t - 1], x[:, t])
             past = x[:, t - n:t][:, ::-1].reshape(n_samples, -1)
-            x[:, t] = self.gibbs_frame(start, past, rng, n_gibbs, missing=missing)
+            x[:, t] = self.gibbs_frame(start, past, rng, n_gibbs, missing=missing,
+                                       mean_field=mean_field)
         out = self.denormalise(x)
         out[:, known] = frames[known]   # bit-exact, not mean + std * (x - mean) / std
         return out

@@ -21,8 +21,9 @@ import torch
 from torch import nn
 
 from motionlang.models import mdn
-from motionlang.models.checkpoint import (pack_normalizer, pack_vocab, read_model_dict,
-                                          unpack_normalizer, unpack_vocab, write_checkpoint)
+from motionlang.models.checkpoint import (pack_features, pack_normalizer, pack_vocab,
+                                          read_model_dict, unpack_features, unpack_normalizer,
+                                          unpack_vocab, write_checkpoint)
 from motionlang.models.recurrent import AdditiveAttention, BiGRUEncoder, StackedDecoder
 
 
@@ -54,12 +55,13 @@ class LanguageToMotion(nn.Module):
 
     kind = "l2m"
 
-    def __init__(self, config: L2MConfig, vocab: Any = None, normalizer: Any = None):
+    def __init__(self, config: L2MConfig, vocab: Any = None, normalizer: Any = None,
+                 features: Any = None):
         super().__init__()
         c = self.config = config
         if c.loss not in ("surrogate", "exact"):
             raise ValueError(f"L2MConfig.loss must be 'surrogate' or 'exact', not {c.loss!r}")
-        self.vocab, self.normalizer = vocab, normalizer
+        self.vocab, self.normalizer, self.features = vocab, normalizer, features
         self.embed = nn.Embedding(c.vocab_size, c.embed_dim, padding_idx=c.pad_id)
         self.embed_norm = nn.LayerNorm(c.embed_dim)
         self.drop = nn.Dropout(c.dropout)
@@ -125,12 +127,12 @@ class LanguageToMotion(nn.Module):
     def to_checkpoint(self) -> dict:
         return {"kind": self.kind, "config": asdict(self.config),
                 "vocab": pack_vocab(self.vocab), "normalizer": pack_normalizer(self.normalizer),
-                "state_dict": self.state_dict()}
+                "features": pack_features(self.features), "state_dict": self.state_dict()}
 
     @classmethod
     def from_checkpoint(cls, d: dict) -> "LanguageToMotion":
         model = cls(L2MConfig(**d["config"]), unpack_vocab(d.get("vocab")),
-                    unpack_normalizer(d.get("normalizer")))
+                    unpack_normalizer(d.get("normalizer")), unpack_features(d.get("features")))
         model.load_state_dict(d["state_dict"])
         return model.eval()
 

@@ -20,8 +20,9 @@ import torch
 from torch import nn
 from torch.nn import functional as F
 
-from motionlang.models.checkpoint import (pack_normalizer, pack_vocab, read_model_dict,
-                                          unpack_normalizer, unpack_vocab, write_checkpoint)
+from motionlang.models.checkpoint import (pack_features, pack_normalizer, pack_vocab,
+                                          read_model_dict, unpack_features, unpack_normalizer,
+                                          unpack_vocab, write_checkpoint)
 from motionlang.models.recurrent import AdditiveAttention, BiGRUEncoder, StackedDecoder
 
 
@@ -58,10 +59,11 @@ class MotionToLanguage(nn.Module):
 
     kind = "m2l"
 
-    def __init__(self, config: M2LConfig, vocab: Any = None, normalizer: Any = None):
+    def __init__(self, config: M2LConfig, vocab: Any = None, normalizer: Any = None,
+                 features: Any = None):
         super().__init__()
         c = self.config = config
-        self.vocab, self.normalizer = vocab, normalizer
+        self.vocab, self.normalizer, self.features = vocab, normalizer, features
         self.encoder = BiGRUEncoder(c.n_features, c.enc_hidden, c.enc_layers, c.dropout)
         ctx = self.encoder.out_dim
         self.embed = nn.Embedding(c.vocab_size, c.embed_dim, padding_idx=c.pad_id)
@@ -122,12 +124,12 @@ class MotionToLanguage(nn.Module):
     def to_checkpoint(self) -> dict:
         return {"kind": self.kind, "config": asdict(self.config),
                 "vocab": pack_vocab(self.vocab), "normalizer": pack_normalizer(self.normalizer),
-                "state_dict": self.state_dict()}
+                "features": pack_features(self.features), "state_dict": self.state_dict()}
 
     @classmethod
     def from_checkpoint(cls, d: dict) -> "MotionToLanguage":
         model = cls(M2LConfig(**d["config"]), unpack_vocab(d.get("vocab")),
-                    unpack_normalizer(d.get("normalizer")))
+                    unpack_normalizer(d.get("normalizer")), unpack_features(d.get("features")))
         model.load_state_dict(d["state_dict"])
         return model.eval()
 

@@ -70,9 +70,10 @@ def arm_targets(action: str, side: str, count: int, t: np.ndarray, style: dict, 
         elif action == "wipe":
             per = 1.0 * tempo
             osc = np.sin(2 * np.pi * tin / per) * (tin < count * per)
-            pose = {"Sx": 0.95 + 0.1 * osc, "Sy": 0.25 + 0.35 * amp * osc, "Sz": 0.2,
-                    "Ex": 0.75 - 0.15 * osc}
-            extra["BTx_joint"] = -0.18 * w
+            # hand flat on a table in front of the hips, sweeping sideways
+            pose = {"Sx": 0.75 + 0.1 * osc, "Sy": 0.25 + 0.35 * amp * osc, "Sz": 0.2,
+                    "Ex": 0.55 - 0.15 * osc}
+            extra["BTx_joint"] = -0.25 * w
         else:
             raise ValueError(f"not an upper-body action: {action!r}")
         for key in KEYS:

@@ -120,6 +120,8 @@ def _attributes(prim: Primitive, toks: list[str]) -> None:
         nxt2 = toks[i + 2] if i + 2 < len(toks) else ""
         if t in ("left", "right", "both"):
             prim.side = t
+        elif t in ("leftwards", "leftward", "rightwards", "rightward"):
+            prim.side = "left" if t.startswith("left") else "right"
         elif t in ("clockwise", "counterclockwise") and a in ("turn", "walk", "run"):
             prim.side = "right" if t == "clockwise" else "left"
             if a != "turn":
@@ -138,8 +140,6 @@ def _attributes(prim: Primitive, toks: list[str]) -> None:
             prim.angle = _number(t)
         elif _number(t) is not None and (nxt in _COUNT_UNITS or nxt2 in _COUNT_UNITS and
                                          nxt in ("more", "small", "big", "quick", "slow")):
-            if t in ("a", "an", "single") and nxt in ("time",):
-                continue
             prim.count = _number(t)
         elif t in ("quarter",):
             prim.angle = 90

@@ -166,10 +166,12 @@ def locomotion(body: Body, stance: Stance, style: dict, rng: np.random.Generator
                 a1 = ankle_from_contact(body, np.array([[nx, ny, 0.0]]), np.array([nyaw]),
                                         np.array([pitch_strike]), np.array([False]))[0]
                 sw = (t[m] - nl) / (nland - nl)
-                e = smoothstep(sw)[:, None]
+                # lift off and set down vertically: the foot travels only in the middle
+                # 80 % of the swing, so it is clear of the floor whenever it moves
+                e = smoothstep((sw - 0.1) / 0.8)[:, None]
                 A[m] = a0 * (1 - e) + a1 * e
                 peak = 0.8 if kind == "walk" else 0.6
-                A[m, 2] += clearance * np.sin(np.pi * sw ** peak) ** 2
+                A[m, 2] += clearance * np.sin(np.pi * sw ** peak) ** 0.7
                 dyaw = np.angle(np.exp(1j * (nyaw - yaw)))
                 Y[m] = yaw + dyaw * e[:, 0]
                 P[m] = -pitch_off + (pitch_strike + pitch_off) * e[:, 0]

@@ -29,8 +29,7 @@ DIR_WORDS = {
     "right": ("to the right", "sideways to the right", "to the right side", "rightwards"),
 }
 CIRCLE_WORDS = {"left": ("in a circle to the left", "in a circle counterclockwise",
-                         "counterclockwise in a circle", "in a circle counter-clockwise",
-                         "in a circle anticlockwise"),
+                         "counterclockwise in a circle", "around in a circle counterclockwise"),
                 "right": ("in a circle to the right", "in a circle clockwise",
                           "clockwise in a circle")}
 SPEED_WORDS = {"slow": ("slowly", "at a slow pace", "very slowly"),

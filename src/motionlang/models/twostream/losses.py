@@ -1,0 +1,42 @@
+"""Loss terms of the two-stream model, each a masked mean over valid frames.
+
+Frames are model features (normalised); masks are (B, T) with 1 on valid frames.
+"""
+from __future__ import annotations
+
+import torch
+import torch.nn.functional as F
+
+
+def frame_mask(lengths: torch.Tensor | None, B: int, T: int) -> torch.Tensor:
+    """(B, T) float mask, 1 where ``t < lengths[b]`` (all ones without lengths)."""
+    if lengths is None:
+        return torch.ones(B, T)
+    return (torch.arange(T).unsqueeze(0) < lengths.unsqueeze(1)).float()
+
+
+def masked_smooth_l1(pred: torch.Tensor, target: torch.Tensor, mask: torch.Tensor
+                     ) -> torch.Tensor:
+    """Smooth-L1 of (B, T, F) sequences, averaged over features and valid frames."""
+    per_frame = F.smooth_l1_loss(pred, target, reduction="none").mean(dim=-1)
+    return (per_frame * mask).sum() / mask.sum().clamp(min=1.0)
+
+
+def velocity_loss(pred: torch.Tensor, target: torch.Tensor, mask: torch.Tensor
+                  ) -> torch.Tensor:
+    """Smooth-L1 between frame-to-frame differences (B, T-1, F) of both sequences."""
+    if pred.shape[1] < 2:
+        return pred.new_zeros(())
+    m = mask[:, 1:] * mask[:, :-1]
+    return masked_smooth_l1(pred[:, 1:] - pred[:, :-1], target[:, 1:] - target[:, :-1], m)
+
+
+def embedding_loss(a: dict[str, torch.Tensor], b: dict[str, torch.Tensor]) -> torch.Tensor:
+    """Sum over streams of the smooth-L1 between two embeddings (B, H)."""
+    return sum(F.smooth_l1_loss(a[s], b[s]) for s in a)
+
+
+def bce_logits(logits: torch.Tensor, real: bool) -> torch.Tensor:
+    """Binary cross-entropy of discriminator logits (B,) against all-real or all-fake."""
+    target = torch.ones_like(logits) if real else torch.zeros_like(logits)
+    return F.binary_cross_entropy_with_logits(logits, target)

@@ -1,0 +1,198 @@
+"""The two-stream text-to-motion model (Ghosh et al. 2021): joint embedding of sentences and
+pose sequences with upper- and lower-body streams, a shared hierarchical decoder and a pose
+discriminator; losses as a dict of named terms weighted by ``config.lambdas``.
+
+Batch (see :meth:`TwoStreamModel.loss`): ``motion`` (B, T, F) normalised features,
+optional ``lengths`` (B,), and either ``sentences`` (list of B strings; features come from
+the frozen, cached text encoder) or ``text`` (B, L, D) + ``text_lengths`` (B,).
+
+Adversarial training in one optimiser: the generator's term scores generated poses with a
+*detached copy* of the discriminator's parameters, and the discriminator's term scores
+detached generated poses, so each term only moves its own side; the shared trainer (one
+optimiser over all parameters) can therefore train both at once.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+import torch
+from torch import nn
+from torch.func import functional_call
+
+from motionlang.errors import MotionlangError
+from motionlang.models.checkpoint import (pack_normalizer, read_model_dict, unpack_normalizer,
+                                          write_checkpoint)
+from motionlang.models.twostream import losses as L
+from motionlang.models.twostream.config import TwoStreamConfig
+from motionlang.models.twostream.pose import (PoseDecoder, PoseDiscriminator, PoseEncoder,
+                                              SentenceEncoder)
+from motionlang.models.twostream.text import build_text_encoder
+
+STAGES = ("joint", "pose", "text")
+
+
+class TwoStreamModel(nn.Module):
+    """Sentence / pose-sequence joint embedding and hierarchical pose decoder.
+
+    Args:
+        config: sizes and flags; ``config.text_dim == 0`` is filled in from the text encoder.
+        normalizer: the features' Normalizer (travels in the checkpoint), optional.
+        text_encoder: token-feature source (``text.CachedTokens``); built from the config
+            on first use when None.
+    """
+
+    kind = "twostream"
+
+    def __init__(self, config: TwoStreamConfig, normalizer: Any = None, text_encoder=None):
+        super().__init__()
+        self._text = text_encoder
+        if config.text_dim <= 0:
+            config.text_dim = self.text_encoder.dim
+        self.config, self.normalizer = config, normalizer
+        self.pose_encoder = PoseEncoder(config)
+        self.sentence_encoder = SentenceEncoder(config)
+        self.decoder = PoseDecoder(config)
+        self.discriminator = PoseDiscriminator(config.n_features, config.disc_hidden)
+        # where generation starts when no initial pose is given (normalised features)
+        self.register_buffer("rest_pose", torch.zeros(config.n_features))
+        self.set_stage("joint" if config.joint_training else "pose")
+
+    # ------------------------------------------------------------------ parts
+    @property
+    def text_encoder(self):
+        if self._text is None:
+            self._text = build_text_encoder(self.config)
+        return self._text
+
+    def set_stage(self, stage: str) -> None:
+        """"joint" (default), or for the no-joint-training ablation "pose" (autoencoder
+        and discriminator) then "text" (sentence encoder only; the rest frozen)."""
+        if stage not in STAGES:
+            raise MotionlangError(f"stage must be one of {STAGES}, not {stage!r}")
+        self.stage = stage
+        frozen = (self.pose_encoder, self.decoder, self.discriminator) if stage == "text" else ()
+        for module in (self.pose_encoder, self.decoder, self.discriminator,
+                       self.sentence_encoder):
+            for p in module.parameters():
+                p.requires_grad_(module not in frozen and
+                                 not (stage == "pose" and module is self.sentence_encoder))
+
+    def _tokens(self, batch: dict) -> tuple[torch.Tensor, torch.Tensor]:
+        if "text" in batch:
+            return batch["text"], batch["text_lengths"]
+        return self.text_encoder.batch(batch["sentences"])
+
+    def encode_motion(self, motion: torch.Tensor, lengths: torch.Tensor | None = None
+                      ) -> dict[str, torch.Tensor]:
+        """(B, T, F) -> {stream: (B, H)} pose embeddings (Z_ub, Z_lb or one whole-body Z)."""
+        return self.pose_encoder(motion, lengths)
+
+    def encode_text(self, sentences: Sequence[str]) -> dict[str, torch.Tensor]:
+        """B sentences -> {stream: (B, H)} sentence embeddings (Z_ub^s, Z_lb^s or Z^s)."""
+        return self.sentence_encoder(*self.text_encoder.batch(list(sentences)))
+
+    @staticmethod
+    def joint(z: dict[str, torch.Tensor]) -> torch.Tensor:
+        """{stream: (B, H)} -> (B, 2h) the concatenated embedding (for CEE / SEE)."""
+        return torch.cat(list(z.values()), dim=-1)
+
+    # ------------------------------------------------------------------ training
+    def _disc(self, poses, lengths, frozen: bool) -> torch.Tensor:
+        if not frozen:
+            return self.discriminator(poses, lengths)
+        params = {k: v.detach() for k, v in self.discriminator.named_parameters()}
+        return functional_call(self.discriminator, params, (poses, lengths))
+
+    def loss(self, batch: dict) -> dict[str, torch.Tensor]:
+        """-> {"loss": weighted sum, and each named term (detached)}.
+
+        Terms: ``pose`` (smooth-L1 of the poses decoded from the pose and from the sentence
+        embedding), ``manifold`` (re-encoded decoded poses vs their embedding), ``velocity``,
+        ``embedding`` (sentence vs pose embedding), ``adversarial`` (generator) and
+        ``discriminator``. Which terms exist depends on the stage and ``extra_losses``.
+        """
+        c, stage = self.config, self.stage
+        x = batch["motion"]
+        lengths = batch.get("lengths")
+        B, T, _ = x.shape
+        mask = L.frame_mask(lengths, B, T).to(x)
+        extra = c.extra_losses
+        terms: dict[str, torch.Tensor] = {}
+        with torch.set_grad_enabled(stage != "text" and torch.is_grad_enabled()):
+            zp = self.pose_encoder(x, lengths)
+        fake = None
+        if stage in ("joint", "pose"):
+            qp = self.decoder(zp, x[:, 0], T)
+            terms["pose"] = L.masked_smooth_l1(qp, x, mask)
+            if extra:
+                terms["manifold"] = L.embedding_loss(self.pose_encoder(qp, lengths), zp)
+                terms["velocity"] = L.velocity_loss(qp, x, mask)
+            fake = qp
+        if stage in ("joint", "text"):
+            zs = self.sentence_encoder(*self._tokens(batch))
+            qs = self.decoder(zs, x[:, 0], T)
+            terms["pose"] = terms.get("pose", 0.0) + L.masked_smooth_l1(qs, x, mask)
+            terms["embedding"] = L.embedding_loss(zs, zp)
+            if extra and stage == "joint":  # the text stage fits embeddings + poses only
+                terms["velocity"] = terms.get("velocity", 0.0) + L.velocity_loss(qs, x, mask)
+            fake = qs  # what generation produces
+        if extra and stage != "text":
+            terms["adversarial"] = L.bce_logits(self._disc(fake, lengths, frozen=True), True)
+            terms["discriminator"] = (
+                L.bce_logits(self._disc(x, lengths, frozen=False), True)
+                + L.bce_logits(self._disc(fake.detach(), lengths, frozen=False), False))
+        total = sum(c.lambdas[k] * v for k, v in terms.items())
+        return {"loss": total, **{k: v.detach() for k, v in terms.items()}}
+
+    # ------------------------------------------------------------------ generation
+    @torch.no_grad()
+    def generate(self, sentence: str | Sequence[str], n_frames: int,
+                 start: torch.Tensor | None = None) -> torch.Tensor:
+        """Sentence(s) -> normalised features (T, F), or (B, T, F) for a list.
+
+        ``start`` (F,) or (B, F) is the initial pose (normalised); default ``rest_pose``.
+        """
+        if n_frames < 1:
+            raise MotionlangError(f"n_frames must be >= 1, got {n_frames}")
+        single = isinstance(sentence, str)
+        sentences = [sentence] if single else list(sentence)
+        z = self.encode_text(sentences)
+        x0 = self.rest_pose if start is None else torch.as_tensor(start, dtype=torch.float32)
+        x0 = x0.expand(len(sentences), -1) if x0.ndim == 1 else x0
+        out = self.decoder(z, x0, n_frames)
+        return out[0] if single else out
+
+    def generate_positions(self, sentence: str, n_frames: int,
+                           start=(0.0, 0.0, 0.0)) -> np.ndarray:
+        """Sentence -> global 21-joint positions (T, 21, 3) metres, Y up, for models trained
+        on the *positions* features (``features.positions`` layout and normaliser)."""
+        from motionlang.features.positions import join_global
+        if self.normalizer is None or self.config.n_features != 66:
+            raise MotionlangError("generate_positions needs a model of the 66 positions "
+                                  "features with its normaliser")
+        raw = self.normalizer.inverse(self.generate(sentence, n_frames).double().numpy())
+        return join_global(raw[:, :63].reshape(-1, 21, 3), raw[:, 63:65], raw[:, 65], start)
+
+    # ------------------------------------------------------------------ persistence
+    def to_checkpoint(self) -> dict:
+        return {"kind": self.kind, "config": self.config.to_dict(), "stage": self.stage,
+                "normalizer": pack_normalizer(self.normalizer), "state_dict": self.state_dict()}
+
+    @classmethod
+    def from_checkpoint(cls, d: dict, text_encoder=None) -> "TwoStreamModel":
+        model = cls(TwoStreamConfig.from_dict(d["config"]),
+                    unpack_normalizer(d.get("normalizer")), text_encoder)
+        model.load_state_dict(d["state_dict"])
+        model.set_stage(d.get("stage", "joint"))
+        return model.eval()
+
+    def save(self, path: str | Path) -> None:
+        """One self-describing file: config, stage, normaliser, weights (atomic write)."""
+        write_checkpoint(self.to_checkpoint(), path)
+
+    @classmethod
+    def load(cls, path: str | Path, text_encoder=None) -> "TwoStreamModel":
+        """Rebuild from :meth:`save` or a trainer checkpoint; in eval mode."""
+        return cls.from_checkpoint(read_model_dict(path, cls.kind), text_encoder)

