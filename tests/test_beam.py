@@ -43,20 +43,20 @@ class Table:
         return float(sum(self.log_probs((b,) + tokens[:i])[tok] for i, tok in enumerate(tokens)))
 
 
-def brute_force(table: Table, b: int, max_len: int) -> list[Hypothesis]:
-    """Every word sequence of length 0..max_len-1 followed by EOS, best first."""
+def brute_force(table: Table, b: int, max_len: int, min_len: int = 0) -> list[Hypothesis]:
+    """Every word sequence of length min_len..max_len-1 followed by EOS, best first."""
     out = []
-    for n in range(max_len):
+    for n in range(min_len, max_len):
         for words in itertools.product((1, 2, 3), repeat=n):
             toks = words + (EOS,)
             out.append(Hypothesis(toks, table.score(b, toks)))
     return sorted(out, key=lambda h: -h.score)
 
 
-def run_beam(table: Table, B: int, width: int, max_len: int):
+def run_beam(table: Table, B: int, width: int, max_len: int, min_len: int = 0):
     state = torch.arange(B).unsqueeze(1)
     return beam_search(table.step, state, batch_size=B, width=width, sos=SOS, eos=EOS,
-                       max_len=max_len, banned=(SOS,))
+                       max_len=max_len, banned=(SOS,), min_len=min_len)
 
 
 @pytest.mark.parametrize("seed", range(6))
@@ -72,6 +72,19 @@ def test_wide_beam_equals_brute_force(seed, max_len):
         got = beams[b]
         assert [h.tokens for h in got] == [h.tokens for h in ref]
         np.testing.assert_allclose([h.score for h in got], [h.score for h in ref], rtol=1e-5)
+
+
+@pytest.mark.parametrize("seed", range(3))
+@pytest.mark.parametrize("min_len", [1, 2])
+def test_min_len_equals_brute_force(seed, min_len):
+    table = Table(50 + seed, 1, temperature=2.0)
+    W = 3 ** 3 + 1
+    got = run_beam(table, 1, W, 4, min_len=min_len)[0]
+    ref = brute_force(table, 0, 4, min_len=min_len)[:W]
+    assert [h.tokens for h in got] == [h.tokens for h in ref]
+    g = greedy_search(table.step, torch.zeros(1, 1, dtype=torch.long), batch_size=1, sos=SOS,
+                      eos=EOS, max_len=4, banned=(SOS,), min_len=min_len)[0]
+    assert len(g.tokens) >= min_len + 1
 
 
 @pytest.mark.parametrize("seed", range(10))

@@ -153,7 +153,8 @@ def test_mmm_to_bvh_is_y_up(tmp_path):
 def test_constant_inner_position_channels(tmp_path):
     """LAFAN1-style files put constant position channels on every joint: accepted."""
     text = HAND.replace("    CHANNELS 3 Yrotation Zrotation Xrotation",
-                        "    CHANNELS 6 Xposition Yposition Zposition Yrotation Zrotation Xrotation")
+                        "    CHANNELS 6 Xposition Yposition Zposition "
+                        "Yrotation Zrotation Xrotation")
     lines = text.splitlines()
     k = lines.index("MOTION") + 3
     frames = [lines[k + t].split() for t in range(3)]
@@ -209,3 +210,34 @@ def test_bad_bvh(tmp_path, text, line, words):
 def test_missing_bvh(tmp_path):
     with pytest.raises(MotionFormatError, match="cannot read"):
         read_bvh(tmp_path / "none.bvh")
+
+
+def test_written_layout_is_the_plain_one_blender_reads(tiny_motion, tmp_path):
+    """A non-BVH motion: root 6 channels (positions first), 3 ZXY rotations per joint,
+    End Sites without channels, balanced braces, one line of values per frame."""
+    write_bvh(tiny_motion, tmp_path / "t.bvh")
+    lines = [ln.strip() for ln in (tmp_path / "t.bvh").read_text().splitlines()]
+    assert lines[0] == "HIERARCHY" and lines[1] == "ROOT Hips"
+    assert lines[4] == "CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation"
+    motion_at = lines.index("MOTION")
+    head = lines[:motion_at]
+    assert head.count("{") == head.count("}") == sum(ln.startswith(("ROOT", "JOINT", "End"))
+                                                     for ln in head)
+    for i, ln in enumerate(head):
+        if ln.startswith("JOINT"):
+            assert head[i + 2].startswith("OFFSET")
+            assert head[i + 3] == "CHANNELS 3 Zrotation Xrotation Yrotation"
+        if ln == "End Site":
+            assert head[i + 2].startswith("OFFSET") and head[i + 3] == "}"
+    n_channels = sum(int(ln.split()[1]) for ln in head if ln.startswith("CHANNELS"))
+    assert lines[motion_at + 1] == f"Frames: {tiny_motion.n_frames}"
+    assert lines[motion_at + 2] == "Frame Time: 0.03333333"
+    rows = lines[motion_at + 3:]
+    assert len(rows) == tiny_motion.n_frames
+    assert all(len(r.split()) == n_channels for r in rows)
+
+
+def test_windows_line_ends_and_bom(hand, tmp_path):
+    path = tmp_path / "win.bvh"
+    path.write_bytes(b"\xef\xbb\xbf" + HAND.replace("\n", "\r\n").encode())
+    assert np.array_equal(read_bvh(path).joint_angles, read_bvh(hand).joint_angles)

@@ -7,7 +7,9 @@ hypothesis runs derandomized (reproducible in CI), 600 examples per reader.
 """
 from __future__ import annotations
 
+import atexit
 import re
+import shutil
 import tempfile
 from datetime import timedelta
 from pathlib import Path
@@ -80,7 +82,8 @@ def _bases() -> dict[str, list[bytes]]:
     return bases
 
 
-WORK = Path(tempfile.mkdtemp(prefix="motionlang-fuzz-"))
+WORK = Path(tempfile.mkdtemp(prefix="motionlang-fuzz-"))  # one folder per test process
+atexit.register(shutil.rmtree, WORK, ignore_errors=True)
 BASES = _bases()
 TINY_ASF_PATH = WORK / "tiny.asf"
 TINY_ASF_PATH.write_text(TINY_ASF)

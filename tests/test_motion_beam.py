@@ -107,3 +107,16 @@ def test_mean_decode_follows_heaviest_component():
         np.testing.assert_allclose(f, p.mu[0, 0].numpy(), rtol=1e-6)   # component 0 heaviest
         prev = torch.tensor(f)[None]
     assert h.score == pytest.approx(replay_score(params_for, h.frames), abs=1e-3)
+
+
+def test_min_frames_holds_the_flag():
+    step, params_for = make_step(p_active=0.2)
+    res = sampled_beam(step, torch.zeros(1, dtype=torch.long), batch_size=1, width=3,
+                       max_frames=10, samples=4, min_frames=4, dim=D,
+                       generator=torch.Generator().manual_seed(2))[0]
+    assert all(len(h.frames) >= 4 for h in res)
+    for h in res:
+        assert h.score == pytest.approx(replay_score(params_for, h.frames), abs=1e-3)
+    mean = mean_decode(step, torch.zeros(1, dtype=torch.long), batch_size=1, max_frames=10,
+                       dim=D, min_frames=3)[0]
+    assert len(mean.frames) == 3             # P(active) = 0.2 < 0.5 ends it right after

@@ -26,7 +26,7 @@ def items(seed=0):
         ramp = np.linspace(0, 1, T) if up else np.linspace(1, 0, T)
         motion = 3.0 + 2.0 * rng.normal(size=(T, F_DIM)) * 0.05
         motion[:, 0] += 2.0 * ramp
-        tokens = [1, 4, 5, 2] if up else [1, 6, 7, 8, 2]
+        tokens = [1, 4, 5, 6, 7, 2] if up else [1, 8, 7, 6, 5, 4, 2]
         out.append({"motion": motion.astype(np.float32), "tokens": tokens})
     return out
 
@@ -35,8 +35,9 @@ def test_collate_pads_and_counts():
     batch = collate_pairs(items()[:3])
     assert batch["motion"].shape == (3, 8, F_DIM) and batch["motion"].dtype == torch.float32
     assert batch["motion_lengths"].tolist() == [6, 7, 8]
-    assert batch["tokens"].tolist() == [[1, 4, 5, 2, 0], [1, 6, 7, 8, 2], [1, 4, 5, 2, 0]]
-    assert batch["token_lengths"].tolist() == [4, 5, 4]
+    assert batch["tokens"].tolist() == [[1, 4, 5, 6, 7, 2, 0], [1, 8, 7, 6, 5, 4, 2],
+                                         [1, 4, 5, 6, 7, 2, 0]]
+    assert batch["token_lengths"].tolist() == [6, 7, 6]
     assert float(batch["motion"][0, 6:].abs().sum()) == 0.0
 
 

@@ -20,6 +20,7 @@ COMMAND_MODULES = [
     "motionlang.cli.demo",              # demo (the main job)
     "motionlang.cli.train_commands",    # train crbm | seq2seq | twostream
     "motionlang.cli.crbm_commands",     # crbm generate | fill | reproduce
+    "motionlang.cli.seq2seq_commands",  # describe, generate (train m2l | l2m via train)
 ]
 
 

@@ -52,7 +52,7 @@ def _ban(log_probs: torch.Tensor, banned: Sequence[int]) -> torch.Tensor:
 
 @torch.no_grad()
 def beam_search(step: Step, state: Any, *, batch_size: int, width: int, sos: int, eos: int,
-                max_len: int, banned: Sequence[int] = (),
+                max_len: int, banned: Sequence[int] = (), min_len: int = 0,
                 reorder: Callable[[Any, torch.Tensor], Any] = select_state
                 ) -> list[list[Hypothesis]]:
     """Beam search for ``batch_size`` independent inputs.
@@ -64,6 +64,7 @@ def beam_search(step: Step, state: Any, *, batch_size: int, width: int, sos: int
         width: beam width W; also the number of hypotheses returned per input.
         sos, eos: start and end token ids. ``banned``: ids never generated (PAD, SOS...).
         max_len: at most this many generated tokens per hypothesis, EOS included.
+        min_len: at least this many tokens before EOS (1 rules out the empty sentence).
 
     Returns:
         for each input, up to W hypotheses sorted by decreasing total log probability.
@@ -88,7 +89,8 @@ def beam_search(step: Step, state: Any, *, batch_size: int, width: int, sos: int
     for t in range(max_len):
         log_probs, state = step(state, prev)
         V = log_probs.shape[-1]
-        total = scores.unsqueeze(-1) + _ban(log_probs.float(), banned).view(B, W, V)
+        ban = tuple(banned) + ((eos,) if t < min_len and t < max_len - 1 else ())
+        total = scores.unsqueeze(-1) + _ban(log_probs.float(), ban).view(B, W, V)
         eos_total = total[..., eos]
         for b, w in (torch.isfinite(eos_total) & ~done.unsqueeze(1)).nonzero().tolist():
             finished[b].append(Hypothesis(tuple(tokens[b, w].tolist()) + (eos,),
@@ -115,10 +117,12 @@ def beam_search(step: Step, state: Any, *, batch_size: int, width: int, sos: int
 
 @torch.no_grad()
 def greedy_search(step: Step, state: Any, *, batch_size: int, sos: int, eos: int,
-                  max_len: int, banned: Sequence[int] = ()) -> list[Hypothesis]:
+                  max_len: int, banned: Sequence[int] = (), min_len: int = 0
+                  ) -> list[Hypothesis]:
     """Take the most probable word at every step; one hypothesis per input.
 
-    At the last allowed step EOS is forced (its log probability is still counted).
+    At the last allowed step EOS is forced (its log probability is still counted); before
+    ``min_len`` tokens EOS is not allowed.
     """
     B = batch_size
     prev = torch.full((B,), sos, dtype=torch.long)
@@ -127,7 +131,8 @@ def greedy_search(step: Step, state: Any, *, batch_size: int, sos: int, eos: int
     alive = torch.ones(B, dtype=torch.bool)
     for t in range(max_len):
         log_probs, state = step(state, prev)
-        log_probs = _ban(log_probs.float(), banned)
+        ban = tuple(banned) + ((eos,) if t < min_len and t < max_len - 1 else ())
+        log_probs = _ban(log_probs.float(), ban)
         tok = log_probs.argmax(-1)
         if t == max_len - 1:
             tok = torch.full_like(tok, eos)

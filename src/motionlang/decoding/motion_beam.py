@@ -44,7 +44,8 @@ def _start(start: torch.Tensor | None, B: int, D: int | None) -> torch.Tensor:
 
 @torch.no_grad()
 def sampled_beam(step: MotionStep, state: Any, *, batch_size: int, width: int,
-                 max_frames: int, samples: int = 5, start: torch.Tensor | None = None,
+                 max_frames: int, samples: int = 5, min_frames: int = 1,
+                 start: torch.Tensor | None = None,
                  dim: int | None = None, generator: torch.Generator | None = None,
                  reorder: Callable[[Any, torch.Tensor], Any] = select_state
                  ) -> list[list[MotionHypothesis]]:
@@ -55,6 +56,7 @@ def sampled_beam(step: MotionStep, state: Any, *, batch_size: int, width: int,
         width: W hypotheses kept and returned per input.
         max_frames: length cap; hypotheses still active at the cap are closed there.
         samples: S candidate (frame, flag) pairs drawn per live hypothesis and step.
+        min_frames: the flag is held at 1 (and scored so) before this many frames.
         start: first decoder input, (D,) or (batch_size, D); zeros of ``dim`` if None.
         generator: torch RNG for reproducible sampling.
 
@@ -83,6 +85,8 @@ def sampled_beam(step: MotionStep, state: Any, *, batch_size: int, width: int,
         xf, af = x.reshape(N * S, D), a.reshape(N * S)
         if t == max_frames - 1:
             af = torch.zeros_like(af)                               # close everything at the cap
+        elif t < min_frames - 1:
+            af = torch.ones_like(af)
         ll = mixture_log_prob(rep, xf) + active_log_prob(rep, af)
         cand = scores.repeat_interleave(S) + ll                     # (N*S,)
         row = torch.arange(N).repeat_interleave(S)
@@ -112,9 +116,10 @@ def sampled_beam(step: MotionStep, state: Any, *, batch_size: int, width: int,
 @torch.no_grad()
 def mean_decode(step: MotionStep, state: Any, *, batch_size: int, max_frames: int,
                 start: torch.Tensor | None = None, dim: int | None = None,
-                threshold: float = 0.5) -> list[MotionHypothesis]:
+                threshold: float = 0.5, min_frames: int = 1) -> list[MotionHypothesis]:
     """Deterministic decoding: each frame is the mean of the heaviest mixture component,
-    and the motion ends at the first frame whose P(active) < ``threshold`` (or the cap).
+    and the motion ends at the first frame whose P(active) < ``threshold`` (or the cap),
+    but not before ``min_frames``.
     Scores are the log likelihood of the chosen frames and flags.
     """
     B = batch_size
@@ -128,6 +133,8 @@ def mean_decode(step: MotionStep, state: Any, *, batch_size: int, max_frames: in
         a = (torch.sigmoid(params.active_logit) >= threshold).float()
         if t == max_frames - 1:
             a = torch.zeros_like(a)
+        elif t < min_frames - 1:
+            a = torch.ones_like(a)
         ll = mixture_log_prob(params, x) + active_log_prob(params, a)
         score = score + torch.where(alive, ll, torch.zeros(B))
         for b in alive.nonzero().flatten().tolist():

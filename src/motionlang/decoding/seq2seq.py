@@ -1,8 +1,12 @@
-"""Python API over the trained seq2seq models: describe motion features, generate frames.
+"""Python API over the trained seq2seq models: describe motions, generate motions.
 
-Both work at the level of per-frame features (``motionlang.features``); the model's own
-normaliser (stored in its checkpoint) is applied on the way in and inverted on the way out,
-so callers pass and receive raw features.
+:func:`describe` / :func:`generate` work on :class:`Motion` objects through the feature set
+stored in the model's checkpoint; :func:`describe_features` / :func:`generate_features`
+work on per-frame features, applying the model's own normaliser (if any) on the way in and
+inverting it on the way out, so callers pass and receive raw features.
+
+Model frames are the feature set's normalised dimensions only: a trailing binary "active"
+flag (AnglesFeatures) is dropped, since L2M predicts its own end-of-motion flag.
 """
 from __future__ import annotations
 
@@ -18,6 +22,28 @@ from motionlang.models.l2m import LanguageToMotion
 from motionlang.models.m2l import MotionToLanguage
 
 UNK_ID = 3
+
+
+def model_dim(fs: Any) -> int:
+    """Frame size the models see: the feature set's dims without its active flag."""
+    return int(getattr(fs, "n_normalised", fs.dim))
+
+
+def motion_frames(fs: Any, motion, offsets: int = 1) -> list[np.ndarray]:
+    """Up to ``offsets`` sequences (T, model_dim) float32 of one motion (start offsets
+    of the down-sampling, for feature sets that have them)."""
+    seqs = fs.encode_all(motion)[:max(1, offsets)] if hasattr(fs, "encode_all") \
+        else [fs.encode(motion)]
+    n = model_dim(fs)
+    return [np.ascontiguousarray(s[:, :n], dtype=np.float32) for s in seqs]
+
+
+def frames_to_features(fs: Any, frames: np.ndarray) -> np.ndarray:
+    """Model frames (T, model_dim) -> the feature set's (T, dim), active flag set to 1."""
+    extra = fs.dim - frames.shape[1]
+    if extra <= 0:
+        return frames
+    return np.concatenate([frames, np.ones((len(frames), extra), frames.dtype)], axis=1)
 
 
 def _normalize(norm: Any, x: np.ndarray) -> np.ndarray:
@@ -71,7 +97,7 @@ def describe_features(model: MotionToLanguage, features: np.ndarray, *, width: i
     x = torch.as_tensor(_normalize(model.normalizer, features), dtype=torch.float32)[None]
     state = model.encode(x, torch.tensor([len(features)]))
     kw = dict(batch_size=1, sos=c.sos_id, eos=c.eos_id, max_len=max_len or c.max_len,
-              banned=(c.pad_id, c.sos_id))
+              banned=(c.pad_id, c.sos_id), min_len=1)
     if width == 1:
         hyps = greedy_search(model.step, state, **kw)
     else:
@@ -82,7 +108,8 @@ def describe_features(model: MotionToLanguage, features: np.ndarray, *, width: i
 @torch.no_grad()
 def generate_features(model: LanguageToMotion, sentence: str | Sequence[int], *,
                       width: int = 5, max_frames: int | None = None, method: str = "beam",
-                      samples: int = 5, seed: int = 0) -> list[tuple[np.ndarray, float]]:
+                      samples: int = 5, seed: int = 0, min_frames: int = 1
+                      ) -> list[tuple[np.ndarray, float]]:
     """Sentence -> W motions as raw features (T, F) with their log likelihood, best first.
 
     method: "beam" (the sampled beam, ``samples`` candidates per hypothesis and step) or
@@ -96,10 +123,39 @@ def generate_features(model: LanguageToMotion, sentence: str | Sequence[int], *,
     cap = max_frames or model.config.max_frames
     F = model.config.n_features
     if method == "mean":
-        hyps = mean_decode(model.step, state, batch_size=1, max_frames=cap, dim=F)
+        hyps = mean_decode(model.step, state, batch_size=1, max_frames=cap, dim=F,
+                           min_frames=min_frames)
     else:
         hyps = sampled_beam(model.step, state, batch_size=1, width=width, max_frames=cap,
-                            samples=samples, dim=F,
+                            samples=samples, dim=F, min_frames=min_frames,
                             generator=torch.Generator().manual_seed(seed))[0]
     return [(_denormalize(model.normalizer, h.frames).astype(np.float32), h.score)
             for h in hyps]
+
+
+def _features_of(model) -> Any:
+    if model.features is None:
+        raise MotionlangError("this model was saved without its feature set; "
+                              "use describe_features / generate_features")
+    return model.features
+
+
+def describe(model: MotionToLanguage, motion, *, width: int = 5,
+             max_len: int | None = None) -> list[tuple[str, float]]:
+    """A :class:`Motion` -> W sentences with their total log probability, best first."""
+    frames = motion_frames(_features_of(model), motion, 1)[0]
+    return describe_features(model, frames, width=width, max_len=max_len)
+
+
+def generate(model: LanguageToMotion, sentence: str | Sequence[int], *, width: int = 5,
+             max_frames: int | None = None, method: str = "beam", samples: int = 5,
+             seed: int = 0, min_frames: int = 1) -> list[tuple[Any, float]]:
+    """Sentence -> W decoded motions with their log likelihood, best first.
+
+    Each motion is what the feature set's ``decode`` returns: a :class:`Motion` for joint
+    angles, joint positions (T, 21, 3) for position features.
+    """
+    fs = _features_of(model)
+    out = generate_features(model, sentence, width=width, max_frames=max_frames,
+                            method=method, samples=samples, seed=seed, min_frames=min_frames)
+    return [(fs.decode(frames_to_features(fs, f)), score) for f, score in out]

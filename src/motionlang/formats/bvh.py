@@ -155,7 +155,7 @@ def read_bvh(path: str | Path, unit: float | str | None = None) -> Motion:
     """
     path = Path(path)
     try:
-        lines = path.read_bytes().decode("utf-8", errors="replace").splitlines()
+        lines = path.read_bytes().decode("utf-8-sig", errors="replace").splitlines()
     except OSError as exc:
         raise MotionFormatError(path, f"cannot read file: {exc.strerror or exc}") from None
     tk = _Tokens(path, lines)

@@ -78,7 +78,9 @@ class ARModel:
             x[t] = self.predict_normalised(x[t - n:t][::-1].reshape(1, -1))[0]
             if noise > 0:
                 x[t] += noise * rng.standard_normal(self.n_visible)
-        return self.denormalise(x)
+        out = self.denormalise(x)
+        out[:len(init)] = init
+        return out
 
     def fill_in(self, frames: np.ndarray, known: np.ndarray) -> np.ndarray:
         """Unknown entries of ``frames`` (T, D) := the prediction from the (filled) past.

@@ -49,6 +49,7 @@ class CRBMConfig:
     init_std: float = 0.01
     seed: int = 0
     visible: str = "gaussian"   # "gaussian" (unit variance) or "binary"
+    input_scale: float = 1.0    # std of the normalised training data (1 = z-scores, the paper's)
     dtype: str = "float32"      # of weights and training arithmetic: float32 is 3x faster here
     blas_threads: int | None = 1  # the matrices are small: one BLAS thread avoids oversubscription
 
@@ -194,7 +195,10 @@ class CRBM:
         frames = np.concatenate(seqs)
         if cfg.visible == "gaussian":
             self.mean = frames.mean(axis=0)
-            self.std = np.where(frames.std(axis=0) > 1e-8, frames.std(axis=0), 1.0)
+            sd = frames.std(axis=0)
+            # input_scale > 1 spreads the data over several units of the fixed unit-variance
+            # visible noise, making the model's conditionals sharper (see CRBMConfig)
+            self.std = np.where(sd > 1e-8, sd, 1.0) / cfg.input_scale
         x = self.normalise(frames).astype(self.config.dtype)
         rows = chunk_index([len(s) for s in seqs], cfg.order)
         rng = np.random.default_rng(cfg.seed + 1)
@@ -270,7 +274,9 @@ class CRBM:
             past = out[:, t - n:t][:, ::-1].reshape(n_samples, -1)
             out[:, t] = self.gibbs_frame(out[:, t - 1], past, rng, n_gibbs,
                                          hidden_noise=hidden_noise)
-        return self.denormalise(out)
+        out = self.denormalise(out)
+        out[:, :len(init)] = init   # exactly as given
+        return out
 
     def fill_in(self, frames: np.ndarray, known: np.ndarray, *, n_gibbs: int = 30, seed: int = 0,
                 n_samples: int = 1, mean_field: bool = False) -> np.ndarray:

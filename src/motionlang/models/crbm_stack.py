@@ -61,7 +61,9 @@ class CRBMStack:
             h[t] = l2.gibbs_frame(h[t - 1:t], past2, rng, n_gibbs, hidden_noise=hidden_noise)[0]
             a_star, _ = l1.dynamic_biases(v[t - n1:t][::-1].reshape(1, -1))
             v[t] = l1.visible_mean(h[t:t + 1], a_star)[0]
-        return l1.denormalise(v)
+        out = l1.denormalise(v)
+        out[:T0] = init
+        return out
 
     def save(self, folder_or_path: str | Path) -> None:
         """Both levels in one .npz (keys prefixed ``l1_`` / ``l2_``)."""

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from motionlang.kinematics.rotations import axis_angle, matrix_to_chain
+from motionlang.kinematics.rotations import matrix_to_chain
 
 X, Y, Z = np.eye(3)
 SIDES = ("L", "R")
@@ -65,13 +65,31 @@ class Body:
         return np.array([0.0, self.foot_len, -self.sole])
 
 
+def rot(axis: int, a: np.ndarray) -> np.ndarray:
+    """(..., 3, 3) rotations by angles ``a`` about coordinate axis 0 (x), 1 (y) or 2 (z).
+
+    Same result as ``axis_angle(eye(3)[axis], a)``, written out because the generator
+    calls it thousands of times per sample.
+    """
+    a = np.asarray(a, dtype=float)
+    c, s = np.cos(a), np.sin(a)
+    out = np.zeros(a.shape + (3, 3))
+    i, j = [(1, 2), (2, 0), (0, 1)][axis]
+    out[..., axis, axis] = 1.0
+    out[..., i, i] = c
+    out[..., j, j] = c
+    out[..., i, j] = -s
+    out[..., j, i] = s
+    return out
+
+
 def rot_z(a: np.ndarray) -> np.ndarray:
-    return axis_angle(Z, a)
+    return rot(2, a)
 
 
 def foot_rotation(yaw: np.ndarray, pitch: np.ndarray) -> np.ndarray:
     """(T, 3, 3) foot frames: yaw about Z, then pitch about the foot's X (toes up > 0)."""
-    return rot_z(yaw) @ axis_angle(X, pitch)
+    return rot(2, yaw) @ rot(0, pitch)
 
 
 def ankle_from_contact(body: Body, point: np.ndarray, yaw: np.ndarray, pitch: np.ndarray,
@@ -83,9 +101,9 @@ def ankle_from_contact(body: Body, point: np.ndarray, yaw: np.ndarray, pitch: np
     return point - np.einsum("tij,tj->ti", R, local)
 
 
-def pelvis_rotation(rot: np.ndarray) -> np.ndarray:
+def pelvis_rotation(angles: np.ndarray) -> np.ndarray:
     """(T, 3, 3) from MMM root angles (T, 3) = (yaw about Z, tilt about Y, pitch about X)."""
-    return axis_angle(Z, rot[:, 0]) @ axis_angle(Y, rot[:, 1]) @ axis_angle(X, rot[:, 2])
+    return rot_z(angles[:, 0]) @ rot(1, angles[:, 1]) @ rot(0, angles[:, 2])
 
 
 def solve_leg(body: Body, side: str, root_pos: np.ndarray, root_rot: np.ndarray,
@@ -121,8 +139,7 @@ def solve_leg(body: Body, side: str, root_pos: np.ndarray, root_rot: np.ndarray,
     px, pz = sb * uz, np.cos(beta) * uz
     wy, wz = sg * px + cg * uy, pz
     alpha = np.angle(np.exp(1j * (np.arctan2(v[:, 2], v[:, 1]) - np.arctan2(wz, wy))))
-    R_leg = (Rp @ axis_angle(X, alpha) @ axis_angle(Z, gamma) @ axis_angle(Y, beta)
-             @ axis_angle(X, -kappa))
+    R_leg = Rp @ rot(0, alpha) @ rot(2, gamma) @ rot(1, beta) @ rot(0, -kappa)
     R_ank = np.swapaxes(R_leg, 1, 2) @ foot_rotation(foot_yaw, foot_pitch)
     ank = matrix_to_chain(R_ank, np.stack([X, Z, Y]))
     s = side

@@ -132,50 +132,9 @@ def locomotion(body: Body, stance: Stance, style: dict, rng: np.random.Generator
 
     ankle, fyaw, fpitch, contact = {}, {}, {}, {}
     for s in SIDES:
-        A, Y, P = np.zeros((T, 3)), np.zeros(T), np.zeros(T)
-        C = np.zeros(T, bool)
-        seq = plants[s]
-        for k, (lift_prev, land, x, y, yaw) in enumerate(seq):
-            lift = seq[k + 1][0] if k + 1 < len(seq) else np.inf
-            # planted interval [land, lift)
-            m = (t >= land) & (t < lift)
-            if m.any():
-                tm = t[m]
-                strike = pitch_strike * (1 - smoothstep((tm - land) / 0.12)) if k > 0 else 0 * tm
-                W = min(0.35 * Ts, 0.5 * (lift - max(land, 0.0))) if np.isfinite(lift) else 1.0
-                rise = -pitch_off * smoothstep((tm - (lift - W)) / W) if np.isfinite(lift) \
-                    else 0 * tm
-                pitch = np.where(rise < 0, rise, strike)
-                ball = pitch < 0
-                yv = np.full(len(tm), yaw)
-                f, _ = _dirs(yaw)
-                pt = np.zeros((len(tm), 3))
-                pt[:, :2] = [x, y]
-                pt[ball, :2] += f * body.foot_len
-                A[m] = ankle_from_contact(body, pt, yv, pitch, ball)
-                Y[m], P[m], C[m] = yv, pitch, True
-            if k + 1 < len(seq):  # swing to the next plant
-                nl, nland, nx, ny, nyaw = seq[k + 1]
-                m = (t >= nl) & (t < nland)
-                if not m.any():
-                    continue
-                f0, _ = _dirs(yaw)
-                start_pt = np.array([x, y, 0.0]) + np.r_[f0 * body.foot_len, 0.0]
-                a0 = ankle_from_contact(body, start_pt[None], np.array([yaw]),
-                                        np.array([-pitch_off]), np.array([True]))[0]
-                a1 = ankle_from_contact(body, np.array([[nx, ny, 0.0]]), np.array([nyaw]),
-                                        np.array([pitch_strike]), np.array([False]))[0]
-                sw = (t[m] - nl) / (nland - nl)
-                # lift off and set down vertically: the foot travels only in the middle
-                # 80 % of the swing, so it is clear of the floor whenever it moves
-                e = smoothstep((sw - 0.1) / 0.8)[:, None]
-                A[m] = a0 * (1 - e) + a1 * e
-                peak = 0.8 if kind == "walk" else 0.6
-                A[m, 2] += clearance * np.sin(np.pi * sw ** peak) ** 0.7
-                dyaw = np.angle(np.exp(1j * (nyaw - yaw)))
-                Y[m] = yaw + dyaw * e[:, 0]
-                P[m] = -pitch_off + (pitch_strike + pitch_off) * e[:, 0]
-        ankle[s], fyaw[s], fpitch[s], contact[s] = A, Y, P, C
+        ankle[s], fyaw[s], fpitch[s], contact[s] = _foot_track(
+            body, plants[s], t, Ts, pitch_strike, pitch_off, clearance,
+            0.8 if kind == "walk" else 0.6)
 
     # pelvis: over the middle of the feet at each landing (walking), closer to the
     # landing foot when running
@@ -198,12 +157,13 @@ def locomotion(body: Body, stance: Stance, style: dict, rng: np.random.Generator
     _, lv = _dirs(pel[:, 2])
     root_pos = np.zeros((T, 3))
     root_pos[:, :2] = pel[:, :2] + sway_amp * sway[:, None] * lv
-    drop = 0.01 if kind == "walk" else 0.06
+    # ease posture in and out over 0.3 s so segments join standing ones smoothly
+    ramp = smoothstep(np.minimum(t / 0.3, (t_end - t) / 0.3))
+    drop = 0.004 + (0.006 if kind == "walk" else 0.056) * ramp
     root_pos[:, 2] = body.pelvis_height - drop * scale
     if kind == "run":
         airborne = gaussian_filter1d((~(contact["L"] | contact["R"])).astype(float), 3)
         root_pos[:, 2] += 0.05 * scale * airborne
-    ramp = smoothstep(np.minimum(t / 0.3, (t_end - t) / 0.3))
     root_rot = np.zeros((T, 3))
     root_rot[:, 0] = pel[:, 2]
     lean = {"walk": -0.04, "run": -0.14}[kind] * (1.4 if speed == "fast" else 1.0)
@@ -221,9 +181,67 @@ def locomotion(body: Body, stance: Stance, style: dict, rng: np.random.Generator
         amp *= 0.3
     up = track.upper
     for s, sg in (("L", 1.0), ("R", -1.0)):
-        up[f"{s}Sx_joint"] += sg * amp * swing_sig - (0.1 if kind == "run" else 0.0)
+        up[f"{s}Sx_joint"] += sg * amp * swing_sig - (0.1 * ramp if kind == "run" else 0.0)
         up[f"{s}Ex_joint"] += 0.25 * amp * np.maximum(sg * swing_sig, 0) + (
             1.1 * ramp if kind == "run" else 0.0)
     up["BTz_joint"] += 0.06 * swing_sig * (kind == "walk")
     end = Stance({s: tuple(last[s]) for s in SIDES}, float(path(u[-1])[1]))
     return track, end
+
+
+def _foot_track(body: Body, seq: list, t: np.ndarray, Ts: float, pitch_strike: float,
+                pitch_off: float, clearance: float, peak: float):
+    """Ankle (T, 3), yaw, pitch and contact (T,) of one foot from its plants.
+
+    ``seq``: [(t_lift, t_land, x, y, yaw)] of the foot's successive plants (the first one
+    standing since -inf). Planted: heel strike (toes up, pivot on the heel) easing to flat,
+    then heel rise pivoting on the ball before lift-off. Swinging: from the lift-off pose
+    to the landing pose along an arc ``clearance`` high.
+    """
+    T = len(t)
+    point, Y, P = np.zeros((T, 3)), np.zeros(T), np.zeros(T)
+    C = np.zeros(T, bool)
+    swings = []
+    for k, (_, land, x, y, yaw) in enumerate(seq):
+        lift = seq[k + 1][0] if k + 1 < len(seq) else np.inf
+        m = (t >= land) & (t < lift)
+        if m.any():
+            tm = t[m]
+            strike = pitch_strike * (1 - smoothstep((tm - land) / 0.12)) if k > 0 else 0 * tm
+            if np.isfinite(lift):
+                W = min(0.35 * Ts, 0.5 * (lift - max(land, 0.0)))
+                rise = -pitch_off * smoothstep((tm - (lift - W)) / W)
+            else:
+                rise = 0 * tm
+            P[m] = np.where(rise < 0, rise, strike)
+            Y[m], C[m] = yaw, True
+            point[m, :2] = [x, y]
+        if k + 1 < len(seq):
+            swings.append((seq[k], seq[k + 1]))
+    ball = P < 0
+    f, _ = _dirs(Y[ball])
+    point[ball, :2] += f * body.foot_len
+    A = ankle_from_contact(body, point, Y, P, ball)
+    if swings:  # lift-off and landing poses of all swings at once
+        n = len(swings)
+        start = np.array([[a[2], a[3], 0.0] for a, _ in swings])
+        syaw = np.array([a[4] for a, _ in swings])
+        f0, _ = _dirs(syaw)
+        start[:, :2] += f0 * body.foot_len
+        a0 = ankle_from_contact(body, start, syaw, np.full(n, -pitch_off), np.ones(n, bool))
+        end = np.array([[b[2], b[3], 0.0] for _, b in swings])
+        eyaw = np.array([b[4] for _, b in swings])
+        a1 = ankle_from_contact(body, end, eyaw, np.full(n, pitch_strike), np.zeros(n, bool))
+        for i, ((_, _, _, _, yaw), (nl, nland, _, _, nyaw)) in enumerate(swings):
+            m = (t >= nl) & (t < nland)
+            if not m.any():
+                continue
+            sw = (t[m] - nl) / (nland - nl)
+            # lift off and set down vertically: the foot travels only in the middle
+            # 80 % of the swing, so it is clear of the floor whenever it moves
+            e = smoothstep((sw - 0.1) / 0.8)[:, None]
+            A[m] = a0[i] * (1 - e) + a1[i] * e
+            A[m, 2] += clearance * np.sin(np.pi * sw ** peak) ** 0.7
+            Y[m] = yaw + np.angle(np.exp(1j * (nyaw - yaw))) * e[:, 0]
+            P[m] = -pitch_off + (pitch_strike + pitch_off) * e[:, 0]
+    return A, Y, P, C

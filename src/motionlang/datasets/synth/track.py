@@ -85,7 +85,7 @@ def standing_track(body: Body, stance: Stance, T: int, style: dict,
                    drop: float = 0.004) -> Track:
     """T frames of quiet standing in ``stance``."""
     c = stance.center
-    root_pos = np.tile([c[0], c[1], body.pelvis_height - drop], (T, 1))
+    root_pos = np.tile([c[0], c[1], body.pelvis_height - drop * body.height / 1.75], (T, 1))
     root_rot = np.zeros((T, 3))
     root_rot[:, 0] = stance.yaw
     ankle, fyaw, fpitch, contact = {}, {}, {}, {}

@@ -13,6 +13,7 @@ optimiser over all parameters) can therefore train both at once.
 """
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 from typing import Any, Sequence
 
@@ -48,9 +49,9 @@ class TwoStreamModel(nn.Module):
     def __init__(self, config: TwoStreamConfig, normalizer: Any = None, text_encoder=None):
         super().__init__()
         self._text = text_encoder
-        if config.text_dim <= 0:
-            config.text_dim = self.text_encoder.dim
         self.config, self.normalizer = config, normalizer
+        if config.text_dim <= 0:  # a copy: the caller's config is left as given
+            config = self.config = replace(config, text_dim=self.text_encoder.dim)
         self.pose_encoder = PoseEncoder(config)
         self.sentence_encoder = SentenceEncoder(config)
         self.decoder = PoseDecoder(config)
@@ -99,6 +100,19 @@ class TwoStreamModel(nn.Module):
         return torch.cat(list(z.values()), dim=-1)
 
     # ------------------------------------------------------------------ training
+    @staticmethod
+    def collate(items: Sequence[dict]) -> dict:
+        """Items ``{"motion": (T_i, F) normalised features, "sentence": str}`` -> the batch
+        :meth:`loss` takes: ``motion`` (B, T, F) float32 zero-padded, ``lengths`` (B,),
+        ``sentences``."""
+        from motionlang.features.collate import pad_batch
+        if not items:
+            raise MotionlangError("cannot collate an empty batch")
+        motion, mask = pad_batch([torch.as_tensor(np.asarray(it["motion"]), dtype=torch.float32)
+                                  for it in items])
+        return {"motion": motion, "lengths": mask.sum(dim=1),
+                "sentences": [str(it["sentence"]) for it in items]}
+
     def _disc(self, poses, lengths, frozen: bool) -> torch.Tensor:
         if not frozen:
             return self.discriminator(poses, lengths)

@@ -1,0 +1,198 @@
+"""``motionlang train m2l|l2m``, ``motionlang describe MOTION``, ``motionlang generate TEXT``.
+
+Thin wrappers over :mod:`motionlang.training.seq2seq_data` (dataset -> pairs),
+:class:`motionlang.training.trainer.Trainer` and :mod:`motionlang.decoding.seq2seq`.
+``--data`` is a KIT-ML-format folder (the release, or a procedural corpus) or a custom
+folder of motion files with ``captions.csv``/``captions.jsonl``.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+import numpy as np
+
+from motionlang.errors import MotionlangError
+
+PACKAGED = Path(__file__).resolve().parents[1] / "data" / "models"
+MOTION_OUT = (".bvh", ".xml", ".amc")
+RENDER_OUT = (".gif", ".mp4")
+
+
+# ------------------------------------------------------------------ train m2l | l2m
+def _add_train(sub, name: str, help_: str) -> None:
+    from motionlang.models.l2m import L2MConfig
+    from motionlang.models.m2l import M2LConfig
+    d = M2LConfig(1, 1) if name == "m2l" else L2MConfig(1, 1)
+    p = sub.add_parser(name, help=help_, description=help_)
+    p.add_argument("--data", required=True, metavar="DIR", help="KIT-ML-format or custom folder")
+    p.add_argument("--out", default=f"runs/{name}", metavar="DIR",
+                   help="run folder: last.pt, best.pt, model.pt, history, splits")
+    p.add_argument("--features", choices=("angles", "positions"), default="angles")
+    p.add_argument("--offsets", type=int, default=10,
+                   help="down-sampling start offsets per motion (augmentation, default 10)")
+    p.add_argument("--max-seconds", type=float, default=30.0, help="drop longer motions")
+    p.add_argument("--min-count", type=int, default=1, help="vocabulary: minimum word count")
+    p.add_argument("--epochs", type=int, default=20)
+    p.add_argument("--batch-size", type=int, default=128)
+    p.add_argument("--lr", type=float, default=1e-3)
+    p.add_argument("--grad-clip", type=float, default=None if name == "m2l" else 25.0)
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--resume", action="store_true", help="continue from OUT/last.pt")
+    p.add_argument("--checkpoint-every", type=int, default=0, metavar="STEPS")
+    p.add_argument("--enc-hidden", type=int, default=d.enc_hidden)
+    p.add_argument("--enc-layers", type=int, default=d.enc_layers)
+    p.add_argument("--dec-hidden", type=int, default=d.dec_hidden)
+    p.add_argument("--dec-layers", type=int, default=d.dec_layers)
+    p.add_argument("--embed-dim", type=int, default=d.embed_dim)
+    p.add_argument("--dropout", type=float, default=d.dropout)
+    p.add_argument("--attention", action="store_true", help="additive attention variant")
+    if name == "l2m":
+        p.add_argument("--components", type=int, default=d.n_components)
+        p.add_argument("--loss", choices=("surrogate", "exact"), default=d.loss)
+    p.set_defaults(func=cmd_train, model_kind=name)
+
+
+def cmd_train(args: argparse.Namespace) -> int:
+    import torch
+
+    from motionlang.datasets.splits import save_splits
+    from motionlang.decoding.seq2seq import model_dim
+    from motionlang.training.collate import collate_pairs
+    from motionlang.training.seq2seq_data import build_pairs
+    from motionlang.training.trainer import TrainConfig, Trainer
+
+    data = build_pairs(args.data, features=args.features, offsets=args.offsets, seed=args.seed,
+                       min_count=args.min_count, max_seconds=args.max_seconds)
+    out = Path(args.out)
+    save_splits(data.splits, out / "splits")
+    sizes = dict(enc_hidden=args.enc_hidden, enc_layers=args.enc_layers,
+                 dec_hidden=args.dec_hidden, dec_layers=args.dec_layers,
+                 embed_dim=args.embed_dim, dropout=args.dropout, attention=args.attention)
+    torch.manual_seed(args.seed)
+    F, V = model_dim(data.features), len(data.vocab)
+    if args.model_kind == "m2l":
+        from motionlang.models.m2l import M2LConfig, MotionToLanguage
+        model = MotionToLanguage(M2LConfig(n_features=F, vocab_size=V, **sizes),
+                                 data.vocab, features=data.features)
+    else:
+        from motionlang.models.l2m import L2MConfig, LanguageToMotion
+        longest = max(len(it["motion"]) for it in data.items["train"])
+        model = LanguageToMotion(L2MConfig(vocab_size=V, n_features=F,
+                                           n_components=args.components, loss=args.loss,
+                                           max_frames=int(1.5 * longest), **sizes),
+                                 data.vocab, features=data.features)
+    cfg = TrainConfig(epochs=args.epochs, batch_size=args.batch_size, lr=args.lr,
+                      grad_clip=args.grad_clip, seed=args.seed, out_dir=str(out),
+                      checkpoint_every=args.checkpoint_every)
+    print(f"{args.model_kind}: {len(data.items['train'])} training pairs "
+          f"({len(data.splits['train'])} motions), vocabulary {V}, {F} features/frame, "
+          f"{sum(p.numel() for p in model.parameters()):,} parameters")
+    trainer = Trainer(model, data.items["train"], collate_pairs, cfg,
+                      val_set=data.items.get("val") or None)
+    history = trainer.fit(resume=args.resume)
+    if trainer.rank == 0:
+        best = out / "best.pt"
+        final = type(model).load(best) if best.exists() else model
+        final.save(out / "model.pt")
+        last = history[-1] if history else {}
+        print(f"{out / 'model.pt'}: epoch {last.get('epoch')}, train {last.get('train')}, "
+              f"val {last.get('val')}")
+    return 0
+
+
+def register_train(train_sub) -> None:
+    """Hook of ``cli/train_commands.py``: adds ``train m2l`` and ``train l2m``."""
+    _add_train(train_sub, "m2l", "train the motion-to-language model (Plappert et al. 2018)")
+    _add_train(train_sub, "l2m", "train the language-to-motion model (Plappert et al. 2018)")
+
+
+# ------------------------------------------------------------------ describe / generate
+def _model_path(arg: str | None, kind: str) -> Path:
+    path = Path(arg) if arg else PACKAGED / f"{kind}.pt"
+    if not path.is_file():
+        hint = "" if arg else f" (no packaged {kind} model; pass --model)"
+        raise MotionlangError(f"{path}: no such model file{hint}")
+    return path
+
+
+def cmd_describe(args: argparse.Namespace) -> int:
+    from motionlang.decoding.seq2seq import describe
+    from motionlang.formats import read_motion
+    from motionlang.models.m2l import MotionToLanguage
+
+    model = MotionToLanguage.load(_model_path(args.model, "m2l"))
+    hyps = describe(model, read_motion(args.motion), width=args.width)
+    if args.json:
+        print(json.dumps([{"rank": i + 1, "text": t, "log_p": s} for i, (t, s) in
+                          enumerate(hyps)], indent=1))
+    else:
+        for i, (text, score) in enumerate(hyps, 1):
+            print(f"{i}. log P = {score:8.3f}  {text}")
+    return 0
+
+
+def _write(result, path: Path, title: str) -> None:
+    from motionlang.kinematics import Motion
+    ext = path.suffix.lower()
+    if ext == ".npz":
+        from motionlang.utils.atomic import atomic_write
+        data = {"positions": result} if isinstance(result, np.ndarray) else \
+            {"positions": result.positions(), "fps": np.float64(result.fps)}
+        with atomic_write(path, "wb") as fh:
+            np.savez(fh, **data)
+        return
+    if not isinstance(result, Motion):
+        raise MotionlangError(f"{path}: this model's features decode to joint positions; "
+                              "write .npz")
+    if ext in MOTION_OUT:
+        from motionlang.formats import write_motion
+        write_motion(result, path)
+    elif ext in RENDER_OUT:
+        from motionlang.render import render_animation
+        render_animation(result, path, title=title)
+    else:
+        raise MotionlangError(f"{path}: output must be .bvh, .gif, .mp4 or .npz")
+
+
+def cmd_generate(args: argparse.Namespace) -> int:
+    from motionlang.decoding.seq2seq import generate
+    from motionlang.models.l2m import LanguageToMotion
+
+    model = LanguageToMotion.load(_model_path(args.model, "l2m"))
+    hyps = generate(model, args.text, width=args.width, method=args.method, seed=args.seed,
+                    max_frames=args.max_frames, min_frames=args.min_frames)
+    out = Path(args.output)
+    for i, (result, score) in enumerate(hyps, 1):
+        n = len(result.joint_angles) if hasattr(result, "joint_angles") else len(result)
+        line = f"{i}. log L = {score:10.2f}  {n} frames"
+        if i == 1 or args.all:
+            path = out if i == 1 else out.with_name(f"{out.stem}_{i}{out.suffix}")
+            _write(result, path, f"{args.text} (#{i})")
+            line += f"  -> {path}"
+        print(line)
+    return 0
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser("describe", help="describe a motion in English (M2L, beam search)")
+    p.add_argument("motion", help="motion file (.xml MMM, .bvh, .amc)")
+    p.add_argument("--model", help="M2L model file (default: the packaged one)")
+    p.add_argument("-w", "--width", type=int, default=5, help="beam width = hypotheses shown")
+    p.add_argument("--json", action="store_true")
+    p.set_defaults(func=cmd_describe)
+    p = subparsers.add_parser("generate", help="generate a motion from English (L2M)")
+    p.add_argument("text", help="sentence, e.g. \"a person waves with the left hand\"")
+    p.add_argument("-o", "--output", required=True, help="out.gif, .mp4, .bvh or .npz")
+    p.add_argument("--model", help="L2M model file (default: the packaged one)")
+    p.add_argument("-w", "--width", type=int, default=5, help="hypotheses (sampled beam)")
+    p.add_argument("--method", choices=("beam", "mean"), default="beam")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--max-frames", type=int, default=None,
+                   help="length cap in model frames (default: the model's)")
+    p.add_argument("--min-frames", type=int, default=5,
+                   help="no end-of-motion before this many model frames (default 5)")
+    p.add_argument("--all", action="store_true", help="write every hypothesis (OUT_2, ...)")
+    p.set_defaults(func=cmd_generate)
+

@@ -1,0 +1,117 @@
+"""Evaluation of the seq2seq models (Plappert, Mandery & Asfour 2018, Section 5).
+
+- M2L: corpus BLEU (1-4-grams, all references of a motion) of the 1st..W-th beam
+  hypotheses (the paper's Table 2), BLEU-1, ROUGE-L, CIDEr and the rank/BLEU correlation.
+- Nearest-neighbour baseline: a test motion gets the first description of the closest
+  training motion (Euclidean distance between per-dimension mean and std over time of the
+  model frames, a length-independent summary).
+- L2M round trip (Tables 3-4): generate a motion from every reference sentence of a test
+  motion, describe it with the M2L model, BLEU of those descriptions against the motion's
+  references; relative performance = that BLEU / the M2L BLEU on the real motions.
+
+Inputs are model frames (``{id: (T, F) array}``, as in ``PairData.sequences`` offset 0) and
+references ``{id: [sentences]}``; sentences are compared after ``datasets.text.normalize``.
+"""
+from __future__ import annotations
+
+from typing import Mapping, Sequence
+
+import numpy as np
+
+from motionlang.datasets.text import normalize
+from motionlang.decoding.seq2seq import describe_features, generate_features
+from motionlang.evaluation import text_metrics as tm
+from motionlang.utils.progress import progress
+
+
+def _refs(references: Mapping[str, Sequence[str]], ids: Sequence[str]) -> list[list[str]]:
+    return [[normalize(s) for s in references[i]] for i in ids]
+
+
+def text_scores(refs: list[list[str]], hyps: list[str]) -> dict[str, float]:
+    """BLEU, BLEU-1, ROUGE-L and (if pycocoevalcap is installed) CIDEr of one hypothesis
+    per item."""
+    out = {"bleu": tm.corpus_bleu(refs, hyps), "bleu1": tm.bleu1(refs, hyps),
+           "rouge_l": tm.rouge_l(refs, hyps)}
+    try:
+        out["cider"] = tm.cider(refs, hyps)
+    except Exception:  # optional dependency missing: report the others
+        pass
+    return out
+
+
+def evaluate_m2l(model, frames: Mapping[str, np.ndarray], references: Mapping[str, Sequence[str]],
+                 width: int = 5) -> dict:
+    """Describe every motion with beam width W and score the hypotheses.
+
+    Returns ``{"n", "width", "bleu_by_rank" [W], "rank_bleu_spearman", "bleu", "bleu1",
+    "rouge_l", ("cider"), "examples"}`` (scores of the top hypothesis).
+    """
+    ids = sorted(frames)
+    ranked = []
+    for i in progress(ids, desc="describe", unit="motion"):
+        hyps = [t for t, _ in describe_features(model, frames[i], width=width)]
+        ranked.append((hyps + [hyps[-1]] * width)[:width])  # pad rare short beams
+    refs = _refs(references, ids)
+    top = [r[0] for r in ranked]
+    return {"n": len(ids), "width": width, "bleu_by_rank": tm.bleu_by_rank(refs, ranked),
+            "rank_bleu_spearman": tm.rank_bleu_correlation(refs, ranked),
+            **text_scores(refs, top),
+            "examples": [{"id": i, "hypotheses": r, "references": f}
+                         for i, r, f in list(zip(ids, ranked, refs))[:5]]}
+
+
+def summary(x: np.ndarray) -> np.ndarray:
+    """(T, F) frames -> (2F,) mean and std over time."""
+    return np.concatenate([x.mean(0), x.std(0)])
+
+
+def nearest_neighbour_descriptions(train_frames: Mapping[str, np.ndarray],
+                                   train_refs: Mapping[str, Sequence[str]],
+                                   query_frames: Mapping[str, np.ndarray]) -> dict[str, str]:
+    """{query id: first description of the nearest described training motion}."""
+    tids = [i for i in sorted(train_frames) if train_refs.get(i)]
+    bank = np.stack([summary(train_frames[i]) for i in tids])
+    out = {}
+    for q, x in query_frames.items():
+        d = ((bank - summary(x)) ** 2).sum(1)
+        out[q] = normalize(train_refs[tids[int(d.argmin())]][0])
+    return out
+
+
+def evaluate_nn_baseline(train_frames, train_refs, frames, references) -> dict:
+    ids = sorted(frames)
+    nn = nearest_neighbour_descriptions(train_frames, train_refs, {i: frames[i] for i in ids})
+    return {"n": len(ids), **text_scores(_refs(references, ids), [nn[i] for i in ids])}
+
+
+def evaluate_round_trip(l2m, m2l, references: Mapping[str, Sequence[str]],
+                        m2l_bleu: float, *, method: str = "mean", width: int = 1,
+                        max_frames: int | None = None, seed: int = 0) -> dict:
+    """Generate from each reference sentence, describe the result, score against the
+    motion's references. Both models must share one feature set (same frames).
+
+    Returns ``{"n_sentences", "bleu", "bleu1", "rouge_l", ("cider"), "relative"}`` with
+    relative = bleu / m2l_bleu (NaN if m2l_bleu is 0).
+    """
+    refs, hyps = [], []
+    pairs = [(i, s) for i in sorted(references) for s in references[i]]
+    for i, sentence in progress(pairs, desc="round trip", unit="sentence"):
+        frames, _ = generate_features(l2m, sentence, width=width, method=method,
+                                      max_frames=max_frames, seed=seed)[0]
+        hyps.append(describe_features(m2l, frames, width=1)[0][0])
+        refs.append([normalize(s) for s in references[i]])
+    scores = text_scores(refs, hyps)
+    rel = scores["bleu"] / m2l_bleu if m2l_bleu > 0 else float("nan")
+    return {"n_sentences": len(pairs), **scores, "relative": rel}
+
+
+def markdown_table(results: Mapping[str, Mapping[str, float]]) -> str:
+    """{row name: {metric: value}} -> a markdown table over the metrics they share."""
+    cols = ["bleu", "bleu1", "rouge_l", "cider", "relative"]
+    cols = [c for c in cols if any(c in r for r in results.values())]
+    lines = ["| | " + " | ".join(cols) + " |", "|---" * (len(cols) + 1) + "|"]
+    for name, r in results.items():
+        cells = [f"{r[c]:.3f}" if c in r and r[c] == r[c] else "" for c in cols]
+        lines.append(f"| {name} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"

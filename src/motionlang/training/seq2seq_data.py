@@ -1,0 +1,143 @@
+"""From a dataset folder to (motion features, sentence) pairs for the seq2seq models.
+
+The same code reads a KIT-ML release, a procedural corpus (written in KIT-ML format) and a
+custom folder of motion files with a captions file. Motions without descriptions are
+dropped; the split is by motion (``datasets.splits.random_split``), so no motion's
+sentences or offsets are shared between train and test. Features are fitted on the
+training motions only. Each motion gives up to ``offsets`` down-sampled sequences (the
+paper's augmentation: 10 start offsets from 100 Hz to 10 Hz) and each sequence is paired
+with every description.
+
+Model frames are the feature set's normalised dimensions only: a trailing binary "active"
+flag (AnglesFeatures) is dropped, since L2M predicts its own end-of-motion flag.
+"""
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+
+from motionlang.datasets.cache import cached, file_identity
+from motionlang.datasets.custom import load_custom
+from motionlang.datasets.kitml import find_kitml_root, load_kitml
+from motionlang.datasets.splits import random_split
+from motionlang.datasets.text import Vocabulary
+from motionlang.decoding.seq2seq import motion_frames
+from motionlang.errors import DatasetError, MotionlangError
+from motionlang.features.base import FeatureSet, features_from_dict
+from motionlang.utils.progress import progress
+
+CACHE_VERSION = "seq2seq-pairs-1"
+
+
+def load_records(data: str | Path, max_seconds: float | None = 30.0) -> list:
+    """KIT-ML-format records if ``data`` holds ``*_mmm.xml`` files, else a custom dataset."""
+    try:
+        find_kitml_root(data)
+    except DatasetError:
+        return load_custom(data)
+    return load_kitml(data, max_seconds=max_seconds)
+
+
+def record_path(rec: Any) -> Path:
+    return Path(getattr(rec, "mmm_path", None) or rec.path)
+
+
+def make_features(kind: str) -> FeatureSet:
+    if kind == "angles":
+        from motionlang.features.angles import AnglesFeatures
+        return AnglesFeatures()
+    if kind == "positions":
+        from motionlang.features.positions import PositionFeatures
+        return PositionFeatures()
+    raise MotionlangError(f"unknown features {kind!r} (angles or positions)")
+
+
+@dataclass
+class PairData:
+    """Everything a seq2seq training run needs.
+
+    Attributes:
+        features: the fitted feature set. vocab: built from the training sentences.
+        splits: ``{"train"|"val"|"test": [record ids]}``.
+        items: per split, dicts ``{"motion" (T, F) float32, "tokens" [SOS .. EOS], "id"}``.
+        references: per split, ``{id: [sentences]}`` (all descriptions, for BLEU).
+        sequences: per split, ``{id: [(T, F) arrays, one per offset]}``.
+    """
+
+    features: FeatureSet
+    vocab: Vocabulary
+    splits: dict[str, list[str]]
+    items: dict[str, list[dict]]
+    references: dict[str, dict[str, list[str]]]
+    sequences: dict[str, dict[str, list[np.ndarray]]]
+
+
+def _thin(motion, fps: float):
+    """Every k-th frame when that lands on ``fps`` exactly: fitting on these instead of the
+    100 Hz motions keeps a 5,000-motion corpus in memory; the statistics barely change."""
+    step = int(round(motion.fps / fps))
+    if step <= 1 or abs(motion.fps / step - fps) > 1e-6 or motion.n_frames < step:
+        return motion
+    return motion[::step]
+
+
+def _fit_features(kind: str, train: Sequence) -> FeatureSet:
+    """Fit on the training motions (cached by file identity)."""
+    def compute():
+        fs = make_features(kind)
+        motions = []
+        for rec in progress(train, desc="fit features", unit="motion"):
+            motions.append(_thin(rec.load_motion(), fs.fps))
+        fs.fit(motions)
+        blob = json.dumps(fs.to_dict()).encode("utf-8")
+        return {"json": np.frombuffer(blob, dtype=np.uint8)}
+    key = {"v": CACHE_VERSION, "stage": "fit", "kind": kind,
+           "files": [file_identity(record_path(r)) for r in train]}
+    out = cached(key, compute, name=f"seq2seq-fit-{kind}")
+    return features_from_dict(json.loads(out["json"].tobytes().decode("utf-8")))
+
+
+def _encode(fs: FeatureSet, records: Sequence, offsets: int) -> dict[str, list[np.ndarray]]:
+    """{id: sequences} for ``records`` (cached by files + fitted features + offsets)."""
+    def compute():
+        arrays: dict[str, np.ndarray] = {}
+        for i, rec in enumerate(progress(records, desc="encode", unit="motion")):
+            for k, s in enumerate(motion_frames(fs, rec.load_motion(), offsets)):
+                arrays[f"{i}_{k}"] = s
+        return arrays
+    key = {"v": CACHE_VERSION, "stage": "encode", "features": fs.to_dict(), "offsets": offsets,
+           "files": [file_identity(record_path(r)) for r in records]}
+    out = cached(key, compute, name="seq2seq-encode")
+    seqs: dict[str, list[np.ndarray]] = {r.id: [] for r in records}
+    for name in sorted(out, key=lambda n: tuple(map(int, n.split("_")))):
+        i, _ = name.split("_")
+        seqs[records[int(i)].id].append(out[name])
+    return seqs
+
+
+def build_pairs(data: str | Path, *, features: str = "angles", offsets: int = 10,
+                fractions: Sequence[float] = (0.8, 0.1, 0.1), seed: int = 0,
+                min_count: int = 1, max_seconds: float | None = 30.0) -> PairData:
+    """Read ``data``, split by motion, fit features and vocabulary on train, make pairs."""
+    records = [r for r in load_records(data, max_seconds) if r.annotations]
+    if len(records) < 2:
+        raise DatasetError(f"{data}: need at least 2 described motions, found {len(records)}")
+    splits = random_split([r.id for r in records], fractions, seed=seed)
+    by_id = {r.id: r for r in records}
+    train = [by_id[i] for i in splits["train"]]
+    if not train:
+        raise DatasetError(f"{data}: the training split is empty")
+    fs = _fit_features(features, train)
+    vocab = Vocabulary.build([s for r in train for s in r.annotations], min_count=min_count)
+    items, refs, seqs = {}, {}, {}
+    for name, ids in splits.items():
+        recs = [by_id[i] for i in ids]
+        seqs[name] = _encode(fs, recs, offsets) if recs else {}
+        refs[name] = {r.id: list(r.annotations) for r in recs}
+        items[name] = [{"motion": s, "tokens": vocab.encode(text), "id": r.id}
+                       for r in recs for s in seqs[name][r.id] for text in r.annotations]
+    return PairData(fs, vocab, splits, items, refs, seqs)

@@ -1,0 +1,95 @@
+"""``motionlang train crbm`` / ``crbm generate | fill | reproduce`` end to end, tiny models."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from conftest import shared_file
+from motionlang.cli.main import main
+from motionlang.evaluation.crbm_fill import load_cmu35
+from motionlang.evaluation.crbm_generation import StyleLabeller, generation_report
+from motionlang.evaluation.crbm_reproduce import frames_to_motion, model_frames, model_frames_to_channels
+from motionlang.models.crbm import CRBM, CRBMConfig
+from motionlang.models.crbm_stack import CRBMStack
+
+
+@pytest.fixture(scope="module")
+def data_dir():
+    return shared_file("cmu35/cmu35WalkJog.mat").parent
+
+
+@pytest.fixture(scope="module")
+def model_path(data_dir, tmp_path_factory):
+    path = tmp_path_factory.mktemp("crbm") / "m.npz"
+    assert main(["train", "crbm", "--data", str(data_dir), str(path), "--epochs", "3",
+                 "--hidden", "12", "--quiet"]) == 0
+    return path
+
+
+def test_train_writes_a_reloadable_checkpoint(model_path):
+    m = CRBM.load(model_path)
+    assert m.config.n_hidden == 12 and len(m.history) == 3 and m.n_visible == 59
+
+
+def test_generate_and_fill_outputs(model_path, data_dir, tmp_path, capsys):
+    out = tmp_path / "gen.npy"
+    assert main(["crbm", "generate", str(model_path), str(out), "--data", str(data_dir),
+                 "--frames", "20", "--gibbs", "2", "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert np.load(out).shape == (23, 59)
+    assert report["fraction_walk"] + report["fraction_jog"] == pytest.approx(1.0)
+    png = tmp_path / "fill.png"
+    assert main(["crbm", "fill", str(model_path), str(png), "--data", str(data_dir),
+                 "--part", "upper-body", "--repeats", "2", "--gibbs", "2", "--json"]) == 0
+    errs = json.loads(capsys.readouterr().out)
+    assert png.stat().st_size > 1000
+    assert errs["nearest neighbour"] == pytest.approx(22.20, rel=0.01)
+    bvh = tmp_path / "fill.bvh"
+    assert main(["crbm", "fill", str(model_path), str(bvh), "--data", str(data_dir),
+                 "--repeats", "1", "--gibbs", "1"]) == 0
+    assert bvh.read_text().startswith("HIERARCHY")
+
+
+def test_reproduce_json_with_a_saved_model(model_path, data_dir, capsys):
+    assert main(["crbm", "reproduce", "--data", str(data_dir), "--model", str(model_path),
+                 "--repeats", "2", "--gibbs", "2", "--json"]) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert set(result["table"]) == {"35_29", "35_18"}
+    assert result["table"]["35_29"]["upper body"]["nearest neighbour"] == pytest.approx(22.20, rel=0.01)
+
+
+def test_errors_are_one_line(data_dir, tmp_path, capsys):
+    assert main(["crbm", "generate", str(tmp_path / "none.npz"), str(tmp_path / "o.npy"),
+                 "--data", str(data_dir)]) == 2
+    assert "no such model file" in capsys.readouterr().err
+    assert main(["train", "crbm", "--data", str(tmp_path), str(tmp_path / "m.npz"), "--quiet"]) == 2
+
+
+def test_model_frames_invert_to_channels_and_a_motion(data_dir):
+    data = load_cmu35(data_dir)
+    c = data.test["35_29"]
+    back = model_frames_to_channels(model_frames(c), c, tuple(c[0, [0, 2]]))
+    np.testing.assert_allclose(back, c, atol=1e-9)
+    motion = frames_to_motion(model_frames(c), data, data_dir / "35.asf")
+    assert motion.n_frames == len(c) and motion.fps == 30.0
+    pos = motion.positions()
+    assert np.isfinite(pos).all() and pos[..., 1].min() > -0.2   # feet near the floor, not below
+
+
+def test_two_level_model_and_generation_report(data_dir):
+    data = load_cmu35(data_dir)
+    seqs = [model_frames(c) for c in data.train]
+    l1 = CRBM(CRBMConfig(n_hidden=8, epochs=2), 59).fit(seqs)
+    stack = CRBMStack.fit(l1, seqs, CRBMConfig(n_hidden=6, epochs=2))
+    assert stack.level2.config.visible == "binary" and stack.n_init == 6
+    gen = stack.generate(seqs[0][:6], 15, n_gibbs=2)
+    assert gen.shape == (21, 59) and np.isfinite(gen).all()
+    np.testing.assert_array_equal(gen[:6], seqs[0][:6])
+    rep = generation_report(l1, data, n_frames=10, n_gibbs=2)
+    assert set(rep) == {"walk", "jog"} and 0 <= rep["walk"]["style_kept"] <= 1
+    # the labeller gives a training frame its own trial's label
+    lab = StyleLabeller(data, l1.mean, l1.std)
+    jog_trial = data.train[data.train_names.index("35_20")]
+    assert (lab(model_frames(jog_trial)) == "jog").all()

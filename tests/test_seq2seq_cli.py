@@ -1,0 +1,91 @@
+"""``motionlang train m2l|l2m``, ``describe`` and ``generate`` end to end on tiny data:
+a procedural corpus in KIT-ML format and a custom BVH + captions folder."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+import torch
+
+from motionlang.cli.main import main
+from motionlang.models.l2m import LanguageToMotion
+from motionlang.models.m2l import MotionToLanguage
+
+torch.set_num_threads(1)
+TINY = ["--epochs", "2", "--batch-size", "8", "--offsets", "2", "--enc-hidden", "8",
+        "--dec-hidden", "16", "--embed-dim", "8", "--dec-layers", "2"]
+
+
+@pytest.fixture(scope="module")
+def corpus(tmp_path_factory):
+    from motionlang.datasets.synth.corpus import write_corpus
+    root = tmp_path_factory.mktemp("corpus")
+    write_corpus(root, 8, seed=1, workers=1, show_progress=False)
+    return root
+
+
+@pytest.fixture(autouse=True)
+def private_cache(tmp_path, monkeypatch):
+    monkeypatch.setenv("MOTIONLANG_CACHE", str(tmp_path / "cache"))
+
+
+def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
+    m2l_dir, l2m_dir = tmp_path / "m2l", tmp_path / "l2m"
+    assert main(["train", "m2l", "--data", str(corpus), "--out", str(m2l_dir), *TINY]) == 0
+    assert main(["train", "l2m", "--data", str(corpus), "--out", str(l2m_dir), *TINY,
+                 "--components", "2", "--attention"]) == 0
+    for d in (m2l_dir, l2m_dir):
+        assert {"model.pt", "best.pt", "last.pt", "history.json", "splits"} <= \
+            {p.name for p in d.iterdir()}
+    m2l = MotionToLanguage.load(m2l_dir / "model.pt")
+    assert m2l.features is not None and len(m2l.vocab) == m2l.config.vocab_size
+    train_ids = (m2l_dir / "splits" / "train.txt").read_text().split()
+    assert len(train_ids) >= 5
+    capsys.readouterr()
+    motion = corpus / f"{train_ids[0]}_mmm.xml"
+    assert main(["describe", str(motion), "--model", str(m2l_dir / "model.pt"), "-w", "3",
+                 "--json"]) == 0
+    hyps = json.loads(capsys.readouterr().out)
+    assert [h["rank"] for h in hyps] == [1, 2, 3]
+    assert all(h["text"] for h in hyps)                       # no empty sentence
+    assert hyps[0]["log_p"] >= hyps[1]["log_p"] >= hyps[2]["log_p"]
+    l2m = LanguageToMotion.load(l2m_dir / "model.pt")
+    assert l2m.config.attention
+    out = tmp_path / "gen.bvh"
+    assert main(["generate", "a person walks forward", "--model", str(l2m_dir / "model.pt"),
+                 "-o", str(out), "-w", "2", "--max-frames", "12", "--min-frames", "6",
+                 "--all"]) == 0
+    printed = capsys.readouterr().out
+    assert "log L" in printed and str(out) in printed
+    from motionlang.formats import read_motion
+    for path in (out, tmp_path / "gen_2.bvh"):
+        m = read_motion(path)
+        assert 6 <= m.n_frames <= 12 and np.isfinite(m.joint_angles).all()
+
+
+def test_custom_bvh_folder_with_position_features(corpus, tmp_path, capsys):
+    from motionlang.formats import read_motion, write_motion
+    folder = tmp_path / "custom"
+    folder.mkdir()
+    rows = ["file,text"]
+    for p in sorted(corpus.glob("*_mmm.xml"))[:6]:
+        mid = p.name[:5]
+        write_motion(read_motion(p), folder / f"{mid}.bvh")
+        for a in json.loads((corpus / f"{mid}_annotations.json").read_text()):
+            rows.append(f'{mid}.bvh,"{a}"')
+    (folder / "captions.csv").write_text("\n".join(rows) + "\n")
+    out = tmp_path / "run"
+    assert main(["train", "m2l", "--data", str(folder), "--out", str(out), "--features",
+                 "positions", *TINY]) == 0
+    capsys.readouterr()
+    assert main(["describe", str(folder / "00001.bvh"), "--model", str(out / "model.pt"),
+                 "-w", "2"]) == 0
+    lines = capsys.readouterr().out.strip().splitlines()
+    assert len(lines) == 2 and lines[0].startswith("1. log P =")
+
+
+def test_errors_are_one_line(tmp_path, capsys):
+    assert main(["describe", str(tmp_path / "x.bvh"), "--model", str(tmp_path / "no.pt")]) == 2
+    assert "no such model file" in capsys.readouterr().err
+    assert main(["train", "m2l", "--data", str(tmp_path), "--out", str(tmp_path / "o")]) == 2

@@ -1,0 +1,66 @@
+"""Seq2seq evaluation: M2L scores by rank, nearest-neighbour baseline, L2M round trip."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import torch
+from test_seq2seq_api import WORDS, items
+from test_seq2seq_models import F_DIM, tiny
+
+from motionlang.evaluation import seq2seq_eval as ev
+from motionlang.training.collate import collate_pairs
+from motionlang.training.trainer import TrainConfig, Trainer
+
+torch.set_num_threads(1)
+
+
+@pytest.fixture(scope="module")
+def trained(tmp_path_factory):
+    data = items()
+    model = tiny("m2l", False)
+    Trainer(model, data, collate_pairs, TrainConfig(
+        epochs=60, batch_size=4, lr=1e-2, out_dir=str(tmp_path_factory.mktemp("run")),
+        plot=False, progress=False)).fit()
+    frames = {f"m{i}": d["motion"] for i, d in enumerate(data)}
+    refs = {f"m{i}": [" ".join(WORDS[t] for t in d["tokens"][1:-1])] for i, d in enumerate(data)}
+    return model.eval(), frames, refs
+
+
+def test_m2l_scores_of_a_model_that_memorised(trained):
+    model, frames, refs = trained
+    res = ev.evaluate_m2l(model, frames, refs, width=3)
+    assert res["n"] == 8 and len(res["bleu_by_rank"]) == 3
+    assert res["bleu"] == pytest.approx(1.0) and res["bleu_by_rank"][0] == pytest.approx(1.0)
+    assert res["bleu_by_rank"][1] < 1.0                  # other hypotheses differ
+    assert res["rouge_l"] == pytest.approx(1.0) and res["bleu1"] == pytest.approx(1.0)
+    assert res["rank_bleu_spearman"] < 0
+    assert res["examples"][0]["hypotheses"][0] == res["examples"][0]["references"][0]
+
+
+def test_nearest_neighbour_baseline():
+    rng = np.random.default_rng(0)
+    train = {"a": rng.normal(0, 1, (10, 3)), "b": rng.normal(5, 1, (12, 3)),
+             "c": rng.normal(-5, 3, (8, 3))}
+    refs = {"a": ["A person Walks.", "x"], "b": ["someone jumps"], "c": ["a kick"]}
+    query = {"q1": rng.normal(5, 1, (20, 3)), "q2": rng.normal(-5, 3, (9, 3))}
+    nn = ev.nearest_neighbour_descriptions(train, refs, query)
+    assert nn == {"q1": "someone jumps", "q2": "a kick"}
+    res = ev.evaluate_nn_baseline(train, refs, query, {"q1": ["someone jumps"],
+                                                       "q2": ["a person kicks"]})
+    assert res["n"] == 2 and 0 < res["bleu1"] < 1 and 0 < res["rouge_l"] < 1
+
+
+def test_round_trip_and_table(trained):
+    m2l, frames, refs = trained
+    l2m = tiny("l2m", False)
+    l2m.vocab = WORDS
+    res = ev.evaluate_round_trip(l2m, m2l, refs, m2l_bleu=0.5, max_frames=8)
+    assert res["n_sentences"] == 8
+    assert res["relative"] == pytest.approx(res["bleu"] / 0.5)
+    assert math.isnan(ev.evaluate_round_trip(l2m, m2l, {"m0": refs["m0"]}, 0.0,
+                                             max_frames=4)["relative"])
+    table = ev.markdown_table({"M2L": {"bleu": 0.5, "bleu1": 0.7}, "NN": {"bleu": 0.25}})
+    assert table.splitlines()[0] == "| | bleu | bleu1 |"
+    assert "| NN | 0.250 |  |" in table
