@@ -64,7 +64,8 @@ def main() -> None:
             torch.nn.utils.clip_grad_norm_(model.parameters(), 25.0)
             opt.step()
         t = median_time(train_step, max(3, args.repeats // 2))
-        print(f"{name} train: {128 / t:8.1f} sequences/s  (batch 128, median {t * 1e3:.0f} ms/step)")
+        print(f"{name} train: {128 / t:8.1f} sequences/s  "
+              f"(batch 128, median {t * 1e3:.0f} ms/step)")
     motion = rng.normal(size=(100, F)).astype(np.float32)
     t = median_time(lambda: describe_features(m2l, motion, width=5, max_len=20), args.repeats)
     print(f"describe (W=5, 100 frames, <=20 words): median {t * 1e3:.1f} ms")

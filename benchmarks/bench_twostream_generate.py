@@ -2,10 +2,10 @@
 frames) from a sentence, sentence encoding by the frozen MiniLM included (its per-sentence
 cache is cleared before every run, so each run pays the language model).
 
-The model has the paper's sizes (h1 32, h2 128, h 512) and random weights: latency does not
+The model has the paper's sizes (h1 32, h2 128, h 512; h can be changed) and random weights: latency does not
 depend on the weights. Prints the median (and min/max) of repeated runs; target < 200 ms.
 
-    .venv/bin/python benchmarks/bench_twostream_generate.py [REPEAT] [THREADS]
+    .venv/bin/python benchmarks/bench_twostream_generate.py [REPEAT] [THREADS] [H]
 """
 from __future__ import annotations
 
@@ -28,9 +28,10 @@ SENTENCES = [
 def main() -> int:
     repeat = int(sys.argv[1]) if len(sys.argv) > 1 else 15
     threads = int(sys.argv[2]) if len(sys.argv) > 2 else 1
+    h = int(sys.argv[3]) if len(sys.argv) > 3 else 512
     torch.set_num_threads(threads)
     try:
-        model = TwoStreamModel(TwoStreamConfig()).eval()
+        model = TwoStreamModel(TwoStreamConfig(h=h)).eval()
     except MotionlangError as exc:
         print(f"skipped: {exc}")
         return 0

@@ -24,7 +24,8 @@ def test_info_json_kit(capsys):
     assert info["frames"] == 378 and info["fps"] == 100.0 and info["dofs"] == 44
     assert info["duration_s"] == pytest.approx(3.78)
     assert info["source_format"] == "mmm"
-    assert len(info["joint_names"]) == info["joints"]
+    assert len(info["joint_names"]) == info["joints"] == 44  # the "44 joints"
+    assert info["nodes"] > 44 and "BPx_joint" in info["joint_names"]
 
 
 def test_info_amc_with_asf_text(capsys):
@@ -34,6 +35,16 @@ def test_info_amc_with_asf_text(capsys):
     assert "358" in out and "120" in out
     code, out, _ = run(capsys, "info", amc, "--json", "--source-fps", "60")
     assert json.loads(out)["fps"] == 60.0
+
+
+def test_info_mit_mat_sequences(capsys):
+    mat = shared_file("mit/motion.mat")
+    code, out, _ = run(capsys, "info", mat, "--json", "--sequence", "2")
+    assert code == 0 and json.loads(out)["frames"] == 260 and json.loads(out)["fps"] == 30.0
+    code, _, err = run(capsys, "info", mat, "--sequence", "9")
+    assert code == 2 and str(mat) in err and "no sequence 9" in err
+    code, _, err = run(capsys, "info", shared_file("kitml/00001_mmm.xml"), "--sequence", "2")
+    assert code == 2 and "--sequence applies to .mat" in err
 
 
 def test_render_gif_clip_and_strip(tmp_path, capsys):

@@ -24,7 +24,8 @@ def data_dir():
 def model_path(data_dir, tmp_path_factory):
     path = tmp_path_factory.mktemp("crbm") / "m.npz"
     assert main(["train", "crbm", "--data", str(data_dir), str(path), "--epochs", "3",
-                 "--hidden", "12", "--quiet"]) == 0
+                 "--hidden", "12", "--quiet", "--level2", str(path.with_name("two.npz")),
+                 "--level2-hidden", "5", "--level2-order", "2"]) == 0
     return path
 
 
@@ -39,6 +40,12 @@ def test_generate_and_fill_outputs(model_path, data_dir, tmp_path, capsys):
                  "--frames", "20", "--gibbs", "2", "--json"]) == 0
     report = json.loads(capsys.readouterr().out)
     assert np.load(out).shape == (23, 59)
+    assert report["fraction_walk"] + report["fraction_jog"] == pytest.approx(1.0)
+    two = model_path.with_name("two.npz")
+    assert main(["crbm", "generate", str(two), str(out), "--data", str(data_dir), "--start", "jog",
+                 "--frames", "10", "--gibbs", "2", "--json"]) == 0
+    json.loads(capsys.readouterr().out)
+    assert np.load(out).shape == (15, 59)   # 3 + 2 real frames start a two-level model
     assert report["fraction_walk"] + report["fraction_jog"] == pytest.approx(1.0)
     png = tmp_path / "fill.png"
     assert main(["crbm", "fill", str(model_path), str(png), "--data", str(data_dir),

@@ -47,9 +47,20 @@ def test_real_amc_and_info():
     info = motion_info(m)
     assert info["frames"] == 898 and info["fps"] == 120.0
     assert info["duration_s"] == pytest.approx(898 / 120)
-    assert info["joints"] == len(info["joint_names"]) == 38 and info["dofs"] == 56
+    # 28 bones carry rotations; 38 nodes with the root, hip joints and end sites
+    assert info["joints"] == len(info["joint_names"]) == 28 and info["dofs"] == 56
+    assert info["nodes"] == len(info["node_names"]) == 38 and "root" in info["node_names"]
     assert info["source_format"] == "amc" and info["name"] == "49_20"
-    assert "lfemur" in info["joint_names"]
+    assert "lfemur" in info["joint_names"] and "lhipjoint" not in info["joint_names"]
+
+
+def test_mit_mat_by_sequence():
+    path = shared_file("mit/motion.mat")
+    first, third = read_motion(path), read_motion(path, sequence=3)
+    assert (first.n_frames, third.n_frames) == (438, 3128) and first.fps == 30.0
+    assert first.source_format == "mit" and motion_info(third)["frames"] == 3128
+    with pytest.raises(MotionFormatError, match="no sequence 4.*holds 3"):
+        read_motion(path, sequence=4)
 
 
 def test_bvh_and_resampling(tmp_path):

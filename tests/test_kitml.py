@@ -95,8 +95,11 @@ def test_malformed_annotations_name_file_and_line(tmp_path):
     (tmp_path / "00005_annotations.json").write_text('{"a": 1}')
     with pytest.raises(DatasetError, match="list of strings"):
         load_kitml(tmp_path)
-    (tmp_path / "00005_meta.json").unlink()
     (tmp_path / "00005_annotations.json").write_text("[]")
+    assert not load_kitml(tmp_path)[0].has_annotations  # kept by default, as in the release
+    with pytest.raises(DatasetError, match=r"00005_annotations.json: empty annotation list"):
+        load_kitml(tmp_path, require_annotations=True)
+    (tmp_path / "00005_meta.json").unlink()
     with pytest.raises(DatasetError, match="00005_meta.json: missing"):
         load_kitml(tmp_path)
     with pytest.raises(DatasetError, match="not found"):

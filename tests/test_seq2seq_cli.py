@@ -58,6 +58,15 @@ def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
                  "--all"]) == 0
     printed = capsys.readouterr().out
     assert "log L" in printed and str(out) in printed
+    report = tmp_path / "report.json"
+    assert main(["evaluate", "--m2l", str(m2l_dir / "model.pt"), "--l2m",
+                 str(l2m_dir / "model.pt"), "--data", str(corpus), "--split", "val", "-w", "2",
+                 "-o", str(report)]) == 0
+    rep = json.loads(report.read_text())
+    assert len(rep["m2l"]["bleu_by_rank"]) == 2 and rep["m2l"]["n"] >= 1
+    assert {"bleu", "rouge_l"} <= set(rep["nearest_neighbour"])
+    assert rep["l2m_round_trip"]["n_sentences"] >= 1
+    assert "| nearest neighbour |" in report.with_suffix(".md").read_text()
     from motionlang.formats import read_motion
     for path in (out, tmp_path / "gen_2.bvh"):
         m = read_motion(path)

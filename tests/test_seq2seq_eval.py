@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import torch
 from test_seq2seq_api import WORDS, items
-from test_seq2seq_models import F_DIM, tiny
+from test_seq2seq_models import tiny
 
 from motionlang.evaluation import seq2seq_eval as ev
 from motionlang.training.collate import collate_pairs

@@ -184,3 +184,49 @@ def test_cli_data_synth(tmp_path, capsys):
     assert "wrote 2 motions" in capsys.readouterr().out
     assert main(["data", "synth", "--out", str(out), "--n", "0"]) == 2
     assert "--n must be at least 1" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("index", [0, 1, 5, 12])
+def test_samples_are_smooth_and_within_joint_limits(index):
+    from motionlang.datasets.synth.track import dof_limits
+
+    s = generate_sample(3, index)
+    m = s.motion
+    assert np.abs(np.diff(m.joint_angles, axis=0)).max() < 0.35  # rad per 10 ms
+    assert np.linalg.norm(np.diff(m.root_translation, axis=0), axis=1).max() < 0.07
+    lim = dof_limits()
+    for j, name in enumerate(m.skeleton.dof_names):
+        lo, hi = lim[name]
+        # ankles may exceed the model's range a little when flat on the floor in a squat
+        tol = 0.25 if name[1] == "A" else 0.12
+        assert lo - tol <= m.joint_angles[:, j].min() and m.joint_angles[:, j].max() <= hi + tol, name
+    # the primitives tile the motion in order and lie inside it
+    body = [p for p in s.primitives if p.layer == "body"]
+    assert all(a.end == b.start for a, b in zip(body, body[1:]))
+    assert 0 < body[0].start and body[-1].end < m.n_frames
+
+
+def test_mirror_augmentation_on_real_kitml_motion():
+    from tests.conftest import shared_file
+
+    m = read_mmm(shared_file("kitml/00001_mmm.xml"))
+    m1, t1, _ = mirror_sample(m, ["A person turns left and walks forwards."])
+    assert t1 == ["A person turns right and walks forwards."]
+    m2, t2, _ = mirror_sample(m1, t1)
+    assert t2 == ["A person turns left and walks forwards."]
+    assert np.allclose(m2.joint_angles, m.joint_angles)
+    assert np.allclose(m2.root_rotation, m.root_rotation)
+    assert not np.allclose(m1.joint_angles, m.joint_angles)
+
+
+def test_stated_speed_orders_walking_speed():
+    speeds = []
+    for sp in ("slow", "normal", "fast"):
+        rng = np.random.default_rng(9)
+        style = random_style(rng)
+        m, prims, _ = build_motion([Primitive("walk", count=6, direction="forward",
+                                              speed=sp)], style, rng)
+        root = m.positions()[prims[0].start:prims[0].end, 0][:, [0, 2]]
+        speeds.append(np.linalg.norm(root[-1] - root[0]) / ((len(root) - 1) / m.fps))
+    assert speeds[0] < speeds[1] < speeds[2]
+    assert 0.4 < speeds[0] and speeds[2] < 2.2  # m/s incl. start and stop

@@ -116,3 +116,52 @@ def test_mirror_text_twice_is_identity_and_swaps_meaning():
         assert extract_keys(m) == [mirror_primitive(p).key() for p in stated]
     assert mirror_text("Left, right; LEFT.") == "Right, left; RIGHT."
     assert mirror_text("walks counter-clockwise") == "walks clockwise"
+
+
+def test_mirror_text_agrees_with_tmr_mirrored_kitml_annotations():
+    """TMR ships left/right-swapped copies of the real KIT-ML texts (ids "M..."); ours
+    agree except on TMR's own slips ("upright" -> "upleft") and misspellings."""
+    import json
+
+    from tests.conftest import shared_file
+
+    data = json.loads(shared_file("kitml/annotations_tmr.json").read_text())
+    pairs = [(a["text"], b["text"]) for k, v in data.items()
+             if not k.startswith("M") and "M" + k in data
+             for a, b in zip(v["annotations"], data["M" + k]["annotations"])]
+    assert len(pairs) > 5000
+    agree = sum(mirror_text(a) == b for a, b in pairs) / len(pairs)
+    assert agree > 0.995
+    assert mirror_text("a left-handed punch, counter clockwise") == \
+        "a right-handed punch, clockwise"
+
+
+def test_score_counts_right_and_wrong_parameters():
+    from motionlang.datasets.synth.extract import score
+
+    truth = [Primitive("walk", count=4, direction="forward", speed="slow"),
+             Primitive("turn", side="left", angle=180),
+             Primitive("wave", side="right", count=2)]
+    s = score("A person walks 3 steps forward, turns around to the left and waves with "
+              "the left hand twice.", truth)
+    assert s["actions_match"] and s["matched"] == 3
+    assert s["count"] == (1, 2)  # 3 steps wrong, twice right
+    assert s["side"] == (1, 2)  # turn left right, left hand wrong
+    assert s["direction"] == (1, 1) and s["angle"] == (1, 1) and s["speed"] == (0, 0)
+    s = score("Someone jumps.", truth)
+    assert not s["actions_match"] and s["matched"] == 0
+
+
+@pytest.mark.parametrize("text,want", [
+    ("A person walks two steps forward, starting with the left foot, performs a spot-turn "
+     "of 180 degree on the right foot and walks back two steps",
+     [("walk", None, 2, "forward", None, None), ("turn", "right", None, None, None, 180),
+      ("walk", None, 2, None, None, None)]),
+    ("a person walks forward takes a 180 degree turn to the right and keeps on walking",
+     [("walk", None, None, "forward", None, None), ("turn", "right", None, None, None, 180),
+      ("walk", None, None, None, None, None)]),
+    ("Subject walks in a quarter circle counterclockwise.",
+     [("walk", "left", None, "circle", None, 90)]),
+])
+def test_extractor_on_real_kitml_style_sentences(text, want):
+    assert extract_keys(text) == want

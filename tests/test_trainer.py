@@ -103,7 +103,7 @@ def test_two_process_ddp_matches_single_process(tmp_path):
         assert torch.equal(r0[k], r1[k]), k                # ranks never diverge
     torch.manual_seed(0)
     single = TinyReg()
-    trainer = Trainer(single, make_data(), collate, ddp_config(tmp_path / "single"),
+    trainer = Trainer(single, make_data(41), collate, ddp_config(tmp_path / "single"),
                       val_set=make_data(16, 1))
     hist = trainer.fit()
     start = TinyReg()

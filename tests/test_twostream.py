@@ -62,13 +62,17 @@ def test_forward_shapes(two_stream):
 
 
 @pytest.mark.parametrize("two_stream", [True, False])
-def test_fast_inference_unroll_matches_training_unroll(two_stream):
+def test_folded_unroll_matches_layered_unroll(two_stream):
     m = tiny(two_stream=two_stream)
     z, x0 = m.encode_text(["a person waves", "walk"]), torch.randn(2, 66)
-    slow = m.decoder(z, x0, 12)                     # autograd on: layer by layer
-    with torch.no_grad():
-        fast = m.decoder(z, x0, 12)                 # folded Hier block
-    torch.testing.assert_close(fast, slow.detach(), rtol=1e-4, atol=1e-4)
+    ref = m.decoder.unroll_layered(z, x0, 12)
+    fast = m.decoder(z, x0, 12)
+    torch.testing.assert_close(fast, ref, rtol=1e-4, atol=1e-4)
+    # and the gradients agree: the folded map is built differentiably
+    g_ref = torch.autograd.grad(ref.square().sum(), list(m.decoder.parameters()))
+    g_fast = torch.autograd.grad(fast.square().sum(), list(m.decoder.parameters()))
+    for a, b in zip(g_ref, g_fast):
+        torch.testing.assert_close(a, b, rtol=1e-3, atol=1e-3)
 
 
 def test_streams_see_only_their_body_parts():
@@ -155,8 +159,10 @@ def test_save_load_identical(tmp_path):
     torch.testing.assert_close(m.loss(b)["loss"], m2.loss(b)["loss"], rtol=0, atol=0)
     np.testing.assert_array_equal(m2.normalizer.mean, m.normalizer.mean)
     assert m2.config == m.config
-    p = m2.generate_positions("a person walks", 10)
+    p = m2.generate_positions("a person walks", 10, start=(1.0, 2.0, 0.3))
     assert p.shape == (10, 21, 3) and np.isfinite(p).all()
+    # the root starts exactly at the requested ground position (its local x, z are 0)
+    np.testing.assert_allclose(p[0, 0, [0, 2]], [1.0, 2.0], atol=1e-9)
     torch.save({"kind": "l2m"}, tmp_path / "other.pt")
     with pytest.raises(MotionlangError):
         TwoStreamModel.load(tmp_path / "other.pt")

@@ -45,10 +45,20 @@ def _crbm_config(args: argparse.Namespace):
                       momentum=args.momentum, weight_decay=args.weight_decay, seed=args.seed)
 
 
-def _load_model(path: str):
+def _load_model(path: str, allow_stack: bool = False):
+    """A CRBM checkpoint (or, where allowed, a two-level one written by --level2)."""
     from motionlang.models.crbm import CRBM
+    from motionlang.models.crbm_stack import CRBMStack
     if not Path(path).is_file():
         raise MotionlangError(f"{path}: no such model file")
+    if allow_stack:
+        try:
+            with np.load(path, allow_pickle=False) as z:
+                is_stack = "kind" in z.files
+        except (OSError, ValueError) as exc:
+            raise MotionlangError(f"{path}: not a model checkpoint ({exc})") from exc
+        if is_stack:
+            return CRBMStack.load(path)
     return CRBM.load(path)
 
 
@@ -90,7 +100,6 @@ def cmd_train(args: argparse.Namespace) -> int:
     model.save(args.output)
     print(f"{args.output}: {model.describe()}")
     if args.level2:
-        from motionlang.models.crbm import CRBMConfig
         from motionlang.models.crbm_stack import CRBMStack
         cfg2 = dataclasses.replace(model.config, visible="binary", n_hidden=args.level2_hidden,
                                    order=args.level2_order)
@@ -105,14 +114,16 @@ def cmd_generate(args: argparse.Namespace) -> int:
     from motionlang.evaluation.crbm_fill import load_cmu35
     from motionlang.evaluation.crbm_generation import StyleLabeller
     from motionlang.evaluation.crbm_reproduce import model_frames
-    model = _load_model(args.model)
+    model = _load_model(args.model, allow_stack=True)
+    base = getattr(model, "level1", model)       # a two-level model generates through both
     data = load_cmu35(args.data)
     trial = {"walk": "35_29", "jog": "35_18"}[args.start]
-    n = model.config.order
+    n = getattr(model, "n_init", base.config.order)
     init = model_frames(data.test[trial])[:n]
     gen = model.generate(init, args.frames, n_gibbs=args.gibbs, seed=args.seed,
-                         hidden_noise=args.noise)[0]
-    lab = StyleLabeller(data, model.mean, model.std)
+                         hidden_noise=args.noise)
+    gen = gen[0] if gen.ndim == 3 else gen
+    lab = StyleLabeller(data, base.mean, base.std)
     labels = lab(gen[n:])
     switches = int((labels[1:] != labels[:-1]).sum())
     report = {"frames": args.frames, "start_style": args.start,
@@ -131,9 +142,8 @@ def cmd_generate(args: argparse.Namespace) -> int:
 # ------------------------------------------------------------------ crbm fill
 def cmd_fill(args: argparse.Namespace) -> int:
     from motionlang.evaluation.crbm_fill import load_cmu35
-    from motionlang.evaluation.crbm_reproduce import ReproduceConfig, fill_trial, train_models
+    from motionlang.evaluation.crbm_reproduce import ReproduceConfig, fill_trial, model_frames
     from motionlang.models.ar import ARConfig, ARModel
-    from motionlang.evaluation.crbm_reproduce import model_frames
     model = _load_model(args.model)
     data = load_cmu35(args.data)
     ar = ARModel(ARConfig(order=model.config.order), 59).fit([model_frames(c) for c in data.train])
@@ -146,13 +156,12 @@ def cmd_fill(args: argparse.Namespace) -> int:
         from motionlang.evaluation.crbm_plots import plot_fill
         plot_fill(res, out, title=title)
     else:
-        from motionlang.evaluation.crbm_reproduce import model_frames as mf
-        frames = mf(data.test[args.trial])
+        frames = model_frames(data.test[args.trial])
         fd = res["erased_dims59"]
         frames[:, fd] = res["filled59"]["CRBM"][0][:, fd]
         _write_frames(frames, out, data, args.data, name="CRBM fill-in",
                       start_xz=tuple(data.test[args.trial][0, [0, 2]]), title=title,
-                      compare=mf(data.test[args.trial]))
+                      compare=model_frames(data.test[args.trial]))
     errs = {k: round(v, 4) for k, v in res["errors"].items()}
     print(json.dumps(errs) if args.json else f"{out}: " + ", ".join(f"{k} {v:.2f}" for k, v in errs.items()))
     return 0
@@ -218,7 +227,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(func=lambda args: (parser.print_help(), 1)[1])
 
     g = sub.add_parser("generate", help="generate motion on-line from real starting frames")
-    g.add_argument("model", metavar="MODEL.npz")
+    g.add_argument("model", metavar="MODEL.npz", help="a CRBM, or a two-level model (train --level2)")
     g.add_argument("output", metavar="OUT", help=".npy (features), .bvh/.amc, or .gif/.mp4")
     _add_data(g)
     g.add_argument("--start", choices=["walk", "jog"], default="walk",

@@ -52,6 +52,9 @@ def main(argv: list[str] | None = None) -> int:
     except MotionlangError as exc:
         print(f"motionlang {args.command}: error: {exc}", file=sys.stderr)
         return 2
+    except BrokenPipeError:  # output piped into `head` and the like: not an error
+        sys.stderr.close()
+        return 0
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130

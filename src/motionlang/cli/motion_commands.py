@@ -16,23 +16,37 @@ RENDER_EXTENSIONS = (".gif", ".mp4", ".png")
 
 
 def add_input_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("input", metavar="IN", help="motion file: .xml (KIT MMM), .bvh or .amc")
+    p.add_argument("input", metavar="IN",
+                   help="motion file: .xml (KIT MMM), .bvh, .amc or .mat (MIT walking data)")
     p.add_argument("--asf", metavar="PATH", default=None,
                    help="ASF skeleton of an .amc input (default: <subject>.asf next to it)")
     p.add_argument("--source-fps", type=float, default=None, metavar="HZ",
                    help="frame rate of an .amc input (AMC files do not store it; default 120)")
+    p.add_argument("--sequence", type=int, default=None, metavar="N",
+                   help="which sequence of a .mat input holding several (1-based; default 1)")
 
 
 def load_input(args: argparse.Namespace) -> Motion:
-    """Read ``args.input`` (with ``--asf`` / ``--source-fps`` for AMC files)."""
+    """Read ``args.input`` (with ``--asf`` / ``--source-fps`` for AMC files, ``--sequence``
+    for MAT files)."""
     from motionlang.formats import read_motion
 
     path = Path(args.input)
-    if path.suffix.lower() != ".amc" and (args.asf is not None or args.source_fps is not None):
+    ext = path.suffix.lower()
+    if ext != ".amc" and (args.asf is not None or args.source_fps is not None):
         raise MotionlangError(f"{path}: --asf and --source-fps apply to .amc inputs only")
-    if path.suffix.lower() == ".amc":
+    if ext != ".mat" and args.sequence is not None:
+        raise MotionlangError(f"{path}: --sequence applies to .mat inputs only")
+    if ext == ".amc":
         return read_motion(path, skeleton=args.asf, fps=args.source_fps)
+    if ext == ".mat":
+        return read_motion(path, sequence=1 if args.sequence is None else args.sequence)
     return read_motion(path)
+
+
+def add_clip_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--start", type=float, default=None, metavar="S", help="start, seconds")
+    p.add_argument("--end", type=float, default=None, metavar="E", help="end, seconds")
 
 
 def clip_seconds(motion: Motion, start: float | None, end: float | None,
@@ -65,7 +79,8 @@ def cmd_info(args: argparse.Namespace) -> int:
     print(f"{info['path']}")
     print(f"  format    {info['source_format']}  (skeleton {info.get('skeleton', '?')})")
     print(f"  frames    {info['frames']} at {info['fps']:g} Hz = {info['duration_s']:.2f} s")
-    print(f"  joints    {info['joints']} nodes, {info['dofs']} joint DOFs")
+    print(f"  joints    {info['joints']} with {info['dofs']} DOFs (+ root), "
+          f"{info['nodes']} skeleton nodes")
     print(f"  names     {shown}")
     return 0
 
@@ -123,8 +138,7 @@ def register(subparsers) -> None:
     p.add_argument("output", metavar="OUT", help="output .gif, .mp4 or .png")
     p.add_argument("--fps", type=float, default=None,
                    help="animation frame rate (default: min(25, source rate))")
-    p.add_argument("--start", type=float, default=None, metavar="S", help="start, seconds")
-    p.add_argument("--end", type=float, default=None, metavar="E", help="end, seconds")
+    add_clip_args(p)
     p.add_argument("--strip", type=int, default=None, metavar="N",
                    help="number of poses in a .png strip (default 8)")
     p.add_argument("--trajectory", action="store_true",
@@ -140,6 +154,5 @@ def register(subparsers) -> None:
                     "skeleton; .xml for MMM and .amc for ASF skeletons).")
     add_input_args(p)
     p.add_argument("output", metavar="OUT", help="output file, e.g. out.bvh")
-    p.add_argument("--start", type=float, default=None, metavar="S", help="start, seconds")
-    p.add_argument("--end", type=float, default=None, metavar="E", help="end, seconds")
+    add_clip_args(p)
     p.set_defaults(func=cmd_convert)

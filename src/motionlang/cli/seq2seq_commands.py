@@ -55,6 +55,8 @@ def _add_train(sub, name: str, help_: str) -> None:
 
 
 def cmd_train(args: argparse.Namespace) -> int:
+    import logging
+
     import torch
 
     from motionlang.datasets.splits import save_splits
@@ -63,6 +65,8 @@ def cmd_train(args: argparse.Namespace) -> int:
     from motionlang.training.seq2seq_data import build_pairs
     from motionlang.training.trainer import TrainConfig, Trainer
 
+    # one line per epoch from the trainer (the progress bar only shows on a terminal)
+    logging.basicConfig(level=logging.INFO, format="%(message)s")
     data = build_pairs(args.data, features=args.features, offsets=args.offsets, seed=args.seed,
                        min_count=args.min_count, max_seconds=args.max_seconds)
     out = Path(args.out)
@@ -175,6 +179,52 @@ def cmd_generate(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_evaluate(args: argparse.Namespace) -> int:
+    from motionlang.datasets.splits import load_splits
+    from motionlang.decoding.seq2seq import motion_frames
+    from motionlang.evaluation import seq2seq_eval as ev
+    from motionlang.models.m2l import MotionToLanguage
+    from motionlang.training.seq2seq_data import load_records
+    from motionlang.utils.atomic import atomic_write
+    from motionlang.utils.progress import progress
+
+    m2l_path = Path(args.m2l)
+    m2l = MotionToLanguage.load(m2l_path)
+    splits = load_splits(args.splits or m2l_path.parent / "splits")
+    for name in ("train", args.split):
+        if name not in splits:
+            raise MotionlangError(f"no {name!r} split (have {sorted(splits)})")
+    records = {r.id: r for r in load_records(args.data, args.max_seconds) if r.annotations}
+
+    def frames(ids):
+        ids = [i for i in ids if i in records][:args.limit or None]
+        return {i: motion_frames(m2l.features, records[i].load_motion(), 1)[0]
+                for i in progress(ids, desc="encode", unit="motion")}
+    test, train = frames(splits[args.split]), frames(splits["train"])
+    refs = {i: records[i].annotations for i in {**test, **train}}
+    report = {"split": args.split, "m2l": ev.evaluate_m2l(m2l, test, refs, args.width),
+              "nearest_neighbour": ev.evaluate_nn_baseline(train, refs, test, refs)}
+    if args.l2m:
+        from motionlang.models.l2m import LanguageToMotion
+        l2m = LanguageToMotion.load(args.l2m)
+        report["l2m_round_trip"] = ev.evaluate_round_trip(
+            l2m, m2l, {i: refs[i] for i in test}, report["m2l"]["bleu"])
+    table = ev.markdown_table({"M2L (top hypothesis)": report["m2l"],
+                               "nearest neighbour": report["nearest_neighbour"],
+                               **({"L2M round trip": report["l2m_round_trip"]}
+                                  if "l2m_round_trip" in report else {})})
+    by_rank = " ".join(f"{b:.3f}" for b in report["m2l"]["bleu_by_rank"])
+    table += f"\nM2L BLEU of hypotheses 1..{args.width}: {by_rank}\n"
+    if args.output:
+        out = Path(args.output)
+        with atomic_write(out) as fh:
+            json.dump(report, fh, indent=1)
+        with atomic_write(out.with_suffix(".md")) as fh:
+            fh.write(table)
+    print(table, end="")
+    return 0
+
+
 def register(subparsers) -> None:
     p = subparsers.add_parser("describe", help="describe a motion in English (M2L, beam search)")
     p.add_argument("motion", help="motion file (.xml MMM, .bvh, .amc)")
@@ -195,4 +245,15 @@ def register(subparsers) -> None:
                    help="no end-of-motion before this many model frames (default 5)")
     p.add_argument("--all", action="store_true", help="write every hypothesis (OUT_2, ...)")
     p.set_defaults(func=cmd_generate)
+    p = subparsers.add_parser("evaluate", help="BLEU/ROUGE/CIDEr of M2L, baseline, L2M round trip")
+    p.add_argument("--m2l", required=True, help="M2L model file (its run folder holds splits/)")
+    p.add_argument("--l2m", help="L2M model file: also run the round trip")
+    p.add_argument("--data", required=True, metavar="DIR", help="the dataset trained on")
+    p.add_argument("--splits", metavar="DIR", help="split files (default: M2L_DIR/splits)")
+    p.add_argument("--split", default="test")
+    p.add_argument("-w", "--width", type=int, default=5)
+    p.add_argument("--limit", type=int, default=0, help="evaluate at most N motions")
+    p.add_argument("--max-seconds", type=float, default=30.0)
+    p.add_argument("-o", "--output", help="report.json (+ report.md beside it)")
+    p.set_defaults(func=cmd_evaluate)
 

@@ -27,8 +27,8 @@ def _run(args) -> int:
 
     if args.n < 1:
         raise DatasetError(f"--n must be at least 1, got {args.n}")
-    if args.start < 0:
-        raise DatasetError(f"--start must be >= 0, got {args.start}")
+    if args.start < 0 or args.seed < 0:
+        raise DatasetError(f"--start and --seed must be >= 0, got {args.start}, {args.seed}")
     t0 = time.perf_counter()
     ids = write_corpus(args.out, args.n, args.seed, start=args.start, workers=args.workers)
     print(f"wrote {len(ids)} motions ({ids[0]}..{ids[-1]}) to {args.out} "

@@ -141,24 +141,33 @@ def read_record(folder: Path, mid: str) -> KitMLRecord:
                        count_mmm_frames(mmm, KITML_FPS))
 
 
-def load_kitml(root: str | Path, max_seconds: float | None = 30.0) -> list[KitMLRecord]:
+def load_kitml(root: str | Path, max_seconds: float | None = 30.0, *,
+               require_annotations: bool = False) -> list[KitMLRecord]:
     """All KIT-ML records under ``root``, sorted by id.
 
     Args:
         root: the extracted release (or a folder above it, see ``find_kitml_root``).
         max_seconds: drop motions of this duration or longer (frames / 100 Hz);
-            ``None`` keeps everything. Records without annotations are kept.
+            ``None`` keeps everything.
+        require_annotations: raise on a kept motion whose annotation list is empty (for
+            text tasks on data that should be fully annotated); by default such records are
+            kept (the official release has them) with ``has_annotations`` False.
 
     Raises:
-        DatasetError: missing folder or files, malformed JSON (file and line named).
+        DatasetError: missing folder or files, malformed JSON (file and line named), an
+            empty annotation list when ``require_annotations``.
     """
     folder = find_kitml_root(root)
     ids = sorted(m.group(1) for p in folder.iterdir() if (m := _ID.match(p.name)))
     records = []
     for mid in progress(ids, desc="KIT-ML", unit="motion"):
         rec = read_record(folder, mid)
-        if max_seconds is None or rec.duration_s < max_seconds:
-            records.append(rec)
+        if max_seconds is not None and rec.duration_s >= max_seconds:
+            continue
+        if require_annotations and not rec.has_annotations:
+            raise DatasetError(f"{folder / f'{mid}_annotations.json'}: empty annotation list "
+                               f"(motion {mid} has no description)")
+        records.append(rec)
     return records
 
 

@@ -10,7 +10,8 @@
   references; relative performance = that BLEU / the M2L BLEU on the real motions.
 
 Inputs are model frames (``{id: (T, F) array}``, as in ``PairData.sequences`` offset 0) and
-references ``{id: [sentences]}``; sentences are compared after ``datasets.text.normalize``.
+references ``{id: [sentences]}``; hypotheses and references are both compared after
+``datasets.text.normalize``.
 """
 from __future__ import annotations
 
@@ -50,7 +51,7 @@ def evaluate_m2l(model, frames: Mapping[str, np.ndarray], references: Mapping[st
     ids = sorted(frames)
     ranked = []
     for i in progress(ids, desc="describe", unit="motion"):
-        hyps = [t for t, _ in describe_features(model, frames[i], width=width)]
+        hyps = [normalize(t) for t, _ in describe_features(model, frames[i], width=width)]
         ranked.append((hyps + [hyps[-1]] * width)[:width])  # pad rare short beams
     refs = _refs(references, ids)
     top = [r[0] for r in ranked]
@@ -99,7 +100,7 @@ def evaluate_round_trip(l2m, m2l, references: Mapping[str, Sequence[str]],
     for i, sentence in progress(pairs, desc="round trip", unit="sentence"):
         frames, _ = generate_features(l2m, sentence, width=width, method=method,
                                       max_frames=max_frames, seed=seed)[0]
-        hyps.append(describe_features(m2l, frames, width=1)[0][0])
+        hyps.append(normalize(describe_features(m2l, frames, width=1)[0][0]))
         refs.append([normalize(s) for s in references[i]])
     scores = text_scores(refs, hyps)
     rel = scores["bleu"] / m2l_bleu if m2l_bleu > 0 else float("nan")

@@ -5,9 +5,12 @@
   (Ghosh et al. 2021).
 * :class:`TaylorFeatures` — root increments + per-bone exp-maps, 30 Hz (Taylor et al. 2006).
 * :class:`Normalizer`, padding/masks (:mod:`.collate`), the 21-joint map (:mod:`.joint_map`).
+* :func:`~motionlang.features.dataset_cache.dataset_features` — a dataset fitted and encoded
+  once, cached on disk keyed by source files and options.
 """
 from motionlang.features.angles import AnglesConfig, AnglesFeatures
-from motionlang.features.base import FeatureSet, downsample, features_from_dict
+from motionlang.features.base import (FeatureSet, downsample, features_from_dict,
+                                     make_features)
 from motionlang.features.collate import lengths_to_mask, pad_batch, unpad
 from motionlang.features.joint_map import KIT21_NAMES, KIT21_PARENTS, positions21
 from motionlang.features.normalizer import Normalizer
@@ -17,4 +20,5 @@ from motionlang.features.taylor import TaylorConfig, TaylorFeatures
 __all__ = ["AnglesConfig", "AnglesFeatures", "FeatureSet", "KIT21_NAMES", "KIT21_PARENTS",
            "Normalizer", "PositionFeatures", "PositionsConfig", "TaylorConfig",
            "TaylorFeatures", "downsample", "features_from_dict", "lengths_to_mask",
+           "make_features",
            "pad_batch", "positions21", "unpad"]

@@ -122,12 +122,28 @@ class FeatureSet:
         return cls.from_dict(d) if cls.kind else features_from_dict(d)
 
 
-def features_from_dict(d: dict[str, Any]) -> FeatureSet:
-    """Rebuild any registered feature set (``"angles"``, ``"positions"``, ``"taylor"``)."""
+def _feature_class(kind: Any) -> type[FeatureSet]:
     import motionlang.features.angles  # noqa: F401  (register the built-in kinds)
     import motionlang.features.positions  # noqa: F401
     import motionlang.features.taylor  # noqa: F401
-    kind = d.get("kind")
     if kind not in _REGISTRY:
         raise MotionlangError(f"unknown feature kind {kind!r}; known: {sorted(_REGISTRY)}")
-    return _REGISTRY[kind].from_dict(d)
+    return _REGISTRY[kind]
+
+
+def features_from_dict(d: dict[str, Any]) -> FeatureSet:
+    """Rebuild any registered feature set (``"angles"``, ``"positions"``, ``"taylor"``)."""
+    return _feature_class(d.get("kind")).from_dict(d)
+
+
+def make_features(kind: str, options: dict[str, Any] | None = None) -> FeatureSet:
+    """A new, unfitted feature set of ``kind`` whose config fields are ``options``.
+
+    Raises:
+        MotionlangError: unknown kind or option name.
+    """
+    cls = _feature_class(kind)
+    try:
+        return cls(**dict(options or {}))
+    except TypeError as exc:  # an option the config dataclass does not have
+        raise MotionlangError(f"{kind} features: {exc}") from None

@@ -3,6 +3,8 @@
 * ``.xml`` — KIT MMM (:mod:`motionlang.formats.mmm`)
 * ``.bvh`` — Biovision hierarchy (:mod:`motionlang.formats.bvh`)
 * ``.amc`` — Acclaim motion with its ``.asf`` skeleton (:mod:`motionlang.formats.asf_amc`)
+* ``.mat`` — the MIT walking data as Taylor distributed it (:mod:`motionlang.formats.mit`;
+  read only, one sequence at a time)
 """
 from __future__ import annotations
 
@@ -12,7 +14,7 @@ from motionlang.errors import MotionFormatError, SkeletonError
 from motionlang.kinematics.motion import Motion
 from motionlang.kinematics.skeleton import Skeleton
 
-READ_EXTENSIONS = (".xml", ".bvh", ".amc")
+READ_EXTENSIONS = (".xml", ".bvh", ".amc", ".mat")
 WRITE_EXTENSIONS = (".bvh", ".xml", ".amc")
 
 
@@ -39,18 +41,20 @@ def find_asf(amc_path: str | Path) -> Path:
 
 
 def read_motion(path: str | Path, *, skeleton: Skeleton | str | Path | None = None,
-                fps: float | None = None) -> Motion:
+                fps: float | None = None, sequence: int = 1) -> Motion:
     """Read a motion file, choosing the reader from the extension.
 
     Args:
-        path: ``.xml`` (MMM), ``.bvh`` or ``.amc``.
+        path: ``.xml`` (MMM), ``.bvh``, ``.amc`` or ``.mat`` (MIT walking data).
         skeleton: for ``.amc``: a ``Skeleton`` or the path of its ``.asf`` (found next to
             the AMC when omitted).
         fps: for ``.amc`` (default 120); for other formats, the motion is resampled to
             ``fps`` if given.
+        sequence: for ``.mat`` files holding several sequences: which one (1-based).
 
     Raises:
-        MotionFormatError: missing file, unknown extension, or malformed content.
+        MotionFormatError: missing file, unknown extension, malformed content, or a
+            ``sequence`` the file does not hold.
     """
     path = Path(path)
     ext = path.suffix.lower()
@@ -69,6 +73,13 @@ def read_motion(path: str | Path, *, skeleton: Skeleton | str | Path | None = No
     if ext == ".bvh":
         from motionlang.formats.bvh import read_bvh
         motion = read_bvh(path)
+    elif ext == ".mat":
+        from motionlang.formats.mit import read_mit
+        motions = read_mit(path)
+        if not 1 <= sequence <= len(motions):
+            raise MotionFormatError(path, f"no sequence {sequence}: the file holds "
+                                          f"{len(motions)} (1..{len(motions)})")
+        motion = motions[sequence - 1]
     else:
         from motionlang.formats.mmm import read_mmm  # imported lazily: a sibling module
         motion = read_mmm(path)
@@ -108,12 +119,20 @@ def write_motion(motion: Motion, path: str | Path) -> None:
 
 
 def motion_info(motion: Motion) -> dict:
-    """A JSON-friendly summary: frames, fps, duration_s, joints, joint_names, dofs,
-    source_format, name."""
+    """A JSON-friendly summary of a motion.
+
+    Keys: ``name``, ``frames``, ``fps``, ``duration_s``, ``joints`` / ``joint_names`` (the
+    joints that carry rotation DOFs: 44 for MMM, where each revolute axis is a joint),
+    ``dofs`` (joint DOFs, without the root's translation and rotation), ``nodes`` /
+    ``node_names`` (every node of the skeleton tree, fixed segments and end sites included),
+    ``source_format``, ``skeleton``.
+    """
     sk = motion.skeleton
+    moving = [j.name for j in sk.joints if len(j.dof_names)]
     return {"name": motion.name, "frames": motion.n_frames, "fps": float(motion.fps),
-            "duration_s": float(motion.duration), "joints": len(sk), "joint_names": sk.names,
-            "dofs": int(sk.ndof), "source_format": motion.source_format,
+            "duration_s": float(motion.duration), "joints": len(moving),
+            "joint_names": moving, "dofs": int(sk.ndof), "nodes": len(sk),
+            "node_names": list(sk.names), "source_format": motion.source_format,
             "skeleton": sk.name}
 
 

@@ -3,8 +3,8 @@
 A checkpoint is a plain dict that ``torch.load(..., weights_only=True)`` accepts (no
 pickled classes): ``{"kind", "config", "vocab", "normalizer", "features", "state_dict"}``;
 the fitted feature set (whose own normaliser the data went through) rides along as its
-``to_dict``. The trainer wraps it as ``{"model": <that dict>, "optimizer": ...}``; :func:`read_model_dict` accepts
-both, so ``best.pt`` of a training run loads directly into a model.
+``to_dict``. The trainer wraps it as ``{"model": <that dict>, "optimizer": ...}``;
+:func:`read_model_dict` accepts both, so ``best.pt`` of a training run loads directly.
 """
 from __future__ import annotations
 

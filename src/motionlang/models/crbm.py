@@ -43,13 +43,13 @@ class CRBMConfig:
     lr: float = 1e-3            # one learning rate for weights and biases
     lr_autoregressive: float = 1e-3   # A is the easiest part to over-fit: own rate
     momentum: float = 0.9
-    weight_decay: float = 2e-4  # L2 on W, A, B (never on biases)
+    weight_decay: float = 2e-4  # L2 on W and B (never on biases)
+    weight_decay_autoregressive: float | None = None  # L2 on A; None = weight_decay
     batch_size: int = 100
     epochs: int = 4000
     init_std: float = 0.01
     seed: int = 0
     visible: str = "gaussian"   # "gaussian" (unit variance) or "binary"
-    input_scale: float = 1.0    # std of the normalised training data (1 = z-scores, the paper's)
     dtype: str = "float32"      # of weights and training arithmetic: float32 is 3x faster here
     blas_threads: int | None = 1  # the matrices are small: one BLAS thread avoids oversubscription
 
@@ -60,6 +60,12 @@ class CRBMConfig:
             raise MotionlangError(f"CRBMConfig.dtype must be 'float32' or 'float64', got {self.dtype!r}")
         if self.order < 1 or self.n_hidden < 1 or self.batch_size < 1:
             raise MotionlangError("CRBMConfig: order, n_hidden and batch_size must be >= 1")
+
+
+def config_from_dict(d: dict) -> CRBMConfig:
+    """CRBMConfig from a checkpoint's dict; keys this version does not know are ignored."""
+    known = {f.name for f in dataclasses.fields(CRBMConfig)}
+    return CRBMConfig(**{k: v for k, v in d.items() if k in known})
 
 
 def _blas_threads(n: int | None):
@@ -196,9 +202,7 @@ class CRBM:
         if cfg.visible == "gaussian":
             self.mean = frames.mean(axis=0)
             sd = frames.std(axis=0)
-            # input_scale > 1 spreads the data over several units of the fixed unit-variance
-            # visible noise, making the model's conditionals sharper (see CRBMConfig)
-            self.std = np.where(sd > 1e-8, sd, 1.0) / cfg.input_scale
+            self.std = np.where(sd > 1e-8, sd, 1.0)
         x = self.normalise(frames).astype(self.config.dtype)
         rows = chunk_index([len(s) for s in seqs], cfg.order)
         rng = np.random.default_rng(cfg.seed + 1)
@@ -214,6 +218,8 @@ class CRBM:
 
     def _epochs(self, epoch_iter, x, rows, rng, velocity, rates) -> None:
         cfg = self.config
+        wd_a = cfg.weight_decay if cfg.weight_decay_autoregressive is None else cfg.weight_decay_autoregressive
+        decay = {"W": cfg.weight_decay, "B": cfg.weight_decay, "A": wd_a}
         for _ in epoch_iter:
             order = rng.permutation(rows)
             err = 0.0
@@ -223,8 +229,8 @@ class CRBM:
                 err += e * len(batch)
                 for k in PARAMS:
                     g = grads[k]
-                    if k in ("W", "A", "B"):
-                        g = g - cfg.weight_decay * getattr(self, k)
+                    if k in decay:
+                        g = g - decay[k] * getattr(self, k)
                     velocity[k] *= cfg.momentum
                     velocity[k] += rates[k] * g
                     getattr(self, k).__iadd__(velocity[k])
@@ -349,7 +355,7 @@ class CRBM:
                 meta = json.loads(str(z["meta"]))
                 if meta.get("kind") != "crbm":
                     raise MotionFormatError(path, f"not a CRBM checkpoint (kind={meta.get('kind')!r})")
-                model = cls(CRBMConfig(**meta["config"]), meta["n_visible"])
+                model = cls(config_from_dict(meta["config"]), meta["n_visible"])
                 for k in PARAMS:
                     setattr(model, k, z[k].astype(model.config.dtype))
                 for k in ("mean", "std"):

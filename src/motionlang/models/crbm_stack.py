@@ -15,7 +15,7 @@ from typing import Sequence
 import numpy as np
 
 from motionlang.errors import MotionFormatError
-from motionlang.models.crbm import CRBM, CRBMConfig, check_sequences
+from motionlang.models.crbm import CRBM, CRBMConfig, check_sequences, config_from_dict
 from motionlang.utils.atomic import atomic_path
 
 
@@ -86,7 +86,7 @@ class CRBMStack:
                 levels = []
                 for name in ("l1", "l2"):
                     meta = json.loads(str(z[f"{name}_meta"]))
-                    m = CRBM(CRBMConfig(**meta["config"]), meta["n_visible"])
+                    m = CRBM(config_from_dict(meta["config"]), meta["n_visible"])
                     for k in ("W", "A", "B", "a", "b", "mean", "std"):
                         setattr(m, k, z[f"{name}_{k}"].astype(np.float64))
                     levels.append(m)

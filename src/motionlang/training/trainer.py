@@ -73,6 +73,10 @@ def init_distributed() -> tuple[int, int]:
     return 0, 1
 
 
+def _fmt(terms: dict[str, float]) -> str:
+    return " ".join(f"{k} {v:.4g}" for k, v in terms.items())
+
+
 def _rng_state() -> dict:
     np_state = np.random.get_state()
     py_state = random.getstate()
@@ -139,12 +143,14 @@ class Trainer:
         params = [p for p in self.model.parameters() if p.requires_grad]
         if self.world > 1:
             # Weight each rank's mean-gradient by its share so the sum is the global mean.
-            flat = torch.cat([p.grad.reshape(-1) for p in params]) * (len(mine) / len(idx))
+            # A rank with an empty share (last batch smaller than the world) sends zeros.
+            flat = torch.cat([(p.grad if p.grad is not None else torch.zeros_like(p)).reshape(-1)
+                              for p in params]) * (len(mine) / len(idx))
             dist.all_reduce(flat)
             off = 0
             for p in params:
                 n = p.numel()
-                p.grad.copy_(flat[off:off + n].view_as(p))
+                p.grad = flat[off:off + n].view_as(p).clone()
                 off += n
         if self.config.grad_clip:
             torch.nn.utils.clip_grad_norm_(params, self.config.grad_clip)
@@ -254,7 +260,8 @@ class Trainer:
             train, val = self._reduce(sums, count), self.validate()
             self.history.append({"epoch": epoch + 1, "step": step, "train": train, "val": val,
                                  "seq_per_s": rate})
-            log.info("epoch %d: train %s val %s (%.0f seq/s)", epoch + 1, train, val, rate)
+            log.info("epoch %d/%d: train %s | val %s | %.0f seq/s", epoch + 1, c.epochs,
+                     _fmt(train), _fmt(val) or "-", rate)
             epoch, start_batch, sums, count = epoch + 1, 0, {}, 0
             score = (val or train).get("loss", math.inf)
             pos = {"epoch": epoch, "batch": 0, "step": step, "epoch_sums": {}, "epoch_count": 0}

@@ -14,10 +14,10 @@ Main entry points::
 from motionlang.datasets.synth.augment import (change_speed, concat_samples, mirror_sample,
                                                mirror_text)
 from motionlang.datasets.synth.corpus import (GENERATOR_VERSION, SynthSample, generate_sample,
-                                              write_corpus, write_sample)
-from motionlang.datasets.synth.extract import extract, extract_keys
+                                              ground_truth, write_corpus, write_sample)
+from motionlang.datasets.synth.extract import extract, extract_keys, score
 from motionlang.datasets.synth.spec import Primitive
 
 __all__ = ["GENERATOR_VERSION", "Primitive", "SynthSample", "change_speed", "concat_samples",
-           "extract", "extract_keys", "generate_sample", "mirror_sample", "mirror_text",
-           "write_corpus", "write_sample"]
+           "extract", "extract_keys", "generate_sample", "ground_truth", "mirror_sample",
+           "mirror_text", "score", "write_corpus", "write_sample"]

@@ -7,9 +7,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from motionlang.datasets.synth.body import SIDES, Body, ankle_from_contact
-from motionlang.datasets.synth.gait import _dirs, smoothstep
-from motionlang.datasets.synth.track import FPS, Stance, Track, standing_track
+from motionlang.datasets.synth.body import (SIDES, Body, ankle_from_contact,
+                                            heading_vectors, smoothstep)
+from motionlang.datasets.synth.track import (FPS, Stance, Track, concat_tracks,
+                                             standing_track)
 
 G = 9.81
 
@@ -36,7 +37,7 @@ def _frames(duration: float) -> tuple[int, np.ndarray]:
 
 def _shift_pelvis(track: Track, stance: Stance, fwd: np.ndarray, side: np.ndarray) -> None:
     """Move the pelvis by ``fwd`` (T,) metres forward and ``side`` (T,) to the left."""
-    f, left = _dirs(stance.yaw)
+    f, left = heading_vectors(stance.yaw)
     track.root_pos[:, :2] += fwd[:, None] * f + side[:, None] * left
 
 
@@ -105,7 +106,6 @@ def jump(body: Body, stance: Stance, style: dict, rng, count: int,
         dist = (rng.uniform(0.45, 0.8) * scale) if direction == "forward" else 0.0
         tr, cur = _one_jump(body, cur, style, rng, dist, first=(k == 0), last=(k == count - 1))
         tracks.append(tr)
-    from motionlang.datasets.synth.track import concat_tracks
     return concat_tracks(tracks), cur
 
 
@@ -119,7 +119,7 @@ def _one_jump(body, stance, style, rng, dist, first, last):
     T, t = _frames(tend)
     tr = standing_track(body, stance, T, style)
     h0 = tr.root_pos[0, 2]
-    f, _ = _dirs(stance.yaw)
+    f, _ = heading_vectors(stance.yaw)
     depth = 0.12 * scale
     h_to = h0 + 0.02 * scale
     z = keyframes(t, [0, lead, tc, tto], [h0, h0, h0 - depth, h_to])
@@ -129,7 +129,7 @@ def _one_jump(body, stance, style, rng, dist, first, last):
     after = keyframes(t, [tland, tland + 0.22, tend], [h_to, h0 - 0.8 * depth, h0])
     z = np.where(t >= tland, after, z)
     tr.root_pos[:, 2] = z
-    fwd = dist * smoothstep(tf) * 0 + dist * tf  # constant horizontal speed in flight
+    fwd = dist * tf  # constant horizontal speed in flight
     fwd = fwd + keyframes(t, [0, lead, tc, tto], [0, 0, -0.05 * scale, 0.0]) * (t <= tto)
     _shift_pelvis(tr, stance, fwd, 0 * fwd)
     tr.root_rot[:, 2] -= keyframes(t, [0, lead, tc, tto, tland, tland + 0.22, tend],
@@ -156,7 +156,7 @@ def _one_jump(body, stance, style, rng, dist, first, last):
         tr.contact[s] = ~flight
         tr.upper[f"{s}Sx_joint"] += keyframes(
             t, [0, lead, tc, tto, tland, tland + 0.25, tend], [0, 0, -0.6, 1.2, 0.6, 0.2, 0])
-        tr.upper[f"{s}Ex_joint"] += 0.3 * (z < h0 - 0.02)
+        tr.upper[f"{s}Ex_joint"] += 0.3 * smoothstep((h0 - z) / (0.5 * depth))
     new_feet = {s: (stance.feet[s][0] + dist * f[0], stance.feet[s][1] + dist * f[1],
                     stance.feet[s][2]) for s in SIDES}
     return tr, Stance(new_feet, stance.yaw)
@@ -171,7 +171,7 @@ def _foot_lift(body, stance, style, rng, side, count, kind):
     T, t = _frames(duration)
     tr = standing_track(body, stance, T, style)
     s = "L" if side == "left" else "R"
-    f, left = _dirs(stance.yaw)
+    f, left = heading_vectors(stance.yaw)
     lat = left if s == "L" else -left
     # weight over the support foot for the whole segment
     shift = keyframes(t, [0, 0.4, duration - 0.4, duration], [0, 1, 1, 0])
@@ -187,7 +187,7 @@ def _foot_lift(body, stance, style, rng, side, count, kind):
             kz = [0, 0.12 * scale, 0.38 * leg * amp, 0.12 * scale, 0]
             kp = [0, -0.3, -0.6, -0.2, 0]
         else:
-            kt = [s0, s0 + 0.4 * p, s0 + 0.6 * p, s0 + 0.72 * p, s0 + p]
+            kt = [s0, s0 + 0.4 * p, s0 + 0.58 * p, s0 + 0.74 * p, s0 + p]
             kf = [0, 0.08 * scale, 0.08 * scale, 0, 0]
             kz = [0, 0.24 * scale * amp, 0.24 * scale * amp, 0, 0]
             kp = [0, 0.05, 0.05, 0, 0]
@@ -197,7 +197,7 @@ def _foot_lift(body, stance, style, rng, side, count, kind):
         pitch[m] = keyframes(t[m], kt, kp)
         if kind == "stomp":  # the way down is fast, not eased
             d = (t > kt[2]) & (t <= kt[3])
-            w = ((t[d] - kt[2]) / (kt[3] - kt[2])) ** 2
+            w = ((t[d] - kt[2]) / (kt[3] - kt[2])) ** 1.6
             rel_z[d] = kz[2] * (1 - w)
             rel_f[d] = kf[2] * (1 - w)
         if kind == "kick":  # lean back a little while kicking

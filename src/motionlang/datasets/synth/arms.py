@@ -65,13 +65,15 @@ def arm_targets(action: str, side: str, count: int, t: np.ndarray, style: dict, 
                 s0 = 0.5 + r * per
                 ext = np.maximum(ext, keyframes(t, [s0, s0 + 0.18 * tempo, s0 + 0.25 * tempo,
                                                     s0 + 0.5 * tempo], [0, 1, 1, 0]) * (t >= s0))
-            pose = {"Sx": 0.6 + 0.95 * ext, "Sy": 0.3 - 0.15 * ext, "Sz": 0.25 - 0.2 * ext,
-                    "Ex": 2.1 - 2.0 * ext}
+            # guard: fist in front of the chin; punch: arm straight ahead at shoulder height,
+            # fist in front of the body's midline (poses fitted by forward kinematics)
+            pose = {"Sx": 0.4 + 1.1 * ext, "Sy": 0.2 - 0.2 * ext, "Sz": -0.4 - 0.6 * ext,
+                    "Ex": 2.2 - 2.0 * ext}
         elif action == "wipe":
             per = 1.0 * tempo
             osc = np.sin(2 * np.pi * tin / per) * (tin < count * per)
             # hand flat on a table in front of the hips, sweeping sideways
-            pose = {"Sx": 0.75 + 0.1 * osc, "Sy": 0.25 + 0.35 * amp * osc, "Sz": 0.2,
+            pose = {"Sx": 0.75 + 0.1 * osc, "Sy": 0.32 + 0.3 * amp * osc, "Sz": 0.2,
                     "Ex": 0.55 - 0.15 * osc}
             extra["BTx_joint"] = -0.25 * w
         else:

@@ -11,18 +11,19 @@ from motionlang.datasets.synth.spec import LOCOMOTION, Primitive
 from motionlang.kinematics.motion import Motion, concatenate
 from motionlang.kinematics.rotations import axis_angle, chain, matrix_to_chain
 
-# Word pairs swapped by mirroring (a bijection, so mirroring twice restores the text;
-# "counter-clockwise"/"anticlockwise" become "clockwise", whose mirror is "counterclockwise").
-_SWAP = {"left": "right", "leftwards": "rightwards", "leftward": "rightward",
-         "clockwise": "counterclockwise", "counter-clockwise": "clockwise",
-         "anticlockwise": "clockwise", "anti-clockwise": "clockwise"}
-_PAIRS = {**{a: b for a, b in _SWAP.items() if a in ("left", "leftwards", "leftward",
-                                                       "clockwise")},
-          **{b: a for a, b in _SWAP.items() if a in ("left", "leftwards", "leftward",
-                                                       "clockwise")},
-          **{a: b for a, b in _SWAP.items() if "-" in a or a.startswith("anti")}}
-_WORD = re.compile(r"\b(" + "|".join(sorted(map(re.escape, _PAIRS), key=len, reverse=True))
-                   + r")\b", re.IGNORECASE)
+# Word pairs swapped by mirroring. left/right, leftwards/rightwards and clockwise/
+# counterclockwise swap both ways (mirroring twice restores the text); other spellings
+# ("counter clockwise", "clock-wise", "anticlockwise", ...) map onto these canonical forms.
+_BIJECTIVE = {"left": "right", "leftwards": "rightwards", "leftward": "rightward",
+              "clockwise": "counterclockwise"}
+_ONE_WAY = {"counter clockwise": "clockwise", "counter-clockwise": "clockwise",
+            "counter clock-wise": "clockwise", "counter-clock-wise": "clockwise",
+            "anticlockwise": "clockwise", "anti-clockwise": "clockwise",
+            "clock-wise": "counterclockwise", "clock wise": "counterclockwise"}
+_PAIRS = {**_BIJECTIVE, **{b: a for a, b in _BIJECTIVE.items()}, **_ONE_WAY}
+_WORD = re.compile(r"(?<![\w-])(" + "|".join(sorted(map(re.escape, _PAIRS), key=len,
+                                                     reverse=True)) + r")(?!\w)",
+                   re.IGNORECASE)
 _SPEED_WORD = re.compile(r"\b(slow|slowly|quick|quickly|fast|rapidly|briskly|hastily|"
                          r"leisurely|speed|pace)\b", re.IGNORECASE)
 _SPEED_UP = {"slow": "normal", "normal": "fast", "fast": "fast"}

@@ -65,6 +65,20 @@ class Body:
         return np.array([0.0, self.foot_len, -self.sole])
 
 
+def smoothstep(x: np.ndarray) -> np.ndarray:
+    """Ease-in-out ramp: 0 below 0, 1 above 1, zero slope at both ends."""
+    x = np.clip(x, 0.0, 1.0)
+    return x * x * (3 - 2 * x)
+
+
+def heading_vectors(yaw) -> tuple[np.ndarray, np.ndarray]:
+    """Forward and left unit vectors (..., 2) on the floor for heading ``yaw`` (rad)."""
+    yaw = np.asarray(yaw, dtype=float)
+    f = np.stack([-np.sin(yaw), np.cos(yaw)], axis=-1)
+    left = np.stack([-np.cos(yaw), -np.sin(yaw)], axis=-1)
+    return f, left
+
+
 def rot(axis: int, a: np.ndarray) -> np.ndarray:
     """(..., 3, 3) rotations by angles ``a`` about coordinate axis 0 (x), 1 (y) or 2 (z).
 

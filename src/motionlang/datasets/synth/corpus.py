@@ -66,6 +66,11 @@ class SynthSample:
         }
 
 
+def ground_truth(meta: dict) -> list[Primitive]:
+    """The primitives (with frame ranges) stored in a sample's ``_meta.json`` dict."""
+    return [Primitive.from_dict(d) for d in meta.get("primitives", [])]
+
+
 def sample_rng(seed: int, index: int) -> np.random.Generator:
     return np.random.default_rng([int(seed), int(index)])
 

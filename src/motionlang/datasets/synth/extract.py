@@ -65,6 +65,7 @@ def _normalise(text: str) -> str:
     t = t.replace("anti-clockwise", "counterclockwise").replace("anticlockwise",
                                                                 "counterclockwise")
     t = re.sub(r"(\d+)\s*-?\s*degrees?", r"\1 degrees", t)
+    t = t.replace("-", " ")  # "left-turn", "spot-turn", "u-turn"
     t = t.replace("a couple of", "two")
     t = re.sub(r"[^a-z0-9,;.\- ]", " ", t)
     return t
@@ -89,17 +90,27 @@ def _number(tok: str) -> int | None:
     return _NUMBERS.get(tok)
 
 
-def _find_action(toks: list[str]) -> tuple[str | None, int]:
-    """First action word of a clause and its index. Light verbs defer to a following noun."""
-    for i, t in enumerate(toks):
+#: tokens that name an action but cannot start a second one inside a clause
+#: ("walks four steps" is one action, "stands still" too)
+_NOT_STARTERS = {"steps", "step", "still"}
+
+
+def _find_action(toks: list[str], start: int = 0) -> tuple[str | None, int, int]:
+    """The first action at or after ``start``: (action, first token, last head token).
+
+    A light verb ("performs", "takes") defers to the action noun after it ("a squat"),
+    and the head then ends at that noun. Returns (None, -1, -1) if there is none.
+    """
+    for i in range(start, len(toks)):
+        t = toks[i]
         if t in _LIGHT:
-            for t2 in toks[i + 1:]:
-                if t2 in _NOUN_ACTION:
-                    return _NOUN_ACTION[t2], i
-            if t in ("takes", "taking") and "bow" not in toks:
+            for j in range(i + 1, len(toks)):
+                if toks[j] in _NOUN_ACTION:
+                    return _NOUN_ACTION[toks[j]], i, j
+            if t in ("takes", "taking"):
                 continue
-        if t == "still" and i > 0:
-            continue  # "still" alone is an attribute ("stands still"), handled by "stands"
+        if t in _NOT_STARTERS and (i > 0 or start > 0):
+            continue
         if t in ("goes", "going", "moves", "moving") and any(
                 w in toks for w in ("squat", "down", "knees")):
             continue
@@ -107,8 +118,22 @@ def _find_action(toks: list[str]) -> tuple[str | None, int]:
             a = _ACTION[t]
             if a == "stand" and t in ("stand", "stands", "standing") and "up" in toks[i + 1:i + 2]:
                 continue  # "stands up" ends a squat, it is not "stands still"
-            return a, i
-    return None, -1
+            return a, i, i
+    return None, -1, -1
+
+
+def _split_actions(toks: list[str]) -> list[tuple[str, list[str]]]:
+    """Cut a clause at each further action ("walks forward takes a turn" is two)."""
+    found = []
+    start = 0
+    while True:
+        a, i, head = _find_action(toks, start)
+        if a is None:
+            break
+        found.append((a, i))
+        start = head + 1
+    cuts = [0] + [i for _, i in found[1:]] + [len(toks)]
+    return [(a, toks[cuts[k]:cuts[k + 1]]) for k, (a, _) in enumerate(found)]
 
 
 def _attributes(prim: Primitive, toks: list[str]) -> None:
@@ -153,7 +178,7 @@ def _attributes(prim: Primitive, toks: list[str]) -> None:
     if a in ("walk", "run"):
         if "circle" in toks or "circles" in toks:
             prim.direction = "circle"
-        elif re.search(r"\b(backwards?|back)\b", text) and "turn" not in text:
+        elif re.search(r"\bbackwards?\b", text):  # "walks back" is returning, not a direction
             prim.direction = "backward"
         elif re.search(r"\b(forwards?|ahead|straight)\b", text):
             prim.direction = "forward"
@@ -161,8 +186,10 @@ def _attributes(prim: Primitive, toks: list[str]) -> None:
                 or re.search(r"\bto (the|his|her|their|its) (left|right)\b", text):
             if prim.side in ("left", "right"):
                 prim.direction = prim.side
-        if prim.direction in ("left", "right"):
-            prim.side = None  # sideways walking: the direction is the side
+        if prim.direction != "circle":
+            # sideways walking: the direction is the side; otherwise a side word is about
+            # the leading foot ("starting with the left foot"), not a parameter
+            prim.side = None
     elif a == "jump":
         if re.search(r"\b(forwards?|ahead)\b", text):
             prim.direction = "forward"
@@ -181,14 +208,15 @@ def extract(sentence: str) -> list[Primitive]:
     prims: list[tuple[Primitive, bool]] = []
     for clause, follows_while in _clauses(text):
         toks = clause.split()
-        action, idx = _find_action(toks)
-        if action is None:
+        parts = _split_actions(toks)
+        if not parts:
             if prims:  # a dangling attribute phrase ("..., with the left hand")
                 _attributes(prims[-1][0], toks)
             continue
-        p = Primitive(action)
-        _attributes(p, toks)
-        prims.append((p, follows_while))
+        for k, (action, part) in enumerate(parts):
+            p = Primitive(action)
+            _attributes(p, part)
+            prims.append((p, follows_while and k == 0))
     out: list[Primitive] = []
     i = 0
     while i < len(prims):
@@ -209,3 +237,36 @@ def extract(sentence: str) -> list[Primitive]:
 def extract_keys(sentence: str) -> list[tuple]:
     """``[p.key() for p in extract(sentence)]`` — convenient for scoring."""
     return [p.key() for p in extract(sentence)]
+
+
+def score(text: str, truth: list[Primitive]) -> dict:
+    """Score a (generated) description against ground-truth primitives.
+
+    Extracted primitives are matched to the truth in order, by action (a greedy
+    in-order alignment). For each parameter the description states, it is right or wrong.
+
+    Returns:
+        {"actions_match": the action sequences are identical,
+         "matched": number of aligned primitives,
+         field: (correct, stated) for side, count, direction, speed and angle}.
+    """
+    got = extract(text)
+    out: dict = {"actions_match": [p.action for p in got] == [p.action for p in truth]}
+    fields = ("side", "count", "direction", "speed", "angle")
+    tally = {f: [0, 0] for f in fields}
+    j = matched = 0
+    for p in got:
+        while j < len(truth) and truth[j].action != p.action:
+            j += 1
+        if j == len(truth):
+            break
+        matched += 1
+        for f in fields:
+            v = getattr(p, f)
+            if v is not None:
+                tally[f][1] += 1
+                tally[f][0] += int(v == getattr(truth[j], f))
+        j += 1
+    out["matched"] = matched
+    out.update({f: tuple(v) for f, v in tally.items()})
+    return out

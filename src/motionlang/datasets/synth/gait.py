@@ -15,7 +15,8 @@ import numpy as np
 from scipy.interpolate import PchipInterpolator
 from scipy.ndimage import gaussian_filter1d
 
-from motionlang.datasets.synth.body import SIDES, Body, ankle_from_contact
+from motionlang.datasets.synth.body import (SIDES, Body, ankle_from_contact,
+                                            heading_vectors, smoothstep)
 from motionlang.datasets.synth.track import FPS, Stance, Track, limit_reach, rest_upper
 
 # step length (m for a 1.75 m subject), step time (s), swing time / step time
@@ -27,23 +28,10 @@ GAIT = {
 }
 
 
-def smoothstep(x: np.ndarray) -> np.ndarray:
-    x = np.clip(x, 0.0, 1.0)
-    return x * x * (3 - 2 * x)
-
-
-def _dirs(yaw):
-    """Forward and left unit vectors (..., 2) for heading ``yaw``."""
-    yaw = np.asarray(yaw, dtype=float)
-    f = np.stack([-np.sin(yaw), np.cos(yaw)], axis=-1)
-    left = np.stack([-np.cos(yaw), -np.sin(yaw)], axis=-1)
-    return f, left
-
-
 def _path(stance: Stance, direction: str, side: str | None, radius: float):
     """``u -> (centre (2,), heading)``; u is metres along the path (radians for "turn")."""
     c0, psi0 = stance.center, stance.yaw
-    f0, l0 = _dirs(psi0)
+    f0, l0 = heading_vectors(psi0)
     if direction in ("forward", "backward", "left", "right"):
         d = {"forward": f0, "backward": -f0, "left": l0, "right": -l0}[direction]
         return lambda u: (c0 + u * d, psi0)
@@ -124,7 +112,7 @@ def locomotion(body: Body, stance: Stance, style: dict, rng: np.random.Generator
     toe_out = 0.06
     for i, (s, ui) in enumerate(zip(order, u)):
         c, yaw = path(ui)
-        _, lv = _dirs(yaw)
+        _, lv = heading_vectors(yaw)
         lat = lv if s == "L" else -lv
         xy = c + lat * width / 2
         plants[s].append((t_land[i] - Tsw, t_land[i], xy[0], xy[1],
@@ -134,7 +122,7 @@ def locomotion(body: Body, stance: Stance, style: dict, rng: np.random.Generator
     for s in SIDES:
         ankle[s], fyaw[s], fpitch[s], contact[s] = _foot_track(
             body, plants[s], t, Ts, pitch_strike, pitch_off, clearance,
-            0.8 if kind == "walk" else 0.6)
+            0.45 if kind == "walk" else 0.35)
 
     # pelvis: over the middle of the feet at each landing (walking), closer to the
     # landing foot when running
@@ -154,7 +142,7 @@ def locomotion(body: Body, stance: Stance, style: dict, rng: np.random.Generator
     single = contact["L"].astype(float) - contact["R"].astype(float)
     sway = gaussian_filter1d(single, 0.3 * Ts * FPS, mode="nearest")
     sway_amp = (0.025 if kind == "walk" else 0.012) * scale * style.get("sway", 1.0)
-    _, lv = _dirs(pel[:, 2])
+    _, lv = heading_vectors(pel[:, 2])
     root_pos = np.zeros((T, 3))
     root_pos[:, :2] = pel[:, :2] + sway_amp * sway[:, None] * lv
     # ease posture in and out over 0.3 s so segments join standing ones smoothly
@@ -164,18 +152,21 @@ def locomotion(body: Body, stance: Stance, style: dict, rng: np.random.Generator
     if kind == "run":
         airborne = gaussian_filter1d((~(contact["L"] | contact["R"])).astype(float), 3)
         root_pos[:, 2] += 0.05 * scale * airborne
+    # which leg is ahead: +1 right foot forward ... -1 left foot forward
+    fwd, _ = heading_vectors(pel[:, 2])
+    rel = {s: np.sum((ankle[s][:, :2] - root_pos[:, :2]) * fwd, axis=1) for s in SIDES}
+    swing_sig = np.clip((rel["R"] - rel["L"]) / max(L if action != "turn" else 0.3, 0.2),
+                        -1.2, 1.2)
+    stepping = kind == "walk" and action != "turn" and direction not in ("left", "right")
     root_rot = np.zeros((T, 3))
-    root_rot[:, 0] = pel[:, 2]
+    # the pelvis turns with the forward leg, the thorax turns back against it
+    root_rot[:, 0] = pel[:, 2] + (0.06 * swing_sig if stepping else 0.0)
     lean = {"walk": -0.04, "run": -0.14}[kind] * (1.4 if speed == "fast" else 1.0)
     root_rot[:, 2] = lean * ramp
     track = Track(root_pos, root_rot, ankle, fyaw, fpitch, contact, rest_upper(T, style))
     limit_reach(body, track)
 
     # arms swing opposite to the legs
-    fwd, _ = _dirs(root_rot[:, 0])
-    rel = {s: np.sum((ankle[s][:, :2] - root_pos[:, :2]) * fwd, axis=1) for s in SIDES}
-    swing_sig = np.clip((rel["R"] - rel["L"]) / max(L if action != "turn" else 0.3, 0.2),
-                        -1.2, 1.2)
     amp = (0.35 if kind == "walk" else 0.6) * style.get("arm_amp", 1.0)
     if action == "turn" or direction in ("left", "right"):
         amp *= 0.3
@@ -184,7 +175,8 @@ def locomotion(body: Body, stance: Stance, style: dict, rng: np.random.Generator
         up[f"{s}Sx_joint"] += sg * amp * swing_sig - (0.1 * ramp if kind == "run" else 0.0)
         up[f"{s}Ex_joint"] += 0.25 * amp * np.maximum(sg * swing_sig, 0) + (
             1.1 * ramp if kind == "run" else 0.0)
-    up["BTz_joint"] += 0.06 * swing_sig * (kind == "walk")
+    if stepping:
+        up["BTz_joint"] -= 0.1 * swing_sig
     end = Stance({s: tuple(last[s]) for s in SIDES}, float(path(u[-1])[1]))
     return track, end
 
@@ -196,7 +188,7 @@ def _foot_track(body: Body, seq: list, t: np.ndarray, Ts: float, pitch_strike: f
     ``seq``: [(t_lift, t_land, x, y, yaw)] of the foot's successive plants (the first one
     standing since -inf). Planted: heel strike (toes up, pivot on the heel) easing to flat,
     then heel rise pivoting on the ball before lift-off. Swinging: from the lift-off pose
-    to the landing pose along an arc ``clearance`` high.
+    to the landing pose along an arc ``clearance`` high at fraction ``peak`` of the swing.
     """
     T = len(t)
     point, Y, P = np.zeros((T, 3)), np.zeros(T), np.zeros(T)
@@ -219,14 +211,14 @@ def _foot_track(body: Body, seq: list, t: np.ndarray, Ts: float, pitch_strike: f
         if k + 1 < len(seq):
             swings.append((seq[k], seq[k + 1]))
     ball = P < 0
-    f, _ = _dirs(Y[ball])
+    f, _ = heading_vectors(Y[ball])
     point[ball, :2] += f * body.foot_len
     A = ankle_from_contact(body, point, Y, P, ball)
     if swings:  # lift-off and landing poses of all swings at once
         n = len(swings)
         start = np.array([[a[2], a[3], 0.0] for a, _ in swings])
         syaw = np.array([a[4] for a, _ in swings])
-        f0, _ = _dirs(syaw)
+        f0, _ = heading_vectors(syaw)
         start[:, :2] += f0 * body.foot_len
         a0 = ankle_from_contact(body, start, syaw, np.full(n, -pitch_off), np.ones(n, bool))
         end = np.array([[b[2], b[3], 0.0] for _, b in swings])
@@ -241,7 +233,9 @@ def _foot_track(body: Body, seq: list, t: np.ndarray, Ts: float, pitch_strike: f
             # 80 % of the swing, so it is clear of the floor whenever it moves
             e = smoothstep((sw - 0.1) / 0.8)[:, None]
             A[m] = a0[i] * (1 - e) + a1[i] * e
-            A[m, 2] += clearance * np.sin(np.pi * sw ** peak) ** 0.7
+            # arc peaking at ``peak`` of the swing; finite slope at both ends
+            A[m, 2] += clearance * np.sin(0.5 * np.pi * np.where(
+                sw < peak, sw / peak, (1 - sw) / (1 - peak)))
             Y[m] = yaw + np.angle(np.exp(1j * (nyaw - yaw))) * e[:, 0]
             P[m] = -pitch_off + (pitch_strike + pitch_off) * e[:, 0]
     return A, Y, P, C

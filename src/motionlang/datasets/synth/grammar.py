@@ -143,7 +143,11 @@ def _turn(ph: _Phrase) -> str:
     if p.angle == 180 and r < 0.35:
         ph.say("angle", "")
         around = ph.verb(("turns around", "turning around"))
-        return f"{around} {side}" if ph.maybe(0.6) else (ph.said.discard("side") or around)
+        if ph.maybe(0.6):
+            side = f"to the {p.side}" if side in ("left", "right") else side
+            return f"{around} {side}"
+        ph.said.discard("side")
+        return around
     if r < 0.6:
         deg = ph.say("angle", f"{number(p.angle, rng)} degrees")
         return f"{ph.verb(('turns', 'turning'))} {deg} {side}"

@@ -8,11 +8,14 @@ starting from the :class:`Stance` the previous one ended in, and concatenated.
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.ndimage import distance_transform_edt, gaussian_filter1d, minimum_filter1d
 
-from motionlang.datasets.synth.body import ARM_REST, SIDES, Body, ankle_from_contact, solve_leg
+from motionlang.datasets.synth.body import (ARM_REST, SIDES, Body, ankle_from_contact,
+                                            pelvis_rotation, smoothstep, solve_leg)
 
 FPS = 100.0
 #: Upper-body DOFs the primitives drive directly (everything but legs and feet).
@@ -115,10 +118,6 @@ def limit_reach(body: Body, track: Track, margin: float = 0.995) -> None:
     The allowed height is min-filtered and smoothed so the pelvis dips smoothly, then
     clamped again so that no frame stays out of reach.
     """
-    from scipy.ndimage import gaussian_filter1d, minimum_filter1d
-
-    from motionlang.datasets.synth.body import pelvis_rotation
-
     L = (body.thigh + body.shank) * margin
     Rp = pelvis_rotation(track.root_rot)
     zmax = np.full(track.n_frames, np.inf)
@@ -137,17 +136,41 @@ def limit_reach(body: Body, track: Track, margin: float = 0.995) -> None:
     track.root_pos[:, 2] = np.minimum(smooth, zmax)
 
 
+@functools.lru_cache(maxsize=1)
+def dof_limits() -> dict[str, tuple[float, float]]:
+    """MMM joint limits (radians) of the 44 recorded DOFs."""
+    from motionlang.formats.mmm_model import MMM_DOF_ORDER, mmm_kinematics
+
+    names = set(MMM_DOF_ORDER)
+    return {n["name"]: tuple(n["limits"]) for n in mmm_kinematics()["nodes"]
+            if n["name"] in names and "limits" in n}
+
+
 def solve_track(body: Body, track: Track, dof_names: list[str]) -> np.ndarray:
-    """(T, D) joint angles in ``dof_names`` order: legs by IK, the rest from ``upper``."""
+    """(T, D) joint angles in ``dof_names`` order: legs by IK, the rest from ``upper``.
+
+    Upper-body DOFs are clipped to the MMM joint limits; so are the ankles of a foot in the
+    air (a planted foot keeps the angle that holds it flat on the floor).
+    """
     T = track.n_frames
     col = {n: i for i, n in enumerate(dof_names)}
+    lim = dof_limits()
     out = np.zeros((T, len(dof_names)))
     for n, v in track.upper.items():
-        out[:, col[n]] = v
+        lo, hi = lim.get(n, (-np.inf, np.inf))
+        out[:, col[n]] = np.clip(v, lo, hi)
     for s in SIDES:
         sol = solve_leg(body, s, track.root_pos, track.root_rot, track.ankle[s],
                         track.foot_yaw[s], track.foot_pitch[s])
         sol.pop("reach_error")
+        air = ~track.contact[s]
+        # A swinging foot's target can fall out of reach for a few frames, where the IK
+        # straightens the knee abruptly; in the air the exact foot position does not
+        # matter, so low-pass the leg there, fading to the exact solution at contacts.
+        w = smoothstep(distance_transform_edt(air) / 8.0) if air.any() else np.zeros(T)
         for n, v in sol.items():
+            v = v + w * (gaussian_filter1d(v, 3.0, mode="nearest") - v)
+            if n[1] == "A" and n in lim:
+                v = np.where(air, np.clip(v, *lim[n]), v)
             out[:, col[n]] = v
     return out

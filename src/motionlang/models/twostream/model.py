@@ -27,8 +27,9 @@ from motionlang.models.checkpoint import (pack_normalizer, read_model_dict, unpa
                                           write_checkpoint)
 from motionlang.models.twostream import losses as L
 from motionlang.models.twostream.config import TwoStreamConfig
-from motionlang.models.twostream.pose import (PoseDecoder, PoseDiscriminator, PoseEncoder,
-                                              SentenceEncoder)
+from motionlang.models.twostream.discriminator import PoseDiscriminator
+from motionlang.models.twostream.pose import PoseDecoder, PoseEncoder
+from motionlang.models.twostream.sentence import SentenceEncoder
 from motionlang.models.twostream.text import build_text_encoder
 
 STAGES = ("joint", "pose", "text")
@@ -161,6 +162,14 @@ class TwoStreamModel(nn.Module):
         return {"loss": total, **{k: v.detach() for k, v in terms.items()}}
 
     # ------------------------------------------------------------------ generation
+    def set_rest_pose(self, first_frames) -> None:
+        """Default initial pose of :meth:`generate`: the mean of training sequences' first
+        frames (N, F), normalised features."""
+        x = torch.as_tensor(np.asarray(first_frames), dtype=torch.float32).reshape(
+            -1, self.config.n_features)
+        with torch.no_grad():
+            self.rest_pose.copy_(x.mean(dim=0))
+
     @torch.no_grad()
     def generate(self, sentence: str | Sequence[str], n_frames: int,
                  start: torch.Tensor | None = None) -> torch.Tensor:
@@ -187,6 +196,9 @@ class TwoStreamModel(nn.Module):
             raise MotionlangError("generate_positions needs a model of the 66 positions "
                                   "features with its normaliser")
         raw = self.normalizer.inverse(self.generate(sentence, n_frames).double().numpy())
+        # the local frame's origin is the root projected on the ground: the root's local
+        # x and z are 0 by construction (constant columns the model only approximates)
+        raw[:, [0, 2]] = 0.0
         return join_global(raw[:, :63].reshape(-1, 21, 3), raw[:, 63:65], raw[:, 65], start)
 
     # ------------------------------------------------------------------ persistence
