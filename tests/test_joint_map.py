@@ -1,3 +1,5 @@
+import itertools
+
 import numpy as np
 import pytest
 
@@ -113,6 +115,29 @@ def test_cmu_and_kit_bone_lengths_agree_after_height_scaling():
     # 0.07 H and 0.12 H), so segments differ; the whole root->head-base chain agrees.
     trunk = [k for k, b in enumerate(bones) if b in TRUNK]
     assert abs(lc[0, trunk].sum() / lk[0, trunk].sum() - 1.0) < 0.20
+
+
+def test_no_choice_of_cmu_spine_nodes_matches_the_mmm_trunk():
+    """Why the trunk is compared as a whole chain: over every choice of 5 points in order
+    along CMU's spine (hip midpoint, lowerback .. head_end) for root, BP, BT, BLN, BUN, some
+    trunk bone still differs from MMM's by more than 20 % (MMM's lumbar joint BP sits
+    0.04 H above the hip line; CMU's nearest spine nodes sit at 0 and 0.066 H)."""
+    kit = read_mmm(shared_file("kitml/00001_mmm.xml"))
+    cmu = read_asf_amc(shared_file("cmu35/35.asf"), shared_file("cmu35/35_01.amc"))
+    pk = positions21(_still(kit.skeleton))[0] / _stature(kit)
+    kit_trunk = pk[[KIT21_NAMES.index(n) for n in ("root", "BP", "BT", "BLN", "BUN")]]
+    kit_len = np.linalg.norm(np.diff(kit_trunk, axis=0), axis=1)
+    sk = cmu.skeleton
+    pc = _still(sk).positions()[0] / _stature(cmu)
+    spine = [(pc[sk.index("lfemur")] + pc[sk.index("rfemur")]) / 2] + [
+        pc[sk.index(n)] for n in ("lowerback", "upperback", "thorax", "lowerneck",
+                                  "upperneck", "head", "head_end")]
+    worst = []
+    for combo in itertools.combinations(range(len(spine)), 5):
+        lens = np.linalg.norm(np.diff(np.array([spine[i] for i in combo]), axis=0), axis=1)
+        worst.append(np.abs(lens / kit_len - 1).max())
+    assert min(worst) > 0.20
+    assert pk[KIT21_NAMES.index("BP"), 1] - pk[0, 1] < 0.05  # BP close above the hip line
 
 
 def test_cmu_through_bvh_maps_to_the_same_points(tmp_path):

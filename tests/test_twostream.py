@@ -59,6 +59,10 @@ def test_forward_shapes(two_stream):
     assert m.generate("a person walks", 12).shape == (12, 66)
     assert m.generate(["a", "b c"], 5).shape == (2, 5, 66)
     assert m.discriminator(b["motion"], b["lengths"]).shape == (3,)
+    with pytest.raises(MotionlangError):
+        m.generate("walk", 5, start=torch.zeros(65))
+    with pytest.raises(MotionlangError):
+        m.loss({**b, "motion": b["motion"][..., :60]})
 
 
 @pytest.mark.parametrize("two_stream", [True, False])

@@ -31,6 +31,7 @@ def data_dirs() -> list[Path]:
 
 
 def find_demo_motion() -> Path | None:
+    """The demo's real motion in the first data folder that has it, else None."""
     for d in data_dirs():
         if (d / DEMO_MOTION).is_file():
             return d / DEMO_MOTION

@@ -157,10 +157,12 @@ class Vocabulary:
         return " ".join(words)
 
     def to_dict(self) -> dict:
+        """``{"specials", "itos"}``, JSON-ready (saved inside model checkpoints)."""
         return {"specials": list(SPECIALS), "itos": self.itos}
 
     @classmethod
     def from_dict(cls, d: dict) -> "Vocabulary":
+        """Inverse of :meth:`to_dict`; DatasetError on a malformed entry."""
         itos = d.get("itos")
         if not isinstance(itos, list) or list(itos[:4]) != list(SPECIALS):
             raise DatasetError("vocabulary: 'itos' must be a list starting with "
@@ -168,11 +170,13 @@ class Vocabulary:
         return cls(itos[4:])
 
     def save(self, path: str | Path) -> None:
+        """Write :meth:`to_dict` as JSON (atomically)."""
         with atomic_write(path) as fh:
             json.dump(self.to_dict(), fh, indent=0)
 
     @classmethod
     def load(cls, path: str | Path) -> "Vocabulary":
+        """Read a file written by :meth:`save`."""
         try:
             d = json.loads(Path(path).read_text(encoding="utf-8"))
         except (OSError, ValueError) as exc:

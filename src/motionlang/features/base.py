@@ -100,6 +100,7 @@ class FeatureSet:
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> "FeatureSet":
+        """Inverse of :meth:`to_dict` (unknown config keys are ignored)."""
         if cls.kind and d.get("kind") != cls.kind:
             raise MotionlangError(f"expected {cls.kind!r} features, got {d.get('kind')!r}")
         known = {f.name for f in fields(cls.Config)}
@@ -109,11 +110,13 @@ class FeatureSet:
         return obj
 
     def save(self, path: str | Path) -> None:
+        """Write :meth:`to_dict` as JSON (atomically)."""
         with atomic_write(path) as fh:
             json.dump(self.to_dict(), fh)
 
     @classmethod
     def load(cls, path: str | Path) -> "FeatureSet":
+        """Read a file written by :meth:`save`; on the base class, of any registered kind."""
         try:
             with open(path, encoding="utf-8") as fh:
                 d = json.load(fh)

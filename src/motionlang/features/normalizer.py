@@ -110,6 +110,7 @@ class Normalizer:
 
     @classmethod
     def from_dict(cls, d: dict) -> "Normalizer":
+        """Inverse of :meth:`to_dict`."""
         if d.get("type", "Normalizer") != "Normalizer":
             raise MotionlangError(f"not a Normalizer description: type {d.get('type')!r}")
         try:
@@ -137,6 +138,7 @@ class Normalizer:
 
     @classmethod
     def load(cls, path: str | Path) -> "Normalizer":
+        """Read a ``.json`` or ``.npz`` file written by :meth:`save`."""
         path = Path(path)
         try:
             if path.suffix == ".npz":

@@ -90,6 +90,8 @@ class PositionFeatures(FeatureSet):
         return np.concatenate([local.reshape(len(p), -1), v, dyaw[:, None]], axis=1), start
 
     def fit(self, motions: Iterable[Motion]) -> "PositionFeatures":
+        """Fit the normaliser on the (T, 66) raw features of ``motions`` (any mappable
+        skeleton: MMM, CMU-ASF, BVH)."""
         motions = list(motions)
         if not motions:
             raise MotionlangError("PositionFeatures.fit: no motions")

@@ -18,6 +18,7 @@ GRID_COLOUR = "#c8c8c8"
 
 
 def new_figure(width_in: float, height_in: float, dpi: float) -> tuple[Figure, FigureCanvasAgg]:
+    """An off-screen figure (inches, dots per inch) and its Agg canvas; no pyplot state."""
     fig = Figure(figsize=(width_in, height_in), dpi=dpi, facecolor="white")
     return fig, FigureCanvasAgg(fig)
 

@@ -69,8 +69,9 @@ class TwoStreamModel(nn.Module):
         return self._text
 
     def set_stage(self, stage: str) -> None:
-        """"joint" (default), or for the no-joint-training ablation "pose" (autoencoder
-        and discriminator) then "text" (sentence encoder only; the rest frozen)."""
+        """Select the trained parts: stage "joint" (default), or for the no-joint-training
+        ablation "pose" (autoencoder and discriminator) then "text" (sentence encoder only,
+        the rest frozen)."""
         if stage not in STAGES:
             raise MotionlangError(f"stage must be one of {STAGES}, not {stage!r}")
         self.stage = stage
@@ -131,6 +132,9 @@ class TwoStreamModel(nn.Module):
         c, stage = self.config, self.stage
         x = batch["motion"]
         lengths = batch.get("lengths")
+        if x.ndim != 3 or x.shape[-1] != c.n_features:
+            raise MotionlangError(f"motion batch must be (B, T, {c.n_features}), got "
+                                  f"{tuple(x.shape)}")
         B, T, _ = x.shape
         mask = L.frame_mask(lengths, B, T).to(x)
         extra = c.extra_losses
@@ -184,6 +188,10 @@ class TwoStreamModel(nn.Module):
         z = self.encode_text(sentences)
         x0 = self.rest_pose if start is None else torch.as_tensor(start, dtype=torch.float32)
         x0 = x0.expand(len(sentences), -1) if x0.ndim == 1 else x0
+        if x0.shape != (len(sentences), self.config.n_features):
+            raise MotionlangError(f"start pose must be ({self.config.n_features},) or "
+                                  f"({len(sentences)}, {self.config.n_features}), got "
+                                  f"{tuple(x0.shape)}")
         out = self.decoder(z, x0, n_frames)
         return out[0] if single else out
 
