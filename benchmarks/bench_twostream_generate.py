@@ -39,12 +39,12 @@ def main() -> int:
     model.generate(SENTENCES[0], n_frames)  # warm-up (lazy init, allocator)
     times, text_times = [], []
     for i in range(repeat):
-        model.text_encoder._cache.clear()
+        model.text_encoder.clear_cache()
         s = SENTENCES[i % len(SENTENCES)]
         t0 = time.perf_counter()
         out = model.generate(s, n_frames)
         times.append(time.perf_counter() - t0)
-        model.text_encoder._cache.clear()
+        model.text_encoder.clear_cache()
         t0 = time.perf_counter()
         model.text_encoder.features(s)
         text_times.append(time.perf_counter() - t0)

@@ -175,3 +175,20 @@ def test_ar_recovers_a_linear_process():
     known[20:, 0] = False
     filled = ar.fill_in(x[:50], known)
     assert np.array_equal(filled[known], x[:50][known])
+
+
+def test_two_level_stack_round_trip_and_generation(tmp_path, trained):
+    from motionlang.models.crbm_stack import CRBMStack
+    m, seqs = trained
+    stack = CRBMStack.fit(m, seqs, CRBMConfig(n_hidden=4, order=2, epochs=5, batch_size=20))
+    hidden = m.hidden_activations(seqs)
+    assert [h.shape for h in hidden] == [(len(s) - 2, 10) for s in seqs]
+    assert all(((h > 0) & (h < 1)).all() for h in hidden)
+    stack.save(tmp_path / "two.npz")
+    again = CRBMStack.load(tmp_path / "two.npz")
+    a = stack.generate(seqs[0][:4], 30, n_gibbs=3, seed=2)
+    b = again.generate(seqs[0][:4], 30, n_gibbs=3, seed=2)
+    np.testing.assert_array_equal(a, b)
+    assert a.shape == (34, 3) and np.isfinite(a).all()
+    with pytest.raises(MotionFormatError, match="at least 4"):
+        stack.generate(seqs[0][:3], 5)

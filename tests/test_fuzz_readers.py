@@ -3,7 +3,8 @@
 positions) — never another exception and never a hang.
 
 The real files are cut to their first few frames so that one parse takes milliseconds;
-hypothesis runs derandomized (reproducible in CI), 600 examples per reader.
+hypothesis runs derandomized (reproducible in CI), 600 examples per reader (ASF, AMC, BVH,
+MMM XML and the MIT ``.mat``).
 """
 from __future__ import annotations
 
@@ -71,6 +72,7 @@ def _bases() -> dict[str, list[bytes]]:
         "amc": [_cut_amc(amc.read_text(), 3).encode()] if real else [],
         "bvh": [HAND.encode()],
         "mmm": [],
+        "mit": [],
     }
     if real:  # a BVH with CMU's 38 joints, written by motionlang from two AMC frames
         m = read_amc(_write("base.amc", bases["amc"][0]), read_asf(asf))[:2]
@@ -79,7 +81,24 @@ def _bases() -> dict[str, list[bytes]]:
     mmm = SHARED / "kitml/00001_mmm.xml"
     if mmm.is_file():
         bases["mmm"].append(_cut_mmm(mmm.read_text(), 3).encode())
+    mit = SHARED / "mit/motion.mat"
+    if mit.is_file():
+        bases["mit"].append(_cut_mit(mit))
     return bases
+
+
+def _cut_mit(path: Path) -> bytes:
+    """Taylor's MIT ``motion.mat`` with two sequences of 3 and 2 frames (uncompressed MAT
+    bytes, so that flipped bytes land in headers, the tree and the numbers alike)."""
+    import io
+
+    import scipy.io as sio
+    d = sio.loadmat(str(path))
+    seqs = np.empty((1, 2), dtype=object)
+    seqs[0, 0], seqs[0, 1] = d["Motion"][0, 0][:3], d["Motion"][0, 1][:2]
+    buf = io.BytesIO()
+    sio.savemat(buf, {"skel": d["skel"], "Motion": seqs})
+    return buf.getvalue()
 
 
 WORK = Path(tempfile.mkdtemp(prefix="motionlang-fuzz-"))  # one folder per test process
@@ -176,6 +195,22 @@ def test_fuzz_amc(cmu35, data):
 @given(mutated(BASES["bvh"]))
 def test_fuzz_bvh(data):
     _check(lambda: read_bvh(_write("fuzz.bvh", data)))
+
+
+@FUZZ
+@given(data=mutated(BASES["mit"] or [b"MATLAB"]))
+@pytest.mark.filterwarnings("ignore::UserWarning")  # scipy on corrupt headers
+def test_fuzz_mit(data):
+    from motionlang.formats.mit import read_mit
+    if not BASES["mit"]:
+        pytest.skip("real MIT motion.mat not present")
+    try:
+        motions = read_mit(_write("fuzz.mat", data))
+    except MotionlangError:
+        return
+    assert motions
+    for m in motions:
+        _check(lambda: m)
 
 
 @FUZZ

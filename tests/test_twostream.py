@@ -98,6 +98,19 @@ def test_streams_see_only_their_body_parts():
     assert torch.all(delta[:, parts["right_arm"]].abs().sum(0) > 0)
 
 
+def test_token_cache_is_bounded_and_exact():
+    enc = HashTokens(cache_size=2)
+    feats = enc.many(["a b", "c", "d e f", "a b"])
+    assert [len(f) for f in feats] == [2, 1, 3, 2]
+    assert len(enc._cache) == 2
+    torch.testing.assert_close(feats[0], HashTokens().features("a b"), rtol=0, atol=0)
+    padded, lengths = enc.batch(["c", "d e f"])
+    assert padded.shape == (2, 3, 8) and lengths.tolist() == [1, 3]
+    assert torch.all(padded[0, 1:] == 0)
+    enc.clear_cache()
+    assert len(enc._cache) == 0
+
+
 def test_loss_terms_and_ablations():
     out = tiny().loss(batch())
     assert set(out) == {"loss", "pose", "manifold", "velocity", "embedding", "adversarial",

@@ -106,6 +106,6 @@ def register(subparsers) -> None:
     p.add_argument("--input", default=None, metavar="FILE",
                    help="motion to render (default: kitml/00001_mmm.xml in the shared data)")
     p.add_argument("--asf", default=None, metavar="PATH", help="ASF skeleton of an .amc input")
-    p.add_argument("--out", default="motionlang_demo", metavar="DIR",
-                   help="output folder (default: ./motionlang_demo)")
+    p.add_argument("--out", default="out/demo", metavar="DIR",
+                   help="output folder (default: out/demo, as the README says)")
     p.set_defaults(func=cmd_demo)

@@ -87,7 +87,9 @@ class CRBMStack:
                 for name in ("l1", "l2"):
                     meta = json.loads(str(z[f"{name}_meta"]))
                     m = CRBM(config_from_dict(meta["config"]), meta["n_visible"])
-                    for k in ("W", "A", "B", "a", "b", "mean", "std"):
+                    for k in ("W", "A", "B", "a", "b"):
+                        setattr(m, k, z[f"{name}_{k}"].astype(m.config.dtype))
+                    for k in ("mean", "std"):
                         setattr(m, k, z[f"{name}_{k}"].astype(np.float64))
                     levels.append(m)
         except (OSError, KeyError, ValueError, TypeError) as exc:

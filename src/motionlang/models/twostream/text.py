@@ -40,6 +40,10 @@ class CachedTokens:
     def _compute(self, sentences: list[str]) -> list[torch.Tensor]:  # pragma: no cover
         raise NotImplementedError
 
+    def clear_cache(self) -> None:
+        """Forget every cached sentence (benchmarks that must pay the encoder each time)."""
+        self._cache.clear()
+
     def features(self, sentence: str) -> torch.Tensor:
         """(L, D) float32 token features of one sentence (L >= 1)."""
         return self.many([sentence])[0]
