@@ -194,12 +194,14 @@ def _frame_template(n_dof: int) -> str:
             "\t\t\t</MotionFrame>\n")
 
 
-def write_mmm(motion: Motion, path: str | Path) -> None:
+def write_mmm(motion: Motion, path: str | Path, *, fsync: bool = True) -> None:
     """Write ``motion`` (on an MMM skeleton) as a KIT MMM XML file, atomically.
 
     Values are printed with 6 significant digits, like KIT's own files (timesteps with 10,
     so that long motions keep their frame rate); root position in mm. The subject height
     comes from the skeleton, the mass from ``meta["mass"]``.
+
+    ``fsync=False`` skips forcing the file to disk (see :func:`utils.atomic.atomic_write`).
 
     Raises:
         SkeletonError: if the motion's skeleton is not the MMM model.
@@ -222,7 +224,7 @@ def write_mmm(motion: Motion, path: str | Path) -> None:
     joints = "".join(f"\t\t\t<Joint name='{n}'/>\n" for n in MMM_DOF_ORDER)
     # one printf over all frames: the corpus tools write thousands of files
     body = (_frame_template(len(MMM_DOF_ORDER)) * T) % tuple(data.ravel().tolist())
-    with atomic_write(path) as fh:
+    with atomic_write(path, fsync=fsync) as fh:
         fh.write(_HEAD.format(name=name, height=height, mass=mass, joints=joints))
         fh.write(body)
         fh.write(_TAIL)

@@ -93,7 +93,7 @@ def write_sample(sample: SynthSample, out: str | Path) -> None:
     from motionlang.formats.mmm import write_mmm
 
     out = Path(out)
-    write_mmm(sample.motion, out / f"{sample.id}_mmm.xml")
+    write_mmm(sample.motion, out / f"{sample.id}_mmm.xml", fsync=False)
     # small JSON files: atomic rename without fsync (thousands of them; fsync dominated)
     for suffix, obj, kw in (("annotations", sample.annotations, {"ensure_ascii": False}),
                             ("meta", sample.meta(), {"indent": 1})):
