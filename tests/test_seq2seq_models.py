@@ -179,3 +179,23 @@ def test_step_matches_teacher_forcing(kind, attention):
                 torch.testing.assert_close(p.active_logit, full.active_logit[:, t],
                                            rtol=1e-4, atol=1e-5)
                 prev = motion[:, t]
+
+
+def test_l2m_end_weight_reweights_the_stop_frames():
+    from motionlang.models import mdn
+    model, batch = tiny("l2m", False), make_batch()
+    model.eval()
+    with torch.no_grad():
+        base = model.loss(batch)
+        p = model(batch["tokens"], batch["token_lengths"], batch["motion"])
+        lengths = batch["motion_lengths"]
+        T = batch["motion"].shape[1]
+        t = torch.arange(T)[None]
+        valid = t < lengths[:, None]
+        active = (t < lengths[:, None] - 1).float()
+        ll = mdn.active_log_prob(p.flatten(), active.reshape(-1)).view_as(active)
+        torch.testing.assert_close(base["active_bce"], -ll[valid].mean())
+        model.config.end_weight = 5.0
+        w = torch.where(active > 0, 1.0, 5.0)
+        want = -(w * ll)[valid].sum() / w[valid].sum()
+        torch.testing.assert_close(model.loss(batch)["active_bce"], want)

@@ -79,6 +79,29 @@ def test_folded_unroll_matches_layered_unroll(two_stream):
         torch.testing.assert_close(a, b, rtol=1e-3, atol=1e-3)
 
 
+def test_teacher_forcing_reads_the_true_previous_frame():
+    m = tiny()
+    z, x = m.encode_text(["walk"]), torch.randn(1, 8, 66)
+    y = x.clone()
+    y[:, 5] += 1.0
+    a = m.decoder(z, x[:, 0], 8, x, teacher_forcing=1.0)
+    b = m.decoder(z, x[:, 0], 8, y, teacher_forcing=1.0)
+    torch.testing.assert_close(a[:, :6], b[:, :6])          # frames up to 5 unaffected
+    assert not torch.allclose(a[:, 6], b[:, 6])             # frame 6 reads true frame 5
+    free = m.decoder(z, x[:, 0], 8)
+    torch.testing.assert_close(m.decoder(z, x[:, 0], 8, y, teacher_forcing=0.0), free)
+    # the model forces in training mode only: in eval mode the loss is the free-running one
+    m.teacher_forcing = 1.0
+    b = {"motion": x, "sentences": ["walk"]}
+    m.train()
+    forced = float(m.loss(b)["pose"])
+    m.eval()
+    free_loss = float(m.loss(b)["pose"])
+    assert forced != pytest.approx(free_loss)
+    m.teacher_forcing = 0.0
+    assert float(m.loss(b)["pose"]) == pytest.approx(free_loss)
+
+
 def test_streams_see_only_their_body_parts():
     m = tiny()
     x = torch.randn(2, 6, 66)

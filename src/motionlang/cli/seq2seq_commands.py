@@ -51,6 +51,8 @@ def _add_train(sub, name: str, help_: str) -> None:
     if name == "l2m":
         p.add_argument("--components", type=int, default=d.n_components)
         p.add_argument("--loss", choices=("surrogate", "exact"), default=d.loss)
+        p.add_argument("--end-weight", type=float, default=d.end_weight,
+                       help="BCE weight of each motion's last (stop) frame (paper: 1)")
     p.set_defaults(func=cmd_train, model_kind=name)
 
 
@@ -85,6 +87,7 @@ def cmd_train(args: argparse.Namespace) -> int:
         longest = max(len(it["motion"]) for it in data.items["train"])
         model = LanguageToMotion(L2MConfig(vocab_size=V, n_features=F,
                                            n_components=args.components, loss=args.loss,
+                                           end_weight=args.end_weight,
                                            max_frames=int(1.5 * longest), **sizes),
                                  data.vocab, features=data.features)
     cfg = TrainConfig(epochs=args.epochs, batch_size=args.batch_size, lr=args.lr,

@@ -46,6 +46,7 @@ class L2MConfig:
     attention: bool = False
     attn_dim: int = 64
     loss: str = "surrogate"     # or "exact"
+    end_weight: float = 1.0     # BCE weight of a motion's last frame (1 = the paper's loss)
     pad_id: int = 0
     max_frames: int = 300       # decoding cap (frames)
 
@@ -121,7 +122,10 @@ class LanguageToMotion(nn.Module):
         log_density = (mdn.surrogate_log_prob if self.config.loss == "surrogate"
                        else mdn.mixture_log_prob)(params, x)
         nll = -log_density[valid].mean()
-        bce = -mdn.active_log_prob(params, active)[valid].mean()
+        # The last frame is the only "stop" example of a motion; end_weight > 1 makes it
+        # count more so that generation learns to end (the paper's loss: 1).
+        w = torch.where(active > 0, 1.0, self.config.end_weight)[valid]
+        bce = -(w * mdn.active_log_prob(params, active)[valid]).sum() / w.sum()
         return {"loss": nll + bce, "nll": nll.detach(), "active_bce": bce.detach()}
 
     def to_checkpoint(self) -> dict:

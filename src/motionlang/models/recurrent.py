@@ -14,10 +14,7 @@ import torch
 from torch import nn
 from torch.nn.utils.rnn import pack_padded_sequence, pad_packed_sequence
 
-
-def length_mask(lengths: torch.Tensor, max_len: int) -> torch.Tensor:
-    """(B,) lengths -> (B, max_len) bool, True at valid steps."""
-    return torch.arange(max_len, device=lengths.device).unsqueeze(0) < lengths.unsqueeze(1)
+from motionlang.features.collate import lengths_to_mask
 
 
 class BiGRUEncoder(nn.Module):
@@ -42,7 +39,7 @@ class BiGRUEncoder(nn.Module):
         # h_n: (layers * 2, B, H); the forward direction ends at the last valid step and the
         # backward one at step 0 -- packing makes both respect each sequence's length.
         context = torch.cat([h_n[-2], h_n[-1]], dim=-1)
-        return context, out, length_mask(lengths, T)
+        return context, out, lengths_to_mask(lengths, T)
 
 
 class StackedDecoder(nn.Module):

@@ -12,16 +12,15 @@ from typing import Sequence
 import numpy as np
 import torch
 
+from motionlang.features.collate import pad_batch
+
 
 def pad_sequences(seqs: Sequence, pad: float = 0.0, dtype=torch.float32
                   ) -> tuple[torch.Tensor, torch.Tensor]:
     """List of (T_i, ...) arrays -> padded (B, max T_i, ...) tensor and lengths (B,) long."""
     tensors = [torch.as_tensor(np.asarray(s), dtype=dtype) for s in seqs]
-    lengths = torch.tensor([len(t) for t in tensors], dtype=torch.long)
-    out = torch.full((len(tensors), int(lengths.max()), *tensors[0].shape[1:]), pad, dtype=dtype)
-    for i, t in enumerate(tensors):
-        out[i, :len(t)] = t
-    return out, lengths
+    out, mask = pad_batch(tensors, value=pad)
+    return out, mask.sum(1).long()
 
 
 def collate_pairs(items: Sequence[dict], pad_id: int = 0) -> dict[str, torch.Tensor]:

@@ -59,6 +59,9 @@ class TwoStreamModel(nn.Module):
         self.discriminator = PoseDiscriminator(config.n_features, config.disc_hidden)
         # where generation starts when no initial pose is given (normalised features)
         self.register_buffer("rest_pose", torch.zeros(config.n_features))
+        #: probability of feeding the true previous frame while training (a schedule,
+        #: e.g. annealed to 0 by the training loop; never used in eval mode)
+        self.teacher_forcing = 0.0
         self.set_stage("joint" if config.joint_training else "pose")
 
     # ------------------------------------------------------------------ parts
@@ -121,6 +124,9 @@ class TwoStreamModel(nn.Module):
         params = {k: v.detach() for k, v in self.discriminator.named_parameters()}
         return functional_call(self.discriminator, params, (poses, lengths))
 
+    def _forcing(self) -> float:
+        return self.teacher_forcing if self.training else 0.0
+
     def loss(self, batch: dict) -> dict[str, torch.Tensor]:
         """-> {"loss": weighted sum, and each named term (detached)}.
 
@@ -143,7 +149,7 @@ class TwoStreamModel(nn.Module):
             zp = self.pose_encoder(x, lengths)
         fake = None
         if stage in ("joint", "pose"):
-            qp = self.decoder(zp, x[:, 0], T)
+            qp = self.decoder(zp, x[:, 0], T, x, self._forcing())
             terms["pose"] = L.masked_smooth_l1(qp, x, mask)
             if extra:
                 terms["manifold"] = L.embedding_loss(self.pose_encoder(qp, lengths), zp)
@@ -151,7 +157,7 @@ class TwoStreamModel(nn.Module):
             fake = qp
         if stage in ("joint", "text"):
             zs = self.sentence_encoder(*self._tokens(batch))
-            qs = self.decoder(zs, x[:, 0], T)
+            qs = self.decoder(zs, x[:, 0], T, x, self._forcing())
             terms["pose"] = terms.get("pose", 0.0) + L.masked_smooth_l1(qs, x, mask)
             terms["embedding"] = L.embedding_loss(zs, zp)
             if extra and stage == "joint":  # the text stage fits embeddings + poses only

@@ -98,9 +98,14 @@ class PoseDecoder(nn.Module):
             self.cells[s] = nn.GRUCell(len(cols), c.stream_size)
         self.hier = HierBlock(config)
 
-    def forward(self, z: dict[str, torch.Tensor], x0: torch.Tensor, n_frames: int
+    def forward(self, z: dict[str, torch.Tensor], x0: torch.Tensor, n_frames: int,
+                target: torch.Tensor | None = None, teacher_forcing: float = 0.0
                 ) -> torch.Tensor:
         """z {stream: (B, H)}, x0 (B, F) -> (B, n_frames, F); frame 0 is x0.
+
+        Teacher forcing (training only): with probability ``teacher_forcing``, drawn per
+        sequence and step, the step reads the true previous frame ``target[:, t-1]``
+        (B, T, F) instead of its own previous output (the authors anneal it to 0 early).
 
         The Hier block is a composition of linear layers (no non-linearity, as in the
         paper), hence one affine map of the stacked stream states. It is found once per call
@@ -118,7 +123,11 @@ class PoseDecoder(nn.Module):
         hs = [z[s] for s in streams]
         x = x0
         frames = [x0]
-        for _ in range(n_frames - 1):
+        forcing = target is not None and teacher_forcing > 0
+        for t in range(1, n_frames):
+            if forcing:
+                use = torch.rand(x.shape[0], 1, device=x.device) < teacher_forcing
+                x = torch.where(use, target[:, t - 1], x)
             hs = [cell(x[..., cols], h) for (cell, cols), h in zip(cells, hs)]
             x = torch.addmm(x + bias, torch.cat(hs, dim=-1), weight)
             frames.append(x)
