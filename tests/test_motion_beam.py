@@ -120,3 +120,18 @@ def test_min_frames_holds_the_flag():
     mean = mean_decode(step, torch.zeros(1, dtype=torch.long), batch_size=1, max_frames=10,
                        dim=D, min_frames=3)[0]
     assert len(mean.frames) == 3             # P(active) = 0.2 < 0.5 ends it right after
+
+
+def test_length_norm_ranks_by_log_likelihood_per_frame():
+    step, params_for = make_step(p_active=0.6)
+    kw = dict(batch_size=1, width=4, max_frames=8, samples=4, dim=D)
+    total = sampled_beam(step, torch.zeros(1, dtype=torch.long),
+                         generator=torch.Generator().manual_seed(4), **kw)[0]
+    norm = sampled_beam(step, torch.zeros(1, dtype=torch.long), length_norm=True,
+                        generator=torch.Generator().manual_seed(4), **kw)[0]
+    per_frame = [h.score / len(h.frames) for h in norm]
+    assert per_frame == sorted(per_frame, reverse=True)
+    for h in norm:                                   # scores stay totals
+        assert h.score == pytest.approx(replay_score(params_for, h.frames), abs=1e-3)
+    best_total = max(h.score / len(h.frames) for h in total)
+    assert per_frame[0] >= best_total - 1e-9         # same draws, better per-frame pick

@@ -114,6 +114,8 @@ def cmd_generate(args: argparse.Namespace) -> int:
     from motionlang.evaluation.crbm_fill import load_cmu35
     from motionlang.evaluation.crbm_generation import StyleLabeller
     from motionlang.evaluation.crbm_reproduce import model_frames
+    if not (args.noise >= 0 and np.isfinite(args.noise)) or args.frames < 1 or args.gibbs < 1:
+        raise MotionlangError("--noise must be a finite number >= 0, --frames and --gibbs >= 1")
     model = _load_model(args.model, allow_stack=True)
     base = getattr(model, "level1", model)       # a two-level model generates through both
     data = load_cmu35(args.data)

@@ -169,7 +169,8 @@ def cmd_generate(args: argparse.Namespace) -> int:
 
     model = LanguageToMotion.load(_model_path(args.model, "l2m"))
     hyps = generate(model, args.text, width=args.width, method=args.method, seed=args.seed,
-                    max_frames=args.max_frames, min_frames=args.min_frames)
+                    max_frames=args.max_frames, min_frames=args.min_frames,
+                    length_norm=args.length_norm)
     out = Path(args.output)
     for i, (result, score) in enumerate(hyps, 1):
         n = len(result.joint_angles) if hasattr(result, "joint_angles") else len(result)
@@ -246,6 +247,8 @@ def register(subparsers) -> None:
                    help="length cap in model frames (default: the model's)")
     p.add_argument("--min-frames", type=int, default=5,
                    help="no end-of-motion before this many model frames (default 5)")
+    p.add_argument("--length-norm", action="store_true",
+                   help="rank hypotheses by log likelihood per frame (default: total)")
     p.add_argument("--all", action="store_true", help="write every hypothesis (OUT_2, ...)")
     p.set_defaults(func=cmd_generate)
     p = subparsers.add_parser("evaluate", help="BLEU/ROUGE/CIDEr of M2L, baseline, L2M round trip")

@@ -45,7 +45,7 @@ def _start(start: torch.Tensor | None, B: int, D: int | None) -> torch.Tensor:
 @torch.no_grad()
 def sampled_beam(step: MotionStep, state: Any, *, batch_size: int, width: int,
                  max_frames: int, samples: int = 5, min_frames: int = 1,
-                 start: torch.Tensor | None = None,
+                 length_norm: bool = False, start: torch.Tensor | None = None,
                  dim: int | None = None, generator: torch.Generator | None = None,
                  reorder: Callable[[Any, torch.Tensor], Any] = select_state
                  ) -> list[list[MotionHypothesis]]:
@@ -57,11 +57,15 @@ def sampled_beam(step: MotionStep, state: Any, *, batch_size: int, width: int,
         max_frames: length cap; hypotheses still active at the cap are closed there.
         samples: S candidate (frame, flag) pairs drawn per live hypothesis and step.
         min_frames: the flag is held at 1 (and scored so) before this many frames.
+        length_norm: rank finished hypotheses by log likelihood per frame instead of the
+            total (the paper's). With normalised features a well-fitted frame has a positive
+            log density, so the total favours motions that run to the cap.
         start: first decoder input, (D,) or (batch_size, D); zeros of ``dim`` if None.
         generator: torch RNG for reproducible sampling.
 
     Returns:
-        for each input, up to W hypotheses sorted by decreasing log likelihood.
+        for each input, up to W hypotheses sorted by decreasing log likelihood (per frame
+        with ``length_norm``); ``score`` is always the total.
 
     Each step draws S candidates for each live hypothesis; candidates whose flag is 0
     finish, the W most likely of the others stay live. Densities can exceed 1, so unlike
@@ -75,6 +79,10 @@ def sampled_beam(step: MotionStep, state: Any, *, batch_size: int, width: int,
     frames = torch.empty(B, 0, D)
     scores = torch.zeros(B)
     finished: list[list[MotionHypothesis]] = [[] for _ in range(B)]
+
+    def rank(h: MotionHypothesis) -> float:
+        return -h.score / len(h.frames) if length_norm else -h.score
+
     for t in range(max_frames):
         params, state = step(state, prev)
         N = len(owner)
@@ -98,7 +106,7 @@ def sampled_beam(step: MotionStep, state: Any, *, batch_size: int, width: int,
                 r = int(row[i])
                 seq = torch.cat([frames[r], xf[i:i + 1]]).numpy().astype(np.float32)
                 finished[b].append(MotionHypothesis(seq, float(cand[i])))
-            finished[b] = sorted(finished[b], key=lambda h: -h.score)[:W]
+            finished[b] = sorted(finished[b], key=rank)[:W]
             going = (mine & (af == 1)).nonzero().flatten()
             if len(going):
                 best = cand[going].topk(min(W, len(going))).indices

@@ -108,8 +108,8 @@ def describe_features(model: MotionToLanguage, features: np.ndarray, *, width: i
 @torch.no_grad()
 def generate_features(model: LanguageToMotion, sentence: str | Sequence[int], *,
                       width: int = 5, max_frames: int | None = None, method: str = "beam",
-                      samples: int = 5, seed: int = 0, min_frames: int = 1
-                      ) -> list[tuple[np.ndarray, float]]:
+                      samples: int = 5, seed: int = 0, min_frames: int = 1,
+                      length_norm: bool = False) -> list[tuple[np.ndarray, float]]:
     """Sentence -> W motions as raw features (T, F) with their log likelihood, best first.
 
     method: "beam" (the sampled beam, ``samples`` candidates per hypothesis and step) or
@@ -128,7 +128,7 @@ def generate_features(model: LanguageToMotion, sentence: str | Sequence[int], *,
     else:
         hyps = sampled_beam(model.step, state, batch_size=1, width=width, max_frames=cap,
                             samples=samples, dim=F, min_frames=min_frames,
-                            generator=torch.Generator().manual_seed(seed))[0]
+                            length_norm=length_norm, generator=torch.Generator().manual_seed(seed))[0]
     return [(_denormalize(model.normalizer, h.frames).astype(np.float32), h.score)
             for h in hyps]
 
@@ -149,7 +149,8 @@ def describe(model: MotionToLanguage, motion, *, width: int = 5,
 
 def generate(model: LanguageToMotion, sentence: str | Sequence[int], *, width: int = 5,
              max_frames: int | None = None, method: str = "beam", samples: int = 5,
-             seed: int = 0, min_frames: int = 1) -> list[tuple[Any, float]]:
+             seed: int = 0, min_frames: int = 1, length_norm: bool = False
+             ) -> list[tuple[Any, float]]:
     """Sentence -> W decoded motions with their log likelihood, best first.
 
     Each motion is what the feature set's ``decode`` returns: a :class:`Motion` for joint
@@ -157,5 +158,6 @@ def generate(model: LanguageToMotion, sentence: str | Sequence[int], *, width: i
     """
     fs = _features_of(model)
     out = generate_features(model, sentence, width=width, max_frames=max_frames,
-                            method=method, samples=samples, seed=seed, min_frames=min_frames)
+                            method=method, samples=samples, seed=seed, min_frames=min_frames,
+                            length_norm=length_norm)
     return [(fs.decode(frames_to_features(fs, f)), score) for f, score in out]

@@ -47,7 +47,7 @@ class ARModel:
     def fit(self, sequences: Sequence[np.ndarray]) -> "ARModel":
         """Least squares on all frames with a full past; sequences (T_i, D) unnormalised."""
         n = self.config.order
-        seqs = check_sequences(sequences, self.n_visible, n)
+        seqs = check_sequences(sequences, self.n_visible, n + 1)
         frames = np.concatenate(seqs)
         self.mean = frames.mean(axis=0)
         sd = frames.std(axis=0)
@@ -70,7 +70,7 @@ class ARModel:
         """Roll the model forward from ``init`` ((>= order, D) unnormalised); returns
         (len(init) + n_frames, D) unnormalised. ``noise`` scales the unit-variance noise."""
         n = self.config.order
-        init = check_sequences([init], self.n_visible, n - 1, "initial frames")[0]
+        init = check_sequences([init], self.n_visible, n, "initial frames")[0]
         rng = np.random.default_rng(seed)
         x = np.empty((len(init) + n_frames, self.n_visible))
         x[:len(init)] = self.normalise(init)
@@ -91,7 +91,7 @@ class ARModel:
         n = self.config.order
         frames = np.asarray(frames, dtype=np.float64)
         known = np.broadcast_to(np.asarray(known, dtype=bool), frames.shape)
-        check_sequences([np.where(known, frames, 0.0)], self.n_visible, n, "fill-in sequence")
+        check_sequences([np.where(known, frames, 0.0)], self.n_visible, n + 1, "fill-in sequence")
         if not known[:n].all():
             raise MotionlangError(f"fill_in: the first {n} frames (the model order) must be fully known")
         x = self.normalise(np.where(known, frames, 0.0))

@@ -85,9 +85,10 @@ def _sigmoid(x: np.ndarray) -> np.ndarray:
     return 0.5 * (1.0 + np.tanh(0.5 * x))  # overflow-free logistic
 
 
-def check_sequences(sequences: Sequence[np.ndarray], dim: int | None, order: int,
+def check_sequences(sequences: Sequence[np.ndarray], dim: int | None, min_frames: int,
                     what: str = "sequence") -> list[np.ndarray]:
-    """Validate a list of (T_i, D) arrays: 2-D, same D (= ``dim`` if given), finite, T_i > order.
+    """Validate a list of (T_i, D) arrays: 2-D, same D (= ``dim`` if given), finite,
+    T_i >= ``min_frames`` (an order-n model needs n + 1 to learn from, n to start from).
 
     Raises :class:`MotionFormatError` naming the sequence and frame of the first problem.
     """
@@ -101,9 +102,9 @@ def check_sequences(sequences: Sequence[np.ndarray], dim: int | None, order: int
             raise MotionFormatError(name, f"expected a (frames, dims) array, got shape {s.shape}")
         if dim is not None and s.shape[1] != dim:
             raise MotionFormatError(name, f"expected {dim} dimensions per frame, got {s.shape[1]}")
-        if s.shape[0] <= order:
-            raise MotionFormatError(name, f"{s.shape[0]} frames: an order-{order} model needs at "
-                                    f"least {order + 1}")
+        if s.shape[0] < min_frames:
+            raise MotionFormatError(name, f"{s.shape[0]} frames: at least {min_frames} needed "
+                                    f"(the model's order of past frames, plus the frame itself)")
         bad = ~np.isfinite(s)
         if bad.any():
             f, d = np.argwhere(bad)[0]
@@ -201,7 +202,7 @@ class CRBM:
         The normaliser is fitted here for Gaussian visibles (binary ones are used as is).
         """
         cfg = self.config
-        seqs = check_sequences(sequences, self.n_visible, cfg.order)
+        seqs = check_sequences(sequences, self.n_visible, cfg.order + 1)
         frames = np.concatenate(seqs)
         if cfg.visible == "gaussian":
             self.mean = frames.mean(axis=0)
@@ -275,7 +276,7 @@ class CRBM:
         frame starts from the previous one and is refined by ``n_gibbs`` Gibbs updates.
         """
         n = self.config.order
-        init = check_sequences([init], self.n_visible, n - 1, "initial frames")[0]
+        init = check_sequences([init], self.n_visible, n, "initial frames")[0]
         rng = np.random.default_rng(seed)
         x = np.repeat(self.normalise(init)[None], n_samples, axis=0)
         out = np.empty((n_samples, len(init) + n_frames, self.n_visible))
@@ -302,7 +303,7 @@ class CRBM:
         frames = np.asarray(frames, dtype=np.float64)
         known = np.broadcast_to(np.asarray(known, dtype=bool), frames.shape)
         check = np.where(known, frames, 0.0)
-        check_sequences([check], self.n_visible, n, "fill-in sequence")
+        check_sequences([check], self.n_visible, n + 1, "fill-in sequence")
         if not known[:n].all():
             raise MotionlangError(f"fill_in: the first {n} frames (the model order) must be fully known")
         bad = ~np.isfinite(frames) & known
@@ -328,7 +329,7 @@ class CRBM:
         """p(h | v_t, past) for every frame with a full past: list of (T_i - order, H)."""
         n = self.config.order
         out = []
-        for s in check_sequences(sequences, self.n_visible, n):
+        for s in check_sequences(sequences, self.n_visible, n + 1):
             x = self.normalise(s)
             rows = np.arange(n, len(x))
             _, b_star = self.dynamic_biases(gather_past(x, rows, n))

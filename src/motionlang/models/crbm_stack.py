@@ -46,7 +46,7 @@ class CRBMStack:
         """``init`` (>= n_init, D) unnormalised -> (len(init) + n_frames, D) unnormalised."""
         l1, l2 = self.level1, self.level2
         n1, n2 = l1.config.order, l2.config.order
-        init = check_sequences([init], l1.n_visible, self.n_init - 1, "initial frames")[0]
+        init = check_sequences([init], l1.n_visible, self.n_init, "initial frames")[0]
         rng = np.random.default_rng(seed)
         T0 = len(init)
         v = np.empty((T0 + n_frames, l1.n_visible))
