@@ -128,7 +128,8 @@ def generate_features(model: LanguageToMotion, sentence: str | Sequence[int], *,
     else:
         hyps = sampled_beam(model.step, state, batch_size=1, width=width, max_frames=cap,
                             samples=samples, dim=F, min_frames=min_frames,
-                            length_norm=length_norm, generator=torch.Generator().manual_seed(seed))[0]
+                            length_norm=length_norm,
+                            generator=torch.Generator().manual_seed(seed))[0]
     return [(_denormalize(model.normalizer, h.frames).astype(np.float32), h.score)
             for h in hyps]
 
