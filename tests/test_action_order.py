@@ -56,3 +56,19 @@ def test_merge_and_rescale():
     assert rescale_ranges([(398, 400)], 400, 50) == [(49, 50)]
     with pytest.raises(MotionlangError):
         order_accuracy([], [])
+
+
+def test_nearest_example_mode():
+    # two clusters of "wave" far apart (small and large) whose centroid lies far from a
+    # small wave: the centroid labeller calls it "stand", 1-NN over the examples "wave"
+    train = [("wave", wave(20, 0.2)), ("wave", wave(20, 3.0)),
+             ("stand", still(20, 0.0)), ("stand", still(20, 0.05))]
+    central = Prototypes.fit(train)
+    nn = Prototypes.fit(train, nearest_example=True)
+    assert central.examples is None and nn.examples.shape == (4, 9)
+    assert sorted(nn.example_labels) == ["stand", "stand", "wave", "wave"]
+    probe = wave(20, 0.2)
+    assert central.label(probe) == "stand" and nn.label(probe) == "wave"
+    assert nn.label(still(20, 0.02)) == "stand"
+    # same centroids either way
+    np.testing.assert_allclose(nn.centroids, central.centroids)

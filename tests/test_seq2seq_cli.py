@@ -98,3 +98,17 @@ def test_errors_are_one_line(tmp_path, capsys):
     assert main(["describe", str(tmp_path / "x.bvh"), "--model", str(tmp_path / "no.pt")]) == 2
     assert "no such model file" in capsys.readouterr().err
     assert main(["train", "m2l", "--data", str(tmp_path), "--out", str(tmp_path / "o")]) == 2
+
+
+def test_building_the_parser_does_not_import_torch():
+    # `motionlang info` must not pay torch's 2-10 s import: every CLI module imports heavy
+    # modules inside its command functions. A fresh interpreter, since this one has torch.
+    import subprocess
+    import sys
+    code = ("import sys, motionlang.cli.main as m; p = m.build_parser(); "
+            "p.parse_args(['train', 'l2m', '--data', 'x']); "
+            "heavy = [k for k in ('torch', 'motionlang.models.l2m', 'motionlang.models.m2l', "
+            "'transformers', 'sklearn') if k in sys.modules]; print(heavy)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout.strip()
+    assert out == "[]"

@@ -112,7 +112,7 @@ def cmd_train(args: argparse.Namespace) -> int:
 # ------------------------------------------------------------------ crbm generate
 def cmd_generate(args: argparse.Namespace) -> int:
     from motionlang.evaluation.crbm_fill import load_cmu35
-    from motionlang.evaluation.crbm_generation import StyleLabeller
+    from motionlang.evaluation.crbm_generation import StyleLabeller, forward_speed
     from motionlang.evaluation.crbm_reproduce import model_frames
     if not (args.noise >= 0 and np.isfinite(args.noise)) or args.frames < 1 or args.gibbs < 1:
         raise MotionlangError("--noise must be a finite number >= 0, --frames and --gibbs >= 1")
@@ -131,13 +131,15 @@ def cmd_generate(args: argparse.Namespace) -> int:
     report = {"frames": args.frames, "start_style": args.start,
               "fraction_walk": float((labels == "walk").mean()),
               "fraction_jog": float((labels == "jog").mean()),
-              "label_changes": switches, "range_excess_std": lab.range_excess(gen[n:])}
+              "label_changes": switches, "range_excess_std": lab.range_excess(gen[n:]),
+              "forward_speed_last_half_m_s": forward_speed(gen[n:][-args.frames // 2:])}
     _write_frames(gen, Path(args.output), data, args.data, name=f"crbm from {args.start}",
                   start_xz=tuple(data.test[trial][0, [0, 2]]), title=f"CRBM, started from {args.start}")
     print(json.dumps(report) if args.json else
           f"{args.output}: {args.frames} frames from {args.start}; walk {report['fraction_walk']:.0%}, "
           f"jog {report['fraction_jog']:.0%}, {switches} label changes, range excess "
-          f"{report['range_excess_std']:.2f} std")
+          f"{report['range_excess_std']:.2f} std, forward speed (last half) "
+          f"{report['forward_speed_last_half_m_s']:.2f} m/s")
     return 0
 
 

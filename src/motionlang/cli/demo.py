@@ -1,9 +1,16 @@
-"""``motionlang demo``: render a real motion to an animated GIF, a pose strip and a
-trajectory plot — the quickest way to see that reading, kinematics and rendering work.
+"""``motionlang demo``: the main job, with no download and no shared data needed.
 
-The motion is ``--input FILE`` or, by default, KIT-ML motion 00001 ("A person is walking
-forwards.") from the shared data folder: ``$MOTIONLANG_DATA``, else ``../shared/data``
-relative to the current folder, else next to the package's source checkout.
+1. Generate a motion for a sentence with the packaged language-to-motion model (L2M) and
+   write it as an animated GIF, a pose strip and a BVH file; print the W hypotheses of
+   the sampled beam with their log likelihoods.
+2. Describe a motion with the packaged motion-to-language model (M2L): a procedural-corpus
+   sample generated on the fly (from a corpus seed the packaged models never saw) and,
+   when the shared data is present, KIT-ML motion 00001; print the W beam hypotheses with
+   their log probabilities.
+3. When a real motion is available (``--input FILE`` or KIT-ML 00001 from the shared data
+   folder: ``$MOTIONLANG_DATA``, else ``../shared/data`` relative to the current folder,
+   else next to the package's source checkout), render it to a GIF, a pose strip and a
+   trajectory plot as well.
 """
 from __future__ import annotations
 
@@ -92,20 +99,127 @@ def run_demo(input_path: str | Path | None, out_dir: str | Path, *, asf: str | N
     return written
 
 
+# ------------------------------------------------------------------ the main job
+DEFAULT_SENTENCE = "a person waves with the left hand"
+#: The packaged models were trained on corpus seed 0; this seed's samples are unseen.
+SYNTH_SEED = 2026
+
+
+def packaged_model(kind: str) -> Path:
+    """Path of the packaged ``m2l`` or ``l2m`` model (MotionlangError if missing)."""
+    from motionlang.cli.seq2seq_commands import _model_path
+
+    return _model_path(None, kind)
+
+
+def _print_hyps(echo, hyps, label: str) -> None:
+    for i, (text, score) in enumerate(hyps, 1):
+        echo(f"  {i}. {label} = {score:9.2f}  {text}")
+
+
+def generate_part(out_dir: Path, sentence: str, *, width: int = 5, seed: int = 0,
+                  model_path: str | Path | None = None, echo=print) -> list[Path]:
+    """L2M: ``sentence`` -> W motions; the best one written as GIF, strip PNG and BVH."""
+    from motionlang.decoding.seq2seq import generate
+    from motionlang.formats import write_motion
+    from motionlang.models.l2m import LanguageToMotion
+    from motionlang.render import render_animation, render_strip
+
+    model = LanguageToMotion.load(model_path or packaged_model("l2m"))
+    hyps = generate(model, sentence, width=width, seed=seed, min_frames=5)
+    echo(f'generate "{sentence}" (L2M, sampled beam, W={width}):')
+    _print_hyps(echo, [(f"{m.n_frames} frames, {m.duration:.1f} s", s) for m, s in hyps],
+                "log L")
+    best = hyps[0][0].replace(name="generated")
+    title = f'"{sentence}" (L2M #1)'
+    stem = out_dir / "generated"
+    written = [render_animation(best, stem.with_suffix(".gif"), title=title),
+               render_strip(best, out_dir / "generated_strip.png", title=title)]
+    write_motion(best, stem.with_suffix(".bvh"))
+    written.append(stem.with_suffix(".bvh"))
+    return written
+
+
+def describe_part(motions: list[tuple[str, object]], *, width: int = 5,
+                  model_path: str | Path | None = None, echo=print) -> list[list]:
+    """M2L: each (label, Motion) -> W sentences with log P, printed; returns the lists."""
+    from motionlang.decoding.seq2seq import describe
+    from motionlang.models.m2l import MotionToLanguage
+
+    model = MotionToLanguage.load(model_path or packaged_model("m2l"))
+    out = []
+    for label, motion in motions:
+        echo(f"describe {label} (M2L, beam search, W={width}):")
+        hyps = describe(model, motion, width=width)
+        _print_hyps(echo, hyps, "log P")
+        out.append(hyps)
+    return out
+
+
+def synth_motion(index: int = 0):
+    """A procedural sample unseen in training: (Motion, its reference sentences)."""
+    from motionlang.datasets.synth import generate_sample
+
+    sample = generate_sample(SYNTH_SEED, index)
+    return sample.motion, sample.annotations
+
+
+def run_main_job(out_dir: str | Path, *, sentence: str = DEFAULT_SENTENCE, width: int = 5,
+                 seed: int = 0, input_path: str | Path | None = None, asf: str | None = None,
+                 render_real: bool = True, m2l: str | Path | None = None,
+                 l2m: str | Path | None = None, echo=print) -> list[Path]:
+    """The whole demo (see the module docstring); returns the files written."""
+    from motionlang.formats import read_motion
+
+    out_dir = Path(out_dir)
+    written = generate_part(out_dir, sentence, width=width, seed=seed, model_path=l2m,
+                            echo=echo)
+    motion, refs = synth_motion()
+    echo(f"procedural sample (seed {SYNTH_SEED}), its reference: {refs[0]}")
+    to_describe = [("a procedural-corpus sample", motion)]
+    real = Path(input_path) if input_path else find_demo_motion()
+    if real is not None:
+        real_motion = read_motion(real, skeleton=asf) if asf else read_motion(real)
+        caption = kit_caption(real)
+        if caption:
+            echo(f"reference of {caption}")
+        to_describe.append((str(real), real_motion))
+    else:
+        echo("(no shared data found: the real-motion part is skipped; "
+             f"set {DATA_ENV} or pass --input FILE)")
+    describe_part(to_describe, width=width, model_path=m2l, echo=echo)
+    if real is not None and render_real:
+        written += run_demo(real, out_dir, asf=asf)
+    return written
+
+
 def cmd_demo(args: argparse.Namespace) -> int:
-    for path in run_demo(args.input, args.out, asf=args.asf):
-        print(path)
+    written = run_main_job(args.out, sentence=args.sentence, width=args.width, seed=args.seed,
+                           input_path=args.input, asf=args.asf, render_real=not args.no_render)
+    print("written:")
+    for path in written:
+        print(f"  {path}")
     return 0
 
 
 def register(subparsers) -> None:
     p = subparsers.add_parser(
-        "demo", help="render a real motion (GIF, pose strip, trajectory plot)",
-        description="Render KIT-ML motion 00001 (or --input FILE) to an animated GIF, a PNG "
-                    "strip of poses and a PNG trajectory plot, and print their paths.")
+        "demo", help="generate a motion from text and describe motions (packaged models)",
+        description="The main job, offline: generate a motion for SENTENCE with the packaged "
+                    "L2M model (GIF, pose strip and BVH written; hypotheses printed with log "
+                    "likelihoods), describe a procedural-corpus motion and KIT-ML 00001 (when "
+                    "the shared data is present) with the packaged M2L model, and render the "
+                    "real motion (GIF, pose strip, trajectory plot).")
+    p.add_argument("--sentence", default=DEFAULT_SENTENCE,
+                   help=f'text to generate a motion for (default: "{DEFAULT_SENTENCE}")')
+    p.add_argument("-w", "--width", type=int, default=5, help="beam width = hypotheses shown")
+    p.add_argument("--seed", type=int, default=0, help="seed of the sampled beam")
     p.add_argument("--input", default=None, metavar="FILE",
-                   help="motion to render (default: kitml/00001_mmm.xml in the shared data)")
+                   help="real motion to describe and render (default: kitml/00001_mmm.xml "
+                        "in the shared data, when present)")
     p.add_argument("--asf", default=None, metavar="PATH", help="ASF skeleton of an .amc input")
+    p.add_argument("--no-render", action="store_true",
+                   help="skip rendering the real motion (the generated one is always rendered)")
     p.add_argument("--out", default="out/demo", metavar="DIR",
                    help="output folder (default: out/demo, as the README says)")
     p.set_defaults(func=cmd_demo)

@@ -21,6 +21,7 @@ COMMAND_MODULES = [
     "motionlang.cli.train_commands",    # train crbm | seq2seq | twostream
     "motionlang.cli.crbm_commands",     # crbm generate | fill | reproduce
     "motionlang.cli.seq2seq_commands",  # describe, generate (train m2l | l2m via train)
+    "motionlang.cli.twostream_commands",  # evaluate-t2m (train twostream via train)
 ]
 
 

@@ -22,8 +22,8 @@ RENDER_OUT = (".gif", ".mp4")
 
 # ------------------------------------------------------------------ train m2l | l2m
 def _add_train(sub, name: str, help_: str) -> None:
-    from motionlang.models.l2m import L2MConfig
-    from motionlang.models.m2l import M2LConfig
+    # torch-free config module: building the parser must not import torch
+    from motionlang.models.seq2seq_config import L2MConfig, M2LConfig
     d = M2LConfig(1, 1) if name == "m2l" else L2MConfig(1, 1)
     p = sub.add_parser(name, help=help_, description=help_)
     p.add_argument("--data", required=True, metavar="DIR", help="KIT-ML-format or custom folder")

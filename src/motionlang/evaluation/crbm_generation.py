@@ -13,6 +13,17 @@ from motionlang.evaluation.crbm_reproduce import model_frames
 from motionlang.models.crbm import CRBM
 
 STYLE_DIMS = np.r_[1, 3:59]   # all model features but root x / z displacement
+METRES_PER_UNIT = 0.0254 / 0.45   # 35.asf: ":units length 0.45" of inches
+FPS = 30.0
+
+
+def forward_speed(frames: np.ndarray) -> float:
+    """Mean forward speed (m/s) of (T, 59) model features: the root's ground-plane step
+    (dims 0, 2) projected on the facing direction given by the root's y rotation
+    (sin in dim 4, cos in dim 7; at ry = 0 the subject faces +z). Walking on the spot ~ 0."""
+    f = np.asarray(frames, dtype=np.float64)
+    step = f[:, 0] * f[:, 4] + f[:, 2] * f[:, 7]
+    return float(step.mean() * METRES_PER_UNIT * FPS)
 
 
 class StyleLabeller:
@@ -45,12 +56,20 @@ class StyleLabeller:
         return float(max(0.0, below.max(), above.max()))
 
 
+def _training_speed(data: Cmu35, style: str) -> float:
+    """Mean forward speed (m/s) of the training trials of one style (walks ~1.2, jogs ~3.4)."""
+    return float(np.mean([forward_speed(model_frames(c)) for c, n in zip(data.train, data.train_names)
+                          if data.labels[n] == style]))
+
+
 def generation_report(model, data: Cmu35, *, n_frames: int = 1000, seed: int = 0,
                       n_gibbs: int = 30, hidden_noise: float = 0.0, n_samples: int = 1,
                       start: int = 0) -> dict:
     """Generate ``n_samples`` sequences of ``n_frames`` from walking (35_29) and jogging (35_18)
-    test frames; per start style: fraction of frames keeping the style, range excess, and
-    the fraction of sequences that switch style (majority of their last 100 frames differs).
+    test frames; per start style: fraction of frames keeping the style, range excess, the
+    fraction of sequences that switch style (majority of their last 100 frames differs), and
+    the mean forward speed (m/s) over the second half of the generated frames next to that
+    of the training trials of the style.
 
     ``model`` is a :class:`CRBM`, a ``CRBMStack`` or an ``ARModel`` (anything with
     ``generate(init, n_frames, seed=...)`` and the normaliser of level 1 as ``mean/std``).
@@ -61,7 +80,7 @@ def generation_report(model, data: Cmu35, *, n_frames: int = 1000, seed: int = 0
     out = {}
     for style, trial in (("walk", "35_29"), ("jog", "35_18")):
         init = model_frames(data.test[trial])[start:start + n_init]
-        keep, excess, switched = [], [], 0
+        keep, excess, speed, switched = [], [], [], 0
         for s in range(n_samples):
             kwargs = {"seed": seed + s}
             if isinstance(model, CRBM) or hasattr(model, "level1"):
@@ -71,9 +90,13 @@ def generation_report(model, data: Cmu35, *, n_frames: int = 1000, seed: int = 0
             labels = lab(gen[n_init:])
             keep.append(float((labels == style).mean()))
             excess.append(lab.range_excess(gen[n_init:]))
+            speed.append(forward_speed(gen[n_init:][-n_frames // 2:]))
             tail = labels[-100:]
             switched += int((tail == style).mean() < 0.5)
         out[style] = {"style_kept": float(np.mean(keep)), "style_kept_min": float(np.min(keep)),
                       "range_excess_std": float(np.max(excess)),
-                      "switch_rate": switched / n_samples, "n_samples": n_samples}
+                      "switch_rate": switched / n_samples, "n_samples": n_samples,
+                      # m/s over the second half of the generated frames (walking on the spot ~ 0)
+                      "forward_speed_last_half": float(np.mean(speed)),
+                      "forward_speed_training": _training_speed(data, style)}
     return out

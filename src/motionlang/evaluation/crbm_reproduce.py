@@ -46,13 +46,33 @@ class ReproduceConfig:
     seed: int = 0
 
 
+def unwrap_degrees(angles: np.ndarray) -> np.ndarray:
+    """(T, K) degrees -> the same rotations without 360-degree jumps along T, the first
+    frame brought into [-180, 180)."""
+    a = np.rad2deg(np.unwrap(np.deg2rad(np.asarray(angles, dtype=np.float64)), axis=0))
+    return a - 360.0 * np.floor((a[:1] + 180.0) / 360.0)
+
+
 def model_frames(channels: np.ndarray) -> np.ndarray:
-    """(T, 62) degrees -> (T, 59) model features (root x, z as per-frame displacement)."""
+    """(T, 62) degrees -> (T, 59) model features: the protocol's 59 values with root x, z as
+    per-frame displacement and the 50 joint channels *unwrapped* instead of folded as
+    asin(sin(x)): the jogs' knees bend past 90 degrees and several arm channels pass +-90
+    (14 % of the training frames), and a fold turns a smooth swing into a kink (110 -> 70
+    degrees) that the CRBM's dynamics cannot follow. :func:`to_protocol59` folds back."""
     x = taylor59(channels)
     out = x.copy()
+    out[:, 9:] = unwrap_degrees(channels[:, JOINT_CHANNELS])
     if len(x) > 1:
         out[1:, [0, 2]] = np.diff(x[:, [0, 2]], axis=0)
         out[0, [0, 2]] = out[1, [0, 2]]  # the first frame has no predecessor: copy the next step
+    return out
+
+
+def to_protocol59(frames: np.ndarray) -> np.ndarray:
+    """Joint dims of (..., 59) model features folded as the protocol does, asin(sin(x)) in
+    degrees (the root dims are returned unchanged: they differ from the protocol's)."""
+    out = np.array(frames, dtype=np.float64)
+    out[..., 9:] = np.rad2deg(np.arcsin(np.sin(np.deg2rad(out[..., 9:]))))
     return out
 
 
@@ -122,12 +142,12 @@ def fill_trial(data: Cmu35, trial: str, part: str, crbm: CRBM, ar: ARModel,
     mf = model_frames(channels)
     given = np.where(known, mf, np.nan)
     ar_frames = true59.copy()
-    ar_frames[:, fdims] = ar.fill_in(given, known)[:, fdims]
+    ar_frames[:, fdims] = to_protocol59(ar.fill_in(given, known))[:, fdims]
     filled["AR(n)"] = ar_frames
     samples = crbm.fill_in(given, known, n_gibbs=cfg.n_gibbs, seed=cfg.seed,
                            n_samples=cfg.n_repeats)
     crbm_frames = np.repeat(true59[None], len(samples), axis=0)
-    crbm_frames[:, :, fdims] = samples[:, :, fdims]
+    crbm_frames[:, :, fdims] = to_protocol59(samples)[:, :, fdims]
     filled["CRBM"] = crbm_frames
     for m in ("hold last value", "AR(n)"):
         errors[m] = score(filled[m])

@@ -196,10 +196,12 @@ class CRBM:
         return grads, float((dv ** 2).mean())
 
     def fit(self, sequences: Sequence[np.ndarray], *, show_progress: bool = False,
-            epochs: int | None = None) -> "CRBM":
+            epochs: int | None = None, on_epoch=None) -> "CRBM":
         """Train on a list of (T_i, D) unnormalised sequences (T_i > order each).
 
         The normaliser is fitted here for Gaussian visibles (binary ones are used as is).
+        ``on_epoch(epoch, model)`` (1-based epoch), if given, is called after every pass:
+        it lets hyper-parameter selection score snapshots of one run at several epoch counts.
         """
         cfg = self.config
         seqs = check_sequences(sequences, self.n_visible, cfg.order + 1)
@@ -218,10 +220,10 @@ class CRBM:
         if show_progress:
             epoch_iter = progress(epoch_iter, desc="crbm", total=n_epochs)
         with _blas_threads(cfg.blas_threads):
-            self._epochs(epoch_iter, x, rows, rng, velocity, rates)
+            self._epochs(epoch_iter, x, rows, rng, velocity, rates, on_epoch)
         return self
 
-    def _epochs(self, epoch_iter, x, rows, rng, velocity, rates) -> None:
+    def _epochs(self, epoch_iter, x, rows, rng, velocity, rates, on_epoch=None) -> None:
         cfg = self.config
         wd_a = cfg.weight_decay if cfg.weight_decay_autoregressive is None else cfg.weight_decay_autoregressive
         decay = {"W": cfg.weight_decay, "B": cfg.weight_decay, "A": wd_a}
@@ -240,6 +242,8 @@ class CRBM:
                     velocity[k] += rates[k] * g
                     getattr(self, k).__iadd__(velocity[k])
             self.history.append(err / len(order))
+            if on_epoch is not None:
+                on_epoch(len(self.history), self)
 
     # ----------------------------------------------------------------- inference
     def gibbs_frame(self, v: np.ndarray, past: np.ndarray, rng: np.random.Generator,

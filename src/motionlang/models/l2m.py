@@ -13,7 +13,7 @@ Frames are model features (usually normalised); the first decoder input is a zer
 """
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
@@ -25,30 +25,7 @@ from motionlang.models.checkpoint import (pack_features, pack_normalizer, pack_v
                                           read_model_dict, unpack_features, unpack_normalizer,
                                           unpack_vocab, write_checkpoint)
 from motionlang.models.recurrent import AdditiveAttention, BiGRUEncoder, StackedDecoder
-
-
-@dataclass
-class L2MConfig:
-    """Sizes of the language-to-motion model; paper defaults except the data-given ones.
-
-    vocab_size: V (from the vocabulary); n_features: per-frame feature size F (from data).
-    """
-
-    vocab_size: int
-    n_features: int
-    embed_dim: int = 64
-    enc_hidden: int = 64
-    enc_layers: int = 2
-    dec_hidden: int = 400
-    dec_layers: int = 3
-    n_components: int = 20
-    dropout: float = 0.1
-    attention: bool = False
-    attn_dim: int = 64
-    loss: str = "surrogate"     # or "exact"
-    end_weight: float = 1.0     # BCE weight of a motion's last frame (1 = the paper's loss)
-    pad_id: int = 0
-    max_frames: int = 300       # decoding cap (frames)
+from motionlang.models.seq2seq_config import L2MConfig  # noqa: F401 (re-exported)
 
 
 class LanguageToMotion(nn.Module):

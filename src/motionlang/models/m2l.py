@@ -12,7 +12,7 @@ The decoder is driven word by word through :meth:`MotionToLanguage.step` so that
 """
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
@@ -24,30 +24,7 @@ from motionlang.models.checkpoint import (pack_features, pack_normalizer, pack_v
                                           read_model_dict, unpack_features, unpack_normalizer,
                                           unpack_vocab, write_checkpoint)
 from motionlang.models.recurrent import AdditiveAttention, BiGRUEncoder, StackedDecoder
-
-
-@dataclass
-class M2LConfig:
-    """Sizes of the motion-to-language model; paper defaults except the data-given ones.
-
-    n_features: per-frame motion feature size F (from the features/dataset, never fixed here).
-    vocab_size: V, including PAD/SOS/EOS/UNK at ids ``pad_id``/``sos_id``/``eos_id``/3.
-    """
-
-    n_features: int
-    vocab_size: int
-    enc_hidden: int = 64
-    enc_layers: int = 2
-    dec_hidden: int = 128
-    dec_layers: int = 2
-    embed_dim: int = 64
-    dropout: float = 0.4
-    attention: bool = False
-    attn_dim: int = 64
-    pad_id: int = 0
-    sos_id: int = 1
-    eos_id: int = 2
-    max_len: int = 40          # decoding cap in tokens, EOS included
+from motionlang.models.seq2seq_config import M2LConfig  # noqa: F401 (re-exported)
 
 
 class MotionToLanguage(nn.Module):

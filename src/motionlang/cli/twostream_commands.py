@@ -1,0 +1,132 @@
+"""``motionlang train twostream`` and ``motionlang evaluate-t2m``.
+
+Thin wrappers over :mod:`motionlang.training.twostream_data` (dataset -> items),
+:mod:`motionlang.training.twostream_train` (shared trainer + annealed teacher forcing,
+ablations) and :mod:`motionlang.evaluation.t2m_compare` (one table for every
+text-to-motion model). torch is imported inside the commands only, so building the CLI
+parser stays cheap.
+"""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from motionlang.errors import MotionlangError
+
+ABLATION_NAMES = ("full", "no-joint-training", "one-stream", "no-extra-losses", "word-vectors")
+
+
+def _threads(n: int) -> None:
+    import torch
+    if n > 0:
+        torch.set_num_threads(n)
+
+
+def cmd_train(args: argparse.Namespace) -> int:
+    import logging
+
+    import torch
+
+    from motionlang.datasets.splits import save_splits
+    from motionlang.models.twostream import TwoStreamModel
+    from motionlang.training.trainer import TrainConfig
+    from motionlang.training.twostream_data import build_twostream_data
+    from motionlang.training.twostream_train import ForcingSchedule, make_config, train_twostream
+
+    logging.basicConfig(level=logging.INFO, format="%(message)s")
+    _threads(args.threads)
+    out = Path(args.out)
+    if out.suffix != ".pt":
+        raise MotionlangError(f"{out}: the model file must end in .pt")
+    run = Path(args.run_dir) if args.run_dir else out.parent / f"{out.stem}_run"
+    data = build_twostream_data(args.data, seed=args.seed, max_seconds=args.max_seconds,
+                                max_frames=args.max_frames)
+    save_splits(data.splits, run / "splits")
+    fields = dict(h1=args.h1, h2=args.h2, h=args.h, lstm_layers=args.lstm_layers)
+    if args.text_layers:
+        fields["text_layers"] = [int(x) for x in args.text_layers.split(",")]
+    torch.manual_seed(args.seed)
+    model = TwoStreamModel(make_config(args.ablation, **fields), data.features.normalizer)
+    cfg = TrainConfig(epochs=args.epochs, batch_size=args.batch_size, lr=args.lr,
+                      grad_clip=args.grad_clip, seed=args.seed, out_dir=str(run),
+                      checkpoint_every=args.checkpoint_every)
+    print(f"twostream ({args.ablation}): {len(data.items['train'])} training pairs "
+          f"({len(data.splits['train'])} motions), "
+          f"{sum(p.numel() for p in model.parameters()):,} parameters")
+    model, history = train_twostream(
+        model, data.items["train"], cfg, val_items=data.items.get("val") or None,
+        first_frames=data.first_frames(), resume=args.resume,
+        schedule=ForcingSchedule(1.0, 0.0, args.forcing_steps))
+    model.save(out)
+    last = history[-1] if history else {}
+    print(f"{out}: epoch {last.get('epoch')}, train loss "
+          f"{last.get('train', {}).get('loss', float('nan')):.4g}, "
+          f"val loss {last.get('val', {}).get('loss', float('nan')):.4g}")
+    return 0
+
+
+def register_train(train_sub) -> None:
+    """Hook of ``cli/train_commands.py``: adds ``train twostream``."""
+    h = "train the two-stream text-to-motion model (Ghosh et al. 2021)"
+    p = train_sub.add_parser("twostream", help=h, description=h)
+    p.add_argument("--data", required=True, metavar="DIR", help="KIT-ML-format or custom folder")
+    p.add_argument("--out", required=True, metavar="MODEL.pt", help="the trained model file")
+    p.add_argument("--run-dir", metavar="DIR",
+                   help="checkpoints, history, splits (default: MODEL_run beside MODEL.pt)")
+    p.add_argument("--ablation", choices=ABLATION_NAMES, default="full")
+    p.add_argument("--h", type=int, default=512, help="stream embedding size (paper 512)")
+    p.add_argument("--h1", type=int, default=32, help="per-part layer size (paper 32)")
+    p.add_argument("--h2", type=int, default=128, help="trunk+limb layer size (paper 128)")
+    p.add_argument("--lstm-layers", type=int, default=2)
+    p.add_argument("--text-layers", metavar="I,J,..",
+                   help="hidden states of the text model to concatenate (default 3,4,5,6)")
+    p.add_argument("--epochs", type=int, default=20)
+    p.add_argument("--batch-size", type=int, default=32)
+    p.add_argument("--lr", type=float, default=1e-3)
+    p.add_argument("--grad-clip", type=float, default=5.0)
+    p.add_argument("--forcing-steps", type=int, default=200,
+                   help="optimiser steps over which teacher forcing anneals 1 -> 0")
+    p.add_argument("--max-frames", type=int, default=None,
+                   help="crop sequences to this many 12.5 Hz frames")
+    p.add_argument("--max-seconds", type=float, default=30.0, help="drop longer motions")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--threads", type=int, default=0, help="torch threads (0: torch's default)")
+    p.add_argument("--resume", action="store_true", help="continue from the run's last.pt")
+    p.add_argument("--checkpoint-every", type=int, default=0, metavar="STEPS")
+    p.set_defaults(func=cmd_train)
+
+
+def cmd_evaluate(args: argparse.Namespace) -> int:
+    from motionlang.decoding.t2m import load_any_t2m
+    from motionlang.evaluation.t2m_compare import compare
+    from motionlang.training.twostream_data import build_twostream_data
+
+    _threads(args.threads)
+    models = {}
+    for spec in args.model:
+        name, sep, path = spec.partition("=")
+        if not sep:
+            name, path = Path(spec).stem, spec
+        models[name] = load_any_t2m(path)
+    data = build_twostream_data(args.data, seed=args.seed, max_seconds=args.max_seconds)
+    _, table = compare(models, data, split=args.split, limit=args.limit or None,
+                       out_dir=args.output, figures=args.figures)
+    print(table, end="")
+    return 0
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser(
+        "evaluate-t2m", help="APE/AVE and action order of text-to-motion models (one table)")
+    p.add_argument("--data", required=True, metavar="DIR", help="the dataset trained on")
+    p.add_argument("--model", required=True, action="append", metavar="[NAME=]PATH",
+                   help="an L2M or two-stream checkpoint; repeat for each model")
+    p.add_argument("--split", default="test")
+    p.add_argument("--seed", type=int, default=0, help="the split seed used in training")
+    p.add_argument("--max-seconds", type=float, default=30.0)
+    p.add_argument("--limit", type=int, default=0, help="evaluate at most N motions")
+    p.add_argument("--figures", type=int, default=3, help="trajectory figures to draw")
+    p.add_argument("--threads", type=int, default=0)
+    p.add_argument("-o", "--output", metavar="DIR",
+                   help="write t2m_table.md, t2m_report.json and trajectory PNGs here")
+    p.set_defaults(func=cmd_evaluate)

@@ -1,0 +1,106 @@
+"""Any text-to-motion checkpoint behind one interface: the seq2seq L2M model (Plappert et
+al. 2018) and the two-stream model (Ghosh et al. 2021).
+
+* :func:`load_any_t2m` reads a checkpoint (a model file or a trainer's ``best.pt``) and
+  builds the model its ``kind`` names.
+* :func:`generate_any` has the signature and return value of ``decoding.seq2seq.generate``
+  (a list of ``(result, score)``, best first); a two-stream model is deterministic, so it
+  returns one hypothesis: global 21-joint positions (T, 21, 3) metres, score NaN.
+* :func:`generate_positions21` gives every model's output as global 21-joint positions at
+  12.5 Hz starting at the origin facing +Z — the common ground of the comparison table.
+"""
+from __future__ import annotations
+
+import pickle
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+
+from motionlang.errors import MotionlangError
+
+#: frame rate of the comparison (the positions features' rate)
+FPS = 12.5
+#: length of a two-stream generation when none is asked for (frames at 12.5 Hz = 10 s)
+DEFAULT_FRAMES = 125
+
+
+def load_any_t2m(path: str | Path, text_encoder=None):
+    """A text-to-motion model from its checkpoint, whatever its kind (eval mode).
+
+    Raises:
+        MotionlangError: unreadable file, or a kind that is not ``l2m`` / ``twostream``.
+    """
+    try:
+        d = torch.load(path, map_location="cpu", weights_only=True)
+    except (OSError, RuntimeError, EOFError, ValueError, pickle.UnpicklingError) as exc:
+        raise MotionlangError(f"{path}: cannot read checkpoint: {exc}") from exc
+    if isinstance(d, dict) and isinstance(d.get("model"), dict):
+        d = d["model"]
+    kind = d.get("kind") if isinstance(d, dict) else None
+    if kind == "twostream":
+        from motionlang.models.twostream import TwoStreamModel
+        return TwoStreamModel.from_checkpoint(d, text_encoder)
+    if kind == "l2m":
+        from motionlang.models.l2m import LanguageToMotion
+        return LanguageToMotion.from_checkpoint(d).eval()
+    raise MotionlangError(f"{path}: not a text-to-motion checkpoint (kind {kind!r}; "
+                          "expected 'l2m' or 'twostream')")
+
+
+def generate_any(model, sentence: str, *, max_frames: int | None = None, **kw
+                 ) -> list[tuple[Any, float]]:
+    """``decoding.seq2seq.generate`` for L2M (``kw`` passed on); for a two-stream model one
+    ``(positions (T, 21, 3), nan)`` with ``T = max_frames`` or 125 (10 s at 12.5 Hz)."""
+    if getattr(model, "kind", None) == "twostream":
+        return [(model.generate_positions(sentence, max_frames or DEFAULT_FRAMES), float("nan"))]
+    from motionlang.decoding.seq2seq import generate
+    return generate(model, sentence, max_frames=max_frames, **kw)
+
+
+def anchor(p21: np.ndarray) -> np.ndarray:
+    """Global (T, 21, 3) -> the same motion moved so that frame 0's root is above the
+    origin and faces +Z (the start of every generated motion)."""
+    from motionlang.features.positions import join_global, split_global
+    local, v, dyaw, _ = split_global(np.asarray(p21, dtype=np.float64))
+    return join_global(local, v, dyaw)
+
+
+def fit_length(p: np.ndarray, n_frames: int) -> np.ndarray:
+    """Crop, or pad by holding the last frame, to exactly ``n_frames`` frames."""
+    if len(p) >= n_frames:
+        return p[:n_frames]
+    return np.concatenate([p, np.repeat(p[-1:], n_frames - len(p), axis=0)])
+
+
+@torch.no_grad()
+def generate_positions21(model, sentence: str, n_frames: int, *, seed: int = 0) -> np.ndarray:
+    """Sentence -> global 21-joint positions (n_frames, 21, 3) metres at 12.5 Hz, anchored
+    at the origin facing +Z.
+
+    Two-stream: decoded for exactly ``n_frames``. L2M: the deterministic "mean" decoding
+    (capped at ``n_frames`` model frames at its own rate), angles features through forward
+    kinematics (``joint_map.positions21``), re-timed to 12.5 Hz, then cropped or held at
+    its last frame to ``n_frames`` (L2M chooses its own length).
+    """
+    if getattr(model, "kind", None) == "twostream":
+        return model.generate_positions(sentence, n_frames)
+    from motionlang.decoding.seq2seq import generate
+    from motionlang.features.base import downsample
+    from motionlang.features.joint_map import positions21
+    fps = float(getattr(getattr(model, "features", None), "fps", FPS))
+    cap = max(1, int(np.ceil(n_frames * fps / FPS)))
+    result, _ = generate(model, sentence, width=1, method="mean", seed=seed,
+                         max_frames=cap)[0]
+    if isinstance(result, np.ndarray):  # positions features: already (T, 21, 3) at fps
+        p = result
+        if abs(fps - FPS) > 1e-9:
+            t_src = np.arange(len(p)) / fps
+            t_dst = np.arange(int(np.floor(t_src[-1] * FPS)) + 1) / FPS
+            p = np.stack([np.stack([np.interp(t_dst, t_src, p[:, j, c]) for c in range(3)], -1)
+                          for j in range(p.shape[1])], 1)
+    else:
+        m = result
+        p = positions21(downsample(m, FPS) if m.n_frames > 1 else m)
+    return fit_length(anchor(p), n_frames)

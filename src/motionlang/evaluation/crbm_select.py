@@ -1,0 +1,111 @@
+"""Honest hyper-parameter selection for the CRBM of the Taylor 2006 experiment.
+
+The test trials (35_18, 35_29) are never looked at here. Four of the 31 training trials
+(2 walks, 2 jogs: :data:`VALIDATION_TRIALS`) are held out; a CRBM is trained on the other
+27 and scored on the held-out four with the paper's protocol (erase one leg / the upper
+body from halfway through the trial to its end, fill on-line, squared error per erased
+dimension in the normalised pair space of :mod:`crbm_fill`). Because walk trials are ~2.5x
+longer than jog trials and the two parts differ in scale, the score of a setting is the mean,
+over the 4 trials x 2 parts, of CRBM error / nearest-neighbour error on the same cell (lower
+is better; 1 = as good as nearest neighbour).
+
+One training run per (weight decay, learning rate) is scored at several epoch counts
+(snapshots through ``CRBM.fit(on_epoch=...)``) and, per snapshot, for several numbers of
+Gibbs updates in the fill-in: epochs and Gibbs steps come almost for free. The winner is
+then retrained on all 31 trials (``crbm_reproduce``) and the test table is computed once.
+
+Generation from the held-out trials' first frames (forward speed, walk/jog label kept,
+range excess) is recorded for every snapshot as well, so that the selected setting's
+generation behaviour is known without touching the test trials.
+"""
+from __future__ import annotations
+
+import dataclasses
+import itertools
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from motionlang.evaluation.crbm_fill import ERASED, Cmu35, load_cmu35
+from motionlang.evaluation.crbm_reproduce import ReproduceConfig, fill_trial, model_frames
+from motionlang.models.ar import ARConfig, ARModel
+from motionlang.models.crbm import CRBM, CRBMConfig
+
+VALIDATION_TRIALS = ("35_15", "35_16", "35_25", "35_26")   # 2 walks, 2 jogs, all training trials
+
+
+@dataclass
+class SelectionConfig:
+    weight_decays: tuple = (2e-4, 2e-3)
+    learning_rates: tuple = (1e-3,)
+    epochs: tuple = (1000, 2000, 4000)    # snapshots of one run
+    n_gibbs: tuple = (5, 30)
+    n_repeats: int = 20                   # stochastic fill-ins per cell (100 in the final table)
+    generation_frames: int = 1000
+    seed: int = 0
+    base: CRBMConfig = field(default_factory=CRBMConfig)
+
+
+def validation_split(data: Cmu35, held_out=VALIDATION_TRIALS) -> Cmu35:
+    """A Cmu35 whose ``train`` lacks ``held_out`` and whose ``test`` holds them instead."""
+    keep = [i for i, n in enumerate(data.train_names) if n not in held_out]
+    test = {n: data.train[data.train_names.index(n)] for n in held_out}
+    return dataclasses.replace(data, train=[data.train[i] for i in keep],
+                               train_names=[data.train_names[i] for i in keep], test=test)
+
+
+def score_snapshot(crbm: CRBM, ar: ARModel, val: Cmu35, n_gibbs: int, n_repeats: int, seed: int) -> dict:
+    """Fill-in of every held-out trial x part; returns per-cell errors and the score."""
+    cells, ratios = {}, []
+    cfg = ReproduceConfig(crbm=crbm.config, n_repeats=n_repeats, n_gibbs=n_gibbs, seed=seed)
+    for trial in val.test:
+        for part in ERASED:
+            e = fill_trial(val, trial, part, crbm, ar, cfg)["errors"]
+            cells[f"{trial} {part}"] = {k: round(v, 4) for k, v in e.items()}
+            ratios.append(e["CRBM"] / e["nearest neighbour"])
+    return {"score": float(np.mean(ratios)), "cells": cells}
+
+
+def validation_generation(crbm: CRBM, val: Cmu35, n_frames: int, seed: int) -> dict:
+    """Generation from the first frames of each held-out trial (see ``crbm_generation``)."""
+    from motionlang.evaluation.crbm_generation import StyleLabeller, forward_speed
+    lab = StyleLabeller(val, crbm.mean, crbm.std)
+    n = crbm.config.order
+    out = {}
+    for trial, ch in val.test.items():
+        style = val.labels[trial]
+        gen = crbm.generate(model_frames(ch)[:n], n_frames, seed=seed)[0][n:]
+        out[trial] = {"style_kept": float((lab(gen) == style).mean()),
+                      "range_excess_std": lab.range_excess(gen),
+                      "speed_last_half_m_s": forward_speed(gen[len(gen) // 2:])}
+    return out
+
+
+def select(data_dir: str | Path, cfg: SelectionConfig | None = None, *, log=print) -> dict:
+    """Run the grid; returns {"runs": [...], "best": {...}} (JSON-able)."""
+    cfg = cfg or SelectionConfig()
+    val = validation_split(load_cmu35(data_dir))
+    seqs = [model_frames(c) for c in val.train]
+    ar = ARModel(ARConfig(order=cfg.base.order), 59).fit(seqs)
+    runs = []
+    for wd, lr in itertools.product(cfg.weight_decays, cfg.learning_rates):
+        ccfg = dataclasses.replace(cfg.base, weight_decay=wd, lr=lr, lr_autoregressive=lr,
+                                   epochs=max(cfg.epochs), seed=cfg.seed)
+
+        def snapshot(epoch, model, wd=wd, lr=lr):
+            if epoch not in cfg.epochs:
+                return
+            gen = validation_generation(model, val, cfg.generation_frames, cfg.seed)
+            for ng in cfg.n_gibbs:
+                res = score_snapshot(model, ar, val, ng, cfg.n_repeats, cfg.seed)
+                run = {"weight_decay": wd, "lr": lr, "epochs": epoch, "n_gibbs": ng,
+                       "score": round(res["score"], 4), "cells": res["cells"], "generation": gen}
+                runs.append(run)
+                log(json.dumps({k: v for k, v in run.items() if k != "cells"}))
+
+        CRBM(ccfg, 59).fit(seqs, on_epoch=snapshot)
+    best = min(runs, key=lambda r: r["score"])
+    return {"runs": runs, "best": {k: best[k] for k in ("weight_decay", "lr", "epochs", "n_gibbs", "score")},
+            "validation_trials": list(VALIDATION_TRIALS)}

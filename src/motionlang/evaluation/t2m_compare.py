@@ -1,0 +1,184 @@
+"""Every text-to-motion model on the same test sentences, in one table (issue 6).
+
+For each test motion: one description (the first that states all of its body actions,
+else the first), the target = the motion's 21 joints at 12.5 Hz anchored at the origin
+facing +Z (``PositionFeatures.decode`` of its features), and each model's generation of the
+same length from the same sentence (``decoding.t2m.generate_positions21``: the two-stream
+model directly, the seq2seq L2M through forward kinematics). Columns:
+
+* APE / AVE local (mean of the 20 non-root joints in the body frame) and root (global
+  trajectory), **millimetres** (AVE mm^2) after undoing the normalisation
+  (``motion_metrics.position_metrics_mm``);
+* order accuracy on the compositional items (>= 2 distinct body actions in sequence, the
+  sentence stating all of them): the generated motion cut at the ground truth's rescaled
+  frame ranges, each segment labelled by its nearest training segment (``action_order``,
+  1-NN), compared with the true order. Needs the corpus's ``_meta.json``.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable, Sequence
+
+import numpy as np
+
+from motionlang.errors import MotionlangError
+from motionlang.evaluation.action_order import (Prototypes, merge_repeats, order_accuracy,
+                                                rescale_ranges, segment_labels)
+from motionlang.evaluation.motion_metrics import position_metrics_mm
+
+
+@dataclass
+class T2MItem:
+    """One test sentence. target: (T, 21, 3) metres, anchored. ranges: body-primitive frame
+    ranges at 12.5 Hz; truth: their actions (empty when the record has no ground truth)."""
+
+    id: str
+    sentence: str
+    target: np.ndarray
+    ranges: list[tuple[int, int]] = field(default_factory=list)
+    truth: list[str] = field(default_factory=list)
+
+    @property
+    def compositional(self) -> bool:
+        return len(merge_repeats(self.truth)) >= 2
+
+
+def body_primitives(record) -> list[tuple[str, int, int]]:
+    """(action, start, end) at 100 Hz of the record's body primitives, from its meta."""
+    return [(p["action"], int(p["start"]), int(p["end"]))
+            for p in (getattr(record, "meta", None) or {}).get("primitives", [])
+            if p.get("layer", "body") == "body"]
+
+
+def _stating_sentence(record) -> str:
+    """The first description whose stated body actions are the true ones, in order."""
+    truth = [a for a, _, _ in body_primitives(record)]
+    stated = (getattr(record, "meta", None) or {}).get("annotation_params", [])
+    for sentence, params in zip(record.annotations, stated):
+        if [p["action"] for p in params if p.get("layer", "body") == "body"] == truth:
+            return sentence
+    return record.annotations[0]
+
+
+def _ranges(record, n_frames: int) -> tuple[list[tuple[int, int]], list[str]]:
+    prims = body_primitives(record)
+    if not prims:
+        return [], []
+    src = int(getattr(record, "n_frames", 0) or max(e for _, _, e in prims))
+    ranges = rescale_ranges([(s, e) for _, s, e in prims], src, n_frames)
+    return ranges, [a for a, _, _ in prims]
+
+
+def eval_items(data, split: str = "test", limit: int | None = None) -> list[T2MItem]:
+    """The evaluation items of a ``training.twostream_data.TwoStreamData`` split."""
+    out = []
+    for rid in data.splits[split][:limit or None]:
+        rec, seq = data.records[rid], data.sequences[rid]
+        ranges, truth = _ranges(rec, len(seq))
+        out.append(T2MItem(rid, _stating_sentence(rec), data.features.decode(seq),
+                           ranges, truth))
+    return out
+
+
+def fit_prototypes(data, split: str = "train", nearest_example: bool = True
+                   ) -> Prototypes | None:
+    """Action labeller from the split's ground-truth segments (None without meta); by
+    default 1-NN over the training segments (``Prototypes`` explains why)."""
+    segs = []
+    for rid in data.splits[split]:
+        seq = data.sequences[rid]
+        ranges, truth = _ranges(data.records[rid], len(seq))
+        segs += [(a, seq[s:e]) for a, (s, e) in zip(truth, ranges)]
+    return Prototypes.fit(segs, nearest_example) if segs else None
+
+
+def positions_to_features(features, p21: np.ndarray) -> np.ndarray:
+    """Global (T, 21, 3) -> the normalised (T, 66) positions features (as ``encode``)."""
+    from motionlang.features.positions import split_global
+    local, v, dyaw, _ = split_global(np.asarray(p21, dtype=np.float64))
+    raw = np.concatenate([local.reshape(len(p21), -1), v, dyaw[:, None]], axis=1)
+    return features.normalizer.transform(raw)
+
+
+def evaluate_model(generate: Callable[[str, int], np.ndarray], items: Sequence[T2MItem],
+                   features, prototypes: Prototypes | None) -> dict:
+    """Metrics of one model. ``generate(sentence, n_frames) -> (n_frames, 21, 3)``.
+
+    Returns: ``ape_local, ape_root, ave_local, ave_root`` (mm / mm^2), ``order_accuracy``
+    (NaN without compositional items), ``n_items``, ``n_compositional`` and
+    ``generated`` ({id: positions}).
+    """
+    if not items:
+        raise MotionlangError("no test items to evaluate")
+    gen = {it.id: np.asarray(generate(it.sentence, len(it.target))) for it in items}
+    m = position_metrics_mm([gen[it.id] for it in items], [it.target for it in items])
+    comp = [it for it in items if it.compositional] if prototypes is not None else []
+    acc = math.nan
+    if comp:
+        pred = [segment_labels(positions_to_features(features, gen[it.id]), it.ranges,
+                               prototypes) for it in comp]
+        acc = order_accuracy(pred, [it.truth for it in comp])
+    return {"ape_local": m["ape_local"], "ape_root": m["ape_root"],
+            "ave_local": m["ave_local"], "ave_root": m["ave_root"],
+            "order_accuracy": acc, "n_items": len(items), "n_compositional": len(comp),
+            "generated": gen}
+
+
+def markdown_table(results: dict[str, dict]) -> str:
+    """One row per model: APE/AVE local and root (mm, mm^2), order accuracy."""
+    lines = ["| model | APE local (mm) | APE root (mm) | AVE local (mm^2) | AVE root (mm^2) "
+             "| order acc. |", "|---|---|---|---|---|---|"]
+    for name, r in results.items():
+        acc = "-" if math.isnan(r["order_accuracy"]) else \
+            f"{r['order_accuracy']:.2f} ({r['n_compositional']})"
+        lines.append(f"| {name} | {r['ape_local']:.1f} | {r['ape_root']:.1f} | "
+                     f"{r['ave_local']:.1f} | {r['ave_root']:.1f} | {acc} |")
+    n = next(iter(results.values()))["n_items"] if results else 0
+    return "\n".join(lines) + f"\n\n{n} test sentences; positions after undoing the " \
+        "normalisation (not the authors' normalised units).\n"
+
+
+def trajectory_figures(results: dict[str, dict], items: Sequence[T2MItem], out_dir: str | Path,
+                       n: int = 3) -> list[Path]:
+    """One top-view PNG per compositional item (the first ``n``): ground truth and every
+    model's root path with footsteps (``render.plot_trajectory``)."""
+    from motionlang.render import plot_trajectory
+    chosen = [it for it in items if it.compositional][:n] or list(items)[:n]
+    paths = []
+    for it in chosen:
+        path = Path(out_dir) / f"trajectory_{it.id}.png"
+        plot_trajectory([it.target] + [r["generated"][it.id] for r in results.values()], path,
+                        labels=["ground truth", *results], fps=12.5, title=it.sentence[:60])
+        paths.append(path)
+    return paths
+
+
+def compare(models: dict[str, object], data, *, split: str = "test", limit: int | None = None,
+            out_dir: str | Path | None = None, figures: int = 3) -> tuple[dict, str]:
+    """Evaluate ``{name: model}`` (anything ``decoding.t2m.generate_positions21`` takes) on
+    ``data`` (``TwoStreamData``); with ``out_dir`` also write ``t2m_table.md``,
+    ``t2m_report.json`` and the trajectory figures. Returns (results, table)."""
+    import json
+
+    from motionlang.decoding.t2m import generate_positions21
+    items = eval_items(data, split, limit)
+    protos = fit_prototypes(data)
+    results = {name: evaluate_model(lambda s, t, m=model: generate_positions21(m, s, t),
+                                    items, data.features, protos)
+               for name, model in models.items()}
+    table = markdown_table(results)
+    if out_dir is not None:
+        from motionlang.utils.atomic import atomic_write
+        out = Path(out_dir)
+        with atomic_write(out / "t2m_table.md") as fh:
+            fh.write(table)
+        report = {k: {kk: (None if isinstance(vv, float) and math.isnan(vv) else vv)
+                      for kk, vv in r.items() if kk != "generated"}
+                  for k, r in results.items()}
+        with atomic_write(out / "t2m_report.json") as fh:
+            json.dump({"split": split, "results": report}, fh, indent=1)
+        if figures:
+            trajectory_figures(results, items, out, figures)
+    return results, table

@@ -1,0 +1,57 @@
+"""Configs of the seq2seq models (Plappert, Mandery & Asfour 2018), free of torch.
+
+Kept apart from :mod:`motionlang.models.m2l` / :mod:`motionlang.models.l2m` so that the CLI
+can read the default sizes for ``--help`` without importing torch (2-10 s per call).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass
+class M2LConfig:
+    """Sizes of the motion-to-language model; paper defaults except the data-given ones.
+
+    n_features: per-frame motion feature size F (from the features/dataset, never fixed here).
+    vocab_size: V, including PAD/SOS/EOS/UNK at ids ``pad_id``/``sos_id``/``eos_id``/3.
+    """
+
+    n_features: int
+    vocab_size: int
+    enc_hidden: int = 64
+    enc_layers: int = 2
+    dec_hidden: int = 128
+    dec_layers: int = 2
+    embed_dim: int = 64
+    dropout: float = 0.4
+    attention: bool = False
+    attn_dim: int = 64
+    pad_id: int = 0
+    sos_id: int = 1
+    eos_id: int = 2
+    max_len: int = 40          # decoding cap in tokens, EOS included
+
+
+@dataclass
+class L2MConfig:
+    """Sizes of the language-to-motion model; paper defaults except the data-given ones.
+
+    vocab_size: V (from the vocabulary); n_features: per-frame feature size F (from data).
+    """
+
+    vocab_size: int
+    n_features: int
+    embed_dim: int = 64
+    enc_hidden: int = 64
+    enc_layers: int = 2
+    dec_hidden: int = 400
+    dec_layers: int = 3
+    n_components: int = 20
+    dropout: float = 0.1
+    attention: bool = False
+    attn_dim: int = 64
+    loss: str = "surrogate"     # or "exact"
+    end_weight: float = 1.0     # BCE weight of a motion's last frame (1 = the paper's loss)
+    pad_id: int = 0
+    max_frames: int = 300       # decoding cap (frames)
+

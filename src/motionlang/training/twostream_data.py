@@ -1,0 +1,83 @@
+"""From a dataset folder to the two-stream model's training items (Ghosh et al. 2021).
+
+Reads a KIT-ML-format folder (the release or a procedural corpus) or a custom folder
+(``training.seq2seq_data.load_records``), drops motions without descriptions, splits by
+motion (``datasets.splits.random_split``), fits the *positions* features (21 joints + root
+trajectory, 12.5 Hz, ``features.positions.PositionFeatures``) on the training motions only
+and encodes every motion once through the on-disk feature cache
+(``features.dataset_cache.dataset_features``). Each motion is paired with each of its
+descriptions: items ``{"motion": (T, 66) float32 normalised, "sentence": str, "id": str}``,
+the input of ``TwoStreamModel.collate``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+
+from motionlang.datasets.splits import random_split
+from motionlang.errors import DatasetError
+from motionlang.features.dataset_cache import dataset_features
+
+#: frame rate of the positions features (Ghosh et al. 2021: KIT-ML at 12.5 Hz)
+FPS = 12.5
+
+
+@dataclass
+class TwoStreamData:
+    """Everything a two-stream training or evaluation run needs.
+
+    Attributes:
+        features: the fitted ``PositionFeatures`` (its normaliser included).
+        splits: ``{"train"|"val"|"test": [record ids]}``.
+        records: ``{id: record}`` (``annotations``, ``meta``, ``n_frames`` at 100 Hz).
+        sequences: ``{id: (T, 66) float32}`` normalised features at 12.5 Hz.
+        items: per split, ``[{"motion", "sentence", "id"}]`` (one per description).
+    """
+
+    features: Any
+    splits: dict[str, list[str]]
+    records: dict[str, Any]
+    sequences: dict[str, np.ndarray]
+    items: dict[str, list[dict]]
+
+    def first_frames(self, split: str = "train") -> np.ndarray:
+        """(N, 66) first frames of the split's motions (for ``TwoStreamModel.set_rest_pose``)."""
+        return np.stack([self.sequences[i][0] for i in self.splits[split]])
+
+
+def build_twostream_data(data: str | Path, *, fractions: Sequence[float] = (0.8, 0.1, 0.1),
+                         seed: int = 0, max_seconds: float | None = 30.0,
+                         max_frames: int | None = None, cache_dir: str | Path | None = None
+                         ) -> TwoStreamData:
+    """Read ``data``, split by motion, fit + encode positions features (cached), make items.
+
+    Args:
+        fractions, seed: the split (``random_split``).
+        max_seconds: drop motions this long or longer.
+        max_frames: crop every training/validation/test sequence to its first
+            ``max_frames`` frames (12.5 Hz) to bound the unrolled decoder's cost; None keeps all.
+        cache_dir: feature cache folder (default ``$MOTIONLANG_CACHE`` or ~/.cache/motionlang).
+    """
+    from motionlang.training.seq2seq_data import load_records
+
+    records = [r for r in load_records(data, max_seconds) if r.annotations]
+    if len(records) < 2:
+        raise DatasetError(f"{data}: need at least 2 described motions, found {len(records)}")
+    by_id = {str(r.id): r for r in records}
+    splits = random_split(list(by_id), fractions, seed=seed)
+    train = [by_id[i] for i in splits["train"]]
+    if not train:
+        raise DatasetError(f"{data}: the training split is empty")
+    df = dataset_features(records, "positions", {"fps": FPS}, fit_records=train,
+                          directory=cache_dir)
+    seqs = {}
+    for rid, arrays in df.sequences.items():
+        x = np.asarray(arrays[0], dtype=np.float32)
+        seqs[rid] = x[:max_frames] if max_frames else x
+    items = {name: [{"motion": seqs[i], "sentence": s, "id": i}
+                    for i in ids for s in by_id[i].annotations]
+             for name, ids in splits.items()}
+    return TwoStreamData(df.features, splits, by_id, seqs, items)

