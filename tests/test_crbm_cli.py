@@ -96,6 +96,10 @@ def test_two_level_model_and_generation_report(data_dir):
     np.testing.assert_array_equal(gen[:6], seqs[0][:6])
     rep = generation_report(l1, data, n_frames=10, n_gibbs=2)
     assert set(rep) == {"walk", "jog"} and 0 <= rep["walk"]["style_kept"] <= 1
+    # forward speed next to the training trials' own (walks ~1.2 m/s, jogs ~3.4 m/s)
+    assert 1.1 < rep["walk"]["forward_speed_training"] < 1.35
+    assert 3.0 < rep["jog"]["forward_speed_training"] < 3.7
+    assert np.isfinite(rep["walk"]["forward_speed_last_half"])
     # the labeller gives a training frame its own trial's label
     lab = StyleLabeller(data, l1.mean, l1.std)
     jog_trial = data.train[data.train_names.index("35_20")]

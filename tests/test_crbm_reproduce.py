@@ -71,3 +71,19 @@ def test_reproduce_runs_and_is_deterministic(data):
     assert r1["table"]["35_18"]["leg"]["erased frames"] == 44 - 43 // 2
     text = format_table(r1)
     assert "walking (35_29)" in text and "jogging (35_18)" in text and "8.78" in text
+
+
+def test_model_frames_unwrap_joint_angles_and_fold_back_to_the_protocol(data):
+    """The model sees a jogging knee bend past 90 degrees as it is (the protocol's
+    asin(sin(x)) folds 110 into 70); folding the model frames gives the protocol's values."""
+    from motionlang.evaluation.crbm_fill import JOINT_CHANNELS
+    from motionlang.evaluation.crbm_reproduce import to_protocol59, unwrap_degrees
+    jog = data.train[data.train_names.index("35_20")]
+    mf, t59 = model_frames(jog), taylor59(jog)
+    np.testing.assert_allclose(to_protocol59(mf)[:, 9:], t59[:, 9:], atol=1e-9)
+    knee = list(JOINT_CHANNELS).index(16) + 9          # rtibia rx in the 59-layout
+    assert mf[:, knee].max() > 100 and t59[:, knee].max() <= 90
+    # unwrapped: continuous where the folded channel has a kink (no 40-degree jump per frame)
+    assert np.abs(np.diff(mf[:, knee])).max() < 40
+    a = np.array([[170.0], [-175.0], [-160.0], [185.0 + 360.0]])
+    np.testing.assert_allclose(unwrap_degrees(a)[:, 0], [170.0, 185.0, 200.0, 185.0 + 360.0 - 360.0])

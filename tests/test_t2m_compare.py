@@ -115,7 +115,11 @@ def test_compare_writes_table_report_and_figures(data, tmp_path):
                         data.features.normalizer, text_encoder=HashTokens()).eval()
     results, table = compare({"two-stream": ts, "L2M": _tiny_l2m(data)}, data, split="train",
                              limit=4, out_dir=tmp_path, figures=2)
-    assert set(results) == {"two-stream", "L2M"}
+    assert set(results) == {"two-stream", "L2M", "no motion (mean first pose)"}
+    still = results["no motion (mean first pose)"]
+    assert still["ave_local"] > 0 and still["ave_root"] > 0  # the targets move, it does not
+    g = next(iter(still["generated"].values()))
+    np.testing.assert_array_equal(g[0], g[-1])
     assert (tmp_path / "t2m_table.md").read_text() == table
     report = json.loads((tmp_path / "t2m_report.json").read_text())
     for name, r in report["results"].items():
@@ -151,3 +155,19 @@ def test_generate_any_passes_l2m_options(data):
     assert len(hyps) == 2 and hyps[0][1] >= hyps[1][1]
     for pos, _ in hyps:  # positions features decode to joint positions, at most 6 frames
         assert pos.ndim == 3 and pos.shape[1:] == (21, 3) and 1 <= len(pos) <= 6
+
+
+def test_ranges_of_cropped_sequences(data):
+    from motionlang.evaluation.action_order import rescale_ranges
+    from motionlang.evaluation.t2m_compare import _ranges, body_primitives
+    rid = max(data.splits["train"], key=lambda i: len(body_primitives(data.records[i])))
+    rec, n = data.records[rid], len(data.sequences[rid])
+    prims = body_primitives(rec)
+    full, truth = _ranges(rec, n)
+    assert full == rescale_ranges([(s, e) for _, s, e in prims], rec.n_frames, n)
+    assert truth == [a for a, _, _ in prims]
+    # the first k frames only: the same frame numbers, cut at k; later primitives dropped
+    k = full[-1][0]
+    cut, cut_truth = _ranges(rec, k)
+    assert cut == [(a, min(b, k)) for a, b in full if a < k]
+    assert cut_truth == truth[:len(cut)] and len(cut) < len(full)

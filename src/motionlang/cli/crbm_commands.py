@@ -264,4 +264,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     r.add_argument("--plots", metavar="DIR", default=None, help="write Figure-4 plots and GIFs here")
     r.add_argument("--json", action="store_true")
     r.add_argument("--quiet", action="store_true")
-    r.set_defaults(func=cmd_reproduce)
+    from motionlang.evaluation.crbm_reproduce import SELECTED
+    # the experiment's defaults are the settings selected on held-out training trials
+    r.set_defaults(func=cmd_reproduce, epochs=SELECTED["epochs"], lr=SELECTED["lr"],
+                   weight_decay=SELECTED["weight_decay"], gibbs=SELECTED["n_gibbs"])

@@ -38,9 +38,9 @@ VALIDATION_TRIALS = ("35_15", "35_16", "35_25", "35_26")   # 2 walks, 2 jogs, al
 
 @dataclass
 class SelectionConfig:
-    weight_decays: tuple = (2e-4, 2e-3)
+    weight_decays: tuple = (0.0, 2e-4, 2e-3)
     learning_rates: tuple = (1e-3,)
-    epochs: tuple = (1000, 2000, 4000)    # snapshots of one run
+    epochs: tuple = (1000, 2000)          # snapshots of one run (4000: see the module docstring)
     n_gibbs: tuple = (5, 30)
     n_repeats: int = 20                   # stochastic fill-ins per cell (100 in the final table)
     generation_frames: int = 1000

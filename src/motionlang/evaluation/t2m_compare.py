@@ -17,6 +17,7 @@ model directly, the seq2seq L2M through forward kinematics). Columns:
 from __future__ import annotations
 
 import math
+import textwrap
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Sequence
@@ -63,12 +64,17 @@ def _stating_sentence(record) -> str:
 
 
 def _ranges(record, n_frames: int) -> tuple[list[tuple[int, int]], list[str]]:
+    """Body-primitive ranges in a sequence of ``n_frames`` 12.5 Hz frames that may be the
+    motion's first frames only (``max_frames`` crop): primitives past the end are dropped."""
     prims = body_primitives(record)
     if not prims:
         return [], []
     src = int(getattr(record, "n_frames", 0) or max(e for _, _, e in prims))
-    ranges = rescale_ranges([(s, e) for _, s, e in prims], src, n_frames)
-    return ranges, [a for a, _, _ in prims]
+    full = max(1, int(np.ceil(src * 12.5 / float(getattr(record, "fps", 100.0)) - 1e-9)))
+    ranges = rescale_ranges([(s, e) for _, s, e in prims], src, max(full, n_frames))
+    kept = [(min(a, n_frames - 1), min(b, n_frames), act)
+            for (a, b), (act, _, _) in zip(ranges, prims) if a < n_frames]
+    return [(a, b) for a, b, _ in kept], [act for _, _, act in kept]
 
 
 def eval_items(data, split: str = "test", limit: int | None = None) -> list[T2MItem]:
@@ -150,15 +156,25 @@ def trajectory_figures(results: dict[str, dict], items: Sequence[T2MItem], out_d
     for it in chosen:
         path = Path(out_dir) / f"trajectory_{it.id}.png"
         plot_trajectory([it.target] + [r["generated"][it.id] for r in results.values()], path,
-                        labels=["ground truth", *results], fps=12.5, title=it.sentence[:60])
+                        labels=["ground truth", *results], fps=12.5,
+                        title="\n".join(textwrap.wrap(it.sentence, 58)[:3]))
         paths.append(path)
     return paths
 
 
+def still_baseline(data):
+    """``generate(sentence, T)`` of the no-motion baseline: the training set's mean first
+    pose held for T frames, at the origin — what a model collapsed to the mean produces."""
+    pose = data.features.decode(data.first_frames().mean(axis=0)[None])  # (1, 21, 3)
+    return lambda sentence, n_frames: np.repeat(pose, n_frames, axis=0)
+
+
 def compare(models: dict[str, object], data, *, split: str = "test", limit: int | None = None,
-            out_dir: str | Path | None = None, figures: int = 3) -> tuple[dict, str]:
+            out_dir: str | Path | None = None, figures: int = 3, baseline: bool = True
+            ) -> tuple[dict, str]:
     """Evaluate ``{name: model}`` (anything ``decoding.t2m.generate_positions21`` takes) on
-    ``data`` (``TwoStreamData``); with ``out_dir`` also write ``t2m_table.md``,
+    ``data`` (``TwoStreamData``), plus the no-motion baseline row (``still_baseline``)
+    unless ``baseline`` is False; with ``out_dir`` also write ``t2m_table.md``,
     ``t2m_report.json`` and the trajectory figures. Returns (results, table)."""
     import json
 
@@ -168,6 +184,9 @@ def compare(models: dict[str, object], data, *, split: str = "test", limit: int 
     results = {name: evaluate_model(lambda s, t, m=model: generate_positions21(m, s, t),
                                     items, data.features, protos)
                for name, model in models.items()}
+    if baseline:
+        results["no motion (mean first pose)"] = evaluate_model(still_baseline(data), items,
+                                                                data.features, protos)
     table = markdown_table(results)
     if out_dir is not None:
         from motionlang.utils.atomic import atomic_write
