@@ -162,7 +162,7 @@ def cmd_fill(args: argparse.Namespace) -> int:
     else:
         frames = model_frames(data.test[args.trial])
         fd = res["erased_dims59"]
-        frames[:, fd] = res["filled59"]["CRBM"][0][:, fd]
+        frames[:, fd] = res["crbm_model_frames"][0][:, fd]   # unfolded angles
         _write_frames(frames, out, data, args.data, name="CRBM fill-in",
                       start_xz=tuple(data.test[args.trial][0, [0, 2]]), title=title,
                       compare=model_frames(data.test[args.trial]))
@@ -185,7 +185,7 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
         for (trial, part), res in result.pop("fills").items():
             slug = f"{trial}_{part.replace(' ', '_')}"
             plot_fill(res, folder / f"{slug}.png", title=f"{trial}: {part} erased")
-            crbm_frames = res["filled59"]["CRBM"][0]
+            crbm_frames = res["crbm_model_frames"][0]   # unfolded angles (knees past 90 deg)
             _gif_of_fill(trial, res, crbm_frames, folder / f"{slug}.gif", args)
         result.pop("models")
     if args.json:
@@ -196,7 +196,7 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
 
 
 def _gif_of_fill(trial: str, res: dict, crbm59: np.ndarray, path: Path, args) -> None:
-    """True vs CRBM-filled motion side by side (the filled frames are in the 59-space)."""
+    """True vs CRBM-filled motion side by side (``crbm59``: (T, 59) model-space frames)."""
     from motionlang.evaluation.crbm_fill import load_cmu35
     from motionlang.evaluation.crbm_reproduce import model_frames
     data = load_cmu35(args.data)
