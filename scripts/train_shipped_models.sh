@@ -17,5 +17,6 @@ mkdir -p "$WORK"
     --dec-hidden 128 --dec-layers 2 --components 5 --end-weight 10 &
 wait
 # 3. ship the best checkpoints (self-describing: config, vocabulary, normaliser, weights)
+mkdir -p "$HERE/src/motionlang/data/models"
 cp "$WORK/m2l/model.pt" "$HERE/src/motionlang/data/models/m2l.pt"
 cp "$WORK/l2m/model.pt" "$HERE/src/motionlang/data/models/l2m.pt"

@@ -105,22 +105,51 @@ def test_render_empty_clip_is_an_error(tmp_path, capsys):
     assert code == 2 and "no frames" in err and not out.exists()
 
 
-def test_demo_writes_three_files(tmp_path, capsys):
-    src = shared_file("cmu35/35_01.amc")
-    code, out, _ = run(capsys, "demo", "--input", src, "--out", tmp_path)
-    assert code == 0
-    written = out.split()
-    assert [p.rsplit("/", 1)[1] for p in written] == ["35_01.gif", "35_01_strip.png",
-                                                      "35_01_trajectory.png"]
-    for p in written:
-        assert iio.imread(p, index=0).size > 0
+def _scores(out, label):
+    return [float(line.split("=")[1].split()[0]) for line in out.splitlines()
+            if line.strip()[:1].isdigit() and label in line]
 
 
-def test_demo_without_data_says_what_to_pass(tmp_path, capsys, monkeypatch):
+def test_demo_main_job_offline_with_packaged_models(tmp_path, capsys, monkeypatch):
+    # The README's main job on a machine without shared data: the packaged L2M generates,
+    # the packaged M2L describes a procedural sample; GIF, strip and BVH are written.
+    from motionlang.formats import read_motion
     monkeypatch.setattr(demo_mod, "data_dirs", lambda: [tmp_path])
-    code, _, err = run(capsys, "demo", "--out", tmp_path / "o")
-    assert code == 2 and "--input FILE" in err
-    assert not (tmp_path / "o").exists()
+    out_dir = tmp_path / "o"
+    code, out, _ = run(capsys, "demo", "--out", out_dir, "-w", "3", "--max-frames", "12")
+    assert code == 0
+    assert "no shared data" in out
+    gen, desc = _scores(out, "log L"), _scores(out, "log P")
+    assert len(gen) == 3 and len(desc) == 3          # one procedural motion described
+    assert desc == sorted(desc, reverse=True) and all(s < 0 for s in desc)
+    assert gen == sorted(gen, reverse=True)
+    written = out.split("written:")[1].split()
+    assert [p.rsplit("/", 1)[1] for p in written] == ["generated.gif", "generated_strip.png",
+                                                      "generated.bvh"]
+    assert iio.imread(written[0], index=0).size > 0
+    motion = read_motion(written[2])
+    assert 5 <= motion.n_frames * 10 / motion.fps <= 12 + 1e-6  # min 5, cap 12 model frames
+    assert np.isfinite(motion.positions()).all()
+
+
+def test_demo_with_input_describes_and_renders_it(tmp_path, capsys):
+    src = shared_file("kitml/00001_mmm.xml")
+    code, out, _ = run(capsys, "demo", "--input", src, "--out", tmp_path, "-w", "2",
+                       "--max-frames", "6")
+    assert code == 0
+    assert len(_scores(out, "log P")) == 4            # procedural sample + 00001
+    assert f"describe {src}" in out
+    names = [p.rsplit("/", 1)[1] for p in out.split("written:")[1].split()]
+    assert names[3:] == ["00001_mmm.gif", "00001_mmm_strip.png", "00001_mmm_trajectory.png"]
+
+
+def test_demo_renders_a_cmu_input_it_cannot_describe(tmp_path, capsys):
+    src = shared_file("cmu35/35_01.amc")
+    code, out, _ = run(capsys, "demo", "--input", src, "--out", tmp_path, "-w", "1",
+                       "--max-frames", "6")
+    assert code == 0 and "not described" in out
+    names = [p.rsplit("/", 1)[1] for p in out.split("written:")[1].split()]
+    assert "35_01_strip.png" in names
 
 
 def test_demo_finds_shared_data(monkeypatch, tmp_path):

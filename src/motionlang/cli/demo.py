@@ -101,6 +101,10 @@ def run_demo(input_path: str | Path | None, out_dir: str | Path, *, asf: str | N
 
 # ------------------------------------------------------------------ the main job
 DEFAULT_SENTENCE = "a person waves with the left hand"
+#: Length cap of the demo's generated motion, in model frames (10 Hz): the packaged L2M
+#: has not learned when to stop (its P(active) stays ~0.8 per frame), and the total log
+#: likelihood of the sampled beam favours running to the cap, so the cap sets the length.
+DEMO_MAX_FRAMES = 100
 #: The packaged models were trained on corpus seed 0; this seed's samples are unseen.
 SYNTH_SEED = 2026
 
@@ -118,15 +122,20 @@ def _print_hyps(echo, hyps, label: str) -> None:
 
 
 def generate_part(out_dir: Path, sentence: str, *, width: int = 5, seed: int = 0,
+                  max_frames: int | None = DEMO_MAX_FRAMES,
                   model_path: str | Path | None = None, echo=print) -> list[Path]:
-    """L2M: ``sentence`` -> W motions; the best one written as GIF, strip PNG and BVH."""
+    """L2M: ``sentence`` -> W motions; the best one written as GIF, strip PNG and BVH.
+
+    max_frames: length cap in model frames (None: the model's own cap).
+    """
     from motionlang.decoding.seq2seq import generate
     from motionlang.formats import write_motion
     from motionlang.models.l2m import LanguageToMotion
     from motionlang.render import render_animation, render_strip
 
     model = LanguageToMotion.load(model_path or packaged_model("l2m"))
-    hyps = generate(model, sentence, width=width, seed=seed, min_frames=5)
+    hyps = generate(model, sentence, width=width, seed=seed, min_frames=5,
+                    max_frames=max_frames)
     echo(f'generate "{sentence}" (L2M, sampled beam, W={width}):')
     _print_hyps(echo, [(f"{m.n_frames} frames, {m.duration:.1f} s", s) for m, s in hyps],
                 "log L")
@@ -142,7 +151,8 @@ def generate_part(out_dir: Path, sentence: str, *, width: int = 5, seed: int = 0
 
 def describe_part(motions: list[tuple[str, object]], *, width: int = 5,
                   model_path: str | Path | None = None, echo=print) -> list[list]:
-    """M2L: each (label, Motion) -> W sentences with log P, printed; returns the lists."""
+    """M2L: each (label, Motion) -> W sentences with log P, printed; returns the lists
+    (empty for a motion the model's feature set cannot read, e.g. a non-MMM skeleton)."""
     from motionlang.decoding.seq2seq import describe
     from motionlang.models.m2l import MotionToLanguage
 
@@ -150,7 +160,11 @@ def describe_part(motions: list[tuple[str, object]], *, width: int = 5,
     out = []
     for label, motion in motions:
         echo(f"describe {label} (M2L, beam search, W={width}):")
-        hyps = describe(model, motion, width=width)
+        try:
+            hyps = describe(model, motion, width=width)
+        except MotionlangError as exc:  # e.g. a CMU skeleton: the M2L reads MMM angles
+            echo(f"  (not described: {exc})")
+            hyps = []
         _print_hyps(echo, hyps, "log P")
         out.append(hyps)
     return out
@@ -165,15 +179,16 @@ def synth_motion(index: int = 0):
 
 
 def run_main_job(out_dir: str | Path, *, sentence: str = DEFAULT_SENTENCE, width: int = 5,
-                 seed: int = 0, input_path: str | Path | None = None, asf: str | None = None,
+                 seed: int = 0, max_frames: int | None = DEMO_MAX_FRAMES,
+                 input_path: str | Path | None = None, asf: str | None = None,
                  render_real: bool = True, m2l: str | Path | None = None,
                  l2m: str | Path | None = None, echo=print) -> list[Path]:
     """The whole demo (see the module docstring); returns the files written."""
     from motionlang.formats import read_motion
 
     out_dir = Path(out_dir)
-    written = generate_part(out_dir, sentence, width=width, seed=seed, model_path=l2m,
-                            echo=echo)
+    written = generate_part(out_dir, sentence, width=width, seed=seed, max_frames=max_frames,
+                            model_path=l2m, echo=echo)
     motion, refs = synth_motion()
     echo(f"procedural sample (seed {SYNTH_SEED}), its reference: {refs[0]}")
     to_describe = [("a procedural-corpus sample", motion)]
@@ -195,7 +210,8 @@ def run_main_job(out_dir: str | Path, *, sentence: str = DEFAULT_SENTENCE, width
 
 def cmd_demo(args: argparse.Namespace) -> int:
     written = run_main_job(args.out, sentence=args.sentence, width=args.width, seed=args.seed,
-                           input_path=args.input, asf=args.asf, render_real=not args.no_render)
+                           max_frames=args.max_frames, input_path=args.input, asf=args.asf,
+                           render_real=not args.no_render)
     print("written:")
     for path in written:
         print(f"  {path}")
@@ -214,6 +230,9 @@ def register(subparsers) -> None:
                    help=f'text to generate a motion for (default: "{DEFAULT_SENTENCE}")')
     p.add_argument("-w", "--width", type=int, default=5, help="beam width = hypotheses shown")
     p.add_argument("--seed", type=int, default=0, help="seed of the sampled beam")
+    p.add_argument("--max-frames", type=int, default=DEMO_MAX_FRAMES,
+                   help=f"length cap of the generated motion in 10 Hz frames "
+                        f"(default {DEMO_MAX_FRAMES})")
     p.add_argument("--input", default=None, metavar="FILE",
                    help="real motion to describe and render (default: kitml/00001_mmm.xml "
                         "in the shared data, when present)")
