@@ -46,13 +46,22 @@ def main() -> None:
     ap.add_argument("--vocab", type=int, default=1000)
     ap.add_argument("--repeats", type=int, default=7)
     ap.add_argument("--threads", type=int, default=1)
+    ap.add_argument("--packaged", action="store_true",
+                    help="time the packaged (shipped) models instead of paper-size ones")
     args = ap.parse_args()
     torch.set_num_threads(args.threads)
     torch.manual_seed(0)
     rng = np.random.default_rng(0)
     F, V = args.features, args.vocab
-    m2l = MotionToLanguage(M2LConfig(n_features=F, vocab_size=V))
-    l2m = LanguageToMotion(L2MConfig(vocab_size=V, n_features=F))
+    if args.packaged:
+        from motionlang.cli.demo import packaged_model
+        m2l = MotionToLanguage.load(packaged_model("m2l"))
+        l2m = LanguageToMotion.load(packaged_model("l2m"))
+        F, V = m2l.config.n_features, m2l.config.vocab_size
+        print(f"packaged models: M2L {m2l.config}\nL2M {l2m.config}")
+    else:
+        m2l = MotionToLanguage(M2LConfig(n_features=F, vocab_size=V))
+        l2m = LanguageToMotion(L2MConfig(vocab_size=V, n_features=F))
     batch = fake_batch(rng, 128, F, V)
     for name, model in (("m2l", m2l), ("l2m", l2m)):
         opt = torch.optim.NAdam(model.parameters(), lr=1e-3)
@@ -66,9 +75,11 @@ def main() -> None:
         t = median_time(train_step, max(3, args.repeats // 2))
         print(f"{name} train: {128 / t:8.1f} sequences/s  "
               f"(batch 128, median {t * 1e3:.0f} ms/step)")
+    m2l.eval()
     motion = rng.normal(size=(100, F)).astype(np.float32)
     t = median_time(lambda: describe_features(m2l, motion, width=5, max_len=20), args.repeats)
     print(f"describe (W=5, 100 frames, <=20 words): median {t * 1e3:.1f} ms")
+    l2m.eval()
     with torch.no_grad():
         l2m.head.proj.bias[-1] = 30.0     # always active -> full 100 frames
     t = median_time(lambda: generate_features(l2m, [1, 5, 6, 7, 2], width=5, max_frames=100),

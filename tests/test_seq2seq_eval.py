@@ -64,3 +64,32 @@ def test_round_trip_and_table(trained):
     table = ev.markdown_table({"M2L": {"bleu": 0.5, "bleu1": 0.7}, "NN": {"bleu": 0.25}})
     assert table.splitlines()[0] == "| | bleu | bleu1 |"
     assert "| NN | 0.250 |  |" in table
+
+
+def test_parameter_accuracy_on_hand_made_descriptions():
+    from motionlang.datasets.synth import generate_sample
+    sample = generate_sample(3, 0)
+    truth = {"a": sample.primitives, "b": sample.primitives}
+    texts = {"a": sample.annotations[0], "b": "a person bows"}
+    acc = ev.parameter_accuracy(texts, truth)
+    assert acc["n"] == 2
+    # the corpus's own sentence states only true parameters
+    own = ev.parameter_accuracy({"a": sample.annotations[0]}, truth)
+    for f in ("side", "count", "direction", "speed"):
+        assert own[f + "_stated"] == 0 or own[f] == 1.0
+    if [p.action for p in sample.primitives] != ["bow"]:
+        assert acc["actions_match"] <= 0.5
+
+
+def test_context_tsne_keeps_separated_clusters_apart(tmp_path):
+    pytest.importorskip("sklearn")
+    from motionlang.evaluation.context_tsne import plot_context_tsne, tsne_2d
+    rng = np.random.default_rng(0)
+    vec = np.concatenate([rng.normal(0, 0.1, (15, 8)), rng.normal(5, 0.1, (15, 8))])
+    xy = tsne_2d(vec)
+    a, b = xy[:15], xy[15:]
+    spread = max(np.linalg.norm(a - a.mean(0), axis=1).max(),
+                 np.linalg.norm(b - b.mean(0), axis=1).max())
+    assert np.linalg.norm(a.mean(0) - b.mean(0)) > 2 * spread
+    path = plot_context_tsne({"m": (vec, ["x"] * 15 + ["y"] * 15)}, tmp_path / "t.png")
+    assert path.stat().st_size > 1000

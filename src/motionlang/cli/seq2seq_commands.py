@@ -200,11 +200,12 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
             raise MotionlangError(f"no {name!r} split (have {sorted(splits)})")
     records = {r.id: r for r in load_records(args.data, args.max_seconds) if r.annotations}
 
-    def frames(ids):
-        ids = [i for i in ids if i in records][:args.limit or None]
+    def frames(ids, limit=None):
+        ids = [i for i in ids if i in records][:limit]
         return {i: motion_frames(m2l.features, records[i].load_motion(), 1)[0]
                 for i in progress(ids, desc="encode", unit="motion")}
-    test, train = frames(splits[args.split]), frames(splits["train"])
+    # --limit caps the evaluated split only: the baseline searches the whole training set
+    test, train = frames(splits[args.split], args.limit or None), frames(splits["train"])
     refs = {i: records[i].annotations for i in {**test, **train}}
     report = {"split": args.split, "m2l": ev.evaluate_m2l(m2l, test, refs, args.width),
               "nearest_neighbour": ev.evaluate_nn_baseline(train, refs, test, refs)}

@@ -116,3 +116,31 @@ def markdown_table(results: Mapping[str, Mapping[str, float]]) -> str:
         cells = [f"{r[c]:.3f}" if c in r and r[c] == r[c] else "" for c in cols]
         lines.append(f"| {name} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
+
+
+def parameter_accuracy(texts: Mapping[str, str], truths: Mapping[str, Sequence]) -> dict:
+    """Procedural corpus: are the parameters a description states right?
+
+    texts: id -> one description (e.g. the top M2L hypothesis); truths: id -> the sample's
+    ground-truth primitives (``motionlang.datasets.synth.ground_truth(meta)``).
+    Returns {"n", "actions_match" (fraction of descriptions naming exactly the true action
+    sequence), field: accuracy over the descriptions that state it (NaN if none),
+    field + "_stated": how many stated it} for side, count, direction, speed.
+    """
+    from motionlang.datasets.synth import score
+
+    fields = ("side", "count", "direction", "speed")
+    right = {f: 0 for f in fields}
+    stated = {f: 0 for f in fields}
+    match = 0
+    for i, text in texts.items():
+        s = score(text, list(truths[i]))
+        match += bool(s["actions_match"])
+        for f in fields:
+            right[f] += s[f][0]
+            stated[f] += s[f][1]
+    out: dict = {"n": len(texts), "actions_match": match / max(1, len(texts))}
+    for f in fields:
+        out[f] = right[f] / stated[f] if stated[f] else float("nan")
+        out[f + "_stated"] = stated[f]
+    return out

@@ -199,5 +199,6 @@ def compare(models: dict[str, object], data, *, split: str = "test", limit: int 
         with atomic_write(out / "t2m_report.json") as fh:
             json.dump({"split": split, "results": report}, fh, indent=1)
         if figures:
-            trajectory_figures(results, items, out, figures)
+            # models only: the no-motion baseline is a dot at the origin
+            trajectory_figures({k: results[k] for k in models}, items, out, figures)
     return results, table
