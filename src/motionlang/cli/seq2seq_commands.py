@@ -164,13 +164,13 @@ def _write(result, path: Path, title: str) -> None:
 
 
 def cmd_generate(args: argparse.Namespace) -> int:
-    from motionlang.decoding.seq2seq import generate
-    from motionlang.models.l2m import LanguageToMotion
+    # any text-to-motion checkpoint: L2M (seq2seq) or the two-stream model
+    from motionlang.decoding.t2m import generate_any, load_any_t2m
 
-    model = LanguageToMotion.load(_model_path(args.model, "l2m"))
-    hyps = generate(model, args.text, width=args.width, method=args.method, seed=args.seed,
-                    max_frames=args.max_frames, min_frames=args.min_frames,
-                    length_norm=args.length_norm)
+    model = load_any_t2m(_model_path(args.model, "l2m"))
+    hyps = generate_any(model, args.text, width=args.width, method=args.method, seed=args.seed,
+                        max_frames=args.max_frames, min_frames=args.min_frames,
+                        length_norm=args.length_norm)
     out = Path(args.output)
     for i, (result, score) in enumerate(hyps, 1):
         n = len(result.joint_angles) if hasattr(result, "joint_angles") else len(result)
