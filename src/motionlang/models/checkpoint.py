@@ -102,3 +102,36 @@ def read_model_dict(path: str | Path, kind: str) -> dict:
         found = d.get("kind") if isinstance(d, dict) else type(d).__name__
         raise MotionlangError(f"{path}: not a {kind} checkpoint (found {found!r})")
     return d
+
+
+class Seq2SeqCheckpoint:
+    """Mixin: self-describing checkpoints for models built as
+    ``cls(config_cls(**config), vocab, normalizer, features)`` (M2L and L2M).
+
+    The subclass sets ``kind`` (written into the file and checked on load) and ``config_cls``.
+    """
+
+    kind: str
+    config_cls: type
+
+    def to_checkpoint(self) -> dict:
+        from dataclasses import asdict
+        return {"kind": self.kind, "config": asdict(self.config),
+                "vocab": pack_vocab(self.vocab), "normalizer": pack_normalizer(self.normalizer),
+                "features": pack_features(self.features), "state_dict": self.state_dict()}
+
+    @classmethod
+    def from_checkpoint(cls, d: dict):
+        model = cls(cls.config_cls(**d["config"]), unpack_vocab(d.get("vocab")),
+                    unpack_normalizer(d.get("normalizer")), unpack_features(d.get("features")))
+        model.load_state_dict(d["state_dict"])
+        return model.eval()
+
+    def save(self, path: str | Path) -> None:
+        """One self-describing file (atomic write)."""
+        write_checkpoint(self.to_checkpoint(), path)
+
+    @classmethod
+    def load(cls, path: str | Path):
+        """Rebuild from a file written by :meth:`save` or by the trainer; in eval mode."""
+        return cls.from_checkpoint(read_model_dict(path, cls.kind))

@@ -13,25 +13,22 @@ Frames are model features (usually normalised); the first decoder input is a zer
 """
 from __future__ import annotations
 
-from dataclasses import asdict
-from pathlib import Path
 from typing import Any
 
 import torch
 from torch import nn
 
 from motionlang.models import mdn
-from motionlang.models.checkpoint import (pack_features, pack_normalizer, pack_vocab,
-                                          read_model_dict, unpack_features, unpack_normalizer,
-                                          unpack_vocab, write_checkpoint)
+from motionlang.models.checkpoint import Seq2SeqCheckpoint
 from motionlang.models.recurrent import AdditiveAttention, BiGRUEncoder, StackedDecoder
 from motionlang.models.seq2seq_config import L2MConfig  # noqa: F401 (re-exported)
 
 
-class LanguageToMotion(nn.Module):
+class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
     """Token ids (B, L) -> mixture parameters of every next frame (B, T, ...)."""
 
     kind = "l2m"
+    config_cls = L2MConfig
 
     def __init__(self, config: L2MConfig, vocab: Any = None, normalizer: Any = None,
                  features: Any = None):
@@ -104,24 +101,3 @@ class LanguageToMotion(nn.Module):
         w = torch.where(active > 0, 1.0, self.config.end_weight)[valid]
         bce = -(w * mdn.active_log_prob(params, active)[valid]).sum() / w.sum()
         return {"loss": nll + bce, "nll": nll.detach(), "active_bce": bce.detach()}
-
-    def to_checkpoint(self) -> dict:
-        return {"kind": self.kind, "config": asdict(self.config),
-                "vocab": pack_vocab(self.vocab), "normalizer": pack_normalizer(self.normalizer),
-                "features": pack_features(self.features), "state_dict": self.state_dict()}
-
-    @classmethod
-    def from_checkpoint(cls, d: dict) -> "LanguageToMotion":
-        model = cls(L2MConfig(**d["config"]), unpack_vocab(d.get("vocab")),
-                    unpack_normalizer(d.get("normalizer")), unpack_features(d.get("features")))
-        model.load_state_dict(d["state_dict"])
-        return model.eval()
-
-    def save(self, path: str | Path) -> None:
-        """One self-describing file (atomic write)."""
-        write_checkpoint(self.to_checkpoint(), path)
-
-    @classmethod
-    def load(cls, path: str | Path) -> "LanguageToMotion":
-        """Rebuild from a file written by :meth:`save` or by the trainer; in eval mode."""
-        return cls.from_checkpoint(read_model_dict(path, cls.kind))

@@ -12,22 +12,18 @@ The decoder is driven word by word through :meth:`MotionToLanguage.step` so that
 """
 from __future__ import annotations
 
-from dataclasses import asdict
-from pathlib import Path
 from typing import Any
 
 import torch
 from torch import nn
 from torch.nn import functional as F
 
-from motionlang.models.checkpoint import (pack_features, pack_normalizer, pack_vocab,
-                                          read_model_dict, unpack_features, unpack_normalizer,
-                                          unpack_vocab, write_checkpoint)
+from motionlang.models.checkpoint import Seq2SeqCheckpoint
 from motionlang.models.recurrent import AdditiveAttention, BiGRUEncoder, StackedDecoder
 from motionlang.models.seq2seq_config import M2LConfig  # noqa: F401 (re-exported)
 
 
-class MotionToLanguage(nn.Module):
+class MotionToLanguage(Seq2SeqCheckpoint, nn.Module):
     """Motion features (B, T, F) -> next-word logits (B, L, V).
 
     ``vocab`` (a ``Vocabulary`` or a token list) and ``normalizer`` ride along in the
@@ -35,6 +31,7 @@ class MotionToLanguage(nn.Module):
     """
 
     kind = "m2l"
+    config_cls = M2LConfig
 
     def __init__(self, config: M2LConfig, vocab: Any = None, normalizer: Any = None,
                  features: Any = None):
@@ -96,25 +93,3 @@ class MotionToLanguage(nn.Module):
         valid = target != self.config.pad_id
         acc = (logits.argmax(-1) == target)[valid].float().mean()
         return {"loss": ce, "token_acc": acc.detach()}
-
-    # -- checkpoints -------------------------------------------------------------------
-    def to_checkpoint(self) -> dict:
-        return {"kind": self.kind, "config": asdict(self.config),
-                "vocab": pack_vocab(self.vocab), "normalizer": pack_normalizer(self.normalizer),
-                "features": pack_features(self.features), "state_dict": self.state_dict()}
-
-    @classmethod
-    def from_checkpoint(cls, d: dict) -> "MotionToLanguage":
-        model = cls(M2LConfig(**d["config"]), unpack_vocab(d.get("vocab")),
-                    unpack_normalizer(d.get("normalizer")), unpack_features(d.get("features")))
-        model.load_state_dict(d["state_dict"])
-        return model.eval()
-
-    def save(self, path: str | Path) -> None:
-        """One self-describing file (atomic write)."""
-        write_checkpoint(self.to_checkpoint(), path)
-
-    @classmethod
-    def load(cls, path: str | Path) -> "MotionToLanguage":
-        """Rebuild from a file written by :meth:`save` or by the trainer; in eval mode."""
-        return cls.from_checkpoint(read_model_dict(path, cls.kind))
