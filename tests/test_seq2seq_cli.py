@@ -60,9 +60,16 @@ def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
     assert "log L" in printed and str(out) in printed
     report = tmp_path / "report.json"
     assert main(["evaluate", "--m2l", str(m2l_dir / "model.pt"), "--l2m",
-                 str(l2m_dir / "model.pt"), "--data", str(corpus), "--split", "val", "-w", "2",
-                 "-o", str(report)]) == 0
+                 str(l2m_dir / "model.pt"), "--data", str(corpus), "--split", "train", "-w", "2",
+                 "-o", str(report), "--tsne", str(tmp_path / "tsne.png")]) == 0
     rep = json.loads(report.read_text())
+    # a procedural corpus carries ground truth: parameter accuracy of both directions
+    for key in ("m2l_parameters", "l2m_parameters"):
+        acc = rep[key]
+        assert acc["n"] >= 1 and 0.0 <= acc["actions_match"] <= 1.0
+        assert all(acc[f] != acc[f] or 0.0 <= acc[f] <= 1.0 for f in ("side", "count"))
+    assert rep["l2m_parameters"]["n"] == rep["l2m_round_trip"]["n_sentences"]
+    assert (tmp_path / "tsne.png").stat().st_size > 1000
     assert len(rep["m2l"]["bleu_by_rank"]) == 2 and rep["m2l"]["n"] >= 1
     assert {"bleu", "rouge_l"} <= set(rep["nearest_neighbour"])
     assert rep["l2m_round_trip"]["n_sentences"] >= 1

@@ -27,7 +27,7 @@ def make_batch(seed: int = 0, B: int = 4) -> dict:
     return {"motion": motion, "motion_lengths": m_len, "tokens": tokens, "token_lengths": t_len}
 
 
-def tiny(kind: str, attention: bool, dropout: float = 0.0):
+def tiny(kind: str, attention: bool, dropout: float = 0.0, **l2m_options):
     torch.manual_seed(0)
     if kind == "m2l":
         cfg = M2LConfig(n_features=F_DIM, vocab_size=V, enc_hidden=8, enc_layers=2,
@@ -37,11 +37,13 @@ def tiny(kind: str, attention: bool, dropout: float = 0.0):
                                 normalizer={"mean": np.zeros(F_DIM), "std": np.ones(F_DIM)})
     cfg = L2MConfig(vocab_size=V, n_features=F_DIM, embed_dim=8, enc_hidden=8, enc_layers=1,
                     dec_hidden=16, dec_layers=3, n_components=3, dropout=dropout,
-                    attention=attention, attn_dim=8, max_frames=10)
+                    attention=attention, attn_dim=8, max_frames=10, **l2m_options)
     return LanguageToMotion(cfg, vocab=[f"w{i}" for i in range(V)])
 
 
 KINDS = [("m2l", False), ("m2l", True), ("l2m", False), ("l2m", True)]
+KINDS_OPTIONS = [(k, a, {}) for k, a in KINDS] + [("l2m", False, {"time_input": True}),
+                                                  ("l2m", True, {"time_input": True})]
 
 
 def outputs(model, batch) -> torch.Tensor:
@@ -155,10 +157,11 @@ def test_l2m_decoders_run_on_the_model():
     assert all(1 <= len(h.frames) <= 8 for h in mean)
 
 
-@pytest.mark.parametrize("kind,attention", KINDS)
-def test_step_matches_teacher_forcing(kind, attention):
-    # Feeding the reference one step at a time must reproduce the parallel forward pass.
-    model, batch = tiny(kind, attention), make_batch()
+@pytest.mark.parametrize("kind,attention,options", KINDS_OPTIONS)
+def test_step_matches_teacher_forcing(kind, attention, options):
+    # Feeding the reference one step at a time must reproduce the parallel forward pass
+    # (with the clock input, the step's own counter must agree with the frame index).
+    model, batch = tiny(kind, attention, **options), make_batch()
     model.eval()
     with torch.no_grad():
         if kind == "m2l":
@@ -199,3 +202,34 @@ def test_l2m_end_weight_reweights_the_stop_frames():
         w = torch.where(active > 0, 1.0, 5.0)
         want = -(w * ll)[valid].sum() / w[valid].sum()
         torch.testing.assert_close(model.loss(batch)["active_bce"], want)
+
+
+def test_l2m_time_input_changes_the_prediction():
+    # Same weights apart from the clock column: zeroing that column's weights must change
+    # nothing at t=0 (clock 0) and something later on, so the clock really reaches the decoder.
+    model, batch = tiny("l2m", False, time_input=True), make_batch()
+    model.eval()
+    with torch.no_grad():
+        before = model(batch["tokens"], batch["token_lengths"], batch["motion"]).mu
+        first = [m for m in model.decoder.modules() if isinstance(m, torch.nn.GRU)][0]
+        first.weight_ih_l0[:, -1] = 0.0
+        after = model(batch["tokens"], batch["token_lengths"], batch["motion"]).mu
+    torch.testing.assert_close(after[:, 0], before[:, 0])
+    assert not torch.allclose(after[:, 1:], before[:, 1:])
+
+
+def test_l2m_input_noise_only_while_training():
+    model, batch = tiny("l2m", False, input_noise=0.5), make_batch()
+    clean = tiny("l2m", False)
+    clean.load_state_dict(model.state_dict())
+    model.eval()
+    clean.eval()
+    with torch.no_grad():
+        torch.testing.assert_close(model.loss(batch)["loss"], clean.loss(batch)["loss"])
+        model.train()
+        clean.train()
+        torch.manual_seed(1)
+        noisy = model.loss(batch)["loss"]
+        torch.manual_seed(1)
+        plain = clean.loss(batch)["loss"]
+    assert not torch.allclose(noisy, plain)

@@ -53,6 +53,10 @@ def _add_train(sub, name: str, help_: str) -> None:
         p.add_argument("--loss", choices=("surrogate", "exact"), default=d.loss)
         p.add_argument("--end-weight", type=float, default=d.end_weight,
                        help="BCE weight of each motion's last (stop) frame (paper: 1)")
+        p.add_argument("--input-noise", type=float, default=d.input_noise,
+                       help="std of noise on teacher-forced previous frames (paper: 0)")
+        p.add_argument("--time-input", action="store_true",
+                       help="decoder also sees the elapsed time (not in the paper)")
     p.set_defaults(func=cmd_train, model_kind=name)
 
 
@@ -88,6 +92,8 @@ def cmd_train(args: argparse.Namespace) -> int:
         model = LanguageToMotion(L2MConfig(vocab_size=V, n_features=F,
                                            n_components=args.components, loss=args.loss,
                                            end_weight=args.end_weight,
+                                           input_noise=args.input_noise,
+                                           time_input=args.time_input,
                                            max_frames=int(1.5 * longest), **sizes),
                                  data.vocab, features=data.features)
     cfg = TrainConfig(epochs=args.epochs, batch_size=args.batch_size, lr=args.lr,
@@ -214,12 +220,32 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         l2m = LanguageToMotion.load(args.l2m)
         report["l2m_round_trip"] = ev.evaluate_round_trip(
             l2m, m2l, {i: refs[i] for i in test}, report["m2l"]["bleu"])
+    truths = _ground_truths(records, test)
+    if truths:   # a procedural corpus: the parameters each description states, checked
+        top = {e["id"]: e["hypotheses"][0] for e in report["m2l"].pop("all")}
+        report["m2l_parameters"] = ev.parameter_accuracy(top, truths)
+        if "l2m_round_trip" in report:
+            report["l2m_parameters"] = ev.round_trip_parameter_accuracy(
+                report["l2m_round_trip"]["descriptions"], truths)
+    else:
+        report["m2l"].pop("all")
+    if args.tsne:
+        _context_tsne(Path(args.tsne), m2l, l2m if args.l2m else None, test, records)
+        report["tsne"] = str(args.tsne)
     table = ev.markdown_table({"M2L (top hypothesis)": report["m2l"],
                                "nearest neighbour": report["nearest_neighbour"],
                                **({"L2M round trip": report["l2m_round_trip"]}
                                   if "l2m_round_trip" in report else {})})
     by_rank = " ".join(f"{b:.3f}" for b in report["m2l"]["bleu_by_rank"])
     table += f"\nM2L BLEU of hypotheses 1..{args.width}: {by_rank}\n"
+    for key, name in (("m2l_parameters", "M2L top description"),
+                      ("l2m_parameters", "L2M round trip")):
+        if key in report:
+            acc = report[key]
+            table += (f"{name}, parameters right (procedural ground truth): " + ", ".join(
+                f"{f} {acc[f]:.1%} of {acc[f + '_stated']}" for f in
+                ("side", "count", "direction", "speed")) +
+                f"; actions exactly right {acc['actions_match']:.1%}\n")
     if args.output:
         out = Path(args.output)
         with atomic_write(out) as fh:
@@ -228,6 +254,35 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
             fh.write(table)
     print(table, end="")
     return 0
+
+
+def _ground_truths(records: dict, ids) -> dict:
+    """{id: ground-truth primitives} when every record carries them (procedural corpus)."""
+    from motionlang.datasets.synth import ground_truth
+    metas = {i: records[i].meta for i in ids}
+    if not metas or not all(m.get("primitives") for m in metas.values()):
+        return {}
+    return {i: ground_truth(m) for i, m in metas.items()}
+
+
+def _context_tsne(path: Path, m2l, l2m, test: dict, records: dict) -> None:
+    """The paper's Fig. 9: t-SNE of both encoders' context vectors, coloured by motion type
+    (the first action of a procedural sample, else the first word after "a person")."""
+    from motionlang.evaluation.context_tsne import l2m_contexts, m2l_contexts, plot_context_tsne
+
+    def label(i):
+        prims = records[i].meta.get("primitives")
+        if prims:
+            return prims[0]["action"]
+        words = records[i].annotations[0].lower().split()
+        return words[2] if len(words) > 2 and words[:2] == ["a", "person"] else words[0]
+    ids = sorted(test)
+    panels = {"M2L encoder (motions)": (m2l_contexts(m2l, [test[i] for i in ids]),
+                                        [label(i) for i in ids])}
+    if l2m is not None:
+        panels["L2M encoder (sentences)"] = (
+            l2m_contexts(l2m, [records[i].annotations[0] for i in ids]), [label(i) for i in ids])
+    plot_context_tsne(panels, path)
 
 
 def register(subparsers) -> None:
@@ -262,5 +317,6 @@ def register(subparsers) -> None:
     p.add_argument("--limit", type=int, default=0, help="evaluate at most N motions")
     p.add_argument("--max-seconds", type=float, default=30.0)
     p.add_argument("-o", "--output", help="report.json (+ report.md beside it)")
+    p.add_argument("--tsne", metavar="PNG", help="also plot the context vectors' t-SNE map")
     p.set_defaults(func=cmd_evaluate)
 

@@ -42,7 +42,10 @@ def tsne_2d(vectors: np.ndarray, seed: int = 0) -> np.ndarray:
     """(N, C) -> (N, 2) t-SNE embedding (perplexity capped for small N)."""
     from sklearn.manifold import TSNE
 
-    perplexity = float(min(30.0, max(2.0, (len(vectors) - 1) / 3)))
+    from motionlang.errors import MotionlangError
+    if len(vectors) < 4:
+        raise MotionlangError(f"t-SNE needs at least 4 points, got {len(vectors)}")
+    perplexity = float(min(30.0, max(1.0, (len(vectors) - 1) / 3)))
     return TSNE(2, perplexity=perplexity, random_state=seed, init="pca").fit_transform(
         np.asarray(vectors, dtype=np.float64))
 

@@ -68,6 +68,7 @@ class ReproduceConfig:
     n_repeats: int = 100       # stochastic CRBM fill-ins averaged per cell
     n_gibbs: int = SELECTED["n_gibbs"]   # alternating updates per filled frame
     seed: int = 0
+    mean_field: bool = SELECTED.get("mean_field", False)  # deterministic fill-in (hidden probabilities)
 
 
 def unwrap_degrees(angles: np.ndarray) -> np.ndarray:
@@ -170,7 +171,7 @@ def fill_trial(data: Cmu35, trial: str, part: str, crbm: CRBM, ar: ARModel,
     ar_frames[:, fdims] = to_protocol59(ar.fill_in(given, known))[:, fdims]
     filled["AR(n)"] = ar_frames
     samples = crbm.fill_in(given, known, n_gibbs=cfg.n_gibbs, seed=cfg.seed,
-                           n_samples=cfg.n_repeats)
+                           n_samples=1 if cfg.mean_field else cfg.n_repeats, mean_field=cfg.mean_field)
     crbm_frames = np.repeat(true59[None], len(samples), axis=0)
     crbm_frames[:, :, fdims] = to_protocol59(samples)[:, :, fdims]
     filled["CRBM"] = crbm_frames

@@ -59,7 +59,8 @@ def evaluate_m2l(model, frames: Mapping[str, np.ndarray], references: Mapping[st
             "rank_bleu_spearman": tm.rank_bleu_correlation(refs, ranked),
             **text_scores(refs, top),
             "examples": [{"id": i, "hypotheses": r, "references": f}
-                         for i, r, f in list(zip(ids, ranked, refs))[:5]]}
+                         for i, r, f in list(zip(ids, ranked, refs))[:5]],
+            "all": [{"id": i, "hypotheses": r} for i, r in zip(ids, ranked)]}
 
 
 def summary(x: np.ndarray) -> np.ndarray:
@@ -92,8 +93,9 @@ def evaluate_round_trip(l2m, m2l, references: Mapping[str, Sequence[str]],
     """Generate from each reference sentence, describe the result, score against the
     motion's references. Both models must share one feature set (same frames).
 
-    Returns ``{"n_sentences", "bleu", "bleu1", "rouge_l", ("cider"), "relative"}`` with
-    relative = bleu / m2l_bleu (NaN if m2l_bleu is 0).
+    Returns ``{"n_sentences", "bleu", "bleu1", "rouge_l", ("cider"), "relative",
+    "descriptions"}`` with relative = bleu / m2l_bleu (NaN if m2l_bleu is 0) and
+    descriptions = [[motion id, sentence, description of the generated motion], ...].
     """
     refs, hyps = [], []
     pairs = [(i, s) for i in sorted(references) for s in references[i]]
@@ -104,7 +106,16 @@ def evaluate_round_trip(l2m, m2l, references: Mapping[str, Sequence[str]],
         refs.append([normalize(s) for s in references[i]])
     scores = text_scores(refs, hyps)
     rel = scores["bleu"] / m2l_bleu if m2l_bleu > 0 else float("nan")
-    return {"n_sentences": len(pairs), **scores, "relative": rel}
+    return {"n_sentences": len(pairs), **scores, "relative": rel,
+            "descriptions": [[i, s, h] for (i, s), h in zip(pairs, hyps)]}
+
+
+def round_trip_parameter_accuracy(descriptions: Sequence[Sequence[str]],
+                                  truths: Mapping[str, Sequence]) -> dict:
+    """:func:`parameter_accuracy` of the round trip's descriptions (one per sentence);
+    the truth of each is its motion's, which the sentence describes."""
+    texts = {f"{i}#{k}": d for k, (i, _, d) in enumerate(descriptions)}
+    return parameter_accuracy(texts, {key: truths[key.split("#")[0]] for key in texts})
 
 
 def markdown_table(results: Mapping[str, Mapping[str, float]]) -> str:

@@ -10,6 +10,13 @@ Loss: the paper's stable surrogate ``-sum_k pi_k log N_k`` (or the exact mixture
 attention as in :mod:`motionlang.models.m2l`.
 
 Frames are model features (usually normalised); the first decoder input is a zero frame.
+
+Two options beyond the paper, both off by default: ``input_noise`` adds Gaussian noise to
+the teacher-forced previous frames while training, so that predicting "the previous frame
+again" stops being nearly free and the decoder has to use the sentence (without it, a model
+trained on our corpus copies its input and generates standing); ``time_input`` feeds the
+elapsed time, which makes the end-of-motion flag learnable from a clock instead of from a
+count the GRU state has to keep.
 """
 from __future__ import annotations
 
@@ -42,7 +49,7 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
         self.drop = nn.Dropout(c.dropout)
         self.encoder = BiGRUEncoder(c.embed_dim, c.enc_hidden, c.enc_layers, c.dropout)
         ctx = self.encoder.out_dim
-        self.decoder = StackedDecoder(ctx + c.n_features, c.dec_hidden, c.dec_layers,
+        self.decoder = StackedDecoder(ctx + c.n_features + int(c.time_input), c.dec_hidden, c.dec_layers,
                                       c.dropout, layer_norm=True)
         head_in = self.decoder.out_dim
         self.attn = None
@@ -58,11 +65,17 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
         h = x.new_zeros(tokens.shape[0], self.config.dec_layers, self.config.dec_hidden)
         return {"h": h, "context": context, "memory": memory, "mask": mask}
 
-    def _decode(self, state: dict, prev: torch.Tensor) -> tuple[mdn.MixtureParams, torch.Tensor]:
-        """prev (B, T, F) previous frames -> params with leading (B, T), hidden (B, layers, H)."""
-        T = prev.shape[1]
+    def _decode(self, state: dict, prev: torch.Tensor, t0: int = 0
+                ) -> tuple[mdn.MixtureParams, torch.Tensor]:
+        """prev (B, T, F) previous frames (the first at decoding step ``t0``) -> params with
+        leading (B, T), hidden (B, layers, H)."""
+        B, T = prev.shape[:2]
         ctx = state["context"].unsqueeze(1).expand(-1, T, -1)
-        outs, h = self.decoder(torch.cat([ctx, prev], dim=-1), state["h"])
+        inputs = [ctx, prev]
+        if self.config.time_input:
+            clock = (torch.arange(T, dtype=prev.dtype) + t0) / 100.0
+            inputs.append(clock.view(1, T, 1).expand(B, T, 1))
+        outs, h = self.decoder(torch.cat(inputs, dim=-1), state["h"])
         if self.attn is not None:
             att, _ = self.attn(outs[..., -self.config.dec_hidden:], state["memory"],
                                state["mask"])
@@ -74,13 +87,16 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
         """Teacher forcing on target motion (B, T, F): params of frames 0..T-1, (B, T, ...)."""
         prev = torch.cat([motion.new_zeros(motion.shape[0], 1, motion.shape[2]),
                           motion[:, :-1]], dim=1)
+        if self.training and self.config.input_noise > 0:
+            prev = prev + self.config.input_noise * torch.randn_like(prev)
         params, _ = self._decode(self.encode(tokens, token_lengths), prev)
         return params
 
     def step(self, state: dict, prev_frames: torch.Tensor) -> tuple[mdn.MixtureParams, dict]:
         """One decoding step: prev_frames (N, F) -> params over N rows, new state."""
-        params, h = self._decode(state, prev_frames.unsqueeze(1))
-        return params.flatten(), {**state, "h": h}
+        t = state.get("t", 0)
+        params, h = self._decode(state, prev_frames.unsqueeze(1), t)
+        return params.flatten(), {**state, "h": h, "t": t + 1}
 
     def loss(self, batch: dict) -> dict[str, torch.Tensor]:
         """batch: ``tokens`` (B, L), ``token_lengths`` (B,), ``motion`` (B, T, F) padded,

@@ -52,6 +52,8 @@ class L2MConfig:
     attn_dim: int = 64
     loss: str = "surrogate"     # or "exact"
     end_weight: float = 1.0     # BCE weight of a motion's last frame (1 = the paper's loss)
+    input_noise: float = 0.0    # std of noise on the teacher-forced previous frames (0 = paper)
+    time_input: bool = False    # decoder also sees the elapsed time (frames / 100) (not in paper)
     pad_id: int = 0
     max_frames: int = 300       # decoding cap (frames)
 
