@@ -20,8 +20,9 @@ def main() -> None:
     ap.add_argument("--learning-rates", type=float, nargs="+", default=[1e-3])
     ap.add_argument("--epochs", type=int, nargs="+", default=[1000, 2000])
     ap.add_argument("--n-gibbs", type=int, nargs="+", default=[5, 30])
-    ap.add_argument("--ar-decays", type=float, nargs="+", default=None,
-                    help="weight decays of the autoregressive weights A (default: W's)")
+    ap.add_argument("--ar-decays", type=lambda v: None if v == "same" else float(v), nargs="+",
+                    default=None,
+                    help="weight decays of the autoregressive weights A (\"same\": W's; default same)")
     ap.add_argument("--mean-field", choices=["no", "yes", "both"], default="no")
     ap.add_argument("--repeats", type=int, default=20)
     a = ap.parse_args()

@@ -192,3 +192,19 @@ def test_two_level_stack_round_trip_and_generation(tmp_path, trained):
     assert a.shape == (34, 3) and np.isfinite(a).all()
     with pytest.raises(MotionFormatError, match="at least 4"):
         stack.generate(seqs[0][:3], 5)
+
+
+def test_generate_from_a_batch_of_starts_matches_one_by_one():
+    # mean-field generation is deterministic, so S starts side by side must give exactly
+    # what S separate calls give
+    rng = np.random.default_rng(3)
+    seqs = [rng.normal(size=(40, 4)) for _ in range(3)]
+    m = CRBM(CRBMConfig(n_hidden=6, order=2, epochs=3, batch_size=10), 4).fit(seqs)
+    starts = np.stack([s[:2] for s in seqs])
+    batch = m.generate(starts, 7, n_gibbs=3, mean_field=True)
+    assert batch.shape == (3, 9, 4)
+    for s, got in zip(starts, batch):
+        np.testing.assert_allclose(m.generate(s, 7, n_gibbs=3, mean_field=True)[0], got, atol=1e-12)
+    np.testing.assert_array_equal(batch[:, :2], starts)
+    with pytest.raises(MotionlangError):
+        m.generate(starts, 3, n_samples=2)

@@ -9,18 +9,25 @@ from motionlang.models.crbm import CRBM, CRBMConfig
 
 
 @pytest.mark.parametrize("ry_deg", [0.0, 30.0, -120.0])
-def test_forward_speed_projects_the_step_on_the_facing_direction(ry_deg):
+def test_forward_speed_is_the_step_along_the_facing_direction(ry_deg):
+    from motionlang.evaluation.crbm_reproduce import body_to_world, model_frames, world_to_body
     T, ry = 20, np.deg2rad(ry_deg)
-    f = np.zeros((T, 59))
-    f[:, 4], f[:, 7] = np.sin(ry), np.cos(ry)        # sin / cos of the root's y rotation
     fwd = np.array([np.sin(ry), np.cos(ry)])          # facing direction in the (x, z) plane
     side = np.array([np.cos(ry), -np.sin(ry)])
-    f[:, [0, 2]] = 0.7 * fwd
-    assert forward_speed(f) == pytest.approx(0.7 * METRES_PER_UNIT * FPS)
-    f[:, [0, 2]] = -0.7 * fwd                          # walking backwards counts negative
-    assert forward_speed(f) == pytest.approx(-0.7 * METRES_PER_UNIT * FPS)
-    f[:, [0, 2]] = 0.7 * side                          # side steps are not forward motion
-    assert forward_speed(f) == pytest.approx(0.0, abs=1e-12)
+    s, c = np.full(T, np.sin(ry)), np.full(T, np.cos(ry))
+    for world, want in ((0.7 * fwd, 0.7), (-0.7 * fwd, -0.7), (0.7 * side, 0.0)):
+        body = world_to_body(np.tile(world, (T, 1)), s, c)
+        f = np.zeros((T, 59))
+        f[:, [0, 2]] = body
+        assert forward_speed(f) == pytest.approx(want * METRES_PER_UNIT * FPS, abs=1e-12)
+        # back to the world, also from a (sin, cos) pair that is not unit length
+        np.testing.assert_allclose(body_to_world(body, 2 * s, 2 * c), np.tile(world, (T, 1)),
+                                   atol=1e-12)
+    # channels walking along the facing direction give that speed through model_frames
+    ch = np.zeros((T, 62))
+    ch[:, 4] = ry_deg
+    ch[:, [0, 2]] = np.arange(T)[:, None] * 0.5 * fwd
+    assert forward_speed(model_frames(ch)) == pytest.approx(0.5 * METRES_PER_UNIT * FPS)
 
 
 def test_on_epoch_sees_every_snapshot_of_one_run():

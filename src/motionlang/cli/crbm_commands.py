@@ -35,6 +35,8 @@ def _add_crbm_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--lr", type=float, default=d.lr)
     p.add_argument("--momentum", type=float, default=d.momentum)
     p.add_argument("--weight-decay", type=float, default=d.weight_decay)
+    p.add_argument("--ar-weight-decay", type=float, default=d.weight_decay_autoregressive,
+                   help="weight decay of the autoregressive weights A (default: --weight-decay's)")
     p.add_argument("--seed", type=int, default=0)
 
 
@@ -42,7 +44,8 @@ def _crbm_config(args: argparse.Namespace):
     from motionlang.models.crbm import CRBMConfig
     return CRBMConfig(n_hidden=args.hidden, order=args.order, epochs=args.epochs,
                       batch_size=args.batch_size, lr=args.lr, lr_autoregressive=args.lr,
-                      momentum=args.momentum, weight_decay=args.weight_decay, seed=args.seed)
+                      momentum=args.momentum, weight_decay=args.weight_decay,
+                      weight_decay_autoregressive=args.ar_weight_decay, seed=args.seed)
 
 
 def _load_model(path: str, allow_stack: bool = False):
@@ -176,7 +179,8 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
     from motionlang.evaluation.crbm_reproduce import ReproduceConfig, format_table, reproduce
     model = _load_model(args.model) if args.model else None
     cfg = ReproduceConfig(crbm=model.config if model else _crbm_config(args),
-                          n_repeats=args.repeats, n_gibbs=args.gibbs, seed=args.seed)
+                          n_repeats=args.repeats, n_gibbs=args.gibbs, seed=args.seed,
+                          mean_field=args.mean_field)
     result = reproduce(args.data, cfg, crbm=model, show_progress=not (args.quiet or args.json),
                        keep_fills=bool(args.plots))
     if args.plots:
@@ -221,7 +225,11 @@ def register_train(train_sub: argparse._SubParsersAction) -> None:
     p.add_argument("--level2-hidden", type=int, default=200)
     p.add_argument("--level2-order", type=int, default=3)
     p.add_argument("--quiet", action="store_true", help="no progress bar")
-    p.set_defaults(func=cmd_train)
+    from motionlang.evaluation.crbm_reproduce import SELECTED
+    # defaults: the paper's sizes with the settings selected on held-out training trials
+    p.set_defaults(func=cmd_train, epochs=SELECTED["epochs"], lr=SELECTED["lr"],
+                   weight_decay=SELECTED["weight_decay"],
+                   ar_weight_decay=SELECTED["weight_decay_autoregressive"])
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -262,9 +270,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     r.add_argument("--repeats", type=int, default=100, help="stochastic fill-ins averaged per cell")
     r.add_argument("--gibbs", type=int, default=30)
     r.add_argument("--plots", metavar="DIR", default=None, help="write Figure-4 plots and GIFs here")
+    r.add_argument("--sampled", dest="mean_field", action="store_false",
+                   help="report sampled-hidden fill-ins as \"CRBM\" (default: mean-field, as selected)")
     r.add_argument("--json", action="store_true")
     r.add_argument("--quiet", action="store_true")
     from motionlang.evaluation.crbm_reproduce import SELECTED
     # the experiment's defaults are the settings selected on held-out training trials
     r.set_defaults(func=cmd_reproduce, epochs=SELECTED["epochs"], lr=SELECTED["lr"],
-                   weight_decay=SELECTED["weight_decay"], gibbs=SELECTED["n_gibbs"])
+                   weight_decay=SELECTED["weight_decay"], gibbs=SELECTED["n_gibbs"],
+                   ar_weight_decay=SELECTED["weight_decay_autoregressive"],
+                   mean_field=SELECTED["mean_field"])

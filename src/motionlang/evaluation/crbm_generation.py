@@ -30,11 +30,10 @@ FPS = 30.0
 
 def forward_speed(frames: np.ndarray) -> float:
     """Mean forward speed (m/s) of (T, 59) model features: the root's ground-plane step
-    (dims 0, 2) projected on the facing direction given by the root's y rotation
-    (sin in dim 4, cos in dim 7; at ry = 0 the subject faces +z). Walking on the spot ~ 0."""
+    along the facing direction (dim 2, see ``crbm_reproduce.model_frames``). Walking on the
+    spot ~ 0, backwards < 0."""
     f = np.asarray(frames, dtype=np.float64)
-    step = f[:, 0] * f[:, 4] + f[:, 2] * f[:, 7]
-    return float(step.mean() * METRES_PER_UNIT * FPS)
+    return float(f[:, 2].mean() * METRES_PER_UNIT * FPS)
 
 
 class StyleLabeller:

@@ -47,10 +47,11 @@ def plot_fill(result: dict, path: str | Path, dims59: list[int] | None = None,
                              squeeze=False)
     for ax, d in zip(axes[:, 0], dims59):
         ax.plot(t, true[:, d], "k-", lw=2, label="true")
-        ax.plot(t, fills["CRBM"][0][:, d], "-", color="tab:red", lw=0.7, alpha=0.6,
-                label="CRBM (one repeat)")
+        if len(fills["CRBM"]) > 1:   # sampled fill-ins: one of them and their mean
+            ax.plot(t, fills["CRBM"][0][:, d], "-", color="tab:red", lw=0.7, alpha=0.6,
+                    label="CRBM (one repeat)")
         ax.plot(t, fills["CRBM"].mean(axis=0)[:, d], "-", color="tab:red", lw=1.5,
-                label="CRBM (mean of repeats)")
+                label="CRBM (mean of repeats)" if len(fills["CRBM"]) > 1 else "CRBM")
         ax.plot(t, fills["AR(n)"][:, d], "--", color="tab:blue", lw=1, label="AR(n)")
         ax.plot(t, fills["hold last value"][:, d], ":", color="tab:gray", lw=1, label="hold last")
         ax.axvline(result["gap_start"], color="k", lw=0.5)

@@ -74,17 +74,29 @@ def score_snapshot(crbm: CRBM, ar: ARModel, val: Cmu35, n_gibbs: int, n_repeats:
 
 
 def validation_generation(crbm: CRBM, val: Cmu35, n_frames: int, seed: int) -> dict:
-    """Generation from the first frames of each held-out trial (see ``crbm_generation``)."""
+    """Generation from the first frames of every trial the model may see: the held-out four
+    and its own 27 training trials (see ``crbm_generation``). Per held-out trial and, as
+    "training walks" / "training jogs", the worst case over the training starts."""
     from motionlang.evaluation.crbm_generation import StyleLabeller, forward_speed
     lab = StyleLabeller(val, crbm.mean, crbm.std)
     n = crbm.config.order
-    out = {}
-    for trial, ch in val.test.items():
-        style = val.labels[trial]
-        gen = crbm.generate(model_frames(ch)[:n], n_frames, seed=seed)[0][n:]
-        out[trial] = {"style_kept": float((lab(gen) == style).mean()),
-                      "range_excess_std": lab.range_excess(gen),
-                      "speed_last_half_m_s": forward_speed(gen[len(gen) // 2:])}
+    names = list(val.test) + list(val.train_names)
+    chans = list(val.test.values()) + list(val.train)
+    gens = crbm.generate(np.stack([model_frames(c)[:n] for c in chans]), n_frames, seed=seed)[:, n:]
+    per = {}
+    for name, gen in zip(names, gens):
+        style = val.labels[name]
+        per[name] = {"style_kept": float((lab(gen) == style).mean()),
+                     "range_excess_std": lab.range_excess(gen),
+                     "speed_last_half_m_s": forward_speed(gen[len(gen) // 2:]), "style": style}
+    out = {name: {k: v for k, v in per[name].items() if k != "style"} for name in val.test}
+    for style in ("walk", "jog"):
+        mine = [per[nm] for nm in val.train_names if val.labels[nm] == style]
+        if mine:
+            out[f"training {style}s"] = {
+                "style_kept": min(p["style_kept"] for p in mine),
+                "range_excess_std": max(p["range_excess_std"] for p in mine),
+                "speed_last_half_m_s": float(np.median([p["speed_last_half_m_s"] for p in mine]))}
     return out
 
 

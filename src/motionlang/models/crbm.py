@@ -273,24 +273,37 @@ class CRBM:
         return v
 
     def generate(self, init: np.ndarray, n_frames: int, *, n_gibbs: int = 30, seed: int = 0,
-                 hidden_noise: float = 0.0, n_samples: int = 1) -> np.ndarray:
-        """Causal on-line generation from ``init`` (>= order real frames, (n0, D) unnormalised).
+                 hidden_noise: float = 0.0, n_samples: int = 1, mean_field: bool = False
+                 ) -> np.ndarray:
+        """Causal on-line generation from ``init`` (>= order real frames, (n0, D) unnormalised,
+        or (S, n0, D) for S different starts generated side by side).
 
         Returns (n_samples, n0 + n_frames, D) unnormalised, starting with ``init``. Each new
-        frame starts from the previous one and is refined by ``n_gibbs`` Gibbs updates.
+        frame starts from the previous one and is refined by ``n_gibbs`` Gibbs updates
+        (with hidden probabilities instead of samples if ``mean_field``: deterministic unless
+        ``hidden_noise`` > 0).
         """
         n = self.config.order
-        init = check_sequences([init], self.n_visible, n, "initial frames")[0]
+        init = np.asarray(init)
+        if init.ndim == 3:   # (S, n0, D): S different starts, one sequence each
+            if n_samples != 1:
+                raise MotionlangError("generate: give n_samples=1 with a batch of starts")
+            init = np.stack(check_sequences(list(init), self.n_visible, n, "initial frames"))
+            x = self.normalise(init)
+            n_samples = len(init)
+        else:
+            init = check_sequences([init], self.n_visible, n, "initial frames")[0]
+            x = np.repeat(self.normalise(init)[None], n_samples, axis=0)
         rng = np.random.default_rng(seed)
-        x = np.repeat(self.normalise(init)[None], n_samples, axis=0)
-        out = np.empty((n_samples, len(init) + n_frames, self.n_visible))
-        out[:, :len(init)] = x
-        for t in range(len(init), len(init) + n_frames):
+        n0 = x.shape[1]
+        out = np.empty((n_samples, n0 + n_frames, self.n_visible))
+        out[:, :n0] = x
+        for t in range(n0, n0 + n_frames):
             past = out[:, t - n:t][:, ::-1].reshape(n_samples, -1)
             out[:, t] = self.gibbs_frame(out[:, t - 1], past, rng, n_gibbs,
-                                         hidden_noise=hidden_noise)
+                                         hidden_noise=hidden_noise, mean_field=mean_field)
         out = self.denormalise(out)
-        out[:, :len(init)] = init   # exactly as given
+        out[:, :n0] = init   # exactly as given
         return out
 
     def fill_in(self, frames: np.ndarray, known: np.ndarray, *, n_gibbs: int = 30, seed: int = 0,
