@@ -208,3 +208,30 @@ def test_generate_from_a_batch_of_starts_matches_one_by_one():
     np.testing.assert_array_equal(batch[:, :2], starts)
     with pytest.raises(MotionlangError):
         m.generate(starts, 3, n_samples=2)
+
+
+def test_cd_k_and_negative_start_options():
+    rng = np.random.default_rng(4)
+    v0, past = rng.normal(size=(6, 3)), rng.normal(size=(6, 6))
+    base = CRBM(CRBMConfig(n_hidden=5, order=2), 3)
+    grads = {}
+    for kw in ({}, {"cd_steps": 3}, {"negative_start": "previous"}):
+        m = CRBM(CRBMConfig(n_hidden=5, order=2, **kw), 3)
+        for k in PARAMS:
+            setattr(m, k, getattr(base, k).copy())
+        grads[str(kw)] = m.cd_gradients(v0, past, None)[0]
+    # CD-1 from the data is the default; the other two differ from it
+    for other in ("{'cd_steps': 3}", "{'negative_start': 'previous'}"):
+        assert not np.allclose(grads["{}"]["W"], grads[other]["W"])
+    # the positive statistics are the same whatever the negative chain
+    m = CRBM(CRBMConfig(n_hidden=5, order=2, negative_start="previous"), 3)
+    for k in PARAMS:
+        setattr(m, k, getattr(base, k).copy())
+    g, _ = m.cd_gradients(v0, past, None)
+    a_star, b_star = m.dynamic_biases(past)
+    v1 = m.visible_mean(m.hidden_probs(past[:, :3], b_star), a_star)
+    np.testing.assert_allclose(g["a"], (v0 - v1).mean(axis=0), atol=1e-12)
+    with pytest.raises(MotionlangError):
+        CRBMConfig(negative_start="nowhere")
+    with pytest.raises(MotionlangError):
+        CRBMConfig(cd_steps=0)

@@ -56,12 +56,21 @@ class CRBMConfig:
     visible: str = "gaussian"   # "gaussian" (unit variance) or "binary"
     dtype: str = "float32"      # of weights and training arithmetic: float32 is 3x faster here
     blas_threads: int | None = 1  # the matrices are small: one BLAS thread avoids oversubscription
+    cd_steps: int = 1           # k of CD-k (the paper: 1)
+    negative_start: str = "data"  # where the negative chain starts: "data" (v_t, the paper's
+    # CD) or "previous" (v_{t-1}, as generation starts each frame: the model learns to move
+    # from the last frame to this one; not in the paper)
 
     def __post_init__(self):
         if self.visible not in ("gaussian", "binary"):
             raise MotionlangError(f"CRBMConfig.visible must be 'gaussian' or 'binary', got {self.visible!r}")
         if self.dtype not in ("float32", "float64"):
             raise MotionlangError(f"CRBMConfig.dtype must be 'float32' or 'float64', got {self.dtype!r}")
+        if self.negative_start not in ("data", "previous"):
+            raise MotionlangError(f"CRBMConfig.negative_start must be 'data' or 'previous', "
+                                  f"got {self.negative_start!r}")
+        if self.cd_steps < 1:
+            raise MotionlangError("CRBMConfig.cd_steps must be >= 1")
         if self.order < 1 or self.n_hidden < 1 or self.batch_size < 1:
             raise MotionlangError("CRBMConfig: order, n_hidden and batch_size must be >= 1")
 
@@ -171,19 +180,33 @@ class CRBM:
     # ----------------------------------------------------------------- learning
     def cd_gradients(self, v0: np.ndarray, past: np.ndarray, rng: np.random.Generator | None
                      ) -> tuple[dict[str, np.ndarray], float]:
-        """CD-1 ascent direction, averaged over the N rows, for normalised ``v0`` (N, D).
+        """CD-k ascent direction, averaged over the N rows, for normalised ``v0`` (N, D)
+        (k = ``config.cd_steps``; the negative chain starts at ``v0`` or, with
+        ``negative_start="previous"``, at the past's latest frame).
 
         With ``rng`` the hidden states are sampled (the paper's rule); with ``rng=None``
         probabilities are used throughout, which makes the result a deterministic function:
         exactly ``-(d/dθ) mean[F(v0|p) - F(v1|p)]`` with the reconstruction v1 held fixed.
         Returns (gradients by parameter name, mean squared reconstruction error).
         """
-        N = v0.shape[0]
+        N, D = v0.shape
+        cfg = self.config
         a_star, b_star = self.dynamic_biases(past)
         ph0 = self.hidden_probs(v0, b_star)
-        h0 = (ph0 > rng.random(ph0.shape)).astype(v0.dtype) if rng is not None else ph0
-        v1 = self.visible_mean(h0, a_star)
-        ph1 = self.hidden_probs(v1, b_star)
+
+        def sample(p):
+            return (p > rng.random(p.shape)).astype(v0.dtype) if rng is not None else p
+        h0 = sample(ph0)
+        if cfg.negative_start == "previous":   # past[:, :D] is frame t-1
+            v1 = past[:, :D]
+            h = sample(self.hidden_probs(v1, b_star))
+        else:
+            h = h0
+        for k in range(cfg.cd_steps):
+            v1 = self.visible_mean(h, a_star)
+            ph1 = self.hidden_probs(v1, b_star)
+            if k < cfg.cd_steps - 1:
+                h = sample(ph1)
         dh = h0 - ph1                              # hidden-bias statistic, (N, H)
         dv = v0 - v1                               # visible-bias statistic, (N, D)
         grads = {
