@@ -4,16 +4,15 @@ Style of a generated frame = the label (walk / jog) of the nearest training fram
 model's normalised feature space (Euclidean over all features except the root's ground
 displacement, whose sign depends on the walking direction, not the style).
 
-Known problem (measured 2026-11-22 with the model of ``crbm_reproduce.SELECTED`` trained on
-all 31 trials, 1000 frames, 3 seeds): every frame keeps its style label and stays within
-1.9 std of the training range, but the walk does not go anywhere - forward speed over the
-last 500 frames -0.05 m/s (training walks 1.22) while the legs keep swinging (walking on
-the spot), and the jog glides at 2.45 m/s (training jogs 3.39) with nearly frozen legs.
-Neither the Gibbs schedule (1-100 updates, sampled or mean-field last step, starting from
-the previous frame, its extrapolation or the autoregressive mean) nor weight decay (0 - 2e-3)
-nor order 6 nor the two-level model fixed it: runs either damp to these loops or drift
-from walking into jogging. Unfolding the joint angles (``model_frames``) was a real bug
-fix but not enough.
+Known problem (measured 2026-11-22, model of ``crbm_reproduce.SELECTED`` trained on all 31
+trials, 1000 frames, 30 Gibbs updates, seed 0): from the jogging test frames every frame stays
+jogging (3.7 m/s, range excess 0.34 std), but from the walking test frames the walk turns into
+a jog after ~60 frames (5.8 % of frames labelled walk). From the first frames of each of the
+31 training trials the same happens to nearly every walk. Tried without a fix: world-frame or
+facing-frame root steps, yaw rate instead of heading, 1-100 Gibbs updates, mean-field
+hiddens, weight decays 2e-4 - 2e-2 (A and W separately), 1000-4000 passes, CD-10, the negative
+chain started from the previous frame (``CRBMConfig.negative_start``), order 6, the two-level
+model. Settings that keep walking (e.g. weight decay 2e-2, 1000 passes) walk on the spot.
 """
 from __future__ import annotations
 

@@ -11,20 +11,21 @@ ground-plane position (x, z) replaced by its frame-to-frame step in the root's f
 folded back (:func:`to_protocol59`) and scored in the protocol space.
 
 Hyper-parameters (:data:`SELECTED`) were chosen on training trials only
-(``evaluation/crbm_select.py``: train on 27 trials, fill in 35_15, 35_16 (walks) and 35_25,
-35_26 (jogs) with the same erase protocol, score = mean CRBM / nearest-neighbour error
-ratio over the 8 cells, 20 repeats). Validation scores, lr 1e-3, 1000 / 2000 passes:
-weight decay 0: 0.656 / 0.743, 2e-4: 0.837 / 0.727, 2e-3: 0.673 / 0.616 (best, Gibbs 5 and
-30 tie; 5 taken); lr 3e-3, decay 2e-3: 0.748 (500) / 0.741 / 0.951. 4000 passes were
-scored only with the earlier folded-angle features, where they never gave a decay's best
-snapshot (0.80 / 0.72 / 0.80 vs best 0.64 / 0.68 / 0.62), so the unwrapped sweep stopped
-at 2000 to save time.
+(``scripts/crbm_select.py`` / ``evaluation/crbm_select.py``: train on 27 trials, fill in
+35_15, 35_16 (walks) and 35_25, 35_26 (jogs) with the same erase protocol, score = mean CRBM /
+nearest-neighbour error ratio over the 8 cells, 20 repeats; eligible only if generation from
+each held-out trial keeps its walk/jog label on >= 90 % of 1000 frames). Grid (2026-11-22,
+facing-frame root): weight decay of W, B in {2e-4, 2e-3, 2e-2} x decay of the autoregressive
+A in {same, 2e-2} x {1000, 2000, 4000} passes x fill-in with sampled or mean-field hiddens
+(5 Gibbs updates). Best eligible: W decay 2e-3, A decay 2e-2, 4000 passes (the paper's), mean
+field: 0.564 (sampled hiddens 0.579); the best with A decayed like W was 0.617 (not eligible).
 
-Test table, measured once with the selected settings (2026-11-22, seed 0, 100 repeats;
-``motionlang crbm reproduce``): walking leg 10.58 +- 0.25 (paper 8.78, nearest neighbour
-11.68), upper body 35.15 +- 5.55 (paper 20.52, nearest neighbour 22.20: worse than it);
-AR(n) 13.55 / 8.90. Jogging leg 13.16 (NN 19.14), upper body 13.44 (NN 45.78). The
-earlier 9.95 / 16.03 came from a weight decay chosen on these test numbers themselves.
+Test table, measured once with the selected settings (seed 0; ``motionlang crbm reproduce``):
+walking leg 7.99 (sampled hiddens, 100 repeats: 8.17 +- 0.33; paper 8.78, nearest neighbour
+11.68), upper body 19.94 (sampled 20.76 +- 1.52; paper 20.52, nearest neighbour 22.20); AR(n)
+12.62 / 9.21. Jogging leg 13.50 (NN 19.14), upper body 14.08 (NN 45.78). Earlier tables in
+this project (9.95 / 16.03: settings tuned on these test numbers; 10.58 / 35.15: world-frame
+root steps, A decayed like W) are superseded.
 """
 from __future__ import annotations
 

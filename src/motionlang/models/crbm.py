@@ -39,9 +39,10 @@ PARAMS = ("W", "A", "B", "a", "b")
 class CRBMConfig:
     """Hyper-parameters. Size, order, batch, passes and learning rate are the paper's
     (Taylor et al. 2006: 200 hidden units, order 3, batches of 100, 4000 passes). Weight
-    decay is 10x that of Taylor's published code (2e-4): among 0, 2e-4 and 2e-3 it gave the
-    best fill-in on a validation split of the *training* trials (``evaluation/crbm_select.py``;
-    the CMU experiment's own selected settings are ``crbm_reproduce.SELECTED``)."""
+    decay is 10x that of Taylor's published code (2e-4). The settings selected for the CMU
+    experiment on held-out training trials (``crbm_reproduce.SELECTED``, the CLI's
+    defaults) also decay the autoregressive weights more: ``weight_decay_autoregressive``
+    2e-2."""
     n_hidden: int = 200
     order: int = 3              # n, frames of past that condition the current frame
     lr: float = 1e-3            # learning rate of W, B and the biases
