@@ -149,3 +149,34 @@ def test_width_one_beam_never_worse_than_greedy():
                           sos=SOS, eos=EOS, max_len=4, banned=(SOS,))[0]
         b = run_beam(table, 1, 1, 4)[0][0]
         assert b.score >= g.score - 1e-6
+
+
+@pytest.mark.parametrize("seed", range(4))
+@pytest.mark.parametrize("alpha", [0.5, 1.0])
+def test_length_penalty_wide_beam_equals_brute_force(seed, alpha):
+    # nothing pruned (W >= all prefixes): the W best by total / length**alpha of all sequences
+    table = Table(200 + seed, 1, temperature=2.0)
+    max_len = 4
+    W = 3 ** (max_len - 1) + 2
+    state = torch.arange(1).unsqueeze(1)
+    got = beam_search(table.step, state, batch_size=1, width=W, sos=SOS, eos=EOS,
+                      max_len=max_len, banned=(SOS,), length_penalty=alpha)[0]
+    ref = sorted(brute_force(table, 0, max_len), key=lambda h: -h.score / len(h.tokens) ** alpha)[:W]
+    assert [h.tokens for h in got] == [h.tokens for h in ref]
+    np.testing.assert_allclose([h.score for h in got], [h.score for h in ref], rtol=1e-5)
+
+
+def test_length_penalty_prefers_longer_sentences():
+    # every word costs log probability, so the total picks the shortest sentence; per
+    # token, the longest of confident words wins (log .6 > the mean with EOS's log .35)
+    def step(state, prev):
+        lp = torch.log(torch.tensor([[0.35, 0.6, 0.03, 0.02, 1e-9]] * len(prev)))
+        return lp, state
+    state = torch.zeros(1, 1)
+    total = beam_search(step, state, batch_size=1, width=2, sos=SOS, eos=EOS, max_len=5,
+                        banned=(SOS,), min_len=1)[0]
+    norm = beam_search(step, state, batch_size=1, width=2, sos=SOS, eos=EOS, max_len=5,
+                       banned=(SOS,), min_len=1, length_penalty=1.0)[0]
+    assert total[0].tokens == (1, EOS)
+    assert len(norm[0].tokens) == 5 and norm[0].tokens[:4] == (1, 1, 1, 1)
+    assert norm[0].score < total[0].score          # scores stay totals

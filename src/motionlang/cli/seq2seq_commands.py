@@ -136,7 +136,8 @@ def cmd_describe(args: argparse.Namespace) -> int:
     from motionlang.models.m2l import MotionToLanguage
 
     model = MotionToLanguage.load(_model_path(args.model, "m2l"))
-    hyps = describe(model, read_motion(args.motion), width=args.width)
+    hyps = describe(model, read_motion(args.motion), width=args.width,
+                    length_penalty=args.length_penalty)
     if args.json:
         print(json.dumps([{"rank": i + 1, "text": t, "log_p": s} for i, (t, s) in
                           enumerate(hyps)], indent=1))
@@ -213,7 +214,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     # --limit caps the evaluated split only: the baseline searches the whole training set
     test, train = frames(splits[args.split], args.limit or None), frames(splits["train"])
     refs = {i: records[i].annotations for i in {**test, **train}}
-    report = {"split": args.split, "m2l": ev.evaluate_m2l(m2l, test, refs, args.width),
+    report = {"split": args.split, "length_penalty": args.length_penalty,
+              "m2l": ev.evaluate_m2l(m2l, test, refs, args.width, args.length_penalty),
               "nearest_neighbour": ev.evaluate_nn_baseline(train, refs, test, refs)}
     if args.l2m:
         from motionlang.models.l2m import LanguageToMotion
@@ -290,6 +292,8 @@ def register(subparsers) -> None:
     p.add_argument("motion", help="motion file (.xml MMM, .bvh, .amc)")
     p.add_argument("--model", help="M2L model file (default: the packaged one)")
     p.add_argument("-w", "--width", type=int, default=5, help="beam width = hypotheses shown")
+    p.add_argument("--length-penalty", type=float, default=0.0, metavar="ALPHA",
+                   help="rank by log P / length**ALPHA (default 0: total log P, the paper's)")
     p.add_argument("--json", action="store_true")
     p.set_defaults(func=cmd_describe)
     p = subparsers.add_parser("generate", help="generate a motion from English (L2M)")
@@ -318,5 +322,7 @@ def register(subparsers) -> None:
     p.add_argument("--max-seconds", type=float, default=30.0)
     p.add_argument("-o", "--output", help="report.json (+ report.md beside it)")
     p.add_argument("--tsne", metavar="PNG", help="also plot the context vectors' t-SNE map")
+    p.add_argument("--length-penalty", type=float, default=0.0, metavar="ALPHA",
+                   help="rank M2L hypotheses by log P / length**ALPHA (default 0: total, the paper's)")
     p.set_defaults(func=cmd_evaluate)
 

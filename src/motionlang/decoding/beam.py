@@ -53,8 +53,8 @@ def _ban(log_probs: torch.Tensor, banned: Sequence[int]) -> torch.Tensor:
 @torch.no_grad()
 def beam_search(step: Step, state: Any, *, batch_size: int, width: int, sos: int, eos: int,
                 max_len: int, banned: Sequence[int] = (), min_len: int = 0,
-                reorder: Callable[[Any, torch.Tensor], Any] = select_state
-                ) -> list[list[Hypothesis]]:
+                reorder: Callable[[Any, torch.Tensor], Any] = select_state,
+                length_penalty: float = 0.0) -> list[list[Hypothesis]]:
     """Beam search for ``batch_size`` independent inputs.
 
     Args:
@@ -65,9 +65,15 @@ def beam_search(step: Step, state: Any, *, batch_size: int, width: int, sos: int
         sos, eos: start and end token ids. ``banned``: ids never generated (PAD, SOS...).
         max_len: at most this many generated tokens per hypothesis, EOS included.
         min_len: at least this many tokens before EOS (1 rules out the empty sentence).
+        length_penalty: alpha >= 0; finished hypotheses are ranked by total log probability
+            / (number of tokens) ** alpha. 0 (default) ranks by the total, the paper's
+            choice; the total favours short sentences (every word costs log probability),
+            alpha = 1 ranks by the mean per token. With alpha > 0 the search runs to
+            ``max_len`` (a longer hypothesis can still overtake).
 
     Returns:
-        for each input, up to W hypotheses sorted by decreasing total log probability.
+        for each input, up to W hypotheses sorted by decreasing rank score; ``score`` is
+        always the total log probability.
 
     At every step each of the W live prefixes is extended by every word; the extensions
     by EOS join the input's finished pool (its W best are kept) and the W best other
@@ -78,6 +84,11 @@ def beam_search(step: Step, state: Any, *, batch_size: int, width: int, sos: int
     B, W = batch_size, width
     if W < 1 or max_len < 1:
         raise ValueError("beam width and max_len must be >= 1")
+    if length_penalty < 0:
+        raise ValueError("length_penalty must be >= 0")
+
+    def rank(h: Hypothesis) -> float:
+        return -h.score / (len(h.tokens) ** length_penalty if length_penalty else 1.0)
     state = reorder(state, torch.arange(B).repeat_interleave(W))
     prev = torch.full((B * W,), sos, dtype=torch.long)
     # Only beam 0 is live at the start so the W copies of the empty prefix don't repeat.
@@ -96,7 +107,7 @@ def beam_search(step: Step, state: Any, *, batch_size: int, width: int, sos: int
             finished[b].append(Hypothesis(tuple(tokens[b, w].tolist()) + (eos,),
                                           float(eos_total[b, w])))
         for b in range(B):
-            finished[b] = sorted(finished[b], key=lambda h: -h.score)[:W]
+            finished[b] = sorted(finished[b], key=rank)[:W]
         if t == max_len - 1:
             break
         total[..., eos] = float("-inf")
@@ -105,7 +116,8 @@ def beam_search(step: Step, state: Any, *, batch_size: int, width: int, sos: int
         tokens = torch.cat([tokens.gather(1, beam.unsqueeze(-1).expand(B, W, t)),
                             tok.unsqueeze(-1)], dim=-1)
         for b in range(B):
-            if len(finished[b]) >= W and not scores[b, 0] > finished[b][-1].score:
+            if (not length_penalty and len(finished[b]) >= W
+                    and not scores[b, 0] > finished[b][-1].score):
                 done[b] = True
         scores[done] = float("-inf")
         if bool(done.all()) or not bool(torch.isfinite(scores).any()):

@@ -84,8 +84,10 @@ def encode_sentence(vocab: Any, sentence: str | Sequence[int]) -> list[int]:
 
 @torch.no_grad()
 def describe_features(model: MotionToLanguage, features: np.ndarray, *, width: int = 5,
-                      max_len: int | None = None) -> list[tuple[str, float]]:
-    """features (T, F) raw -> W sentences with their total log probability, best first.
+                      max_len: int | None = None, length_penalty: float = 0.0
+                      ) -> list[tuple[str, float]]:
+    """features (T, F) raw -> W sentences with their total log probability, best first
+    (ranked by the total, or by total / length ** ``length_penalty``; see ``beam_search``).
 
     width=1 uses greedy decoding.
     """
@@ -101,7 +103,7 @@ def describe_features(model: MotionToLanguage, features: np.ndarray, *, width: i
     if width == 1:
         hyps = greedy_search(model.step, state, **kw)
     else:
-        hyps = beam_search(model.step, state, width=width, **kw)[0]
+        hyps = beam_search(model.step, state, width=width, length_penalty=length_penalty, **kw)[0]
     return [(_words(model.vocab, h.tokens), h.score) for h in hyps]
 
 
@@ -142,10 +144,11 @@ def _features_of(model) -> Any:
 
 
 def describe(model: MotionToLanguage, motion, *, width: int = 5,
-             max_len: int | None = None) -> list[tuple[str, float]]:
+             max_len: int | None = None, length_penalty: float = 0.0) -> list[tuple[str, float]]:
     """A :class:`Motion` -> W sentences with their total log probability, best first."""
     frames = motion_frames(_features_of(model), motion, 1)[0]
-    return describe_features(model, frames, width=width, max_len=max_len)
+    return describe_features(model, frames, width=width, max_len=max_len,
+                             length_penalty=length_penalty)
 
 
 def generate(model: LanguageToMotion, sentence: str | Sequence[int], *, width: int = 5,

@@ -42,7 +42,7 @@ def text_scores(refs: list[list[str]], hyps: list[str]) -> dict[str, float]:
 
 
 def evaluate_m2l(model, frames: Mapping[str, np.ndarray], references: Mapping[str, Sequence[str]],
-                 width: int = 5) -> dict:
+                 width: int = 5, length_penalty: float = 0.0) -> dict:
     """Describe every motion with beam width W and score the hypotheses.
 
     Returns ``{"n", "width", "bleu_by_rank" [W], "rank_bleu_spearman", "bleu", "bleu1",
@@ -51,7 +51,8 @@ def evaluate_m2l(model, frames: Mapping[str, np.ndarray], references: Mapping[st
     ids = sorted(frames)
     ranked = []
     for i in progress(ids, desc="describe", unit="motion"):
-        hyps = [normalize(t) for t, _ in describe_features(model, frames[i], width=width)]
+        hyps = [normalize(t) for t, _ in describe_features(model, frames[i], width=width,
+                                                           length_penalty=length_penalty)]
         ranked.append((hyps + [hyps[-1]] * width)[:width])  # pad rare short beams
     refs = _refs(references, ids)
     top = [r[0] for r in ranked]
