@@ -18,9 +18,11 @@ for n in 6000 3000; do
 done
 # 2. the two models: paper-size M2L; L2M with a shrunk decoder; in parallel
 "$ML" train m2l --data "$WORK/corpus6000" --out "$WORK/m2l" --epochs 24 --batch-size 64 --offsets 1 &
+M2L=$!
 "$ML" train l2m --data "$WORK/corpus3000" --out "$WORK/l2m" --epochs 8 --batch-size 64 --offsets 1 \
     --dec-hidden 128 --dec-layers 2 --components 5 --end-weight 10 &
-wait
+L2M=$!
+wait $M2L && wait $L2M   # a failed run stops the script before anything is shipped
 # 3. ship the final checkpoints (self-describing: config, vocabulary, normaliser, weights)
 mkdir -p "$HERE/src/motionlang/data/models"
 cp "$WORK/m2l/model.pt" "$HERE/src/motionlang/data/models/m2l.pt"

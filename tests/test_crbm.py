@@ -223,7 +223,8 @@ def test_cd_k_and_negative_start_options():
     # CD-1 from the data is the default; the other two differ from it
     for other in ("{'cd_steps': 3}", "{'negative_start': 'previous'}"):
         assert not np.allclose(grads["{}"]["W"], grads[other]["W"])
-    # the positive statistics are the same whatever the negative chain
+    # with negative_start="previous" the negative chain starts from frame t-1 (past[:, :D]):
+    # the visible-bias statistic is v0 minus the reconstruction from there
     m = CRBM(CRBMConfig(n_hidden=5, order=2, negative_start="previous"), 3)
     for k in PARAMS:
         setattr(m, k, getattr(base, k).copy())

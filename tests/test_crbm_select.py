@@ -59,3 +59,18 @@ def test_validation_split_holds_out_training_trials_only():
     assert sorted(val.labels[t] for t in val.test) == ["jog", "jog", "walk", "walk"]
     for name in VALIDATION_TRIALS:
         np.testing.assert_array_equal(val.test[name], data.train[data.train_names.index(name)])
+
+
+def test_choose_prefers_the_best_eligible_run_and_falls_back_to_the_best():
+    from motionlang.evaluation.crbm_select import choose
+
+    def run(score, kept):
+        return {"score": score, "generation": {"a": {"style_kept": kept[0]},
+                                               "b": {"style_kept": kept[1]}}}
+    runs = [run(0.5, (1.0, 0.2)), run(0.6, (0.95, 0.9)), run(0.7, (1.0, 1.0))]
+    best, ok = choose(runs, 0.9, held_out=("a", "b"))
+    assert best is runs[1] and ok == runs[1:]          # 0.5 fails the gate on trial b
+    best, ok = choose(runs, 0.99, held_out=("a", "b"))
+    assert best is runs[2] and ok == [runs[2]]
+    best, ok = choose(runs[:1], 0.9, held_out=("a", "b"))
+    assert best is runs[0] and ok == []                 # nobody eligible: best overall

@@ -34,7 +34,7 @@ def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
     m2l_dir, l2m_dir = tmp_path / "m2l", tmp_path / "l2m"
     assert main(["train", "m2l", "--data", str(corpus), "--out", str(m2l_dir), *TINY]) == 0
     assert main(["train", "l2m", "--data", str(corpus), "--out", str(l2m_dir), *TINY,
-                 "--components", "2", "--attention"]) == 0
+                 "--components", "2", "--attention", "--input-noise", "0.3", "--time-input"]) == 0
     for d in (m2l_dir, l2m_dir):
         assert {"model.pt", "best.pt", "last.pt", "history.json", "splits"} <= \
             {p.name for p in d.iterdir()}
@@ -50,8 +50,17 @@ def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
     assert [h["rank"] for h in hyps] == [1, 2, 3]
     assert all(h["text"] for h in hyps)                       # no empty sentence
     assert hyps[0]["log_p"] >= hyps[1]["log_p"] >= hyps[2]["log_p"]
+    assert main(["describe", str(motion), "--model", str(m2l_dir / "model.pt"), "-w", "3",
+                 "--length-penalty", "1", "--json"]) == 0
+    normed = json.loads(capsys.readouterr().out)
+    assert len(normed) == 3 and all(h["text"] for h in normed)
+    assert main(["describe", str(motion), "--length-penalty", "-1"]) == 2
+    assert "--length-penalty must be" in capsys.readouterr().err
+    assert main(["train", "l2m", "--data", str(corpus), "--out", str(tmp_path / "bad"), *TINY,
+                 "--input-noise", "-1"]) == 2
+    assert "input_noise" in capsys.readouterr().err
     l2m = LanguageToMotion.load(l2m_dir / "model.pt")
-    assert l2m.config.attention
+    assert l2m.config.attention and l2m.config.time_input and l2m.config.input_noise == 0.3
     out = tmp_path / "gen.bvh"
     assert main(["generate", "a person walks forward", "--model", str(l2m_dir / "model.pt"),
                  "-o", str(out), "-w", "2", "--max-frames", "12", "--min-frames", "6",

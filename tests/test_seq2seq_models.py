@@ -205,8 +205,8 @@ def test_l2m_end_weight_reweights_the_stop_frames():
 
 
 def test_l2m_time_input_changes_the_prediction():
-    # Same weights apart from the clock column: zeroing that column's weights must change
-    # nothing at t=0 (clock 0) and something later on, so the clock really reaches the decoder.
+    # Zeroing the first layer's clock weights (later layers see the clock too) must change
+    # nothing at t=0, where the clock is 0, and something later on: the clock is used.
     model, batch = tiny("l2m", False, time_input=True), make_batch()
     model.eval()
     with torch.no_grad():

@@ -135,6 +135,7 @@ def cmd_describe(args: argparse.Namespace) -> int:
     from motionlang.formats import read_motion
     from motionlang.models.m2l import MotionToLanguage
 
+    _check_length_penalty(args.length_penalty)
     model = MotionToLanguage.load(_model_path(args.model, "m2l"))
     hyps = describe(model, read_motion(args.motion), width=args.width,
                     length_penalty=args.length_penalty)
@@ -199,6 +200,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     from motionlang.utils.atomic import atomic_write
     from motionlang.utils.progress import progress
 
+    _check_length_penalty(args.length_penalty)
     m2l_path = Path(args.m2l)
     m2l = MotionToLanguage.load(m2l_path)
     splits = load_splits(args.splits or m2l_path.parent / "splits")
@@ -212,6 +214,10 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         return {i: motion_frames(m2l.features, records[i].load_motion(), 1)[0]
                 for i in progress(ids, desc="encode", unit="motion")}
     # --limit caps the evaluated split only: the baseline searches the whole training set
+    n_eval = len([i for i in splits[args.split] if i in records][:args.limit or None])
+    if args.tsne and n_eval < 4:
+        raise MotionlangError(f"--tsne needs at least 4 motions in the {args.split!r} split, "
+                              f"it has {n_eval}")
     test, train = frames(splits[args.split], args.limit or None), frames(splits["train"])
     refs = {i: records[i].annotations for i in {**test, **train}}
     report = {"split": args.split, "length_penalty": args.length_penalty,
@@ -258,6 +264,12 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _check_length_penalty(alpha: float) -> None:
+    import math
+    if not (math.isfinite(alpha) and alpha >= 0):
+        raise MotionlangError(f"--length-penalty must be a finite number >= 0, got {alpha}")
+
+
 def _ground_truths(records: dict, ids) -> dict:
     """{id: ground-truth primitives} when every record carries them (procedural corpus)."""
     from motionlang.datasets.synth import ground_truth
@@ -293,7 +305,8 @@ def register(subparsers) -> None:
     p.add_argument("--model", help="M2L model file (default: the packaged one)")
     p.add_argument("-w", "--width", type=int, default=5, help="beam width = hypotheses shown")
     p.add_argument("--length-penalty", type=float, default=0.0, metavar="ALPHA",
-                   help="rank by log P / length**ALPHA (default 0: total log P, the paper's)")
+                   help="rank by log P / length**ALPHA (default 0: total log P, the paper's; "
+                        "no effect with -w 1)")
     p.add_argument("--json", action="store_true")
     p.set_defaults(func=cmd_describe)
     p = subparsers.add_parser("generate", help="generate a motion from English (L2M)")

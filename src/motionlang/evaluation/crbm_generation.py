@@ -2,7 +2,7 @@
 
 Style of a generated frame = the label (walk / jog) of the nearest training frame in the
 model's normalised feature space (Euclidean over all features except the root's ground
-displacement, whose sign depends on the walking direction, not the style).
+step, whose speed alone would give the style away: the label should judge the pose).
 
 Known problem (measured 2026-11-22, model of ``crbm_reproduce.SELECTED`` trained on all 31
 trials, 1000 frames, 30 Gibbs updates, seed 0): from the jogging test frames every frame stays
@@ -11,7 +11,7 @@ a jog after ~60 frames (5.8 % of frames labelled walk). From the first frames of
 31 training trials the same happens to nearly every walk. Tried without a fix: world-frame or
 facing-frame root steps, yaw rate instead of heading, 1-100 Gibbs updates, mean-field
 hiddens, weight decays 2e-4 - 2e-2 (A and W separately), 1000-4000 passes, CD-10, the negative
-chain started from the previous frame (``CRBMConfig.negative_start``), order 6, the two-level
+chain started from the previous frame (``CRBMConfig.negative_start``), orders 1, 2 and 6, the two-level
 model. Settings that keep walking (e.g. weight decay 2e-2, 1000 passes) walk on the spot.
 """
 from __future__ import annotations
@@ -22,7 +22,7 @@ from motionlang.evaluation.crbm_fill import Cmu35
 from motionlang.evaluation.crbm_reproduce import model_frames
 from motionlang.models.crbm import CRBM
 
-STYLE_DIMS = np.r_[1, 3:59]   # all model features but root x / z displacement
+STYLE_DIMS = np.r_[1, 3:59]   # all model features but the root's ground step
 METRES_PER_UNIT = 0.0254 / 0.45   # 35.asf: ":units length 0.45" of inches
 FPS = 30.0
 

@@ -239,7 +239,7 @@ def reproduce(data_dir: str | Path, cfg: ReproduceConfig | None = None, *,
         for part in ERASED:
             res = fill_trial(data, trial, part, crbm, ar, cfg)
             table[trial][part] = {**{m: round(res["errors"][m], 4) for m in METHODS},
-                                  "CRBM std over repeats": round(res["crbm_std"], 4),
+                                  "CRBM (sampled hiddens) std over repeats": round(res["crbm_std"], 4),
                                   "erased frames": len(res["true59"]) - res["gap_start"]}
             fills[(trial, part)] = res
     out = {"table": table, "paper": PAPER,
@@ -258,12 +258,13 @@ def format_table(result: dict) -> str:
         paper = result["paper"].get(trial, {})
         lines.append(f"Missing data, {TRIAL_NAMES.get(trial, trial)}: squared error per erased "
                      f"dimension, summed over the erased frames (normalised space)")
-        lines.append(f"{'method':<20}" + "".join(f"{p + ' (ours)':>20}{'paper':>8}" for p in parts))
+        lines.append(f"{'method':<24}" + "".join(f"{p + ' (ours)':>20}{'paper':>8}" for p in parts))
         for m in METHODS:
-            row = f"{m:<20}"
+            row = f"{m:<24}"
             for p, cells in parts.items():
                 ref = paper.get(m, {}).get(p)
-                extra = f" ±{cells['CRBM std over repeats']:.2f}" if m == "CRBM (sampled hiddens)" else ""
+                extra = (f" ±{cells['CRBM (sampled hiddens) std over repeats']:.2f}"
+                         if m == "CRBM (sampled hiddens)" else "")
                 row += f"{cells[m]:>14.2f}{extra:>6}" + (f"{ref:>8.2f}" if ref is not None else f"{'-':>8}")
             lines.append(row)
         lines.append("")

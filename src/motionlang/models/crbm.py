@@ -302,7 +302,7 @@ class CRBM:
         """Causal on-line generation from ``init`` (>= order real frames, (n0, D) unnormalised,
         or (S, n0, D) for S different starts generated side by side).
 
-        Returns (n_samples, n0 + n_frames, D) unnormalised, starting with ``init``. Each new
+        Returns (n_samples or S, n0 + n_frames, D) unnormalised, starting with ``init``. Each new
         frame starts from the previous one and is refined by ``n_gibbs`` Gibbs updates
         (with hidden probabilities instead of samples if ``mean_field``: deterministic unless
         ``hidden_noise`` > 0).

@@ -25,6 +25,7 @@ from typing import Any
 import torch
 from torch import nn
 
+from motionlang.errors import MotionlangError
 from motionlang.models import mdn
 from motionlang.models.checkpoint import Seq2SeqCheckpoint
 from motionlang.models.recurrent import AdditiveAttention, BiGRUEncoder, StackedDecoder
@@ -43,6 +44,8 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
         c = self.config = config
         if c.loss not in ("surrogate", "exact"):
             raise ValueError(f"L2MConfig.loss must be 'surrogate' or 'exact', not {c.loss!r}")
+        if not c.input_noise >= 0:
+            raise MotionlangError(f"L2MConfig.input_noise must be >= 0, not {c.input_noise!r}")
         self.vocab, self.normalizer, self.features = vocab, normalizer, features
         self.embed = nn.Embedding(c.vocab_size, c.embed_dim, padding_idx=c.pad_id)
         self.embed_norm = nn.LayerNorm(c.embed_dim)
