@@ -128,3 +128,20 @@ def test_building_the_parser_does_not_import_torch():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout.strip()
     assert out == "[]"
+
+
+def test_data_preparation_logs_its_stages_once(corpus, caplog):
+    # logged runs (stderr not a terminal, so no progress bar) still say what takes the time;
+    # the second call reads the cache and has nothing to announce
+    import logging
+
+    from motionlang.training.seq2seq_data import build_pairs
+    with caplog.at_level(logging.INFO, logger="motionlang.training.seq2seq_data"):
+        build_pairs(corpus, offsets=2)
+    msgs = [r.getMessage() for r in caplog.records]
+    assert any(m.startswith("fitting angles features on") for m in msgs)
+    assert any(m.startswith("encoding") and "x 2 offsets" in m for m in msgs)
+    caplog.clear()
+    with caplog.at_level(logging.INFO, logger="motionlang.training.seq2seq_data"):
+        build_pairs(corpus, offsets=2)
+    assert not caplog.records

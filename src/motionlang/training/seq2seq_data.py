@@ -14,6 +14,7 @@ flag (AnglesFeatures) is dropped, since L2M predicts its own end-of-motion flag.
 from __future__ import annotations
 
 import json
+import logging
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Sequence
@@ -31,6 +32,7 @@ from motionlang.features.base import FeatureSet, features_from_dict
 from motionlang.utils.progress import progress
 
 CACHE_VERSION = "seq2seq-pairs-1"
+log = logging.getLogger(__name__)
 
 
 def load_records(data: str | Path, max_seconds: float | None = 30.0) -> list:
@@ -88,6 +90,8 @@ def _thin(motion, fps: float):
 def _fit_features(kind: str, train: Sequence) -> FeatureSet:
     """Fit on the training motions (cached by file identity)."""
     def compute():
+        # one line for logs too: the bar below is hidden when stderr is not a terminal
+        log.info(f"fitting {kind} features on {len(train)} training motions (cached after)")
         fs = make_features(kind)
         motions = []
         for rec in progress(train, desc="fit features", unit="motion"):
@@ -104,6 +108,7 @@ def _fit_features(kind: str, train: Sequence) -> FeatureSet:
 def _encode(fs: FeatureSet, records: Sequence, offsets: int) -> dict[str, list[np.ndarray]]:
     """{id: sequences} for ``records`` (cached by files + fitted features + offsets)."""
     def compute():
+        log.info(f"encoding {len(records)} motions x {offsets} offsets (cached after)")
         arrays: dict[str, np.ndarray] = {}
         for i, rec in enumerate(progress(records, desc="encode", unit="motion")):
             for k, s in enumerate(motion_frames(fs, rec.load_motion(), offsets)):
