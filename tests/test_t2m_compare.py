@@ -171,3 +171,12 @@ def test_ranges_of_cropped_sequences(data):
     cut, cut_truth = _ranges(rec, k)
     assert cut == [(a, min(b, k)) for a, b in full if a < k]
     assert cut_truth == truth[:len(cut)] and len(cut) < len(full)
+
+
+def test_model_spec_names_may_hold_equals_signs(tmp_path):
+    from motionlang.cli.twostream_commands import model_spec
+    assert model_spec("full (h=128)=runs/ts.pt") == ("full (h=128)", "runs/ts.pt")
+    assert model_spec("runs/ts.pt") == ("ts", "runs/ts.pt")
+    odd = tmp_path / "a=b.pt"
+    odd.write_bytes(b"x")
+    assert model_spec(str(odd)) == ("a=b", str(odd))     # an existing file wins

@@ -65,6 +65,15 @@ def cmd_train(args: argparse.Namespace) -> int:
     return 0
 
 
+def model_spec(spec: str) -> tuple[str, str]:
+    """``[NAME=]PATH`` -> (name, path). An existing file is a path even if it holds "=";
+    otherwise the name ends at the *last* "=", so names may contain "=" ("h=128")."""
+    if Path(spec).is_file():
+        return Path(spec).stem, spec
+    name, sep, path = spec.rpartition("=")
+    return (name, path) if sep and name else (Path(spec).stem, spec.lstrip("="))
+
+
 def register_train(train_sub) -> None:
     """Hook of ``cli/train_commands.py``: adds ``train twostream``."""
     h = "train the two-stream text-to-motion model (Ghosh et al. 2021)"
@@ -104,9 +113,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     _threads(args.threads)
     models = {}
     for spec in args.model:
-        name, sep, path = spec.partition("=")
-        if not sep:
-            name, path = Path(spec).stem, spec
+        name, path = model_spec(spec)
         models[name] = load_any_t2m(path)
     data = build_twostream_data(args.data, seed=args.seed, max_seconds=args.max_seconds)
     _, table = compare(models, data, split=args.split, limit=args.limit or None,
