@@ -34,7 +34,8 @@ def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
     m2l_dir, l2m_dir = tmp_path / "m2l", tmp_path / "l2m"
     assert main(["train", "m2l", "--data", str(corpus), "--out", str(m2l_dir), *TINY]) == 0
     assert main(["train", "l2m", "--data", str(corpus), "--out", str(l2m_dir), *TINY,
-                 "--components", "2", "--attention", "--input-noise", "0.3", "--time-input"]) == 0
+                 "--components", "2", "--attention", "--input-noise", "0.3", "--time-input",
+                 "--rollout", "0.5", "--rollout-warmup", "2"]) == 0
     for d in (m2l_dir, l2m_dir):
         assert {"model.pt", "best.pt", "last.pt", "history.json", "splits"} <= \
             {p.name for p in d.iterdir()}
@@ -61,6 +62,7 @@ def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
     assert "input_noise" in capsys.readouterr().err
     l2m = LanguageToMotion.load(l2m_dir / "model.pt")
     assert l2m.config.attention and l2m.config.time_input and l2m.config.input_noise == 0.3
+    assert l2m.config.rollout == 0.5 and int(l2m.rollout_steps) > 0
     out = tmp_path / "gen.bvh"
     assert main(["generate", "a person walks forward", "--model", str(l2m_dir / "model.pt"),
                  "-o", str(out), "-w", "2", "--max-frames", "12", "--min-frames", "6",

@@ -9,6 +9,7 @@ from motionlang.decoding.beam import beam_search
 from motionlang.decoding.motion_beam import mean_decode, sampled_beam
 from motionlang.models.l2m import L2MConfig, LanguageToMotion
 from motionlang.models.m2l import M2LConfig, MotionToLanguage
+from motionlang.models.mdn import sample
 
 torch.set_num_threads(1)
 F_DIM, V = 5, 9      # features per frame; vocabulary with PAD SOS EOS UNK + 5 words
@@ -233,3 +234,53 @@ def test_l2m_input_noise_only_while_training():
         torch.manual_seed(1)
         plain = clean.loss(batch)["loss"]
     assert not torch.allclose(noisy, plain)
+
+
+def test_l2m_rollout_is_teacher_forcing_at_zero_and_feeds_own_frames_at_one():
+    batch = make_batch()
+    forced = tiny("l2m", False, time_input=True)
+    rolled = tiny("l2m", False, time_input=True, rollout=1.0)
+    rolled.load_state_dict(forced.state_dict())
+    forced.train()
+    rolled.train()
+    with torch.no_grad():
+        p_forced = forced(batch["tokens"], batch["token_lengths"], batch["motion"])
+        torch.manual_seed(3)
+        p_rolled = rolled(batch["tokens"], batch["token_lengths"], batch["motion"])
+    assert p_rolled.mu.shape == p_forced.mu.shape
+    # step 0 sees the same zero frame either way; later steps see the model's own samples
+    torch.testing.assert_close(p_rolled.mu[:, 0], p_forced.mu[:, 0])
+    assert not torch.allclose(p_rolled.mu[:, 1:], p_forced.mu[:, 1:])
+    # replaying the rollout by hand: feed each step the frame sampled from the step before
+    torch.manual_seed(3)
+    state = rolled.encode(batch["tokens"], batch["token_lengths"])
+    x = torch.zeros(4, F_DIM)
+    with torch.no_grad():
+        for t in range(batch["motion"].shape[1]):
+            p, state = rolled.step(state, x)
+            torch.testing.assert_close(p.mu, p_rolled.mu[:, t])
+            x = sample(p, 1)[0][:, 0]
+            torch.rand(4, 1)      # the coin flip the training forward draws (always own at P=1)
+    # evaluation is always teacher forced
+    rolled.eval()
+    forced.eval()
+    with torch.no_grad():
+        torch.testing.assert_close(rolled.loss(batch)["loss"], forced.loss(batch)["loss"])
+
+
+def test_l2m_rollout_ramps_up_and_resumes_with_the_weights():
+    model = tiny("l2m", False, rollout=0.6, rollout_warmup=4)
+    batch = make_batch()
+    model.train()
+    probs = []
+    for _ in range(6):
+        probs.append(model.rollout_prob())
+        model.loss(batch)
+    assert probs == pytest.approx([0.0, 0.15, 0.3, 0.45, 0.6, 0.6])
+    again = tiny("l2m", False, rollout=0.6, rollout_warmup=4)
+    again.load_state_dict(model.state_dict())
+    assert again.rollout_prob() == pytest.approx(0.6)
+    old = {k: v for k, v in model.state_dict().items() if k != "rollout_steps"}
+    tiny("l2m", False).load_state_dict(old)          # checkpoints from before the option load
+    with pytest.raises(Exception, match="rollout"):
+        tiny("l2m", False, rollout=1.5)

@@ -57,6 +57,11 @@ def _add_train(sub, name: str, help_: str) -> None:
                        help="std of noise on teacher-forced previous frames (paper: 0)")
         p.add_argument("--time-input", action="store_true",
                        help="decoder also sees the elapsed time (not in the paper)")
+        p.add_argument("--rollout", type=float, default=d.rollout, metavar="P",
+                       help="scheduled sampling: while training, feed the model's own sampled "
+                            "frame instead of the true one with probability P (paper: 0)")
+        p.add_argument("--rollout-warmup", type=int, default=d.rollout_warmup, metavar="STEPS",
+                       help="optimiser steps over which that probability ramps up from 0")
     p.set_defaults(func=cmd_train, model_kind=name)
 
 
@@ -94,6 +99,8 @@ def cmd_train(args: argparse.Namespace) -> int:
                                            end_weight=args.end_weight,
                                            input_noise=args.input_noise,
                                            time_input=args.time_input,
+                                           rollout=args.rollout,
+                                           rollout_warmup=args.rollout_warmup,
                                            max_frames=int(1.5 * longest), **sizes),
                                  data.vocab, features=data.features)
     cfg = TrainConfig(epochs=args.epochs, batch_size=args.batch_size, lr=args.lr,

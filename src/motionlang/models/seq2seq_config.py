@@ -54,6 +54,8 @@ class L2MConfig:
     end_weight: float = 1.0     # BCE weight of a motion's last frame (1 = the paper's loss)
     input_noise: float = 0.0    # std of noise on the teacher-forced previous frames (0 = paper)
     time_input: bool = False    # decoder also sees the elapsed time (frames / 100) (not in paper)
+    rollout: float = 0.0        # scheduled sampling: P(feed own sampled frame) while training
+    rollout_warmup: int = 0     # optimiser steps over which that probability ramps up from 0
     pad_id: int = 0
     max_frames: int = 300       # decoding cap (frames)
 
