@@ -261,11 +261,21 @@ def test_l2m_rollout_is_teacher_forcing_at_zero_and_feeds_own_frames_at_one():
             torch.testing.assert_close(p.mu, p_rolled.mu[:, t])
             x = sample(p, 1)[0][:, 0]
             torch.rand(4, 1)      # the coin flip the training forward draws (always own at P=1)
-    # evaluation is always teacher forced
+    # evaluation: teacher forced in forward; the validation loss runs on own frames with a
+    # fixed RNG (reproducible), and equals teacher forcing at P = 0
     rolled.eval()
     forced.eval()
     with torch.no_grad():
-        torch.testing.assert_close(rolled.loss(batch)["loss"], forced.loss(batch)["loss"])
+        torch.testing.assert_close(rolled(batch["tokens"], batch["token_lengths"],
+                                          batch["motion"]).mu,
+                                   forced(batch["tokens"], batch["token_lengths"],
+                                          batch["motion"]).mu)
+        val = rolled.loss(batch)["loss"]
+        torch.testing.assert_close(rolled.loss(batch)["loss"], val)
+        assert not torch.allclose(val, forced.loss(batch)["loss"])
+        p0 = rolled.rollout_forward(batch["tokens"], batch["token_lengths"], batch["motion"], 0.0)
+        torch.testing.assert_close(p0.mu, forced(batch["tokens"], batch["token_lengths"],
+                                                 batch["motion"]).mu)
 
 
 def test_l2m_rollout_ramps_up_and_resumes_with_the_weights():

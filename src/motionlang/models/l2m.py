@@ -24,7 +24,9 @@ at the step before instead of the true one (no gradient through the sample); the
 probability ramps up linearly over ``rollout_warmup`` optimiser steps. Teacher forcing alone
 teaches "continue the frames you are shown": on our corpus such a model, left to run on its
 own frames, settles into standing even when primed with 20 true frames. Training on its
-own frames makes it follow the sentence instead. It decodes step by step (slower).
+own frames makes it follow the sentence instead. It decodes step by step (slower). The
+validation loss of such a model (``loss`` in eval mode) is computed the same way with a
+fixed RNG, so that the best epoch is the one that does best on its own frames.
 """
 from __future__ import annotations
 
@@ -109,7 +111,8 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
 
     def forward(self, tokens: torch.Tensor, token_lengths: torch.Tensor,
                 motion: torch.Tensor) -> mdn.MixtureParams:
-        """Teacher forcing on target motion (B, T, F): params of frames 0..T-1, (B, T, ...)."""
+        """Params of frames 0..T-1 (B, T, ...) given the target motion (B, T, F): teacher
+        forced, or while training with ``rollout`` on, partly fed the model's own frames."""
         prev = torch.cat([motion.new_zeros(motion.shape[0], 1, motion.shape[2]),
                           motion[:, :-1]], dim=1)
         if self.training and self.config.input_noise > 0:
@@ -123,7 +126,16 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
             return params
         return self._rollout(state, prev, p)
 
-    def _rollout(self, state: dict, prev: torch.Tensor, p: float) -> mdn.MixtureParams:
+    def rollout_forward(self, tokens: torch.Tensor, token_lengths: torch.Tensor,
+                        motion: torch.Tensor, p: float, seed: int = 0) -> mdn.MixtureParams:
+        """Like :meth:`forward` with own-frame probability ``p``, reproducible (own RNG)."""
+        prev = torch.cat([motion.new_zeros(motion.shape[0], 1, motion.shape[2]),
+                          motion[:, :-1]], dim=1)
+        state = self.encode(tokens, token_lengths)
+        return self._rollout(state, prev, p, torch.Generator().manual_seed(seed))
+
+    def _rollout(self, state: dict, prev: torch.Tensor, p: float,
+                 generator: torch.Generator | None = None) -> mdn.MixtureParams:
         """Scheduled sampling over prev (B, T, F): params with leading (B, T)."""
         B, T, _ = prev.shape
         steps = []
@@ -134,8 +146,8 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
             steps.append(params)
             if t + 1 < T:
                 with torch.no_grad():
-                    own = mdn.sample(params.flatten(), 1)[0][:, 0]
-                use_own = torch.rand(B, 1) < p
+                    own = mdn.sample(params.flatten(), 1, generator)[0][:, 0]
+                use_own = torch.rand(B, 1, generator=generator) < p
                 x = torch.where(use_own, own, prev[:, t + 1])
         return mdn.MixtureParams(*(torch.cat([getattr(s, f) for s in steps], dim=1)
                                    for f in ("logit_pi", "mu", "log_sigma", "active_logit")))
@@ -152,7 +164,13 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
         frame's negative log density (surrogate or exact), ``active_bce`` the flag's."""
         motion, lengths = batch["motion"], batch["motion_lengths"]
         B, T, _ = motion.shape
-        params = self(batch["tokens"], batch["token_lengths"], motion).flatten()
+        if not self.training and self.config.rollout > 0:
+            # validation of a scheduled-sampling model: on its own frames (as it will
+            # generate), with a fixed RNG so that epochs compare; picks best.pt
+            params = self.rollout_forward(batch["tokens"], batch["token_lengths"], motion,
+                                          self.config.rollout).flatten()
+        else:
+            params = self(batch["tokens"], batch["token_lengths"], motion).flatten()
         t = torch.arange(T).unsqueeze(0)
         valid = (t < lengths.unsqueeze(1)).reshape(-1)
         active = (t < (lengths.unsqueeze(1) - 1)).reshape(-1).float()
