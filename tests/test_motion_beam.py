@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 import torch
 
-from motionlang.decoding.motion_beam import mean_decode, sampled_beam
+from motionlang.decoding.motion_beam import mean_decode, sample_decode, sampled_beam
 from motionlang.models.mdn import (MixtureParams, active_log_prob, mixture_log_prob,
                                    sample)
 
@@ -135,3 +135,23 @@ def test_length_norm_ranks_by_log_likelihood_per_frame():
         assert h.score == pytest.approx(replay_score(params_for, h.frames), abs=1e-3)
     best_total = max(h.score / len(h.frames) for h in total)
     assert per_frame[0] >= best_total - 1e-9         # same draws, better per-frame pick
+
+
+def test_sample_decode_draws_independent_motions_ended_by_the_flag():
+    step, params_for = make_step(stop_at=4)
+    hyps = sample_decode(step, torch.zeros(1, dtype=torch.long), width=3, max_frames=10,
+                         dim=D, generator=torch.Generator().manual_seed(5))
+    assert len(hyps) == 3
+    assert all(len(h.frames) == 5 for h in hyps)       # flag on for t < 4, off at t = 4
+    assert [h.score for h in hyps] == sorted((h.score for h in hyps), reverse=True)
+    assert not np.allclose(hyps[0].frames, hyps[1].frames)  # independent draws
+    for h in hyps:
+        assert h.score == pytest.approx(replay_score(params_for, h.frames), abs=1e-3)
+    # the draws are those of the mixture: replaying the RNG gives the same first frames
+    g = torch.Generator().manual_seed(5)
+    first = sample(params_for(torch.zeros(3, dtype=torch.long), torch.zeros(3, D)), 1, g)[0]
+    assert sorted(map(tuple, first[:, 0].numpy().round(5))) == \
+        sorted(tuple(h.frames[0].round(5)) for h in hyps)
+    again = sample_decode(step, torch.zeros(1, dtype=torch.long), width=3, max_frames=10,
+                          dim=D, generator=torch.Generator().manual_seed(5))
+    assert [h.score for h in again] == [h.score for h in hyps]

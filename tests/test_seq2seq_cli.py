@@ -85,10 +85,26 @@ def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
     assert {"bleu", "rouge_l"} <= set(rep["nearest_neighbour"])
     assert rep["l2m_round_trip"]["n_sentences"] >= 1
     assert "| nearest neighbour |" in report.with_suffix(".md").read_text()
+    assert rep["l2m_round_trip"]["method"] == "mean"
+    assert main(["evaluate", "--m2l", str(m2l_dir / "model.pt"), "--l2m",
+                 str(l2m_dir / "model.pt"), "--data", str(corpus), "--split", "train", "-w", "2",
+                 "--limit", "2", "--l2m-method", "sample", "--l2m-width", "2",
+                 "-o", str(report)]) == 0
+    rep = json.loads(report.read_text())
+    assert rep["l2m_round_trip"]["method"] == "sample" and rep["l2m_round_trip"]["width"] == 2
+    assert "| L2M round trip (sample) |" in report.with_suffix(".md").read_text()
+    assert main(["evaluate", "--m2l", str(m2l_dir / "model.pt"), "--data", str(corpus),
+                 "--l2m-width", "0"]) == 2
+    assert "--l2m-width must be >= 1" in capsys.readouterr().err
     from motionlang.formats import read_motion
     for path in (out, tmp_path / "gen_2.bvh"):
         m = read_motion(path)
         assert 6 <= m.n_frames <= 12 and np.isfinite(m.joint_angles).all()
+    sampled = tmp_path / "sampled.npz"
+    assert main(["generate", "a person walks forward", "--model", str(l2m_dir / "model.pt"),
+                 "-o", str(sampled), "-w", "2", "--method", "sample", "--max-frames", "12",
+                 "--min-frames", "6"]) == 0
+    assert sampled.is_file()
 
 
 def test_custom_bvh_folder_with_position_features(corpus, tmp_path, capsys):

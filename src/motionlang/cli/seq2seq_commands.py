@@ -208,6 +208,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     from motionlang.utils.progress import progress
 
     _check_length_penalty(args.length_penalty)
+    if args.l2m_width < 1:
+        raise MotionlangError(f"--l2m-width must be >= 1, got {args.l2m_width}")
     m2l_path = Path(args.m2l)
     m2l = MotionToLanguage.load(m2l_path)
     splits = load_splits(args.splits or m2l_path.parent / "splits")
@@ -234,7 +236,9 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         from motionlang.models.l2m import LanguageToMotion
         l2m = LanguageToMotion.load(args.l2m)
         report["l2m_round_trip"] = ev.evaluate_round_trip(
-            l2m, m2l, {i: refs[i] for i in test}, report["m2l"]["bleu"])
+            l2m, m2l, {i: refs[i] for i in test}, report["m2l"]["bleu"],
+            method=args.l2m_method, width=args.l2m_width)
+        report["l2m_round_trip"].update(method=args.l2m_method, width=args.l2m_width)
     truths = _ground_truths(records, test)
     if truths:   # a procedural corpus: the parameters each description states, checked
         top = {e["id"]: e["hypotheses"][0] for e in report["m2l"].pop("all")}
@@ -249,7 +253,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         report["tsne"] = str(args.tsne)
     table = ev.markdown_table({"M2L (top hypothesis)": report["m2l"],
                                "nearest neighbour": report["nearest_neighbour"],
-                               **({"L2M round trip": report["l2m_round_trip"]}
+                               **({f"L2M round trip ({args.l2m_method})":
+                                   report["l2m_round_trip"]}
                                   if "l2m_round_trip" in report else {})})
     by_rank = " ".join(f"{b:.3f}" for b in report["m2l"]["bleu_by_rank"])
     table += f"\nM2L BLEU of hypotheses 1..{args.width}: {by_rank}\n"
@@ -321,7 +326,8 @@ def register(subparsers) -> None:
     p.add_argument("-o", "--output", required=True, help="out.gif, .mp4, .bvh or .npz")
     p.add_argument("--model", help="L2M model file (default: the packaged one)")
     p.add_argument("-w", "--width", type=int, default=5, help="hypotheses (sampled beam)")
-    p.add_argument("--method", choices=("beam", "mean"), default="beam")
+    p.add_argument("--method", choices=("beam", "mean", "sample"), default="beam",
+                   help="sampled beam (default), heaviest-component means, or W ancestral samples")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--max-frames", type=int, default=None,
                    help="length cap in model frames (default: the model's)")
@@ -344,5 +350,9 @@ def register(subparsers) -> None:
     p.add_argument("--tsne", metavar="PNG", help="also plot the context vectors' t-SNE map")
     p.add_argument("--length-penalty", type=float, default=0.0, metavar="ALPHA",
                    help="rank M2L hypotheses by log P / length**ALPHA (default 0: total, the paper's)")
+    p.add_argument("--l2m-method", choices=("mean", "sample", "beam"), default="mean",
+                   help="round trip: how each motion is generated (default: heaviest-component "
+                        "means); the best of --l2m-width hypotheses is described")
+    p.add_argument("--l2m-width", type=int, default=1, metavar="W")
     p.set_defaults(func=cmd_evaluate)
 

@@ -1,4 +1,5 @@
-"""Decoding motions from a mixture-density decoder: the sampled beam and mean decoding.
+"""Decoding motions from a mixture-density decoder: the sampled beam, mean decoding and
+ancestral sampling.
 
 A motion decoder is driven through one callable
 
@@ -124,11 +125,16 @@ def sampled_beam(step: MotionStep, state: Any, *, batch_size: int, width: int,
 @torch.no_grad()
 def mean_decode(step: MotionStep, state: Any, *, batch_size: int, max_frames: int,
                 start: torch.Tensor | None = None, dim: int | None = None,
-                threshold: float = 0.5, min_frames: int = 1) -> list[MotionHypothesis]:
-    """Deterministic decoding: each frame is the mean of the heaviest mixture component,
-    and the motion ends at the first frame whose P(active) < ``threshold`` (or the cap),
-    but not before ``min_frames``.
-    Scores are the log likelihood of the chosen frames and flags.
+                threshold: float = 0.5, min_frames: int = 1,
+                generator: torch.Generator | None = None,
+                sample_frames: bool = False) -> list[MotionHypothesis]:
+    """Decoding one motion per row: each frame is the mean of the heaviest mixture component
+    (or, with ``sample_frames``, a draw from the mixture: ancestral sampling), and the motion
+    ends at the first frame whose P(active) < ``threshold`` (or the cap), but not before
+    ``min_frames``. Scores are the log likelihood of the chosen frames and flags.
+
+    The flag is thresholded rather than sampled even when frames are sampled: a per-frame
+    stop probability of a few percent, drawn at every frame, ends most motions early.
     """
     B = batch_size
     prev = _start(start, B, dim)
@@ -137,7 +143,7 @@ def mean_decode(step: MotionStep, state: Any, *, batch_size: int, max_frames: in
     alive = torch.ones(B, dtype=torch.bool)
     for t in range(max_frames):
         params, state = step(state, prev)
-        x = mode_frame(params)
+        x = sample(params, 1, generator)[0][:, 0] if sample_frames else mode_frame(params)
         a = (torch.sigmoid(params.active_logit) >= threshold).float()
         if t == max_frames - 1:
             a = torch.zeros_like(a)
@@ -153,3 +159,17 @@ def mean_decode(step: MotionStep, state: Any, *, batch_size: int, max_frames: in
         prev = x
     return [MotionHypothesis(torch.stack(o).numpy().astype(np.float32), float(s))
             for o, s in zip(out, score)]
+
+
+def sample_decode(step: MotionStep, state: Any, *, width: int, max_frames: int,
+                  dim: int | None = None, start: torch.Tensor | None = None,
+                  min_frames: int = 1, generator: torch.Generator | None = None,
+                  reorder: Callable[[Any, torch.Tensor], Any] = select_state
+                  ) -> list[MotionHypothesis]:
+    """W independent ancestral samples for ONE input (``state`` has one row), sorted by
+    decreasing log likelihood."""
+    rows = reorder(state, torch.zeros(width, dtype=torch.long))
+    hyps = mean_decode(step, rows, batch_size=width, max_frames=max_frames, start=start,
+                       dim=dim, min_frames=min_frames, generator=generator,
+                       sample_frames=True)
+    return sorted(hyps, key=lambda h: -h.score)

@@ -16,10 +16,13 @@ import numpy as np
 import torch
 
 from motionlang.decoding.beam import beam_search, greedy_search
-from motionlang.decoding.motion_beam import mean_decode, sampled_beam
+from motionlang.decoding.motion_beam import mean_decode, sample_decode, sampled_beam
 from motionlang.errors import MotionlangError
 from motionlang.models.l2m import LanguageToMotion
 from motionlang.models.m2l import MotionToLanguage
+
+#: motion decoding methods of :func:`generate_features`
+METHODS = ("beam", "mean", "sample")
 
 UNK_ID = 3
 
@@ -114,11 +117,12 @@ def generate_features(model: LanguageToMotion, sentence: str | Sequence[int], *,
                       length_norm: bool = False) -> list[tuple[np.ndarray, float]]:
     """Sentence -> W motions as raw features (T, F) with their log likelihood, best first.
 
-    method: "beam" (the sampled beam, ``samples`` candidates per hypothesis and step) or
-    "mean" (one deterministic motion from the heaviest component's means).
+    method: "beam" (the sampled beam, ``samples`` candidates per hypothesis and step),
+    "mean" (one deterministic motion from the heaviest component's means) or "sample"
+    (W independent ancestral samples, ranked by log likelihood).
     """
-    if method not in ("beam", "mean"):
-        raise MotionlangError(f"method must be 'beam' or 'mean', not {method!r}")
+    if method not in METHODS:
+        raise MotionlangError(f"method must be one of {METHODS}, not {method!r}")
     model.eval()
     ids = encode_sentence(model.vocab, sentence)
     state = model.encode(torch.tensor([ids]), torch.tensor([len(ids)]))
@@ -127,6 +131,10 @@ def generate_features(model: LanguageToMotion, sentence: str | Sequence[int], *,
     if method == "mean":
         hyps = mean_decode(model.step, state, batch_size=1, max_frames=cap, dim=F,
                            min_frames=min_frames)
+    elif method == "sample":
+        hyps = sample_decode(model.step, state, width=width, max_frames=cap, dim=F,
+                             min_frames=min_frames,
+                             generator=torch.Generator().manual_seed(seed))
     else:
         hyps = sampled_beam(model.step, state, batch_size=1, width=width, max_frames=cap,
                             samples=samples, dim=F, min_frames=min_frames,
