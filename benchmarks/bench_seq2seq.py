@@ -88,6 +88,9 @@ def main() -> None:
     t = median_time(lambda: generate_features(l2m, [1, 5, 6, 7, 2], method="mean",
                                               max_frames=100), args.repeats)
     print(f"generate (mean decoding, 100 frames): median {t * 1e3:.1f} ms")
+    t = median_time(lambda: generate_features(l2m, [1, 5, 6, 7, 2], width=5, method="sample",
+                                              max_frames=100), args.repeats)
+    print(f"generate (W=5 ancestral samples, 100 frames): median {t * 1e3:.1f} ms")
 
 
 if __name__ == "__main__":
