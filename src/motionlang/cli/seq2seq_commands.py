@@ -325,9 +325,11 @@ def register(subparsers) -> None:
     p.add_argument("text", help="sentence, e.g. \"a person waves with the left hand\"")
     p.add_argument("-o", "--output", required=True, help="out.gif, .mp4, .bvh or .npz")
     p.add_argument("--model", help="L2M model file (default: the packaged one)")
-    p.add_argument("-w", "--width", type=int, default=5, help="hypotheses (sampled beam)")
-    p.add_argument("--method", choices=("beam", "mean", "sample"), default="beam",
-                   help="sampled beam (default), heaviest-component means, or W ancestral samples")
+    p.add_argument("-w", "--width", type=int, default=5, help="hypotheses (samples or beam width)")
+    p.add_argument("--method", choices=("sample", "beam", "mean"), default="sample",
+                   help="W ancestral samples (default), the paper's sampled beam, or "
+                        "heaviest-component means (the beam, ranked by likelihood, favours "
+                        "standing still)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--max-frames", type=int, default=None,
                    help="length cap in model frames (default: the model's)")
