@@ -4,7 +4,8 @@
 
 Prints medians of repeated runs: training throughput (sequences/s, batch 128) of M2L and L2M,
 ``describe`` latency (beam width 5, batch 1, a 10 s motion at 10 Hz) and ``generate``
-latency of a 10-second motion (sampled beam, width 5, 5 samples, 100 frames at 10 Hz).
+latency of a 10-second motion (100 frames at 10 Hz: sampled beam, width 5, 5 samples; W = 5
+ancestral samples, the CLI's default; mean decoding).
 Weights are random (speed does not depend on training); the L2M "active" bias is set high so
 every hypothesis runs the full 100 frames. Uses 1 thread unless --threads says otherwise.
 """

@@ -66,7 +66,7 @@ def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
     out = tmp_path / "gen.bvh"
     assert main(["generate", "a person walks forward", "--model", str(l2m_dir / "model.pt"),
                  "-o", str(out), "-w", "2", "--max-frames", "12", "--min-frames", "6",
-                 "--all"]) == 0
+                 "--all", "--method", "beam"]) == 0
     printed = capsys.readouterr().out
     assert "log L" in printed and str(out) in printed
     report = tmp_path / "report.json"
@@ -96,6 +96,16 @@ def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
     assert main(["evaluate", "--m2l", str(m2l_dir / "model.pt"), "--data", str(corpus),
                  "--l2m-width", "0"]) == 2
     assert "--l2m-width must be >= 1" in capsys.readouterr().err
+    assert main(["evaluate", "--m2l", str(m2l_dir / "model.pt"), "--data", str(corpus),
+                 "--l2m-width", "3"]) == 2                      # mean decoding: one motion
+    assert "--l2m-width applies to" in capsys.readouterr().err
+    assert main(["train", "l2m", "--data", str(corpus), "--out", str(tmp_path / "bad"), *TINY,
+                 "--rollout", "1.5"]) == 2
+    assert "--rollout must be in [0, 1]" in capsys.readouterr().err
+    assert main(["generate", "a person walks", "--model", str(l2m_dir / "model.pt"), "-o",
+                 str(tmp_path / "none.npz"), "-w", "0"]) == 2
+    assert "width must be >= 1" in capsys.readouterr().err
+    assert not (tmp_path / "none.npz").exists()
     from motionlang.formats import read_motion
     for path in (out, tmp_path / "gen_2.bvh"):
         m = read_motion(path)
@@ -104,7 +114,9 @@ def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
     assert main(["generate", "a person walks forward", "--model", str(l2m_dir / "model.pt"),
                  "-o", str(sampled), "-w", "2", "--method", "sample", "--max-frames", "12",
                  "--min-frames", "6"]) == 0
-    assert sampled.is_file()
+    with np.load(sampled) as z:
+        n = {k: z[k].shape for k in z.files}
+    assert any(len(shape) >= 1 and 6 <= shape[0] <= 12 for shape in n.values()), n
 
 
 def test_custom_bvh_folder_with_position_features(corpus, tmp_path, capsys):

@@ -9,6 +9,7 @@ from motionlang.decoding.beam import beam_search
 from motionlang.decoding.motion_beam import mean_decode, sampled_beam
 from motionlang.models.l2m import L2MConfig, LanguageToMotion
 from motionlang.models.m2l import M2LConfig, MotionToLanguage
+from motionlang.errors import MotionlangError
 from motionlang.models.mdn import sample
 
 torch.set_num_threads(1)
@@ -292,5 +293,5 @@ def test_l2m_rollout_ramps_up_and_resumes_with_the_weights():
     assert again.rollout_prob() == pytest.approx(0.6)
     old = {k: v for k, v in model.state_dict().items() if k != "rollout_steps"}
     tiny("l2m", False).load_state_dict(old)          # checkpoints from before the option load
-    with pytest.raises(Exception, match="rollout"):
+    with pytest.raises(MotionlangError, match="rollout"):
         tiny("l2m", False, rollout=1.5)

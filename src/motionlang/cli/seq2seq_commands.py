@@ -76,6 +76,11 @@ def cmd_train(args: argparse.Namespace) -> int:
     from motionlang.training.seq2seq_data import build_pairs
     from motionlang.training.trainer import TrainConfig, Trainer
 
+    if args.model_kind == "l2m":   # before the (long) data preparation
+        if not 0.0 <= args.rollout <= 1.0:
+            raise MotionlangError(f"--rollout must be in [0, 1], got {args.rollout}")
+        if args.rollout_warmup < 0:
+            raise MotionlangError(f"--rollout-warmup must be >= 0, got {args.rollout_warmup}")
     # one line per epoch from the trainer (the progress bar only shows on a terminal)
     logging.basicConfig(level=logging.INFO, format="%(message)s")
     data = build_pairs(args.data, features=args.features, offsets=args.offsets, seed=args.seed,
@@ -114,7 +119,10 @@ def cmd_train(args: argparse.Namespace) -> int:
     history = trainer.fit(resume=args.resume)
     if trainer.rank == 0:
         best = out / "best.pt"
-        final = type(model).load(best) if best.exists() else model
+        # without validation "best" is the lowest training loss, which scheduled sampling
+        # raises as it ramps up: then the final weights are the model
+        by_train_loss = not data.items.get("val") and getattr(model.config, "rollout", 0) > 0
+        final = type(model).load(best) if best.exists() and not by_train_loss else model
         final.save(out / "model.pt")
         last = history[-1] if history else {}
         print(f"{out / 'model.pt'}: epoch {last.get('epoch')}, train {last.get('train')}, "
@@ -210,6 +218,9 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     _check_length_penalty(args.length_penalty)
     if args.l2m_width < 1:
         raise MotionlangError(f"--l2m-width must be >= 1, got {args.l2m_width}")
+    if args.l2m_method == "mean" and args.l2m_width != 1:
+        raise MotionlangError("--l2m-width applies to 'sample' and 'beam'; mean decoding gives "
+                              "one motion")
     m2l_path = Path(args.m2l)
     m2l = MotionToLanguage.load(m2l_path)
     splits = load_splits(args.splits or m2l_path.parent / "splits")
@@ -336,7 +347,7 @@ def register(subparsers) -> None:
     p.add_argument("--min-frames", type=int, default=5,
                    help="no end-of-motion before this many model frames (default 5)")
     p.add_argument("--length-norm", action="store_true",
-                   help="rank hypotheses by log likelihood per frame (default: total)")
+                   help="rank hypotheses (beam, sample) by log likelihood per frame (default: total)")
     p.add_argument("--all", action="store_true", help="write every hypothesis (OUT_2, ...)")
     p.set_defaults(func=cmd_generate)
     p = subparsers.add_parser("evaluate", help="BLEU/ROUGE/CIDEr of M2L, baseline, L2M round trip")
@@ -354,7 +365,8 @@ def register(subparsers) -> None:
                    help="rank M2L hypotheses by log P / length**ALPHA (default 0: total, the paper's)")
     p.add_argument("--l2m-method", choices=("mean", "sample", "beam"), default="mean",
                    help="round trip: how each motion is generated (default: heaviest-component "
-                        "means); the best of --l2m-width hypotheses is described")
-    p.add_argument("--l2m-width", type=int, default=1, metavar="W")
+                        "means); the likeliest of --l2m-width hypotheses is described")
+    p.add_argument("--l2m-width", type=int, default=1, metavar="W",
+                   help="hypotheses per sentence for 'sample' / 'beam' (default 1)")
     p.set_defaults(func=cmd_evaluate)
 

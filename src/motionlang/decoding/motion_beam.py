@@ -164,12 +164,13 @@ def mean_decode(step: MotionStep, state: Any, *, batch_size: int, max_frames: in
 def sample_decode(step: MotionStep, state: Any, *, width: int, max_frames: int,
                   dim: int | None = None, start: torch.Tensor | None = None,
                   min_frames: int = 1, generator: torch.Generator | None = None,
+                  length_norm: bool = False,
                   reorder: Callable[[Any, torch.Tensor], Any] = select_state
                   ) -> list[MotionHypothesis]:
     """W independent ancestral samples for ONE input (``state`` has one row), sorted by
-    decreasing log likelihood."""
+    decreasing log likelihood (per frame with ``length_norm``)."""
     rows = reorder(state, torch.zeros(width, dtype=torch.long))
     hyps = mean_decode(step, rows, batch_size=width, max_frames=max_frames, start=start,
                        dim=dim, min_frames=min_frames, generator=generator,
                        sample_frames=True)
-    return sorted(hyps, key=lambda h: -h.score)
+    return sorted(hyps, key=lambda h: -h.score / (len(h.frames) if length_norm else 1))

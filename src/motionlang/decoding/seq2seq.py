@@ -119,10 +119,14 @@ def generate_features(model: LanguageToMotion, sentence: str | Sequence[int], *,
 
     method: "beam" (the sampled beam, ``samples`` candidates per hypothesis and step),
     "mean" (one deterministic motion from the heaviest component's means) or "sample"
-    (W independent ancestral samples, ranked by log likelihood).
+    (W independent ancestral samples, ranked by log likelihood). The library default stays
+    the paper's sampled beam; the CLI's is "sample" (the beam favours standing still).
+    length_norm: rank by log likelihood per frame ("beam" and "sample").
     """
     if method not in METHODS:
         raise MotionlangError(f"method must be one of {METHODS}, not {method!r}")
+    if width < 1:
+        raise MotionlangError(f"width must be >= 1, got {width}")
     model.eval()
     ids = encode_sentence(model.vocab, sentence)
     state = model.encode(torch.tensor([ids]), torch.tensor([len(ids)]))
@@ -133,7 +137,7 @@ def generate_features(model: LanguageToMotion, sentence: str | Sequence[int], *,
                            min_frames=min_frames)
     elif method == "sample":
         hyps = sample_decode(model.step, state, width=width, max_frames=cap, dim=F,
-                             min_frames=min_frames,
+                             min_frames=min_frames, length_norm=length_norm,
                              generator=torch.Generator().manual_seed(seed))
     else:
         hyps = sampled_beam(model.step, state, batch_size=1, width=width, max_frames=cap,

@@ -128,7 +128,8 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
 
     def rollout_forward(self, tokens: torch.Tensor, token_lengths: torch.Tensor,
                         motion: torch.Tensor, p: float, seed: int = 0) -> mdn.MixtureParams:
-        """Like :meth:`forward` with own-frame probability ``p``, reproducible (own RNG)."""
+        """Params (B, T, ...) with own-frame probability ``p`` in [0, 1], reproducible (its own
+        RNG seeded with ``seed``); no input noise, whatever the mode."""
         prev = torch.cat([motion.new_zeros(motion.shape[0], 1, motion.shape[2]),
                           motion[:, :-1]], dim=1)
         state = self.encode(tokens, token_lengths)
@@ -165,8 +166,9 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
         motion, lengths = batch["motion"], batch["motion_lengths"]
         B, T, _ = motion.shape
         if not self.training and self.config.rollout > 0:
-            # validation of a scheduled-sampling model: on its own frames (as it will
-            # generate), with a fixed RNG so that epochs compare; picks best.pt
+            # validation of a scheduled-sampling model: as trained at full ramp (a fraction
+            # ``rollout`` of its inputs its own frames), with a fixed RNG so that epochs
+            # compare; picks best.pt
             params = self.rollout_forward(batch["tokens"], batch["token_lengths"], motion,
                                           self.config.rollout).flatten()
         else:
