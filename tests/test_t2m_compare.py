@@ -100,6 +100,11 @@ def test_l2m_and_twostream_positions(data):
     p = generate_positions21(l2m, "a person walks forward", 9)
     assert p.shape == (9, 21, 3) and np.isfinite(p).all()
     np.testing.assert_allclose(p[0, 0, [0, 2]], 0.0, atol=1e-9)
+    s1 = generate_positions21(l2m, "a person walks forward", 9, method="sample", seed=1)
+    assert s1.shape == (9, 21, 3) and np.isfinite(s1).all()
+    np.testing.assert_array_equal(
+        s1, generate_positions21(l2m, "a person walks forward", 9, method="sample", seed=1))
+    assert not np.allclose(s1, p)            # a draw, not the heaviest component's means
     torch.manual_seed(0)
     ts = TwoStreamModel(TwoStreamConfig(h1=4, h2=8, h=16, disc_hidden=8),
                         data.features.normalizer, text_encoder=HashTokens()).eval()
@@ -146,6 +151,12 @@ def test_evaluate_command(corpus, data, tmp_path, monkeypatch, capsys):
     assert rc == 0 and "| ts |" in out and "| l2m |" in out
     assert (tmp_path / "eval" / "t2m_table.md").exists()
     assert not list((tmp_path / "eval").glob("*.png"))
+    mean_l2m = json.loads((tmp_path / "eval" / "t2m_report.json").read_text())["results"]["l2m"]
+    assert main(["evaluate-t2m", "--data", str(corpus), "--model", str(tmp_path / "l2m.pt"),
+                 "--split", "train", "--limit", "3", "--figures", "0", "--l2m-method", "sample",
+                 "-o", str(tmp_path / "eval")]) == 0
+    sampled = json.loads((tmp_path / "eval" / "t2m_report.json").read_text())["results"]["l2m"]
+    assert sampled["ape_local"] != mean_l2m["ape_local"]     # other motions were scored
 
 
 def test_generate_any_passes_l2m_options(data):

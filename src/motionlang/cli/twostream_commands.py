@@ -117,6 +117,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         models[name] = load_any_t2m(path)
     data = build_twostream_data(args.data, seed=args.seed, max_seconds=args.max_seconds)
     _, table = compare(models, data, split=args.split, limit=args.limit or None,
+                       l2m_method=args.l2m_method,
                        out_dir=args.output, figures=args.figures)
     print(table, end="")
     return 0
@@ -136,4 +137,7 @@ def register(subparsers) -> None:
     p.add_argument("--threads", type=int, default=0)
     p.add_argument("-o", "--output", metavar="DIR",
                    help="write t2m_table.md, t2m_report.json and trajectory PNGs here")
+    p.add_argument("--l2m-method", choices=("mean", "sample"), default="mean",
+                   help="how L2M models generate (default: heaviest-component means; "
+                        "sample: one ancestral sample per sentence)")
     p.set_defaults(func=cmd_evaluate)

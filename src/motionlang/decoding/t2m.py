@@ -75,12 +75,14 @@ def fit_length(p: np.ndarray, n_frames: int) -> np.ndarray:
 
 
 @torch.no_grad()
-def generate_positions21(model, sentence: str, n_frames: int, *, seed: int = 0) -> np.ndarray:
+def generate_positions21(model, sentence: str, n_frames: int, *, seed: int = 0,
+                         method: str = "mean") -> np.ndarray:
     """Sentence -> global 21-joint positions (n_frames, 21, 3) metres at 12.5 Hz, anchored
     at the origin facing +Z.
 
-    Two-stream: decoded for exactly ``n_frames``. L2M: the deterministic "mean" decoding
-    (capped at ``n_frames`` model frames at its own rate), angles features through forward
+    Two-stream: decoded for exactly ``n_frames``. L2M: ``method`` "mean" (deterministic)
+    or "sample" (one ancestral sample drawn with ``seed``), capped at ``n_frames`` model
+    frames at its own rate, angles features through forward
     kinematics (``joint_map.positions21``), re-timed to 12.5 Hz, then cropped or held at
     its last frame to ``n_frames`` (L2M chooses its own length).
     """
@@ -91,7 +93,7 @@ def generate_positions21(model, sentence: str, n_frames: int, *, seed: int = 0) 
     from motionlang.features.joint_map import positions21
     fps = float(getattr(getattr(model, "features", None), "fps", FPS))
     cap = max(1, int(np.ceil(n_frames * fps / FPS)))
-    result, _ = generate(model, sentence, width=1, method="mean", seed=seed,
+    result, _ = generate(model, sentence, width=1, method=method, seed=seed,
                          max_frames=cap)[0]
     if isinstance(result, np.ndarray):  # positions features: already (T, 21, 3) at fps
         p = result

@@ -170,18 +170,20 @@ def still_baseline(data):
 
 
 def compare(models: dict[str, object], data, *, split: str = "test", limit: int | None = None,
-            out_dir: str | Path | None = None, figures: int = 3, baseline: bool = True
-            ) -> tuple[dict, str]:
+            out_dir: str | Path | None = None, figures: int = 3, baseline: bool = True,
+            l2m_method: str = "mean") -> tuple[dict, str]:
     """Evaluate ``{name: model}`` (anything ``decoding.t2m.generate_positions21`` takes) on
     ``data`` (``TwoStreamData``), plus the no-motion baseline row (``still_baseline``)
-    unless ``baseline`` is False; with ``out_dir`` also write ``t2m_table.md``,
+    unless ``baseline`` is False; L2M models decode with ``l2m_method`` ("mean" or
+    "sample"); with ``out_dir`` also write ``t2m_table.md``,
     ``t2m_report.json`` and the trajectory figures. Returns (results, table)."""
     import json
 
     from motionlang.decoding.t2m import generate_positions21
     items = eval_items(data, split, limit)
     protos = fit_prototypes(data)
-    results = {name: evaluate_model(lambda s, t, m=model: generate_positions21(m, s, t),
+    results = {name: evaluate_model(lambda s, t, m=model: generate_positions21(
+                                        m, s, t, method=l2m_method),
                                     items, data.features, protos)
                for name, model in models.items()}
     if baseline:
