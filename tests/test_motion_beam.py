@@ -155,3 +155,19 @@ def test_sample_decode_draws_independent_motions_ended_by_the_flag():
     again = sample_decode(step, torch.zeros(1, dtype=torch.long), width=3, max_frames=10,
                           dim=D, generator=torch.Generator().manual_seed(5))
     assert [h.score for h in again] == [h.score for h in hyps]
+
+
+def test_sample_decode_length_norm_ranks_per_frame():
+    # the flag goes off once the previous frame's first value is positive: lengths differ
+    def step(t, prev):
+        N = len(prev)
+        mu = torch.zeros(N, K, D)
+        act = torch.where((t > 0) & (prev[:, 0] > 0), torch.tensor(-20.0), torch.tensor(20.0))
+        return MixtureParams(torch.zeros(N, K), mu, torch.zeros(N, K, D), act), t + 1
+    state = torch.zeros(1, dtype=torch.long)
+    for norm in (False, True):
+        hyps = sample_decode(step, state, width=6, max_frames=12, dim=D, length_norm=norm,
+                             generator=torch.Generator().manual_seed(3))
+        assert len({len(h.frames) for h in hyps}) > 1          # the test needs mixed lengths
+        key = [h.score / len(h.frames) if norm else h.score for h in hyps]
+        assert key == sorted(key, reverse=True)
