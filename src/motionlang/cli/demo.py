@@ -134,7 +134,7 @@ def generate_part(out_dir: Path, sentence: str, *, width: int = 5, seed: int = 0
 
     model = LanguageToMotion.load(model_path or packaged_model("l2m"))
     # ancestral samples: the sampled beam keeps the likeliest frames, and standing still
-    # is always likelier than moving (round trip 6.8 % vs 58 % for samples, 60 motions)
+    # is always likelier than moving (round-trip figures in the README)
     hyps = generate(model, sentence, width=width, seed=seed, min_frames=5,
                     max_frames=max_frames, method="sample")
     echo(f'generate "{sentence}" (L2M, {width} ancestral samples, likeliest first):')

@@ -23,7 +23,7 @@ previous-frame input is, with probability ``rollout``, the frame the model itsel
 at the step before instead of the true one (no gradient through the sample); the
 probability ramps up linearly over ``rollout_warmup`` optimiser steps. Teacher forcing alone
 teaches "continue the frames you are shown": on our corpus such a model, left to run on its
-own frames, settles into standing even when primed with 20 true frames. Training on its
+own frames, settles into standing even when primed with true frames. Training on its
 own frames makes it follow the sentence instead. It decodes step by step (slower). The
 validation loss of such a model (``loss`` in eval mode) is computed the same way with a
 fixed RNG, so that the best epoch is the one that does best on its own frames.
@@ -113,8 +113,7 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
                 motion: torch.Tensor) -> mdn.MixtureParams:
         """Params of frames 0..T-1 (B, T, ...) given the target motion (B, T, F): teacher
         forced, or while training with ``rollout`` on, partly fed the model's own frames."""
-        prev = torch.cat([motion.new_zeros(motion.shape[0], 1, motion.shape[2]),
-                          motion[:, :-1]], dim=1)
+        prev = _previous_frames(motion)
         if self.training and self.config.input_noise > 0:
             prev = prev + self.config.input_noise * torch.randn_like(prev)
         state = self.encode(tokens, token_lengths)
@@ -130,8 +129,7 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
                         motion: torch.Tensor, p: float, seed: int = 0) -> mdn.MixtureParams:
         """Params (B, T, ...) with own-frame probability ``p`` in [0, 1], reproducible (its own
         RNG seeded with ``seed``); no input noise, whatever the mode."""
-        prev = torch.cat([motion.new_zeros(motion.shape[0], 1, motion.shape[2]),
-                          motion[:, :-1]], dim=1)
+        prev = _previous_frames(motion)
         state = self.encode(tokens, token_lengths)
         return self._rollout(state, prev, p, torch.Generator().manual_seed(seed))
 
@@ -190,3 +188,9 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
 def _default_rollout_steps(state_dict, prefix, *args, **kwargs):
     """Checkpoints written before ``rollout`` existed lack the counter: start it at 0."""
     state_dict.setdefault(prefix + "rollout_steps", torch.zeros((), dtype=torch.long))
+
+
+def _previous_frames(motion: torch.Tensor) -> torch.Tensor:
+    """Decoder inputs of a target motion (B, T, F): a zero frame, then frames 0..T-2."""
+    return torch.cat([motion.new_zeros(motion.shape[0], 1, motion.shape[2]), motion[:, :-1]],
+                     dim=1)
