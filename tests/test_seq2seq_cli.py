@@ -33,9 +33,15 @@ def private_cache(tmp_path, monkeypatch):
 def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
     m2l_dir, l2m_dir = tmp_path / "m2l", tmp_path / "l2m"
     assert main(["train", "m2l", "--data", str(corpus), "--out", str(m2l_dir), *TINY]) == 0
-    assert main(["train", "l2m", "--data", str(corpus), "--out", str(l2m_dir), *TINY,
+    capsys.readouterr()
+    assert main(["train", "l2m", "--balance", "3", "--data", str(corpus), "--out", str(l2m_dir), *TINY,
                  "--components", "2", "--attention", "--input-noise", "0.3", "--time-input",
                  "--rollout", "0.5", "--rollout-warmup", "2"]) == 0
+    balanced = [l for l in capsys.readouterr().out.splitlines() if l.startswith("balanced:")]
+    assert len(balanced) == 1
+    before, after = (int(w) for w in balanced[0].split()[1:4:2])
+    # 6 training motions are too few for sqrt(top count / rarest count) to reach 1.5
+    assert before <= after <= 3 * before
     for d in (m2l_dir, l2m_dir):
         assert {"model.pt", "best.pt", "last.pt", "history.json", "splits"} <= \
             {p.name for p in d.iterdir()}
@@ -138,12 +144,20 @@ def test_custom_bvh_folder_with_position_features(corpus, tmp_path, capsys):
                  "-w", "2"]) == 0
     lines = capsys.readouterr().out.strip().splitlines()
     assert len(lines) == 2 and lines[0].startswith("1. log P =")
+    # no ground-truth primitives to balance on: a clear error, not a silent no-op
+    assert main(["train", "m2l", "--data", str(folder), "--out", str(tmp_path / "bal"),
+                 "--features", "positions", "--balance", "2", *TINY]) == 2
+    assert "ground-truth primitives" in capsys.readouterr().err
+    assert not (tmp_path / "bal" / "model.pt").exists()
 
 
 def test_errors_are_one_line(tmp_path, capsys):
     assert main(["describe", str(tmp_path / "x.bvh"), "--model", str(tmp_path / "no.pt")]) == 2
     assert "no such model file" in capsys.readouterr().err
     assert main(["train", "m2l", "--data", str(tmp_path), "--out", str(tmp_path / "o")]) == 2
+    capsys.readouterr()
+    assert main(["train", "l2m", "--data", str(tmp_path), "--balance", "0"]) == 2
+    assert "--balance must be >= 1" in capsys.readouterr().err
 
 
 def test_building_the_parser_does_not_import_torch():
@@ -175,3 +189,23 @@ def test_data_preparation_logs_its_stages_once(corpus, caplog):
     with caplog.at_level(logging.INFO, logger="motionlang.training.seq2seq_data"):
         build_pairs(corpus, offsets=2)
     assert not caplog.records
+
+
+def test_balance_repeats_by_rarest_primitive():
+    from motionlang.errors import DatasetError, MotionlangError
+    from motionlang.training.seq2seq_data import balance_repeats, oversample
+    labels = {f"f{i}": ["walk/forward"] for i in range(15)}
+    labels |= {"fw": ["walk/forward", "wave"], "b": ["walk/backward"],
+               **{f"t{i}": ["turn"] for i in range(4)}}
+    ids = sorted(labels)
+    # forward: 16 motions (the most common); turn 4 -> sqrt(16/4) = 2; backward and wave 1
+    # -> sqrt(16) = 4, capped at 3; a motion counts by its rarest label
+    r = balance_repeats(labels, ids, max_repeat=3)
+    assert r["f0"] == 1 and r["t0"] == 2 and r["b"] == 3 and r["fw"] == 3
+    assert balance_repeats(labels, ids, max_repeat=1) == {i: 1 for i in ids}
+    items = [{"id": "b", "k": 0}, {"id": "f0", "k": 1}, {"id": "t1", "k": 2}]
+    assert [it["k"] for it in oversample(items, r)] == [0, 0, 0, 1, 2, 2]
+    with pytest.raises(DatasetError, match="1 motions have none, e.g. x"):
+        balance_repeats(labels | {"x": []}, ids + ["x"], 3)
+    with pytest.raises(MotionlangError, match="max_repeat"):
+        balance_repeats(labels, ids, 0)

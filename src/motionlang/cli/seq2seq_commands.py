@@ -48,6 +48,10 @@ def _add_train(sub, name: str, help_: str) -> None:
     p.add_argument("--embed-dim", type=int, default=d.embed_dim)
     p.add_argument("--dropout", type=float, default=d.dropout)
     p.add_argument("--attention", action="store_true", help="additive attention variant")
+    p.add_argument("--balance", type=int, default=1, metavar="MAX",
+                   help="repeat training motions with rare ground-truth primitives (e.g. "
+                        "walking backwards) up to MAX times per epoch; needs a procedural "
+                        "corpus (default 1: off)")
     if name == "l2m":
         p.add_argument("--components", type=int, default=d.n_components)
         p.add_argument("--loss", choices=("surrogate", "exact"), default=d.loss)
@@ -73,10 +77,12 @@ def cmd_train(args: argparse.Namespace) -> int:
     from motionlang.datasets.splits import save_splits
     from motionlang.decoding.seq2seq import model_dim
     from motionlang.training.collate import collate_pairs
-    from motionlang.training.seq2seq_data import build_pairs
+    from motionlang.training.seq2seq_data import balance_repeats, build_pairs, oversample
     from motionlang.training.trainer import TrainConfig, Trainer
 
-    if args.model_kind == "l2m":   # before the (long) data preparation
+    if args.balance < 1:   # before the (long) data preparation
+        raise MotionlangError(f"--balance must be >= 1, got {args.balance}")
+    if args.model_kind == "l2m":
         if not 0.0 <= args.rollout <= 1.0:
             raise MotionlangError(f"--rollout must be in [0, 1], got {args.rollout}")
         if args.rollout_warmup < 0:
@@ -111,10 +117,16 @@ def cmd_train(args: argparse.Namespace) -> int:
     cfg = TrainConfig(epochs=args.epochs, batch_size=args.batch_size, lr=args.lr,
                       grad_clip=args.grad_clip, seed=args.seed, out_dir=str(out),
                       checkpoint_every=args.checkpoint_every)
-    print(f"{args.model_kind}: {len(data.items['train'])} training pairs "
+    train_items = data.items["train"]
+    if args.balance > 1:
+        repeats = balance_repeats(data.labels, data.splits["train"], args.balance)
+        train_items = oversample(train_items, repeats)
+        print(f"balanced: {len(data.items['train'])} -> {len(train_items)} training pairs "
+              f"(motions repeated up to {args.balance} times)")
+    print(f"{args.model_kind}: {len(train_items)} training pairs "
           f"({len(data.splits['train'])} motions), vocabulary {V}, {F} features/frame, "
           f"{sum(p.numel() for p in model.parameters()):,} parameters")
-    trainer = Trainer(model, data.items["train"], collate_pairs, cfg,
+    trainer = Trainer(model, train_items, collate_pairs, cfg,
                       val_set=data.items.get("val") or None)
     history = trainer.fit(resume=args.resume)
     if trainer.rank == 0:
