@@ -13,9 +13,9 @@ import pytest
 import torch
 
 from motionlang.evaluation.action_order import segment_labels
-from motionlang.evaluation.t2m_compare import (compare, eval_items, evaluate_model,
-                                               fit_prototypes, markdown_table,
-                                               positions_to_features)
+from motionlang.evaluation.t2m_compare import (GROUND_TRUTH, compare, eval_items,
+                                               evaluate_model, fit_prototypes,
+                                               markdown_table, positions_to_features)
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_twostream import HashTokens  # noqa: E402
@@ -120,7 +120,14 @@ def test_compare_writes_table_report_and_figures(data, tmp_path):
                         data.features.normalizer, text_encoder=HashTokens()).eval()
     results, table = compare({"two-stream": ts, "L2M": _tiny_l2m(data)}, data, split="train",
                              limit=4, out_dir=tmp_path, figures=2)
-    assert set(results) == {"two-stream", "L2M", "no motion (mean first pose)"}
+    assert set(results) == {"two-stream", "L2M", "no motion (mean first pose)", GROUND_TRUTH}
+    truth = results[GROUND_TRUTH]
+    assert truth["ape_local"] == 0.0 and truth["ape_root"] == 0.0
+    items = eval_items(data, "train", 4)
+    comp = [it for it in items if it.compositional]
+    direct = np.mean([segment_labels(data.sequences[it.id], it.ranges, fit_prototypes(data))
+                      == it.truth for it in comp]) if comp else math.nan
+    assert truth["order_accuracy"] == pytest.approx(direct, nan_ok=True)
     still = results["no motion (mean first pose)"]
     assert still["ave_local"] > 0 and still["ave_root"] > 0  # the targets move, it does not
     g = next(iter(still["generated"].values()))

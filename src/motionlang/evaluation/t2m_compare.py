@@ -119,6 +119,13 @@ def evaluate_model(generate: Callable[[str, int], np.ndarray], items: Sequence[T
     if not items:
         raise MotionlangError("no test items to evaluate")
     gen = {it.id: np.asarray(generate(it.sentence, len(it.target))) for it in items}
+    return score_generated(gen, items, features, prototypes)
+
+
+def score_generated(gen: dict[str, np.ndarray], items: Sequence[T2MItem], features,
+                    prototypes: Prototypes | None) -> dict:
+    """:func:`evaluate_model`'s result for motions already generated, ``{id: (T, 21, 3)}``
+    with T = the item's target length."""
     m = position_metrics_mm([gen[it.id] for it in items], [it.target for it in items])
     comp = [it for it in items if it.compositional] if prototypes is not None else []
     acc = math.nan
@@ -162,6 +169,9 @@ def trajectory_figures(results: dict[str, dict], items: Sequence[T2MItem], out_d
     return paths
 
 
+GROUND_TRUTH = "ground truth (order check's ceiling)"
+
+
 def still_baseline(data):
     """``generate(sentence, T)`` of the no-motion baseline: the training set's mean first
     pose held for T frames, at the origin — what a model collapsed to the mean produces."""
@@ -173,8 +183,8 @@ def compare(models: dict[str, object], data, *, split: str = "test", limit: int 
             out_dir: str | Path | None = None, figures: int = 3, baseline: bool = True,
             l2m_method: str = "mean") -> tuple[dict, str]:
     """Evaluate ``{name: model}`` (anything ``decoding.t2m.generate_positions21`` takes) on
-    ``data`` (``TwoStreamData``), plus the no-motion baseline row (``still_baseline``)
-    unless ``baseline`` is False; L2M models decode with ``l2m_method`` ("mean" or
+    ``data`` (``TwoStreamData``), plus the no-motion baseline row (``still_baseline``) and
+    the ground-truth row (:data:`GROUND_TRUTH`) unless ``baseline`` is False; L2M models decode with ``l2m_method`` ("mean" or
     "sample"); with ``out_dir`` also write ``t2m_table.md``,
     ``t2m_report.json`` and the trajectory figures. Returns (results, table)."""
     import json
@@ -189,6 +199,10 @@ def compare(models: dict[str, object], data, *, split: str = "test", limit: int 
     if baseline:
         results["no motion (mean first pose)"] = evaluate_model(still_baseline(data), items,
                                                                 data.features, protos)
+        # the test motions themselves: APE 0, and the order check's ceiling (how often
+        # the labeller gets true motions right)
+        results[GROUND_TRUTH] = score_generated({it.id: it.target for it in items}, items,
+                                                data.features, protos)
     table = markdown_table(results)
     if out_dir is not None:
         from motionlang.utils.atomic import atomic_write
