@@ -71,3 +71,25 @@ def test_head_shapes_and_sigma_floor():
     assert p.logit_pi.shape == (2, 4, 5) and p.mu.shape == (2, 4, 5, 3)
     assert p.active_logit.shape == (2, 4) and p.log_sigma.min().item() == -2.0
     assert p.flatten().mu.shape == (8, 5, 3)
+
+
+def test_sampling_temperature_sharpens_weights_and_deviations():
+    # two 1-D components, weights 0.8 / 0.2, means -5 / +5, sigma 1 / 2; at tau = 0.5 the
+    # weights become 0.8**2 : 0.2**2 = 0.941 : 0.059 and the deviations 0.5 / 1
+    p = mdn.MixtureParams(torch.log(torch.tensor([[0.8, 0.2]])),
+                          torch.tensor([[[-5.0], [5.0]]]),
+                          torch.log(torch.tensor([[[1.0], [2.0]]])), torch.tensor([0.0]))
+    x, _ = mdn.sample(p, 40000, torch.Generator().manual_seed(1), temperature=0.5)
+    x = x[0, :, 0]
+    first, second = x[x < 0], x[x > 0]
+    assert len(first) / len(x) == pytest.approx(0.64 / 0.68, abs=0.005)
+    assert float(first.std()) == pytest.approx(0.5, rel=0.03)
+    assert float(second.std()) == pytest.approx(1.0, rel=0.08)
+    x1, _ = mdn.sample(p, 40000, torch.Generator().manual_seed(1))
+    assert float((x1 < 0).float().mean()) == pytest.approx(0.8, abs=0.006)  # tau 1: as is
+    tiny, _ = mdn.sample(random_params(seed=2), 3, torch.Generator().manual_seed(0),
+                         temperature=1e-4)
+    torch.testing.assert_close(tiny, mdn.mode_frame(random_params(seed=2)).unsqueeze(1)
+                               .expand_as(tiny), atol=1e-2, rtol=0)
+    with pytest.raises(ValueError, match="temperature"):
+        mdn.sample(p, 1, temperature=0.0)

@@ -171,3 +171,16 @@ def test_sample_decode_length_norm_ranks_per_frame():
         assert len({len(h.frames) for h in hyps}) > 1          # the test needs mixed lengths
         key = [h.score / len(h.frames) if norm else h.score for h in hyps]
         assert key == sorted(key, reverse=True)
+
+
+def test_sample_decode_temperature_draws_from_the_sharpened_mixture():
+    step, params_for = make_step(stop_at=4)
+    hyps = sample_decode(step, torch.zeros(1, dtype=torch.long), width=3, max_frames=10,
+                         dim=D, temperature=0.3, generator=torch.Generator().manual_seed(5))
+    g = torch.Generator().manual_seed(5)
+    first = sample(params_for(torch.zeros(3, dtype=torch.long), torch.zeros(3, D)), 1, g,
+                   temperature=0.3)[0]
+    assert sorted(map(tuple, first[:, 0].numpy().round(5))) == \
+        sorted(tuple(h.frames[0].round(5)) for h in hyps)
+    for h in hyps:                         # scored under the model's own distribution
+        assert h.score == pytest.approx(replay_score(params_for, h.frames), abs=1e-3)

@@ -158,6 +158,10 @@ def test_errors_are_one_line(tmp_path, capsys):
     capsys.readouterr()
     assert main(["train", "l2m", "--data", str(tmp_path), "--balance", "0"]) == 2
     assert "--balance must be >= 1" in capsys.readouterr().err
+    assert main(["generate", "a person walks", "-o", str(tmp_path / "g.npz"),
+                 "--temperature", "0"]) == 2
+    assert "temperature must be > 0" in capsys.readouterr().err
+    assert not (tmp_path / "g.npz").exists()
 
 
 def test_building_the_parser_does_not_import_torch():

@@ -205,7 +205,7 @@ def cmd_generate(args: argparse.Namespace) -> int:
     model = load_any_t2m(_model_path(args.model, "l2m"))
     hyps = generate_any(model, args.text, width=args.width, method=args.method, seed=args.seed,
                         max_frames=args.max_frames, min_frames=args.min_frames,
-                        length_norm=args.length_norm)
+                        length_norm=args.length_norm, temperature=args.temperature)
     out = Path(args.output)
     for i, (result, score) in enumerate(hyps, 1):
         n = len(result.joint_angles) if hasattr(result, "joint_angles") else len(result)
@@ -233,6 +233,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     if args.l2m_method == "mean" and args.l2m_width != 1:
         raise MotionlangError("--l2m-width applies to 'sample' and 'beam'; mean decoding gives "
                               "one motion")
+    if not args.l2m_temperature > 0:
+        raise MotionlangError(f"--l2m-temperature must be > 0, got {args.l2m_temperature}")
     m2l_path = Path(args.m2l)
     m2l = MotionToLanguage.load(m2l_path)
     splits = load_splits(args.splits or m2l_path.parent / "splits")
@@ -260,8 +262,9 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         l2m = LanguageToMotion.load(args.l2m)
         report["l2m_round_trip"] = ev.evaluate_round_trip(
             l2m, m2l, {i: refs[i] for i in test}, report["m2l"]["bleu"],
-            method=args.l2m_method, width=args.l2m_width)
-        report["l2m_round_trip"].update(method=args.l2m_method, width=args.l2m_width)
+            method=args.l2m_method, width=args.l2m_width, temperature=args.l2m_temperature)
+        report["l2m_round_trip"].update(method=args.l2m_method, width=args.l2m_width,
+                                        temperature=args.l2m_temperature)
     truths = _ground_truths(records, test)
     if truths:   # a procedural corpus: the parameters each description states, checked
         top = {e["id"]: e["hypotheses"][0] for e in report["m2l"].pop("all")}
@@ -360,6 +363,9 @@ def register(subparsers) -> None:
                    help="no end-of-motion before this many model frames (default 5)")
     p.add_argument("--length-norm", action="store_true",
                    help="rank hypotheses (beam, sample) by log likelihood per frame (default: total)")
+    p.add_argument("--temperature", type=float, default=1.0, metavar="TAU",
+                   help="sample (beam, sample) from the mixture sharpened by TAU: weights "
+                        "softmax(logits / TAU), deviations x TAU (default 1: as trained)")
     p.add_argument("--all", action="store_true", help="write every hypothesis (OUT_2, ...)")
     p.set_defaults(func=cmd_generate)
     p = subparsers.add_parser("evaluate", help="BLEU/ROUGE/CIDEr of M2L, baseline, L2M round trip")
@@ -380,5 +386,7 @@ def register(subparsers) -> None:
                         "means); the likeliest of --l2m-width hypotheses is described")
     p.add_argument("--l2m-width", type=int, default=1, metavar="W",
                    help="hypotheses per sentence for 'sample' / 'beam' (default 1)")
+    p.add_argument("--l2m-temperature", type=float, default=1.0, metavar="TAU",
+                   help="sampling temperature for 'sample' / 'beam' (see generate --temperature)")
     p.set_defaults(func=cmd_evaluate)
 

@@ -48,6 +48,7 @@ def sampled_beam(step: MotionStep, state: Any, *, batch_size: int, width: int,
                  max_frames: int, samples: int = 5, min_frames: int = 1,
                  length_norm: bool = False, start: torch.Tensor | None = None,
                  dim: int | None = None, generator: torch.Generator | None = None,
+                 temperature: float = 1.0,
                  reorder: Callable[[Any, torch.Tensor], Any] = select_state
                  ) -> list[list[MotionHypothesis]]:
     """The sampled beam of Plappert et al. (2018) for ``batch_size`` inputs.
@@ -63,6 +64,8 @@ def sampled_beam(step: MotionStep, state: Any, *, batch_size: int, width: int,
             log density, so the total favours motions that run to the cap.
         start: first decoder input, (D,) or (batch_size, D); zeros of ``dim`` if None.
         generator: torch RNG for reproducible sampling.
+        temperature: candidates drawn from the mixture sharpened by tau (``mdn.sample``);
+            they are scored under the model's own distribution.
 
     Returns:
         for each input, up to W hypotheses sorted by decreasing log likelihood (per frame
@@ -87,7 +90,7 @@ def sampled_beam(step: MotionStep, state: Any, *, batch_size: int, width: int,
     for t in range(max_frames):
         params, state = step(state, prev)
         N = len(owner)
-        x, a = sample(params, S, generator)                       # (N, S, D), (N, S)
+        x, a = sample(params, S, generator, temperature)          # (N, S, D), (N, S)
         rep = MixtureParams(*(p.repeat_interleave(S, 0) for p in
                               (params.logit_pi, params.mu, params.log_sigma,
                                params.active_logit)))
@@ -127,11 +130,13 @@ def mean_decode(step: MotionStep, state: Any, *, batch_size: int, max_frames: in
                 start: torch.Tensor | None = None, dim: int | None = None,
                 threshold: float = 0.5, min_frames: int = 1,
                 generator: torch.Generator | None = None,
-                sample_frames: bool = False) -> list[MotionHypothesis]:
+                sample_frames: bool = False, temperature: float = 1.0
+                ) -> list[MotionHypothesis]:
     """Decoding one motion per row: each frame is the mean of the heaviest mixture component
     (or, with ``sample_frames``, a draw from the mixture: ancestral sampling), and the motion
     ends at the first frame whose P(active) < ``threshold`` (or the cap), but not before
-    ``min_frames``. Scores are the log likelihood of the chosen frames and flags.
+    ``min_frames``. Scores are the log likelihood of the chosen frames and flags (under the
+    model's own distribution, whatever the sampling ``temperature``: see ``mdn.sample``).
 
     The flag is thresholded rather than sampled even when frames are sampled: a per-frame
     stop probability of a few percent, drawn at every frame, ends most motions early.
@@ -143,7 +148,8 @@ def mean_decode(step: MotionStep, state: Any, *, batch_size: int, max_frames: in
     alive = torch.ones(B, dtype=torch.bool)
     for t in range(max_frames):
         params, state = step(state, prev)
-        x = sample(params, 1, generator)[0][:, 0] if sample_frames else mode_frame(params)
+        x = (sample(params, 1, generator, temperature)[0][:, 0] if sample_frames
+             else mode_frame(params))
         a = (torch.sigmoid(params.active_logit) >= threshold).float()
         if t == max_frames - 1:
             a = torch.zeros_like(a)
@@ -164,13 +170,14 @@ def mean_decode(step: MotionStep, state: Any, *, batch_size: int, max_frames: in
 def sample_decode(step: MotionStep, state: Any, *, width: int, max_frames: int,
                   dim: int | None = None, start: torch.Tensor | None = None,
                   min_frames: int = 1, generator: torch.Generator | None = None,
-                  length_norm: bool = False,
+                  length_norm: bool = False, temperature: float = 1.0,
                   reorder: Callable[[Any, torch.Tensor], Any] = select_state
                   ) -> list[MotionHypothesis]:
-    """W independent ancestral samples for ONE input (``state`` has one row), sorted by
-    decreasing log likelihood (per frame with ``length_norm``)."""
+    """W independent ancestral samples for ONE input (``state`` has one row), drawn at
+    ``temperature`` (``mdn.sample``), sorted by decreasing log likelihood (per frame with
+    ``length_norm``)."""
     rows = reorder(state, torch.zeros(width, dtype=torch.long))
     hyps = mean_decode(step, rows, batch_size=width, max_frames=max_frames, start=start,
                        dim=dim, min_frames=min_frames, generator=generator,
-                       sample_frames=True)
+                       sample_frames=True, temperature=temperature)
     return sorted(hyps, key=lambda h: -h.score / (len(h.frames) if length_norm else 1))

@@ -114,7 +114,8 @@ def describe_features(model: MotionToLanguage, features: np.ndarray, *, width: i
 def generate_features(model: LanguageToMotion, sentence: str | Sequence[int], *,
                       width: int = 5, max_frames: int | None = None, method: str = "beam",
                       samples: int = 5, seed: int = 0, min_frames: int = 1,
-                      length_norm: bool = False) -> list[tuple[np.ndarray, float]]:
+                      length_norm: bool = False, temperature: float = 1.0
+                      ) -> list[tuple[np.ndarray, float]]:
     """Sentence -> W motions as raw features (T, F) with their log likelihood, best first.
 
     method: "beam" (the sampled beam, ``samples`` candidates per hypothesis and step),
@@ -122,11 +123,15 @@ def generate_features(model: LanguageToMotion, sentence: str | Sequence[int], *,
     (W independent ancestral samples, ranked by log likelihood). The library default stays
     the paper's sampled beam; the CLI's is "sample" (the beam favours standing still).
     length_norm: rank by log likelihood per frame ("beam" and "sample").
+    temperature: tau of the frames drawn by "beam" and "sample" (``models.mdn.sample``: 1 =
+    the model's distribution, -> 0 = its heaviest component's means).
     """
     if method not in METHODS:
         raise MotionlangError(f"method must be one of {METHODS}, not {method!r}")
     if width < 1:
         raise MotionlangError(f"width must be >= 1, got {width}")
+    if not temperature > 0:
+        raise MotionlangError(f"temperature must be > 0, got {temperature}")
     model.eval()
     ids = encode_sentence(model.vocab, sentence)
     state = model.encode(torch.tensor([ids]), torch.tensor([len(ids)]))
@@ -138,11 +143,12 @@ def generate_features(model: LanguageToMotion, sentence: str | Sequence[int], *,
     elif method == "sample":
         hyps = sample_decode(model.step, state, width=width, max_frames=cap, dim=F,
                              min_frames=min_frames, length_norm=length_norm,
+                             temperature=temperature,
                              generator=torch.Generator().manual_seed(seed))
     else:
         hyps = sampled_beam(model.step, state, batch_size=1, width=width, max_frames=cap,
                             samples=samples, dim=F, min_frames=min_frames,
-                            length_norm=length_norm,
+                            length_norm=length_norm, temperature=temperature,
                             generator=torch.Generator().manual_seed(seed))[0]
     return [(_denormalize(model.normalizer, h.frames).astype(np.float32), h.score)
             for h in hyps]
@@ -165,8 +171,8 @@ def describe(model: MotionToLanguage, motion, *, width: int = 5,
 
 def generate(model: LanguageToMotion, sentence: str | Sequence[int], *, width: int = 5,
              max_frames: int | None = None, method: str = "beam", samples: int = 5,
-             seed: int = 0, min_frames: int = 1, length_norm: bool = False
-             ) -> list[tuple[Any, float]]:
+             seed: int = 0, min_frames: int = 1, length_norm: bool = False,
+             temperature: float = 1.0) -> list[tuple[Any, float]]:
     """Sentence -> W decoded motions with their log likelihood, best first.
 
     Each motion is what the feature set's ``decode`` returns: a :class:`Motion` for joint
@@ -175,5 +181,5 @@ def generate(model: LanguageToMotion, sentence: str | Sequence[int], *, width: i
     fs = _features_of(model)
     out = generate_features(model, sentence, width=width, max_frames=max_frames,
                             method=method, samples=samples, seed=seed, min_frames=min_frames,
-                            length_norm=length_norm)
+                            length_norm=length_norm, temperature=temperature)
     return [(fs.decode(frames_to_features(fs, f)), score) for f, score in out]

@@ -90,9 +90,11 @@ def evaluate_nn_baseline(train_frames, train_refs, frames, references) -> dict:
 
 def evaluate_round_trip(l2m, m2l, references: Mapping[str, Sequence[str]],
                         m2l_bleu: float, *, method: str = "mean", width: int = 1,
-                        max_frames: int | None = None, seed: int = 0) -> dict:
-    """Generate from each reference sentence, describe the result, score against the
-    motion's references. Both models must share one feature set (same frames).
+                        max_frames: int | None = None, seed: int = 0,
+                        temperature: float = 1.0) -> dict:
+    """Generate from each reference sentence (``decoding.seq2seq.generate_features`` with
+    ``method``, ``width``, ``temperature``; its best hypothesis), describe the result, score
+    against the motion's references. Both models must share one feature set (same frames).
 
     Returns ``{"n_sentences", "bleu", "bleu1", "rouge_l", ("cider"), "relative",
     "descriptions"}`` with relative = bleu / m2l_bleu (NaN if m2l_bleu is 0) and
@@ -102,7 +104,8 @@ def evaluate_round_trip(l2m, m2l, references: Mapping[str, Sequence[str]],
     pairs = [(i, s) for i in sorted(references) for s in references[i]]
     for i, sentence in progress(pairs, desc="round trip", unit="sentence"):
         frames, _ = generate_features(l2m, sentence, width=width, method=method,
-                                      max_frames=max_frames, seed=seed)[0]
+                                      max_frames=max_frames, seed=seed,
+                                      temperature=temperature)[0]
         hyps.append(normalize(describe_features(m2l, frames, width=1)[0][0]))
         refs.append([normalize(s) for s in references[i]])
     scores = text_scores(refs, hyps)

@@ -96,15 +96,23 @@ def active_log_prob(params: MixtureParams, active: torch.Tensor) -> torch.Tensor
                                                reduction="none")
 
 
-def sample(params: MixtureParams, n: int, generator: torch.Generator | None = None
-           ) -> tuple[torch.Tensor, torch.Tensor]:
-    """Draw n frames and active flags per mixture: -> x (N, n, D), active (N, n) in {0, 1}."""
+def sample(params: MixtureParams, n: int, generator: torch.Generator | None = None,
+           temperature: float = 1.0) -> tuple[torch.Tensor, torch.Tensor]:
+    """Draw n frames and active flags per mixture: -> x (N, n, D), active (N, n) in {0, 1}.
+
+    ``temperature`` tau < 1 samples a sharpened mixture: weights softmax(logits / tau) and
+    standard deviations sigma * tau (the "bias" of Graves 2013, arXiv:1308.0850, Sec. 5.4,
+    with tau = exp(-b)). tau = 1 is the model's own distribution; as tau -> 0 the draw tends to
+    the heaviest component's mean (:func:`mode_frame`). The flags are not tempered.
+    """
+    if not temperature > 0:
+        raise ValueError(f"temperature must be > 0, got {temperature}")
     N, K, D = params.mu.shape
-    probs = F.softmax(params.logit_pi, dim=-1)
+    probs = F.softmax(params.logit_pi / temperature, dim=-1)
     comp = torch.multinomial(probs, n, replacement=True, generator=generator)  # (N, n)
     idx = comp.unsqueeze(-1).expand(N, n, D)
     mu = params.mu.gather(1, idx)
-    sigma = params.log_sigma.gather(1, idx).exp()
+    sigma = params.log_sigma.gather(1, idx).exp() * temperature
     eps = torch.randn(N, n, D, generator=generator, dtype=mu.dtype)
     p_active = torch.sigmoid(params.active_logit).unsqueeze(-1).expand(N, n)
     active = torch.bernoulli(p_active, generator=generator)
