@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 import torch
 
+from motionlang.errors import MotionlangError
 from motionlang.evaluation.action_order import segment_labels
 from motionlang.evaluation.t2m_compare import (GROUND_TRUTH, compare, eval_items,
                                                evaluate_model, fit_prototypes,
@@ -119,8 +120,19 @@ def test_compare_writes_table_report_and_figures(data, tmp_path):
     ts = TwoStreamModel(TwoStreamConfig(h1=4, h2=8, h=16, disc_hidden=8),
                         data.features.normalizer, text_encoder=HashTokens()).eval()
     results, table = compare({"two-stream": ts, "L2M": _tiny_l2m(data)}, data, split="train",
-                             limit=4, out_dir=tmp_path, figures=2)
-    assert set(results) == {"two-stream", "L2M", "no motion (mean first pose)", GROUND_TRUTH}
+                             limit=4, out_dir=tmp_path, figures=2, autoencode=True)
+    ae = "two-stream, from the motion's own embedding"   # two-stream models only
+    assert set(results) == {"two-stream", "L2M", "no motion (mean first pose)", GROUND_TRUTH,
+                            ae}
+    # the autoencoder row decodes each test motion from its own embedding and first frame
+    for rid, p in results[ae]["generated"].items():
+        seq = data.sequences[rid]
+        want = ts.positions(ts.decoder(ts.encode_motion(torch.as_tensor(seq[None]).float(),
+                                                        torch.tensor([len(seq)])),
+                                       torch.as_tensor(seq[:1]).float(), len(seq))[0])
+        np.testing.assert_allclose(p, want, atol=1e-4)
+    with pytest.raises(MotionlangError, match=r"motion must be \(T >= 1, 66\)"):
+        ts.reconstruct(torch.zeros(5, 3))
     truth = results[GROUND_TRUTH]
     assert truth["ape_local"] == 0.0 and truth["ape_root"] == 0.0
     items = eval_items(data, "train", 4)

@@ -117,7 +117,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         models[name] = load_any_t2m(path)
     data = build_twostream_data(args.data, seed=args.seed, max_seconds=args.max_seconds)
     _, table = compare(models, data, split=args.split, limit=args.limit or None,
-                       l2m_method=args.l2m_method,
+                       l2m_method=args.l2m_method, autoencode=args.autoencode,
                        out_dir=args.output, figures=args.figures)
     print(table, end="")
     return 0
@@ -133,6 +133,9 @@ def register(subparsers) -> None:
     p.add_argument("--seed", type=int, default=0, help="the split seed used in training")
     p.add_argument("--max-seconds", type=float, default=30.0)
     p.add_argument("--limit", type=int, default=0, help="evaluate at most N motions")
+    p.add_argument("--autoencode", action="store_true",
+                   help="also score each two-stream model decoding the test motions from their "
+                        "own pose embeddings (what its sentence path can reach at best)")
     p.add_argument("--figures", type=int, default=3, help="trajectory figures to draw")
     p.add_argument("--threads", type=int, default=0)
     p.add_argument("-o", "--output", metavar="DIR",

@@ -101,7 +101,8 @@ def fit_prototypes(data, split: str = "train", nearest_example: bool = True
 
 
 def positions_to_features(features, p21: np.ndarray) -> np.ndarray:
-    """Global (T, 21, 3) -> the normalised (T, 66) positions features (as ``encode``)."""
+    """Global (T, 21, 3) -> the normalised (T, 66) positions features (as ``encode``);
+    ``features`` is anything with the positions features' ``normalizer``."""
     from motionlang.features.positions import split_global
     local, v, dyaw, _ = split_global(np.asarray(p21, dtype=np.float64))
     raw = np.concatenate([local.reshape(len(p21), -1), v, dyaw[:, None]], axis=1)
@@ -181,11 +182,13 @@ def still_baseline(data):
 
 def compare(models: dict[str, object], data, *, split: str = "test", limit: int | None = None,
             out_dir: str | Path | None = None, figures: int = 3, baseline: bool = True,
-            l2m_method: str = "mean") -> tuple[dict, str]:
+            l2m_method: str = "mean", autoencode: bool = False) -> tuple[dict, str]:
     """Evaluate ``{name: model}`` (anything ``decoding.t2m.generate_positions21`` takes) on
-    ``data`` (``TwoStreamData``), plus the no-motion baseline row (``still_baseline``) and
-    the ground-truth row (:data:`GROUND_TRUTH`) unless ``baseline`` is False; L2M models decode with ``l2m_method`` ("mean" or
-    "sample"); with ``out_dir`` also write ``t2m_table.md``,
+    ``data`` (``TwoStreamData``); L2M models decode with ``l2m_method`` ("mean" or
+    "sample"). Extra rows: the no-motion baseline (``still_baseline``) and the ground truth
+    (:data:`GROUND_TRUTH`) unless ``baseline`` is False; with ``autoencode``, each
+    two-stream model decoding each test motion from its own pose embedding
+    (``TwoStreamModel.reconstruct``). With ``out_dir`` also write ``t2m_table.md``,
     ``t2m_report.json`` and the trajectory figures. Returns (results, table)."""
     import json
 
@@ -196,6 +199,14 @@ def compare(models: dict[str, object], data, *, split: str = "test", limit: int 
                                         m, s, t, method=l2m_method),
                                     items, data.features, protos)
                for name, model in models.items()}
+    if autoencode:
+        for name, model in models.items():
+            if getattr(model, "kind", None) == "twostream":
+                # the model's normaliser maps positions to its own features
+                gen = {it.id: model.positions(model.reconstruct(
+                    positions_to_features(model, it.target))) for it in items}
+                results[f"{name}, from the motion's own embedding"] = score_generated(
+                    gen, items, data.features, protos)
     if baseline:
         results["no motion (mean first pose)"] = evaluate_model(still_baseline(data), items,
                                                                 data.features, protos)

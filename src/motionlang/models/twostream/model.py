@@ -201,15 +201,32 @@ class TwoStreamModel(nn.Module):
         out = self.decoder(z, x0, n_frames)
         return out[0] if single else out
 
+    @torch.no_grad()
+    def reconstruct(self, motion: torch.Tensor) -> torch.Tensor:
+        """The autoencoder path: normalised features (T, F) -> the same motion decoded from
+        its own pose embedding, (T, F), starting from its first frame. It bounds what the
+        sentence path can do: a sequence the embedding cannot carry, no sentence can."""
+        x = torch.as_tensor(motion, dtype=torch.float32)
+        if x.ndim != 2 or x.shape[1] != self.config.n_features or len(x) < 1:
+            raise MotionlangError(f"motion must be (T >= 1, {self.config.n_features}), got "
+                                  f"{tuple(x.shape)}")
+        z = self.encode_motion(x[None], torch.tensor([len(x)]))
+        return self.decoder(z, x[None, 0], len(x))[0]
+
     def generate_positions(self, sentence: str, n_frames: int,
                            start=(0.0, 0.0, 0.0)) -> np.ndarray:
         """Sentence -> global 21-joint positions (T, 21, 3) metres, Y up, for models trained
         on the *positions* features (``features.positions`` layout and normaliser)."""
+        return self.positions(self.generate(sentence, n_frames), start)
+
+    def positions(self, x: torch.Tensor, start=(0.0, 0.0, 0.0)) -> np.ndarray:
+        """Normalised features (T, F) of this model -> global 21-joint positions (T, 21, 3)
+        metres, Y up (models of the 66 *positions* features with their normaliser)."""
         from motionlang.features.positions import join_global
         if self.normalizer is None or self.config.n_features != 66:
-            raise MotionlangError("generate_positions needs a model of the 66 positions "
+            raise MotionlangError("positions need a model of the 66 positions "
                                   "features with its normaliser")
-        raw = self.normalizer.inverse(self.generate(sentence, n_frames).double().numpy())
+        raw = self.normalizer.inverse(torch.as_tensor(x).detach().double().numpy())
         # the local frame's origin is the root projected on the ground: the root's local
         # x and z are 0 by construction (constant columns the model only approximates)
         raw[:, [0, 2]] = 0.0
