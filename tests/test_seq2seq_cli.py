@@ -40,8 +40,11 @@ def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
     balanced = [l for l in capsys.readouterr().out.splitlines() if l.startswith("balanced:")]
     assert len(balanced) == 1
     before, after = (int(w) for w in balanced[0].split()[1:4:2])
-    # 6 training motions are too few for sqrt(top count / rarest count) to reach 1.5
-    assert before <= after <= 3 * before
+    from motionlang.training.seq2seq_data import balance_repeats, build_pairs, oversample
+    data = build_pairs(corpus, offsets=2)          # the same pairs (cached)
+    assert before == len(data.items["train"])
+    assert after == len(oversample(data.items["train"],
+                                   balance_repeats(data.labels, data.splits["train"], 3)))
     for d in (m2l_dir, l2m_dir):
         assert {"model.pt", "best.pt", "last.pt", "history.json", "splits"} <= \
             {p.name for p in d.iterdir()}
@@ -148,7 +151,7 @@ def test_custom_bvh_folder_with_position_features(corpus, tmp_path, capsys):
     assert main(["train", "m2l", "--data", str(folder), "--out", str(tmp_path / "bal"),
                  "--features", "positions", "--balance", "2", *TINY]) == 2
     assert "ground-truth primitives" in capsys.readouterr().err
-    assert not (tmp_path / "bal" / "model.pt").exists()
+    assert not (tmp_path / "bal").exists()           # nothing written, not even splits
 
 
 def test_errors_are_one_line(tmp_path, capsys):
@@ -158,10 +161,16 @@ def test_errors_are_one_line(tmp_path, capsys):
     capsys.readouterr()
     assert main(["train", "l2m", "--data", str(tmp_path), "--balance", "0"]) == 2
     assert "--balance must be >= 1" in capsys.readouterr().err
-    assert main(["generate", "a person walks", "-o", str(tmp_path / "g.npz"),
-                 "--temperature", "0"]) == 2
-    assert "temperature must be > 0" in capsys.readouterr().err
+    # sampling options are checked before any model is read (no model file here)
+    for opts, msg in ((["--temperature", "0"], "temperature must be > 0"),
+                      (["--temperature", "0.5", "--method", "mean"], "mean decoding draws")):
+        assert main(["generate", "a person walks", "-o", str(tmp_path / "g.npz"),
+                     "--model", str(tmp_path / "none.pt"), *opts]) == 2
+        assert msg in capsys.readouterr().err
     assert not (tmp_path / "g.npz").exists()
+    assert main(["evaluate", "--m2l", str(tmp_path / "none.pt"), "--data", str(tmp_path),
+                 "--l2m-temperature", "0.5"]) == 2
+    assert "mean decoding draws" in capsys.readouterr().err
 
 
 def test_building_the_parser_does_not_import_torch():

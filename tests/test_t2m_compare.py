@@ -176,6 +176,11 @@ def test_evaluate_command(corpus, data, tmp_path, monkeypatch, capsys):
                  "-o", str(tmp_path / "eval")]) == 0
     sampled = json.loads((tmp_path / "eval" / "t2m_report.json").read_text())["results"]["l2m"]
     assert sampled["ape_local"] != mean_l2m["ape_local"]     # other motions were scored
+    capsys.readouterr()
+    assert main(["evaluate-t2m", "--data", str(corpus), "--model", str(tmp_path / "l2m.pt"),
+                 "--autoencode", "-o", str(tmp_path / "ae")]) == 2
+    assert "--autoencode needs a two-stream model" in capsys.readouterr().err
+    assert not (tmp_path / "ae").exists()
 
 
 def test_generate_any_passes_l2m_options(data):

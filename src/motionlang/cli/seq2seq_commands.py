@@ -91,6 +91,12 @@ def cmd_train(args: argparse.Namespace) -> int:
     logging.basicConfig(level=logging.INFO, format="%(message)s")
     data = build_pairs(args.data, features=args.features, offsets=args.offsets, seed=args.seed,
                        min_count=args.min_count, max_seconds=args.max_seconds)
+    train_items = data.items["train"]
+    if args.balance > 1:   # before anything is written
+        repeats = balance_repeats(data.labels, data.splits["train"], args.balance)
+        train_items = oversample(train_items, repeats)
+        print(f"balanced: {len(data.items['train'])} -> {len(train_items)} training pairs "
+              f"(motions repeated up to {args.balance} times)")
     out = Path(args.out)
     save_splits(data.splits, out / "splits")
     sizes = dict(enc_hidden=args.enc_hidden, enc_layers=args.enc_layers,
@@ -117,12 +123,6 @@ def cmd_train(args: argparse.Namespace) -> int:
     cfg = TrainConfig(epochs=args.epochs, batch_size=args.batch_size, lr=args.lr,
                       grad_clip=args.grad_clip, seed=args.seed, out_dir=str(out),
                       checkpoint_every=args.checkpoint_every)
-    train_items = data.items["train"]
-    if args.balance > 1:
-        repeats = balance_repeats(data.labels, data.splits["train"], args.balance)
-        train_items = oversample(train_items, repeats)
-        print(f"balanced: {len(data.items['train'])} -> {len(train_items)} training pairs "
-              f"(motions repeated up to {args.balance} times)")
     print(f"{args.model_kind}: {len(train_items)} training pairs "
           f"({len(data.splits['train'])} motions), vocabulary {V}, {F} features/frame, "
           f"{sum(p.numel() for p in model.parameters()):,} parameters")
@@ -202,7 +202,15 @@ def cmd_generate(args: argparse.Namespace) -> int:
     # any text-to-motion checkpoint: L2M (seq2seq) or the two-stream model
     from motionlang.decoding.t2m import generate_any, load_any_t2m
 
+    if not args.temperature > 0:
+        raise MotionlangError(f"--temperature must be > 0, got {args.temperature}")
+    if args.temperature != 1.0 and args.method == "mean":
+        raise MotionlangError("--temperature applies to 'sample' and 'beam'; mean decoding "
+                              "draws nothing")
     model = load_any_t2m(_model_path(args.model, "l2m"))
+    if args.temperature != 1.0 and getattr(model, "kind", None) == "twostream":
+        raise MotionlangError("--temperature applies to L2M models; the two-stream model is "
+                              "deterministic")
     hyps = generate_any(model, args.text, width=args.width, method=args.method, seed=args.seed,
                         max_frames=args.max_frames, min_frames=args.min_frames,
                         length_norm=args.length_norm, temperature=args.temperature)
@@ -235,6 +243,9 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
                               "one motion")
     if not args.l2m_temperature > 0:
         raise MotionlangError(f"--l2m-temperature must be > 0, got {args.l2m_temperature}")
+    if args.l2m_method == "mean" and args.l2m_temperature != 1.0:
+        raise MotionlangError("--l2m-temperature applies to 'sample' and 'beam'; mean decoding "
+                              "draws nothing")
     m2l_path = Path(args.m2l)
     m2l = MotionToLanguage.load(m2l_path)
     splits = load_splits(args.splits or m2l_path.parent / "splits")

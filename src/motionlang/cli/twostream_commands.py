@@ -115,6 +115,9 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     for spec in args.model:
         name, path = model_spec(spec)
         models[name] = load_any_t2m(path)
+    if args.autoencode and not any(getattr(m, "kind", None) == "twostream"
+                                   for m in models.values()):
+        raise MotionlangError("--autoencode needs a two-stream model among --model")
     data = build_twostream_data(args.data, seed=args.seed, max_seconds=args.max_seconds)
     _, table = compare(models, data, split=args.split, limit=args.limit or None,
                        l2m_method=args.l2m_method, autoencode=args.autoencode,
@@ -135,7 +138,7 @@ def register(subparsers) -> None:
     p.add_argument("--limit", type=int, default=0, help="evaluate at most N motions")
     p.add_argument("--autoencode", action="store_true",
                    help="also score each two-stream model decoding the test motions from their "
-                        "own pose embeddings (what its sentence path can reach at best)")
+                        "own pose embeddings and first poses (a reference for the sentence path)")
     p.add_argument("--figures", type=int, default=3, help="trajectory figures to draw")
     p.add_argument("--threads", type=int, default=0)
     p.add_argument("-o", "--output", metavar="DIR",

@@ -101,9 +101,10 @@ def sample(params: MixtureParams, n: int, generator: torch.Generator | None = No
     """Draw n frames and active flags per mixture: -> x (N, n, D), active (N, n) in {0, 1}.
 
     ``temperature`` tau < 1 samples a sharpened mixture: weights softmax(logits / tau) and
-    standard deviations sigma * tau (the "bias" of Graves 2013, arXiv:1308.0850, Sec. 5.4,
-    with tau = exp(-b)). tau = 1 is the model's own distribution; as tau -> 0 the draw tends to
-    the heaviest component's mean (:func:`mode_frame`). The flags are not tempered.
+    standard deviations sigma * tau (in the spirit of the sampling "bias" of Graves 2013,
+    arXiv:1308.0850, Sec. 5.4, which shrinks sigma by exp(-b) and scales the logits by 1 + b).
+    tau = 1 is the model's own distribution; as tau -> 0 the draw tends to the heaviest
+    component's mean (:func:`mode_frame`). The flags are not tempered.
     """
     if not temperature > 0:
         raise ValueError(f"temperature must be > 0, got {temperature}")

@@ -156,8 +156,8 @@ def build_pairs(data: str | Path, *, features: str = "angles", offsets: int = 10
 def primitive_labels(meta: dict) -> list[str]:
     """A procedural sample's primitives as labels: "action/direction" when the primitive
     has a direction (walk, run, jump), else "action"."""
-    return [p["action"] + (f"/{p['direction']}" if p.get("direction") else "")
-            for p in meta.get("primitives", [])]
+    from motionlang.datasets.synth import ground_truth
+    return [p.action + (f"/{p.direction}" if p.direction else "") for p in ground_truth(meta)]
 
 
 def balance_repeats(labels: dict[str, list[str]], ids: Sequence[str], max_repeat: int

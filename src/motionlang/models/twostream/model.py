@@ -204,8 +204,10 @@ class TwoStreamModel(nn.Module):
     @torch.no_grad()
     def reconstruct(self, motion: torch.Tensor) -> torch.Tensor:
         """The autoencoder path: normalised features (T, F) -> the same motion decoded from
-        its own pose embedding, (T, F), starting from its first frame. It bounds what the
-        sentence path can do: a sequence the embedding cannot carry, no sentence can."""
+        its own pose embedding and its own first frame, (T, F). A reference for the sentence
+        path (which starts from ``rest_pose``): when the decoder cannot bring a sequence back
+        from the motion's own embedding, the sentence embedding, trained to match it, is
+        unlikely to."""
         x = torch.as_tensor(motion, dtype=torch.float32)
         if x.ndim != 2 or x.shape[1] != self.config.n_features or len(x) < 1:
             raise MotionlangError(f"motion must be (T >= 1, {self.config.n_features}), got "
