@@ -45,6 +45,14 @@ def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
     assert before == len(data.items["train"])
     assert after == len(oversample(data.items["train"],
                                    balance_repeats(data.labels, data.splits["train"], 3)))
+    logged = [json.loads(l) for l in (l2m_dir / "commands.jsonl").read_text().splitlines()]
+    assert len(logged) == 1 and logged[0]["balance"] == 3 and logged[0]["rollout"] == 0.5
+    import argparse
+
+    from motionlang.cli.seq2seq_commands import _log_command
+    _log_command(l2m_dir / "commands.jsonl", argparse.Namespace(resume=True, func=main))
+    lines = (l2m_dir / "commands.jsonl").read_text().splitlines()   # a resume appends
+    assert len(lines) == 2 and json.loads(lines[1]) == {"resume": True}
     for d in (m2l_dir, l2m_dir):
         assert {"model.pt", "best.pt", "last.pt", "history.json", "splits"} <= \
             {p.name for p in d.iterdir()}
