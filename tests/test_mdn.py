@@ -49,6 +49,22 @@ def test_surrogate_is_the_weighted_lower_bound():
     torch.testing.assert_close(mdn.surrogate_log_prob(one, x), mdn.mixture_log_prob(one, x))
 
 
+def test_dimension_weights_scale_each_dimensions_log_density():
+    from scipy.stats import norm
+    p = random_params(N=2, K=3, D=3, seed=4)
+    x = torch.randn(2, 3, generator=torch.Generator().manual_seed(2))
+    w = torch.tensor([1.0, 4.0, 0.0])
+    mu, sd = p.mu.double().numpy(), p.log_sigma.double().exp().numpy()
+    want = (norm.logpdf(x.double().numpy()[:, None, :], mu, sd) * w.double().numpy()).sum(-1)
+    got = mdn.component_log_density(p, x, w)
+    np.testing.assert_allclose(got.double().numpy(), want, rtol=1e-5)
+    pi = torch.softmax(p.logit_pi, -1).double().numpy()
+    np.testing.assert_allclose(mdn.surrogate_log_prob(p, x, w).double().numpy(),
+                               (pi * want).sum(-1), rtol=1e-5)
+    ones = torch.ones(3)
+    torch.testing.assert_close(mdn.mixture_log_prob(p, x, ones), mdn.mixture_log_prob(p, x))
+
+
 def test_active_log_prob_and_sampling_statistics():
     p = random_params(N=2, K=2, D=2, seed=3)
     a = torch.tensor([1.0, 0.0])

@@ -9,6 +9,7 @@ import pytest
 import torch
 
 from motionlang.cli.main import main
+from motionlang.errors import MotionlangError
 from motionlang.models.l2m import LanguageToMotion
 from motionlang.models.m2l import MotionToLanguage
 
@@ -36,7 +37,7 @@ def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
     capsys.readouterr()
     assert main(["train", "l2m", "--balance", "3", "--data", str(corpus), "--out", str(l2m_dir), *TINY,
                  "--components", "2", "--attention", "--input-noise", "0.3", "--time-input",
-                 "--rollout", "0.5", "--rollout-warmup", "2"]) == 0
+                 "--rollout", "0.5", "--rollout-warmup", "2", "--root-weight", "5"]) == 0
     balanced = [l for l in capsys.readouterr().out.splitlines() if l.startswith("balanced:")]
     assert len(balanced) == 1
     before, after = (int(w) for w in balanced[0].split()[1:4:2])
@@ -56,6 +57,11 @@ def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
     for d in (m2l_dir, l2m_dir):
         assert {"model.pt", "best.pt", "last.pt", "history.json", "splits"} <= \
             {p.name for p in d.iterdir()}
+    l2m = LanguageToMotion.load(l2m_dir / "model.pt")
+    names = l2m.features.names[:l2m.config.n_features]
+    assert [n for n, w in zip(names, l2m.config.loss_weights) if w != 1.0] == \
+        ["root_vx", "root_vz", "root_dyaw"]
+    assert set(l2m.config.loss_weights) == {1.0, 5.0}
     m2l = MotionToLanguage.load(m2l_dir / "model.pt")
     assert m2l.features is not None and len(m2l.vocab) == m2l.config.vocab_size
     train_ids = (m2l_dir / "splits" / "train.txt").read_text().split()
@@ -160,6 +166,17 @@ def test_custom_bvh_folder_with_position_features(corpus, tmp_path, capsys):
                  "--features", "positions", "--balance", "2", *TINY]) == 2
     assert "ground-truth primitives" in capsys.readouterr().err
     assert not (tmp_path / "bal").exists()           # nothing written, not even splits
+
+
+def test_root_weights_need_the_root_motion_features():
+    import types
+
+    from motionlang.cli.seq2seq_commands import root_loss_weights
+    fs = types.SimpleNamespace(names=["a", "root_vz", "root_vx", "b", "root_dyaw", "active"],
+                               n_normalised=5, dim=6)
+    assert root_loss_weights(fs, 4.0) == [1.0, 4.0, 4.0, 1.0, 4.0]
+    with pytest.raises(MotionlangError, match="root_vx"):
+        root_loss_weights(types.SimpleNamespace(names=["a", "root_vz"], dim=2), 4.0)
 
 
 def test_errors_are_one_line(tmp_path, capsys):

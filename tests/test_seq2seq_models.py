@@ -1,6 +1,8 @@
 """M2L / L2M models from tiny configs: shapes, save/load, overfitting one batch, decoding."""
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 import torch
@@ -204,6 +206,28 @@ def test_l2m_end_weight_reweights_the_stop_frames():
         w = torch.where(active > 0, 1.0, 5.0)
         want = -(w * ll)[valid].sum() / w[valid].sum()
         torch.testing.assert_close(model.loss(batch)["active_bce"], want)
+
+
+def test_l2m_loss_weights_reweight_the_frame_nll():
+    from motionlang.models import mdn
+    model, batch = tiny("l2m", False), make_batch()
+    model.eval()
+    F = model.config.n_features
+    with torch.no_grad():
+        p = model(batch["tokens"], batch["token_lengths"], batch["motion"]).flatten()
+        x = batch["motion"].reshape(-1, F)
+        T = batch["motion"].shape[1]
+        valid = (torch.arange(T)[None] < batch["motion_lengths"][:, None]).reshape(-1)
+        w = torch.ones(F)
+        w[0] = 10.0
+        want = -mdn.surrogate_log_prob(p, x, w)[valid].mean()
+        base = model.loss(batch)["nll"]
+        model.config.loss_weights = w.tolist()
+        got = model.loss(batch)["nll"]
+    torch.testing.assert_close(got, want)
+    assert not torch.isclose(got, base)
+    with pytest.raises(MotionlangError):
+        LanguageToMotion(replace(model.config, loss_weights=[1.0] * (F - 1)))
 
 
 def test_l2m_time_input_changes_the_prediction():

@@ -65,9 +65,9 @@ def test_forward_shapes(two_stream):
         m.loss({**b, "motion": b["motion"][..., :60]})
 
 
-@pytest.mark.parametrize("two_stream", [True, False])
-def test_folded_unroll_matches_layered_unroll(two_stream):
-    m = tiny(two_stream=two_stream)
+@pytest.mark.parametrize("two_stream,every_step", [(True, False), (False, False), (True, True)])
+def test_folded_unroll_matches_layered_unroll(two_stream, every_step):
+    m = tiny(two_stream=two_stream, z_every_step=every_step, time_input=every_step)
     z, x0 = m.encode_text(["a person waves", "walk"]), torch.randn(2, 66)
     ref = m.decoder.unroll_layered(z, x0, 12)
     fast = m.decoder(z, x0, 12)
@@ -293,3 +293,26 @@ def test_glove_word_vectors(monkeypatch):
     w = enc.features("walk run banana")
     cos = torch.nn.functional.cosine_similarity
     assert cos(w[0], w[1], dim=0) > cos(w[0], w[2], dim=0)
+
+
+def test_z_every_step_and_clock_enter_only_through_their_input_columns():
+    plain, fed = tiny(), tiny(z_every_step=True, time_input=True)
+    fed.load_state_dict({k: v for k, v in plain.state_dict().items()
+                         if "decoder.cells" not in k}, strict=False)
+    z, x0 = plain.encode_text(["a person waves", "walk"]), torch.randn(2, 66)
+    for s, cell in fed.decoder.cells.items():
+        ref = plain.decoder.cells[s]
+        n = ref.weight_ih.shape[1]
+        assert cell.weight_ih.shape[1] == n + 16 + 1  # pose columns + z (h 16) + clock
+        with torch.no_grad():
+            cell.weight_ih.zero_()
+            cell.weight_ih[:, :n] = ref.weight_ih
+            for name in ("weight_hh", "bias_ih", "bias_hh"):
+                getattr(cell, name).copy_(getattr(ref, name))
+    torch.testing.assert_close(fed.decoder(z, x0, 10), plain.decoder(z, x0, 10))
+    with torch.no_grad():  # the clock column now matters: outputs move after step 1 only
+        for cell in fed.decoder.cells.values():
+            cell.weight_ih[:, -1] = 1.0
+    out, ref = fed.decoder(z, x0, 10), plain.decoder(z, x0, 10)
+    torch.testing.assert_close(out[:, :2], ref[:, :2])  # clock 0 at the first step
+    assert (out[:, 2:] - ref[:, 2:]).abs().max() > 1e-4

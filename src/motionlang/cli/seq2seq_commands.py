@@ -64,9 +64,28 @@ def _add_train(sub, name: str, help_: str) -> None:
         p.add_argument("--rollout", type=float, default=d.rollout, metavar="P",
                        help="scheduled sampling: while training, feed the model's own sampled "
                             "frame instead of the true one with probability P (paper: 0)")
+        p.add_argument("--root-weight", type=float, default=1.0, metavar="W",
+                       help="weight of the root's ground velocity and heading change "
+                            "(root_vx, root_vz, root_dyaw) in the frame NLL (paper: 1)")
         p.add_argument("--rollout-warmup", type=int, default=d.rollout_warmup, metavar="STEPS",
                        help="optimiser steps over which that probability ramps up from 0")
     p.set_defaults(func=cmd_train, model_kind=name)
+
+
+ROOT_MOTION = ("root_vx", "root_vz", "root_dyaw")
+
+
+def root_loss_weights(features, weight: float) -> list[float]:
+    """Per-feature NLL weights: ``weight`` for the root's ground velocity and heading change
+    (``ROOT_MOTION``), 1 elsewhere; the model's features (active flag excluded)."""
+    from motionlang.decoding.seq2seq import model_dim
+    names = list(features.names)[:model_dim(features)]
+    missing = [n for n in ROOT_MOTION if n not in names]
+    if missing:
+        raise MotionlangError(f"--root-weight needs features with {', '.join(ROOT_MOTION)} "
+                              f"(angles with the root trajectory, or positions); these have no "
+                              f"{', '.join(missing)}")
+    return [weight if n in ROOT_MOTION else 1.0 for n in names]
 
 
 def cmd_train(args: argparse.Namespace) -> int:
@@ -87,6 +106,8 @@ def cmd_train(args: argparse.Namespace) -> int:
             raise MotionlangError(f"--rollout must be in [0, 1], got {args.rollout}")
         if args.rollout_warmup < 0:
             raise MotionlangError(f"--rollout-warmup must be >= 0, got {args.rollout_warmup}")
+        if not args.root_weight >= 0:
+            raise MotionlangError(f"--root-weight must be >= 0, got {args.root_weight}")
     # one line per epoch from the trainer (the progress bar only shows on a terminal)
     logging.basicConfig(level=logging.INFO, format="%(message)s")
     data = build_pairs(args.data, features=args.features, offsets=args.offsets, seed=args.seed,
@@ -97,6 +118,9 @@ def cmd_train(args: argparse.Namespace) -> int:
         train_items = oversample(train_items, repeats)
         print(f"balanced: {len(data.items['train'])} -> {len(train_items)} training pairs "
               f"(motions repeated up to {args.balance} times)")
+    loss_weights = None
+    if args.model_kind == "l2m" and args.root_weight != 1.0:   # before anything is written
+        loss_weights = root_loss_weights(data.features, args.root_weight)
     out = Path(args.out)
     save_splits(data.splits, out / "splits")
     _log_command(out / "commands.jsonl", args)
@@ -119,6 +143,7 @@ def cmd_train(args: argparse.Namespace) -> int:
                                            time_input=args.time_input,
                                            rollout=args.rollout,
                                            rollout_warmup=args.rollout_warmup,
+                                           loss_weights=loss_weights,
                                            max_frames=int(1.5 * longest), **sizes),
                                  data.vocab, features=data.features)
     cfg = TrainConfig(epochs=args.epochs, batch_size=args.batch_size, lr=args.lr,

@@ -42,7 +42,8 @@ def cmd_train(args: argparse.Namespace) -> int:
     data = build_twostream_data(args.data, seed=args.seed, max_seconds=args.max_seconds,
                                 max_frames=args.max_frames)
     save_splits(data.splits, run / "splits")
-    fields = dict(h1=args.h1, h2=args.h2, h=args.h, lstm_layers=args.lstm_layers)
+    fields = dict(h1=args.h1, h2=args.h2, h=args.h, lstm_layers=args.lstm_layers,
+                  z_every_step=args.z_every_step, time_input=args.time_input)
     if args.text_layers:
         fields["text_layers"] = [int(x) for x in args.text_layers.split(",")]
     torch.manual_seed(args.seed)
@@ -87,6 +88,10 @@ def register_train(train_sub) -> None:
     p.add_argument("--h1", type=int, default=32, help="per-part layer size (paper 32)")
     p.add_argument("--h2", type=int, default=128, help="trunk+limb layer size (paper 128)")
     p.add_argument("--lstm-layers", type=int, default=2)
+    p.add_argument("--z-every-step", action="store_true",
+                   help="beyond the paper: every decoder step reads its stream's embedding")
+    p.add_argument("--time-input", action="store_true",
+                   help="beyond the paper: every decoder step reads the elapsed time")
     p.add_argument("--text-layers", metavar="I,J,..",
                    help="hidden states of the text model to concatenate (default 3,4,5,6)")
     p.add_argument("--epochs", type=int, default=20)

@@ -54,6 +54,9 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
         c = self.config = config
         if c.loss not in ("surrogate", "exact"):
             raise ValueError(f"L2MConfig.loss must be 'surrogate' or 'exact', not {c.loss!r}")
+        if c.loss_weights is not None and (len(c.loss_weights) != c.n_features
+                                           or not all(w >= 0 for w in c.loss_weights)):
+            raise MotionlangError(f"L2MConfig.loss_weights must be {c.n_features} weights >= 0")
         if not c.input_noise >= 0:
             raise MotionlangError(f"L2MConfig.input_noise must be >= 0, not {c.input_noise!r}")
         self.vocab, self.normalizer, self.features = vocab, normalizer, features
@@ -160,7 +163,8 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
     def loss(self, batch: dict) -> dict[str, torch.Tensor]:
         """batch: ``tokens`` (B, L), ``token_lengths`` (B,), ``motion`` (B, T, F) padded,
         ``motion_lengths`` (B,). Losses are means over valid frames; ``nll`` is the
-        frame's negative log density (surrogate or exact), ``active_bce`` the flag's."""
+        frame's negative log density (surrogate or exact; per-feature weighted by
+        ``config.loss_weights`` when set), ``active_bce`` the flag's."""
         motion, lengths = batch["motion"], batch["motion_lengths"]
         B, T, _ = motion.shape
         if not self.training and self.config.rollout > 0:
@@ -175,8 +179,10 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
         valid = (t < lengths.unsqueeze(1)).reshape(-1)
         active = (t < (lengths.unsqueeze(1) - 1)).reshape(-1).float()
         x = motion.reshape(B * T, -1)
+        weights = (None if self.config.loss_weights is None
+                   else torch.tensor(self.config.loss_weights, dtype=x.dtype))
         log_density = (mdn.surrogate_log_prob if self.config.loss == "surrogate"
-                       else mdn.mixture_log_prob)(params, x)
+                       else mdn.mixture_log_prob)(params, x, weights)
         nll = -log_density[valid].mean()
         # The last frame is the only "stop" example of a motion; end_weight > 1 makes it
         # count more so that generation learns to end (the paper's loss: 1).

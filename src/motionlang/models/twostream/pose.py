@@ -12,6 +12,12 @@ linear to the limbs' h2 -> linear to limb h1 + trunk h1 -> per-part linear to th
 columns; the trunk is the mean of its predictions from every limb) and gives a pose change
 that is added to the current pose (residual from input pose to output pose):
 ``x_t = x_{t-1} + Hier(GRU(x_{t-1}, h_{t-1}))``; output frame 0 is x_0 itself.
+
+Two options beyond the paper (``TwoStreamConfig.z_every_step`` / ``time_input``) extend each
+step's GRU input to ``[x_{t-1} columns, z_stream, t / 100]``: with z only as the initial
+state, the decoder has to carry a whole sequence of actions in a state it also overwrites
+every step, and our models (h 128) lost the order of actions even when decoding a motion
+from its own embedding.
 """
 from __future__ import annotations
 
@@ -95,8 +101,20 @@ class PoseDecoder(nn.Module):
         for s, limbs in c.streams().items():
             cols = _cols(c, limbs + ("trunk",))
             self.register_buffer(f"cols_{s}", torch.tensor(sorted(cols)), persistent=False)
-            self.cells[s] = nn.GRUCell(len(cols), c.stream_size)
+            extra = c.stream_size * c.z_every_step + int(c.time_input)
+            self.cells[s] = nn.GRUCell(len(cols) + extra, c.stream_size)
         self.hier = HierBlock(config)
+
+    def _inputs(self, x: torch.Tensor, cols: torch.Tensor, z: torch.Tensor, t: int
+                ) -> torch.Tensor:
+        """The GRU input of decoding step ``t`` (1-based) for one stream: (B, D)."""
+        c = self.config
+        parts = [x[..., cols]]
+        if c.z_every_step:
+            parts.append(z)
+        if c.time_input:
+            parts.append(x.new_full((x.shape[0], 1), (t - 1) / 100.0))
+        return torch.cat(parts, dim=-1) if len(parts) > 1 else parts[0]
 
     def forward(self, z: dict[str, torch.Tensor], x0: torch.Tensor, n_frames: int,
                 target: torch.Tensor | None = None, teacher_forcing: float = 0.0
@@ -119,7 +137,7 @@ class PoseDecoder(nn.Module):
                            torch.eye(H * len(streams))]).to(x0)
         out = self.hier({s: probe[:, k * H:(k + 1) * H] for k, s in enumerate(streams)})
         bias, weight = out[0], out[1:] - out[0]               # (F,), (S*H, F)
-        cells = [(self.cells[s], getattr(self, f"cols_{s}")) for s in streams]
+        cells = [(self.cells[s], getattr(self, f"cols_{s}"), z[s]) for s in streams]
         hs = [z[s] for s in streams]
         x = x0
         frames = [x0]
@@ -128,7 +146,7 @@ class PoseDecoder(nn.Module):
             if forcing:
                 use = torch.rand(x.shape[0], 1, device=x.device) < teacher_forcing
                 x = torch.where(use, target[:, t - 1], x)
-            hs = [cell(x[..., cols], h) for (cell, cols), h in zip(cells, hs)]
+            hs = [cell(self._inputs(x, cols, zs, t), h) for (cell, cols, zs), h in zip(cells, hs)]
             x = torch.addmm(x + bias, torch.cat(hs, dim=-1), weight)
             frames.append(x)
         return torch.stack(frames, dim=1)
@@ -139,8 +157,8 @@ class PoseDecoder(nn.Module):
         h = dict(z)
         x = x0
         frames = [x0]
-        for _ in range(n_frames - 1):
-            h = {s: cell(x[..., getattr(self, f"cols_{s}")], h[s])
+        for t in range(1, n_frames):
+            h = {s: cell(self._inputs(x, getattr(self, f"cols_{s}"), z[s], t), h[s])
                  for s, cell in self.cells.items()}
             x = x + self.hier(h)
             frames.append(x)
