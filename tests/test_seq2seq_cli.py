@@ -50,8 +50,8 @@ def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
     assert len(logged) == 1 and logged[0]["balance"] == 3 and logged[0]["rollout"] == 0.5
     import argparse
 
-    from motionlang.cli.seq2seq_commands import _log_command
-    _log_command(l2m_dir / "commands.jsonl", argparse.Namespace(resume=True, func=main))
+    from motionlang.cli.run_log import log_command
+    log_command(l2m_dir / "commands.jsonl", argparse.Namespace(resume=True, func=main))
     lines = (l2m_dir / "commands.jsonl").read_text().splitlines()   # a resume appends
     assert len(lines) == 2 and json.loads(lines[1]) == {"resume": True}
     for d in (m2l_dir, l2m_dir):

@@ -3,6 +3,8 @@ schedule, joint and two-stage training with the shared trainer, load_any_t2m, an
 ``train twostream`` command (the last one skipped without the MiniLM package)."""
 from __future__ import annotations
 
+import json
+
 import importlib.util
 import sys
 from pathlib import Path
@@ -162,11 +164,15 @@ def test_train_command(corpus, tmp_path, monkeypatch, capsys):
     out = tmp_path / "ts.pt"
     rc = main(["train", "twostream", "--data", str(corpus), "--out", str(out), "--h", "8",
                "--h1", "4", "--h2", "8", "--epochs", "1", "--batch-size", "16",
-               "--max-frames", "12", "--text-layers", "6", "--threads", "1"])
+               "--max-frames", "12", "--text-layers", "6", "--threads", "1",
+               "--z-every-step", "--time-input"])
     assert rc == 0 and out.exists()
     assert (tmp_path / "ts_run" / "splits").is_dir()
+    logged = json.loads((tmp_path / "ts_run" / "commands.jsonl").read_text())
+    assert logged["max_frames"] == 12 and logged["z_every_step"] is True
     model = TwoStreamModel.load(out)
     assert model.config.h == 8 and model.config.text_layers == [6]
+    assert model.config.z_every_step and model.config.time_input
     assert model.generate_positions("a person walks forward", 5).shape == (5, 21, 3)
     assert "twostream (full)" in capsys.readouterr().out
     assert main(["train", "twostream", "--data", str(corpus), "--out",

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
+from motionlang.cli.run_log import log_command
 from motionlang.errors import MotionlangError
 
 PACKAGED = Path(__file__).resolve().parents[1] / "data" / "models"
@@ -123,7 +124,7 @@ def cmd_train(args: argparse.Namespace) -> int:
         loss_weights = root_loss_weights(data.features, args.root_weight)
     out = Path(args.out)
     save_splits(data.splits, out / "splits")
-    _log_command(out / "commands.jsonl", args)
+    log_command(out / "commands.jsonl", args)
     sizes = dict(enc_hidden=args.enc_hidden, enc_layers=args.enc_layers,
                  dec_hidden=args.dec_hidden, dec_layers=args.dec_layers,
                  embed_dim=args.embed_dim, dropout=args.dropout, attention=args.attention)
@@ -166,16 +167,6 @@ def cmd_train(args: argparse.Namespace) -> int:
         print(f"{out / 'model.pt'}: epoch {last.get('epoch')}, train {last.get('train')}, "
               f"val {last.get('val')}")
     return 0
-
-
-def _log_command(path: Path, args: argparse.Namespace) -> None:
-    """Append this run's options to ``path`` (one JSON line per invocation, resumes
-    included): the data options (offsets, --balance, ...) are not in the checkpoint."""
-    from motionlang.utils.atomic import atomic_write
-    opts = {k: v for k, v in vars(args).items() if not callable(v)}
-    old = path.read_text() if path.exists() else ""
-    with atomic_write(path) as fh:
-        fh.write(old + json.dumps(opts, sort_keys=True, default=str) + "\n")
 
 
 def register_train(train_sub) -> None:

@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from motionlang.cli.run_log import log_command
 from motionlang.errors import MotionlangError
 
 ABLATION_NAMES = ("full", "no-joint-training", "one-stream", "no-extra-losses", "word-vectors")
@@ -42,6 +43,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     data = build_twostream_data(args.data, seed=args.seed, max_seconds=args.max_seconds,
                                 max_frames=args.max_frames)
     save_splits(data.splits, run / "splits")
+    log_command(run / "commands.jsonl", args)
     fields = dict(h1=args.h1, h2=args.h2, h=args.h, lstm_layers=args.lstm_layers,
                   z_every_step=args.z_every_step, time_input=args.time_input)
     if args.text_layers:
