@@ -4,8 +4,10 @@ cache is cleared before every run, so each run pays the language model).
 
 The model has the paper's sizes (h1 32, h2 128, h 512; h can be changed) and random weights: latency does not
 depend on the weights. Prints the median (and min/max) of repeated runs; target < 200 ms.
+``fed`` as a 4th argument times the decoder that reads its embedding and the clock at every
+step (``--z-every-step --time-input``).
 
-    .venv/bin/python benchmarks/bench_twostream_generate.py [REPEAT] [THREADS] [H]
+    .venv/bin/python benchmarks/bench_twostream_generate.py [REPEAT] [THREADS] [H] [fed]
 """
 from __future__ import annotations
 
@@ -29,9 +31,10 @@ def main() -> int:
     repeat = int(sys.argv[1]) if len(sys.argv) > 1 else 15
     threads = int(sys.argv[2]) if len(sys.argv) > 2 else 1
     h = int(sys.argv[3]) if len(sys.argv) > 3 else 512
+    fed = len(sys.argv) > 4 and sys.argv[4] == "fed"
     torch.set_num_threads(threads)
     try:
-        model = TwoStreamModel(TwoStreamConfig(h=h)).eval()
+        model = TwoStreamModel(TwoStreamConfig(h=h, z_every_step=fed, time_input=fed)).eval()
     except MotionlangError as exc:
         print(f"skipped: {exc}")
         return 0
@@ -50,7 +53,8 @@ def main() -> int:
         text_times.append(time.perf_counter() - t0)
     assert out.shape == (n_frames, model.config.n_features)
     ms = [1000 * t for t in times]
-    print(f"two-stream generate, {n_frames} frames, h={model.config.h}, {threads} thread(s), "
+    print(f"two-stream generate, {n_frames} frames, h={model.config.h}"
+          f"{', z + clock every step' if fed else ''}, {threads} thread(s), "
           f"{repeat} runs: median {statistics.median(ms):.1f} ms "
           f"(min {min(ms):.1f}, max {max(ms):.1f}); of which sentence encoding median "
           f"{1000 * statistics.median(text_times):.1f} ms; target < 200 ms")

@@ -10,6 +10,7 @@ import pytest
 import torch
 from trainer_tiny import TinyReg, collate, ddp_config, make_data
 
+from motionlang.errors import MotionlangError
 from motionlang.training.trainer import TrainConfig, Trainer
 
 torch.set_num_threads(1)
@@ -25,7 +26,8 @@ def run(out, epochs, resume=False, init_seed=0, fail_after=None, **kw):
     torch.manual_seed(init_seed)
     model = TinyReg(dropout=0.3, fail_after=fail_after)
     trainer = Trainer(model, make_data(), collate, config(out, epochs, **kw),
-                      val_set=make_data(12, 1))
+                      val_set=make_data(12, 1),   # a stand-in length for length_buckets
+                      length_of=lambda item: int(10 * abs(float(item[0][0]))))
     hist = trainer.fit(resume=resume)
     return model, trainer, hist
 
@@ -115,3 +117,27 @@ def test_two_process_ddp_matches_single_process(tmp_path):
     ddp_hist = torch.load(tmp_path / "history.pt", weights_only=False)
     assert ddp_hist[-1]["val"]["loss"] == pytest.approx(hist[-1]["val"]["loss"], rel=1e-4)
     assert (tmp_path / "run" / "last.pt").exists()
+
+
+def test_length_buckets_group_similar_lengths_and_cover_every_item(tmp_path):
+    items = make_data(40)
+    lengths = [(7 * i) % 40 for i in range(40)]          # a permutation of 0..39
+    cfg = config(tmp_path, 1, length_buckets=5)          # pools of 5 batches of 8 = all 40
+    t = Trainer(TinyReg(), items, collate, cfg, length_of=lambda it: lengths[
+        next(i for i, x in enumerate(items) if x is it)])
+    batches = t._batches(0)
+    assert sorted(i for b in batches for i in b) == list(range(40))
+    spans = sorted((min(lengths[i] for i in b), max(lengths[i] for i in b)) for b in batches)
+    assert spans == [(0, 7), (8, 15), (16, 23), (24, 31), (32, 39)]   # one pool: sorted
+    assert t._batches(0) == batches and t._batches(1) != batches       # (seed, epoch) only
+    plain = Trainer(TinyReg(), items, collate, config(tmp_path, 1))._batches(0)
+    assert max(max(lengths[i] for i in b) - min(lengths[i] for i in b) for b in plain) > 7
+
+
+def test_length_buckets_resume_equals_uninterrupted(tmp_path):
+    full, _, _ = run(tmp_path / "full", 3, length_buckets=2)
+    run(tmp_path / "part", 1, length_buckets=2)
+    resumed, _, _ = run(tmp_path / "part", 3, resume=True, init_seed=5, length_buckets=2)
+    assert_same_weights(full, resumed)
+    with pytest.raises(MotionlangError, match="length_buckets"):
+        Trainer(TinyReg(), make_data(), collate, config(tmp_path, 1, length_buckets=-1))

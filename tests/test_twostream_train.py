@@ -165,7 +165,7 @@ def test_train_command(corpus, tmp_path, monkeypatch, capsys):
     rc = main(["train", "twostream", "--data", str(corpus), "--out", str(out), "--h", "8",
                "--h1", "4", "--h2", "8", "--epochs", "1", "--batch-size", "16",
                "--max-frames", "12", "--text-layers", "6", "--threads", "1",
-               "--z-every-step", "--time-input"])
+               "--z-every-step", "--time-input", "--length-buckets", "2"])
     assert rc == 0 and out.exists()
     assert (tmp_path / "ts_run" / "splits").is_dir()
     logged = json.loads((tmp_path / "ts_run" / "commands.jsonl").read_text())

@@ -52,7 +52,8 @@ def cmd_train(args: argparse.Namespace) -> int:
     model = TwoStreamModel(make_config(args.ablation, **fields), data.features.normalizer)
     cfg = TrainConfig(epochs=args.epochs, batch_size=args.batch_size, lr=args.lr,
                       grad_clip=args.grad_clip, seed=args.seed, out_dir=str(run),
-                      checkpoint_every=args.checkpoint_every)
+                      checkpoint_every=args.checkpoint_every,
+                      length_buckets=args.length_buckets)
     print(f"twostream ({args.ablation}): {len(data.items['train'])} training pairs "
           f"({len(data.splits['train'])} motions), "
           f"{sum(p.numel() for p in model.parameters()):,} parameters")
@@ -105,6 +106,9 @@ def register_train(train_sub) -> None:
     p.add_argument("--max-frames", type=int, default=None,
                    help="crop sequences to this many 12.5 Hz frames")
     p.add_argument("--max-seconds", type=float, default=30.0, help="drop longer motions")
+    p.add_argument("--length-buckets", type=int, default=0, metavar="N",
+                   help="batch motions of similar lengths (pools of N batches sorted by "
+                        "length; 0: plain shuffle): less padding, faster epochs")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--threads", type=int, default=0, help="torch threads (0: torch's default)")
     p.add_argument("--resume", action="store_true", help="continue from the run's last.pt")

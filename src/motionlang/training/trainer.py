@@ -49,6 +49,10 @@ class TrainConfig:
     batch_size is the GLOBAL batch (split across ranks under torchrun). grad_clip is a max
     global L2 norm (None: no clipping). checkpoint_every: also write ``last.pt`` every this
     many steps (0: at epoch ends only). progress: None shows the bar on a terminal only.
+    length_buckets: 0 = batches of a plain shuffle; N > 0 = the shuffled order is cut into
+    pools of N batches, each pool sorted by sequence length before it is cut into batches,
+    and the batches are shuffled again: batches of similar lengths, so that padding (and an
+    unrolled decoder's wasted steps) stays small. Still a function of (seed, epoch) only.
     """
 
     epochs: int = 10
@@ -62,6 +66,7 @@ class TrainConfig:
     checkpoint_every: int = 0
     plot: bool = True
     progress: bool | None = None
+    length_buckets: int = 0
 
 
 def init_distributed() -> tuple[int, int]:
@@ -99,10 +104,13 @@ class Trainer:
         model: an ``nn.Module`` with ``loss(batch)``.
         train_set, val_set: sequences of items; ``collate`` turns a list of items into a batch.
         config: :class:`TrainConfig`.
+        length_of: an item's sequence length, for ``config.length_buckets`` (default:
+            ``len(item["motion"])``).
     """
 
     def __init__(self, model: torch.nn.Module, train_set: Sequence, collate: Callable[[list], Any],
-                 config: TrainConfig, val_set: Sequence | None = None):
+                 config: TrainConfig, val_set: Sequence | None = None,
+                 length_of: Callable[[Any], int] | None = None):
         if len(train_set) == 0:
             raise MotionlangError("training set is empty")
         if config.optimizer not in OPTIMIZERS:
@@ -110,6 +118,12 @@ class Trainer:
                                   f"choose from {sorted(OPTIMIZERS)}")
         self.model, self.train_set, self.val_set = model, train_set, val_set
         self.collate, self.config = collate, config
+        self._lengths = None
+        if config.length_buckets < 0:
+            raise MotionlangError(f"length_buckets must be >= 0, got {config.length_buckets}")
+        if config.length_buckets > 0:
+            length_of = length_of or (lambda item: len(item["motion"]))
+            self._lengths = [int(length_of(item)) for item in train_set]
         self.out_dir = Path(config.out_dir)
         self.rank, self.world = init_distributed()
         if self.world > 1:  # every rank starts from rank 0's weights
@@ -125,7 +139,15 @@ class Trainer:
         g = torch.Generator().manual_seed(self.config.seed * 100_003 + epoch)
         perm = torch.randperm(len(self.train_set), generator=g).tolist()
         bs = self.config.batch_size
-        return [perm[i:i + bs] for i in range(0, len(perm), bs)]
+        if self._lengths is None:
+            return [perm[i:i + bs] for i in range(0, len(perm), bs)]
+        pool = bs * self.config.length_buckets
+        batches = []
+        for i in range(0, len(perm), pool):
+            chunk = sorted(perm[i:i + pool], key=self._lengths.__getitem__)
+            batches += [chunk[j:j + bs] for j in range(0, len(chunk), bs)]
+        order = torch.randperm(len(batches), generator=g).tolist()
+        return [batches[k] for k in order]
 
     def _share(self, idx: list[int]) -> list[int]:
         return idx[self.rank::self.world]
