@@ -31,7 +31,9 @@ def main() -> int:
     repeat = int(sys.argv[1]) if len(sys.argv) > 1 else 15
     threads = int(sys.argv[2]) if len(sys.argv) > 2 else 1
     h = int(sys.argv[3]) if len(sys.argv) > 3 else 512
-    fed = len(sys.argv) > 4 and sys.argv[4] == "fed"
+    if len(sys.argv) > 4 and sys.argv[4] != "fed":
+        sys.exit(f"unknown 4th argument {sys.argv[4]!r}: only 'fed' is known")
+    fed = len(sys.argv) > 4
     torch.set_num_threads(threads)
     try:
         model = TwoStreamModel(TwoStreamConfig(h=h, z_every_step=fed, time_input=fed)).eval()

@@ -61,6 +61,9 @@ def test_dimension_weights_scale_each_dimensions_log_density():
     pi = torch.softmax(p.logit_pi, -1).double().numpy()
     np.testing.assert_allclose(mdn.surrogate_log_prob(p, x, w).double().numpy(),
                                (pi * want).sum(-1), rtol=1e-5)
+    log_pi = torch.log_softmax(p.logit_pi, -1).double().numpy()
+    np.testing.assert_allclose(mdn.mixture_log_prob(p, x, w).double().numpy(),
+                               np.logaddexp.reduce(log_pi + want, axis=-1), rtol=1e-5)
     ones = torch.ones(3)
     torch.testing.assert_close(mdn.mixture_log_prob(p, x, ones), mdn.mixture_log_prob(p, x))
 

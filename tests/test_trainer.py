@@ -1,6 +1,7 @@
 """The shared trainer: resume equals uninterrupted, checkpoints, plots, 2-process DDP."""
 from __future__ import annotations
 
+import dataclasses
 import json
 import subprocess
 import sys
@@ -26,8 +27,8 @@ def run(out, epochs, resume=False, init_seed=0, fail_after=None, **kw):
     torch.manual_seed(init_seed)
     model = TinyReg(dropout=0.3, fail_after=fail_after)
     trainer = Trainer(model, make_data(), collate, config(out, epochs, **kw),
-                      val_set=make_data(12, 1),   # a stand-in length for length_buckets
-                      length_of=lambda item: int(10 * abs(float(item[0][0]))))
+                      val_set=make_data(12, 1),
+                      length_of=lambda item: int(10 * abs(float(item[0][0]))))  # stand-in length
     hist = trainer.fit(resume=resume)
     return model, trainer, hist
 
@@ -141,3 +142,54 @@ def test_length_buckets_resume_equals_uninterrupted(tmp_path):
     assert_same_weights(full, resumed)
     with pytest.raises(MotionlangError, match="length_buckets"):
         Trainer(TinyReg(), make_data(), collate, config(tmp_path, 1, length_buckets=-1))
+
+
+def test_mid_epoch_resume_with_length_buckets(tmp_path):
+    full, _, _ = run(tmp_path / "full", 3, checkpoint_every=2, length_buckets=2)
+    with pytest.raises(KeyboardInterrupt):
+        run(tmp_path / "cut", 3, checkpoint_every=2, fail_after=8, length_buckets=2)
+    resumed, _, _ = run(tmp_path / "cut", 3, resume=True, init_seed=5, checkpoint_every=2,
+                        length_buckets=2)
+    assert_same_weights(full, resumed)
+    with pytest.raises(KeyboardInterrupt):
+        run(tmp_path / "cut2", 3, checkpoint_every=2, fail_after=8, length_buckets=2)
+    with pytest.raises(MotionlangError, match="length_buckets"):   # another batch list
+        run(tmp_path / "cut2", 3, resume=True, checkpoint_every=2, length_buckets=3)
+
+
+@dataclasses.dataclass
+class ScaleConfig:
+    scale: float = 1.0
+
+
+class ScaledReg(TinyReg):
+    """TinyReg whose loss is multiplied by ``config.scale`` (a loss-changing option)."""
+
+    def __init__(self, scale: float):
+        super().__init__()
+        self.config = ScaleConfig(scale)
+
+    def to_checkpoint(self) -> dict:
+        return {"kind": "scaled", "config": dataclasses.asdict(self.config),
+                "state_dict": self.state_dict()}
+
+    def loss(self, batch):
+        return {k: v * self.config.scale for k, v in super().loss(batch).items()}
+
+
+def test_resume_with_another_loss_ranks_best_afresh(tmp_path, caplog):
+    def fit(epochs, scale, resume):
+        torch.manual_seed(0)
+        t = Trainer(ScaledReg(scale), make_data(), collate, config(tmp_path, epochs),
+                    val_set=make_data(12, 1))
+        return t.fit(resume=resume)
+
+    fit(1, 1.0, False)
+    fit(2, 1.0, True)        # same config: best still compares with epoch 1
+    assert torch.load(tmp_path / "best.pt", weights_only=True)["best"] == \
+        min(h["val"]["loss"] for h in json.loads((tmp_path / "history.json").read_text()))
+    with caplog.at_level("WARNING"):
+        hist = fit(3, 100.0, True)   # a 100x larger loss would never beat the old best
+    assert "config differs" in caplog.text
+    best = torch.load(tmp_path / "best.pt", weights_only=True)
+    assert best["epoch"] == 3 and best["best"] == hist[-1]["val"]["loss"]

@@ -316,3 +316,14 @@ def test_z_every_step_and_clock_enter_only_through_their_input_columns():
     out, ref = fed.decoder(z, x0, 10), plain.decoder(z, x0, 10)
     torch.testing.assert_close(out[:, :2], ref[:, :2])  # clock 0 at the first step
     assert (out[:, 2:] - ref[:, 2:]).abs().max() > 1e-4
+
+
+def test_each_step_reads_pose_columns_then_its_streams_embedding_then_the_clock():
+    m = tiny(z_every_step=True, time_input=True)
+    x, z = torch.randn(2, 66), m.encode_text(["walk", "wave"])
+    for s in m.decoder.cells:
+        cols = getattr(m.decoder, f"cols_{s}")
+        got = m.decoder._inputs(x, cols, z[s], 26)
+        torch.testing.assert_close(got, torch.cat([x[:, cols], z[s], torch.full((2, 1), 0.25)],
+                                                  dim=-1))
+    assert tiny().decoder._inputs(x, cols, z[s], 26).shape == (2, len(cols))

@@ -40,6 +40,8 @@ def cmd_train(args: argparse.Namespace) -> int:
     if out.suffix != ".pt":
         raise MotionlangError(f"{out}: the model file must end in .pt")
     run = Path(args.run_dir) if args.run_dir else out.parent / f"{out.stem}_run"
+    if args.length_buckets < 0:   # before anything is written
+        raise MotionlangError(f"--length-buckets must be >= 0, got {args.length_buckets}")
     data = build_twostream_data(args.data, seed=args.seed, max_seconds=args.max_seconds,
                                 max_frames=args.max_frames)
     save_splits(data.splits, run / "splits")

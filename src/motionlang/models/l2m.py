@@ -56,7 +56,8 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
             raise ValueError(f"L2MConfig.loss must be 'surrogate' or 'exact', not {c.loss!r}")
         if c.loss_weights is not None and (len(c.loss_weights) != c.n_features
                                            or not all(w >= 0 for w in c.loss_weights)):
-            raise MotionlangError(f"L2MConfig.loss_weights must be {c.n_features} weights >= 0")
+            raise MotionlangError(f"L2MConfig.loss_weights must be {c.n_features} weights >= 0, "
+                                  f"got {len(c.loss_weights)} (min {min(c.loss_weights, default=0)})")
         if not c.input_noise >= 0:
             raise MotionlangError(f"L2MConfig.input_noise must be >= 0, not {c.input_noise!r}")
         self.vocab, self.normalizer, self.features = vocab, normalizer, features
@@ -180,7 +181,7 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
         active = (t < (lengths.unsqueeze(1) - 1)).reshape(-1).float()
         x = motion.reshape(B * T, -1)
         weights = (None if self.config.loss_weights is None
-                   else torch.tensor(self.config.loss_weights, dtype=x.dtype))
+                   else torch.tensor(self.config.loss_weights, dtype=x.dtype, device=x.device))
         log_density = (mdn.surrogate_log_prob if self.config.loss == "surrogate"
                        else mdn.mixture_log_prob)(params, x, weights)
         nll = -log_density[valid].mean()

@@ -18,6 +18,7 @@ process on the same global batches (up to float summation order). Only rank 0 wr
 """
 from __future__ import annotations
 
+import dataclasses
 import json
 import logging
 import math
@@ -241,6 +242,34 @@ class Trainer:
         self.history = list(ck["history"])
         return ck
 
+    def _config_changed(self, old: dict | None) -> bool:
+        """Does the model's config differ from a checkpoint's (``old``)? Fields the checkpoint
+        predates count as their defaults."""
+        new = self._model_dict().get("config")
+        if old is None or new is None:
+            return old != new
+        cfg = getattr(self.model, "config", None)
+        defaults = {}
+        if dataclasses.is_dataclass(cfg):
+            for f in dataclasses.fields(cfg):
+                if f.default is not dataclasses.MISSING:
+                    defaults[f.name] = f.default
+                elif f.default_factory is not dataclasses.MISSING:
+                    defaults[f.name] = f.default_factory()
+        return any(old.get(k, defaults.get(k)) != v for k, v in new.items())
+
+    def _check_batching(self, ck: dict, path: Path) -> None:
+        """A mid-epoch resume continues the interrupted epoch's batch list: the options that
+        make that list must not have changed."""
+        if not ck["batch"]:
+            return
+        old, new = ck.get("train_config", {}), asdict(self.config)
+        changed = [k for k in ("batch_size", "seed", "length_buckets")
+                   if old.get(k, 0 if k == "length_buckets" else None) != new[k]]
+        if changed:
+            raise MotionlangError(f"{path}: interrupted in the middle of an epoch with other "
+                                  f"{', '.join(changed)}; resume with the same values")
+
     # -- the loop -----------------------------------------------------------------------
     def fit(self, resume: bool = False) -> list[dict]:
         """Train for ``config.epochs`` epochs; with ``resume`` continue from ``last.pt``.
@@ -256,6 +285,13 @@ class Trainer:
             ck = self._load(last)
             epoch, start_batch, step = ck["epoch"], ck["batch"], ck["step"]
             sums, count, best = dict(ck["epoch_sums"]), ck["epoch_count"], ck["best"]
+            self._check_batching(ck, last)
+            if self._config_changed(ck["model"].get("config")):
+                # e.g. resumed with other loss weights: the old best score measured another
+                # loss, so best.pt is ranked afresh from here on
+                log.warning("%s: the model's config differs from the checkpoint's; best.pt "
+                            "is chosen among the epochs from here on", last)
+                best = math.inf
             log.info("resuming from %s at epoch %d batch %d", last, epoch + 1, start_batch)
         hide = True if self.rank else (None if c.progress is None else not c.progress)
         while epoch < c.epochs:
