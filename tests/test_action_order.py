@@ -7,7 +7,8 @@ import pytest
 from motionlang.errors import MotionlangError
 from motionlang.evaluation.action_order import (Prototypes, merge_repeats, order_accuracy,
                                                 order_matches, rescale_ranges,
-                                                segment_descriptor, segment_labels)
+                                                segment_accuracy, segment_descriptor,
+                                                segment_labels)
 
 
 def still(T, level=0.0):
@@ -56,6 +57,16 @@ def test_merge_and_rescale():
     assert rescale_ranges([(398, 400)], 400, 50) == [(49, 50)]
     with pytest.raises(MotionlangError):
         order_accuracy([], [])
+
+
+def test_segment_accuracy_first_and_later():
+    truth = [["walk", "turn", "walk"], ["jump", "wave"], ["stand"]]
+    pred = [["walk", "stand", "walk"], ["stand", "wave"], ["stand"]]
+    assert segment_accuracy(pred, truth) == (2 / 3, 2 / 3)   # later: turn x, walk ok, wave ok
+    first, later = segment_accuracy([["stand"]], [["stand"]])
+    assert first == 1.0 and np.isnan(later)
+    with pytest.raises(MotionlangError):
+        segment_accuracy([["walk"]], [["walk", "turn"]])
 
 
 def test_nearest_example_mode():

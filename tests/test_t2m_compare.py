@@ -68,6 +68,9 @@ def test_oracle_and_wrong_models(data):
     direct = np.mean([segment_labels(data.sequences[it.id], it.ranges, protos) == it.truth
                       for it in comp])
     assert oracle["order_accuracy"] == pytest.approx(direct)
+    labels = [segment_labels(data.sequences[it.id], it.ranges, protos) for it in comp]
+    assert oracle["first_segment_accuracy"] == pytest.approx(
+        np.mean([l[0] == it.truth[0] for l, it in zip(labels, comp)]))
     # a model that stands still in the first pose: errors in mm, and APE of the root = the
     # mean distance of the true root from its start
     still = evaluate_model(lambda s, t: np.repeat(by_sentence[s][:1], t, axis=0), items,
@@ -81,6 +84,8 @@ def test_oracle_and_wrong_models(data):
     assert rev["order_accuracy"] < oracle["order_accuracy"] or oracle["order_accuracy"] == 0
     table = markdown_table({"oracle": oracle, "still": still})
     assert table.count("\n| ") == 2 and "| oracle | 0.0 |" in table
+    first, later = oracle["first_segment_accuracy"], oracle["later_segment_accuracy"]
+    assert f"| {first:.2f} / {later:.2f} |" in table
 
 
 def _tiny_l2m(data):

@@ -17,6 +17,7 @@ Pure numpy.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Iterable, Sequence
 
@@ -122,3 +123,19 @@ def order_accuracy(predicted: Sequence[Sequence[str]], truth: Sequence[Sequence[
     if len(predicted) != len(truth) or not truth:
         raise MotionlangError(f"{len(predicted)} predictions for {len(truth)} items")
     return float(np.mean([order_matches(p, t) for p, t in zip(predicted, truth)]))
+
+
+def segment_accuracy(predicted: Sequence[Sequence[str]], truth: Sequence[Sequence[str]]
+                     ) -> tuple[float, float]:
+    """Fraction of segments labelled right, (first segments, all later segments): where
+    :func:`order_accuracy` is all or nothing per item, this shows how far into a
+    sequence a model stays right (NaN when there are no later segments)."""
+    if len(predicted) != len(truth) or not truth:
+        raise MotionlangError(f"{len(predicted)} predictions for {len(truth)} items")
+    first, later = [], []
+    for p, t in zip(predicted, truth):
+        if len(p) != len(t) or not t:
+            raise MotionlangError(f"{len(p)} segment labels for {len(t)} segments")
+        first.append(p[0] == t[0])
+        later += [a == b for a, b in zip(p[1:], t[1:])]
+    return float(np.mean(first)), float(np.mean(later)) if later else math.nan

@@ -26,7 +26,8 @@ import numpy as np
 
 from motionlang.errors import MotionlangError
 from motionlang.evaluation.action_order import (Prototypes, merge_repeats, order_accuracy,
-                                                rescale_ranges, segment_labels)
+                                                rescale_ranges, segment_accuracy,
+                                                segment_labels)
 from motionlang.evaluation.motion_metrics import position_metrics_mm
 
 
@@ -129,26 +130,33 @@ def score_generated(gen: dict[str, np.ndarray], items: Sequence[T2MItem], featur
     with T = the item's target length."""
     m = position_metrics_mm([gen[it.id] for it in items], [it.target for it in items])
     comp = [it for it in items if it.compositional] if prototypes is not None else []
-    acc = math.nan
+    acc = first = later = math.nan
     if comp:
         pred = [segment_labels(positions_to_features(features, gen[it.id]), it.ranges,
                                prototypes) for it in comp]
         acc = order_accuracy(pred, [it.truth for it in comp])
+        first, later = segment_accuracy(pred, [it.truth for it in comp])
     return {"ape_local": m["ape_local"], "ape_root": m["ape_root"],
             "ave_local": m["ave_local"], "ave_root": m["ave_root"],
-            "order_accuracy": acc, "n_items": len(items), "n_compositional": len(comp),
+            "order_accuracy": acc, "first_segment_accuracy": first,
+            "later_segment_accuracy": later, "n_items": len(items), "n_compositional": len(comp),
             "generated": gen}
 
 
 def markdown_table(results: dict[str, dict]) -> str:
-    """One row per model: APE/AVE local and root (mm, mm^2), order accuracy."""
+    """One row per model: APE/AVE local and root (mm, mm^2), order accuracy, and the
+    fraction of first / later segments of the compositional items labelled right."""
     lines = ["| model | APE local (mm) | APE root (mm) | AVE local (mm^2) | AVE root (mm^2) "
-             "| order acc. |", "|---|---|---|---|---|---|"]
+             "| order acc. | segments right (first / later) |", "|---|---|---|---|---|---|---|"]
+
+    def frac(x):
+        return "-" if x is None or math.isnan(x) else f"{x:.2f}"
     for name, r in results.items():
         acc = "-" if math.isnan(r["order_accuracy"]) else \
             f"{r['order_accuracy']:.2f} ({r['n_compositional']})"
+        segs = f"{frac(r.get('first_segment_accuracy'))} / {frac(r.get('later_segment_accuracy'))}"
         lines.append(f"| {name} | {r['ape_local']:.1f} | {r['ape_root']:.1f} | "
-                     f"{r['ave_local']:.1f} | {r['ave_root']:.1f} | {acc} |")
+                     f"{r['ave_local']:.1f} | {r['ave_root']:.1f} | {acc} | {segs} |")
     n = next(iter(results.values()))["n_items"] if results else 0
     return "\n".join(lines) + f"\n\n{n} test sentences; positions after undoing the " \
         "normalisation (not the authors' normalised units).\n"
