@@ -23,6 +23,8 @@ def main() -> None:
     ap.add_argument("--ar-decays", type=lambda v: None if v == "same" else float(v), nargs="+",
                     default=None,
                     help="weight decays of the autoregressive weights A (\"same\": W's; default same)")
+    ap.add_argument("--history-noises", type=float, nargs="+", default=[0.0],
+                    help="noise on the past frames while training (CRBMConfig.history_noise)")
     ap.add_argument("--mean-field", choices=["no", "yes", "both"], default="no")
     ap.add_argument("--repeats", type=int, default=20)
     a = ap.parse_args()
@@ -30,7 +32,8 @@ def main() -> None:
     cfg = SelectionConfig(weight_decays=tuple(a.weight_decays), learning_rates=tuple(a.learning_rates),
                           epochs=tuple(a.epochs), n_gibbs=tuple(a.n_gibbs), mean_fields=mf,
                           n_repeats=a.repeats,
-                          ar_decays=tuple(a.ar_decays) if a.ar_decays else (None,))
+                          ar_decays=tuple(a.ar_decays) if a.ar_decays else (None,),
+                          history_noises=tuple(a.history_noises))
     res = select(a.data, cfg, log=lambda s: print(s, flush=True))
     with atomic_write(a.out) as f:
         json.dump(res, f, indent=1)

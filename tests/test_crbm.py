@@ -236,3 +236,33 @@ def test_cd_k_and_negative_start_options():
         CRBMConfig(negative_start="nowhere")
     with pytest.raises(MotionlangError):
         CRBMConfig(cd_steps=0)
+
+
+def test_history_noise_perturbs_only_the_past_it_trains_on(monkeypatch):
+    from motionlang.models.crbm import gather_past
+    seqs = _sines()
+    seen = []
+    real = CRBM.cd_gradients
+
+    def spy(self, v0, past, rng):
+        seen.append((v0.copy(), past.copy()))
+        return real(self, v0, past, rng)
+    monkeypatch.setattr(CRBM, "cd_gradients", spy)
+    for noise in (0.0, 0.5):
+        seen.clear()
+        m = CRBM(CRBMConfig(n_hidden=4, order=2, epochs=3, batch_size=50, history_noise=noise),
+                 3).fit(seqs)
+        x = m.normalise(np.concatenate(seqs)).astype(np.float32)
+        diffs = []
+        for v0, past in seen:
+            # find each row's frame in the data, then its true past
+            rows = np.array([np.flatnonzero((x == v).all(axis=1))[0] for v in v0])
+            diffs.append(past - gather_past(x, rows, 2))
+            np.testing.assert_array_equal(v0, x[rows])           # the current frames: exact
+        d = np.concatenate(diffs)
+        if noise == 0:
+            assert np.abs(d).max() == 0
+        else:
+            assert abs(d.std() - noise) < 0.05 and abs(d.mean()) < 0.05
+    with pytest.raises(MotionlangError):
+        CRBMConfig(history_noise=-1.0)

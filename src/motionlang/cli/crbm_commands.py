@@ -38,6 +38,9 @@ def _add_crbm_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--ar-weight-decay", type=float, default=d.weight_decay_autoregressive,
                    help="weight decay of the autoregressive weights A (train crbm / crbm reproduce: "
                         "the selected 2e-2; elsewhere --weight-decay's)")
+    p.add_argument("--history-noise", type=float, default=d.history_noise, metavar="STD",
+                   help="noise on the past frames while training (normalised units; not in "
+                        "the paper)")
     p.add_argument("--seed", type=int, default=0)
 
 
@@ -46,7 +49,8 @@ def _crbm_config(args: argparse.Namespace):
     return CRBMConfig(n_hidden=args.hidden, order=args.order, epochs=args.epochs,
                       batch_size=args.batch_size, lr=args.lr, lr_autoregressive=args.lr,
                       momentum=args.momentum, weight_decay=args.weight_decay,
-                      weight_decay_autoregressive=args.ar_weight_decay, seed=args.seed)
+                      weight_decay_autoregressive=args.ar_weight_decay, seed=args.seed,
+                      history_noise=args.history_noise)
 
 
 def _load_model(path: str, allow_stack: bool = False):
@@ -231,7 +235,8 @@ def register_train(train_sub: argparse._SubParsersAction) -> None:
     # defaults: the paper's sizes with the settings selected on held-out training trials
     p.set_defaults(func=cmd_train, epochs=SELECTED["epochs"], lr=SELECTED["lr"],
                    weight_decay=SELECTED["weight_decay"],
-                   ar_weight_decay=SELECTED["weight_decay_autoregressive"])
+                   ar_weight_decay=SELECTED["weight_decay_autoregressive"],
+                   history_noise=SELECTED["history_noise"])
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -284,4 +289,4 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     r.set_defaults(func=cmd_reproduce, epochs=SELECTED["epochs"], lr=SELECTED["lr"],
                    weight_decay=SELECTED["weight_decay"], gibbs=SELECTED["n_gibbs"],
                    ar_weight_decay=SELECTED["weight_decay_autoregressive"],
-                   mean_field=SELECTED["mean_field"])
+                   history_noise=SELECTED["history_noise"], mean_field=SELECTED["mean_field"])

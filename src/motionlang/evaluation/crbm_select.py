@@ -44,6 +44,7 @@ class SelectionConfig:
     n_gibbs: tuple = (5, 30)
     mean_fields: tuple = (False,)         # fill-in with hidden probabilities in every update
     ar_decays: tuple = (None,)            # weight decay of A (None = the same as W's)
+    history_noises: tuple = (0.0,)        # CRBMConfig.history_noise values
     n_repeats: int = 20                   # stochastic fill-ins per cell (100 in the final table)
     generation_frames: int = 1000
     min_style_kept: float = 0.9           # generation bar a setting must pass on validation
@@ -125,18 +126,20 @@ def select(data_dir: str | Path, cfg: SelectionConfig | None = None, *, log=prin
     seqs = [model_frames(c) for c in val.train]
     ar = ARModel(ARConfig(order=cfg.base.order), 59).fit(seqs)
     runs = []
-    for wd, lr, awd in itertools.product(cfg.weight_decays, cfg.learning_rates, cfg.ar_decays):
+    for wd, lr, awd, hn in itertools.product(cfg.weight_decays, cfg.learning_rates,
+                                             cfg.ar_decays, cfg.history_noises):
         ccfg = dataclasses.replace(cfg.base, weight_decay=wd, lr=lr, lr_autoregressive=lr,
-                                   weight_decay_autoregressive=awd,
+                                   weight_decay_autoregressive=awd, history_noise=hn,
                                    epochs=max(cfg.epochs), seed=cfg.seed)
 
-        def snapshot(epoch, model, wd=wd, lr=lr, awd=awd):
+        def snapshot(epoch, model, wd=wd, lr=lr, awd=awd, hn=hn):
             if epoch not in cfg.epochs:
                 return
             gen = validation_generation(model, val, cfg.generation_frames, cfg.seed)
             for ng, mf in itertools.product(cfg.n_gibbs, cfg.mean_fields):
                 res = score_snapshot(model, ar, val, ng, cfg.n_repeats, cfg.seed, mf)
-                run = {"weight_decay": wd, "weight_decay_autoregressive": awd, "lr": lr, "epochs": epoch, "n_gibbs": ng, "mean_field": mf,
+                run = {"weight_decay": wd, "weight_decay_autoregressive": awd, "lr": lr,
+                       "history_noise": hn, "epochs": epoch, "n_gibbs": ng, "mean_field": mf,
                        "score": round(res["score"], 4), "cells": res["cells"], "generation": gen}
                 runs.append(run)
                 log(json.dumps({k: v for k, v in run.items() if k != "cells"}))
@@ -144,6 +147,7 @@ def select(data_dir: str | Path, cfg: SelectionConfig | None = None, *, log=prin
         CRBM(ccfg, 59).fit(seqs, on_epoch=snapshot)
     best, ok = choose(runs, cfg.min_style_kept)
     return {"runs": runs, "generation_eligible": len(ok),
-            "best": {k: best[k] for k in ("weight_decay", "weight_decay_autoregressive",
-                                                         "lr", "epochs", "n_gibbs", "mean_field", "score")},
+            "best": {k: best[k] for k in ("weight_decay", "weight_decay_autoregressive", "lr",
+                                          "history_noise", "epochs", "n_gibbs", "mean_field",
+                                          "score")},
             "validation_trials": list(VALIDATION_TRIALS)}

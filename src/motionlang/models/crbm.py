@@ -61,6 +61,9 @@ class CRBMConfig:
     negative_start: str = "data"  # where the negative chain starts: "data" (v_t, the paper's
     # CD) or "previous" (v_{t-1}, as generation starts each frame: the model learns to move
     # from the last frame to this one; not in the paper)
+    history_noise: float = 0.0  # std of Gaussian noise added to the past frames (normalised
+    # units) while training, so that generation, which conditions on its own imperfect
+    # frames, is trained for inputs off the data (not in the paper; 0 = the paper)
 
     def __post_init__(self):
         if self.visible not in ("gaussian", "binary"):
@@ -72,6 +75,8 @@ class CRBMConfig:
                                   f"got {self.negative_start!r}")
         if self.cd_steps < 1:
             raise MotionlangError("CRBMConfig.cd_steps must be >= 1")
+        if not self.history_noise >= 0:
+            raise MotionlangError(f"CRBMConfig.history_noise must be >= 0, got {self.history_noise}")
         if self.order < 1 or self.n_hidden < 1 or self.batch_size < 1:
             raise MotionlangError("CRBMConfig: order, n_hidden and batch_size must be >= 1")
 
@@ -256,7 +261,11 @@ class CRBM:
             err = 0.0
             for start in range(0, len(order), cfg.batch_size):
                 batch = order[start:start + cfg.batch_size]
-                grads, e = self.cd_gradients(x[batch], gather_past(x, batch, cfg.order), rng)
+                past = gather_past(x, batch, cfg.order)
+                if cfg.history_noise > 0:
+                    past = past + (cfg.history_noise
+                                   * rng.standard_normal(past.shape)).astype(past.dtype)
+                grads, e = self.cd_gradients(x[batch], past, rng)
                 err += e * len(batch)
                 for k in PARAMS:
                     g = grads[k]
