@@ -32,6 +32,12 @@ def model_path(data_dir, tmp_path_factory):
 def test_train_writes_a_reloadable_checkpoint(model_path):
     m = CRBM.load(model_path)
     assert m.config.n_hidden == 12 and len(m.history) == 3 and m.n_visible == 59
+    # the selected noise on the past frames is the default, kept in the checkpoint; the
+    # second level (hidden probabilities, not normalised units) trains without it
+    from motionlang.evaluation.crbm_reproduce import SELECTED
+    assert m.config.history_noise == SELECTED["history_noise"] > 0
+    stack = CRBMStack.load(model_path.with_name("two.npz"))
+    assert stack.level2.config.history_noise == 0.0
 
 
 def test_generate_and_fill_outputs(model_path, data_dir, tmp_path, capsys):

@@ -40,7 +40,7 @@ def _add_crbm_options(p: argparse.ArgumentParser) -> None:
                         "the selected 2e-2; elsewhere --weight-decay's)")
     p.add_argument("--history-noise", type=float, default=d.history_noise, metavar="STD",
                    help="noise on the past frames while training (normalised units; not in "
-                        "the paper)")
+                        "the paper; train crbm / crbm reproduce: the selected 0.3)")
     p.add_argument("--seed", type=int, default=0)
 
 
@@ -109,8 +109,10 @@ def cmd_train(args: argparse.Namespace) -> int:
     print(f"{args.output}: {model.describe()}")
     if args.level2:
         from motionlang.models.crbm_stack import CRBMStack
+        # level 2's visibles are hidden probabilities in [0, 1]: level 1's noise (normalised
+        # units) does not carry over
         cfg2 = dataclasses.replace(model.config, visible="binary", n_hidden=args.level2_hidden,
-                                   order=args.level2_order)
+                                   order=args.level2_order, history_noise=0.0)
         stack = CRBMStack.fit(model, seqs, cfg2, show_progress=not args.quiet)
         stack.save(args.level2)
         print(f"{args.level2}: two-level model, level 2 {stack.level2.describe()}")

@@ -9,7 +9,7 @@ longer than jog trials and the two parts differ in scale, the score of a setting
 over the 4 trials x 2 parts, of CRBM error / nearest-neighbour error on the same cell (lower
 is better; 1 = as good as nearest neighbour).
 
-One training run per (weight decay, learning rate, A decay) is scored at several epoch counts
+One training run per (weight decay, learning rate, A decay, history noise) is scored at several epoch counts
 (snapshots through ``CRBM.fit(on_epoch=...)``) and, per snapshot, for several numbers of
 Gibbs updates in the fill-in: epochs and Gibbs steps come almost for free. The winner is
 then retrained on all 31 trials (``crbm_reproduce``) and the test table is computed once.

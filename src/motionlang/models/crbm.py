@@ -75,8 +75,8 @@ class CRBMConfig:
                                   f"got {self.negative_start!r}")
         if self.cd_steps < 1:
             raise MotionlangError("CRBMConfig.cd_steps must be >= 1")
-        if not self.history_noise >= 0:
-            raise MotionlangError(f"CRBMConfig.history_noise must be >= 0, got {self.history_noise}")
+        if not (self.history_noise >= 0 and np.isfinite(self.history_noise)):
+            raise MotionlangError(f"CRBMConfig.history_noise must be finite and >= 0, got {self.history_noise}")
         if self.order < 1 or self.n_hidden < 1 or self.batch_size < 1:
             raise MotionlangError("CRBMConfig: order, n_hidden and batch_size must be >= 1")
 
