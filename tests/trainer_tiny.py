@@ -12,7 +12,7 @@ from pathlib import Path
 import torch
 from torch import nn
 
-from motionlang.training.trainer import TrainConfig, Trainer
+from motionlang.training.trainer import TrainConfig, Trainer, finish_distributed
 
 
 class TinyReg(nn.Module):
@@ -61,7 +61,7 @@ def main(out: Path) -> None:
     torch.save(model.state_dict(), out / f"rank{trainer.rank}.pt")
     if trainer.rank == 0:
         torch.save(trainer.history, out / "history.pt")
-    torch.distributed.destroy_process_group()
+    finish_distributed()
 
 
 if __name__ == "__main__":

@@ -49,7 +49,11 @@ def main(argv: list[str] | None = None) -> int:
         parser.print_help()
         return 1
     try:
-        return int(args.func(args) or 0)
+        code = int(args.func(args) or 0)
+        trainer = sys.modules.get("motionlang.training.trainer")
+        if trainer is not None:  # only the trainer joins a process group (under torchrun)
+            trainer.finish_distributed()
+        return code
     except MotionlangError as exc:
         print(f"motionlang {args.command}: error: {exc}", file=sys.stderr)
         return 2

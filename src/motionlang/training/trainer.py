@@ -79,6 +79,18 @@ def init_distributed() -> tuple[int, int]:
     return 0, 1
 
 
+def finish_distributed() -> None:
+    """Leave the process group together: every rank waits at a barrier, then tears it down.
+
+    Without the barrier a rank that finishes first (the others still writing checkpoints or
+    plots) can tear down its gloo connections under them, and the process aborts at exit.
+    No-op outside torchrun.
+    """
+    if dist.is_initialized():
+        dist.barrier()
+        dist.destroy_process_group()
+
+
 def _fmt(terms: dict[str, float]) -> str:
     return " ".join(f"{k} {v:.4g}" for k, v in terms.items())
 
