@@ -323,7 +323,29 @@ def test_each_step_reads_pose_columns_then_its_streams_embedding_then_the_clock(
     x, z = torch.randn(2, 66), m.encode_text(["walk", "wave"])
     for s in m.decoder.cells:
         cols = getattr(m.decoder, f"cols_{s}")
-        got = m.decoder._inputs(x, cols, z[s], 26)
+        got = m.decoder._inputs(x, cols, z[s], 26, torch.ones(2, 1))
         torch.testing.assert_close(got, torch.cat([x[:, cols], z[s], torch.full((2, 1), 0.25)],
                                                   dim=-1))
-    assert tiny().decoder._inputs(x, cols, z[s], 26).shape == (2, len(cols))
+    assert tiny().decoder._inputs(x, cols, z[s], 26, torch.ones(2, 1)).shape == (2, len(cols))
+
+
+def test_progress_input_is_the_fraction_of_each_sequences_own_length():
+    m = tiny(progress_input=True)
+    x, z = torch.randn(2, 66), m.encode_text(["walk", "wave"])
+    cols = m.decoder.cols_upper
+    span = m.decoder._span(x, 11, torch.tensor([11, 5]))        # T - 1 = 10 and 4
+    got = m.decoder._inputs(x, cols, z["upper"], 4, span)
+    # step 4 reads frame 3: 3/10 of the first sequence, 3/4 of the second
+    torch.testing.assert_close(got[:, -1], torch.tensor([0.3, 0.75]))
+    late = m.decoder._inputs(x, cols, z["upper"], 9, span)[:, -1]
+    torch.testing.assert_close(late, torch.tensor([0.8, 1.0]))  # padding frames stay at 1
+    one = m.decoder._span(x, 1, None)                             # a 1-frame motion: no 0/0
+    assert torch.equal(one, torch.ones(2, 1))
+    # the same sequence decoded for another length reads other fractions: output changes
+    a = m.decoder(z, x, 9)
+    b = m.decoder(z, x, 9, lengths=torch.tensor([5, 9]))
+    torch.testing.assert_close(a[1], b[1])
+    assert (a[0, 2:] - b[0, 2:]).abs().max() > 1e-6
+    ref = m.decoder.unroll_layered(z, x, 9, lengths=torch.tensor([5, 9]))
+    torch.testing.assert_close(b, ref, rtol=1e-4, atol=1e-4)
+    assert torch.isfinite(m.loss(batch())["loss"])

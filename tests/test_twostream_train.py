@@ -165,15 +165,23 @@ def test_train_command(corpus, tmp_path, monkeypatch, capsys):
     rc = main(["train", "twostream", "--data", str(corpus), "--out", str(out), "--h", "8",
                "--h1", "4", "--h2", "8", "--epochs", "1", "--batch-size", "16",
                "--max-frames", "12", "--text-layers", "6", "--threads", "1",
-               "--z-every-step", "--time-input", "--length-buckets", "2"])
+               "--z-every-step", "--time-input", "--length-buckets", "2",
+               "--progress-input", "--weight", "adversarial=0.05", "--weight", "embedding=1"])
     assert rc == 0 and out.exists()
     assert (tmp_path / "ts_run" / "splits").is_dir()
     logged = json.loads((tmp_path / "ts_run" / "commands.jsonl").read_text())
     assert logged["max_frames"] == 12 and logged["z_every_step"] is True
     model = TwoStreamModel.load(out)
     assert model.config.h == 8 and model.config.text_layers == [6]
-    assert model.config.z_every_step and model.config.time_input
+    assert model.config.z_every_step and model.config.time_input and model.config.progress_input
+    assert model.config.lambdas["adversarial"] == 0.05 and model.config.lambdas["embedding"] == 1
+    assert model.config.lambdas["velocity"] == 0.1                 # the others keep the paper's
     assert model.generate_positions("a person walks forward", 5).shape == (5, 21, 3)
     assert "twostream (full)" in capsys.readouterr().out
     assert main(["train", "twostream", "--data", str(corpus), "--out",
                  str(tmp_path / "bad.txt")]) == 2
+    for bad in ("adversarial", "gan=1", "pose=-1", "pose=nan", "pose=x"):
+        assert main(["train", "twostream", "--data", str(corpus), "--out",
+                     str(tmp_path / "w.pt"), "--weight", bad]) == 2
+        assert f"--weight {bad!r}" in capsys.readouterr().err
+    assert not (tmp_path / "w_run").exists()                       # refused before writing

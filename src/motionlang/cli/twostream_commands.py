@@ -42,12 +42,14 @@ def cmd_train(args: argparse.Namespace) -> int:
     run = Path(args.run_dir) if args.run_dir else out.parent / f"{out.stem}_run"
     if args.length_buckets < 0:   # before anything is written
         raise MotionlangError(f"--length-buckets must be >= 0, got {args.length_buckets}")
+    parse_lambdas(args.weight)
     data = build_twostream_data(args.data, seed=args.seed, max_seconds=args.max_seconds,
                                 max_frames=args.max_frames)
     save_splits(data.splits, run / "splits")
     log_command(run / "commands.jsonl", args)
     fields = dict(h1=args.h1, h2=args.h2, h=args.h, lstm_layers=args.lstm_layers,
-                  z_every_step=args.z_every_step, time_input=args.time_input)
+                  z_every_step=args.z_every_step, time_input=args.time_input,
+                  progress_input=args.progress_input, lambdas=parse_lambdas(args.weight))
     if args.text_layers:
         fields["text_layers"] = [int(x) for x in args.text_layers.split(",")]
     torch.manual_seed(args.seed)
@@ -69,6 +71,28 @@ def cmd_train(args: argparse.Namespace) -> int:
           f"{last.get('train', {}).get('loss', float('nan')):.4g}, "
           f"val loss {last.get('val', {}).get('loss', float('nan')):.4g}")
     return 0
+
+
+def parse_lambdas(specs: list[str] | None) -> dict[str, float]:
+    """``["adversarial=0.1", ...]`` -> {term: weight}; unknown terms and weights that are
+    not finite and >= 0 are errors naming the option."""
+    import math
+
+    from motionlang.models.twostream.config import DEFAULT_LAMBDAS
+    out = {}
+    for spec in specs or []:
+        name, sep, value = spec.partition("=")
+        if not sep or name not in DEFAULT_LAMBDAS:
+            raise MotionlangError(f"--weight {spec!r}: expected TERM=W with TERM one of "
+                                  f"{', '.join(DEFAULT_LAMBDAS)}")
+        try:
+            w = float(value)
+        except ValueError:
+            w = math.nan
+        if not (math.isfinite(w) and w >= 0):
+            raise MotionlangError(f"--weight {spec!r}: W must be a finite number >= 0")
+        out[name] = w
+    return out
 
 
 def model_spec(spec: str) -> tuple[str, str]:
@@ -97,6 +121,12 @@ def register_train(train_sub) -> None:
                    help="beyond the paper: every decoder step reads its stream's embedding")
     p.add_argument("--time-input", action="store_true",
                    help="beyond the paper: every decoder step reads the elapsed time")
+    p.add_argument("--progress-input", action="store_true",
+                   help="beyond the paper: every decoder step reads t / (T - 1), how far "
+                        "through the motion it is")
+    p.add_argument("--weight", action="append", metavar="TERM=W",
+                   help="loss weight, repeatable (paper: manifold=0.001 velocity=0.1 "
+                        "embedding=0.1 adversarial=0.001)")
     p.add_argument("--text-layers", metavar="I,J,..",
                    help="hidden states of the text model to concatenate (default 3,4,5,6)")
     p.add_argument("--epochs", type=int, default=20)

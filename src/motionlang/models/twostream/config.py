@@ -74,6 +74,11 @@ class TwoStreamConfig:
         time_input: beyond the paper (off by default): each decoder step also reads the
             elapsed time (frames / 100), so that "which action now" need not be counted
             in the GRU state.
+        progress_input: beyond the paper (off by default): each decoder step also reads how
+            far through the motion it is, ``t / (T - 1)`` in [0, 1] for a motion of T frames
+            (its own length in a padded batch; the asked length when generating). Actions
+            of a compositional sentence fill roughly fixed fractions of the motion, so the
+            decoder can tell which action is due without counting frames.
     """
 
     n_features: int = 66
@@ -93,6 +98,7 @@ class TwoStreamConfig:
     word_vectors: bool = False
     z_every_step: bool = False
     time_input: bool = False
+    progress_input: bool = False
 
     def __post_init__(self):
         if set(self.parts) != set(PART_NAMES):

@@ -149,7 +149,7 @@ class TwoStreamModel(nn.Module):
             zp = self.pose_encoder(x, lengths)
         fake = None
         if stage in ("joint", "pose"):
-            qp = self.decoder(zp, x[:, 0], T, x, self._forcing())
+            qp = self.decoder(zp, x[:, 0], T, x, self._forcing(), lengths)
             terms["pose"] = L.masked_smooth_l1(qp, x, mask)
             if extra:
                 terms["manifold"] = L.embedding_loss(self.pose_encoder(qp, lengths), zp)
@@ -157,7 +157,7 @@ class TwoStreamModel(nn.Module):
             fake = qp
         if stage in ("joint", "text"):
             zs = self.sentence_encoder(*self._tokens(batch))
-            qs = self.decoder(zs, x[:, 0], T, x, self._forcing())
+            qs = self.decoder(zs, x[:, 0], T, x, self._forcing(), lengths)
             terms["pose"] = terms.get("pose", 0.0) + L.masked_smooth_l1(qs, x, mask)
             terms["embedding"] = L.embedding_loss(zs, zp)
             if extra and stage == "joint":  # the text stage fits embeddings + poses only

@@ -13,11 +13,12 @@ columns; the trunk is the mean of its predictions from every limb) and gives a p
 that is added to the current pose (residual from input pose to output pose):
 ``x_t = x_{t-1} + Hier(GRU(x_{t-1}, h_{t-1}))``; output frame 0 is x_0 itself.
 
-Two options beyond the paper (``TwoStreamConfig.z_every_step`` / ``time_input``) extend each
-step's GRU input to ``[x_{t-1} columns, z_stream, t / 100]``: with z only as the initial
-state, the decoder has to carry a whole sequence of actions in a state it also overwrites
-every step, and our models (h 128) lost the order of actions even when decoding a motion
-from its own embedding. Measured (README): the options did not bring the order back.
+Options beyond the paper (``TwoStreamConfig.z_every_step`` / ``time_input`` /
+``progress_input``) extend each step's GRU input to ``[x_{t-1} columns, z_stream, t / 100,
+t / (T - 1)]``: with z only as the initial state, the decoder has to carry a whole sequence
+of actions in a state it also overwrites every step, and our models (h 128) lost the order
+of actions even when decoding a motion from its own embedding. Measured (README): z and the
+elapsed time did not bring the order back.
 """
 from __future__ import annotations
 
@@ -101,25 +102,35 @@ class PoseDecoder(nn.Module):
         for s, limbs in c.streams().items():
             cols = _cols(c, limbs + ("trunk",))
             self.register_buffer(f"cols_{s}", torch.tensor(sorted(cols)), persistent=False)
-            extra = c.stream_size * c.z_every_step + int(c.time_input)
+            extra = c.stream_size * c.z_every_step + int(c.time_input) + int(c.progress_input)
             self.cells[s] = nn.GRUCell(len(cols) + extra, c.stream_size)
         self.hier = HierBlock(config)
 
-    def _inputs(self, x: torch.Tensor, cols: torch.Tensor, z: torch.Tensor, t: int
-                ) -> torch.Tensor:
-        """The GRU input of decoding step ``t`` (1-based) for one stream: (B, D)."""
+    def _inputs(self, x: torch.Tensor, cols: torch.Tensor, z: torch.Tensor, t: int,
+                span: torch.Tensor) -> torch.Tensor:
+        """The GRU input of decoding step ``t`` (1-based) for one stream: (B, D). ``span``
+        (B, 1) is each sequence's T - 1 (at least 1), for the progress input."""
         c = self.config
         parts = [x[..., cols]]
         if c.z_every_step:
             parts.append(z)
         if c.time_input:
             parts.append(x.new_full((x.shape[0], 1), (t - 1) / 100.0))
+        if c.progress_input:  # the step reads frame t - 1 and predicts frame t
+            parts.append(((t - 1) / span).clamp(max=1.0))
         return torch.cat(parts, dim=-1) if len(parts) > 1 else parts[0]
 
+    @staticmethod
+    def _span(x0: torch.Tensor, n_frames: int, lengths: torch.Tensor | None) -> torch.Tensor:
+        n = torch.full((x0.shape[0],), n_frames) if lengths is None else lengths
+        return (n.to(x0) - 1).clamp(min=1.0)[:, None]
+
     def forward(self, z: dict[str, torch.Tensor], x0: torch.Tensor, n_frames: int,
-                target: torch.Tensor | None = None, teacher_forcing: float = 0.0
-                ) -> torch.Tensor:
-        """z {stream: (B, H)}, x0 (B, F) -> (B, n_frames, F); frame 0 is x0.
+                target: torch.Tensor | None = None, teacher_forcing: float = 0.0,
+                lengths: torch.Tensor | None = None) -> torch.Tensor:
+        """z {stream: (B, H)}, x0 (B, F) -> (B, n_frames, F); frame 0 is x0. ``lengths``
+        (B,): each sequence's true length in a padded batch (default ``n_frames``), for
+        ``progress_input``.
 
         Teacher forcing (training only): with probability ``teacher_forcing``, drawn per
         sequence and step, the step reads the true previous frame ``target[:, t-1]``
@@ -141,24 +152,27 @@ class PoseDecoder(nn.Module):
         hs = [z[s] for s in streams]
         x = x0
         frames = [x0]
+        span = self._span(x0, n_frames, lengths)
         forcing = target is not None and teacher_forcing > 0
         for t in range(1, n_frames):
             if forcing:
                 use = torch.rand(x.shape[0], 1, device=x.device) < teacher_forcing
                 x = torch.where(use, target[:, t - 1], x)
-            hs = [cell(self._inputs(x, cols, zs, t), h) for (cell, cols, zs), h in zip(cells, hs)]
+            hs = [cell(self._inputs(x, cols, zs, t, span), h)
+                  for (cell, cols, zs), h in zip(cells, hs)]
             x = torch.addmm(x + bias, torch.cat(hs, dim=-1), weight)
             frames.append(x)
         return torch.stack(frames, dim=1)
 
-    def unroll_layered(self, z: dict[str, torch.Tensor], x0: torch.Tensor, n_frames: int
-                       ) -> torch.Tensor:
+    def unroll_layered(self, z: dict[str, torch.Tensor], x0: torch.Tensor, n_frames: int,
+                       lengths: torch.Tensor | None = None) -> torch.Tensor:
         """Same as :meth:`forward`, running the Hier block layer by layer at every step."""
         h = dict(z)
         x = x0
         frames = [x0]
+        span = self._span(x0, n_frames, lengths)
         for t in range(1, n_frames):
-            h = {s: cell(self._inputs(x, getattr(self, f"cols_{s}"), z[s], t), h[s])
+            h = {s: cell(self._inputs(x, getattr(self, f"cols_{s}"), z[s], t, span), h[s])
                  for s, cell in self.cells.items()}
             x = x + self.hier(h)
             frames.append(x)
