@@ -180,8 +180,22 @@ def test_train_command(corpus, tmp_path, monkeypatch, capsys):
     assert "twostream (full)" in capsys.readouterr().out
     assert main(["train", "twostream", "--data", str(corpus), "--out",
                  str(tmp_path / "bad.txt")]) == 2
-    for bad in ("adversarial", "gan=1", "pose=-1", "pose=nan", "pose=x"):
+    for bad in (["adversarial"], ["gan=1"], ["pose=-1"], ["pose=nan"], ["pose=x"],
+                ["pose=1", "pose=2"]):
+        args = [a for w in bad for a in ("--weight", w)]
         assert main(["train", "twostream", "--data", str(corpus), "--out",
-                     str(tmp_path / "w.pt"), "--weight", bad]) == 2
-        assert f"--weight {bad!r}" in capsys.readouterr().err
+                     str(tmp_path / "w.pt"), *args]) == 2
+        assert f"--weight {bad[-1]!r}" in capsys.readouterr().err
     assert not (tmp_path / "w_run").exists()                       # refused before writing
+
+
+def test_weight_help_names_every_loss_term():
+    import argparse
+
+    from motionlang.cli.twostream_commands import register_train
+    from motionlang.models.twostream.config import DEFAULT_LAMBDAS
+    sub = argparse.ArgumentParser().add_subparsers()
+    register_train(sub)
+    (weight,) = [a for a in sub.choices["twostream"]._actions if "--weight" in a.option_strings]
+    for term in DEFAULT_LAMBDAS:
+        assert term in weight.help, term

@@ -3,7 +3,13 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 from pathlib import Path
+
+
+def lead_process() -> bool:
+    """True outside torchrun and on its rank 0: the one process that writes run files."""
+    return os.environ.get("RANK", "0") == "0"
 
 
 def log_command(path: Path, args: argparse.Namespace) -> None:
@@ -11,10 +17,8 @@ def log_command(path: Path, args: argparse.Namespace) -> None:
     included): data options (offsets, --balance, --max-frames, ...) are not in the
     checkpoint, and a resumed run may differ from its start. Under torchrun only rank 0
     writes."""
-    import os
-
     from motionlang.utils.atomic import atomic_write
-    if os.environ.get("RANK", "0") != "0":
+    if not lead_process():
         return
     opts = {k: v for k, v in vars(args).items() if not callable(v)}
     old = path.read_text() if path.exists() else ""

@@ -11,7 +11,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from motionlang.cli.run_log import log_command
+from motionlang.cli.run_log import lead_process, log_command
 from motionlang.errors import MotionlangError
 
 ABLATION_NAMES = ("full", "no-joint-training", "one-stream", "no-extra-losses", "word-vectors")
@@ -42,14 +42,16 @@ def cmd_train(args: argparse.Namespace) -> int:
     run = Path(args.run_dir) if args.run_dir else out.parent / f"{out.stem}_run"
     if args.length_buckets < 0:   # before anything is written
         raise MotionlangError(f"--length-buckets must be >= 0, got {args.length_buckets}")
-    parse_lambdas(args.weight)
+    lambdas = parse_lambdas(args.weight)
+    lead = lead_process()  # under torchrun only rank 0 writes files and prints
     data = build_twostream_data(args.data, seed=args.seed, max_seconds=args.max_seconds,
                                 max_frames=args.max_frames)
-    save_splits(data.splits, run / "splits")
+    if lead:
+        save_splits(data.splits, run / "splits")
     log_command(run / "commands.jsonl", args)
     fields = dict(h1=args.h1, h2=args.h2, h=args.h, lstm_layers=args.lstm_layers,
                   z_every_step=args.z_every_step, time_input=args.time_input,
-                  progress_input=args.progress_input, lambdas=parse_lambdas(args.weight))
+                  progress_input=args.progress_input, lambdas=lambdas)
     if args.text_layers:
         fields["text_layers"] = [int(x) for x in args.text_layers.split(",")]
     torch.manual_seed(args.seed)
@@ -58,13 +60,16 @@ def cmd_train(args: argparse.Namespace) -> int:
                       grad_clip=args.grad_clip, seed=args.seed, out_dir=str(run),
                       checkpoint_every=args.checkpoint_every,
                       length_buckets=args.length_buckets)
-    print(f"twostream ({args.ablation}): {len(data.items['train'])} training pairs "
-          f"({len(data.splits['train'])} motions), "
-          f"{sum(p.numel() for p in model.parameters()):,} parameters")
+    if lead:
+        print(f"twostream ({args.ablation}): {len(data.items['train'])} training pairs "
+              f"({len(data.splits['train'])} motions), "
+              f"{sum(p.numel() for p in model.parameters()):,} parameters")
     model, history = train_twostream(
         model, data.items["train"], cfg, val_items=data.items.get("val") or None,
         first_frames=data.first_frames(), resume=args.resume,
         schedule=ForcingSchedule(1.0, 0.0, args.forcing_steps))
+    if not lead:
+        return 0
     model.save(out)
     last = history[-1] if history else {}
     print(f"{out}: epoch {last.get('epoch')}, train loss "
@@ -74,14 +79,16 @@ def cmd_train(args: argparse.Namespace) -> int:
 
 
 def parse_lambdas(specs: list[str] | None) -> dict[str, float]:
-    """``["adversarial=0.1", ...]`` -> {term: weight}; unknown terms and weights that are
-    not finite and >= 0 are errors naming the option."""
+    """``["adversarial=0.1", ...]`` -> {term: weight}; unknown or repeated terms and weights
+    that are not finite and >= 0 are errors naming the option."""
     import math
 
     from motionlang.models.twostream.config import DEFAULT_LAMBDAS
     out = {}
     for spec in specs or []:
         name, sep, value = spec.partition("=")
+        if name in out:
+            raise MotionlangError(f"--weight {spec!r}: {name} is given twice")
         if not sep or name not in DEFAULT_LAMBDAS:
             raise MotionlangError(f"--weight {spec!r}: expected TERM=W with TERM one of "
                                   f"{', '.join(DEFAULT_LAMBDAS)}")
@@ -122,11 +129,12 @@ def register_train(train_sub) -> None:
     p.add_argument("--time-input", action="store_true",
                    help="beyond the paper: every decoder step reads the elapsed time")
     p.add_argument("--progress-input", action="store_true",
-                   help="beyond the paper: every decoder step reads t / (T - 1), how far "
-                        "through the motion it is")
+                   help="beyond the paper: every decoder step reads how far through the "
+                        "motion it is, (t - 1) / (T - 1) for the frame it reads")
     p.add_argument("--weight", action="append", metavar="TERM=W",
-                   help="loss weight, repeatable (paper: manifold=0.001 velocity=0.1 "
-                        "embedding=0.1 adversarial=0.001)")
+                   help="a loss term's weight, repeatable (terms: pose, manifold, velocity, "
+                        "embedding, adversarial, discriminator); terms not given keep the "
+                        "paper's weights")
     p.add_argument("--text-layers", metavar="I,J,..",
                    help="hidden states of the text model to concatenate (default 3,4,5,6)")
     p.add_argument("--epochs", type=int, default=20)

@@ -72,11 +72,12 @@ class TwoStreamConfig:
         z_every_step: beyond the paper (off by default): each decoder step also reads its
             stream's embedding, not only as the GRUs' initial state.
         time_input: beyond the paper (off by default): each decoder step also reads the
-            elapsed time (frames / 100), so that "which action now" need not be counted
-            in the GRU state.
+            elapsed time ((t - 1) / 100 when predicting frame t), so that "which action
+            now" need not be counted in the GRU state.
         progress_input: beyond the paper (off by default): each decoder step also reads how
-            far through the motion it is, ``t / (T - 1)`` in [0, 1] for a motion of T frames
-            (its own length in a padded batch; the asked length when generating). Actions
+            far through the motion the frame it reads is, ``(t - 1) / (T - 1)`` in [0, 1)
+            when predicting frame t of T frames (its own length in a padded batch; the asked
+            length when generating). Actions
             of a compositional sentence fill roughly fixed fractions of the motion, so the
             decoder can tell which action is due without counting frames.
     """

@@ -14,8 +14,8 @@ that is added to the current pose (residual from input pose to output pose):
 ``x_t = x_{t-1} + Hier(GRU(x_{t-1}, h_{t-1}))``; output frame 0 is x_0 itself.
 
 Options beyond the paper (``TwoStreamConfig.z_every_step`` / ``time_input`` /
-``progress_input``) extend each step's GRU input to ``[x_{t-1} columns, z_stream, t / 100,
-t / (T - 1)]``: with z only as the initial state, the decoder has to carry a whole sequence
+``progress_input``) extend the GRU input of the step that predicts frame t to
+``[x_{t-1} columns, z_stream, (t - 1) / 100, (t - 1) / (T - 1)]``: with z only as the initial state, the decoder has to carry a whole sequence
 of actions in a state it also overwrites every step, and our models (h 128) lost the order
 of actions even when decoding a motion from its own embedding. Measured (README): z and the
 elapsed time did not bring the order back.
