@@ -150,6 +150,30 @@ def test_loss_terms_and_ablations():
         TwoStreamConfig(lambdas={"bogus": 1.0})
 
 
+def test_energy_loss_on_hand_worked_values():
+    from motionlang.models.twostream.losses import energy_loss, velocity_loss
+    seq = lambda *v: torch.tensor(v, dtype=torch.float32).reshape(1, -1, 1)  # noqa: E731
+    ones = torch.ones(1, 5)
+    # speeds |diff| = 1 everywhere: local speed 1 against 0 -> smooth-L1 0.5
+    assert float(energy_loss(seq(0, 0, 0, 0, 0), seq(0, 1, 0, 1, 0), ones, 3)) == 0.5
+    # the same oscillation half a cycle later: no energy loss, but a velocity loss
+    a, b = seq(0, 1, 0, 1, 0), seq(1, 0, 1, 0, 1)
+    assert float(energy_loss(a, b, ones, 3)) == 0.0 and float(velocity_loss(a, b, ones)) > 0.4
+    # speeds (0, 0, 2), window 3: local speeds 0, 2/3, 2/2 (edge windows count valid pairs
+    # only); smooth-L1 against 0: 0, 0.5 (2/3)^2, 1 - 0.5 -> mean 0.24074
+    got = energy_loss(seq(0, 0, 0, 0), seq(0, 0, 0, 2), torch.ones(1, 4), 3)
+    torch.testing.assert_close(got, torch.tensor((0.5 * 4 / 9 + 0.5) / 3))
+    # padding frames (mask 0) do not count: only the pairs inside the first 3 frames
+    pad = torch.tensor([[1.0, 1, 1, 0, 0]])
+    assert float(energy_loss(seq(0, 0, 0, 0, 0), seq(0, 1, 0, 9, 9), pad, 3)) == 0.5
+    # in the model: a term only with a weight > 0, counted with that weight
+    out = tiny(lambdas={"energy": 2.0}).loss(batch())
+    lam = TwoStreamConfig(lambdas={"energy": 2.0}).lambdas
+    torch.testing.assert_close(out["loss"].detach(),
+                               sum(lam[k] * out[k] for k in out if k != "loss"))
+    assert out["energy"] > 0 and "energy" not in tiny().loss(batch())
+
+
 def _grads(module) -> float:
     return sum(float(p.grad.abs().sum()) for p in module.parameters() if p.grad is not None)
 

@@ -133,8 +133,8 @@ def register_train(train_sub) -> None:
                         "motion it is, (t - 1) / (T - 1) for the frame it reads")
     p.add_argument("--weight", action="append", metavar="TERM=W",
                    help="a loss term's weight, repeatable (terms: pose, manifold, velocity, "
-                        "embedding, adversarial, discriminator); terms not given keep the "
-                        "paper's weights")
+                        "embedding, adversarial, discriminator, energy); terms not given keep the "
+                        "paper's weights (energy: 0, beyond the paper)")
     p.add_argument("--text-layers", metavar="I,J,..",
                    help="hidden states of the text model to concatenate (default 3,4,5,6)")
     p.add_argument("--epochs", type=int, default=20)

@@ -132,8 +132,9 @@ class TwoStreamModel(nn.Module):
 
         Terms: ``pose`` (smooth-L1 of the poses decoded from the pose and from the sentence
         embedding), ``manifold`` (re-encoded decoded poses vs their embedding), ``velocity``,
-        ``embedding`` (sentence vs pose embedding), ``adversarial`` (generator) and
-        ``discriminator``. Which terms exist depends on the stage and ``extra_losses``.
+        ``embedding`` (sentence vs pose embedding), ``adversarial`` (generator),
+        ``discriminator``, and ``energy`` (local speeds, only with a weight > 0). Which
+        terms exist depends on the stage and ``extra_losses``.
         """
         c, stage = self.config, self.stage
         x = batch["motion"]
@@ -144,6 +145,7 @@ class TwoStreamModel(nn.Module):
         B, T, _ = x.shape
         mask = L.frame_mask(lengths, B, T).to(x)
         extra = c.extra_losses
+        energy = c.lambdas["energy"] > 0
         terms: dict[str, torch.Tensor] = {}
         with torch.set_grad_enabled(stage != "text" and torch.is_grad_enabled()):
             zp = self.pose_encoder(x, lengths)
@@ -154,6 +156,8 @@ class TwoStreamModel(nn.Module):
             if extra:
                 terms["manifold"] = L.embedding_loss(self.pose_encoder(qp, lengths), zp)
                 terms["velocity"] = L.velocity_loss(qp, x, mask)
+            if energy:
+                terms["energy"] = L.energy_loss(qp, x, mask)
             fake = qp
         if stage in ("joint", "text"):
             zs = self.sentence_encoder(*self._tokens(batch))
@@ -162,6 +166,8 @@ class TwoStreamModel(nn.Module):
             terms["embedding"] = L.embedding_loss(zs, zp)
             if extra and stage == "joint":  # the text stage fits embeddings + poses only
                 terms["velocity"] = terms.get("velocity", 0.0) + L.velocity_loss(qs, x, mask)
+            if energy:
+                terms["energy"] = terms.get("energy", 0.0) + L.energy_loss(qs, x, mask)
             fake = qs  # what generation produces
         if extra and stage != "text":
             terms["adversarial"] = L.bce_logits(self._disc(fake, lengths, frozen=True), True)
