@@ -180,3 +180,25 @@ def test_animation_frames_lazy_and_counted():
     assert got[0].shape == (80, 80, 3)  # overlay: one panel
     with pytest.raises(ValueError):
         animation_frames(m, fps=-1)
+
+
+def test_kit21_scene_colours_sides_and_picks_one_foot_per_side(tmp_path):
+    from motionlang.features.joint_map import KIT21_NAMES
+    from motionlang.render.scene import kit21_scene
+    T = 5
+    pos = np.zeros((T, 21, 3))
+    pos[:, :, 1] = 1.0                              # everything 1 m up ...
+    for k, n in enumerate(KIT21_NAMES):
+        pos[:, k, 0] = 0.1 if n.startswith("L") else (-0.1 if n[0] == "R" else 0.0)
+    pos[:, KIT21_NAMES.index("LF"), 1] = 0.0        # ... except the two feet on the floor
+    pos[:, KIT21_NAMES.index("RF"), 1] = 0.0
+    pos[:, KIT21_NAMES.index("LMrot"), 1] = 0.05
+    scene = kit21_scene(pos, 12.5)
+    assert scene.feet == [KIT21_NAMES.index("LF"), KIT21_NAMES.index("RF")]
+    sides = dict(zip((KIT21_NAMES[c] for _, c in scene.bones), scene.bone_sides))
+    assert sides["LE"] == "L" and sides["RK"] == "R" and sides["BUN"] == "C"
+    assert len(scene.bones) == 20 and scene.fps == 12.5 and scene.floor == 0.0
+    with pytest.raises(ValueError):
+        kit21_scene(pos[:, :20], 12.5)
+    render_strip(scene, tmp_path / "s.png", n_frames=3)
+    assert (tmp_path / "s.png").stat().st_size > 1000

@@ -178,6 +178,18 @@ def test_train_command(corpus, tmp_path, monkeypatch, capsys):
     assert model.config.lambdas["velocity"] == 0.1                 # the others keep the paper's
     assert model.generate_positions("a person walks forward", 5).shape == (5, 21, 3)
     assert "twostream (full)" in capsys.readouterr().out
+    # generate draws and saves the model's joint positions; BVH needs joint angles
+    for ext in (".gif", ".png", ".npz"):
+        assert main(["generate", "a person walks", "--model", str(out), "--max-frames", "6",
+                     "-o", str(tmp_path / f"g{ext}")]) == 0
+    assert (tmp_path / "g.gif").read_bytes()[:6] == b"GIF89a"
+    assert (tmp_path / "g.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    saved = np.load(tmp_path / "g.npz")
+    assert saved["positions"].shape == (6, 21, 3) and float(saved["fps"]) == 12.5
+    capsys.readouterr()
+    assert main(["generate", "a person walks", "--model", str(out), "-o",
+                 str(tmp_path / "g.bvh")]) == 2
+    assert "not joint angles" in capsys.readouterr().err and not (tmp_path / "g.bvh").exists()
     assert main(["train", "twostream", "--data", str(corpus), "--out",
                  str(tmp_path / "bad.txt")]) == 2
     for bad in (["adversarial"], ["gan=1"], ["pose=-1"], ["pose=nan"], ["pose=x"],

@@ -202,32 +202,40 @@ def cmd_describe(args: argparse.Namespace) -> int:
     return 0
 
 
-def _write(result, path: Path, title: str) -> None:
+def _write(result, path: Path, title: str, fps: float) -> None:
+    """A generated Motion, or 21-joint positions (T, 21, 3) at ``fps`` Hz, to ``path``:
+    .npz (positions and fps), .bvh (Motions only), .gif / .mp4 animation or .png pose strip."""
     from motionlang.kinematics import Motion
     ext = path.suffix.lower()
     if ext == ".npz":
         from motionlang.utils.atomic import atomic_write
-        data = {"positions": result} if isinstance(result, np.ndarray) else \
-            {"positions": result.positions(), "fps": np.float64(result.fps)}
+        data = {"positions": result, "fps": np.float64(fps)} if isinstance(result, np.ndarray) \
+            else {"positions": result.positions(), "fps": np.float64(result.fps)}
         with atomic_write(path, "wb") as fh:
             np.savez(fh, **data)
         return
+    if ext not in MOTION_OUT + RENDER_OUT + (".png",):
+        raise MotionlangError(f"{path}: output must be .bvh, .gif, .mp4, .png or .npz")
     if not isinstance(result, Motion):
-        raise MotionlangError(f"{path}: this model's features decode to joint positions; "
-                              "write .npz")
+        if ext in MOTION_OUT:
+            raise MotionlangError(f"{path}: this model's features decode to joint positions, "
+                                  "not joint angles; write .npz, .gif, .mp4 or .png")
+        from motionlang.render.scene import kit21_scene
+        result = kit21_scene(result, fps)
     if ext in MOTION_OUT:
         from motionlang.formats import write_motion
         write_motion(result, path)
-    elif ext in RENDER_OUT:
+    elif ext == ".png":
+        from motionlang.render import render_strip
+        render_strip(result, path, title=title)
+    else:
         from motionlang.render import render_animation
         render_animation(result, path, title=title)
-    else:
-        raise MotionlangError(f"{path}: output must be .bvh, .gif, .mp4 or .npz")
 
 
 def cmd_generate(args: argparse.Namespace) -> int:
     # any text-to-motion checkpoint: L2M (seq2seq) or the two-stream model
-    from motionlang.decoding.t2m import generate_any, load_any_t2m
+    from motionlang.decoding.t2m import FPS, generate_any, load_any_t2m
 
     if not args.temperature > 0:
         raise MotionlangError(f"--temperature must be > 0, got {args.temperature}")
@@ -242,12 +250,15 @@ def cmd_generate(args: argparse.Namespace) -> int:
                         max_frames=args.max_frames, min_frames=args.min_frames,
                         length_norm=args.length_norm, temperature=args.temperature)
     out = Path(args.output)
+    # rate of position outputs: the two-stream model's 12.5 Hz, else the model's features'
+    fps = FPS if getattr(model, "kind", None) == "twostream" else \
+        float(getattr(getattr(model, "features", None), "fps", FPS))
     for i, (result, score) in enumerate(hyps, 1):
         n = len(result.joint_angles) if hasattr(result, "joint_angles") else len(result)
         line = f"{i}. log L = {score:10.2f}  {n} frames"
         if i == 1 or args.all:
             path = out if i == 1 else out.with_name(f"{out.stem}_{i}{out.suffix}")
-            _write(result, path, f"{args.text} (#{i})")
+            _write(result, path, f"{args.text} (#{i})", fps)
             line += f"  -> {path}"
         print(line)
     return 0
@@ -387,7 +398,8 @@ def register(subparsers) -> None:
     p.set_defaults(func=cmd_describe)
     p = subparsers.add_parser("generate", help="generate a motion from English (L2M)")
     p.add_argument("text", help="sentence, e.g. \"a person waves with the left hand\"")
-    p.add_argument("-o", "--output", required=True, help="out.gif, .mp4, .bvh or .npz")
+    p.add_argument("-o", "--output", required=True, help="out.gif, .mp4 (animation), .png (pose strip), .bvh (joint-angle "
+                        "models) or .npz (joint positions and fps)")
     p.add_argument("--model", help="L2M model file (default: the packaged one)")
     p.add_argument("-w", "--width", type=int, default=5, help="hypotheses (samples or beam width)")
     p.add_argument("--method", choices=("sample", "beam", "mean"), default="sample",

@@ -91,12 +91,12 @@ class _Panel:
         self.clock.set_text(f"{t:5.2f} s")
 
 
-def _as_list(motions: Motion | Sequence[Motion]) -> list[Motion]:
-    if isinstance(motions, Motion):
+def _as_list(motions: Motion | Scene | Sequence[Motion | Scene]) -> list[Motion | Scene]:
+    if isinstance(motions, (Motion, Scene)):
         return [motions]
     motions = list(motions)
-    if not motions or not all(isinstance(m, Motion) for m in motions):
-        raise TypeError("expected a Motion or a non-empty list of Motions")
+    if not motions or not all(isinstance(m, (Motion, Scene)) for m in motions):
+        raise TypeError("expected a Motion or Scene, or a non-empty list of them")
     return motions
 
 
@@ -111,7 +111,8 @@ def animation_frames(motions: Motion | Sequence[Motion], *, fps: float | None = 
         (output frame rate in Hz, number of frames, iterator of (H, W, 3) uint8 RGB frames).
 
     Args:
-        motions: one motion or several (e.g. ground truth and generated).
+        motions: one motion or several (e.g. ground truth and generated); Motions or
+            Scenes.
         fps: output frame rate; default min(25, source rate).
         size: inches (width, height) of one panel; dpi: pixels per inch.
         camera: ``"follow"`` (window centred on the body), ``"fixed"`` (whole motion in
@@ -126,7 +127,9 @@ def animation_frames(motions: Motion | Sequence[Motion], *, fps: float | None = 
         raise ValueError(f"camera must be 'auto', 'follow' or 'fixed', got {camera!r}")
     if layout not in ("side", "overlay"):
         raise ValueError(f"layout must be 'side' or 'overlay', got {layout!r}")
-    scenes = [build_scene(m) for m in motions]
+    # a Scene (e.g. ``scene.kit21_scene`` of a model's joint positions) is drawn as it is;
+    # fps, n_frames and name below exist on both types
+    scenes = [m if isinstance(m, Scene) else build_scene(m) for m in motions]
     src_fps = max(m.fps for m in motions)
     if fps is not None and not fps > 0:
         raise ValueError(f"fps must be positive, got {fps}")

@@ -189,19 +189,22 @@ def footsteps(scene: Scene, **kw) -> list[tuple[int, np.ndarray]]:
 
 
 def scene_from_positions(positions: np.ndarray, fps: float = 30.0, name: str = "positions",
-                         parents: np.ndarray | None = None) -> Scene:
+                         parents: np.ndarray | None = None,
+                         sides: list[str] | None = None) -> Scene:
     """A Scene from raw joint positions (T, J, 3) metres, canonical Y-up frame, joint 0 =
-    root (e.g. a model's output). Bones need ``parents`` (J,); sides are unknown, so feet are
-    the two lowest joints."""
+    root (e.g. a model's output). Bones need ``parents`` (J,); ``sides`` (J,) of ``"L"``,
+    ``"R"``, ``"C"`` colour the bones by their child joint and pick one foot per side;
+    without them the feet are the two lowest joints."""
     pos = np.asarray(positions, dtype=float)
     if pos.ndim != 3 or pos.shape[-1] != 3 or len(pos) == 0:
         raise ValueError(f"positions must be (T, J, 3) with T > 0, got {pos.shape}")
     points = pos @ TO_MPL.T
     bones = [] if parents is None else [(int(p), c) for c, p in enumerate(parents) if p >= 0]
-    feet = _pick_feet(points, None)
+    feet = _pick_feet(points, sides)
     floor = float(points[:, feet, 2].min())
     root = points[:, 0]
-    return Scene(points=points, bones=bones, bone_sides=[CENTRE] * len(bones), feet=feet,
+    bone_sides = [CENTRE if sides is None else sides[c] for _, c in bones]
+    return Scene(points=points, bones=bones, bone_sides=bone_sides, feet=feet,
                  floor=floor, root=root, forward=_forward(root, points),
                  height=max(float(points[..., 2].max() - floor), 1e-3), fps=float(fps),
                  name=name)
@@ -216,3 +219,14 @@ def camera_basis(azim_deg: float, elev: float) -> tuple[np.ndarray, np.ndarray, 
     right /= np.linalg.norm(right)
     up = np.cross(eye, right)
     return right, up, eye
+
+
+def kit21_scene(positions: np.ndarray, fps: float, name: str = "generated") -> Scene:
+    """A Scene of the 21 KIT joints (T, 21, 3) metres, Y up, in ``joint_map.KIT21_NAMES``
+    order: the output of the *positions* models (two-stream, positions L2M)."""
+    from motionlang.features.joint_map import KIT21_NAMES, KIT21_PARENTS
+    pos = np.asarray(positions, dtype=float)
+    if pos.ndim != 3 or pos.shape[1:] != (len(KIT21_NAMES), 3):
+        raise ValueError(f"positions must be (T, {len(KIT21_NAMES)}, 3), got {pos.shape}")
+    sides = [n[0] if n[0] in (LEFT, RIGHT) else CENTRE for n in KIT21_NAMES]
+    return scene_from_positions(pos, fps, name, np.array(KIT21_PARENTS), sides)

@@ -10,7 +10,7 @@ from matplotlib.collections import LineCollection
 from motionlang.errors import MotionlangError
 from motionlang.kinematics import Motion
 from motionlang.render.draw import GRID_COLOUR, bone_segments, grid_segments, new_figure
-from motionlang.render.scene import (CENTRE, LEFT, RIGHT, SIDE_COLOURS, build_scene,
+from motionlang.render.scene import (CENTRE, LEFT, RIGHT, SIDE_COLOURS, Scene, build_scene,
                                      camera_basis, view_azimuth)
 from motionlang.utils.atomic import atomic_path
 
@@ -33,7 +33,7 @@ def strip_layout(root_along: np.ndarray, picks: np.ndarray, gap: float) -> np.nd
     return np.interp(np.arange(len(root_along)), picks, shift_at_picks)
 
 
-def render_strip(motion: Motion, path: str | Path, n_frames: int = 8, title: str | None = None,
+def render_strip(motion: Motion | Scene, path: str | Path, n_frames: int = 8, title: str | None = None,
                  *, dpi: float = 100.0) -> Path:
     """Write a PNG with ``n_frames`` evenly spaced poses of ``motion``, left to right.
 
@@ -49,7 +49,7 @@ def render_strip(motion: Motion, path: str | Path, n_frames: int = 8, title: str
                               f"{path.suffix or '(no extension)'!r}")
     if n_frames < 1:
         raise ValueError(f"n_frames must be >= 1, got {n_frames}")
-    scene = build_scene(motion)
+    scene = motion if isinstance(motion, Scene) else build_scene(motion)
     T = scene.n_frames
     picks = np.unique(np.linspace(0, T - 1, n_frames).round().astype(int))
     fwd3 = np.array([scene.forward[0], scene.forward[1], 0.0])
