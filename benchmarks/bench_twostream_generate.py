@@ -5,9 +5,10 @@ cache is cleared before every run, so each run pays the language model).
 The model has the paper's sizes (h1 32, h2 128, h 512; h can be changed) and random weights: latency does not
 depend on the weights. Prints the median (and min/max) of repeated runs; target < 200 ms.
 ``fed`` as a 4th argument times the decoder that reads its embedding and the clock at every
-step (``--z-every-step --time-input``).
+step (``--z-every-step --time-input``); ``progress`` the one that reads its embedding and the
+fraction done (``--z-every-step --progress-input``, the README's recommended options).
 
-    .venv/bin/python benchmarks/bench_twostream_generate.py [REPEAT] [THREADS] [H] [fed]
+    .venv/bin/python benchmarks/bench_twostream_generate.py [REPEAT] [THREADS] [H] [fed|progress]
 """
 from __future__ import annotations
 
@@ -31,12 +32,14 @@ def main() -> int:
     repeat = int(sys.argv[1]) if len(sys.argv) > 1 else 15
     threads = int(sys.argv[2]) if len(sys.argv) > 2 else 1
     h = int(sys.argv[3]) if len(sys.argv) > 3 else 512
-    if len(sys.argv) > 4 and sys.argv[4] != "fed":
-        sys.exit(f"unknown 4th argument {sys.argv[4]!r}: only 'fed' is known")
-    fed = len(sys.argv) > 4
+    variant = sys.argv[4] if len(sys.argv) > 4 else ""
+    if variant not in ("", "fed", "progress"):
+        sys.exit(f"unknown 4th argument {variant!r}: 'fed' or 'progress'")
     torch.set_num_threads(threads)
     try:
-        model = TwoStreamModel(TwoStreamConfig(h=h, z_every_step=fed, time_input=fed)).eval()
+        model = TwoStreamModel(TwoStreamConfig(
+            h=h, z_every_step=bool(variant), time_input=variant == "fed",
+            progress_input=variant == "progress")).eval()
     except MotionlangError as exc:
         print(f"skipped: {exc}")
         return 0
@@ -56,7 +59,8 @@ def main() -> int:
     assert out.shape == (n_frames, model.config.n_features)
     ms = [1000 * t for t in times]
     print(f"two-stream generate, {n_frames} frames, h={model.config.h}"
-          f"{', z + clock every step' if fed else ''}, {threads} thread(s), "
+          f"{', z + ' + ('clock' if variant == 'fed' else 'progress') + ' every step' if variant else ''}"
+          f", {threads} thread(s), "
           f"{repeat} runs: median {statistics.median(ms):.1f} ms "
           f"(min {min(ms):.1f}, max {max(ms):.1f}); of which sentence encoding median "
           f"{1000 * statistics.median(text_times):.1f} ms; target < 200 ms")
