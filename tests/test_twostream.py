@@ -67,7 +67,8 @@ def test_forward_shapes(two_stream):
 
 @pytest.mark.parametrize("two_stream,every_step", [(True, False), (False, False), (True, True)])
 def test_folded_unroll_matches_layered_unroll(two_stream, every_step):
-    m = tiny(two_stream=two_stream, z_every_step=every_step, time_input=every_step)
+    m = tiny(two_stream=two_stream, z_every_step=every_step, time_input=every_step,
+             progress_input=every_step)
     z, x0 = m.encode_text(["a person waves", "walk"]), torch.randn(2, 66)
     ref = m.decoder.unroll_layered(z, x0, 12)
     fast = m.decoder(z, x0, 12)

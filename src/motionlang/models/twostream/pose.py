@@ -113,13 +113,41 @@ class PoseDecoder(nn.Module):
         (B, 1) is each sequence's T - 1 (at least 1), for the progress input."""
         c = self.config
         parts = [x[..., cols]]
-        if c.z_every_step:
+        if c.z_every_step and z is not None:  # None: z's share is added by _gru_step
             parts.append(z)
         if c.time_input:
             parts.append(x.new_full((x.shape[0], 1), (t - 1) / 100.0))
         if c.progress_input:  # the step reads frame t - 1 and predicts frame t
             parts.append(((t - 1) / span).clamp(max=1.0))
         return torch.cat(parts, dim=-1) if len(parts) > 1 else parts[0]
+
+    def _z_gate(self, cell: nn.GRUCell, cols: torch.Tensor, z: torch.Tensor
+                ) -> torch.Tensor | None:
+        """z's share of the input gates, W_ih[:, z columns] z + b_ih: (B, 3H), or None
+        without ``z_every_step``."""
+        if not self.config.z_every_step:
+            return None
+        n = len(cols)
+        return torch.addmm(cell.bias_ih, z, cell.weight_ih[:, n:n + z.shape[1]].t())
+
+    @staticmethod
+    def _gru_step(cell: nn.GRUCell, inp: torch.Tensor, n_pose: int, zgate: torch.Tensor,
+                  h: torch.Tensor) -> torch.Tensor:
+        """One ``nn.GRUCell`` step on the input [pose columns (n_pose), z, clocks] given as
+        ``inp`` = [pose columns, clocks] and z's share of the input gates ``zgate`` (B, 3H):
+        PyTorch's GRU equations, written out."""
+        w = cell.weight_ih
+        n_clock = inp.shape[1] - n_pose
+        gi = torch.addmm(zgate, inp[:, :n_pose], w[:, :n_pose].t())
+        if n_clock:
+            gi = torch.addmm(gi, inp[:, n_pose:], w[:, w.shape[1] - n_clock:].t())
+        gh = torch.addmm(cell.bias_hh, h, cell.weight_hh.t())
+        i_r, i_u, i_n = gi.chunk(3, dim=1)
+        h_r, h_u, h_n = gh.chunk(3, dim=1)
+        r = torch.sigmoid(i_r + h_r)
+        u = torch.sigmoid(i_u + h_u)
+        n = torch.tanh(i_n + r * h_n)
+        return n + u * (h - n)
 
     @staticmethod
     def _span(x0: torch.Tensor, n_frames: int, lengths: torch.Tensor | None) -> torch.Tensor:
@@ -155,12 +183,16 @@ class PoseDecoder(nn.Module):
         frames = [x0]
         span = self._span(x0, n_frames, lengths)
         forcing = target is not None and teacher_forcing > 0
+        # with z_every_step, z's share of every step's input gates is the same: computed once
+        # here (a third of the work at h 512), the steps then multiply the other inputs only
+        zgate = [self._z_gate(cell, cols, zs) for cell, cols, zs in cells]
         for t in range(1, n_frames):
             if forcing:
                 use = torch.rand(x.shape[0], 1, device=x.device) < teacher_forcing
                 x = torch.where(use, target[:, t - 1], x)
-            hs = [cell(self._inputs(x, cols, zs, t, span), h)
-                  for (cell, cols, zs), h in zip(cells, hs)]
+            hs = [cell(self._inputs(x, cols, zs, t, span), h) if zg is None else
+                  self._gru_step(cell, self._inputs(x, cols, None, t, span), len(cols), zg, h)
+                  for (cell, cols, zs), zg, h in zip(cells, zgate, hs)]
             x = torch.addmm(x + bias, torch.cat(hs, dim=-1), weight)
             frames.append(x)
         return torch.stack(frames, dim=1)
