@@ -398,7 +398,8 @@ def register(subparsers) -> None:
     p.set_defaults(func=cmd_describe)
     p = subparsers.add_parser("generate", help="generate a motion from English (L2M)")
     p.add_argument("text", help="sentence, e.g. \"a person waves with the left hand\"")
-    p.add_argument("-o", "--output", required=True, help="out.gif, .mp4 (animation), .png (pose strip), .bvh (joint-angle "
+    p.add_argument("-o", "--output", required=True,
+                   help="out.gif, .mp4 (animation), .png (pose strip), .bvh (joint-angle "
                         "models) or .npz (joint positions and fps)")
     p.add_argument("--model", help="L2M model file (default: the packaged one)")
     p.add_argument("-w", "--width", type=int, default=5, help="hypotheses (samples or beam width)")
