@@ -9,6 +9,7 @@ import torch
 from test_seq2seq_api import WORDS, items
 from test_seq2seq_models import tiny
 
+from motionlang.datasets.text import normalize
 from motionlang.evaluation import seq2seq_eval as ev
 from motionlang.training.collate import collate_pairs
 from motionlang.training.trainer import TrainConfig, Trainer
@@ -61,6 +62,18 @@ def test_round_trip_and_table(trained):
     assert res["relative"] == pytest.approx(res["bleu"] / 0.5)
     assert math.isnan(ev.evaluate_round_trip(l2m, m2l, {"m0": refs["m0"]}, 0.0,
                                              max_frames=4)["relative"])
+    # the baseline: the motion of the closest training sentence. Each test sentence is also
+    # a training sentence, so it retrieves a motion the memorising M2L describes with it
+    from motionlang.evaluation.retrieval import SentenceIndex
+    index = SentenceIndex((i, s) for i in sorted(refs) for s in refs[i])
+    nn = ev.evaluate_round_trip_nn(index, frames, m2l, refs, m2l_bleu=0.5)
+    assert nn["n_sentences"] == 8 and nn["bleu"] == pytest.approx(1.0)
+    assert nn["relative"] == pytest.approx(2.0)
+    assert [d[2] for d in nn["descriptions"]] == [normalize(refs[i][0]) for i in sorted(refs)]
+    # a motion the M2L describes otherwise: only the retrieved frames count
+    swapped = ev.evaluate_round_trip_nn(index, {"m0": frames["m1"], "m1": frames["m0"]}, m2l,
+                                        {"m0": refs["m0"]}, m2l_bleu=0.5)
+    assert swapped["descriptions"][0][2] == normalize(refs["m1"][0]) and swapped["bleu"] < 0.5
     table = ev.markdown_table({"M2L": {"bleu": 0.5, "bleu1": 0.7}, "NN": {"bleu": 0.25}})
     assert table.splitlines()[0] == "| | bleu | bleu1 |"
     assert "| NN | 0.250 |  |" in table

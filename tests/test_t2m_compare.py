@@ -14,7 +14,7 @@ import torch
 
 from motionlang.errors import MotionlangError
 from motionlang.evaluation.action_order import segment_labels
-from motionlang.evaluation.t2m_compare import (GROUND_TRUTH, compare, eval_items,
+from motionlang.evaluation.t2m_compare import (GROUND_TRUTH, NEAREST, compare, eval_items,
                                                evaluate_model, fit_prototypes,
                                                markdown_table, positions_to_features)
 
@@ -128,7 +128,18 @@ def test_compare_writes_table_report_and_figures(data, tmp_path):
                              limit=4, out_dir=tmp_path, figures=2, autoencode=True)
     ae = "two-stream, from the motion's own embedding"   # two-stream models only
     assert set(results) == {"two-stream", "L2M", "no motion (mean first pose)", GROUND_TRUTH,
-                            ae}
+                            NEAREST, ae}
+    # evaluated on the training split, every sentence retrieves a training motion with the
+    # same sentence: its own, unless an earlier motion has that sentence too
+    nearest, own = results[NEAREST], 0
+    for it in eval_items(data, "train", 4):
+        g = nearest["generated"][it.id]
+        assert g.shape == it.target.shape
+        same = [r for r in data.splits["train"] if it.sentence in data.records[r].annotations]
+        if same[0] == it.id:
+            np.testing.assert_allclose(g, it.target, atol=1e-9)
+            own += 1
+    assert own >= 1 and nearest["ape_local"] < results["no motion (mean first pose)"]["ape_local"]
     # the autoencoder row decodes each test motion from its own embedding and first frame
     for rid, p in results[ae]["generated"].items():
         seq = data.sequences[rid]

@@ -314,13 +314,18 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
             method=args.l2m_method, width=args.l2m_width, temperature=args.l2m_temperature)
         report["l2m_round_trip"].update(method=args.l2m_method, width=args.l2m_width,
                                         temperature=args.l2m_temperature)
+        from motionlang.evaluation.retrieval import SentenceIndex
+        index = SentenceIndex((i, s) for i in sorted(train) for s in refs[i])
+        report["nn_round_trip"] = ev.evaluate_round_trip_nn(
+            index, train, m2l, {i: refs[i] for i in test}, report["m2l"]["bleu"])
     truths = _ground_truths(records, test)
     if truths:   # a procedural corpus: the parameters each description states, checked
         top = {e["id"]: e["hypotheses"][0] for e in report["m2l"].pop("all")}
         report["m2l_parameters"] = ev.parameter_accuracy(top, truths)
-        if "l2m_round_trip" in report:
-            report["l2m_parameters"] = ev.round_trip_parameter_accuracy(
-                report["l2m_round_trip"]["descriptions"], truths)
+        for run in ("l2m", "nn"):
+            if f"{run}_round_trip" in report:
+                report[f"{run}_parameters"] = ev.round_trip_parameter_accuracy(
+                    report[f"{run}_round_trip"]["descriptions"], truths)
     else:
         report["m2l"].pop("all")
     if args.tsne:
@@ -329,12 +334,15 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     table = ev.markdown_table({"M2L (top hypothesis)": report["m2l"],
                                "nearest neighbour": report["nearest_neighbour"],
                                **({f"L2M round trip ({args.l2m_method})":
-                                   report["l2m_round_trip"]}
+                                   report["l2m_round_trip"],
+                                   "nearest training sentence, round trip":
+                                   report["nn_round_trip"]}
                                   if "l2m_round_trip" in report else {})})
     by_rank = " ".join(f"{b:.3f}" for b in report["m2l"]["bleu_by_rank"])
     table += f"\nM2L BLEU of hypotheses 1..{args.width}: {by_rank}\n"
     for key, name in (("m2l_parameters", "M2L top description"),
-                      ("l2m_parameters", "L2M round trip")):
+                      ("l2m_parameters", "L2M round trip"),
+                      ("nn_parameters", "Nearest training sentence, round trip")):
         if key in report:
             acc = report[key]
             table += (f"{name}, parameters right (procedural ground truth): " + ", ".join(
@@ -421,7 +429,8 @@ def register(subparsers) -> None:
     p.set_defaults(func=cmd_generate)
     p = subparsers.add_parser("evaluate", help="BLEU/ROUGE/CIDEr of M2L, baseline, L2M round trip")
     p.add_argument("--m2l", required=True, help="M2L model file (its run folder holds splits/)")
-    p.add_argument("--l2m", help="L2M model file: also run the round trip")
+    p.add_argument("--l2m", help="L2M model file: also run the round trip, and its baseline "
+                   "(the motion of the closest training sentence in bag of words)")
     p.add_argument("--data", required=True, metavar="DIR", help="the dataset trained on")
     p.add_argument("--splits", metavar="DIR", help="split files (default: M2L_DIR/splits)")
     p.add_argument("--split", default="test")

@@ -74,6 +74,22 @@ def fit_length(p: np.ndarray, n_frames: int) -> np.ndarray:
     return np.concatenate([p, np.repeat(p[-1:], n_frames - len(p), axis=0)])
 
 
+def interp_frames(p: np.ndarray, t_src: np.ndarray, t_dst: np.ndarray) -> np.ndarray:
+    """(T, ...) frames at times ``t_src`` (increasing) -> (len(t_dst), ...) by linear
+    interpolation, held constant outside ``t_src``."""
+    flat = np.asarray(p, dtype=np.float64).reshape(len(p), -1)
+    out = np.stack([np.interp(t_dst, t_src, flat[:, k]) for k in range(flat.shape[1])], 1)
+    return out.reshape((len(t_dst),) + np.shape(p)[1:])
+
+
+def stretch(p: np.ndarray, n_frames: int) -> np.ndarray:
+    """(T, ...) frames re-timed to exactly ``n_frames`` frames spanning the same motion
+    (first and last frames kept; a single frame is repeated)."""
+    if len(p) == 1:
+        return np.repeat(np.asarray(p, dtype=np.float64), n_frames, axis=0)
+    return interp_frames(p, np.linspace(0.0, 1.0, len(p)), np.linspace(0.0, 1.0, n_frames))
+
+
 @torch.no_grad()
 def generate_positions21(model, sentence: str, n_frames: int, *, seed: int = 0,
                          method: str = "mean") -> np.ndarray:
@@ -99,9 +115,7 @@ def generate_positions21(model, sentence: str, n_frames: int, *, seed: int = 0,
         p = result
         if abs(fps - FPS) > 1e-9:
             t_src = np.arange(len(p)) / fps
-            t_dst = np.arange(int(np.floor(t_src[-1] * FPS)) + 1) / FPS
-            p = np.stack([np.stack([np.interp(t_dst, t_src, p[:, j, c]) for c in range(3)], -1)
-                          for j in range(p.shape[1])], 1)
+            p = interp_frames(p, t_src, np.arange(int(np.floor(t_src[-1] * FPS)) + 1) / FPS)
     else:
         m = result
         p = positions21(downsample(m, FPS) if m.n_frames > 1 else m)

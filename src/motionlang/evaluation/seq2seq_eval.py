@@ -8,6 +8,8 @@
 - L2M round trip (Tables 3-4): generate a motion from every reference sentence of a test
   motion, describe it with the M2L model, BLEU of those descriptions against the motion's
   references; relative performance = that BLEU / the M2L BLEU on the real motions.
+  Its baseline: the motion of the training sentence closest in bag of words
+  (``evaluation.retrieval``), described the same way.
 
 Inputs are model frames (``{id: (T, F) array}``, as in ``PairData.sequences`` offset 0) and
 references ``{id: [sentences]}``; hypotheses and references are both compared after
@@ -100,13 +102,29 @@ def evaluate_round_trip(l2m, m2l, references: Mapping[str, Sequence[str]],
     "descriptions"}`` with relative = bleu / m2l_bleu (NaN if m2l_bleu is 0) and
     descriptions = [[motion id, sentence, description of the generated motion], ...].
     """
+    def motion(sentence):
+        return generate_features(l2m, sentence, width=width, method=method,
+                                 max_frames=max_frames, seed=seed, temperature=temperature)[0][0]
+    return round_trip(motion, m2l, references, m2l_bleu)
+
+
+def evaluate_round_trip_nn(index, train_frames: Mapping[str, np.ndarray], m2l,
+                           references: Mapping[str, Sequence[str]], m2l_bleu: float) -> dict:
+    """The round trip's nearest-neighbour baseline: each sentence gets the motion (model
+    frames from ``train_frames``) of the closest training sentence in bag of words
+    (``retrieval.SentenceIndex`` whose keys are motion ids); same result as
+    :func:`evaluate_round_trip`."""
+    return round_trip(lambda s: train_frames[index.nearest(s)[0]], m2l, references, m2l_bleu)
+
+
+def round_trip(motion_for, m2l, references: Mapping[str, Sequence[str]],
+               m2l_bleu: float) -> dict:
+    """Describe ``motion_for(sentence) -> (T, F) frames`` of every reference sentence with
+    ``m2l`` (top hypothesis of width 1) and score as :func:`evaluate_round_trip` says."""
     refs, hyps = [], []
     pairs = [(i, s) for i in sorted(references) for s in references[i]]
     for i, sentence in progress(pairs, desc="round trip", unit="sentence"):
-        frames, _ = generate_features(l2m, sentence, width=width, method=method,
-                                      max_frames=max_frames, seed=seed,
-                                      temperature=temperature)[0]
-        hyps.append(normalize(describe_features(m2l, frames, width=1)[0][0]))
+        hyps.append(normalize(describe_features(m2l, motion_for(sentence), width=1)[0][0]))
         refs.append([normalize(s) for s in references[i]])
     scores = text_scores(refs, hyps)
     rel = scores["bleu"] / m2l_bleu if m2l_bleu > 0 else float("nan")

@@ -179,6 +179,7 @@ def trajectory_figures(results: dict[str, dict], items: Sequence[T2MItem], out_d
 
 
 GROUND_TRUTH = "ground truth (order check's ceiling)"
+NEAREST = "nearest training sentence's motion (bag of words)"
 
 
 def still_baseline(data):
@@ -188,13 +189,28 @@ def still_baseline(data):
     return lambda sentence, n_frames: np.repeat(pose, n_frames, axis=0)
 
 
+def retrieval_baseline(data, split: str = "train"):
+    """``generate(sentence, T)`` of the nearest-neighbour baseline: the ``split`` motion
+    whose description is closest to the sentence in bag of words
+    (``evaluation.retrieval``), re-timed to T frames (``decoding.t2m.stretch``: all of its
+    actions kept, as a model told the length would). A real motion that fits the sentence,
+    so its APE shows how far apart two motions of one sentence lie."""
+    from motionlang.decoding.t2m import stretch
+    from motionlang.evaluation.retrieval import SentenceIndex
+    index = SentenceIndex((rid, s) for rid in data.splits[split]
+                          for s in data.records[rid].annotations)
+    return lambda sentence, n_frames: stretch(
+        data.features.decode(data.sequences[index.nearest(sentence)[0]]), n_frames)
+
+
 def compare(models: dict[str, object], data, *, split: str = "test", limit: int | None = None,
             out_dir: str | Path | None = None, figures: int = 3, baseline: bool = True,
             l2m_method: str = "mean", autoencode: bool = False) -> tuple[dict, str]:
     """Evaluate ``{name: model}`` (anything ``decoding.t2m.generate_positions21`` takes) on
     ``data`` (``TwoStreamData``); L2M models decode with ``l2m_method`` ("mean" or
-    "sample"). Extra rows: the no-motion baseline (``still_baseline``) and the ground truth
-    (:data:`GROUND_TRUTH`) unless ``baseline`` is False; with ``autoencode``, each
+    "sample"). Extra rows unless ``baseline`` is False: the no-motion baseline
+    (``still_baseline``), the nearest-neighbour baseline (``retrieval_baseline``) and the
+    ground truth (:data:`GROUND_TRUTH`); with ``autoencode``, each
     two-stream model decoding each test motion from its own pose embedding
     (``TwoStreamModel.reconstruct``). With ``out_dir`` also write ``t2m_table.md``,
     ``t2m_report.json`` and the trajectory figures. Returns (results, table)."""
@@ -218,6 +234,8 @@ def compare(models: dict[str, object], data, *, split: str = "test", limit: int 
     if baseline:
         results["no motion (mean first pose)"] = evaluate_model(still_baseline(data), items,
                                                                 data.features, protos)
+        results[NEAREST] = evaluate_model(retrieval_baseline(data), items, data.features,
+                                          protos)
         # the test motions themselves: APE 0, and the order check's ceiling (how often
         # the labeller gets true motions right)
         results[GROUND_TRUTH] = score_generated({it.id: it.target for it in items}, items,
