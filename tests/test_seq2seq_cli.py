@@ -98,11 +98,17 @@ def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
                  "-o", str(report), "--tsne", str(tmp_path / "tsne.png")]) == 0
     rep = json.loads(report.read_text())
     # a procedural corpus carries ground truth: parameter accuracy of both directions
-    for key in ("m2l_parameters", "l2m_parameters"):
+    for key in ("m2l_parameters", "l2m_parameters", "nn_parameters"):
         acc = rep[key]
         assert acc["n"] >= 1 and 0.0 <= acc["actions_match"] <= 1.0
         assert all(acc[f] != acc[f] or 0.0 <= acc[f] <= 1.0 for f in ("side", "count"))
     assert rep["l2m_parameters"]["n"] == rep["l2m_round_trip"]["n_sentences"]
+    # the round trip's baseline (retrieved training motions) scores the same sentences
+    assert rep["nn_round_trip"]["n_sentences"] == rep["l2m_round_trip"]["n_sentences"]
+    assert rep["m2l_actions_by_rank"][0] == rep["m2l_parameters"]["actions_match"]
+    assert len(rep["m2l_actions_by_rank"]) == 2
+    md = report.with_suffix(".md").read_text()
+    assert "| nearest training sentence, round trip |" in md and "naming exactly" in md
     assert (tmp_path / "tsne.png").stat().st_size > 1000
     assert len(rep["m2l"]["bleu_by_rank"]) == 2 and rep["m2l"]["n"] >= 1
     assert {"bleu", "rouge_l"} <= set(rep["nearest_neighbour"])

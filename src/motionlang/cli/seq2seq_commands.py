@@ -320,8 +320,15 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
             index, train, m2l, {i: refs[i] for i in test}, report["m2l"]["bleu"])
     truths = _ground_truths(records, test)
     if truths:   # a procedural corpus: the parameters each description states, checked
-        top = {e["id"]: e["hypotheses"][0] for e in report["m2l"].pop("all")}
-        report["m2l_parameters"] = ev.parameter_accuracy(top, truths)
+        ranked = {e["id"]: e["hypotheses"] for e in report["m2l"].pop("all")}
+        report["m2l_parameters"] = ev.parameter_accuracy(
+            {i: h[0] for i, h in ranked.items()}, truths)
+        # BLEU cannot tell a worse description from an equally valid paraphrase; the
+        # parameters can: how often the k-th hypothesis names exactly the true actions
+        report["m2l_actions_by_rank"] = [
+            ev.parameter_accuracy({i: h[k] for i, h in ranked.items() if len(h) > k},
+                                  truths)["actions_match"]
+            for k in range(max(map(len, ranked.values()), default=0))]
         for run in ("l2m", "nn"):
             if f"{run}_round_trip" in report:
                 report[f"{run}_parameters"] = ev.round_trip_parameter_accuracy(
@@ -340,6 +347,9 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
                                   if "l2m_round_trip" in report else {})})
     by_rank = " ".join(f"{b:.3f}" for b in report["m2l"]["bleu_by_rank"])
     table += f"\nM2L BLEU of hypotheses 1..{args.width}: {by_rank}\n"
+    if "m2l_actions_by_rank" in report:
+        table += (f"M2L hypotheses 1..{args.width} naming exactly the true actions: " +
+                  " ".join(f"{a:.1%}" for a in report["m2l_actions_by_rank"]) + "\n")
     for key, name in (("m2l_parameters", "M2L top description"),
                       ("l2m_parameters", "L2M round trip"),
                       ("nn_parameters", "Nearest training sentence, round trip")):
