@@ -197,6 +197,11 @@ def test_evaluate_command(corpus, data, tmp_path, monkeypatch, capsys):
                  "--autoencode", "-o", str(tmp_path / "ae")]) == 2
     assert "--autoencode needs a two-stream model" in capsys.readouterr().err
     assert not (tmp_path / "ae").exists()
+    assert main(["evaluate-t2m", "--data", str(corpus), "--model", str(tmp_path / "l2m.pt"),
+                 "--split", "train", "--limit", "3", "--oracle", "1000",
+                 "-o", str(tmp_path / "or")]) == 2
+    assert "no test motion has 1000 training motions" in capsys.readouterr().err
+    assert not (tmp_path / "or").exists()
 
 
 def test_generate_any_passes_l2m_options(data):
@@ -231,3 +236,46 @@ def test_model_spec_names_may_hold_equals_signs(tmp_path):
     odd = tmp_path / "a=b.pt"
     odd.write_bytes(b"x")
     assert model_spec(str(odd)) == ("a=b", str(odd))     # an existing file wins
+
+
+def test_same_parameter_oracles(data):
+    """Two made-up parameter sets over the real tiny corpus: the oracle rows are the
+    re-timed mean / first of the other training motions that share the item's set."""
+    from types import SimpleNamespace
+
+    from motionlang.decoding.t2m import stretch
+    from motionlang.evaluation.motion_metrics import position_metrics_mm
+    from motionlang.evaluation.t2m_oracle import (MEAN_ROW, ONE_ROW, oracle_generations,
+                                                  oracle_table, parameter_key)
+    train = data.splits["train"]
+    kind = {rid: "walk" if k % 3 == 0 else "wave" for k, rid in enumerate(train)}
+    fake = SimpleNamespace(splits=data.splits, sequences=data.sequences, features=data.features,
+                           records={rid: SimpleNamespace(meta={"primitives": [
+                               {"action": kind[rid], "side": None, "count": 2}]})
+                               for rid in train})
+    assert parameter_key(fake.records[train[0]]) == (("walk", None, 2, None, None, None,
+                                                       "body"),)
+    assert parameter_key(SimpleNamespace(meta=None)) is None
+    items = eval_items(data, "train")
+    kept, gens = oracle_generations(fake, items, min_group=2)
+    assert [it.id for it in kept] == [it.id for it in items]     # 3+ motions of each kind
+    for it in kept:
+        others = [r for r in train if kind[r] == kind[it.id] and r != it.id]
+        motions = [stretch(data.features.decode(data.sequences[r]), len(it.target))
+                   for r in others]
+        np.testing.assert_allclose(gens[MEAN_ROW][it.id], np.mean(motions, axis=0), atol=1e-9)
+        np.testing.assert_allclose(gens[ONE_ROW][it.id], motions[0], atol=1e-9)
+    n_wave = sum(k == "wave" for k in kind.values())   # the larger group
+    kept, _ = oracle_generations(fake, items, min_group=n_wave - 1)
+    assert [it.id for it in kept] == [it.id for it in items if kind[it.id] == "wave"]
+    # every model row re-scored on the kept items only
+    still = evaluate_model(lambda s, t: np.repeat(items[0].target[:1], t, axis=0), items,
+                           data.features, None)
+    rows, table = oracle_table({"still": still}, fake, items, None, min_group=n_wave - 1)
+    want = position_metrics_mm([still["generated"][it.id] for it in kept],
+                               [it.target for it in kept])
+    assert rows["still"]["ape_local"] == pytest.approx(want["ape_local"])
+    assert rows["still"]["n_items"] == len(kept) and set(rows) == {"still", MEAN_ROW, ONE_ROW}
+    assert f"Only the {len(kept)} of {len(items)} test motions" in table
+    with pytest.raises(MotionlangError, match="exact parameters"):
+        oracle_table({"still": still}, fake, items, None, min_group=len(train))

@@ -172,7 +172,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     data = build_twostream_data(args.data, seed=args.seed, max_seconds=args.max_seconds)
     _, table = compare(models, data, split=args.split, limit=args.limit or None,
                        l2m_method=args.l2m_method, autoencode=args.autoencode,
-                       out_dir=args.output, figures=args.figures)
+                       out_dir=args.output, figures=args.figures, oracle=args.oracle)
     print(table, end="")
     return 0
 
@@ -191,6 +191,10 @@ def register(subparsers) -> None:
                    help="also score each two-stream model decoding the test motions from their "
                         "own pose embeddings and first poses (a reference for the sentence path)")
     p.add_argument("--figures", type=int, default=3, help="trajectory figures to draw")
+    p.add_argument("--oracle", type=int, default=0, metavar="K",
+                   help="procedural corpus: a second table on the test motions whose exact "
+                        "parameters K or more training motions share, with the APE of those "
+                        "motions (how much of APE no sentence can explain)")
     p.add_argument("--threads", type=int, default=0)
     p.add_argument("-o", "--output", metavar="DIR",
                    help="write t2m_table.md, t2m_report.json and trajectory PNGs here")

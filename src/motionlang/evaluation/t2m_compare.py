@@ -205,14 +205,18 @@ def retrieval_baseline(data, split: str = "train"):
 
 def compare(models: dict[str, object], data, *, split: str = "test", limit: int | None = None,
             out_dir: str | Path | None = None, figures: int = 3, baseline: bool = True,
-            l2m_method: str = "mean", autoencode: bool = False) -> tuple[dict, str]:
+            l2m_method: str = "mean", autoencode: bool = False, oracle: int = 0
+            ) -> tuple[dict, str]:
     """Evaluate ``{name: model}`` (anything ``decoding.t2m.generate_positions21`` takes) on
     ``data`` (``TwoStreamData``); L2M models decode with ``l2m_method`` ("mean" or
     "sample"). Extra rows unless ``baseline`` is False: the no-motion baseline
     (``still_baseline``), the nearest-neighbour baseline (``retrieval_baseline``) and the
     ground truth (:data:`GROUND_TRUTH`); with ``autoencode``, each
     two-stream model decoding each test motion from its own pose embedding
-    (``TwoStreamModel.reconstruct``). With ``out_dir`` also write ``t2m_table.md``,
+    (``TwoStreamModel.reconstruct``). With ``oracle`` = k > 0, a second table
+    (``t2m_oracle.oracle_table``): every row again on the test motions with k training
+    motions of the same parameters, beside the oracles; its rows go into the results with
+    names prefixed "same-parameter subset: ". With ``out_dir`` also write ``t2m_table.md``,
     ``t2m_report.json`` and the trajectory figures. Returns (results, table)."""
     import json
 
@@ -241,6 +245,11 @@ def compare(models: dict[str, object], data, *, split: str = "test", limit: int 
         results[GROUND_TRUTH] = score_generated({it.id: it.target for it in items}, items,
                                                 data.features, protos)
     table = markdown_table(results)
+    if oracle:
+        from motionlang.evaluation.t2m_oracle import oracle_table
+        rows, sub_table = oracle_table(results, data, items, protos, oracle)
+        results.update({f"same-parameter subset: {k}": r for k, r in rows.items()})
+        table += "\n" + sub_table
     if out_dir is not None:
         from motionlang.utils.atomic import atomic_write
         out = Path(out_dir)

@@ -1,0 +1,91 @@
+"""How low can APE go on the procedural corpus? Oracles that know each test motion's full
+ground-truth parameters (issue 6).
+
+A corpus motion is drawn from its parameters (actions, sides, counts, directions, speeds,
+angles) *and* from unstated ones: the subject's height, tempo, stride, posture and the
+primitives' timing. A sentence carries at most the first set, so no model can predict the
+second, and APE, a frame-by-frame distance, charges for it. Two rows measure this on the
+test motions whose exact parameters occur at least ``min_group`` times in training:
+
+* **mean of the same-parameter training motions**: each re-timed to the test length
+  (``decoding.t2m.stretch``) and averaged frame by frame — about the best a deterministic
+  model told *every* parameter can do under a squared error, so near a floor for APE;
+* **one same-parameter training motion** (the first in the split): what a real motion that
+  fits the description exactly scores.
+
+Every model row of the main table is re-scored on the same subset beside them.
+"""
+from __future__ import annotations
+
+from collections import defaultdict
+from typing import Sequence
+
+import numpy as np
+
+from motionlang.errors import MotionlangError
+
+#: the primitive fields a motion's parameters consist of (timing and style excluded)
+PARAMETER_FIELDS = ("action", "side", "count", "direction", "speed", "angle", "layer")
+
+MEAN_ROW = "oracle: mean of the same-parameter training motions"
+ONE_ROW = "oracle: one same-parameter training motion"
+
+
+def parameter_key(record) -> tuple | None:
+    """The motion's full ground-truth parameters, hashable; None without corpus meta."""
+    prims = (getattr(record, "meta", None) or {}).get("primitives")
+    if not prims:
+        return None
+    return tuple(tuple(p.get(f, "body" if f == "layer" else None) for f in PARAMETER_FIELDS)
+                 for p in prims)
+
+
+def same_parameter_groups(data, split: str = "train") -> dict[tuple, list[str]]:
+    """{parameter key: ids of the ``split`` motions with exactly those parameters}."""
+    groups: dict[tuple, list[str]] = defaultdict(list)
+    for rid in data.splits[split]:
+        key = parameter_key(data.records[rid])
+        if key is not None:
+            groups[key].append(rid)
+    return dict(groups)
+
+
+def oracle_generations(data, items: Sequence, min_group: int = 3
+                       ) -> tuple[list, dict[str, dict[str, np.ndarray]]]:
+    """(the items with >= ``min_group`` same-parameter training motions, {row name: {item
+    id: (T, 21, 3) metres}}) for :data:`MEAN_ROW` and :data:`ONE_ROW`."""
+    from motionlang.decoding.t2m import stretch
+    if min_group < 1:
+        raise MotionlangError(f"the oracle needs groups of at least 1 motion, got {min_group}")
+    groups = same_parameter_groups(data)
+    kept, mean, one = [], {}, {}
+    for it in items:
+        ids = groups.get(parameter_key(data.records[it.id]), [])
+        ids = [i for i in ids if i != it.id]   # evaluated on training motions: not itself
+        if len(ids) < min_group:
+            continue
+        T = len(it.target)
+        motions = [stretch(data.features.decode(data.sequences[i]), T) for i in ids]
+        kept.append(it)
+        mean[it.id] = np.mean(motions, axis=0)
+        one[it.id] = motions[0]
+    return kept, {MEAN_ROW: mean, ONE_ROW: one}
+
+
+def oracle_table(results: dict[str, dict], data, items: Sequence, prototypes,
+                 min_group: int = 3) -> tuple[dict[str, dict], str]:
+    """Every row of ``results`` (``t2m_compare.compare``'s, with ``generated``) re-scored on
+    the test items that have an oracle, and the two oracle rows. Returns (rows, markdown)."""
+    from motionlang.evaluation.t2m_compare import markdown_table, score_generated
+    kept, gens = oracle_generations(data, items, min_group)
+    if not kept:
+        raise MotionlangError(f"no test motion has {min_group} training motions with its "
+                              "exact parameters (a procedural corpus is needed)")
+    rows = {name: score_generated({it.id: r["generated"][it.id] for it in kept}, kept,
+                                  data.features, prototypes) for name, r in results.items()}
+    rows.update({name: score_generated(g, kept, data.features, prototypes)
+                 for name, g in gens.items()})
+    table = markdown_table(rows).rstrip("\n") + (
+        f" Only the {len(kept)} of {len(items)} test motions whose exact parameters occur "
+        f"in at least {min_group} training motions.\n")
+    return rows, table
