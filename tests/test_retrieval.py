@@ -40,6 +40,18 @@ def test_counts_ties_and_unknown_words():
     assert idx.nearest("") == ("a", "wave wave", 0.0)
 
 
+def test_word_order_breaks_bag_of_words_ties():
+    idx = SentenceIndex([("ab", "a person walks forward then waves"),
+                         ("ba", "a person waves then walks forward"),
+                         ("ab2", "a person walks forward then waves")])
+    key, _, cos = idx.nearest("a person waves, then walks forward")
+    assert key == "ba" and cos == pytest.approx(1.0)
+    assert idx.nearest("A person walks forward, then waves.")[0] == "ab"   # first of equals
+    # equal bags that differ by a rounding step in float32 still tie
+    idx2 = SentenceIndex([("x", "walk walk wave wave"), ("y", "walk wave")])
+    assert idx2.nearest("wave walk")[0] == "x"
+
+
 def test_empty_index_is_an_error():
     with pytest.raises(MotionlangError, match="empty"):
         SentenceIndex([])

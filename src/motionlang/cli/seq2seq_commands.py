@@ -325,10 +325,10 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
             {i: h[0] for i, h in ranked.items()}, truths)
         # BLEU cannot tell a worse description from an equally valid paraphrase; the
         # parameters can: how often the k-th hypothesis names exactly the true actions
+        # (evaluate_m2l pads a short beam with its last hypothesis, so all have W)
         report["m2l_actions_by_rank"] = [
-            ev.parameter_accuracy({i: h[k] for i, h in ranked.items() if len(h) > k},
-                                  truths)["actions_match"]
-            for k in range(max(map(len, ranked.values()), default=0))]
+            ev.parameter_accuracy({i: h[k] for i, h in ranked.items()}, truths)["actions_match"]
+            for k in range(args.width)]
         for run in ("l2m", "nn"):
             if f"{run}_round_trip" in report:
                 report[f"{run}_parameters"] = ev.round_trip_parameter_accuracy(

@@ -162,6 +162,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     from motionlang.training.twostream_data import build_twostream_data
 
     _threads(args.threads)
+    if args.oracle < 0:
+        raise MotionlangError(f"--oracle must be >= 0, got {args.oracle}")
     models = {}
     for spec in args.model:
         name, path = model_spec(spec)

@@ -223,6 +223,9 @@ def compare(models: dict[str, object], data, *, split: str = "test", limit: int 
     from motionlang.decoding.t2m import generate_positions21
     items = eval_items(data, split, limit)
     protos = fit_prototypes(data)
+    if oracle:   # before the models run: a K no test motion meets fails at once
+        from motionlang.evaluation.t2m_oracle import oracle_generations, oracle_table
+        kept, oracle_gens = oracle_generations(data, items, oracle)
     results = {name: evaluate_model(lambda s, t, m=model: generate_positions21(
                                         m, s, t, method=l2m_method),
                                     items, data.features, protos)
@@ -246,8 +249,7 @@ def compare(models: dict[str, object], data, *, split: str = "test", limit: int 
                                                 data.features, protos)
     table = markdown_table(results)
     if oracle:
-        from motionlang.evaluation.t2m_oracle import oracle_table
-        rows, sub_table = oracle_table(results, data, items, protos, oracle)
+        rows, sub_table = oracle_table(results, data, kept, oracle_gens, len(items), protos)
         results.update({f"same-parameter subset: {k}": r for k, r in rows.items()})
         table += "\n" + sub_table
     if out_dir is not None:

@@ -8,8 +8,10 @@ second, and APE, a frame-by-frame distance, charges for it. Two rows measure thi
 test motions whose exact parameters occur at least ``min_group`` times in training:
 
 * **mean of the same-parameter training motions**: each re-timed to the test length
-  (``decoding.t2m.stretch``) and averaged frame by frame — about the best a deterministic
-  model told *every* parameter can do under a squared error, so near a floor for APE;
+  (``decoding.t2m.stretch``) and averaged frame by frame: a reference point for a
+  deterministic model told *every* parameter (the frame-wise mean minimises a squared
+  error; APE is a plain distance and the re-timing is a guess, so this is not a strict
+  floor);
 * **one same-parameter training motion** (the first in the split): what a real motion that
   fits the description exactly scores.
 
@@ -24,20 +26,18 @@ import numpy as np
 
 from motionlang.errors import MotionlangError
 
-#: the primitive fields a motion's parameters consist of (timing and style excluded)
-PARAMETER_FIELDS = ("action", "side", "count", "direction", "speed", "angle", "layer")
-
 MEAN_ROW = "oracle: mean of the same-parameter training motions"
 ONE_ROW = "oracle: one same-parameter training motion"
 
 
 def parameter_key(record) -> tuple | None:
-    """The motion's full ground-truth parameters, hashable; None without corpus meta."""
-    prims = (getattr(record, "meta", None) or {}).get("primitives")
-    if not prims:
+    """The motion's full ground-truth parameters (``Primitive.key()`` and layer of each
+    primitive, in order), hashable; None without corpus meta."""
+    from motionlang.datasets.synth import ground_truth
+    meta = getattr(record, "meta", None) or {}
+    if not meta.get("primitives"):
         return None
-    return tuple(tuple(p.get(f, "body" if f == "layer" else None) for f in PARAMETER_FIELDS)
-                 for p in prims)
+    return tuple((p.key(), p.layer) for p in ground_truth(meta))
 
 
 def same_parameter_groups(data, split: str = "train") -> dict[tuple, list[str]]:
@@ -53,7 +53,11 @@ def same_parameter_groups(data, split: str = "train") -> dict[tuple, list[str]]:
 def oracle_generations(data, items: Sequence, min_group: int = 3
                        ) -> tuple[list, dict[str, dict[str, np.ndarray]]]:
     """(the items with >= ``min_group`` same-parameter training motions, {row name: {item
-    id: (T, 21, 3) metres}}) for :data:`MEAN_ROW` and :data:`ONE_ROW`."""
+    id: (T, 21, 3) metres}}) for :data:`MEAN_ROW` and :data:`ONE_ROW`.
+
+    Raises:
+        MotionlangError: ``min_group`` < 1, or no item has an oracle.
+    """
     from motionlang.decoding.t2m import stretch
     if min_group < 1:
         raise MotionlangError(f"the oracle needs groups of at least 1 motion, got {min_group}")
@@ -69,23 +73,23 @@ def oracle_generations(data, items: Sequence, min_group: int = 3
         kept.append(it)
         mean[it.id] = np.mean(motions, axis=0)
         one[it.id] = motions[0]
-    return kept, {MEAN_ROW: mean, ONE_ROW: one}
-
-
-def oracle_table(results: dict[str, dict], data, items: Sequence, prototypes,
-                 min_group: int = 3) -> tuple[dict[str, dict], str]:
-    """Every row of ``results`` (``t2m_compare.compare``'s, with ``generated``) re-scored on
-    the test items that have an oracle, and the two oracle rows. Returns (rows, markdown)."""
-    from motionlang.evaluation.t2m_compare import markdown_table, score_generated
-    kept, gens = oracle_generations(data, items, min_group)
     if not kept:
         raise MotionlangError(f"no test motion has {min_group} training motions with its "
                               "exact parameters (a procedural corpus is needed)")
+    return kept, {MEAN_ROW: mean, ONE_ROW: one}
+
+
+def oracle_table(results: dict[str, dict], data, kept: Sequence, gens: dict, n_items: int,
+                 prototypes) -> tuple[dict[str, dict], str]:
+    """Every row of ``results`` (``t2m_compare.compare``'s, with ``generated``) re-scored on
+    ``kept``, and the oracle rows ``gens`` (both from :func:`oracle_generations` over
+    ``n_items`` test items). Returns (rows, markdown)."""
+    from motionlang.evaluation.t2m_compare import markdown_table, score_generated
     rows = {name: score_generated({it.id: r["generated"][it.id] for it in kept}, kept,
                                   data.features, prototypes) for name, r in results.items()}
     rows.update({name: score_generated(g, kept, data.features, prototypes)
                  for name, g in gens.items()})
     table = markdown_table(rows).rstrip("\n") + (
-        f" Only the {len(kept)} of {len(items)} test motions whose exact parameters occur "
-        f"in at least {min_group} training motions.\n")
+        f" Only the {len(kept)} of {n_items} test motions with enough training motions of "
+        "exactly their parameters.\n")
     return rows, table
