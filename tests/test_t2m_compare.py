@@ -164,6 +164,12 @@ def test_compare_writes_table_report_and_figures(data, tmp_path):
     np.testing.assert_array_equal(g[0], g[-1])
     assert (tmp_path / "t2m_table.md").read_text() == table
     report = json.loads((tmp_path / "t2m_report.json").read_text())
+    from motionlang.models.twostream.length import SentenceLength
+    lm = SentenceLength.from_items(data.items["train"])
+    items4 = eval_items(data, "train", 4)
+    assert report["length_model"]["mae_frames"] == pytest.approx(np.mean(
+        [abs(lm.frames(it.sentence) - len(it.target)) for it in items4]))
+    assert report["length_model"]["n"] == 4 and "Sentence -> length" in table
     for name, r in report["results"].items():
         assert r["n_items"] == 4
         assert math.isclose(r["ape_local"], results[name]["ape_local"])

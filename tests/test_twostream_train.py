@@ -177,6 +177,9 @@ def test_train_command(corpus, tmp_path, monkeypatch, capsys):
     assert model.config.lambdas["adversarial"] == 0.05 and model.config.lambdas["embedding"] == 1
     assert model.config.lambdas["velocity"] == 0.1                 # the others keep the paper's
     assert model.generate_positions("a person walks forward", 5).shape == (5, 21, 3)
+    # the length model is fitted on the (cropped) training motions
+    assert model.length_model is not None and model.length_model.high <= 12
+    assert 1 <= model.frames_for("a person walks forward") <= 12
     assert "twostream (full)" in capsys.readouterr().out
     # generate draws and saves the model's joint positions; BVH needs joint angles
     for ext in (".gif", ".png", ".npz"):

@@ -427,7 +427,9 @@ def register(subparsers) -> None:
                         "standing still)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--max-frames", type=int, default=None,
-                   help="length cap in model frames (default: the model's)")
+                   help="length cap in model frames (default: the model's); a two-stream "
+                        "model generates exactly this many (default: the length its length "
+                        "model predicts for the sentence, else 125 = 10 s)")
     p.add_argument("--min-frames", type=int, default=5,
                    help="no end-of-motion before this many model frames (default 5)")
     p.add_argument("--length-norm", action="store_true",

@@ -30,6 +30,7 @@ def cmd_train(args: argparse.Namespace) -> int:
 
     from motionlang.datasets.splits import save_splits
     from motionlang.models.twostream import TwoStreamModel
+    from motionlang.models.twostream.length import SentenceLength
     from motionlang.training.trainer import TrainConfig
     from motionlang.training.twostream_data import build_twostream_data
     from motionlang.training.twostream_train import ForcingSchedule, make_config, train_twostream
@@ -56,6 +57,7 @@ def cmd_train(args: argparse.Namespace) -> int:
         fields["text_layers"] = [int(x) for x in args.text_layers.split(",")]
     torch.manual_seed(args.seed)
     model = TwoStreamModel(make_config(args.ablation, **fields), data.features.normalizer)
+    model.length_model = SentenceLength.from_items(data.items["train"])
     cfg = TrainConfig(epochs=args.epochs, batch_size=args.batch_size, lr=args.lr,
                       grad_clip=args.grad_clip, seed=args.seed, out_dir=str(run),
                       checkpoint_every=args.checkpoint_every,

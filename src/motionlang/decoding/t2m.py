@@ -5,7 +5,8 @@ al. 2018) and the two-stream model (Ghosh et al. 2021).
   builds the model its ``kind`` names.
 * :func:`generate_any` has the signature and return value of ``decoding.seq2seq.generate``
   (a list of ``(result, score)``, best first); a two-stream model is deterministic, so it
-  returns one hypothesis: global 21-joint positions (T, 21, 3) metres, score NaN.
+  returns one hypothesis: global 21-joint positions (T, 21, 3) metres, score NaN, of the
+  length its length model predicts for the sentence unless one is given.
 * :func:`generate_positions21` gives every model's output as global 21-joint positions at
   12.5 Hz starting at the origin facing +Z — the common ground of the comparison table.
 """
@@ -22,8 +23,6 @@ from motionlang.errors import MotionlangError
 
 #: frame rate of the comparison (the positions features' rate)
 FPS = 12.5
-#: length of a two-stream generation when none is asked for (frames at 12.5 Hz = 10 s)
-DEFAULT_FRAMES = 125
 
 
 def load_any_t2m(path: str | Path, text_encoder=None):
@@ -52,9 +51,10 @@ def load_any_t2m(path: str | Path, text_encoder=None):
 def generate_any(model, sentence: str, *, max_frames: int | None = None, **kw
                  ) -> list[tuple[Any, float]]:
     """``decoding.seq2seq.generate`` for L2M (``kw`` passed on); for a two-stream model one
-    ``(positions (T, 21, 3), nan)`` with ``T = max_frames`` or 125 (10 s at 12.5 Hz)."""
+    ``(positions (T, 21, 3), nan)`` with ``T = max_frames`` or ``model.frames_for(sentence)``."""
     if getattr(model, "kind", None) == "twostream":
-        return [(model.generate_positions(sentence, max_frames or DEFAULT_FRAMES), float("nan"))]
+        return [(model.generate_positions(sentence, max_frames or model.frames_for(sentence)),
+                 float("nan"))]
     from motionlang.decoding.seq2seq import generate
     return generate(model, sentence, max_frames=max_frames, **kw)
 

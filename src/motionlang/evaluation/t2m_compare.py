@@ -203,6 +203,19 @@ def retrieval_baseline(data, split: str = "train"):
         data.features.decode(data.sequences[index.nearest(sentence)[0]]), n_frames)
 
 
+def length_errors(data, items: Sequence[T2MItem]) -> dict:
+    """How well the sentence -> length model that ``train twostream`` stores
+    (``SentenceLength.from_items`` on the training items) predicts the test lengths:
+    ``{"mae_frames", "constant_mae_frames" (always guessing the training mean), "n"}``."""
+    from motionlang.models.twostream.length import SentenceLength
+    model = SentenceLength.from_items(data.items["train"])
+    mean = float(np.mean([len(it["motion"]) for it in data.items["train"]]))
+    true = np.array([len(it.target) for it in items], dtype=float)
+    pred = np.array([model.frames(it.sentence) for it in items], dtype=float)
+    return {"mae_frames": float(np.abs(pred - true).mean()),
+            "constant_mae_frames": float(np.abs(mean - true).mean()), "n": len(items)}
+
+
 def compare(models: dict[str, object], data, *, split: str = "test", limit: int | None = None,
             out_dir: str | Path | None = None, figures: int = 3, baseline: bool = True,
             l2m_method: str = "mean", autoencode: bool = False, oracle: int = 0
@@ -248,6 +261,10 @@ def compare(models: dict[str, object], data, *, split: str = "test", limit: int 
         results[GROUND_TRUTH] = score_generated({it.id: it.target for it in items}, items,
                                                 data.features, protos)
     table = markdown_table(results)
+    lengths = length_errors(data, items)
+    table += (f"\nSentence -> length (the model `train twostream` stores, for `generate`): mean "
+              f"absolute error {lengths['mae_frames']:.1f} frames at 12.5 Hz; always the "
+              f"training mean: {lengths['constant_mae_frames']:.1f}.\n")
     if oracle:
         rows, sub_table = oracle_table(results, data, kept, oracle_gens, len(items), protos)
         results.update({f"same-parameter subset: {k}": r for k, r in rows.items()})
@@ -261,7 +278,8 @@ def compare(models: dict[str, object], data, *, split: str = "test", limit: int 
                       for kk, vv in r.items() if kk != "generated"}
                   for k, r in results.items()}
         with atomic_write(out / "t2m_report.json") as fh:
-            json.dump({"split": split, "results": report}, fh, indent=1)
+            json.dump({"split": split, "results": report, "length_model": lengths}, fh,
+                      indent=1)
         if figures:
             # models only: the no-motion baseline is a dot at the origin
             trajectory_figures({k: results[k] for k in models}, items, out, figures)

@@ -28,6 +28,7 @@ from motionlang.models.checkpoint import (pack_normalizer, read_model_dict, unpa
 from motionlang.models.twostream import losses as L
 from motionlang.models.twostream.config import TwoStreamConfig
 from motionlang.models.twostream.discriminator import PoseDiscriminator
+from motionlang.models.twostream.length import DEFAULT_FRAMES, SentenceLength
 from motionlang.models.twostream.pose import PoseDecoder, PoseEncoder
 from motionlang.models.twostream.sentence import SentenceEncoder
 from motionlang.models.twostream.text import build_text_encoder
@@ -62,6 +63,9 @@ class TwoStreamModel(nn.Module):
         #: probability of feeding the true previous frame while training (a schedule,
         #: e.g. annealed to 0 by the training loop; never used in eval mode)
         self.teacher_forcing = 0.0
+        #: sentence -> frames for generation without a given length (``SentenceLength``,
+        #: fitted by the trainer; None: :data:`DEFAULT_FRAMES`)
+        self.length_model = None
         self.set_stage("joint" if config.joint_training else "pose")
 
     # ------------------------------------------------------------------ parts
@@ -227,6 +231,13 @@ class TwoStreamModel(nn.Module):
         on the *positions* features (``features.positions`` layout and normaliser)."""
         return self.positions(self.generate(sentence, n_frames), start)
 
+    def frames_for(self, sentence: str) -> int:
+        """The length to generate ``sentence`` for when none is given: the length model's
+        prediction, else :data:`DEFAULT_FRAMES` (10 s at 12.5 Hz)."""
+        if self.length_model is None:
+            return DEFAULT_FRAMES
+        return self.length_model.frames(sentence)
+
     def positions(self, x: torch.Tensor, start=(0.0, 0.0, 0.0)) -> np.ndarray:
         """Normalised features (T, F) of this model -> global 21-joint positions (T, 21, 3)
         metres, Y up (models of the 66 *positions* features with their normaliser)."""
@@ -243,7 +254,9 @@ class TwoStreamModel(nn.Module):
     # ------------------------------------------------------------------ persistence
     def to_checkpoint(self) -> dict:
         return {"kind": self.kind, "config": self.config.to_dict(), "stage": self.stage,
-                "normalizer": pack_normalizer(self.normalizer), "state_dict": self.state_dict()}
+                "normalizer": pack_normalizer(self.normalizer), "state_dict": self.state_dict(),
+                "length_model": (None if self.length_model is None
+                                 else self.length_model.to_dict())}
 
     @classmethod
     def from_checkpoint(cls, d: dict, text_encoder=None) -> "TwoStreamModel":
@@ -251,6 +264,8 @@ class TwoStreamModel(nn.Module):
                     unpack_normalizer(d.get("normalizer")), text_encoder)
         model.load_state_dict(d["state_dict"])
         model.set_stage(d.get("stage", "joint"))
+        if d.get("length_model"):   # checkpoints before it have none
+            model.length_model = SentenceLength.from_dict(d["length_model"])
         return model.eval()
 
     def save(self, path: str | Path) -> None:
