@@ -126,10 +126,20 @@ def test_compare_writes_table_report_and_figures(data, tmp_path):
     ts = TwoStreamModel(TwoStreamConfig(h1=4, h2=8, h=16, disc_hidden=8),
                         data.features.normalizer, text_encoder=HashTokens()).eval()
     results, table = compare({"two-stream": ts, "L2M": _tiny_l2m(data)}, data, split="train",
-                             limit=4, out_dir=tmp_path, figures=2, autoencode=True)
+                             limit=4, out_dir=tmp_path, figures=2, autoencode=True,
+                             true_start=True)
     ae = "two-stream, from the motion's own embedding"   # two-stream models only
+    ts_start = "two-stream, from the test motion's first pose"
     assert set(results) == {"two-stream", "L2M", "no motion (mean first pose)", GROUND_TRUTH,
-                            NEAREST, ae}
+                            NEAREST, ae, ts_start}
+    for rid, p in results[ts_start]["generated"].items():   # the sentence, the true start
+        it = next(i for i in eval_items(data, "train", 4) if i.id == rid)
+        want = ts.positions(ts.generate(it.sentence, len(it.target),
+                                        start=torch.as_tensor(data.sequences[rid][0])))
+        # the start pose went through decode and encode (1e-4 apart), and a global path
+        # sums the frames' steps
+        np.testing.assert_allclose(p, want, atol=1e-3)
+    assert results[ts_start]["ape_local"] != results["two-stream"]["ape_local"]
     # evaluated on the training split, every sentence retrieves the first training motion
     # with the same words in the same order: its own, unless an earlier one has them too
     nearest, own = results[NEAREST], 0
@@ -205,6 +215,9 @@ def test_evaluate_command(corpus, data, tmp_path, monkeypatch, capsys):
                  "--autoencode", "-o", str(tmp_path / "ae")]) == 2
     assert "--autoencode needs a two-stream model" in capsys.readouterr().err
     assert not (tmp_path / "ae").exists()
+    assert main(["evaluate-t2m", "--data", str(corpus), "--model", str(tmp_path / "l2m.pt"),
+                 "--true-start"]) == 2
+    assert "--true-start needs a two-stream model" in capsys.readouterr().err
     assert main(["evaluate-t2m", "--data", str(corpus), "--model", str(tmp_path / "l2m.pt"),
                  "--split", "train", "--limit", "3", "--oracle", "1000",
                  "-o", str(tmp_path / "or")]) == 2

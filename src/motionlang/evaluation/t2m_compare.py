@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Callable, Sequence
 
 import numpy as np
+import torch
 
 from motionlang.errors import MotionlangError
 from motionlang.evaluation.action_order import (Prototypes, merge_repeats, order_accuracy,
@@ -218,15 +219,17 @@ def length_errors(data, items: Sequence[T2MItem]) -> dict:
 
 def compare(models: dict[str, object], data, *, split: str = "test", limit: int | None = None,
             out_dir: str | Path | None = None, figures: int = 3, baseline: bool = True,
-            l2m_method: str = "mean", autoencode: bool = False, oracle: int = 0
-            ) -> tuple[dict, str]:
+            l2m_method: str = "mean", autoencode: bool = False, true_start: bool = False,
+            oracle: int = 0) -> tuple[dict, str]:
     """Evaluate ``{name: model}`` (anything ``decoding.t2m.generate_positions21`` takes) on
     ``data`` (``TwoStreamData``); L2M models decode with ``l2m_method`` ("mean" or
     "sample"). Extra rows unless ``baseline`` is False: the no-motion baseline
     (``still_baseline``), the nearest-neighbour baseline (``retrieval_baseline``) and the
     ground truth (:data:`GROUND_TRUTH`); with ``autoencode``, each
     two-stream model decoding each test motion from its own pose embedding
-    (``TwoStreamModel.reconstruct``). With ``oracle`` = k > 0, a second table
+    (``TwoStreamModel.reconstruct``); with ``true_start``, each two-stream model
+    generating from the sentence but starting at the test motion's first pose, as JL2P and
+    Ghosh et al. evaluate (it tells the model the subject's build and posture). With ``oracle`` = k > 0, a second table
     (``t2m_oracle.oracle_table``): every row again on the test motions with k training
     motions of the same parameters, beside the oracles; its rows go into the results with
     names prefixed "same-parameter subset: ". With ``out_dir`` also write ``t2m_table.md``,
@@ -243,14 +246,22 @@ def compare(models: dict[str, object], data, *, split: str = "test", limit: int 
                                         m, s, t, method=l2m_method),
                                     items, data.features, protos)
                for name, model in models.items()}
-    if autoencode:
-        for name, model in models.items():
-            if getattr(model, "kind", None) == "twostream":
-                # the model's normaliser maps positions to its own features
-                gen = {it.id: model.positions(model.reconstruct(
-                    positions_to_features(model, it.target))) for it in items}
-                results[f"{name}, from the motion's own embedding"] = score_generated(
-                    gen, items, data.features, protos)
+    for name, model in models.items():
+        if getattr(model, "kind", None) != "twostream":
+            continue
+        # the model's normaliser maps positions to its own features
+        if autoencode:
+            gen = {it.id: model.positions(model.reconstruct(
+                positions_to_features(model, it.target))) for it in items}
+            results[f"{name}, from the motion's own embedding"] = score_generated(
+                gen, items, data.features, protos)
+        if true_start:
+            with torch.no_grad():
+                gen = {it.id: model.positions(model.generate(
+                    it.sentence, len(it.target),
+                    start=positions_to_features(model, it.target)[0])) for it in items}
+            results[f"{name}, from the test motion's first pose"] = score_generated(
+                gen, items, data.features, protos)
     if baseline:
         results["no motion (mean first pose)"] = evaluate_model(still_baseline(data), items,
                                                                 data.features, protos)
