@@ -99,6 +99,36 @@ def _tiny_l2m(data):
     return LanguageToMotion(cfg, vocab, features=data.features).eval()
 
 
+def test_l2m_on_the_test_subjects_bodies(data):
+    """An angles L2M with --true-start: the same generated angles drive each test subject's
+    own MMM body, so only bone lengths change (and the root's start stays at the origin)."""
+    from motionlang.datasets.text import Vocabulary
+    from motionlang.decoding.t2m import generate_positions21
+    from motionlang.features.angles import AnglesFeatures
+    from motionlang.formats.mmm_model import mmm_skeleton
+    from motionlang.models.l2m import L2MConfig, LanguageToMotion
+    fs = AnglesFeatures().fit([r.load_motion() for r in list(data.records.values())[:3]])
+    vocab = Vocabulary.build([s for r in data.records.values() for s in r.annotations])
+    torch.manual_seed(0)
+    l2m = LanguageToMotion(L2MConfig(vocab_size=len(vocab), n_features=fs.dim, embed_dim=8,
+                                     enc_hidden=8, enc_layers=1, dec_hidden=8, dec_layers=1,
+                                     n_components=2, dropout=0.0, max_frames=12),
+                           vocab, features=fs).eval()
+    results, _ = compare({"L2M": l2m}, data, split="train", limit=3, figures=0,
+                         true_start=True)
+    body, other = results["L2M, on the test subject's body"]["generated"], 0
+    for it in eval_items(data, "train", 3):
+        h = data.records[it.id].meta["subject"]["height_m"]
+        np.testing.assert_allclose(body[it.id], generate_positions21(
+            l2m, it.sentence, len(it.target), skeleton=mmm_skeleton(h)))
+        # taller or shorter than the mean build: the same pose at another size
+        mean = results["L2M"]["generated"][it.id]
+        if abs(h - fs.subject_height) > 0.02:
+            assert not np.allclose(body[it.id], mean)
+            other += 1
+    assert other >= 1
+
+
 def test_l2m_and_twostream_positions(data):
     from motionlang.decoding.t2m import generate_positions21
     from motionlang.models.twostream import TwoStreamConfig, TwoStreamModel
@@ -130,8 +160,13 @@ def test_compare_writes_table_report_and_figures(data, tmp_path):
                              true_start=True)
     ae = "two-stream, from the motion's own embedding"   # two-stream models only
     ts_start = "two-stream, from the test motion's first pose"
+    still_start = "no motion (the test motion's first pose)"
+    # a positions L2M has no body of its own to scale: no row on the subjects' bodies
     assert set(results) == {"two-stream", "L2M", "no motion (mean first pose)", GROUND_TRUTH,
-                            NEAREST, ae, ts_start}
+                            NEAREST, ae, ts_start, still_start}
+    for it in eval_items(data, "train", 4):
+        np.testing.assert_array_equal(results[still_start]["generated"][it.id],
+                                      np.repeat(it.target[:1], len(it.target), axis=0))
     for rid, p in results[ts_start]["generated"].items():   # the sentence, the true start
         it = next(i for i in eval_items(data, "train", 4) if i.id == rid)
         want = ts.positions(ts.generate(it.sentence, len(it.target),

@@ -172,14 +172,16 @@ def describe(model: MotionToLanguage, motion, *, width: int = 5,
 def generate(model: LanguageToMotion, sentence: str | Sequence[int], *, width: int = 5,
              max_frames: int | None = None, method: str = "beam", samples: int = 5,
              seed: int = 0, min_frames: int = 1, length_norm: bool = False,
-             temperature: float = 1.0) -> list[tuple[Any, float]]:
+             temperature: float = 1.0, skeleton=None) -> list[tuple[Any, float]]:
     """Sentence -> W decoded motions with their log likelihood, best first.
 
     Each motion is what the feature set's ``decode`` returns: a :class:`Motion` for joint
-    angles, joint positions (T, 21, 3) for position features.
+    angles (on ``skeleton``, default the training subjects' mean build), joint positions
+    (T, 21, 3) for position features.
     """
     fs = _features_of(model)
     out = generate_features(model, sentence, width=width, max_frames=max_frames,
                             method=method, samples=samples, seed=seed, min_frames=min_frames,
                             length_norm=length_norm, temperature=temperature)
-    return [(fs.decode(frames_to_features(fs, f)), score) for f, score in out]
+    kw = {} if skeleton is None else {"skeleton": skeleton}
+    return [(fs.decode(frames_to_features(fs, f), **kw), score) for f, score in out]

@@ -92,7 +92,7 @@ def stretch(p: np.ndarray, n_frames: int) -> np.ndarray:
 
 @torch.no_grad()
 def generate_positions21(model, sentence: str, n_frames: int, *, seed: int = 0,
-                         method: str = "mean") -> np.ndarray:
+                         method: str = "mean", skeleton=None) -> np.ndarray:
     """Sentence -> global 21-joint positions (n_frames, 21, 3) metres at 12.5 Hz, anchored
     at the origin facing +Z.
 
@@ -100,7 +100,8 @@ def generate_positions21(model, sentence: str, n_frames: int, *, seed: int = 0,
     or "sample" (one ancestral sample drawn with ``seed``), capped at ``n_frames`` model
     frames at its own rate, angles features through forward
     kinematics (``joint_map.positions21``), re-timed to 12.5 Hz, then cropped or held at
-    its last frame to ``n_frames`` (L2M chooses its own length).
+    its last frame to ``n_frames`` (L2M chooses its own length); ``skeleton``: the body
+    its joint angles drive (default: the training subjects' mean build).
     """
     if getattr(model, "kind", None) == "twostream":
         return model.generate_positions(sentence, n_frames)
@@ -110,7 +111,7 @@ def generate_positions21(model, sentence: str, n_frames: int, *, seed: int = 0,
     fps = float(getattr(getattr(model, "features", None), "fps", FPS))
     cap = max(1, int(np.ceil(n_frames * fps / FPS)))
     result, _ = generate(model, sentence, width=1, method=method, seed=seed,
-                         max_frames=cap)[0]
+                         max_frames=cap, skeleton=skeleton)[0]
     if isinstance(result, np.ndarray):  # positions features: already (T, 21, 3) at fps
         p = result
         if abs(fps - FPS) > 1e-9:

@@ -217,6 +217,34 @@ def length_errors(data, items: Sequence[T2MItem]) -> dict:
             "constant_mae_frames": float(np.abs(mean - true).mean()), "n": len(items)}
 
 
+def subject_height(record) -> float | None:
+    """The subject's height in metres: the corpus meta's, else the motion file's (MMM)."""
+    h = ((getattr(record, "meta", None) or {}).get("subject") or {}).get("height_m")
+    if h is None:
+        h = record.load_motion().meta.get("height")
+    return None if h is None else float(h)
+
+
+def _l2m_on_subjects(results, name, model, data, items, protos, method) -> None:
+    """The L2M's counterpart of a true start: its joint angles drive each test subject's
+    own body (``mmm_skeleton`` of the subject's height) instead of the mean build. Only for
+    angles models; skipped, with a log line, when a test motion's height is unknown."""
+    import logging
+
+    from motionlang.decoding.t2m import generate_positions21
+    from motionlang.formats.mmm_model import mmm_skeleton
+    if getattr(getattr(model, "features", None), "kind", None) != "angles":
+        return   # a positions L2M has no body to scale: its joints are its output
+    heights = {it.id: subject_height(data.records[it.id]) for it in items}
+    if any(h is None for h in heights.values()):
+        logging.getLogger(__name__).info("%s: no subject heights, no row on their bodies", name)
+        return
+    gen = {it.id: generate_positions21(model, it.sentence, len(it.target), method=method,
+                                       skeleton=mmm_skeleton(heights[it.id])) for it in items}
+    results[f"{name}, on the test subject's body"] = score_generated(gen, items, data.features,
+                                                                    protos)
+
+
 def compare(models: dict[str, object], data, *, split: str = "test", limit: int | None = None,
             out_dir: str | Path | None = None, figures: int = 3, baseline: bool = True,
             l2m_method: str = "mean", autoencode: bool = False, true_start: bool = False,
@@ -229,7 +257,9 @@ def compare(models: dict[str, object], data, *, split: str = "test", limit: int 
     two-stream model decoding each test motion from its own pose embedding
     (``TwoStreamModel.reconstruct``); with ``true_start``, each two-stream model
     generating from the sentence but starting at the test motion's first pose, as JL2P and
-    Ghosh et al. evaluate (it tells the model the subject's build and posture). With ``oracle`` = k > 0, a second table
+    Ghosh et al. evaluate (it tells the model the subject's build and posture), each L2M
+    model on the test subject's own body (``_l2m_on_subjects``), and the no-motion
+    baseline holding the test motion's first pose. With ``oracle`` = k > 0, a second table
     (``t2m_oracle.oracle_table``): every row again on the test motions with k training
     motions of the same parameters, beside the oracles; its rows go into the results with
     names prefixed "same-parameter subset: ". With ``out_dir`` also write ``t2m_table.md``,
@@ -247,9 +277,11 @@ def compare(models: dict[str, object], data, *, split: str = "test", limit: int 
                                     items, data.features, protos)
                for name, model in models.items()}
     for name, model in models.items():
-        if getattr(model, "kind", None) != "twostream":
+        if getattr(model, "kind", None) == "l2m":
+            if true_start:
+                _l2m_on_subjects(results, name, model, data, items, protos, l2m_method)
             continue
-        # the model's normaliser maps positions to its own features
+        # two-stream; the model's normaliser maps positions to its own features
         if autoencode:
             gen = {it.id: model.positions(model.reconstruct(
                 positions_to_features(model, it.target))) for it in items}
@@ -265,6 +297,10 @@ def compare(models: dict[str, object], data, *, split: str = "test", limit: int 
     if baseline:
         results["no motion (mean first pose)"] = evaluate_model(still_baseline(data), items,
                                                                 data.features, protos)
+        if true_start:
+            results["no motion (the test motion's first pose)"] = score_generated(
+                {it.id: np.repeat(it.target[:1], len(it.target), axis=0) for it in items},
+                items, data.features, protos)
         results[NEAREST] = evaluate_model(retrieval_baseline(data), items, data.features,
                                           protos)
         # the test motions themselves: APE 0, and the order check's ceiling (how often
