@@ -251,9 +251,6 @@ def test_evaluate_command(corpus, data, tmp_path, monkeypatch, capsys):
     assert "--autoencode needs a two-stream model" in capsys.readouterr().err
     assert not (tmp_path / "ae").exists()
     assert main(["evaluate-t2m", "--data", str(corpus), "--model", str(tmp_path / "l2m.pt"),
-                 "--true-start"]) == 2
-    assert "--true-start needs a two-stream model" in capsys.readouterr().err
-    assert main(["evaluate-t2m", "--data", str(corpus), "--model", str(tmp_path / "l2m.pt"),
                  "--split", "train", "--limit", "3", "--oracle", "1000",
                  "-o", str(tmp_path / "or")]) == 2
     assert "no test motion has 1000 training motions" in capsys.readouterr().err

@@ -170,9 +170,9 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     for spec in args.model:
         name, path = model_spec(spec)
         models[name] = load_any_t2m(path)
-    for flag, on in (("--autoencode", args.autoencode), ("--true-start", args.true_start)):
-        if on and not any(getattr(m, "kind", None) == "twostream" for m in models.values()):
-            raise MotionlangError(f"{flag} needs a two-stream model among --model")
+    if args.autoencode and not any(getattr(m, "kind", None) == "twostream"
+                                   for m in models.values()):
+        raise MotionlangError("--autoencode needs a two-stream model among --model")
     data = build_twostream_data(args.data, seed=args.seed, max_seconds=args.max_seconds)
     _, table = compare(models, data, split=args.split, limit=args.limit or None,
                        l2m_method=args.l2m_method, autoencode=args.autoencode,
@@ -198,7 +198,8 @@ def register(subparsers) -> None:
     p.add_argument("--true-start", action="store_true",
                    help="also score each two-stream model generating from the sentence but "
                         "starting at the test motion's first pose (as JL2P and Ghosh et al. "
-                        "evaluate)")
+                        "evaluate), each L2M model (joint angles) on the test subject's own "
+                        "body, and standing in the first pose")
     p.add_argument("--figures", type=int, default=3, help="trajectory figures to draw")
     p.add_argument("--oracle", type=int, default=0, metavar="K",
                    help="procedural corpus: a second table on the test motions whose exact "
