@@ -155,6 +155,8 @@ def test_compare_writes_table_report_and_figures(data, tmp_path):
     torch.manual_seed(0)
     ts = TwoStreamModel(TwoStreamConfig(h1=4, h2=8, h=16, disc_hidden=8),
                         data.features.normalizer, text_encoder=HashTokens()).eval()
+    from motionlang.models.twostream.length import SentenceLength
+    ts.length_model = SentenceLength.fit(["a person"], [7])
     results, table = compare({"two-stream": ts, "L2M": _tiny_l2m(data)}, data, split="train",
                              limit=4, out_dir=tmp_path, figures=2, autoencode=True,
                              true_start=True)
@@ -209,12 +211,16 @@ def test_compare_writes_table_report_and_figures(data, tmp_path):
     np.testing.assert_array_equal(g[0], g[-1])
     assert (tmp_path / "t2m_table.md").read_text() == table
     report = json.loads((tmp_path / "t2m_report.json").read_text())
-    from motionlang.models.twostream.length import SentenceLength
     lm = SentenceLength.from_items(data.items["train"])
     items4 = eval_items(data, "train", 4)
-    assert report["length_model"]["mae_frames"] == pytest.approx(np.mean(
+    refit = report["length_model"]["refit on the whole training motions"]
+    assert refit["mae_frames"] == pytest.approx(np.mean(
         [abs(lm.frames(it.sentence) - len(it.target)) for it in items4]))
-    assert report["length_model"]["n"] == 4 and "Sentence -> length" in table
+    assert refit["n"] == 4 and "Sentence -> length" in table
+    # the two-stream model's own length model: fitted on one sentence, it always says 7
+    assert report["length_model"]["two-stream"]["mae_frames"] == pytest.approx(
+        np.mean([abs(7 - len(it.target)) for it in items4]))
+    assert set(report["length_model"]) == {"refit on the whole training motions", "two-stream"}
     for name, r in report["results"].items():
         assert r["n_items"] == 4
         assert math.isclose(r["ape_local"], results[name]["ape_local"])

@@ -11,7 +11,8 @@ from motionlang.models.twostream.length import DEFAULT_FRAMES, SentenceLength
 
 def test_fit_recovers_additive_lengths():
     # lengths made of a base of 10 frames plus 20 per "walk" and 5 per "wave"; "a person"
-    # appears everywhere, so it folds into the bias. Without a penalty, exact
+    # appears everywhere, so the base is shared among "a", "person" and the bias (which
+    # share, the minimum-norm solution decides). Without a penalty, exact
     sentences = ["a person walks", "a person waves", "a person walks walks",
                  "a person walks waves", "a person waves waves waves"]
     lengths = [30, 15, 50, 35, 25]

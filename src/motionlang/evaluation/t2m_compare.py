@@ -204,12 +204,13 @@ def retrieval_baseline(data, split: str = "train"):
         data.features.decode(data.sequences[index.nearest(sentence)[0]]), n_frames)
 
 
-def length_errors(data, items: Sequence[T2MItem]) -> dict:
-    """How well the sentence -> length model that ``train twostream`` stores
-    (``SentenceLength.from_items`` on the training items) predicts the test lengths:
+def length_errors(data, items: Sequence[T2MItem], model=None) -> dict:
+    """How well a sentence -> length model (``models.twostream.length.SentenceLength``;
+    default: one fitted here on ``data``'s whole training motions, as ``train twostream``
+    without ``--max-frames`` fits it) predicts the test lengths:
     ``{"mae_frames", "constant_mae_frames" (always guessing the training mean), "n"}``."""
     from motionlang.models.twostream.length import SentenceLength
-    model = SentenceLength.from_items(data.items["train"])
+    model = model or SentenceLength.from_items(data.items["train"])
     mean = float(np.mean([len(it["motion"]) for it in data.items["train"]]))
     true = np.array([len(it.target) for it in items], dtype=float)
     pred = np.array([model.frames(it.sentence) for it in items], dtype=float)
@@ -228,7 +229,8 @@ def subject_height(record) -> float | None:
 def _l2m_on_subjects(results, name, model, data, items, protos, method) -> None:
     """The L2M's counterpart of a true start: its joint angles drive each test subject's
     own body (``mmm_skeleton`` of the subject's height) instead of the mean build. Only for
-    angles models; skipped, with a log line, when a test motion's height is unknown."""
+    angles models; skipped, with a log line, when a test motion's height is unknown (an
+    MMM file without one reads as the reader's default height, so not for those)."""
     import logging
 
     from motionlang.decoding.t2m import generate_positions21
@@ -277,11 +279,11 @@ def compare(models: dict[str, object], data, *, split: str = "test", limit: int 
                                     items, data.features, protos)
                for name, model in models.items()}
     for name, model in models.items():
-        if getattr(model, "kind", None) == "l2m":
-            if true_start:
-                _l2m_on_subjects(results, name, model, data, items, protos, l2m_method)
+        if getattr(model, "kind", None) == "l2m" and true_start:
+            _l2m_on_subjects(results, name, model, data, items, protos, l2m_method)
+        if getattr(model, "kind", None) != "twostream":
             continue
-        # two-stream; the model's normaliser maps positions to its own features
+        # the model's normaliser maps positions to its own features
         if autoencode:
             gen = {it.id: model.positions(model.reconstruct(
                 positions_to_features(model, it.target))) for it in items}
@@ -308,10 +310,13 @@ def compare(models: dict[str, object], data, *, split: str = "test", limit: int 
         results[GROUND_TRUTH] = score_generated({it.id: it.target for it in items}, items,
                                                 data.features, protos)
     table = markdown_table(results)
-    lengths = length_errors(data, items)
-    table += (f"\nSentence -> length (the model `train twostream` stores, for `generate`): mean "
-              f"absolute error {lengths['mae_frames']:.1f} frames at 12.5 Hz; always the "
-              f"training mean: {lengths['constant_mae_frames']:.1f}.\n")
+    lengths = {"refit on the whole training motions": length_errors(data, items)}
+    lengths.update({name: length_errors(data, items, m.length_model)
+                    for name, m in models.items() if getattr(m, "length_model", None)})
+    table += "\nSentence -> length (what `generate` uses without --max-frames), mean absolute " \
+        "error in frames at 12.5 Hz: " + "; ".join(
+            f"{k} {v['mae_frames']:.1f}" for k, v in lengths.items()) + \
+        f"; always the training mean {lengths[next(iter(lengths))]['constant_mae_frames']:.1f}.\n"
     if oracle:
         rows, sub_table = oracle_table(results, data, kept, oracle_gens, len(items), protos)
         results.update({f"same-parameter subset: {k}": r for k, r in rows.items()})

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from collections import Counter
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Sequence
 
 import numpy as np
@@ -50,8 +51,8 @@ class SentenceLength:
             for w, n in c.items():
                 x[i, col[w]] = n
         y = np.asarray(lengths, dtype=np.float64)
-        # the penalty as extra rows sqrt(ridge) * I (bias column 0) under least squares,
-        # whose minimum-norm solution also copes with words that always come together
+        # the penalty as extra rows sqrt(ridge) * I (bias column 0) under least squares
+        # (with ridge 0, the minimum-norm solution among the equally good ones)
         penalty = np.sqrt(ridge) * np.eye(len(words), len(words) + 1)
         beta = np.linalg.lstsq(np.vstack([x, penalty]),
                                np.concatenate([y, np.zeros(len(words))]), rcond=None)[0]
@@ -63,15 +64,20 @@ class SentenceLength:
         """Fitted on training items ``{"sentence", "motion": (T, F)}`` (one per sentence)."""
         return cls.fit([it["sentence"] for it in items], [len(it["motion"]) for it in items])
 
+    @cached_property
+    def _weight(self) -> dict[str, float]:
+        return dict(zip(self.words, self.weights))
+
     def frames(self, sentence: str) -> int:
         """Predicted length of ``sentence``'s motion in frames (unknown words count 0)."""
-        weight = dict(zip(self.words, self.weights))
-        guess = self.bias + sum(weight.get(w, 0.0) for w in tokenize(sentence))
+        guess = self.bias + sum(self._weight.get(w, 0.0) for w in tokenize(sentence))
         return int(np.clip(round(guess), self.low, self.high))
 
     def to_dict(self) -> dict:
-        return {"words": list(self.words), "weights": list(self.weights), "bias": self.bias,
-                "low": self.low, "high": self.high}
+        # plain Python types: checkpoints load with torch.load(weights_only=True)
+        return {"words": [str(w) for w in self.words],
+                "weights": [float(w) for w in self.weights], "bias": float(self.bias),
+                "low": int(self.low), "high": int(self.high)}
 
     @classmethod
     def from_dict(cls, d: dict) -> "SentenceLength":
