@@ -194,8 +194,9 @@ def retrieval_baseline(data, split: str = "train"):
     """``generate(sentence, T)`` of the nearest-neighbour baseline: the ``split`` motion
     whose description is closest to the sentence in bag of words
     (``evaluation.retrieval``), re-timed to T frames (``decoding.t2m.stretch``: all of its
-    actions kept, as a model told the length would). A real motion that fits the sentence,
-    so its APE shows how far apart two motions of one sentence lie."""
+    actions kept, as a model told the length would). A real motion of about what the
+    sentence says (a bag of words misses counts and, but for ties, word order), so its APE
+    shows how far apart two motions of one description lie."""
     from motionlang.decoding.t2m import stretch
     from motionlang.evaluation.retrieval import SentenceIndex
     index = SentenceIndex((rid, s) for rid in data.splits[split]
