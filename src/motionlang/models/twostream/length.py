@@ -1,7 +1,7 @@
 """How long should a generated motion be? A ridge regression from a sentence's word counts to
 its motion's length in frames.
 
-The two-stream model decodes for a length it is given (Ghosh et al. 2021 fix it); the L2M
+The two-stream model decodes for a length it is given; the L2M
 model ends a motion itself. So that ``motionlang generate`` gives "a person waves" a short
 motion and "walks forward eight steps, then turns around" a long one, the trainer fits this
 model on the training pairs and the checkpoint carries it. A motion's length is close to a
