@@ -193,3 +193,42 @@ def test_resume_with_another_loss_ranks_best_afresh(tmp_path, caplog):
     assert "config differs" in caplog.text
     best = torch.load(tmp_path / "best.pt", weights_only=True)
     assert best["epoch"] == 3 and best["best"] == hist[-1]["val"]["loss"]
+
+
+def test_learning_rate_by_hand():
+    from motionlang.training.trainer import learning_rate
+    # 8 steps, the last 4 decaying to 0: cos(0), cos(pi/3), cos(2pi/3), cos(pi)
+    got = [learning_rate(2.0, s, 8, 4, 0.0) for s in range(8)]
+    assert got == pytest.approx([2, 2, 2, 2, 2.0, 1.5, 0.5, 0.0])
+    assert learning_rate(2.0, 7, 8, 4, 0.1) == pytest.approx(0.2)
+    assert [learning_rate(2.0, s, 8, 0, 0.0) for s in range(8)] == [2.0] * 8
+
+
+def test_decay_added_on_resume_equals_a_decayed_run(tmp_path):
+    """A run trained at a constant rate, resumed with a decay over its new last epochs, is
+    the same run as one planned with that decay from the start."""
+    full, trainer, hist_full = run(tmp_path / "full", 4, decay_epochs=2, decay_to=0.1)
+    assert [h["lr"] for h in hist_full[:2]] == [5e-3, 5e-3]
+    assert hist_full[-1]["lr"] == pytest.approx(5e-4)
+    assert trainer.optimizer.param_groups[0]["lr"] == pytest.approx(5e-4)
+    assert 5e-4 < hist_full[2]["lr"] < 5e-3
+    run(tmp_path / "part", 2)
+    resumed, _, hist_res = run(tmp_path / "part", 4, resume=True, init_seed=7,
+                               decay_epochs=2, decay_to=0.1)
+    assert_same_weights(full, resumed)
+    assert [h["lr"] for h in hist_full] == [h["lr"] for h in hist_res]
+    plain, _, _ = run(tmp_path / "plain", 4)
+    assert not all(torch.equal(a, b) for a, b in zip(full.state_dict().values(),
+                                                    plain.state_dict().values()))
+
+
+def test_resume_takes_the_new_learning_rate(tmp_path):
+    run(tmp_path / "part", 1)
+    _, trainer, hist = run(tmp_path / "part", 2, resume=True, lr=1e-3)
+    assert hist[-1]["lr"] == 1e-3 and trainer.optimizer.param_groups[0]["lr"] == 1e-3
+
+
+@pytest.mark.parametrize("kw", [{"decay_epochs": 5}, {"decay_epochs": -1}, {"decay_to": 1.5}])
+def test_bad_decay_is_refused(tmp_path, kw):
+    with pytest.raises(MotionlangError, match="decay"):
+        run(tmp_path, 4, **kw)

@@ -166,8 +166,11 @@ def test_train_command(corpus, tmp_path, monkeypatch, capsys):
                "--h1", "4", "--h2", "8", "--epochs", "1", "--batch-size", "16",
                "--max-frames", "12", "--text-layers", "6", "--threads", "1",
                "--z-every-step", "--time-input", "--length-buckets", "2",
-               "--progress-input", "--weight", "adversarial=0.05", "--weight", "embedding=1"])
+               "--progress-input", "--weight", "adversarial=0.05", "--weight", "embedding=1",
+               "--decay-epochs", "1", "--decay-to", "0.5"])
     assert rc == 0 and out.exists()
+    history = json.loads((tmp_path / "ts_run" / "history.json").read_text())
+    assert history[-1]["lr"] == pytest.approx(5e-4)             # decayed to half of --lr
     assert (tmp_path / "ts_run" / "splits").is_dir()
     logged = json.loads((tmp_path / "ts_run" / "commands.jsonl").read_text())
     assert logged["max_frames"] == 12 and logged["z_every_step"] is True

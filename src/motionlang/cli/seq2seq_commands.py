@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from motionlang.cli.run_log import log_command
+from motionlang.cli.train_commands import add_schedule_args, schedule_options
 from motionlang.errors import MotionlangError
 
 PACKAGED = Path(__file__).resolve().parents[1] / "data" / "models"
@@ -38,6 +39,7 @@ def _add_train(sub, name: str, help_: str) -> None:
     p.add_argument("--epochs", type=int, default=20)
     p.add_argument("--batch-size", type=int, default=128)
     p.add_argument("--lr", type=float, default=1e-3)
+    add_schedule_args(p)
     p.add_argument("--grad-clip", type=float, default=None if name == "m2l" else 25.0)
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--resume", action="store_true", help="continue from OUT/last.pt")
@@ -149,7 +151,7 @@ def cmd_train(args: argparse.Namespace) -> int:
                                  data.vocab, features=data.features)
     cfg = TrainConfig(epochs=args.epochs, batch_size=args.batch_size, lr=args.lr,
                       grad_clip=args.grad_clip, seed=args.seed, out_dir=str(out),
-                      checkpoint_every=args.checkpoint_every)
+                      checkpoint_every=args.checkpoint_every, **schedule_options(args))
     print(f"{args.model_kind}: {len(train_items)} training pairs "
           f"({len(data.splits['train'])} motions), vocabulary {V}, {F} features/frame, "
           f"{sum(p.numel() for p in model.parameters()):,} parameters")

@@ -16,6 +16,21 @@ TRAIN_MODULES = [
 ]
 
 
+def add_schedule_args(p: argparse.ArgumentParser) -> None:
+    """``--decay-epochs`` / ``--decay-to`` of the shared trainer (``TrainConfig``)."""
+    p.add_argument("--decay-epochs", type=float, default=0.0, metavar="N",
+                   help="lower the learning rate along a half cosine over the last N epochs "
+                        "(also when resuming a run trained at a constant rate; default 0: "
+                        "constant)")
+    p.add_argument("--decay-to", type=float, default=0.01, metavar="F",
+                   help="the rate at the last step, as a fraction of --lr (default 0.01)")
+
+
+def schedule_options(args: argparse.Namespace) -> dict:
+    """The ``TrainConfig`` fields set by :func:`add_schedule_args`."""
+    return {"decay_epochs": args.decay_epochs, "decay_to": args.decay_to}
+
+
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser("train", help="train a model",
                                    description="Train a model; see 'motionlang train MODEL -h'.")

@@ -12,6 +12,7 @@ import argparse
 from pathlib import Path
 
 from motionlang.cli.run_log import lead_process, log_command
+from motionlang.cli.train_commands import add_schedule_args, schedule_options
 from motionlang.errors import MotionlangError
 
 ABLATION_NAMES = ("full", "no-joint-training", "one-stream", "no-extra-losses", "word-vectors")
@@ -61,7 +62,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     cfg = TrainConfig(epochs=args.epochs, batch_size=args.batch_size, lr=args.lr,
                       grad_clip=args.grad_clip, seed=args.seed, out_dir=str(run),
                       checkpoint_every=args.checkpoint_every,
-                      length_buckets=args.length_buckets)
+                      length_buckets=args.length_buckets, **schedule_options(args))
     if lead:
         print(f"twostream ({args.ablation}): {len(data.items['train'])} training pairs "
               f"({len(data.splits['train'])} motions), "
@@ -142,6 +143,7 @@ def register_train(train_sub) -> None:
     p.add_argument("--epochs", type=int, default=20)
     p.add_argument("--batch-size", type=int, default=32)
     p.add_argument("--lr", type=float, default=1e-3)
+    add_schedule_args(p)
     p.add_argument("--grad-clip", type=float, default=5.0)
     p.add_argument("--forcing-steps", type=int, default=200,
                    help="optimiser steps over which teacher forcing anneals 1 -> 0")

@@ -54,6 +54,10 @@ class TrainConfig:
     pools of N batches, each pool sorted by sequence length before it is cut into batches,
     and the batches are shuffled again: batches of similar lengths, so that padding (and an
     unrolled decoder's wasted steps) stays small. Still a function of (seed, epoch) only.
+    decay_epochs: the last this many epochs lower the learning rate along a half cosine to
+    ``lr * decay_to`` (:func:`learning_rate`); 0 keeps it constant. The rate is set before
+    every step from ``lr`` and the step's place in the run, so ``lr`` and the decay given to a
+    resumed run win over the checkpoint's optimiser state.
     """
 
     epochs: int = 10
@@ -68,6 +72,28 @@ class TrainConfig:
     plot: bool = True
     progress: bool | None = None
     length_buckets: int = 0
+    decay_epochs: float = 0.0
+    decay_to: float = 0.01
+
+
+def learning_rate(lr: float, position: float, total: float, decay: float,
+                  decay_to: float) -> float:
+    """The learning rate of one optimiser step: ``lr`` until the last ``decay`` steps, then
+    a half cosine from ``lr`` down to ``lr * decay_to`` at the last step.
+
+    Args:
+        position: the step's index in the whole run, counted from 0 (``epoch * B + batch``
+            for B batches per epoch), so a resumed run gets the same rates.
+        total: the run's number of steps; decay: the length of the decay in steps (0: none).
+
+    The decay lets a run trained at a constant rate be resumed with a decay added at its end
+    (a warm-up-stable-decay schedule without the warm-up).
+    """
+    start = total - decay
+    if decay <= 0 or position < start:
+        return lr
+    frac = min((position - start) / max(decay - 1, 1), 1.0)
+    return lr * (decay_to + (1.0 - decay_to) * 0.5 * (1.0 + math.cos(math.pi * frac)))
 
 
 def init_distributed() -> tuple[int, int]:
@@ -126,6 +152,11 @@ class Trainer:
                  length_of: Callable[[Any], int] | None = None):
         if len(train_set) == 0:
             raise MotionlangError("training set is empty")
+        if config.decay_epochs < 0 or config.decay_epochs > config.epochs:
+            raise MotionlangError(f"decay_epochs must be in [0, epochs={config.epochs}], "
+                                  f"got {config.decay_epochs}")
+        if not 0.0 <= config.decay_to <= 1.0:
+            raise MotionlangError(f"decay_to must be in [0, 1], got {config.decay_to}")
         if config.optimizer not in OPTIMIZERS:
             raise MotionlangError(f"unknown optimizer {config.optimizer!r}; "
                                   f"choose from {sorted(OPTIMIZERS)}")
@@ -166,6 +197,14 @@ class Trainer:
         return idx[self.rank::self.world]
 
     # -- one step -----------------------------------------------------------------------
+    def _set_lr(self, epoch: int, batch: int, n_batches: int) -> float:
+        c = self.config
+        lr = learning_rate(c.lr, epoch * n_batches + batch, c.epochs * n_batches,
+                           round(c.decay_epochs * n_batches), c.decay_to)
+        for group in self.optimizer.param_groups:
+            group["lr"] = lr
+        return lr
+
     def _train_step(self, idx: list[int]) -> dict[str, float]:
         mine = self._share(idx)
         self.model.train()
@@ -311,7 +350,9 @@ class Trainer:
             bar = progress(total=len(batches), initial=start_batch, unit="batch",
                            desc=f"epoch {epoch + 1}/{c.epochs}", disable=hide)
             t0, seen = time.perf_counter(), 0
+            lr = c.lr
             for b in range(start_batch, len(batches)):
+                lr = self._set_lr(epoch, b, len(batches))
                 terms = self._train_step(batches[b])
                 n = len(self._share(batches[b]))
                 for k, v in terms.items():
@@ -329,9 +370,9 @@ class Trainer:
             rate = seen / max(time.perf_counter() - t0, 1e-9)
             train, val = self._reduce(sums, count), self.validate()
             self.history.append({"epoch": epoch + 1, "step": step, "train": train, "val": val,
-                                 "seq_per_s": rate})
-            log.info("epoch %d/%d: train %s | val %s | %.0f seq/s", epoch + 1, c.epochs,
-                     _fmt(train), _fmt(val) or "-", rate)
+                                 "seq_per_s": rate, "lr": lr})
+            log.info("epoch %d/%d: train %s | val %s | %.0f seq/s | lr %.3g", epoch + 1,
+                     c.epochs, _fmt(train), _fmt(val) or "-", rate, lr)
             epoch, start_batch, sums, count = epoch + 1, 0, {}, 0
             score = (val or train).get("loss", math.inf)
             pos = {"epoch": epoch, "batch": 0, "step": step, "epoch_sums": {}, "epoch_count": 0}
