@@ -40,7 +40,8 @@ def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
     assert lrs[-1] == pytest.approx(0.2 * lrs[0]) and len(set(lrs[:-1])) == 1
     assert main(["train", "l2m", "--balance", "3", "--data", str(corpus), "--out", str(l2m_dir), *TINY,
                  "--components", "2", "--attention", "--input-noise", "0.3", "--time-input",
-                 "--rollout", "0.5", "--rollout-warmup", "2", "--root-weight", "5"]) == 0
+                 "--rollout", "0.5", "--rollout-warmup", "2", "--root-weight", "5",
+                 "--progress-input"]) == 0
     balanced = [l for l in capsys.readouterr().out.splitlines() if l.startswith("balanced:")]
     assert len(balanced) == 1
     before, after = (int(w) for w in balanced[0].split()[1:4:2])
@@ -61,6 +62,9 @@ def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
         assert {"model.pt", "best.pt", "last.pt", "history.json", "splits"} <= \
             {p.name for p in d.iterdir()}
     l2m = LanguageToMotion.load(l2m_dir / "model.pt")
+    # the length model is fitted on the training sentences (model frames at 10 Hz)
+    assert l2m.config.progress_input and l2m.length_model is not None
+    assert 1 <= l2m.frames_for("a person walks") <= l2m.length_model.high
     names = l2m.features.names[:l2m.config.n_features]
     assert [n for n, w in zip(names, l2m.config.loss_weights) if w != 1.0] == \
         ["root_vx", "root_vz", "root_dyaw"]

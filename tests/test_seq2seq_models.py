@@ -46,8 +46,9 @@ def tiny(kind: str, attention: bool, dropout: float = 0.0, **l2m_options):
 
 
 KINDS = [("m2l", False), ("m2l", True), ("l2m", False), ("l2m", True)]
-KINDS_OPTIONS = [(k, a, {}) for k, a in KINDS] + [("l2m", False, {"time_input": True}),
-                                                  ("l2m", True, {"time_input": True})]
+KINDS_OPTIONS = [(k, a, {}) for k, a in KINDS] + [
+    ("l2m", False, {"time_input": True}), ("l2m", True, {"time_input": True}),
+    ("l2m", False, {"time_input": True, "progress_input": True})]
 
 
 def outputs(model, batch) -> torch.Tensor:
@@ -176,9 +177,9 @@ def test_step_matches_teacher_forcing(kind, attention, options):
                 lp, state = model.step(state, tokens[:, t])
                 torch.testing.assert_close(lp, full[:, t], rtol=1e-4, atol=1e-5)
         else:
-            motion = batch["motion"]
-            full = model(batch["tokens"], batch["token_lengths"], motion)
-            state = model.encode(batch["tokens"], batch["token_lengths"])
+            motion, lengths = batch["motion"], batch["motion_lengths"]
+            full = model(batch["tokens"], batch["token_lengths"], motion, lengths)
+            state = model.encode(batch["tokens"], batch["token_lengths"], lengths)
             prev = torch.zeros(motion.shape[0], F_DIM)
             for t in range(motion.shape[1]):
                 p, state = model.step(state, prev)
@@ -242,6 +243,48 @@ def test_l2m_time_input_changes_the_prediction():
         after = model(batch["tokens"], batch["token_lengths"], batch["motion"]).mu
     torch.testing.assert_close(after[:, 0], before[:, 0])
     assert not torch.allclose(after[:, 1:], before[:, 1:])
+
+
+def test_l2m_progress_input():
+    """The fraction done, t / (T - 1), reaches the decoder: 0 at the first frame whatever
+    the length, then it depends on the length; padding still changes nothing."""
+    model, batch = tiny("l2m", False, progress_input=True), make_batch()
+    model.eval()
+    tok, tl, motion = batch["tokens"], batch["token_lengths"], batch["motion"]
+    with pytest.raises(MotionlangError, match="length"):
+        model.step(model.encode(tok, tl), motion[:, 0])
+    with torch.no_grad():
+        short = model(tok, tl, motion, batch["motion_lengths"]).mu
+        long = model(tok, tl, motion, 3 * batch["motion_lengths"]).mu
+        torch.testing.assert_close(short[:, 0], long[:, 0])
+        assert not torch.allclose(short[:, 1:], long[:, 1:])
+        n = int(batch["motion_lengths"][1])
+        alone = model(tok[1:2, :int(tl[1])], tl[1:2], motion[1:2, :n]).mu   # default T = n
+        torch.testing.assert_close(short[1:2, :n], alone, rtol=1e-4, atol=1e-5)
+
+
+def test_l2m_length_model_rides_in_the_checkpoint_and_plans_generation(tmp_path):
+    from motionlang.datasets.text import Vocabulary
+    from motionlang.decoding.seq2seq import generate_features
+    from motionlang.models.length import SentenceLength
+    model = tiny("l2m", False, progress_input=True)
+    model.vocab = Vocabulary.build(["a person waves", "a person walks far"])   # V = 9 ids
+    with pytest.raises(MotionlangError, match="length"):       # no length model, no cap
+        generate_features(model, "a person waves", width=2, method="sample")
+    got = generate_features(model, "a person waves", width=3, method="sample", max_frames=4)
+    assert all(1 <= len(f) <= 4 for f, _ in got)
+    model.length_model = SentenceLength.fit(["a person waves", "a person walks far"], [3, 9],
+                                            ridge=0.0)
+    assert model.frames_for("a person waves") == 3
+    model.save(tmp_path / "l2m.pt")
+    loaded = LanguageToMotion.load(tmp_path / "l2m.pt")
+    assert loaded.length_model == model.length_model
+    for method in ("sample", "mean", "beam"):
+        got = generate_features(loaded, "a person waves", width=2, method=method)
+        assert all(1 <= len(f) <= 3 for f, _ in got), method
+    plain = tiny("l2m", False)
+    plain.save(tmp_path / "old.pt")
+    assert LanguageToMotion.load(tmp_path / "old.pt").length_model is None
 
 
 def test_l2m_input_noise_only_while_training():

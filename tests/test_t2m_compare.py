@@ -155,7 +155,7 @@ def test_compare_writes_table_report_and_figures(data, tmp_path):
     torch.manual_seed(0)
     ts = TwoStreamModel(TwoStreamConfig(h1=4, h2=8, h=16, disc_hidden=8),
                         data.features.normalizer, text_encoder=HashTokens()).eval()
-    from motionlang.models.twostream.length import SentenceLength
+    from motionlang.models.length import SentenceLength
     ts.length_model = SentenceLength.fit(["a person"], [7])
     results, table = compare({"two-stream": ts, "L2M": _tiny_l2m(data)}, data, split="train",
                              limit=4, out_dir=tmp_path, figures=2, autoencode=True,

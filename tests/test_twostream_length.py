@@ -6,7 +6,8 @@ import pytest
 import torch
 
 from motionlang.errors import MotionlangError
-from motionlang.models.twostream.length import DEFAULT_FRAMES, SentenceLength
+from motionlang.models.length import SentenceLength
+from motionlang.models.twostream.model import DEFAULT_FRAMES
 
 
 def test_fit_recovers_additive_lengths():

@@ -64,6 +64,9 @@ def _add_train(sub, name: str, help_: str) -> None:
                        help="std of noise on teacher-forced previous frames (paper: 0)")
         p.add_argument("--time-input", action="store_true",
                        help="decoder also sees the elapsed time (not in the paper)")
+        p.add_argument("--progress-input", action="store_true",
+                       help="decoder also sees the fraction of the motion done; generation "
+                            "plans the length from the sentence (not in the paper)")
         p.add_argument("--rollout", type=float, default=d.rollout, metavar="P",
                        help="scheduled sampling: while training, feed the model's own sampled "
                             "frame instead of the true one with probability P (paper: 0)")
@@ -99,7 +102,8 @@ def cmd_train(args: argparse.Namespace) -> int:
     from motionlang.datasets.splits import save_splits
     from motionlang.decoding.seq2seq import model_dim
     from motionlang.training.collate import collate_pairs
-    from motionlang.training.seq2seq_data import balance_repeats, build_pairs, oversample
+    from motionlang.training.seq2seq_data import (balance_repeats, build_pairs, oversample,
+                                                  sentence_lengths)
     from motionlang.training.trainer import TrainConfig, Trainer
 
     if args.balance < 1:   # before the (long) data preparation
@@ -144,11 +148,14 @@ def cmd_train(args: argparse.Namespace) -> int:
                                            end_weight=args.end_weight,
                                            input_noise=args.input_noise,
                                            time_input=args.time_input,
+                                           progress_input=args.progress_input,
                                            rollout=args.rollout,
                                            rollout_warmup=args.rollout_warmup,
                                            loss_weights=loss_weights,
                                            max_frames=int(1.5 * longest), **sizes),
                                  data.vocab, features=data.features)
+        from motionlang.models.length import SentenceLength
+        model.length_model = SentenceLength.fit(*sentence_lengths(data, "train"))
     cfg = TrainConfig(epochs=args.epochs, batch_size=args.batch_size, lr=args.lr,
                       grad_clip=args.grad_clip, seed=args.seed, out_dir=str(out),
                       checkpoint_every=args.checkpoint_every, **schedule_options(args))

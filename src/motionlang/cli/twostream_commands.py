@@ -31,7 +31,7 @@ def cmd_train(args: argparse.Namespace) -> int:
 
     from motionlang.datasets.splits import save_splits
     from motionlang.models.twostream import TwoStreamModel
-    from motionlang.models.twostream.length import SentenceLength
+    from motionlang.models.length import SentenceLength
     from motionlang.training.trainer import TrainConfig
     from motionlang.training.twostream_data import build_twostream_data
     from motionlang.training.twostream_train import ForcingSchedule, make_config, train_twostream

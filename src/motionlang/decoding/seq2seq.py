@@ -125,6 +125,8 @@ def generate_features(model: LanguageToMotion, sentence: str | Sequence[int], *,
     length_norm: rank by log likelihood per frame ("beam" and "sample").
     temperature: tau of the frames drawn by "beam" and "sample" (``models.mdn.sample``: 1 =
     the model's distribution, -> 0 = its heaviest component's means).
+    A model with ``progress_input`` plans the length from the sentence (its length model)
+    unless ``max_frames`` is given, and ends there at the latest.
     """
     if method not in METHODS:
         raise MotionlangError(f"method must be one of {METHODS}, not {method!r}")
@@ -134,8 +136,18 @@ def generate_features(model: LanguageToMotion, sentence: str | Sequence[int], *,
         raise MotionlangError(f"temperature must be > 0, got {temperature}")
     model.eval()
     ids = encode_sentence(model.vocab, sentence)
-    state = model.encode(torch.tensor([ids]), torch.tensor([len(ids)]))
-    cap = max_frames or model.config.max_frames
+    planned = None
+    if model.config.progress_input:
+        # the model is told how far into its motion it is: plan the length (the cap)
+        planned = max_frames or (model.frames_for(sentence) if isinstance(sentence, str)
+                                 else None)
+        if planned is None:
+            raise MotionlangError("this L2M model needs the motion's length: give max_frames "
+                                  "(its checkpoint has no length model, or the sentence is "
+                                  "token ids)")
+    state = model.encode(torch.tensor([ids]), torch.tensor([len(ids)]),
+                         None if planned is None else torch.tensor([planned]))
+    cap = max_frames or planned or model.config.max_frames
     F = model.config.n_features
     if method == "mean":
         hyps = mean_decode(model.step, state, batch_size=1, max_frames=cap, dim=F,

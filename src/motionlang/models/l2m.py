@@ -16,7 +16,11 @@ the teacher-forced previous frames while training, so that predicting "the previ
 again" stops being nearly free and the decoder has to use the sentence (without it, a model
 trained on our corpus copies its input and generates standing); ``time_input`` feeds the
 elapsed time, which makes the end-of-motion flag learnable from a clock instead of from a
-count the GRU state has to keep.
+count the GRU state has to keep. ``progress_input`` feeds the fraction of the motion done,
+t / (T - 1), so that the decoder knows which part of the sentence it is in: T is the true
+length while training; generation plans it from the sentence with the checkpoint's
+``length_model`` (:class:`motionlang.models.length.SentenceLength`) or takes it from the
+caller, and stops there at the latest.
 
 A third one, ``rollout`` (scheduled sampling, Bengio et al. 2015): while training, each
 previous-frame input is, with probability ``rollout``, the frame the model itself sampled
@@ -38,6 +42,7 @@ from torch import nn
 from motionlang.errors import MotionlangError
 from motionlang.models import mdn
 from motionlang.models.checkpoint import Seq2SeqCheckpoint
+from motionlang.models.length import SentenceLength
 from motionlang.models.recurrent import AdditiveAttention, BiGRUEncoder, StackedDecoder
 from motionlang.models.seq2seq_config import L2MConfig  # noqa: F401 (re-exported)
 
@@ -66,7 +71,8 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
         self.drop = nn.Dropout(c.dropout)
         self.encoder = BiGRUEncoder(c.embed_dim, c.enc_hidden, c.enc_layers, c.dropout)
         ctx = self.encoder.out_dim
-        self.decoder = StackedDecoder(ctx + c.n_features + int(c.time_input), c.dec_hidden, c.dec_layers,
+        extra = int(c.time_input) + int(c.progress_input)
+        self.decoder = StackedDecoder(ctx + c.n_features + extra, c.dec_hidden, c.dec_layers,
                                       c.dropout, layer_norm=True)
         head_in = self.decoder.out_dim
         self.attn = None
@@ -79,6 +85,9 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
         # Training forwards seen so far: drives the rollout ramp and resumes with the weights.
         self.register_buffer("rollout_steps", torch.zeros((), dtype=torch.long))
         self._register_load_state_dict_pre_hook(_default_rollout_steps)
+        #: sentence -> planned length (frames), fitted by the trainer; needed by generation
+        #: with ``progress_input`` unless the caller gives the length
+        self.length_model: SentenceLength | None = None
 
     def rollout_prob(self) -> float:
         """Current scheduled-sampling probability (0 when ``rollout`` is off)."""
@@ -89,12 +98,24 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
             return c.rollout
         return c.rollout * min(1.0, float(self.rollout_steps) / c.rollout_warmup)
 
-    def encode(self, tokens: torch.Tensor, lengths: torch.Tensor) -> dict:
-        """tokens (B, L) long, lengths (B,) -> decoder state dict (batch-first tensors)."""
+    def encode(self, tokens: torch.Tensor, lengths: torch.Tensor,
+               n_frames: torch.Tensor | None = None) -> dict:
+        """tokens (B, L) long, lengths (B,) -> decoder state dict (batch-first tensors).
+
+        n_frames (B,): each motion's length in frames, needed to decode with
+        ``progress_input`` (not for the context alone).
+        """
         x = self.drop(self.embed_norm(self.embed(tokens)))
         context, memory, mask = self.encoder(x, lengths)
         h = x.new_zeros(tokens.shape[0], self.config.dec_layers, self.config.dec_hidden)
-        return {"h": h, "context": context, "memory": memory, "mask": mask}
+        state = {"h": h, "context": context, "memory": memory, "mask": mask}
+        if self.config.progress_input and n_frames is not None:
+            state["n_frames"] = torch.as_tensor(n_frames, dtype=x.dtype).reshape(-1)
+        return state
+
+    def frames_for(self, sentence: str) -> int | None:
+        """The planned length of ``sentence``'s motion (frames), None without a length model."""
+        return None if self.length_model is None else self.length_model.frames(sentence)
 
     def _decode(self, state: dict, prev: torch.Tensor, t0: int = 0
                 ) -> tuple[mdn.MixtureParams, torch.Tensor]:
@@ -106,6 +127,13 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
         if self.config.time_input:
             clock = (torch.arange(T, dtype=prev.dtype) + t0) / 100.0
             inputs.append(clock.view(1, T, 1).expand(B, T, 1))
+        if self.config.progress_input:
+            if "n_frames" not in state:
+                raise MotionlangError("this L2M model reads the fraction of its motion done: "
+                                      "encode with the motion's length (n_frames)")
+            t = torch.arange(T, dtype=prev.dtype) + t0
+            done = t.view(1, T) / (state["n_frames"].view(B, 1) - 1).clamp(min=1)
+            inputs.append(done.unsqueeze(-1))
         outs, h = self.decoder(torch.cat(inputs, dim=-1), state["h"])
         if self.attn is not None:
             att, _ = self.attn(outs[..., -self.config.dec_hidden:], state["memory"],
@@ -114,13 +142,15 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
         return self.head(outs), h
 
     def forward(self, tokens: torch.Tensor, token_lengths: torch.Tensor,
-                motion: torch.Tensor) -> mdn.MixtureParams:
-        """Params of frames 0..T-1 (B, T, ...) given the target motion (B, T, F): teacher
-        forced, or while training with ``rollout`` on, partly fed the model's own frames."""
+                motion: torch.Tensor, motion_lengths: torch.Tensor | None = None
+                ) -> mdn.MixtureParams:
+        """Params of frames 0..T-1 (B, T, ...) given the target motion (B, T, F) (valid
+        lengths ``motion_lengths`` (B,), default all T): teacher forced, or while training
+        with ``rollout`` on, partly fed the model's own frames."""
         prev = _previous_frames(motion)
         if self.training and self.config.input_noise > 0:
             prev = prev + self.config.input_noise * torch.randn_like(prev)
-        state = self.encode(tokens, token_lengths)
+        state = self.encode(tokens, token_lengths, _lengths(motion, motion_lengths))
         p = self.rollout_prob() if self.training else 0.0
         if self.training and self.config.rollout > 0:
             self.rollout_steps += 1
@@ -130,11 +160,12 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
         return self._rollout(state, prev, p)
 
     def rollout_forward(self, tokens: torch.Tensor, token_lengths: torch.Tensor,
-                        motion: torch.Tensor, p: float, seed: int = 0) -> mdn.MixtureParams:
+                        motion: torch.Tensor, p: float, seed: int = 0,
+                        motion_lengths: torch.Tensor | None = None) -> mdn.MixtureParams:
         """Params (B, T, ...) with own-frame probability ``p`` in [0, 1], reproducible (its own
         RNG seeded with ``seed``); no input noise, whatever the mode."""
         prev = _previous_frames(motion)
-        state = self.encode(tokens, token_lengths)
+        state = self.encode(tokens, token_lengths, _lengths(motion, motion_lengths))
         return self._rollout(state, prev, p, torch.Generator().manual_seed(seed))
 
     def _rollout(self, state: dict, prev: torch.Tensor, p: float,
@@ -173,9 +204,10 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
             # ``rollout`` of its inputs its own frames), with a fixed RNG so that epochs
             # compare; picks best.pt
             params = self.rollout_forward(batch["tokens"], batch["token_lengths"], motion,
-                                          self.config.rollout).flatten()
+                                          self.config.rollout,
+                                          motion_lengths=lengths).flatten()
         else:
-            params = self(batch["tokens"], batch["token_lengths"], motion).flatten()
+            params = self(batch["tokens"], batch["token_lengths"], motion, lengths).flatten()
         t = torch.arange(T).unsqueeze(0)
         valid = (t < lengths.unsqueeze(1)).reshape(-1)
         active = (t < (lengths.unsqueeze(1) - 1)).reshape(-1).float()
@@ -190,6 +222,23 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
         w = torch.where(active > 0, 1.0, self.config.end_weight)[valid]
         bce = -(w * mdn.active_log_prob(params, active)[valid]).sum() / w.sum()
         return {"loss": nll + bce, "nll": nll.detach(), "active_bce": bce.detach()}
+
+
+    def to_checkpoint(self) -> dict:
+        d = super().to_checkpoint()
+        d["length_model"] = None if self.length_model is None else self.length_model.to_dict()
+        return d
+
+    @classmethod
+    def from_checkpoint(cls, d: dict):
+        model = super().from_checkpoint(d)
+        if d.get("length_model"):   # checkpoints before it have none
+            model.length_model = SentenceLength.from_dict(d["length_model"])
+        return model
+
+
+def _lengths(motion: torch.Tensor, lengths: torch.Tensor | None) -> torch.Tensor:
+    return torch.full((motion.shape[0],), motion.shape[1]) if lengths is None else lengths
 
 
 def _default_rollout_steps(state_dict, prefix, *args, **kwargs):

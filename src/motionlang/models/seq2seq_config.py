@@ -54,6 +54,9 @@ class L2MConfig:
     end_weight: float = 1.0     # BCE weight of a motion's last frame (1 = the paper's loss)
     input_noise: float = 0.0    # std of noise on the teacher-forced previous frames (0 = paper)
     time_input: bool = False    # decoder also sees the elapsed time (frames / 100) (not in paper)
+    # decoder also sees the fraction of the motion done, t / (T - 1), for a length T that is
+    # the true one in training and planned from the sentence in generation (not in paper)
+    progress_input: bool = False
     rollout: float = 0.0        # scheduled sampling: P(feed own sampled frame) while training
     rollout_warmup: int = 0     # optimiser steps over which that probability ramps up from 0
     # per-feature weights of the frame NLL (length n_features; None = all 1, the paper's):

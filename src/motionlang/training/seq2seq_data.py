@@ -153,6 +153,14 @@ def build_pairs(data: str | Path, *, features: str = "angles", offsets: int = 10
     return PairData(fs, vocab, splits, items, refs, seqs, labels)
 
 
+def sentence_lengths(data: PairData, split: str) -> tuple[list[str], list[int]]:
+    """Every (sentence, length of its motion's first sequence in model frames) of ``split``:
+    what an L2M's length model is fitted on."""
+    pairs = [(text, len(data.sequences[split][i][0])) for i, texts in
+             data.references[split].items() for text in texts if data.sequences[split][i]]
+    return [t for t, _ in pairs], [n for _, n in pairs]
+
+
 def primitive_labels(meta: dict) -> list[str]:
     """A procedural sample's primitives as labels: "action/direction" when the primitive
     has a direction (walk, run, jump), else "action"."""

@@ -25,15 +25,17 @@ from torch.func import functional_call
 from motionlang.errors import MotionlangError
 from motionlang.models.checkpoint import (pack_normalizer, read_model_dict, unpack_normalizer,
                                           write_checkpoint)
+from motionlang.models.length import SentenceLength
 from motionlang.models.twostream import losses as L
 from motionlang.models.twostream.config import TwoStreamConfig
 from motionlang.models.twostream.discriminator import PoseDiscriminator
-from motionlang.models.twostream.length import DEFAULT_FRAMES, SentenceLength
 from motionlang.models.twostream.pose import PoseDecoder, PoseEncoder
 from motionlang.models.twostream.sentence import SentenceEncoder
 from motionlang.models.twostream.text import build_text_encoder
 
 STAGES = ("joint", "pose", "text")
+#: the length of a generation without a length model (frames at 12.5 Hz: 10 s)
+DEFAULT_FRAMES = 125
 
 
 class TwoStreamModel(nn.Module):

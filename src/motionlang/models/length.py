@@ -1,10 +1,11 @@
 """How long should a generated motion be? A ridge regression from a sentence's word counts to
 its motion's length in frames.
 
-The two-stream model decodes for a length it is given; the L2M
-model ends a motion itself. So that ``motionlang generate`` gives "a person waves" a short
-motion and "walks forward eight steps, then turns around" a long one, the trainer fits this
-model on the training pairs and the checkpoint carries it. A motion's length is close to a
+The two-stream model decodes for a length it is given, and so does an L2M model with
+``progress_input`` (it is told the fraction of its motion done). So that ``motionlang
+generate`` gives "a person waves" a short motion and "walks forward eight steps, then turns
+around" a long one, their trainers fit this model on the training pairs and the checkpoint
+carries it. A motion's length is close to a
 sum over its actions, and each action's share is set by its words ("8", "steps", "slowly"),
 so a linear model over word counts fits it.
 """
@@ -19,10 +20,6 @@ import numpy as np
 
 from motionlang.datasets.text import tokenize
 from motionlang.errors import MotionlangError
-
-#: the length of a generation without a length model (frames at 12.5 Hz: 10 s)
-DEFAULT_FRAMES = 125
-
 
 @dataclass
 class SentenceLength:
