@@ -157,7 +157,9 @@ def test_compare_writes_table_report_and_figures(data, tmp_path):
                         data.features.normalizer, text_encoder=HashTokens()).eval()
     from motionlang.models.length import SentenceLength
     ts.length_model = SentenceLength.fit(["a person"], [7])
-    results, table = compare({"two-stream": ts, "L2M": _tiny_l2m(data)}, data, split="train",
+    l2m = _tiny_l2m(data)
+    l2m.length_model = SentenceLength.fit(["a person"], [3])   # frames at its own rate
+    results, table = compare({"two-stream": ts, "L2M": l2m}, data, split="train",
                              limit=4, out_dir=tmp_path, figures=2, autoencode=True,
                              true_start=True)
     ae = "two-stream, from the motion's own embedding"   # two-stream models only
@@ -220,6 +222,7 @@ def test_compare_writes_table_report_and_figures(data, tmp_path):
     # the two-stream model's own length model: fitted on one sentence, it always says 7
     assert report["length_model"]["two-stream"]["mae_frames"] == pytest.approx(
         np.mean([abs(7 - len(it.target)) for it in items4]))
+    # not the L2M's: it counts frames at 10 Hz
     assert set(report["length_model"]) == {"refit on the whole training motions", "two-stream"}
     for name, r in report["results"].items():
         assert r["n_items"] == 4

@@ -312,8 +312,10 @@ def compare(models: dict[str, object], data, *, split: str = "test", limit: int 
                                                 data.features, protos)
     table = markdown_table(results)
     lengths = {"refit on the whole training motions": length_errors(data, items)}
+    # two-stream models only: an L2M's length model counts frames at its own rate
     lengths.update({name: length_errors(data, items, m.length_model)
-                    for name, m in models.items() if getattr(m, "length_model", None)})
+                    for name, m in models.items()
+                    if getattr(m, "kind", None) == "twostream" and m.length_model})
     table += "\nSentence -> length (what `generate` uses without --max-frames), mean absolute " \
         "error in frames at 12.5 Hz: " + "; ".join(
             f"{k} {v['mae_frames']:.1f}" for k, v in lengths.items()) + \
