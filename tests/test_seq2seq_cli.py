@@ -34,8 +34,10 @@ def private_cache(tmp_path, monkeypatch):
 def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
     m2l_dir, l2m_dir = tmp_path / "m2l", tmp_path / "l2m"
     assert main(["train", "m2l", "--data", str(corpus), "--out", str(m2l_dir), *TINY,
-                 "--decay-epochs", "1", "--decay-to", "0.2"]) == 0
-    capsys.readouterr()
+                 "--decay-epochs", "1", "--decay-to", "0.2", "--mirror"]) == 0
+    from motionlang.training.seq2seq_data import build_pairs
+    n_plain = len(build_pairs(corpus, offsets=2).items["train"])
+    assert f"m2l: {2 * n_plain} training pairs" in capsys.readouterr().out   # mirrored too
     lrs = [h["lr"] for h in json.loads((m2l_dir / "history.json").read_text())]
     assert lrs[-1] == pytest.approx(0.2 * lrs[0]) and len(set(lrs[:-1])) == 1
     assert main(["train", "l2m", "--balance", "3", "--data", str(corpus), "--out", str(l2m_dir), *TINY,

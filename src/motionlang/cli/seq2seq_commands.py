@@ -51,6 +51,10 @@ def _add_train(sub, name: str, help_: str) -> None:
     p.add_argument("--embed-dim", type=int, default=d.embed_dim)
     p.add_argument("--dropout", type=float, default=d.dropout)
     p.add_argument("--attention", action="store_true", help="additive attention variant")
+    p.add_argument("--mirror", action="store_true",
+                   help="also train on every training motion mirrored left/right, its "
+                        "sentences' left and right swapped (with --balance a mirrored copy "
+                        "is repeated as often as its original)")
     p.add_argument("--balance", type=int, default=1, metavar="MAX",
                    help="repeat training motions with rare ground-truth primitives (e.g. "
                         "walking backwards) up to MAX times per epoch; needs a procedural "
@@ -118,7 +122,8 @@ def cmd_train(args: argparse.Namespace) -> int:
     # one line per epoch from the trainer (the progress bar only shows on a terminal)
     logging.basicConfig(level=logging.INFO, format="%(message)s")
     data = build_pairs(args.data, features=args.features, offsets=args.offsets, seed=args.seed,
-                       min_count=args.min_count, max_seconds=args.max_seconds)
+                       min_count=args.min_count, max_seconds=args.max_seconds,
+                       mirror=args.mirror)
     train_items = data.items["train"]
     if args.balance > 1:   # before anything is written
         repeats = balance_repeats(data.labels, data.splits["train"], args.balance)

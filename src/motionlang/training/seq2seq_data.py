@@ -108,17 +108,24 @@ def _fit_features(kind: str, train: Sequence) -> FeatureSet:
     return features_from_dict(json.loads(out["json"].tobytes().decode("utf-8")))
 
 
-def _encode(fs: FeatureSet, records: Sequence, offsets: int) -> dict[str, list[np.ndarray]]:
-    """{id: sequences} for ``records`` (cached by files + fitted features + offsets)."""
+def _encode(fs: FeatureSet, records: Sequence, offsets: int, mirror: bool = False
+            ) -> dict[str, list[np.ndarray]]:
+    """{id: sequences} for ``records`` (cached by files + fitted features + offsets), of
+    the mirrored motions (``Motion.mirror``) with ``mirror``."""
     def compute():
-        log.info(f"encoding {len(records)} motions x {offsets} offsets (cached after)")
+        log.info(f"encoding {len(records)} {'mirrored ' * mirror}motions x {offsets} offsets "
+                 f"(cached after)")
         arrays: dict[str, np.ndarray] = {}
         for i, rec in enumerate(progress(records, desc="encode", unit="motion")):
-            for k, s in enumerate(motion_frames(fs, rec.load_motion(), offsets)):
+            motion = rec.load_motion()
+            for k, s in enumerate(motion_frames(fs, motion.mirror() if mirror else motion,
+                                                offsets)):
                 arrays[f"{i}_{k}"] = s
         return arrays
     key = {"v": CACHE_VERSION, "stage": "encode", "features": fs.to_dict(), "offsets": offsets,
            "files": [file_identity(record_path(r)) for r in records]}
+    if mirror:   # keys without it stay those of earlier caches
+        key["mirror"] = True
     out = cached(key, compute, name="seq2seq-encode")
     seqs: dict[str, list[np.ndarray]] = {r.id: [] for r in records}
     for name in sorted(out, key=lambda n: tuple(map(int, n.split("_")))):
@@ -129,8 +136,16 @@ def _encode(fs: FeatureSet, records: Sequence, offsets: int) -> dict[str, list[n
 
 def build_pairs(data: str | Path, *, features: str = "angles", offsets: int = 10,
                 fractions: Sequence[float] = (0.8, 0.1, 0.1), seed: int = 0,
-                min_count: int = 1, max_seconds: float | None = 30.0) -> PairData:
-    """Read ``data``, split by motion, fit features and vocabulary on train, make pairs."""
+                min_count: int = 1, max_seconds: float | None = 30.0,
+                mirror: bool = False) -> PairData:
+    """Read ``data``, split by motion, fit features and vocabulary on train, make pairs.
+
+    mirror: the training items also hold every training motion mirrored left/right with
+    its sentences' sides swapped (``datasets.synth.augment.mirror_text``; items marked
+    ``"mirrored": True``, same ``id``), which doubles them and balances the sides. The
+    features are fitted on the unmirrored motions; references, sequences and the other
+    splits stay unmirrored.
+    """
     records = [r for r in load_records(data, max_seconds) if r.annotations]
     if len(records) < 2:
         raise DatasetError(f"{data}: need at least 2 described motions, found {len(records)}")
@@ -141,6 +156,14 @@ def build_pairs(data: str | Path, *, features: str = "angles", offsets: int = 10
         raise DatasetError(f"{data}: the training split is empty")
     fs = _fit_features(features, train)
     vocab = Vocabulary.build([s for r in train for s in r.annotations], min_count=min_count)
+    if mirror:
+        from motionlang.datasets.synth.augment import mirror_text
+        # words only the mirrored sentences have go last: the ids of the others stay as
+        # without --mirror, so a run can be resumed with it
+        extra = Vocabulary.build([mirror_text(s) for r in train for s in r.annotations],
+                                 min_count=min_count)
+        for w in extra.itos:
+            vocab.add(w)
     items, refs, seqs = {}, {}, {}
     for name, ids in splits.items():
         recs = [by_id[i] for i in ids]
@@ -148,6 +171,11 @@ def build_pairs(data: str | Path, *, features: str = "angles", offsets: int = 10
         refs[name] = {r.id: list(r.annotations) for r in recs}
         items[name] = [{"motion": s, "tokens": vocab.encode(text), "id": r.id}
                        for r in recs for s in seqs[name][r.id] for text in r.annotations]
+    if mirror:
+        mirrored = _encode(fs, train, offsets, mirror=True)
+        items["train"] += [{"motion": s, "tokens": vocab.encode(mirror_text(text)),
+                            "id": r.id, "mirrored": True}
+                           for r in train for s in mirrored[r.id] for text in r.annotations]
     labels = {r.id: primitive_labels(r.meta) for r in records
               if (getattr(r, "meta", None) or {}).get("primitives")}
     return PairData(fs, vocab, splits, items, refs, seqs, labels)
