@@ -282,6 +282,18 @@ def test_l2m_length_model_rides_in_the_checkpoint_and_plans_generation(tmp_path)
     for method in ("sample", "mean", "beam"):
         got = generate_features(loaded, "a person waves", width=2, method=method)
         assert all(1 <= len(f) <= 3 for f, _ in got), method
+    # max_frames caps the plan; n_frames is the length (the planned 9 would be past 5)
+    assert loaded.frames_for("a person walks far") == 9
+    for kw, most in (({"max_frames": 5}, 5), ({"n_frames": 7, "max_frames": 5}, 7)):
+        got = generate_features(loaded, "a person walks far", width=3, method="sample", **kw)
+        assert max(len(f) for f, _ in got) <= most
+    # the plan is what the decoder is told: n_frames changes the frames generated
+    a = generate_features(loaded, "a person walks far", width=1, method="mean", n_frames=6,
+                          min_frames=4)
+    b = generate_features(loaded, "a person walks far", width=1, method="mean", n_frames=60,
+                          min_frames=4)
+    n = min(len(a[0][0]), len(b[0][0]))
+    assert n >= 2 and not np.allclose(a[0][0][1:n], b[0][0][1:n])
     plain = tiny("l2m", False)
     plain.save(tmp_path / "old.pt")
     assert LanguageToMotion.load(tmp_path / "old.pt").length_model is None

@@ -110,12 +110,27 @@ def describe_features(model: MotionToLanguage, features: np.ndarray, *, width: i
     return [(_words(model.vocab, h.tokens), h.score) for h in hyps]
 
 
+def _planned_length(model: LanguageToMotion, sentence, n_frames: int | None,
+                    max_frames: int | None) -> int:
+    """n_frames if given, else the length model's guess for ``sentence`` capped at
+    ``max_frames`` (or ``max_frames`` alone)."""
+    if n_frames:
+        return n_frames
+    guess = model.frames_for(sentence) if isinstance(sentence, str) else None
+    options = [x for x in (guess, max_frames) if x]
+    if not options:
+        raise MotionlangError("this L2M model needs the motion's length: give n_frames or "
+                              "max_frames (its checkpoint has no length model, or the "
+                              "sentence is token ids)")
+    return min(options)
+
+
 @torch.no_grad()
 def generate_features(model: LanguageToMotion, sentence: str | Sequence[int], *,
                       width: int = 5, max_frames: int | None = None, method: str = "beam",
                       samples: int = 5, seed: int = 0, min_frames: int = 1,
-                      length_norm: bool = False, temperature: float = 1.0
-                      ) -> list[tuple[np.ndarray, float]]:
+                      length_norm: bool = False, temperature: float = 1.0,
+                      n_frames: int | None = None) -> list[tuple[np.ndarray, float]]:
     """Sentence -> W motions as raw features (T, F) with their log likelihood, best first.
 
     method: "beam" (the sampled beam, ``samples`` candidates per hypothesis and step),
@@ -125,8 +140,9 @@ def generate_features(model: LanguageToMotion, sentence: str | Sequence[int], *,
     length_norm: rank by log likelihood per frame ("beam" and "sample").
     temperature: tau of the frames drawn by "beam" and "sample" (``models.mdn.sample``: 1 =
     the model's distribution, -> 0 = its heaviest component's means).
-    A model with ``progress_input`` plans the length from the sentence (its length model)
-    unless ``max_frames`` is given, and ends there at the latest.
+    n_frames: the motion's length for a model told it (``progress_input``; it ends there at
+    the latest), a cap like ``max_frames`` for the others. Without it such a model plans the
+    length from the sentence (its length model), at most ``max_frames``.
     """
     if method not in METHODS:
         raise MotionlangError(f"method must be one of {METHODS}, not {method!r}")
@@ -136,18 +152,12 @@ def generate_features(model: LanguageToMotion, sentence: str | Sequence[int], *,
         raise MotionlangError(f"temperature must be > 0, got {temperature}")
     model.eval()
     ids = encode_sentence(model.vocab, sentence)
-    planned = None
-    if model.config.progress_input:
-        # the model is told how far into its motion it is: plan the length (the cap)
-        planned = max_frames or (model.frames_for(sentence) if isinstance(sentence, str)
-                                 else None)
-        if planned is None:
-            raise MotionlangError("this L2M model needs the motion's length: give max_frames "
-                                  "(its checkpoint has no length model, or the sentence is "
-                                  "token ids)")
+    # a model told how far into its motion it is needs the length (also its cap)
+    planned = _planned_length(model, sentence, n_frames, max_frames) \
+        if model.config.progress_input else None
     state = model.encode(torch.tensor([ids]), torch.tensor([len(ids)]),
                          None if planned is None else torch.tensor([planned]))
-    cap = max_frames or planned or model.config.max_frames
+    cap = planned or n_frames or max_frames or model.config.max_frames
     F = model.config.n_features
     if method == "mean":
         hyps = mean_decode(model.step, state, batch_size=1, max_frames=cap, dim=F,
@@ -184,7 +194,8 @@ def describe(model: MotionToLanguage, motion, *, width: int = 5,
 def generate(model: LanguageToMotion, sentence: str | Sequence[int], *, width: int = 5,
              max_frames: int | None = None, method: str = "beam", samples: int = 5,
              seed: int = 0, min_frames: int = 1, length_norm: bool = False,
-             temperature: float = 1.0, skeleton=None) -> list[tuple[Any, float]]:
+             temperature: float = 1.0, skeleton=None, n_frames: int | None = None
+             ) -> list[tuple[Any, float]]:
     """Sentence -> W decoded motions with their log likelihood, best first.
 
     Each motion is what the feature set's ``decode`` returns: a :class:`Motion` for joint
@@ -194,6 +205,7 @@ def generate(model: LanguageToMotion, sentence: str | Sequence[int], *, width: i
     fs = _features_of(model)
     out = generate_features(model, sentence, width=width, max_frames=max_frames,
                             method=method, samples=samples, seed=seed, min_frames=min_frames,
-                            length_norm=length_norm, temperature=temperature)
+                            length_norm=length_norm, temperature=temperature,
+                            n_frames=n_frames)
     kw = {} if skeleton is None else {"skeleton": skeleton}
     return [(fs.decode(frames_to_features(fs, f), **kw), score) for f, score in out]

@@ -98,7 +98,7 @@ def generate_positions21(model, sentence: str, n_frames: int, *, seed: int = 0,
 
     Two-stream: decoded for exactly ``n_frames``. L2M: ``method`` "mean" (deterministic)
     or "sample" (one ancestral sample drawn with ``seed``), capped at ``n_frames`` model
-    frames at its own rate, angles features through forward
+    frames at its own rate (told that length with ``progress_input``), angles features through forward
     kinematics (``joint_map.positions21``), re-timed to 12.5 Hz, then cropped or held at
     its last frame to ``n_frames`` (L2M chooses its own length); ``skeleton``: the body
     its joint angles drive (default: the training subjects' mean build).
@@ -111,7 +111,7 @@ def generate_positions21(model, sentence: str, n_frames: int, *, seed: int = 0,
     fps = float(getattr(getattr(model, "features", None), "fps", FPS))
     cap = max(1, int(np.ceil(n_frames * fps / FPS)))
     result, _ = generate(model, sentence, width=1, method=method, seed=seed,
-                         max_frames=cap, skeleton=skeleton)[0]
+                         n_frames=cap, skeleton=skeleton)[0]
     if isinstance(result, np.ndarray):  # positions features: already (T, 21, 3) at fps
         p = result
         if abs(fps - FPS) > 1e-9:
