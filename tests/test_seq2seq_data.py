@@ -29,7 +29,7 @@ def test_mirror_adds_the_mirrored_training_motions_with_swapped_sides(corpus):
     n = len(plain.items["train"])
     train = mirrored.items["train"]
     assert len(train) == 2 * n
-    # the originals come first and are unchanged; the others other splits too
+    # the originals come first and are unchanged, and so are the other splits
     for a, b in zip(plain.items["train"], train[:n]):
         assert a["tokens"] == b["tokens"] and np.array_equal(a["motion"], b["motion"])
     assert all(it.get("mirrored") for it in train[n:]) and not any(

@@ -276,17 +276,19 @@ def test_l2m_length_model_rides_in_the_checkpoint_and_plans_generation(tmp_path)
     model.length_model = SentenceLength.fit(["a person waves", "a person walks far"], [3, 9],
                                             ridge=0.0)
     assert model.frames_for("a person waves") == 3
+    with torch.no_grad():
+        model.head.proj.bias[-1] = 30.0      # P(active) ~ 1: motions end at the cap only
     model.save(tmp_path / "l2m.pt")
     loaded = LanguageToMotion.load(tmp_path / "l2m.pt")
     assert loaded.length_model == model.length_model
     for method in ("sample", "mean", "beam"):
         got = generate_features(loaded, "a person waves", width=2, method=method)
-        assert all(1 <= len(f) <= 3 for f, _ in got), method
+        assert {len(f) for f, _ in got} == {3}, method      # ("mean" gives one motion)
     # max_frames caps the plan; n_frames is the length (the planned 9 would be past 5)
     assert loaded.frames_for("a person walks far") == 9
-    for kw, most in (({"max_frames": 5}, 5), ({"n_frames": 7, "max_frames": 5}, 7)):
+    for kw, n in (({}, 9), ({"max_frames": 5}, 5), ({"n_frames": 7, "max_frames": 5}, 7)):
         got = generate_features(loaded, "a person walks far", width=3, method="sample", **kw)
-        assert max(len(f) for f, _ in got) <= most
+        assert [len(f) for f, _ in got] == [n] * 3, kw
     # the plan is what the decoder is told: n_frames changes the frames generated
     a = generate_features(loaded, "a person walks far", width=1, method="mean", n_frames=6,
                           min_frames=4)

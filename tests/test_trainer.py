@@ -197,10 +197,12 @@ def test_resume_with_another_loss_ranks_best_afresh(tmp_path, caplog):
 
 def test_learning_rate_by_hand():
     from motionlang.training.trainer import learning_rate
-    # 8 steps, the last 4 decaying to 0: cos(0), cos(pi/3), cos(2pi/3), cos(pi)
+    # 8 steps, the last 4 decaying to 0: 1 + cos(pi/4), cos(pi/2), cos(3pi/4), cos(pi)
     got = [learning_rate(2.0, s, 8, 4, 0.0) for s in range(8)]
-    assert got == pytest.approx([2, 2, 2, 2, 2.0, 1.5, 0.5, 0.0])
+    r = 0.5 ** 0.5
+    assert got == pytest.approx([2, 2, 2, 2, 1 + r, 1.0, 1 - r, 0.0])
     assert learning_rate(2.0, 7, 8, 4, 0.1) == pytest.approx(0.2)
+    assert [learning_rate(2.0, s, 8, 1, 0.1) for s in range(8)] == pytest.approx([2.0] * 7 + [0.2])
     assert [learning_rate(2.0, s, 8, 0, 0.0) for s in range(8)] == [2.0] * 8
 
 
@@ -220,6 +222,34 @@ def test_decay_added_on_resume_equals_a_decayed_run(tmp_path):
     plain, _, _ = run(tmp_path / "plain", 4)
     assert not all(torch.equal(a, b) for a, b in zip(full.state_dict().values(),
                                                     plain.state_dict().values()))
+
+
+def test_mid_epoch_resume_inside_the_decay(tmp_path):
+    full, _, hist_full = run(tmp_path / "full", 3, checkpoint_every=2, decay_epochs=1.5)
+    with pytest.raises(KeyboardInterrupt):          # dies in epoch 3 (5 batches/epoch)
+        run(tmp_path / "cut", 3, checkpoint_every=2, fail_after=12, decay_epochs=1.5)
+    resumed, _, hist_res = run(tmp_path / "cut", 3, resume=True, init_seed=5,
+                               checkpoint_every=2, decay_epochs=1.5)
+    assert_same_weights(full, resumed)
+    assert [h["lr"] for h in hist_full] == [h["lr"] for h in hist_res]
+    assert hist_full[1]["lr"] < 5e-3                # the decay began inside epoch 2
+
+
+def test_mid_epoch_resume_with_another_training_set_is_refused(tmp_path):
+    with pytest.raises(KeyboardInterrupt):
+        run(tmp_path / "cut", 3, checkpoint_every=2, fail_after=8)
+    torch.manual_seed(0)
+    trainer = Trainer(TinyReg(), make_data(80), collate, config(tmp_path / "cut", 3,
+                                                                checkpoint_every=2))
+    with pytest.raises(MotionlangError, match="training set size"):
+        trainer.fit(resume=True)
+
+
+def test_resume_into_another_model_size_is_a_clear_error(tmp_path):
+    run(tmp_path / "part", 1)
+    trainer = Trainer(torch.nn.Linear(4, 1), make_data(), collate, config(tmp_path / "part", 2))
+    with pytest.raises(MotionlangError, match="does not fit"):
+        trainer.fit(resume=True)
 
 
 def test_resume_takes_the_new_learning_rate(tmp_path):

@@ -112,6 +112,7 @@ def cmd_train(args: argparse.Namespace) -> int:
 
     if args.balance < 1:   # before the (long) data preparation
         raise MotionlangError(f"--balance must be >= 1, got {args.balance}")
+    schedule = schedule_options(args)
     if args.model_kind == "l2m":
         if not 0.0 <= args.rollout <= 1.0:
             raise MotionlangError(f"--rollout must be in [0, 1], got {args.rollout}")
@@ -159,11 +160,12 @@ def cmd_train(args: argparse.Namespace) -> int:
                                            loss_weights=loss_weights,
                                            max_frames=int(1.5 * longest), **sizes),
                                  data.vocab, features=data.features)
-        from motionlang.models.length import SentenceLength
-        model.length_model = SentenceLength.fit(*sentence_lengths(data, "train"))
+        if args.progress_input:   # it plans its length from the sentence
+            from motionlang.models.length import SentenceLength
+            model.length_model = SentenceLength.fit(*sentence_lengths(data, "train"))
     cfg = TrainConfig(epochs=args.epochs, batch_size=args.batch_size, lr=args.lr,
                       grad_clip=args.grad_clip, seed=args.seed, out_dir=str(out),
-                      checkpoint_every=args.checkpoint_every, **schedule_options(args))
+                      checkpoint_every=args.checkpoint_every, **schedule)
     print(f"{args.model_kind}: {len(train_items)} training pairs "
           f"({len(data.splits['train'])} motions), vocabulary {V}, {F} features/frame, "
           f"{sum(p.numel() for p in model.parameters()):,} parameters")
@@ -442,8 +444,9 @@ def register(subparsers) -> None:
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--max-frames", type=int, default=None,
                    help="length cap in model frames (default: the model's); a two-stream "
-                        "model generates exactly this many (default: the length its length "
-                        "model predicts for the sentence, else 125 = 10 s)")
+                        "model, or an L2M trained with --progress-input, generates exactly "
+                        "this many (default: the length its length model predicts for the "
+                        "sentence; a two-stream model without one: 125 = 10 s)")
     p.add_argument("--min-frames", type=int, default=5,
                    help="no end-of-motion before this many model frames (default 5)")
     p.add_argument("--length-norm", action="store_true",

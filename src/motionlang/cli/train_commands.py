@@ -27,7 +27,10 @@ def add_schedule_args(p: argparse.ArgumentParser) -> None:
 
 
 def schedule_options(args: argparse.Namespace) -> dict:
-    """The ``TrainConfig`` fields set by :func:`add_schedule_args`."""
+    """The ``TrainConfig`` fields set by :func:`add_schedule_args`, checked (call it before
+    the data preparation, so that a bad value fails at once)."""
+    from motionlang.training.trainer import check_schedule
+    check_schedule(args.decay_epochs, args.decay_to, args.epochs)
     return {"decay_epochs": args.decay_epochs, "decay_to": args.decay_to}
 
 

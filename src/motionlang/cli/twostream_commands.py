@@ -30,8 +30,8 @@ def cmd_train(args: argparse.Namespace) -> int:
     import torch
 
     from motionlang.datasets.splits import save_splits
-    from motionlang.models.twostream import TwoStreamModel
     from motionlang.models.length import SentenceLength
+    from motionlang.models.twostream import TwoStreamModel
     from motionlang.training.trainer import TrainConfig
     from motionlang.training.twostream_data import build_twostream_data
     from motionlang.training.twostream_train import ForcingSchedule, make_config, train_twostream
@@ -45,6 +45,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     if args.length_buckets < 0:   # before anything is written
         raise MotionlangError(f"--length-buckets must be >= 0, got {args.length_buckets}")
     lambdas = parse_lambdas(args.weight)
+    schedule = schedule_options(args)
     lead = lead_process()  # under torchrun only rank 0 writes files and prints
     data = build_twostream_data(args.data, seed=args.seed, max_seconds=args.max_seconds,
                                 max_frames=args.max_frames)
@@ -62,7 +63,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     cfg = TrainConfig(epochs=args.epochs, batch_size=args.batch_size, lr=args.lr,
                       grad_clip=args.grad_clip, seed=args.seed, out_dir=str(run),
                       checkpoint_every=args.checkpoint_every,
-                      length_buckets=args.length_buckets, **schedule_options(args))
+                      length_buckets=args.length_buckets, **schedule)
     if lead:
         print(f"twostream ({args.ablation}): {len(data.items['train'])} training pairs "
               f"({len(data.splits['train'])} motions), "

@@ -51,11 +51,14 @@ def load_any_t2m(path: str | Path, text_encoder=None):
 def generate_any(model, sentence: str, *, max_frames: int | None = None, **kw
                  ) -> list[tuple[Any, float]]:
     """``decoding.seq2seq.generate`` for L2M (``kw`` passed on); for a two-stream model one
-    ``(positions (T, 21, 3), nan)`` with ``T = max_frames`` or ``model.frames_for(sentence)``."""
+    ``(positions (T, 21, 3), nan)`` with ``T = max_frames`` or ``model.frames_for(sentence)``.
+    An L2M told its length (``progress_input``) takes ``max_frames`` as the length too."""
     if getattr(model, "kind", None) == "twostream":
         return [(model.generate_positions(sentence, max_frames or model.frames_for(sentence)),
                  float("nan"))]
     from motionlang.decoding.seq2seq import generate
+    if model.config.progress_input:
+        return generate(model, sentence, n_frames=max_frames, **kw)
     return generate(model, sentence, max_frames=max_frames, **kw)
 
 
@@ -98,9 +101,10 @@ def generate_positions21(model, sentence: str, n_frames: int, *, seed: int = 0,
 
     Two-stream: decoded for exactly ``n_frames``. L2M: ``method`` "mean" (deterministic)
     or "sample" (one ancestral sample drawn with ``seed``), capped at ``n_frames`` model
-    frames at its own rate (told that length with ``progress_input``), angles features through forward
-    kinematics (``joint_map.positions21``), re-timed to 12.5 Hz, then cropped or held at
-    its last frame to ``n_frames`` (L2M chooses its own length); ``skeleton``: the body
+    frames at its own rate (an L2M with ``progress_input`` is told that length), angles
+    features through forward kinematics (``joint_map.positions21``), re-timed to 12.5 Hz,
+    then cropped or held at its last frame to ``n_frames`` (an L2M may end earlier);
+    ``skeleton``: the body
     its joint angles drive (default: the training subjects' mean build).
     """
     if getattr(model, "kind", None) == "twostream":

@@ -223,7 +223,6 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
         bce = -(w * mdn.active_log_prob(params, active)[valid]).sum() / w.sum()
         return {"loss": nll + bce, "nll": nll.detach(), "active_bce": bce.detach()}
 
-
     def to_checkpoint(self) -> dict:
         d = super().to_checkpoint()
         d["length_model"] = None if self.length_model is None else self.length_model.to_dict()

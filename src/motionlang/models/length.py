@@ -21,6 +21,7 @@ import numpy as np
 from motionlang.datasets.text import tokenize
 from motionlang.errors import MotionlangError
 
+
 @dataclass
 class SentenceLength:
     """frames(sentence) = bias + sum over its words of count x weight, clipped to the

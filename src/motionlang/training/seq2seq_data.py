@@ -159,7 +159,8 @@ def build_pairs(data: str | Path, *, features: str = "angles", offsets: int = 10
     if mirror:
         from motionlang.datasets.synth.augment import mirror_text
         # words only the mirrored sentences have go last: the ids of the others stay as
-        # without --mirror, so a run can be resumed with it
+        # without --mirror, so a run can be resumed with it, unless new words make the
+        # vocabulary larger (the trainer then refuses the checkpoint with a clear error)
         extra = Vocabulary.build([mirror_text(s) for r in train for s in r.annotations],
                                  min_count=min_count)
         for w in extra.itos:

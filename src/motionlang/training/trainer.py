@@ -79,7 +79,8 @@ class TrainConfig:
 def learning_rate(lr: float, position: float, total: float, decay: float,
                   decay_to: float) -> float:
     """The learning rate of one optimiser step: ``lr`` until the last ``decay`` steps, then
-    a half cosine from ``lr`` down to ``lr * decay_to`` at the last step.
+    a half cosine from ``lr`` down to ``lr * decay_to``, reached at the last step (every one
+    of the ``decay`` steps is lowered).
 
     Args:
         position: the step's index in the whole run, counted from 0 (``epoch * B + batch``
@@ -92,8 +93,16 @@ def learning_rate(lr: float, position: float, total: float, decay: float,
     start = total - decay
     if decay <= 0 or position < start:
         return lr
-    frac = min((position - start) / max(decay - 1, 1), 1.0)
+    frac = min((position - start + 1) / decay, 1.0)
     return lr * (decay_to + (1.0 - decay_to) * 0.5 * (1.0 + math.cos(math.pi * frac)))
+
+
+def check_schedule(decay_epochs: float, decay_to: float, epochs: int) -> None:
+    """MotionlangError unless 0 <= decay_epochs <= epochs and 0 <= decay_to <= 1."""
+    if not 0.0 <= decay_epochs <= epochs:
+        raise MotionlangError(f"decay_epochs must be in [0, epochs={epochs}], got {decay_epochs}")
+    if not 0.0 <= decay_to <= 1.0:
+        raise MotionlangError(f"decay_to must be in [0, 1], got {decay_to}")
 
 
 def init_distributed() -> tuple[int, int]:
@@ -152,11 +161,7 @@ class Trainer:
                  length_of: Callable[[Any], int] | None = None):
         if len(train_set) == 0:
             raise MotionlangError("training set is empty")
-        if config.decay_epochs < 0 or config.decay_epochs > config.epochs:
-            raise MotionlangError(f"decay_epochs must be in [0, epochs={config.epochs}], "
-                                  f"got {config.decay_epochs}")
-        if not 0.0 <= config.decay_to <= 1.0:
-            raise MotionlangError(f"decay_to must be in [0, 1], got {config.decay_to}")
+        check_schedule(config.decay_epochs, config.decay_to, config.epochs)
         if config.optimizer not in OPTIMIZERS:
             raise MotionlangError(f"unknown optimizer {config.optimizer!r}; "
                                   f"choose from {sorted(OPTIMIZERS)}")
@@ -197,10 +202,14 @@ class Trainer:
         return idx[self.rank::self.world]
 
     # -- one step -----------------------------------------------------------------------
+    def _decay_steps(self, n_batches: int) -> int:
+        d = self.config.decay_epochs
+        return max(1, round(d * n_batches)) if d > 0 else 0
+
     def _set_lr(self, epoch: int, batch: int, n_batches: int) -> float:
         c = self.config
         lr = learning_rate(c.lr, epoch * n_batches + batch, c.epochs * n_batches,
-                           round(c.decay_epochs * n_batches), c.decay_to)
+                           self._decay_steps(n_batches), c.decay_to)
         for group in self.optimizer.param_groups:
             group["lr"] = lr
         return lr
@@ -278,11 +287,17 @@ class Trainer:
             return
         write_checkpoint({"model": self._model_dict(), "optimizer": self.optimizer.state_dict(),
                           "rng": rng, "world_size": self.world, "history": self.history,
-                          "train_config": asdict(self.config), **pos}, self.out_dir / name)
+                          "train_config": asdict(self.config), "n_train": len(self.train_set),
+                          **pos}, self.out_dir / name)
 
     def _load(self, path: Path) -> dict:
         ck = torch.load(path, map_location="cpu", weights_only=True)
-        self.model.load_state_dict(ck["model"]["state_dict"])
+        try:
+            self.model.load_state_dict(ck["model"]["state_dict"])
+        except RuntimeError as exc:   # e.g. another vocabulary size or model size
+            raise MotionlangError(f"{path}: the model built from these options does not fit "
+                                  f"the checkpoint's weights (other sizes or vocabulary?): "
+                                  f"{str(exc).splitlines()[0]}") from exc
         self.optimizer.load_state_dict(ck["optimizer"])
         if ck["world_size"] == self.world:
             _set_rng_state(ck["rng"][self.rank])
@@ -317,6 +332,8 @@ class Trainer:
         old, new = ck.get("train_config", {}), asdict(self.config)
         changed = [k for k in ("batch_size", "seed", "length_buckets")
                    if old.get(k, 0 if k == "length_buckets" else None) != new[k]]
+        if ck.get("n_train", len(self.train_set)) != len(self.train_set):
+            changed.append(f"training set size ({ck['n_train']} -> {len(self.train_set)})")
         if changed:
             raise MotionlangError(f"{path}: interrupted in the middle of an epoch with other "
                                   f"{', '.join(changed)}; resume with the same values")
@@ -326,7 +343,7 @@ class Trainer:
         """Train for ``config.epochs`` epochs; with ``resume`` continue from ``last.pt``.
 
         Returns the history: one dict per epoch with ``epoch``, ``step``, ``train`` and
-        ``val`` loss terms and ``seq_per_s``.
+        ``val`` loss terms, ``seq_per_s`` and ``lr`` (the rate of its last step).
         """
         c = self.config
         epoch, start_batch, step = 0, 0, 0
@@ -344,6 +361,9 @@ class Trainer:
                             "is chosen among the epochs from here on", last)
                 best = math.inf
             log.info("resuming from %s at epoch %d batch %d", last, epoch + 1, start_batch)
+            if 0 < c.decay_epochs and c.epochs - c.decay_epochs < epoch:
+                log.warning("the learning-rate decay began at epoch %g, before this resume: "
+                            "the rate drops at once", c.epochs - c.decay_epochs + 1)
         hide = True if self.rank else (None if c.progress is None else not c.progress)
         while epoch < c.epochs:
             batches = self._batches(epoch)
