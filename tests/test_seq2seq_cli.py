@@ -3,6 +3,9 @@ a procedural corpus in KIT-ML format and a custom BVH + captions folder."""
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -121,6 +124,20 @@ def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
     assert len(rep["m2l_actions_by_rank"]) == 2
     md = report.with_suffix(".md").read_text()
     assert "| nearest training sentence, round trip |" in md and "naming exactly" in md
+    # the round trip's actions named by place, also from the saved report by the script
+    from motionlang.datasets.synth import ground_truth
+    from motionlang.evaluation.seq2seq_eval import actions_named
+    descr = rep["l2m_round_trip"]["descriptions"]
+    truths = {i: ground_truth(json.loads((corpus / f"{i}_meta.json").read_text()))
+              for i, _, _ in descr}
+    assert rep["l2m_parameters"]["named"] == actions_named(descr, truths)
+    assert "L2M round trip, true actions named: first" in md
+    script = Path(__file__).resolve().parents[1] / "scripts" / "round_trip_actions.py"
+    res = subprocess.run([sys.executable, str(script), str(report), "--data", str(corpus)],
+                         capture_output=True, text=True)
+    assert res.returncode == 0, res.stderr
+    assert [l for l in md.splitlines() if "L2M round trip, true actions named" in l][0] \
+        == res.stdout.splitlines()[0]
     assert (tmp_path / "tsne.png").stat().st_size > 1000
     assert len(rep["m2l"]["bleu_by_rank"]) == 2 and rep["m2l"]["n"] >= 1
     assert {"bleu", "rouge_l"} <= set(rep["nearest_neighbour"])

@@ -106,3 +106,19 @@ def test_context_tsne_keeps_separated_clusters_apart(tmp_path):
     assert np.linalg.norm(a.mean(0) - b.mean(0)) > 2 * spread
     path = plot_context_tsne({"m": (vec, ["x"] * 15 + ["y"] * 15)}, tmp_path / "t.png")
     assert path.stat().st_size > 1000
+
+
+def test_actions_named_by_place_on_hand_made_descriptions():
+    from motionlang.datasets.synth import Primitive
+    truths = {"m1": [Primitive("walk"), Primitive("wave"), Primitive("kick")],
+              "m2": [Primitive("bow")]}
+    descriptions = [("m1", "s", "a person walks forward and then waves with the left hand"),
+                    ("m1", "s", "a person kicks with the right foot"),   # the last one only
+                    ("m2", "s", "a person waves"),                       # not the bow
+                    ("m2", "s", "a person bows")]
+    got = ev.actions_named(descriptions, truths)
+    # first (walk): named 1 of 2; later (wave, kick) x 2: 1 + 1 of 4; only (bow): 1 of 2
+    assert got == {"first": 0.5, "n_first": 2, "later": 0.5, "n_later": 4,
+                   "only": 0.5, "n_only": 2}
+    empty = ev.actions_named([("m2", "s", "a person bows")], truths)
+    assert empty["only"] == 1.0 and empty["n_first"] == 0 and empty["first"] != empty["first"]

@@ -347,8 +347,10 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
             for k in range(args.width)]
         for run in ("l2m", "nn"):
             if f"{run}_round_trip" in report:
+                descriptions = report[f"{run}_round_trip"]["descriptions"]
                 report[f"{run}_parameters"] = ev.round_trip_parameter_accuracy(
-                    report[f"{run}_round_trip"]["descriptions"], truths)
+                    descriptions, truths)
+                report[f"{run}_parameters"]["named"] = ev.actions_named(descriptions, truths)
     else:
         report["m2l"].pop("all")
     if args.tsne:
@@ -375,6 +377,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
                 f"{f} {acc[f]:.1%} of {acc[f + '_stated']}" for f in
                 ("side", "count", "direction", "speed")) +
                 f"; actions exactly right {acc['actions_match']:.1%}\n")
+            if "named" in acc:
+                table += f"{name}, true actions named: " + named_line(acc["named"]) + "\n"
     if args.output:
         out = Path(args.output)
         with atomic_write(out) as fh:
@@ -389,6 +393,12 @@ def _check_length_penalty(alpha: float) -> None:
     import math
     if not (math.isfinite(alpha) and alpha >= 0):
         raise MotionlangError(f"--length-penalty must be a finite number >= 0, got {alpha}")
+
+
+def named_line(named: dict) -> str:
+    """``evaluation.seq2seq_eval.actions_named``'s result as one line of text."""
+    return ", ".join(f"{place} {named[place]:.1%} of {named['n_' + place]}"
+                     for place in ("first", "later", "only"))
 
 
 def _ground_truths(records: dict, ids) -> dict:

@@ -140,6 +140,35 @@ def round_trip_parameter_accuracy(descriptions: Sequence[Sequence[str]],
     return parameter_accuracy(texts, {key: truths[key.split("#")[0]] for key in texts})
 
 
+def actions_named(descriptions: Sequence[Sequence[str]], truths: Mapping[str, Sequence]
+                  ) -> dict:
+    """Procedural corpus: how often the round trip's descriptions name each true action, by
+    its place in its motion. Shows whether generated motions lose their later actions.
+
+    descriptions: ``(id, sentence, description)`` triples; truths: id -> ground-truth
+    primitives. A true primitive counts as named when the description names its action at
+    least once (``datasets.synth.extract``).
+    Returns {place: fraction named, "n_" + place: primitives} for place "first" and "later"
+    (motions of several primitives) and "only" (motions of one).
+    """
+    from motionlang.datasets.synth import extract
+
+    named = {"first": 0, "later": 0, "only": 0}
+    total = dict.fromkeys(named, 0)
+    for i, _, text in descriptions:
+        said = {p.action for p in extract(text)}
+        truth = list(truths[i])
+        for k, prim in enumerate(truth):
+            place = "only" if len(truth) == 1 else ("first" if k == 0 else "later")
+            total[place] += 1
+            named[place] += prim.action in said
+    out: dict = {}
+    for place in named:
+        out[place] = named[place] / total[place] if total[place] else float("nan")
+        out["n_" + place] = total[place]
+    return out
+
+
 def markdown_table(results: Mapping[str, Mapping[str, float]]) -> str:
     """{row name: {metric: value}} -> a markdown table over the metrics they share."""
     cols = ["bleu", "bleu1", "rouge_l", "cider", "relative"]
