@@ -83,3 +83,15 @@ def test_nearest_example_mode():
     assert nn.label(still(20, 0.02)) == "stand"
     # same centroids either way
     np.testing.assert_allclose(nn.centroids, central.centroids)
+
+
+def test_segment_tally_by_hand():
+    from motionlang.evaluation.action_order import segment_tally
+    pred = [["walk", "stand", "wave"], ["kick", "stomp"]]
+    truth = [["walk", "kick", "wave"], ["kick", "kick"]]
+    right, confusions = segment_tally(pred, truth)
+    assert right == {("first", "walk"): [1, 1], ("later", "kick"): [0, 2],
+                     ("later", "wave"): [1, 1], ("first", "kick"): [1, 1]}
+    assert confusions == {("kick", "stand"): 1, ("kick", "stomp"): 1}
+    with pytest.raises(MotionlangError):
+        segment_tally([["walk"]], [["walk", "kick"]])

@@ -3,9 +3,10 @@ schedule, joint and two-stage training with the shared trainer, load_any_t2m, an
 ``train twostream`` command (the last one skipped without the MiniLM package)."""
 from __future__ import annotations
 
-import json
-
 import importlib.util
+import json
+import os
+import subprocess
 import sys
 from pathlib import Path
 
@@ -196,6 +197,16 @@ def test_train_command(corpus, tmp_path, monkeypatch, capsys):
     assert main(["generate", "a person walks", "--model", str(out), "-o",
                  str(tmp_path / "g.bvh")]) == 2
     assert "not joint angles" in capsys.readouterr().err and not (tmp_path / "g.bvh").exists()
+    # the per-action order check script runs on the trained model (on the training split:
+    # the tiny corpus's test split may hold no compositional sentence)
+    script = Path(__file__).resolve().parents[1] / "scripts" / "t2m_segments.py"
+    res = subprocess.run([sys.executable, str(script), "--data", str(corpus), "--model",
+                          str(out), "--split", "train"], capture_output=True, text=True,
+                         env={**os.environ, "MOTIONLANG_CACHE": str(tmp_path / "cache")})
+    assert res.returncode == 0, res.stderr
+    n = int(res.stdout.split()[0])
+    assert n >= 1 and "commonest wrong labels" in res.stdout
+    assert len([l for l in res.stdout.splitlines() if "first " in l]) >= 1
     assert main(["train", "twostream", "--data", str(corpus), "--out",
                  str(tmp_path / "bad.txt")]) == 2
     for bad in (["adversarial"], ["gan=1"], ["pose=-1"], ["pose=nan"], ["pose=x"],

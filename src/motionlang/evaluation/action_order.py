@@ -139,3 +139,27 @@ def segment_accuracy(predicted: Sequence[Sequence[str]], truth: Sequence[Sequenc
         first.append(p[0] == t[0])
         later += [a == b for a, b in zip(p[1:], t[1:])]
     return float(np.mean(first)), float(np.mean(later)) if later else math.nan
+
+
+def segment_tally(predicted: Sequence[Sequence[str]], truth: Sequence[Sequence[str]]
+                  ) -> tuple[dict[tuple[str, str], list[int]], dict[tuple[str, str], int]]:
+    """Per true action, where :func:`segment_accuracy` gives one figure for all.
+
+    Returns:
+        right: ``{(place, action): [labelled right, segments]}`` with place "first" or
+            "later"; confusions: ``{(true action, label): count}`` of the wrong labels.
+    """
+    if len(predicted) != len(truth):
+        raise MotionlangError(f"{len(predicted)} predictions for {len(truth)} items")
+    right: dict[tuple[str, str], list[int]] = {}
+    confusions: dict[tuple[str, str], int] = {}
+    for p, t in zip(predicted, truth):
+        if len(p) != len(t):
+            raise MotionlangError(f"{len(p)} segment labels for {len(t)} segments")
+        for k, (a, b) in enumerate(zip(t, p)):
+            cell = right.setdefault(("first" if k == 0 else "later", a), [0, 0])
+            cell[0] += a == b
+            cell[1] += 1
+            if a != b:
+                confusions[a, b] = confusions.get((a, b), 0) + 1
+    return right, confusions
