@@ -112,3 +112,15 @@ def test_sampling_temperature_sharpens_weights_and_deviations():
                                .expand_as(tiny), atol=1e-2, rtol=0)
     with pytest.raises(ValueError, match="temperature"):
         mdn.sample(p, 1, temperature=0.0)
+
+
+def test_mixture_mean_by_hand_and_against_torch():
+    # weights softmax(log 1, log 3) = (1/4, 3/4): mean 0.25 * (0, 4) + 0.75 * (4, 0) = (3, 1)
+    p = mdn.MixtureParams(torch.log(torch.tensor([[1.0, 3.0]])),
+                          torch.tensor([[[0.0, 4.0], [4.0, 0.0]]]), torch.zeros(1, 2, 2),
+                          torch.zeros(1))
+    torch.testing.assert_close(mdn.mixture_mean(p), torch.tensor([[3.0, 1.0]]))
+    p = random_params()
+    ref = td.MixtureSameFamily(td.Categorical(logits=p.logit_pi),
+                               td.Independent(td.Normal(p.mu, p.log_sigma.exp()), 1))
+    torch.testing.assert_close(mdn.mixture_mean(p), ref.mean)

@@ -47,7 +47,7 @@ def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
     assert main(["train", "l2m", "--balance", "3", "--data", str(corpus), "--out", str(l2m_dir), *TINY,
                  "--components", "2", "--attention", "--input-noise", "0.3", "--time-input",
                  "--rollout", "0.5", "--rollout-warmup", "2", "--root-weight", "5",
-                 "--progress-input"]) == 0
+                 "--progress-input", "--energy", "2.5"]) == 0
     balanced = [l for l in capsys.readouterr().out.splitlines() if l.startswith("balanced:")]
     assert len(balanced) == 1
     before, after = (int(w) for w in balanced[0].split()[1:4:2])
@@ -78,6 +78,8 @@ def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
     assert [n for n, w in zip(names, l2m.config.loss_weights) if w != 1.0] == \
         ["root_vx", "root_vz", "root_dyaw"]
     assert set(l2m.config.loss_weights) == {1.0, 5.0}
+    assert l2m.config.energy_weight == 2.5
+    assert "energy" in json.loads((l2m_dir / "history.json").read_text())[-1]["train"]
     m2l = MotionToLanguage.load(m2l_dir / "model.pt")
     assert m2l.features is not None and len(m2l.vocab) == m2l.config.vocab_size
     train_ids = (m2l_dir / "splits" / "train.txt").read_text().split()
@@ -222,6 +224,8 @@ def test_errors_are_one_line(tmp_path, capsys):
     capsys.readouterr()
     assert main(["train", "l2m", "--data", str(tmp_path), "--balance", "0"]) == 2
     assert "--balance must be >= 1" in capsys.readouterr().err
+    assert main(["train", "l2m", "--data", str(tmp_path), "--energy", "-1"]) == 2
+    assert "--energy must be >= 0" in capsys.readouterr().err
     # sampling options are checked before any model is read (no model file here)
     for opts, msg in ((["--temperature", "0"], "temperature must be > 0"),
                       (["--temperature", "0.5", "--method", "mean"], "mean decoding draws")):

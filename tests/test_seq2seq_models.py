@@ -231,6 +231,29 @@ def test_l2m_loss_weights_reweight_the_frame_nll():
         LanguageToMotion(replace(model.config, loss_weights=[1.0] * (F - 1)))
 
 
+def test_l2m_energy_term_on_the_expected_frames():
+    from motionlang.models import mdn
+    from motionlang.models.sequence_losses import energy_loss, frame_mask
+    model, batch = tiny("l2m", False), make_batch()
+    model.eval()
+    with torch.no_grad():
+        base = model.loss(batch)
+        assert "energy" not in base            # off by default: the paper's loss
+        model.config.energy_weight = 3.0
+        out = model.loss(batch)
+        p = model(batch["tokens"], batch["token_lengths"], batch["motion"])
+        B, T, F = batch["motion"].shape
+        mean = mdn.mixture_mean(p.flatten()).reshape(B, T, F)
+        want = energy_loss(mean, batch["motion"], frame_mask(batch["motion_lengths"], B, T),
+                           model.config.energy_window)
+    torch.testing.assert_close(out["energy"], want)
+    assert float(want) > 0
+    torch.testing.assert_close(out["loss"], base["loss"] + 3.0 * want)
+    for bad in ({"energy_weight": -1.0}, {"energy_window": 4}, {"energy_window": 1}):
+        with pytest.raises(MotionlangError):
+            LanguageToMotion(replace(model.config, **bad))
+
+
 def test_l2m_time_input_changes_the_prediction():
     # Zeroing the first layer's clock weights (later layers see the clock too) must change
     # nothing at t=0, where the clock is 0, and something later on: the clock is used.

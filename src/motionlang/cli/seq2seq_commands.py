@@ -77,6 +77,9 @@ def _add_train(sub, name: str, help_: str) -> None:
         p.add_argument("--root-weight", type=float, default=1.0, metavar="W",
                        help="weight of the root's ground velocity and heading change "
                             "(root_vx, root_vz, root_dyaw) in the frame NLL (paper: 1)")
+        p.add_argument("--energy", type=float, default=d.energy_weight, metavar="W",
+                       help="weight of a loss on the local speeds of the expected frames "
+                            "against the reference's, over ~1 s windows (paper: 0)")
         p.add_argument("--rollout-warmup", type=int, default=d.rollout_warmup, metavar="STEPS",
                        help="optimiser steps over which that probability ramps up from 0")
     p.set_defaults(func=cmd_train, model_kind=name)
@@ -120,6 +123,8 @@ def cmd_train(args: argparse.Namespace) -> int:
             raise MotionlangError(f"--rollout-warmup must be >= 0, got {args.rollout_warmup}")
         if not args.root_weight >= 0:
             raise MotionlangError(f"--root-weight must be >= 0, got {args.root_weight}")
+        if not args.energy >= 0:
+            raise MotionlangError(f"--energy must be >= 0, got {args.energy}")
     # one line per epoch from the trainer (the progress bar only shows on a terminal)
     logging.basicConfig(level=logging.INFO, format="%(message)s")
     data = build_pairs(args.data, features=args.features, offsets=args.offsets, seed=args.seed,
@@ -158,6 +163,7 @@ def cmd_train(args: argparse.Namespace) -> int:
                                            rollout=args.rollout,
                                            rollout_warmup=args.rollout_warmup,
                                            loss_weights=loss_weights,
+                                           energy_weight=args.energy,
                                            max_frames=int(1.5 * longest), **sizes),
                                  data.vocab, features=data.features)
         if args.progress_input:   # it plans its length from the sentence

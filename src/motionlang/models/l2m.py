@@ -31,6 +31,12 @@ own frames, settles into standing even when primed with true frames. Training on
 own frames makes it follow the sentence instead. It decodes step by step (slower). The
 validation loss of such a model (``loss`` in eval mode) is computed the same way with a
 fixed RNG, so that the best epoch is the one that does best on its own frames.
+
+A fourth, ``energy_weight``: a term on the *local speeds* of the expected frames
+(sum_k pi_k mu_k) against the reference's over ~1 s windows
+(:func:`motionlang.models.sequence_losses.energy_loss`, the two-stream model's remedy for
+motions that die down to standing). It does not care about phase, only about moving as
+much as the reference where the reference moves.
 """
 from __future__ import annotations
 
@@ -44,6 +50,7 @@ from motionlang.models import mdn
 from motionlang.models.checkpoint import Seq2SeqCheckpoint
 from motionlang.models.length import SentenceLength
 from motionlang.models.recurrent import AdditiveAttention, BiGRUEncoder, StackedDecoder
+from motionlang.models.sequence_losses import energy_loss, frame_mask
 from motionlang.models.seq2seq_config import L2MConfig  # noqa: F401 (re-exported)
 
 
@@ -65,6 +72,9 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
                                   f"got {len(c.loss_weights)} (min {min(c.loss_weights, default=0)})")
         if not c.input_noise >= 0:
             raise MotionlangError(f"L2MConfig.input_noise must be >= 0, not {c.input_noise!r}")
+        if not (c.energy_weight >= 0 and c.energy_window >= 3 and c.energy_window % 2 == 1):
+            raise MotionlangError("L2MConfig.energy_weight must be >= 0 and energy_window odd "
+                                  f">= 3, got {c.energy_weight!r} and {c.energy_window!r}")
         self.vocab, self.normalizer, self.features = vocab, normalizer, features
         self.embed = nn.Embedding(c.vocab_size, c.embed_dim, padding_idx=c.pad_id)
         self.embed_norm = nn.LayerNorm(c.embed_dim)
@@ -196,7 +206,8 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
         """batch: ``tokens`` (B, L), ``token_lengths`` (B,), ``motion`` (B, T, F) padded,
         ``motion_lengths`` (B,). Losses are means over valid frames; ``nll`` is the
         frame's negative log density (surrogate or exact; per-feature weighted by
-        ``config.loss_weights`` when set), ``active_bce`` the flag's."""
+        ``config.loss_weights`` when set), ``active_bce`` the flag's; ``energy`` (with
+        ``config.energy_weight`` > 0) the local-speed term of the expected frames."""
         motion, lengths = batch["motion"], batch["motion_lengths"]
         B, T, _ = motion.shape
         if not self.training and self.config.rollout > 0:
@@ -221,7 +232,16 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
         # count more so that generation learns to end (the paper's loss: 1).
         w = torch.where(active > 0, 1.0, self.config.end_weight)[valid]
         bce = -(w * mdn.active_log_prob(params, active)[valid]).sum() / w.sum()
-        return {"loss": nll + bce, "nll": nll.detach(), "active_bce": bce.detach()}
+        out = {"loss": nll + bce, "nll": nll.detach(), "active_bce": bce.detach()}
+        if self.config.energy_weight > 0:
+            # the expected frames must move as much as the reference does, wherever the
+            # sample of the step before has taken the motion (phase-free, ~1 s windows)
+            mean = mdn.mixture_mean(params).reshape(B, T, -1)
+            energy = energy_loss(mean, motion, frame_mask(lengths, B, T).to(motion),
+                                 self.config.energy_window)
+            out["loss"] = out["loss"] + self.config.energy_weight * energy
+            out["energy"] = energy.detach()
+        return out
 
     def to_checkpoint(self) -> dict:
         d = super().to_checkpoint()

@@ -130,6 +130,11 @@ def sample(params: MixtureParams, n: int, generator: torch.Generator | None = No
     return mu + sigma * eps, active
 
 
+def mixture_mean(params: MixtureParams) -> torch.Tensor:
+    """Expected frame sum_k pi_k mu_k of each mixture: (N, K, D) params -> (N, D)."""
+    return (F.softmax(params.logit_pi, dim=-1).unsqueeze(-1) * params.mu).sum(1)
+
+
 def mode_frame(params: MixtureParams) -> torch.Tensor:
     """Mean of the heaviest component, a cheap stand-in for the mode: -> (N, D)."""
     k = params.logit_pi.argmax(-1)

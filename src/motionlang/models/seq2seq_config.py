@@ -62,6 +62,11 @@ class L2MConfig:
     # per-feature weights of the frame NLL (length n_features; None = all 1, the paper's):
     # e.g. the root's ground velocity made to count more (train l2m --root-weight)
     loss_weights: list[float] | None = None
+    # weight of a term on the local speeds of the expected frames (sum_k pi_k mu_k) against
+    # the reference's (``sequence_losses.energy_loss``, window ``energy_window`` frames, ~1 s
+    # at 10 Hz); 0 = off (the paper's loss). Beyond the paper, as for the two-stream model.
+    energy_weight: float = 0.0
+    energy_window: int = 11
     pad_id: int = 0
     max_frames: int = 300       # decoding cap (frames)
 
