@@ -68,6 +68,37 @@ def test_items_from_corpus(data, corpus):
     assert data.first_frames().shape == (len(data.splits["train"]), 66)
 
 
+def test_mirrored_training_items(data, corpus, tmp_path):
+    from motionlang.datasets.synth.augment import mirror_text
+    from motionlang.training.twostream_data import build_twostream_data
+    m = build_twostream_data(corpus, max_frames=30, cache_dir=tmp_path, mirror=True)
+    plain, train = data.items["train"], m.items["train"]
+    n = len(plain)
+    assert len(train) == 2 * n
+    assert not any(it.get("mirrored") for it in train[:n])
+    assert all(it.get("mirrored") for it in train[n:])
+    for a, b in zip(plain, train[n:]):
+        assert b["id"] == a["id"] and b["sentence"] == mirror_text(a["sentence"])
+    # the mirrored motion's features are the same feature set's encoding of motion.mirror()
+    rid = train[n]["id"]
+    want = m.features.encode(m.records[rid].load_motion().mirror())[:30]
+    np.testing.assert_allclose(train[n]["motion"], want, atol=1e-5)
+    assert not np.allclose(train[n]["motion"], m.sequences[rid])
+    # fitted as without mirror; the other splits and the sequences unchanged
+    np.testing.assert_array_equal(m.features.normalizer.mean, data.features.normalizer.mean)
+    for split in ("val", "test"):
+        assert [it["sentence"] for it in m.items[split]] == \
+            [it["sentence"] for it in data.items[split]]
+    assert all(np.array_equal(m.sequences[i], data.sequences[i]) for i in data.sequences)
+    # in the mirrored motion, the left wrist moves as the right one did (x mirrored)
+    from motionlang.training.twostream_data import FPS  # noqa: F401
+    pos = m.features.decode(train[n]["motion"])
+    orig = m.features.decode(m.sequences[rid])
+    from motionlang.features.joint_map import KIT21_NAMES
+    lw, rw = KIT21_NAMES.index("LW"), KIT21_NAMES.index("RW")
+    np.testing.assert_allclose(pos[:, lw, 1], orig[:, rw, 1], atol=1e-3)   # heights swap
+
+
 def test_forcing_schedule():
     s = ForcingSchedule(1.0, 0.0, 4)
     assert [s(k) for k in range(6)] == [1.0, 0.75, 0.5, 0.25, 0.0, 0.0]
@@ -168,7 +199,7 @@ def test_train_command(corpus, tmp_path, monkeypatch, capsys):
                "--max-frames", "12", "--text-layers", "6", "--threads", "1",
                "--z-every-step", "--time-input", "--length-buckets", "2",
                "--progress-input", "--weight", "adversarial=0.05", "--weight", "embedding=1",
-               "--decay-epochs", "1", "--decay-to", "0.5"])
+               "--decay-epochs", "1", "--decay-to", "0.5", "--mirror"])
     assert rc == 0 and out.exists()
     history = json.loads((tmp_path / "ts_run" / "history.json").read_text())
     assert history[-1]["lr"] == pytest.approx(5e-4)             # decayed to half of --lr
@@ -184,7 +215,9 @@ def test_train_command(corpus, tmp_path, monkeypatch, capsys):
     # the length model is fitted on the (cropped) training motions
     assert model.length_model is not None and model.length_model.high <= 12
     assert 1 <= model.frames_for("a person walks forward") <= 12
-    assert "twostream (full)" in capsys.readouterr().out
+    from motionlang.training.twostream_data import build_twostream_data
+    n_plain = len(build_twostream_data(corpus, max_frames=12).items["train"])
+    assert f"twostream (full): {2 * n_plain} training pairs" in capsys.readouterr().out
     # generate draws and saves the model's joint positions; BVH needs joint angles
     for ext in (".gif", ".png", ".npz"):
         assert main(["generate", "a person walks", "--model", str(out), "--max-frames", "6",

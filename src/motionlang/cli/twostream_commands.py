@@ -48,7 +48,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     schedule = schedule_options(args)
     lead = lead_process()  # under torchrun only rank 0 writes files and prints
     data = build_twostream_data(args.data, seed=args.seed, max_seconds=args.max_seconds,
-                                max_frames=args.max_frames)
+                                max_frames=args.max_frames, mirror=args.mirror)
     if lead:
         save_splits(data.splits, run / "splits")
     log_command(run / "commands.jsonl", args)
@@ -154,6 +154,9 @@ def register_train(train_sub) -> None:
     p.add_argument("--length-buckets", type=int, default=0, metavar="N",
                    help="batch motions of similar lengths (pools of N batches sorted by "
                         "length; 0: plain shuffle): less padding, faster epochs")
+    p.add_argument("--mirror", action="store_true",
+                   help="also train on every training motion mirrored left/right, its "
+                        "sentences' sides swapped (beyond the paper)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--threads", type=int, default=0, help="torch threads (0: torch's default)")
     p.add_argument("--resume", action="store_true", help="continue from the run's last.pt")

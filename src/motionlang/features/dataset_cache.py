@@ -66,7 +66,7 @@ def _encode_record(fs: FeatureSet, motion) -> list[np.ndarray]:
 
 def dataset_features(records: Sequence, kind: str, options: dict[str, Any] | None = None, *,
                      fit_records: Sequence | None = None, directory: str | Path | None = None,
-                     refresh: bool = False) -> DatasetFeatures:
+                     refresh: bool = False, mirror: bool = False) -> DatasetFeatures:
     """Fit ``kind`` features (config ``options``) and encode ``records``, through the cache.
 
     Args:
@@ -77,6 +77,9 @@ def dataset_features(records: Sequence, kind: str, options: dict[str, Any] | Non
             training split so validation and test data stay unseen).
         directory: cache folder (default ``$MOTIONLANG_CACHE`` or ``~/.cache/motionlang``).
         refresh: recompute even if cached.
+        mirror: encode each record's motion mirrored left/right (``Motion.mirror``), for
+            augmentation; the features are still fitted on the unmirrored ``fit_records``
+            (the same cache entry as without it).
 
     Returns:
         :class:`DatasetFeatures`; the arrays are identical whether loaded or computed.
@@ -105,13 +108,17 @@ def dataset_features(records: Sequence, kind: str, options: dict[str, Any] | Non
     def encode():
         out = {}
         for i, r in enumerate(progress(records, desc=f"encode {kind}", unit="motion")):
-            for k, seq in enumerate(_encode_record(fs, r.load_motion())):
+            motion = r.load_motion()
+            for k, seq in enumerate(_encode_record(fs, motion.mirror() if mirror else motion)):
                 out[f"{i}_{k}"] = seq
         return out
 
     key = {"v": CACHE_VERSION, "stage": "encode", "features": fs.to_dict(),
            "records": _identity(records)}
-    arrays = cached(key, encode, name=f"encode-{kind}", directory=directory, refresh=refresh)
+    if mirror:   # keys without it stay those of earlier caches
+        key["mirror"] = True
+    arrays = cached(key, encode, name=f"encode-{kind}{'-mirrored' * mirror}",
+                    directory=directory, refresh=refresh)
     sequences: dict[str, list[np.ndarray]] = {i: [] for i in ids}
     for name in sorted(arrays, key=lambda n: tuple(int(x) for x in n.split("_"))):
         i, _ = name.split("_")

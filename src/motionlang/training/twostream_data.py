@@ -7,7 +7,8 @@ trajectory, 12.5 Hz, ``features.positions.PositionFeatures``) on the training mo
 and encodes every motion once through the on-disk feature cache
 (``features.dataset_cache.dataset_features``). Each motion is paired with each of its
 descriptions: items ``{"motion": (T, 66) float32 normalised, "sentence": str, "id": str}``,
-the input of ``TwoStreamModel.collate``.
+the input of ``TwoStreamModel.collate``. With ``mirror`` the training items also hold
+every training motion mirrored left/right with its sentences' sides swapped.
 """
 from __future__ import annotations
 
@@ -50,8 +51,8 @@ class TwoStreamData:
 
 def build_twostream_data(data: str | Path, *, fractions: Sequence[float] = (0.8, 0.1, 0.1),
                          seed: int = 0, max_seconds: float | None = 30.0,
-                         max_frames: int | None = None, cache_dir: str | Path | None = None
-                         ) -> TwoStreamData:
+                         max_frames: int | None = None, cache_dir: str | Path | None = None,
+                         mirror: bool = False) -> TwoStreamData:
     """Read ``data``, split by motion, fit + encode positions features (cached), make items.
 
     Args:
@@ -60,6 +61,11 @@ def build_twostream_data(data: str | Path, *, fractions: Sequence[float] = (0.8,
         max_frames: crop every training/validation/test sequence to its first
             ``max_frames`` frames (12.5 Hz) to bound the unrolled decoder's cost; None keeps all.
         cache_dir: feature cache folder (default ``$MOTIONLANG_CACHE`` or ~/.cache/motionlang).
+        mirror: add each training motion mirrored (``Motion.mirror``) with each of its
+            sentences' sides swapped (``datasets.synth.augment.mirror_text``) to the training
+            items (marked ``"mirrored": True``, same ``id``): twice the items, both sides
+            equally often. Features are fitted on the unmirrored motions; ``sequences`` and
+            the other splits stay unmirrored.
     """
     from motionlang.training.seq2seq_data import load_records
 
@@ -73,11 +79,25 @@ def build_twostream_data(data: str | Path, *, fractions: Sequence[float] = (0.8,
         raise DatasetError(f"{data}: the training split is empty")
     df = dataset_features(records, "positions", {"fps": FPS}, fit_records=train,
                           directory=cache_dir)
+    seqs = _first_sequences(df, max_frames)
+    items = {name: [{"motion": seqs[i], "sentence": s, "id": i}
+                    for i in ids for s in by_id[i].annotations]
+             for name, ids in splits.items()}
+    if mirror:
+        from motionlang.datasets.synth.augment import mirror_text
+        flipped = _first_sequences(dataset_features(
+            train, "positions", {"fps": FPS}, fit_records=train, directory=cache_dir,
+            mirror=True), max_frames)
+        items["train"] += [{"motion": flipped[i], "sentence": mirror_text(s), "id": i,
+                            "mirrored": True}
+                           for i in splits["train"] for s in by_id[i].annotations]
+    return TwoStreamData(df.features, splits, by_id, seqs, items)
+
+
+def _first_sequences(df, max_frames: int | None) -> dict[str, np.ndarray]:
+    """``{id: (T, 66) float32}`` of each record's (only) sequence, cut at ``max_frames``."""
     seqs = {}
     for rid, arrays in df.sequences.items():
         x = np.asarray(arrays[0], dtype=np.float32)
         seqs[rid] = x[:max_frames] if max_frames else x
-    items = {name: [{"motion": seqs[i], "sentence": s, "id": i}
-                    for i in ids for s in by_id[i].annotations]
-             for name, ids in splits.items()}
-    return TwoStreamData(df.features, splits, by_id, seqs, items)
+    return seqs
