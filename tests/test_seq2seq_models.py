@@ -252,6 +252,24 @@ def test_l2m_energy_term_on_the_expected_frames():
     for bad in ({"energy_weight": -1.0}, {"energy_window": 4}, {"energy_window": 1}):
         with pytest.raises(MotionlangError):
             LanguageToMotion(replace(model.config, **bad))
+    # motions longer than the window; a scheduled-sampling model, validated on its own frames
+    # (fixed RNG: the same value twice) and trained through the term alone
+    long = make_batch()
+    long["motion"] = torch.randn(4, 15, F_DIM, generator=torch.Generator().manual_seed(1))
+    long["motion_lengths"] = torch.tensor([15, 12, 9, 14])
+    model = tiny("l2m", False, rollout=0.5, energy_weight=1.0)
+    model.eval()
+    with torch.no_grad():
+        a, b = model.loss(long)["energy"], model.loss(long)["energy"]
+    assert float(a) > 0 and float(a) == float(b)
+
+    def head_grads(weight):   # same weights, same draws: only the term differs
+        m = tiny("l2m", False, rollout=0.5, energy_weight=weight)
+        m.train()
+        torch.manual_seed(3)
+        m.loss(long)["loss"].backward()
+        return torch.cat([q.grad.flatten() for q in m.head.parameters()])
+    assert not torch.allclose(head_grads(1.0), head_grads(0.0))
 
 
 def test_l2m_time_input_changes_the_prediction():

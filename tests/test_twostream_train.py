@@ -91,12 +91,12 @@ def test_mirrored_training_items(data, corpus, tmp_path):
             [it["sentence"] for it in data.items[split]]
     assert all(np.array_equal(m.sequences[i], data.sequences[i]) for i in data.sequences)
     # in the mirrored motion, the left wrist moves as the right one did (x mirrored)
-    from motionlang.training.twostream_data import FPS  # noqa: F401
     pos = m.features.decode(train[n]["motion"])
     orig = m.features.decode(m.sequences[rid])
     from motionlang.features.joint_map import KIT21_NAMES
     lw, rw = KIT21_NAMES.index("LW"), KIT21_NAMES.index("RW")
     np.testing.assert_allclose(pos[:, lw, 1], orig[:, rw, 1], atol=1e-3)   # heights swap
+    np.testing.assert_allclose(pos[:, lw, 0], -orig[:, rw, 0], atol=1e-3)  # sideways flips
 
 
 def test_forcing_schedule():

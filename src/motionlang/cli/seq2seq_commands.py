@@ -77,11 +77,11 @@ def _add_train(sub, name: str, help_: str) -> None:
         p.add_argument("--root-weight", type=float, default=1.0, metavar="W",
                        help="weight of the root's ground velocity and heading change "
                             "(root_vx, root_vz, root_dyaw) in the frame NLL (paper: 1)")
+        p.add_argument("--rollout-warmup", type=int, default=d.rollout_warmup, metavar="STEPS",
+                       help="optimiser steps over which that probability ramps up from 0")
         p.add_argument("--energy", type=float, default=d.energy_weight, metavar="W",
                        help="weight of a loss on the local speeds of the expected frames "
                             "against the reference's, over ~1 s windows (paper: 0)")
-        p.add_argument("--rollout-warmup", type=int, default=d.rollout_warmup, metavar="STEPS",
-                       help="optimiser steps over which that probability ramps up from 0")
     p.set_defaults(func=cmd_train, model_kind=name)
 
 

@@ -43,7 +43,7 @@ def retrieval_baseline(data, split: str = "train"):
 def length_errors(data, items: Sequence[T2MItem], model=None) -> dict:
     """How well a sentence -> length model (``models.length.SentenceLength``;
     default: one fitted here on ``data``'s whole training motions, as ``train twostream``
-    without ``--max-frames`` fits it) predicts the test lengths:
+    without ``--max-frames`` or ``--mirror`` fits it) predicts the test lengths:
     ``{"mae_frames", "constant_mae_frames" (always guessing the training mean), "n"}``."""
     from motionlang.models.length import SentenceLength
     model = model or SentenceLength.from_items(data.items["train"])

@@ -30,7 +30,7 @@ from motionlang.evaluation.action_order import (Prototypes, merge_repeats, order
                                                 rescale_ranges, segment_accuracy,
                                                 segment_labels)
 from motionlang.evaluation.motion_metrics import position_metrics_mm
-from motionlang.evaluation.t2m_baselines import (  # noqa: F401 (GROUND_TRUTH, NEAREST: row names)
+from motionlang.evaluation.t2m_baselines import (
     GROUND_TRUTH, NEAREST, length_errors, retrieval_baseline, still_baseline)
 
 

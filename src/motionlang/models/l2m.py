@@ -11,7 +11,7 @@ attention as in :mod:`motionlang.models.m2l`.
 
 Frames are model features (usually normalised); the first decoder input is a zero frame.
 
-Two options beyond the paper, both off by default: ``input_noise`` adds Gaussian noise to
+Options beyond the paper, all off by default: ``input_noise`` adds Gaussian noise to
 the teacher-forced previous frames while training, so that predicting "the previous frame
 again" stops being nearly free and the decoder has to use the sentence (without it, a model
 trained on our corpus copies its input and generates standing); ``time_input`` feeds the
@@ -22,7 +22,7 @@ length while training; generation plans it from the sentence with the checkpoint
 ``length_model`` (:class:`motionlang.models.length.SentenceLength`) or takes it from the
 caller, and stops there at the latest.
 
-A third one, ``rollout`` (scheduled sampling, Bengio et al. 2015): while training, each
+Also ``rollout`` (scheduled sampling, Bengio et al. 2015): while training, each
 previous-frame input is, with probability ``rollout``, the frame the model itself sampled
 at the step before instead of the true one (no gradient through the sample); the
 probability ramps up linearly over ``rollout_warmup`` optimiser steps. Teacher forcing alone
@@ -32,7 +32,7 @@ own frames makes it follow the sentence instead. It decodes step by step (slower
 validation loss of such a model (``loss`` in eval mode) is computed the same way with a
 fixed RNG, so that the best epoch is the one that does best on its own frames.
 
-A fourth, ``energy_weight``: a term on the *local speeds* of the expected frames
+And ``energy_weight``: a term on the *local speeds* of the expected frames
 (sum_k pi_k mu_k) against the reference's over ~1 s windows
 (:func:`motionlang.models.sequence_losses.energy_loss`, the two-stream model's remedy for
 motions that die down to standing). It does not care about phase, only about moving as
@@ -50,7 +50,7 @@ from motionlang.models import mdn
 from motionlang.models.checkpoint import Seq2SeqCheckpoint
 from motionlang.models.length import SentenceLength
 from motionlang.models.recurrent import AdditiveAttention, BiGRUEncoder, StackedDecoder
-from motionlang.models.sequence_losses import energy_loss, frame_mask
+from motionlang.models.sequence_losses import energy_loss
 from motionlang.models.seq2seq_config import L2MConfig  # noqa: F401 (re-exported)
 
 
@@ -204,7 +204,8 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
 
     def loss(self, batch: dict) -> dict[str, torch.Tensor]:
         """batch: ``tokens`` (B, L), ``token_lengths`` (B,), ``motion`` (B, T, F) padded,
-        ``motion_lengths`` (B,). Losses are means over valid frames; ``nll`` is the
+        ``motion_lengths`` (B,). Losses are means over valid frames (``energy``: valid frame
+        pairs); ``nll`` is the
         frame's negative log density (surrogate or exact; per-feature weighted by
         ``config.loss_weights`` when set), ``active_bce`` the flag's; ``energy`` (with
         ``config.energy_weight`` > 0) the local-speed term of the expected frames."""
@@ -237,7 +238,7 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
             # the expected frames must move as much as the reference does, wherever the
             # sample of the step before has taken the motion (phase-free, ~1 s windows)
             mean = mdn.mixture_mean(params).reshape(B, T, -1)
-            energy = energy_loss(mean, motion, frame_mask(lengths, B, T).to(motion),
+            energy = energy_loss(mean, motion, valid.reshape(B, T).to(motion),
                                  self.config.energy_window)
             out["loss"] = out["loss"] + self.config.energy_weight * energy
             out["energy"] = energy.detach()

@@ -35,7 +35,8 @@ class TwoStreamData:
         splits: ``{"train"|"val"|"test": [record ids]}``.
         records: ``{id: record}`` (``annotations``, ``meta``, ``n_frames`` at 100 Hz).
         sequences: ``{id: (T, 66) float32}`` normalised features at 12.5 Hz.
-        items: per split, ``[{"motion", "sentence", "id"}]`` (one per description).
+        items: per split, ``[{"motion", "sentence", "id"}]`` (one per description; with
+            ``mirror`` the mirrored training items also carry ``"mirrored": True``).
     """
 
     features: Any

@@ -1,6 +1,6 @@
-"""Loss terms of the two-stream model, each a masked mean over valid frames.
-
-Frames are model features (normalised); masks are (B, T) with 1 on valid frames.
+"""Loss terms of the two-stream model: the embedding and discriminator terms here; the
+masked frame terms (pose, velocity, energy) are :mod:`motionlang.models.sequence_losses`',
+re-exported.
 """
 from __future__ import annotations
 

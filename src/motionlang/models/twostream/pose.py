@@ -19,7 +19,7 @@ Options beyond the paper (``TwoStreamConfig.z_every_step`` / ``time_input`` /
 initial state, the decoder has to carry a whole sequence of actions in a state it also
 overwrites every step, and our models (h 128) lost the order of actions even when decoding a
 motion from its own embedding. Measured (README): z and the elapsed time alone did not bring
-the order back; with the phase-free energy loss (``losses.energy_loss``), z and the progress
+the order back; with the phase-free energy loss (``sequence_losses.energy_loss``), z and the progress
 input, up to 60 % of the orders come out right.
 """
 from __future__ import annotations
