@@ -80,6 +80,23 @@ def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
     assert set(l2m.config.loss_weights) == {1.0, 5.0}
     assert l2m.config.energy_weight == 2.5
     assert "energy" in json.loads((l2m_dir / "history.json").read_text())[-1]["train"]
+    # scripts/l2m_word_use.py on a word of the held-out sentences, and on an absent one
+    import re
+    one = build_pairs(corpus, offsets=1)           # the script's pairs: one offset
+    held_out = [one.vocab.decode(it["tokens"]) for split in ("val", "test")
+                for it in one.items.get(split, [])]
+    word = max(held_out[0].split(), key=len)
+    n = sum(bool(re.search(rf"\b{re.escape(word)}\b", s)) for s in held_out)
+    script = Path(__file__).resolve().parents[1] / "scripts" / "l2m_word_use.py"
+    run = [sys.executable, str(script), "--data", str(corpus), "--model",
+           str(l2m_dir / "model.pt"), "--samples", "1", "--feature", "root_vx"]
+    res = subprocess.run(run + ["--word", word], capture_output=True, text=True)
+    assert res.returncode == 0, res.stderr
+    lines = res.stdout.splitlines()
+    assert lines[0].startswith(f"{min(n, 48)} validation/test pairs with {word!r}")
+    assert len([l for l in lines if "NLL/frame teacher-forced" in l]) == 2
+    res = subprocess.run(run + ["--word", "zzzz"], capture_output=True, text=True)
+    assert res.returncode != 0 and "no validation or test sentence holds 'zzzz'" in res.stderr
     m2l = MotionToLanguage.load(m2l_dir / "model.pt")
     assert m2l.features is not None and len(m2l.vocab) == m2l.config.vocab_size
     train_ids = (m2l_dir / "splits" / "train.txt").read_text().split()
