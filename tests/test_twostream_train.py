@@ -226,7 +226,8 @@ def test_train_command(corpus, tmp_path, monkeypatch, capsys):
     assert (tmp_path / "g.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     saved = np.load(tmp_path / "g.npz")
     assert saved["positions"].shape == (6, 21, 3) and float(saved["fps"]) == 12.5
-    capsys.readouterr()
+    printed = capsys.readouterr().out       # deterministic: no likelihood, no "nan"
+    assert "1. 6 frames  -> " in printed and "log L" not in printed and "nan" not in printed
     assert main(["generate", "a person walks", "--model", str(out), "-o",
                  str(tmp_path / "g.bvh")]) == 2
     assert "not joint angles" in capsys.readouterr().err and not (tmp_path / "g.bvh").exists()

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 from pathlib import Path
 
 import numpy as np
@@ -277,7 +278,9 @@ def cmd_generate(args: argparse.Namespace) -> int:
         float(getattr(getattr(model, "features", None), "fps", FPS))
     for i, (result, score) in enumerate(hyps, 1):
         n = len(result.joint_angles) if hasattr(result, "joint_angles") else len(result)
-        line = f"{i}. log L = {score:10.2f}  {n} frames"
+        # the two-stream model is deterministic: it has no likelihood to rank by
+        likelihood = "" if math.isnan(score) else f" log L = {score:10.2f} "
+        line = f"{i}.{likelihood} {n} frames"
         if i == 1 or args.all:
             path = out if i == 1 else out.with_name(f"{out.stem}_{i}{out.suffix}")
             _write(result, path, f"{args.text} (#{i})", fps)
