@@ -401,6 +401,37 @@ def test_l2m_rollout_is_teacher_forcing_at_zero_and_feeds_own_frames_at_one():
                                                  batch["motion"]).mu)
 
 
+def test_l2m_rollout_on_expected_frames_and_their_mean_decoding():
+    from motionlang.decoding.seq2seq import generate_features
+    from motionlang.models import mdn
+    batch = make_batch()
+    model = tiny("l2m", False, time_input=True, rollout=1.0, rollout_input="mean")
+    model.train()
+    with torch.no_grad():
+        rolled = model(batch["tokens"], batch["token_lengths"], batch["motion"])
+        # replayed by hand: each step fed the expected frame of the step before; no draw
+        state = model.encode(batch["tokens"], batch["token_lengths"])
+        x = torch.zeros(4, F_DIM)
+        for t in range(batch["motion"].shape[1]):
+            p, state = model.step(state, x)
+            torch.testing.assert_close(p.mu, rolled.mu[:, t])
+            x = mdn.mixture_mean(p)
+    # mean decoding of such a model feeds and returns the expected frames, not the modes
+    model.eval()
+    (frames, _), = generate_features(model, [1, 4, 5, 2], method="mean", max_frames=6,
+                                     min_frames=6)
+    state = model.encode(torch.tensor([[1, 4, 5, 2]]), torch.tensor([4]))
+    x = torch.zeros(1, F_DIM)
+    with torch.no_grad():
+        for t in range(6):
+            p, state = model.step(state, x)
+            x = mdn.mixture_mean(p)
+            np.testing.assert_allclose(frames[t], x[0].numpy(), rtol=1e-5, atol=1e-6)
+    assert not np.allclose(frames[-1], mdn.mode_frame(p)[0].numpy())
+    with pytest.raises(MotionlangError):
+        tiny("l2m", False, rollout_input="mode")
+
+
 def test_l2m_rollout_ramps_up_and_resumes_with_the_weights():
     model = tiny("l2m", False, rollout=0.6, rollout_warmup=4)
     batch = make_batch()

@@ -80,6 +80,9 @@ def _add_train(sub, name: str, help_: str) -> None:
                             "(root_vx, root_vz, root_dyaw) in the frame NLL (paper: 1)")
         p.add_argument("--rollout-warmup", type=int, default=d.rollout_warmup, metavar="STEPS",
                        help="optimiser steps over which that probability ramps up from 0")
+        p.add_argument("--rollout-input", choices=("sample", "mean"), default=d.rollout_input,
+                       help="own frame fed back: a draw from the mixture, or its expected "
+                            "frame (then generate with --method mean)")
         p.add_argument("--energy", type=float, default=d.energy_weight, metavar="W",
                        help="weight of a loss on the local speeds of the expected frames "
                             "against the reference's, over ~1 s windows (paper: 0)")
@@ -163,6 +166,7 @@ def cmd_train(args: argparse.Namespace) -> int:
                                            progress_input=args.progress_input,
                                            rollout=args.rollout,
                                            rollout_warmup=args.rollout_warmup,
+                                           rollout_input=args.rollout_input,
                                            loss_weights=loss_weights,
                                            energy_weight=args.energy,
                                            max_frames=int(1.5 * longest), **sizes),

@@ -21,7 +21,7 @@ import torch
 
 from motionlang.decoding.beam import select_state
 from motionlang.models.mdn import (MixtureParams, active_log_prob, mixture_log_prob,
-                                   mode_frame, sample)
+                                   mixture_mean, mode_frame, sample)
 
 MotionStep = Callable[[Any, torch.Tensor], "tuple[MixtureParams, Any]"]
 
@@ -130,10 +130,11 @@ def mean_decode(step: MotionStep, state: Any, *, batch_size: int, max_frames: in
                 start: torch.Tensor | None = None, dim: int | None = None,
                 threshold: float = 0.5, min_frames: int = 1,
                 generator: torch.Generator | None = None,
-                sample_frames: bool = False, temperature: float = 1.0
-                ) -> list[MotionHypothesis]:
+                sample_frames: bool = False, temperature: float = 1.0,
+                expected: bool = False) -> list[MotionHypothesis]:
     """Decoding one motion per row: each frame is the mean of the heaviest mixture component
-    (or, with ``sample_frames``, a draw from the mixture: ancestral sampling), and the motion
+    (with ``expected``, the mixture's mean sum_k pi_k mu_k; with ``sample_frames``, a draw
+    from the mixture: ancestral sampling), and the motion
     ends at the first frame whose P(active) < ``threshold`` (or the cap), but not before
     ``min_frames``. Scores are the log likelihood of the chosen frames and flags (under the
     model's own distribution, whatever the sampling ``temperature``: see ``mdn.sample``).
@@ -149,7 +150,7 @@ def mean_decode(step: MotionStep, state: Any, *, batch_size: int, max_frames: in
     for t in range(max_frames):
         params, state = step(state, prev)
         x = (sample(params, 1, generator, temperature)[0][:, 0] if sample_frames
-             else mode_frame(params))
+             else mixture_mean(params) if expected else mode_frame(params))
         a = (torch.sigmoid(params.active_logit) >= threshold).float()
         if t == max_frames - 1:
             a = torch.zeros_like(a)

@@ -134,7 +134,8 @@ def generate_features(model: LanguageToMotion, sentence: str | Sequence[int], *,
     """Sentence -> W motions as raw features (T, F) with their log likelihood, best first.
 
     method: "beam" (the sampled beam, ``samples`` candidates per hypothesis and step),
-    "mean" (one deterministic motion from the heaviest component's means) or "sample"
+    "mean" (one deterministic motion from the heaviest component's means, or the expected
+    frames for a model trained on those: ``rollout_input="mean"``) or "sample"
     (W independent ancestral samples, ranked by log likelihood). The library default stays
     the paper's sampled beam; the CLI's is "sample" (the beam favours standing still).
     length_norm: rank by log likelihood per frame ("beam" and "sample").
@@ -160,8 +161,10 @@ def generate_features(model: LanguageToMotion, sentence: str | Sequence[int], *,
     cap = planned or n_frames or max_frames or model.config.max_frames
     F = model.config.n_features
     if method == "mean":
+        # a model trained on its own expected frames continues from those
         hyps = mean_decode(model.step, state, batch_size=1, max_frames=cap, dim=F,
-                           min_frames=min_frames)
+                           min_frames=min_frames,
+                           expected=model.config.rollout_input == "mean")
     elif method == "sample":
         hyps = sample_decode(model.step, state, width=width, max_frames=cap, dim=F,
                              min_frames=min_frames, length_norm=length_norm,

@@ -24,7 +24,9 @@ caller, and stops there at the latest.
 
 Also ``rollout`` (scheduled sampling, Bengio et al. 2015): while training, each
 previous-frame input is, with probability ``rollout``, the frame the model itself sampled
-at the step before instead of the true one (no gradient through the sample); the
+at the step before instead of the true one (no gradient through the sample; with
+``rollout_input="mean"`` its expected frame instead of a draw, for a model that generates
+deterministically with mean decoding); the
 probability ramps up linearly over ``rollout_warmup`` optimiser steps. Teacher forcing alone
 teaches "continue the frames you are shown": on our corpus such a model, left to run on its
 own frames, settles into standing even when primed with true frames. Training on its
@@ -70,6 +72,9 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
                                            or not all(w >= 0 for w in c.loss_weights)):
             raise MotionlangError(f"L2MConfig.loss_weights must be {c.n_features} weights >= 0, "
                                   f"got {len(c.loss_weights)} (min {min(c.loss_weights, default=0)})")
+        if c.rollout_input not in ("sample", "mean"):
+            raise MotionlangError(f"L2MConfig.rollout_input must be 'sample' or 'mean', not "
+                                  f"{c.rollout_input!r}")
         if not c.input_noise >= 0:
             raise MotionlangError(f"L2MConfig.input_noise must be >= 0, not {c.input_noise!r}")
         if not (c.energy_weight >= 0 and c.energy_window >= 3 and c.energy_window % 2 == 1):
@@ -190,7 +195,9 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
             steps.append(params)
             if t + 1 < T:
                 with torch.no_grad():
-                    own = mdn.sample(params.flatten(), 1, generator)[0][:, 0]
+                    own = (mdn.mixture_mean(params.flatten())
+                           if self.config.rollout_input == "mean"
+                           else mdn.sample(params.flatten(), 1, generator)[0][:, 0])
                 use_own = torch.rand(B, 1, generator=generator) < p
                 x = torch.where(use_own, own, prev[:, t + 1])
         return mdn.MixtureParams(*(torch.cat([getattr(s, f) for s in steps], dim=1)

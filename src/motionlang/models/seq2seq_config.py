@@ -59,6 +59,9 @@ class L2MConfig:
     progress_input: bool = False
     rollout: float = 0.0        # scheduled sampling: P(feed own sampled frame) while training
     rollout_warmup: int = 0     # optimiser steps over which that probability ramps up from 0
+    # what "its own frame" is: a draw from the mixture ("sample") or its expected frame
+    # sum_k pi_k mu_k ("mean"; such a model generates with mean decoding of that frame)
+    rollout_input: str = "sample"
     # per-feature weights of the frame NLL (length n_features; None = all 1, the paper's):
     # e.g. the root's ground velocity made to count more (train l2m --root-weight)
     loss_weights: list[float] | None = None
