@@ -195,6 +195,14 @@ def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
     with np.load(sampled) as z:
         n = {k: z[k].shape for k in z.files}
     assert any(len(shape) >= 1 and 6 <= shape[0] <= 12 for shape in n.values()), n
+    # without --method, a model trained on its expected frames decodes those: one motion
+    capsys.readouterr()
+    assert main(["generate", "a person walks forward", "--model", str(l2m_dir / "model.pt"),
+                 "-o", str(tmp_path / "mean.npz"), "-w", "2", "--max-frames", "12"]) == 0
+    assert [l[:3] for l in capsys.readouterr().out.splitlines()] == ["1. "]
+    assert main(["generate", "a person walks", "--model", str(l2m_dir / "model.pt"), "-o",
+                 str(tmp_path / "t.npz"), "--temperature", "0.5"]) == 2
+    assert "add --method sample" in capsys.readouterr().err
 
 
 def test_custom_bvh_folder_with_position_features(corpus, tmp_path, capsys):

@@ -270,6 +270,12 @@ def cmd_generate(args: argparse.Namespace) -> int:
         raise MotionlangError("--temperature applies to 'sample' and 'beam'; mean decoding "
                               "draws nothing")
     model = load_any_t2m(_model_path(args.model, "l2m"))
+    if args.method is None:   # how the model was trained to continue its own frames
+        expected = getattr(getattr(model, "config", None), "rollout_input", None) == "mean"
+        args.method = "mean" if expected else "sample"
+        if expected and args.temperature != 1.0:
+            raise MotionlangError("--temperature: this model generates with mean decoding "
+                                  "(trained on its expected frames); add --method sample")
     if args.temperature != 1.0 and getattr(model, "kind", None) == "twostream":
         raise MotionlangError("--temperature applies to L2M models; the two-stream model is "
                               "deterministic")
@@ -460,10 +466,11 @@ def register(subparsers) -> None:
                         "models) or .npz (joint positions and fps)")
     p.add_argument("--model", help="L2M model file (default: the packaged one)")
     p.add_argument("-w", "--width", type=int, default=5, help="hypotheses (samples or beam width)")
-    p.add_argument("--method", choices=("sample", "beam", "mean"), default="sample",
+    p.add_argument("--method", choices=("sample", "beam", "mean"), default=None,
                    help="W ancestral samples (default), the paper's sampled beam, or "
                         "heaviest-component means (the beam, ranked by likelihood, favours "
-                        "standing still)")
+                        "standing still); default for a model trained on its expected "
+                        "frames (--rollout-input mean): mean")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--max-frames", type=int, default=None,
                    help="length cap in model frames (default: the model's); a two-stream "
