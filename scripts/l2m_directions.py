@@ -2,7 +2,7 @@
 samples and print the distance walked along the body's own axes (summed heading-frame steps,
 metres), the total turn (degrees), and how many samples go the stated way.
 
-    .venv/bin/python scripts/l2m_directions.py [--model M] [--samples 9]
+    .venv/bin/python scripts/l2m_directions.py [--model M] [--samples 9] [--method mean]
 
 The sign of "sideways" is calibrated on a real procedural sample whose sentence says
 "leftwards" (``--data`` corpus), so no axis convention is assumed. Default model: packaged.
@@ -48,15 +48,19 @@ def main() -> None:
     ap.add_argument("--model", default=None)
     ap.add_argument("--data", required=True, help="a procedural corpus (for the sign of left)")
     ap.add_argument("--samples", type=int, default=9)
+    ap.add_argument("--method", choices=("sample", "mean"), default=None,
+                    help="ancestral samples, or the one deterministic motion (default: mean "
+                         "for a model trained on its expected frames, else sample)")
     args = ap.parse_args()
     from motionlang.cli.demo import packaged_model
     from motionlang.decoding.seq2seq import generate_features
     from motionlang.models.l2m import LanguageToMotion
     model = LanguageToMotion.load(args.model or packaged_model("l2m"))
     fs = model.features
+    method = args.method or ("mean" if model.config.rollout_input == "mean" else "sample")
     left = left_sign(fs, Path(args.data))
     for sentence, way in SENTENCES.items():
-        hyps = generate_features(model, sentence, width=args.samples, method="sample",
+        hyps = generate_features(model, sentence, width=args.samples, method=method,
                                  min_frames=5)
         moves = [body_frame_distances(fs, f) for f, _ in hyps]
         right_way = sum({"forward": fwd > 0.2, "backward": fwd < -0.2,
