@@ -97,6 +97,19 @@ def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
     assert len([l for l in lines if "NLL/frame teacher-forced" in l]) == 2
     res = subprocess.run(run + ["--word", "zzzz"], capture_output=True, text=True)
     assert res.returncode != 0 and "no validation or test sentence holds 'zzzz'" in res.stderr
+    # scripts/l2m_feature_fit.py: the data's lag-1 correlation as computed here
+    script = Path(__file__).resolve().parents[1] / "scripts" / "l2m_feature_fit.py"
+    res = subprocess.run([sys.executable, str(script), "--data", str(corpus), "--model",
+                          str(l2m_dir / "model.pt"), "--split", "train", "--features",
+                          "root_vz"], capture_output=True, text=True)
+    assert res.returncode == 0, res.stderr
+    items = one.items["train"][:128]
+    col = l2m.features.names.index("root_vz")
+    now = np.concatenate([it["motion"][1:, col] for it in items])
+    before = np.concatenate([it["motion"][:-1, col] for it in items])
+    row = [l for l in res.stdout.splitlines() if "root_vz" in l][0].split()
+    assert float(row[2]) == pytest.approx(np.corrcoef(now, before)[0, 1], abs=1e-3)
+    assert -1 <= float(row[4]) <= 1 and float(row[6]) > 0
     m2l = MotionToLanguage.load(m2l_dir / "model.pt")
     assert m2l.features is not None and len(m2l.vocab) == m2l.config.vocab_size
     train_ids = (m2l_dir / "splits" / "train.txt").read_text().split()
