@@ -58,12 +58,11 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     torch.set_num_threads(1)
 
-    from pathlib import Path
-
+    from motionlang.cli.demo import packaged_model
     from motionlang.decoding.seq2seq import model_dim
     from motionlang.models.l2m import LanguageToMotion
     from motionlang.training.seq2seq_data import build_pairs
-    path = args.model or Path(__file__).resolve().parents[1] / "src/motionlang/data/models/l2m.pt"
+    path = args.model or packaged_model("l2m")
     model = LanguageToMotion.load(path).eval()
     names = list(model.features.names[:model_dim(model.features)])
     wanted = args.features.split(",")
