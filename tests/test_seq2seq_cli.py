@@ -184,6 +184,23 @@ def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
     rep = json.loads(report.read_text())
     assert rep["l2m_round_trip"]["method"] == "sample" and rep["l2m_round_trip"]["width"] == 2
     assert "| L2M round trip (sample) |" in report.with_suffix(".md").read_text()
+    # ranked by another M2L: a copy of the describer is another file, so it is allowed
+    import shutil
+    shutil.copy(m2l_dir / "model.pt", tmp_path / "ranker.pt")
+    assert main(["evaluate", "--m2l", str(m2l_dir / "model.pt"), "--l2m",
+                 str(l2m_dir / "model.pt"), "--data", str(corpus), "--split", "train", "-w", "2",
+                 "--limit", "2", "--l2m-method", "sample", "--l2m-width", "3",
+                 "--l2m-rerank", str(tmp_path / "ranker.pt"), "-o", str(report)]) == 0
+    rep = json.loads(report.read_text())
+    assert rep["l2m_round_trip"]["rerank"] == str(tmp_path / "ranker.pt")
+    for opts, msg in (([], "the reranker must not be the describer"),
+                      (["--l2m-width", "1"], "needs several motions per sentence")):
+        assert main(["evaluate", "--m2l", str(m2l_dir / "model.pt"), "--l2m",
+                     str(l2m_dir / "model.pt"), "--data", str(corpus), "--l2m-method", "sample",
+                     "--l2m-width", "3", "--l2m-rerank", str(m2l_dir / "model.pt"), *opts,
+                     "-o", str(tmp_path / "rr.json")]) == 2
+        assert msg in capsys.readouterr().err
+    assert not (tmp_path / "rr.json").exists()
     assert main(["evaluate", "--m2l", str(m2l_dir / "model.pt"), "--data", str(corpus),
                  "--l2m-width", "0"]) == 2
     assert "--l2m-width must be >= 1" in capsys.readouterr().err

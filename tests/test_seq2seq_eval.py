@@ -10,6 +10,7 @@ from test_seq2seq_api import WORDS, items
 from test_seq2seq_models import tiny
 
 from motionlang.datasets.text import normalize
+from motionlang.errors import MotionlangError
 from motionlang.evaluation import seq2seq_eval as ev
 from motionlang.training.collate import collate_pairs
 from motionlang.training.trainer import TrainConfig, Trainer
@@ -122,3 +123,52 @@ def test_actions_named_by_place_on_hand_made_descriptions():
                    "only": 0.5, "n_only": 2}
     empty = ev.actions_named([("m2", "s", "a person bows")], truths)
     assert empty["only"] == 1.0 and empty["n_first"] == 0 and empty["first"] != empty["first"]
+
+
+def test_sentence_log_probs_equal_stepwise_decoding_in_any_batch():
+    from motionlang.decoding.rerank import sentence_log_probs
+    rng = np.random.default_rng(3)
+    for attention in (False, True):
+        m2l = tiny("m2l", attention).eval()
+        motions = [rng.normal(size=(T, m2l.config.n_features)).astype(np.float32)
+                   for T in (5, 9, 7)]
+        tokens = [1, 4, 6, 5, 2]
+        together = sentence_log_probs(m2l, motions, tokens)
+        for m, score in zip(motions, together):
+            # one motion alone, word by word through the decoding step beam search uses
+            with torch.no_grad():
+                state = m2l.encode(torch.as_tensor(m)[None], torch.tensor([len(m)]))
+                total = 0.0
+                for prev, nxt in zip(tokens[:-1], tokens[1:]):
+                    logp, state = m2l.step(state, torch.tensor([prev]))
+                    total += float(logp[0, nxt])
+            assert score == pytest.approx(total, abs=1e-4)
+        assert len(set(np.round(together, 4))) == 3          # the motions matter
+        # text goes through the model's vocabulary: the same ids, the same scores
+        assert sentence_log_probs(m2l, motions, "w4 w6 w5") == pytest.approx(together)
+
+
+def test_rerank_puts_the_motion_the_sentence_describes_first(trained):
+    from motionlang.decoding.rerank import rerank
+    m2l, frames, refs = trained
+    up, down = frames["m0"], frames["m1"]             # rising / falling first feature
+    for sentence, want in ((refs["m0"][0], up), (refs["m1"][0], down)):
+        # the L2M's own ranking (second item) says the other one: the M2L decides
+        other = down if want is up else up
+        ranked = rerank([(other, 0.0), (want, -9.0)], m2l, sentence)
+        assert ranked[0][0] is want and ranked[0][1] == -9.0
+        assert ranked[0][2] > ranked[1][2]
+
+
+def test_round_trip_reranked_by_another_m2l(trained):
+    import copy
+    m2l, frames, refs = trained
+    l2m = tiny("l2m", False)
+    l2m.vocab = WORDS
+    few = {"m0": refs["m0"], "m1": refs["m1"]}
+    with pytest.raises(MotionlangError, match="must not be its describer"):
+        ev.evaluate_round_trip(l2m, m2l, few, 0.5, method="sample", width=3, max_frames=8,
+                               reranker=m2l)
+    res = ev.evaluate_round_trip(l2m, m2l, few, 0.5, method="sample", width=3, max_frames=8,
+                                 reranker=copy.deepcopy(m2l))
+    assert res["n_sentences"] == 2 and len(res["descriptions"]) == 2

@@ -320,6 +320,15 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         raise MotionlangError("--l2m-temperature applies to 'sample' and 'beam'; mean decoding "
                               "draws nothing")
     m2l_path = Path(args.m2l)
+    if args.l2m_rerank:
+        if not args.l2m:
+            raise MotionlangError("--l2m-rerank ranks the round trip's motions: give --l2m")
+        if args.l2m_method == "mean" or args.l2m_width < 2:
+            raise MotionlangError("--l2m-rerank needs several motions per sentence: "
+                                  "--l2m-method sample or beam with --l2m-width > 1")
+        if Path(args.l2m_rerank).resolve() == m2l_path.resolve():
+            raise MotionlangError(f"--l2m-rerank {args.l2m_rerank}: the reranker must not be "
+                                  "the describer (--m2l), which would grade its own choice")
     m2l = MotionToLanguage.load(m2l_path)
     splits = load_splits(args.splits or m2l_path.parent / "splits")
     for name in ("train", args.split):
@@ -344,11 +353,14 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     if args.l2m:
         from motionlang.models.l2m import LanguageToMotion
         l2m = LanguageToMotion.load(args.l2m)
+        reranker = None if not args.l2m_rerank else MotionToLanguage.load(args.l2m_rerank)
         report["l2m_round_trip"] = ev.evaluate_round_trip(
             l2m, m2l, {i: refs[i] for i in test}, report["m2l"]["bleu"],
-            method=args.l2m_method, width=args.l2m_width, temperature=args.l2m_temperature)
+            method=args.l2m_method, width=args.l2m_width, temperature=args.l2m_temperature,
+            reranker=reranker)
         report["l2m_round_trip"].update(method=args.l2m_method, width=args.l2m_width,
-                                        temperature=args.l2m_temperature)
+                                        temperature=args.l2m_temperature,
+                                        rerank=args.l2m_rerank)
         from motionlang.evaluation.retrieval import SentenceIndex
         index = SentenceIndex((i, s) for i in sorted(train) for s in refs[i])
         report["nn_round_trip"] = ev.evaluate_round_trip_nn(
@@ -507,5 +519,8 @@ def register(subparsers) -> None:
                    help="hypotheses per sentence for 'sample' / 'beam' (default 1)")
     p.add_argument("--l2m-temperature", type=float, default=1.0, metavar="TAU",
                    help="sampling temperature for 'sample' / 'beam' (see generate --temperature)")
+    p.add_argument("--l2m-rerank", metavar="M2L", help="round trip: describe the hypothesis "
+                   "under which this other M2L model finds the sentence likeliest, not the "
+                   "L2M's likeliest (not the --m2l file)")
     p.set_defaults(func=cmd_evaluate)
 

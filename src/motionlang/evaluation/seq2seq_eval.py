@@ -22,7 +22,9 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from motionlang.datasets.text import normalize
+from motionlang.decoding.rerank import rerank
 from motionlang.decoding.seq2seq import describe_features, generate_features
+from motionlang.errors import MotionlangError
 from motionlang.evaluation import text_metrics as tm
 from motionlang.utils.progress import progress
 
@@ -93,18 +95,28 @@ def evaluate_nn_baseline(train_frames, train_refs, frames, references) -> dict:
 def evaluate_round_trip(l2m, m2l, references: Mapping[str, Sequence[str]],
                         m2l_bleu: float, *, method: str = "mean", width: int = 1,
                         max_frames: int | None = None, seed: int = 0,
-                        temperature: float = 1.0) -> dict:
+                        temperature: float = 1.0, reranker=None) -> dict:
     """Generate from each reference sentence (``decoding.seq2seq.generate_features`` with
     ``method``, ``width``, ``temperature``; its best hypothesis), describe the result, score
     against the motion's references. Both models must share one feature set (same frames).
+
+    reranker: another M2L model; the described hypothesis is then the one of the ``width``
+    under which it finds the sentence likeliest (``decoding.rerank``), not the L2M's likeliest.
+    It must not be ``m2l`` itself, which would grade its own choice.
 
     Returns ``{"n_sentences", "bleu", "bleu1", "rouge_l", ("cider"), "relative",
     "descriptions"}`` with relative = bleu / m2l_bleu (NaN if m2l_bleu is 0) and
     descriptions = [[motion id, sentence, description of the generated motion], ...].
     """
+    if reranker is not None and reranker is m2l:
+        raise MotionlangError("the round trip's reranker must not be its describer")
+
     def motion(sentence):
-        return generate_features(l2m, sentence, width=width, method=method,
-                                 max_frames=max_frames, seed=seed, temperature=temperature)[0][0]
+        hyps = generate_features(l2m, sentence, width=width, method=method,
+                                 max_frames=max_frames, seed=seed, temperature=temperature)
+        if reranker is not None:
+            hyps = rerank(hyps, reranker, sentence)
+        return hyps[0][0]
     return round_trip(motion, m2l, references, m2l_bleu)
 
 
