@@ -193,6 +193,17 @@ def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
                  "--l2m-rerank", str(tmp_path / "ranker.pt"), "-o", str(report)]) == 0
     rep = json.loads(report.read_text())
     assert rep["l2m_round_trip"]["rerank"] == str(tmp_path / "ranker.pt")
+    assert main(["generate", "a person walks", "--model", str(l2m_dir / "model.pt"), "-o",
+                 str(tmp_path / "rr.npz"), "-w", "3", "--method", "sample",
+                 "--rerank", str(m2l_dir / "model.pt")]) == 0
+    lines = [l for l in capsys.readouterr().out.splitlines() if "log P(text | motion)" in l]
+    scores = [float(l.split("=")[1].split()[0]) for l in lines]
+    assert len(scores) == 3 and scores == sorted(scores, reverse=True)
+    assert (tmp_path / "rr.npz").exists()
+    assert main(["generate", "a person walks", "--model", str(l2m_dir / "model.pt"), "-o",
+                 str(tmp_path / "rr1.npz"), "-w", "1", "--rerank", str(m2l_dir / "model.pt")]) == 2
+    assert "--rerank ranks several L2M motions" in capsys.readouterr().err
+    assert not (tmp_path / "rr1.npz").exists()
     for opts, msg in (([], "the reranker must not be the describer"),
                       (["--l2m-width", "1"], "needs several motions per sentence")):
         assert main(["evaluate", "--m2l", str(m2l_dir / "model.pt"), "--l2m",

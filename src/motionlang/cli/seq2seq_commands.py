@@ -279,9 +279,17 @@ def cmd_generate(args: argparse.Namespace) -> int:
     if args.temperature != 1.0 and getattr(model, "kind", None) == "twostream":
         raise MotionlangError("--temperature applies to L2M models; the two-stream model is "
                               "deterministic")
+    extra = {}
+    if args.rerank:
+        if getattr(model, "kind", None) == "twostream" or args.method == "mean" \
+                or args.width < 2:
+            raise MotionlangError("--rerank ranks several L2M motions: an L2M model with "
+                                  "--method sample or beam and -w 2 or more")
+        from motionlang.models.m2l import MotionToLanguage
+        extra["reranker"] = MotionToLanguage.load(args.rerank)
     hyps = generate_any(model, args.text, width=args.width, method=args.method, seed=args.seed,
                         max_frames=args.max_frames, min_frames=args.min_frames,
-                        length_norm=args.length_norm, temperature=args.temperature)
+                        length_norm=args.length_norm, temperature=args.temperature, **extra)
     out = Path(args.output)
     # rate of position outputs: the two-stream model's 12.5 Hz, else the model's features'
     fps = FPS if getattr(model, "kind", None) == "twostream" else \
@@ -289,7 +297,8 @@ def cmd_generate(args: argparse.Namespace) -> int:
     for i, (result, score) in enumerate(hyps, 1):
         n = len(result.joint_angles) if hasattr(result, "joint_angles") else len(result)
         # the two-stream model is deterministic: it has no likelihood to rank by
-        likelihood = "" if math.isnan(score) else f" log L = {score:10.2f} "
+        likelihood = "" if math.isnan(score) else \
+            f" log P(text | motion) = {score:8.2f} " if args.rerank else f" log L = {score:10.2f} "
         line = f"{i}.{likelihood} {n} frames"
         if i == 1 or args.all:
             path = out if i == 1 else out.with_name(f"{out.stem}_{i}{out.suffix}")
@@ -496,6 +505,8 @@ def register(subparsers) -> None:
     p.add_argument("--temperature", type=float, default=1.0, metavar="TAU",
                    help="sample (beam, sample) from the mixture sharpened by TAU: weights "
                         "softmax(logits / TAU), deviations x TAU (default 1: as trained)")
+    p.add_argument("--rerank", metavar="M2L", help="rank the W motions by this M2L model's "
+                   "log P(text | motion) instead of their own likelihood (L2M, sample or beam)")
     p.add_argument("--all", action="store_true", help="write every hypothesis (OUT_2, ...)")
     p.set_defaults(func=cmd_generate)
     p = subparsers.add_parser("evaluate", help="BLEU/ROUGE/CIDEr of M2L, baseline, L2M round trip")

@@ -197,18 +197,24 @@ def describe(model: MotionToLanguage, motion, *, width: int = 5,
 def generate(model: LanguageToMotion, sentence: str | Sequence[int], *, width: int = 5,
              max_frames: int | None = None, method: str = "beam", samples: int = 5,
              seed: int = 0, min_frames: int = 1, length_norm: bool = False,
-             temperature: float = 1.0, skeleton=None, n_frames: int | None = None
-             ) -> list[tuple[Any, float]]:
+             temperature: float = 1.0, skeleton=None, n_frames: int | None = None,
+             reranker: MotionToLanguage | None = None) -> list[tuple[Any, float]]:
     """Sentence -> W decoded motions with their log likelihood, best first.
 
     Each motion is what the feature set's ``decode`` returns: a :class:`Motion` for joint
     angles (on ``skeleton``, default the training subjects' mean build), joint positions
     (T, 21, 3) for position features.
+
+    reranker: an M2L model with the same features; the motions then come ranked by its log
+    P(sentence | motion) instead, and that is the number beside each (``decoding.rerank``).
     """
     fs = _features_of(model)
     out = generate_features(model, sentence, width=width, max_frames=max_frames,
                             method=method, samples=samples, seed=seed, min_frames=min_frames,
                             length_norm=length_norm, temperature=temperature,
                             n_frames=n_frames)
+    if reranker is not None:
+        from motionlang.decoding.rerank import rerank   # it builds on this module
+        out = [(f, m2l_score) for f, _, m2l_score in rerank(out, reranker, sentence)]
     kw = {} if skeleton is None else {"skeleton": skeleton}
     return [(fs.decode(frames_to_features(fs, f), **kw), score) for f, score in out]
