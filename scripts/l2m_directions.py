@@ -3,6 +3,10 @@ samples and print the distance walked along the body's own axes (summed heading-
 metres), the total turn (degrees), and how many samples go the stated way.
 
     .venv/bin/python scripts/l2m_directions.py [--model M] [--samples 9] [--method mean]
+        [--rerank M2L --candidates 10]
+
+With ``--rerank``, each of the ``--samples`` motions is the best of ``--candidates`` draws by
+that M2L's log P(sentence | motion) (``decoding.rerank``).
 
 The sign of "sideways" is calibrated on a real procedural sample whose sentence says
 "leftwards" (``--data`` corpus), so no axis convention is assumed. Default model: packaged.
@@ -51,6 +55,9 @@ def main() -> None:
     ap.add_argument("--method", choices=("sample", "mean"), default=None,
                     help="ancestral samples, or the one deterministic motion (default: mean "
                          "for a model trained on its expected frames, else sample)")
+    ap.add_argument("--rerank", metavar="M2L", help="keep the best of --candidates draws by "
+                    "this M2L's log P(sentence | motion)")
+    ap.add_argument("--candidates", type=int, default=10)
     args = ap.parse_args()
     from motionlang.cli.demo import packaged_model
     from motionlang.decoding.seq2seq import generate_features
@@ -59,9 +66,21 @@ def main() -> None:
     fs = model.features
     method = args.method or ("mean" if model.config.rollout_input == "mean" else "sample")
     left = left_sign(fs, Path(args.data))
+    reranker = None
+    if args.rerank:
+        from motionlang.decoding.rerank import rerank
+        from motionlang.models.m2l import MotionToLanguage
+        reranker = MotionToLanguage.load(args.rerank)
+        if method == "mean" or args.candidates < 2:
+            raise SystemExit("--rerank needs --method sample and --candidates 2 or more")
     for sentence, way in SENTENCES.items():
-        hyps = generate_features(model, sentence, width=args.samples, method=method,
-                                 min_frames=5)
+        if reranker is None:
+            hyps = generate_features(model, sentence, width=args.samples, method=method,
+                                     min_frames=5)
+        else:   # each motion the best of its own draws (seeds 0, 1, ...)
+            hyps = [rerank(generate_features(model, sentence, width=args.candidates,
+                                             method=method, min_frames=5, seed=k),
+                           reranker, sentence)[0][:2] for k in range(args.samples)]
         moves = [body_frame_distances(fs, f) for f, _ in hyps]
         right_way = sum({"forward": fwd > 0.2, "backward": fwd < -0.2,
                          "left": left * side > 0.1, "right": left * side < -0.1}[way]

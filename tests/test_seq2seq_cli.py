@@ -47,7 +47,8 @@ def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
     assert main(["train", "l2m", "--balance", "3", "--data", str(corpus), "--out", str(l2m_dir), *TINY,
                  "--components", "2", "--attention", "--input-noise", "0.3", "--time-input",
                  "--rollout", "0.5", "--rollout-warmup", "2", "--root-weight", "5",
-                 "--progress-input", "--energy", "2.5", "--rollout-input", "mean"]) == 0
+                 "--progress-input", "--energy", "2.5", "--rollout-input", "mean",
+                 "--hide-root-input"]) == 0
     balanced = [l for l in capsys.readouterr().out.splitlines() if l.startswith("balanced:")]
     assert len(balanced) == 1
     before, after = (int(w) for w in balanced[0].split()[1:4:2])
@@ -78,6 +79,8 @@ def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
     assert [n for n, w in zip(names, l2m.config.loss_weights) if w != 1.0] == \
         ["root_vx", "root_vz", "root_dyaw"]
     assert set(l2m.config.loss_weights) == {1.0, 5.0}
+    assert [n for n, w in zip(names, l2m.config.input_mask) if w != 1.0] == \
+        ["root_vx", "root_vz", "root_dyaw"] and set(l2m.config.input_mask) == {0.0, 1.0}
     assert l2m.config.energy_weight == 2.5 and l2m.config.rollout_input == "mean"
     assert "energy" in json.loads((l2m_dir / "history.json").read_text())[-1]["train"]
     # scripts/l2m_word_use.py on a word of the held-out sentences, and on an absent one

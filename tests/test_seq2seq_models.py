@@ -286,6 +286,30 @@ def test_l2m_time_input_changes_the_prediction():
     assert not torch.allclose(after[:, 1:], before[:, 1:])
 
 
+def test_l2m_input_mask_hides_features_of_the_previous_frames(tmp_path):
+    # the hidden feature of earlier frames changes nothing, a visible one does; the mask
+    # is rebuilt from the config on load and applies to the step-by-step decoding too
+    mask = [0.0] + [1.0] * (F_DIM - 1)
+    model, batch = tiny("l2m", False, input_mask=mask).eval(), make_batch()
+    model.save(tmp_path / "m.pt")
+    model = type(model).load(tmp_path / "m.pt").eval()
+    assert model.input_mask.tolist() == mask
+    with torch.no_grad():
+        base = model(batch["tokens"], batch["token_lengths"], batch["motion"]).mu
+        for column, changes in ((0, False), (1, True)):
+            moved = batch["motion"].clone()
+            moved[:, :, column] += 5.0
+            mu = model(batch["tokens"], batch["token_lengths"], moved).mu
+            assert torch.allclose(mu, base) != changes
+        state = model.encode(batch["tokens"][:1], batch["token_lengths"][:1])
+        frame = batch["motion"][:1, 0]
+        a, _ = model.step(state, frame)
+        b, _ = model.step(state, frame + torch.eye(F_DIM)[0] * 5.0)
+    torch.testing.assert_close(a.mu, b.mu)
+    with pytest.raises(MotionlangError, match="input_mask must have"):
+        tiny("l2m", False, input_mask=[1.0])
+
+
 def test_l2m_progress_input():
     """The fraction done, t / (T - 1), reaches the decoder: 0 at the first frame whatever
     the length, then it depends on the length; padding still changes nothing."""

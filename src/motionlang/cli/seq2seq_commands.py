@@ -78,6 +78,9 @@ def _add_train(sub, name: str, help_: str) -> None:
         p.add_argument("--root-weight", type=float, default=1.0, metavar="W",
                        help="weight of the root's ground velocity and heading change "
                             "(root_vx, root_vz, root_dyaw) in the frame NLL (paper: 1)")
+        p.add_argument("--hide-root-input", action="store_true",
+                       help="the decoder does not read the previous frame's root velocity and "
+                            "heading change (it still predicts them; not in the paper)")
         p.add_argument("--rollout-warmup", type=int, default=d.rollout_warmup, metavar="STEPS",
                        help="optimiser steps over which that probability ramps up from 0")
         p.add_argument("--rollout-input", choices=("sample", "mean"), default=d.rollout_input,
@@ -92,14 +95,15 @@ def _add_train(sub, name: str, help_: str) -> None:
 ROOT_MOTION = ("root_vx", "root_vz", "root_dyaw")
 
 
-def root_loss_weights(features, weight: float) -> list[float]:
-    """Per-feature NLL weights: ``weight`` for the root's ground velocity and heading change
-    (``ROOT_MOTION``), 1 elsewhere; the model's features (active flag excluded)."""
+def root_loss_weights(features, weight: float, option: str = "--root-weight") -> list[float]:
+    """Per-feature factors: ``weight`` for the root's ground velocity and heading change
+    (``ROOT_MOTION``), 1 elsewhere; the model's features (active flag excluded). NLL weights
+    (``--root-weight``) and, with weight 0, the input mask of ``--hide-root-input``."""
     from motionlang.decoding.seq2seq import model_dim
     names = list(features.names)[:model_dim(features)]
     missing = [n for n in ROOT_MOTION if n not in names]
     if missing:
-        raise MotionlangError(f"--root-weight needs features with {', '.join(ROOT_MOTION)} "
+        raise MotionlangError(f"{option} needs features with {', '.join(ROOT_MOTION)} "
                               f"(angles with the root trajectory, or positions); these have no "
                               f"{', '.join(missing)}")
     return [weight if n in ROOT_MOTION else 1.0 for n in names]
@@ -143,6 +147,9 @@ def cmd_train(args: argparse.Namespace) -> int:
     loss_weights = None
     if args.model_kind == "l2m" and args.root_weight != 1.0:   # before anything is written
         loss_weights = root_loss_weights(data.features, args.root_weight)
+    input_mask = None
+    if args.model_kind == "l2m" and args.hide_root_input:
+        input_mask = root_loss_weights(data.features, 0.0, "--hide-root-input")
     out = Path(args.out)
     save_splits(data.splits, out / "splits")
     log_command(out / "commands.jsonl", args)
@@ -168,6 +175,7 @@ def cmd_train(args: argparse.Namespace) -> int:
                                            rollout_warmup=args.rollout_warmup,
                                            rollout_input=args.rollout_input,
                                            loss_weights=loss_weights,
+                                           input_mask=input_mask,
                                            energy_weight=args.energy,
                                            max_frames=int(1.5 * longest), **sizes),
                                  data.vocab, features=data.features)

@@ -22,6 +22,11 @@ length while training; generation plans it from the sentence with the checkpoint
 ``length_model`` (:class:`motionlang.models.length.SentenceLength`) or takes it from the
 caller, and stops there at the latest.
 
+``input_mask`` (per feature, 0 = hidden) keeps features of the previous frames from the
+decoder while it still predicts them: with the root's ground velocity and heading change
+hidden, the way the body moves cannot be copied from the frame before and has to come from
+the sentence and the rest of the pose.
+
 Also ``rollout`` (scheduled sampling, Bengio et al. 2015): while training, each
 previous-frame input is, with probability ``rollout``, the frame the model itself sampled
 at the step before instead of the true one (no gradient through the sample; with
@@ -72,6 +77,9 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
                                            or not all(w >= 0 for w in c.loss_weights)):
             raise MotionlangError(f"L2MConfig.loss_weights must be {c.n_features} weights >= 0, "
                                   f"got {len(c.loss_weights)} (min {min(c.loss_weights, default=0)})")
+        if c.input_mask is not None and len(c.input_mask) != c.n_features:
+            raise MotionlangError(f"L2MConfig.input_mask must have {c.n_features} factors, got "
+                                  f"{len(c.input_mask)}")
         if c.rollout_input not in ("sample", "mean"):
             raise MotionlangError(f"L2MConfig.rollout_input must be 'sample' or 'mean', not "
                                   f"{c.rollout_input!r}")
@@ -97,6 +105,9 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
         self.head = mdn.MixtureDensityHead(head_in, c.n_features, c.n_components)
         if not 0.0 <= c.rollout <= 1.0:
             raise MotionlangError(f"L2MConfig.rollout must be in [0, 1], not {c.rollout!r}")
+        # not saved with the weights: it follows from the config
+        self.register_buffer("input_mask", None if c.input_mask is None else
+                             torch.tensor(c.input_mask, dtype=torch.float32), persistent=False)
         # Training forwards seen so far: drives the rollout ramp and resumes with the weights.
         self.register_buffer("rollout_steps", torch.zeros((), dtype=torch.long))
         self._register_load_state_dict_pre_hook(_default_rollout_steps)
@@ -137,6 +148,8 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
         """prev (B, T, F) previous frames (the first at decoding step ``t0``) -> params with
         leading (B, T), hidden (B, layers, H)."""
         B, T = prev.shape[:2]
+        if self.input_mask is not None:   # every path (teacher forcing, rollout, generation)
+            prev = prev * self.input_mask
         ctx = state["context"].unsqueeze(1).expand(-1, T, -1)
         inputs = [ctx, prev]
         if self.config.time_input:

@@ -65,6 +65,12 @@ class L2MConfig:
     # per-feature weights of the frame NLL (length n_features; None = all 1, the paper's):
     # e.g. the root's ground velocity made to count more (train l2m --root-weight)
     loss_weights: list[float] | None = None
+    # per-feature factors on the previous frames the decoder reads (length n_features; None =
+    # all 1, the paper's): 0 hides a feature from the input but still predicts it, e.g. the
+    # root's ground velocity and heading change (train l2m --hide-root-input), so that the
+    # way the body goes cannot be copied from the frame before and must come from the
+    # sentence and the body's own movement
+    input_mask: list[float] | None = None
     # weight of a term on the local speeds of the expected frames (sum_k pi_k mu_k) against
     # the reference's (``sequence_losses.energy_loss``, window ``energy_window`` frames, ~1 s
     # at 10 Hz); 0 = off (the paper's loss). Beyond the paper, as for the two-stream model.
