@@ -255,6 +255,13 @@ def test_evaluate_command(corpus, data, tmp_path, monkeypatch, capsys):
     sampled = json.loads((tmp_path / "eval" / "t2m_report.json").read_text())["results"]["l2m"]
     assert sampled["ape_local"] != mean_l2m["ape_local"]     # other motions were scored
     capsys.readouterr()
+    for opts, msg in ((["--l2m-width", "3"], "--l2m-width applies to --l2m-method sample"),
+                      (["--l2m-method", "sample", "--l2m-rerank", "m2l.pt"],
+                       "--l2m-rerank needs several samples")):
+        assert main(["evaluate-t2m", "--data", str(corpus), "--model", str(tmp_path / "l2m.pt"),
+                     *opts, "-o", str(tmp_path / "rr")]) == 2
+        assert msg in capsys.readouterr().err
+    assert not (tmp_path / "rr").exists()
     assert main(["evaluate-t2m", "--data", str(corpus), "--model", str(tmp_path / "l2m.pt"),
                  "--autoencode", "-o", str(tmp_path / "ae")]) == 2
     assert "--autoencode needs a two-stream model" in capsys.readouterr().err
@@ -264,6 +271,29 @@ def test_evaluate_command(corpus, data, tmp_path, monkeypatch, capsys):
                  "-o", str(tmp_path / "or")]) == 2
     assert "no test motion has 1000 training motions" in capsys.readouterr().err
     assert not (tmp_path / "or").exists()
+
+
+def test_positions_of_the_sample_an_m2l_ranks_first(data):
+    """width W with a reranker: the motion is the best of the same W samples by the M2L's
+    log P(sentence | motion), decoded as without one."""
+    from motionlang.decoding.rerank import rerank
+    from motionlang.decoding.seq2seq import generate_features
+    from motionlang.decoding.t2m import anchor, fit_length, generate_positions21
+    from motionlang.models.m2l import M2LConfig, MotionToLanguage
+    l2m = _tiny_l2m(data)
+    torch.manual_seed(1)
+    m2l = MotionToLanguage(M2LConfig(n_features=66, vocab_size=len(l2m.vocab), enc_hidden=8,
+                                     dec_hidden=8, embed_dim=8, dropout=0.0), l2m.vocab,
+                           features=data.features).eval()
+    sentence = "a person walks forward"
+    samples = generate_features(l2m, sentence, width=4, method="sample", max_frames=8, seed=2)
+    best = rerank(samples, m2l, sentence)[0][0]
+    want = fit_length(anchor(data.features.decode(best)), 8)
+    got = generate_positions21(l2m, sentence, 8, seed=2, method="sample", width=4,
+                               reranker=m2l)
+    np.testing.assert_allclose(got, want, atol=1e-5)
+    likeliest = generate_positions21(l2m, sentence, 8, seed=2, method="sample", width=4)
+    assert likeliest.shape == got.shape
 
 
 def test_generate_any_passes_l2m_options(data):

@@ -179,9 +179,22 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     if args.autoencode and not any(getattr(m, "kind", None) == "twostream"
                                    for m in models.values()):
         raise MotionlangError("--autoencode needs a two-stream model among --model")
+    reranker = None
+    if args.l2m_width < 1:
+        raise MotionlangError(f"--l2m-width must be >= 1, got {args.l2m_width}")
+    if args.l2m_width > 1 and args.l2m_method != "sample":
+        raise MotionlangError("--l2m-width applies to --l2m-method sample; mean decoding "
+                              "gives one motion")
+    if args.l2m_rerank:
+        if args.l2m_width < 2:
+            raise MotionlangError("--l2m-rerank needs several samples: --l2m-method sample "
+                                  "--l2m-width 2 or more")
+        from motionlang.models.m2l import MotionToLanguage
+        reranker = MotionToLanguage.load(args.l2m_rerank)
     data = build_twostream_data(args.data, seed=args.seed, max_seconds=args.max_seconds)
     _, table = compare(models, data, split=args.split, limit=args.limit or None,
-                       l2m_method=args.l2m_method, autoencode=args.autoencode,
+                       l2m_method=args.l2m_method, l2m_width=args.l2m_width,
+                       l2m_reranker=reranker, autoencode=args.autoencode,
                        out_dir=args.output, figures=args.figures, oracle=args.oracle,
                        true_start=args.true_start)
     print(table, end="")
@@ -217,4 +230,8 @@ def register(subparsers) -> None:
     p.add_argument("--l2m-method", choices=("mean", "sample"), default="mean",
                    help="how L2M models generate (default: heaviest-component means; "
                         "sample: one ancestral sample per sentence)")
+    p.add_argument("--l2m-width", type=int, default=1, metavar="W",
+                   help="sample: draw W and keep the likeliest (default 1)")
+    p.add_argument("--l2m-rerank", metavar="M2L", help="sample: keep the one of the W under "
+                   "which this M2L model finds the sentence likeliest")
     p.set_defaults(func=cmd_evaluate)

@@ -95,7 +95,8 @@ def stretch(p: np.ndarray, n_frames: int) -> np.ndarray:
 
 @torch.no_grad()
 def generate_positions21(model, sentence: str, n_frames: int, *, seed: int = 0,
-                         method: str = "mean", skeleton=None) -> np.ndarray:
+                         method: str = "mean", skeleton=None, width: int = 1,
+                         reranker=None) -> np.ndarray:
     """Sentence -> global 21-joint positions (n_frames, 21, 3) metres at 12.5 Hz, anchored
     at the origin facing +Z.
 
@@ -105,7 +106,9 @@ def generate_positions21(model, sentence: str, n_frames: int, *, seed: int = 0,
     features through forward kinematics (``joint_map.positions21``), re-timed to 12.5 Hz,
     then cropped or held at its last frame to ``n_frames`` (an L2M may end earlier);
     ``skeleton``: the body
-    its joint angles drive (default: the training subjects' mean build).
+    its joint angles drive (default: the training subjects' mean build). ``width`` > 1
+    with "sample": the likeliest of that many samples, or with ``reranker`` (an M2L model)
+    the one under which it finds the sentence likeliest (``decoding.rerank``).
     """
     if getattr(model, "kind", None) == "twostream":
         return model.generate_positions(sentence, n_frames)
@@ -114,8 +117,8 @@ def generate_positions21(model, sentence: str, n_frames: int, *, seed: int = 0,
     from motionlang.features.joint_map import positions21
     fps = float(getattr(getattr(model, "features", None), "fps", FPS))
     cap = max(1, int(np.ceil(n_frames * fps / FPS)))
-    result, _ = generate(model, sentence, width=1, method=method, seed=seed,
-                         n_frames=cap, skeleton=skeleton)[0]
+    result, _ = generate(model, sentence, width=width, method=method, seed=seed,
+                         n_frames=cap, skeleton=skeleton, reranker=reranker)[0]
     if isinstance(result, np.ndarray):  # positions features: already (T, 21, 3) at fps
         p = result
         if abs(fps - FPS) > 1e-9:

@@ -213,10 +213,11 @@ def _l2m_on_subjects(results, name, model, data, items, protos, method) -> None:
 def compare(models: dict[str, object], data, *, split: str = "test", limit: int | None = None,
             out_dir: str | Path | None = None, figures: int = 3, baseline: bool = True,
             l2m_method: str = "mean", autoencode: bool = False, true_start: bool = False,
-            oracle: int = 0) -> tuple[dict, str]:
+            oracle: int = 0, l2m_width: int = 1, l2m_reranker=None) -> tuple[dict, str]:
     """Evaluate ``{name: model}`` (anything ``decoding.t2m.generate_positions21`` takes) on
     ``data`` (``TwoStreamData``); L2M models decode with ``l2m_method`` ("mean" or
-    "sample"). Extra rows unless ``baseline`` is False: the no-motion baseline
+    "sample"; with ``l2m_width`` > 1 the likeliest of that many samples, or, with
+    ``l2m_reranker``, the one that M2L model finds the sentence likeliest for). Extra rows unless ``baseline`` is False: the no-motion baseline
     (``still_baseline``), the nearest-neighbour baseline (``retrieval_baseline``) and the
     ground truth (:data:`GROUND_TRUTH`); with ``autoencode``, each
     two-stream model decoding each test motion from its own pose embedding
@@ -238,7 +239,8 @@ def compare(models: dict[str, object], data, *, split: str = "test", limit: int 
         from motionlang.evaluation.t2m_oracle import oracle_generations, oracle_table
         kept, oracle_gens = oracle_generations(data, items, oracle)
     results = {name: evaluate_model(lambda s, t, m=model: generate_positions21(
-                                        m, s, t, method=l2m_method),
+                                        m, s, t, method=l2m_method, width=l2m_width,
+                                        reranker=l2m_reranker),
                                     items, data.features, protos)
                for name, model in models.items()}
     for name, model in models.items():
