@@ -1,0 +1,54 @@
+"""``scripts/l2m_context_probe.py`` (its probes on data whose answer is known) and
+``scripts/corpus_subset.py`` (on a small procedural corpus)."""
+from __future__ import annotations
+
+import importlib.util
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+SCRIPTS = Path(__file__).resolve().parents[1] / "scripts"
+
+
+def load(name: str):
+    spec = importlib.util.spec_from_file_location(name, SCRIPTS / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_probes_find_a_linear_signal_and_no_signal_in_noise():
+    probe = load("l2m_context_probe")
+    rng = np.random.default_rng(0)
+    x = rng.normal(size=(200, 6))
+    assert probe.ridge_r2(x, x @ np.arange(1.0, 7.0)) > 0.99
+    assert probe.ridge_r2(x, rng.normal(size=200)) < 0.05
+    side = x[:, 2] > 0
+    assert probe.probe_accuracy(x, side) > 0.95
+    assert probe.probe_accuracy(x, rng.random(200) > 0.5) < 0.65
+
+
+def test_corpus_subset_links_the_motions_made_only_of_the_given_primitives(tmp_path, capsys):
+    from motionlang.datasets.synth.corpus import write_corpus
+    from motionlang.training.seq2seq_data import primitive_labels
+    src = tmp_path / "corpus"
+    write_corpus(src, 12, seed=3, workers=1, show_progress=False)
+    labels = {m.name[:-len("_meta.json")]: primitive_labels(json.loads(m.read_text()))
+              for m in src.glob("*_meta.json")}
+    first = sorted(labels)[0]
+    only = sorted(set(labels[first]))
+    want = {k for k, v in labels.items() if set(v) <= set(only) and set(v) != {"stand"}}
+    subset = load("corpus_subset")
+    assert subset.main([str(src), str(tmp_path / "sub"), "--only", *only]) == 0
+    got = {p.name[:-len("_meta.json")] for p in (tmp_path / "sub").glob("*_meta.json")}
+    assert first in got and got == want
+    assert all(p.is_symlink() for p in (tmp_path / "sub").iterdir())
+    assert len(list((tmp_path / "sub").iterdir())) == 3 * len(want)
+    assert f"{len(want)} of 12 motions" in capsys.readouterr().out
+    with pytest.raises(SystemExit, match="already exists"):
+        subset.main([str(src), str(tmp_path / "sub"), "--only", *only])
+    with pytest.raises(SystemExit, match="no motion made only of"):
+        subset.main([str(src), str(tmp_path / "none"), "--only", "fly"])
+    assert not (tmp_path / "none").exists() and not (tmp_path / "none.partial").exists()
