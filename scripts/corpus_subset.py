@@ -40,6 +40,8 @@ def main(argv=None) -> int:
     if not kept:
         raise SystemExit(f"{args.source}: no motion made only of {', '.join(args.only)}")
     tmp = args.out.with_name(args.out.name + ".partial")
+    if tmp.exists():
+        raise SystemExit(f"{tmp}: left by an interrupted run; remove it first")
     tmp.mkdir(parents=True)
     for meta in kept:
         stem = meta.name[:-len("_meta.json")]

@@ -68,8 +68,11 @@ def main(argv=None) -> int:
     missing = [n for n in ROOT if n not in fs.names]
     if missing:
         raise SystemExit(f"{path}: the model's features have no {', '.join(missing)}")
+    from motionlang.decoding.seq2seq import encode_sentence
+    # the split of the shipped runs (seed 0); sentences re-encoded in the model's vocabulary
     data = build_pairs(args.data, features=fs.kind, offsets=1, seed=0)
-    items = data.items.get("val", []) + data.items.get("test", [])
+    items = [{**it, "tokens": encode_sentence(model.vocab, data.vocab.decode(it["tokens"]))}
+             for split in ("val", "test") for it in data.items.get(split, [])]
     if len(items) < 2 * args.folds:
         raise SystemExit(f"{args.data}: {len(items)} held-out pairs, too few for "
                          f"{args.folds} folds")

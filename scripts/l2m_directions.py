@@ -65,14 +65,15 @@ def main() -> None:
     model = LanguageToMotion.load(args.model or packaged_model("l2m"))
     fs = model.features
     method = args.method or ("mean" if model.config.rollout_input == "mean" else "sample")
+    if args.rerank and (method == "mean" or args.candidates < 2):
+        raise SystemExit("--rerank needs --method sample and --candidates 2 or more")
     left = left_sign(fs, Path(args.data))
     reranker = None
     if args.rerank:
-        from motionlang.decoding.rerank import rerank
+        from motionlang.decoding.rerank import check_same_features, rerank
         from motionlang.models.m2l import MotionToLanguage
         reranker = MotionToLanguage.load(args.rerank)
-        if method == "mean" or args.candidates < 2:
-            raise SystemExit("--rerank needs --method sample and --candidates 2 or more")
+        check_same_features(model, reranker, f"--rerank {args.rerank}")
     for sentence, way in SENTENCES.items():
         if reranker is None:
             hyps = generate_features(model, sentence, width=args.samples, method=method,

@@ -160,15 +160,90 @@ def test_rerank_puts_the_motion_the_sentence_describes_first(trained):
         assert ranked[0][2] > ranked[1][2]
 
 
-def test_round_trip_reranked_by_another_m2l(trained):
+class StubFeatures:
+    """A feature set of identity frames: what the reranking code needs of one."""
+    kind, fps = "stub", 10.0
+
+    def __init__(self, dim: int):
+        self.dim, self.names = dim, [f"f{i}" for i in range(dim)]
+
+    def to_dict(self) -> dict:
+        return {"kind": self.kind, "names": self.names}
+
+    def decode(self, x):
+        return x
+
+
+def _same_features(*models):
+    for m in models:
+        m.features = StubFeatures(m.config.n_features)
+
+
+def test_round_trip_describes_the_motion_the_reranker_puts_first(trained, monkeypatch):
     import copy
     m2l, frames, refs = trained
     l2m = tiny("l2m", False)
     l2m.vocab = WORDS
+    ranker = copy.deepcopy(m2l)
     few = {"m0": refs["m0"], "m1": refs["m1"]}
     with pytest.raises(MotionlangError, match="must not be its describer"):
         ev.evaluate_round_trip(l2m, m2l, few, 0.5, method="sample", width=3, max_frames=8,
                                reranker=m2l)
+    with pytest.raises(MotionlangError, match="feature sets"):   # none to compare
+        ev.evaluate_round_trip(l2m, m2l, few, 0.5, method="sample", width=3, max_frames=8,
+                               reranker=ranker)
+    _same_features(l2m, ranker)
+    # a ranker that prefers the L2M's least likely sample: that one must be described
+    import motionlang.decoding.rerank as rr
+    monkeypatch.setattr(rr, "sentence_log_probs",
+                        lambda model, motions, sentence: np.arange(len(motions), dtype=float))
+    real_rerank, seen, described = ev.rerank, [], []
+
+    def spy_rerank(hyps, model, sentence):
+        assert model is ranker
+        seen.append([h for h, _ in hyps])
+        return real_rerank(hyps, model, sentence)
+    monkeypatch.setattr(ev, "rerank", spy_rerank)
+    monkeypatch.setattr(ev, "describe_features",
+                        lambda model, x, width: described.append(x) or [("w4 w5", 0.0)])
     res = ev.evaluate_round_trip(l2m, m2l, few, 0.5, method="sample", width=3, max_frames=8,
-                                 reranker=copy.deepcopy(m2l))
-    assert res["n_sentences"] == 2 and len(res["descriptions"]) == 2
+                                 reranker=ranker)
+    assert res["n_sentences"] == 2 and len(seen) == 2 and all(len(c) == 3 for c in seen)
+    assert all(d is c[-1] for d, c in zip(described, seen))
+
+
+def test_generate_ranks_by_the_reranker_and_shows_its_scores(trained, monkeypatch):
+    import copy
+
+    import motionlang.decoding.rerank as rr
+    from motionlang.decoding.seq2seq import generate
+    m2l, _, refs = trained
+    l2m = tiny("l2m", False)
+    l2m.vocab = WORDS
+    ranker = copy.deepcopy(m2l)
+    _same_features(l2m, ranker)
+    plain = generate(l2m, refs["m0"][0], width=3, method="sample", max_frames=6, seed=4)
+    monkeypatch.setattr(rr, "sentence_log_probs",
+                        lambda model, motions, sentence: -np.arange(len(motions), dtype=float)[::-1])
+    ranked = generate(l2m, refs["m0"][0], width=3, method="sample", max_frames=6, seed=4,
+                      reranker=ranker)
+    assert [s for _, s in ranked] == [0.0, -1.0, -2.0]       # the ranker's scores, best first
+    np.testing.assert_allclose(ranked[0][0], plain[-1][0])    # its best: the L2M's last
+    with pytest.raises(MotionlangError, match="as text"):
+        generate(l2m, [1, 4, 2], width=3, method="sample", max_frames=6, reranker=ranker)
+
+
+def test_reranker_features_must_be_the_l2m_features():
+    import types
+
+    from motionlang.decoding.rerank import check_same_features
+    a = types.SimpleNamespace(features=StubFeatures(3))
+    check_same_features(a, types.SimpleNamespace(features=StubFeatures(3)))
+    other = StubFeatures(3)
+    other.names = ["x", "y", "z"]
+    with pytest.raises(MotionlangError, match="--rerank r.pt: .*other feature names"):
+        check_same_features(a, types.SimpleNamespace(features=other), "--rerank r.pt")
+    other = StubFeatures(3)
+    other.kind = "angles"
+    with pytest.raises(MotionlangError, match="stub vs angles"):
+        check_same_features(a, types.SimpleNamespace(features=other))

@@ -273,10 +273,11 @@ def test_evaluate_command(corpus, data, tmp_path, monkeypatch, capsys):
     assert not (tmp_path / "or").exists()
 
 
-def test_positions_of_the_sample_an_m2l_ranks_first(data):
+def test_positions_of_the_sample_an_m2l_ranks_first(data, monkeypatch):
     """width W with a reranker: the motion is the best of the same W samples by the M2L's
-    log P(sentence | motion), decoded as without one."""
-    from motionlang.decoding.rerank import rerank
+    log P(sentence | motion), decoded as without one. A ranker that prefers the L2M's least
+    likely sample shows that its choice, not the L2M's, is decoded."""
+    import motionlang.decoding.rerank as rr
     from motionlang.decoding.seq2seq import generate_features
     from motionlang.decoding.t2m import anchor, fit_length, generate_positions21
     from motionlang.models.m2l import M2LConfig, MotionToLanguage
@@ -287,13 +288,19 @@ def test_positions_of_the_sample_an_m2l_ranks_first(data):
                            features=data.features).eval()
     sentence = "a person walks forward"
     samples = generate_features(l2m, sentence, width=4, method="sample", max_frames=8, seed=2)
-    best = rerank(samples, m2l, sentence)[0][0]
-    want = fit_length(anchor(data.features.decode(best)), 8)
+    # the real ranker scores every sample; then one that likes the last best
+    assert len(set(np.round(rr.sentence_log_probs(m2l, [f for f, _ in samples], sentence),
+                            5))) == 4
+    monkeypatch.setattr(rr, "sentence_log_probs",
+                        lambda model, motions, s: np.arange(len(motions), dtype=float))
+    want = fit_length(anchor(data.features.decode(samples[-1][0])), 8)
     got = generate_positions21(l2m, sentence, 8, seed=2, method="sample", width=4,
                                reranker=m2l)
     np.testing.assert_allclose(got, want, atol=1e-5)
     likeliest = generate_positions21(l2m, sentence, 8, seed=2, method="sample", width=4)
-    assert likeliest.shape == got.shape
+    np.testing.assert_allclose(likeliest, fit_length(anchor(data.features.decode(
+        samples[0][0])), 8), atol=1e-5)
+    assert not np.allclose(likeliest, got)
 
 
 def test_generate_any_passes_l2m_options(data):

@@ -293,8 +293,10 @@ def cmd_generate(args: argparse.Namespace) -> int:
                 or args.width < 2:
             raise MotionlangError("--rerank ranks several L2M motions: an L2M model with "
                                   "--method sample or beam and -w 2 or more")
+        from motionlang.decoding.rerank import check_same_features
         from motionlang.models.m2l import MotionToLanguage
         extra["reranker"] = MotionToLanguage.load(args.rerank)
+        check_same_features(model, extra["reranker"], f"--rerank {args.rerank}")
     hyps = generate_any(model, args.text, width=args.width, method=args.method, seed=args.seed,
                         max_frames=args.max_frames, min_frames=args.min_frames,
                         length_norm=args.length_norm, temperature=args.temperature, **extra)
@@ -346,6 +348,14 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         if Path(args.l2m_rerank).resolve() == m2l_path.resolve():
             raise MotionlangError(f"--l2m-rerank {args.l2m_rerank}: the reranker must not be "
                                   "the describer (--m2l), which would grade its own choice")
+    l2m = reranker = None
+    if args.l2m:
+        from motionlang.models.l2m import LanguageToMotion
+        l2m = LanguageToMotion.load(args.l2m)
+    if args.l2m_rerank:   # before the long M2L evaluation
+        from motionlang.decoding.rerank import check_same_features
+        reranker = MotionToLanguage.load(args.l2m_rerank)
+        check_same_features(l2m, reranker, f"--l2m-rerank {args.l2m_rerank}")
     m2l = MotionToLanguage.load(m2l_path)
     splits = load_splits(args.splits or m2l_path.parent / "splits")
     for name in ("train", args.split):
@@ -367,10 +377,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     report = {"split": args.split, "length_penalty": args.length_penalty,
               "m2l": ev.evaluate_m2l(m2l, test, refs, args.width, args.length_penalty),
               "nearest_neighbour": ev.evaluate_nn_baseline(train, refs, test, refs)}
-    if args.l2m:
-        from motionlang.models.l2m import LanguageToMotion
-        l2m = LanguageToMotion.load(args.l2m)
-        reranker = None if not args.l2m_rerank else MotionToLanguage.load(args.l2m_rerank)
+    if l2m is not None:
         report["l2m_round_trip"] = ev.evaluate_round_trip(
             l2m, m2l, {i: refs[i] for i in test}, report["m2l"]["bleu"],
             method=args.l2m_method, width=args.l2m_width, temperature=args.l2m_temperature,
@@ -406,7 +413,9 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         report["tsne"] = str(args.tsne)
     table = ev.markdown_table({"M2L (top hypothesis)": report["m2l"],
                                "nearest neighbour": report["nearest_neighbour"],
-                               **({f"L2M round trip ({args.l2m_method})":
+                               **({f"L2M round trip ({args.l2m_method}"
+                                   + (f", best of {args.l2m_width} by reranker" if args.l2m_rerank
+                                      else "") + ")":
                                    report["l2m_round_trip"],
                                    "nearest training sentence, round trip":
                                    report["nn_round_trip"]}
@@ -533,7 +542,8 @@ def register(subparsers) -> None:
                    help="rank M2L hypotheses by log P / length**ALPHA (default 0: total, the paper's)")
     p.add_argument("--l2m-method", choices=("mean", "sample", "beam"), default="mean",
                    help="round trip: how each motion is generated (default: heaviest-component "
-                        "means); the likeliest of --l2m-width hypotheses is described")
+                        "means); the likeliest of --l2m-width hypotheses is described (with "
+                        "--l2m-rerank: the one that M2L ranks first)")
     p.add_argument("--l2m-width", type=int, default=1, metavar="W",
                    help="hypotheses per sentence for 'sample' / 'beam' (default 1)")
     p.add_argument("--l2m-temperature", type=float, default=1.0, metavar="TAU",

@@ -189,8 +189,16 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         if args.l2m_width < 2:
             raise MotionlangError("--l2m-rerank needs several samples: --l2m-method sample "
                                   "--l2m-width 2 or more")
+        from motionlang.decoding.rerank import check_same_features
         from motionlang.models.m2l import MotionToLanguage
         reranker = MotionToLanguage.load(args.l2m_rerank)
+        for model in models.values():
+            if getattr(model, "kind", None) == "l2m":
+                check_same_features(model, reranker, f"--l2m-rerank {args.l2m_rerank}")
+    if (args.l2m_rerank or args.l2m_width > 1) and not any(
+            getattr(m, "kind", None) == "l2m" for m in models.values()):
+        raise MotionlangError("--l2m-width and --l2m-rerank apply to L2M models: none among "
+                              "--model")
     data = build_twostream_data(args.data, seed=args.seed, max_seconds=args.max_seconds)
     _, table = compare(models, data, split=args.split, limit=args.limit or None,
                        l2m_method=args.l2m_method, l2m_width=args.l2m_width,
@@ -229,7 +237,8 @@ def register(subparsers) -> None:
                    help="write t2m_table.md, t2m_report.json and trajectory PNGs here")
     p.add_argument("--l2m-method", choices=("mean", "sample"), default="mean",
                    help="how L2M models generate (default: heaviest-component means; "
-                        "sample: one ancestral sample per sentence)")
+                        "sample: one ancestral sample per sentence, or the best of "
+                        "--l2m-width)")
     p.add_argument("--l2m-width", type=int, default=1, metavar="W",
                    help="sample: draw W and keep the likeliest (default 1)")
     p.add_argument("--l2m-rerank", metavar="M2L", help="sample: keep the one of the W under "

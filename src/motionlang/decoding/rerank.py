@@ -8,8 +8,11 @@ first. This is reranking with the reverse model (as in noisy-channel or maximum-
 information decoding), beyond the paper.
 
 An honest round trip must not rank with the model that then describes the motions: that
-model would be graded on the choice it made. ``motionlang evaluate`` therefore refuses a
-reranker file equal to its describer (``--l2m-rerank``).
+model would be graded on the choice it made. ``motionlang evaluate`` therefore refuses the
+describer's own file as reranker (``--l2m-rerank``; a copy of it is not detected).
+
+Both models must read the same frames: :func:`check_same_features` compares their feature
+sets (kind, names, fitted normaliser), since generated frames are in the L2M's feature units.
 """
 from __future__ import annotations
 
@@ -21,8 +24,22 @@ import torch.nn.functional as F
 
 from motionlang.decoding.seq2seq import _normalize, encode_sentence
 from motionlang.errors import MotionlangError
+from motionlang.features.collate import pad_batch
 from motionlang.models.m2l import MotionToLanguage
-from motionlang.training.collate import pad_sequences
+
+
+def check_same_features(l2m, m2l: MotionToLanguage, what: str = "the reranker") -> None:
+    """Raise :class:`MotionlangError` (naming ``what``) unless both models carry the same
+    feature set: kind, feature names and fitted state (normaliser) must match."""
+    fa, fb = getattr(l2m, "features", None), getattr(m2l, "features", None)
+    if fa is None or fb is None:
+        raise MotionlangError(f"{what}: both models need their feature sets to be compared")
+    if fa.to_dict() != fb.to_dict():
+        detail = (f"{fa.kind} vs {fb.kind}" if fa.kind != fb.kind else
+                  "other feature names" if list(fa.names) != list(fb.names) else
+                  "features fitted on other training motions")
+        raise MotionlangError(f"{what}: its features differ from the L2M's ({detail}); rank "
+                              "with an M2L trained on the same data and split")
 
 
 @torch.no_grad()
@@ -43,7 +60,9 @@ def sentence_log_probs(m2l: MotionToLanguage, motions: Sequence[np.ndarray],
                                   f"got {m.shape}")
     m2l.eval()
     ids = encode_sentence(m2l.vocab, sentence)
-    x, lengths = pad_sequences([_normalize(m2l.normalizer, m) for m in motions])
+    x, mask = pad_batch([torch.as_tensor(_normalize(m2l.normalizer, m), dtype=torch.float32)
+                         for m in motions])
+    lengths = mask.sum(1).long()
     tokens = torch.tensor([ids] * len(motions))
     logits = m2l(x, lengths, tokens[:, :-1])                      # (N, L - 1, V)
     logp = F.log_softmax(logits.float(), dim=-1)

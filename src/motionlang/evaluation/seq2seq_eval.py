@@ -22,7 +22,7 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from motionlang.datasets.text import normalize
-from motionlang.decoding.rerank import rerank
+from motionlang.decoding.rerank import check_same_features, rerank
 from motionlang.decoding.seq2seq import describe_features, generate_features
 from motionlang.errors import MotionlangError
 from motionlang.evaluation import text_metrics as tm
@@ -108,8 +108,10 @@ def evaluate_round_trip(l2m, m2l, references: Mapping[str, Sequence[str]],
     "descriptions"}`` with relative = bleu / m2l_bleu (NaN if m2l_bleu is 0) and
     descriptions = [[motion id, sentence, description of the generated motion], ...].
     """
-    if reranker is not None and reranker is m2l:
-        raise MotionlangError("the round trip's reranker must not be its describer")
+    if reranker is not None:
+        if reranker is m2l:
+            raise MotionlangError("the round trip's reranker must not be its describer")
+        check_same_features(l2m, reranker)
 
     def motion(sentence):
         hyps = generate_features(l2m, sentence, width=width, method=method,

@@ -189,7 +189,8 @@ def subject_height(record) -> float | None:
     return None if h is None else float(h)
 
 
-def _l2m_on_subjects(results, name, model, data, items, protos, method) -> None:
+def _l2m_on_subjects(results, name, model, data, items, protos, method, width: int = 1,
+                     reranker=None) -> None:
     """The L2M's counterpart of a true start: its joint angles drive each test subject's
     own body (``mmm_skeleton`` of the subject's height) instead of the mean build. Only for
     angles models; skipped, with a log line, when a test motion's height is unknown (an
@@ -205,7 +206,8 @@ def _l2m_on_subjects(results, name, model, data, items, protos, method) -> None:
         logging.getLogger(__name__).info("%s: no subject heights, no row on their bodies", name)
         return
     gen = {it.id: generate_positions21(model, it.sentence, len(it.target), method=method,
-                                       skeleton=mmm_skeleton(heights[it.id])) for it in items}
+                                       skeleton=mmm_skeleton(heights[it.id]), width=width,
+                                       reranker=reranker) for it in items}
     results[f"{name}, on the test subject's body"] = score_generated(gen, items, data.features,
                                                                     protos)
 
@@ -217,7 +219,8 @@ def compare(models: dict[str, object], data, *, split: str = "test", limit: int 
     """Evaluate ``{name: model}`` (anything ``decoding.t2m.generate_positions21`` takes) on
     ``data`` (``TwoStreamData``); L2M models decode with ``l2m_method`` ("mean" or
     "sample"; with ``l2m_width`` > 1 the likeliest of that many samples, or, with
-    ``l2m_reranker``, the one that M2L model finds the sentence likeliest for). Extra rows unless ``baseline`` is False: the no-motion baseline
+    ``l2m_reranker``, the one that M2L model finds the sentence likeliest for). Extra rows
+    unless ``baseline`` is False: the no-motion baseline
     (``still_baseline``), the nearest-neighbour baseline (``retrieval_baseline``) and the
     ground truth (:data:`GROUND_TRUTH`); with ``autoencode``, each
     two-stream model decoding each test motion from its own pose embedding
@@ -245,7 +248,8 @@ def compare(models: dict[str, object], data, *, split: str = "test", limit: int 
                for name, model in models.items()}
     for name, model in models.items():
         if getattr(model, "kind", None) == "l2m" and true_start:
-            _l2m_on_subjects(results, name, model, data, items, protos, l2m_method)
+            _l2m_on_subjects(results, name, model, data, items, protos, l2m_method,
+                             l2m_width, l2m_reranker)
         if getattr(model, "kind", None) != "twostream":
             continue
         # the model's normaliser maps positions to its own features
@@ -297,8 +301,9 @@ def compare(models: dict[str, object], data, *, split: str = "test", limit: int 
                       for kk, vv in r.items() if kk != "generated"}
                   for k, r in results.items()}
         with atomic_write(out / "t2m_report.json") as fh:
-            json.dump({"split": split, "results": report, "length_model": lengths}, fh,
-                      indent=1)
+            json.dump({"split": split, "results": report, "length_model": lengths,
+                       "l2m_decoding": {"method": l2m_method, "width": l2m_width,
+                                        "reranked": l2m_reranker is not None}}, fh, indent=1)
         if figures:
             # models only: the no-motion baseline is a dot at the origin
             trajectory_figures({k: results[k] for k in models}, items, out, figures)
