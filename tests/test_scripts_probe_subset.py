@@ -52,3 +52,40 @@ def test_corpus_subset_links_the_motions_made_only_of_the_given_primitives(tmp_p
     with pytest.raises(SystemExit, match="no motion made only of"):
         subset.main([str(src), str(tmp_path / "none"), "--only", "fly"])
     assert not (tmp_path / "none").exists() and not (tmp_path / "none.partial").exists()
+
+
+def test_directions_script_measures_the_way_true_motions_go(tmp_path):
+    """scripts/l2m_directions.py's measures on true procedural motions: a backward walk goes
+    backward, a forward walk forward, and a second leftward sidestep goes left by the sign
+    calibrated on the first."""
+    from motionlang.datasets.synth.corpus import write_corpus
+    from motionlang.decoding.seq2seq import motion_frames
+    from motionlang.features.angles import AnglesFeatures
+    from motionlang.formats.mmm import read_mmm
+    from motionlang.training.seq2seq_data import primitive_labels
+    directions = load("l2m_directions")
+    root = tmp_path / "corpus"
+    write_corpus(root, 40, seed=5, workers=1, show_progress=False)
+    motions, by_label = {}, {}
+    for meta in sorted(root.glob("*_meta.json")):
+        stem = meta.name[:-len("_meta.json")]
+        motions[stem] = read_mmm(root / f"{stem}_mmm.xml")
+        labels = primitive_labels(json.loads(meta.read_text()))
+        if len(labels) == 1:
+            by_label.setdefault(labels[0], []).append(stem)
+    assert {"walk/backward", "walk/forward"} <= set(by_label) and len(by_label["walk/left"]) >= 2
+    fs = AnglesFeatures()
+    fs.fit(list(motions.values()))
+    left = directions.left_sign(fs, root)
+    assert left in (1.0, -1.0)
+
+    def moved(stem):
+        return directions.body_frame_distances(fs, motion_frames(fs, motions[stem], 1)[0])
+    assert moved(by_label["walk/backward"][0])[1] < -0.5
+    assert moved(by_label["walk/forward"][0])[1] > 0.5
+    # the calibration read the first "leftwards" sample; the other one must agree
+    calibrated = sorted(p.name[:-len("_annotations.json")] for p in root.glob("*_annotations.json")
+                        if "leftwards" in p.read_text())[0]
+    other = [s for s in by_label["walk/left"] if s != calibrated][0]
+    side, forward, _ = moved(other)
+    assert left * side > 0.5 and abs(forward) < abs(side)
