@@ -92,6 +92,13 @@ def main() -> None:
     t = median_time(lambda: generate_features(l2m, [1, 5, 6, 7, 2], width=5, method="sample",
                                               max_frames=100), args.repeats)
     print(f"generate (W=5 ancestral samples, 100 frames): median {t * 1e3:.1f} ms")
+    from motionlang.decoding.rerank import rerank
+    for w in (5, 10):
+        t = median_time(lambda: rerank(generate_features(
+            l2m, [1, 5, 6, 7, 2], width=w, method="sample", max_frames=100), m2l,
+            [1, 5, 6, 7, 2]), args.repeats)
+        print(f"generate (W={w} ancestral samples ranked by the M2L, 100 frames): "
+              f"median {t * 1e3:.1f} ms")
 
 
 if __name__ == "__main__":
