@@ -49,7 +49,7 @@ def sentence_log_probs(m2l: MotionToLanguage, motions: Sequence[np.ndarray],
 
     motions: raw features (T_i, F) of the M2L's feature set (what ``generate_features``
     returns for an L2M with the same features). sentence: text (the M2L's vocabulary, unknown
-    words as UNK) or token ids SOS .. EOS. Returns (N,) float64.
+    words as UNK) or token ids SOS .. EOS of the M2L's own vocabulary. Returns (N,) float64.
     """
     if not motions:
         return np.zeros(0)
