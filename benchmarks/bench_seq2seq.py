@@ -93,7 +93,7 @@ def main() -> None:
                                               max_frames=100), args.repeats)
     print(f"generate (W=5 ancestral samples, 100 frames): median {t * 1e3:.1f} ms")
     from motionlang.decoding.rerank import rerank
-    for w in (5, 10):
+    for w in (5, 10, 30, 60):
         t = median_time(lambda: rerank(generate_features(
             l2m, [1, 5, 6, 7, 2], width=w, method="sample", max_frames=100), m2l,
             [1, 5, 6, 7, 2]), args.repeats)
