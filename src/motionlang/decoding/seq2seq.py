@@ -209,16 +209,17 @@ def generate(model: LanguageToMotion, sentence: str | Sequence[int], *, width: i
     P(sentence | motion) instead, and that is the number beside each (``decoding.rerank``).
     """
     fs = _features_of(model)
-    if reranker is not None and not isinstance(sentence, str):
-        raise MotionlangError("reranking needs the sentence as text (the two models have "
-                              "their own vocabularies)")
+    if reranker is not None:   # before the (slower) generation
+        from motionlang.decoding.rerank import check_same_features, rerank   # builds on this
+        if not isinstance(sentence, str):
+            raise MotionlangError("reranking needs the sentence as text (the two models have "
+                                  "their own vocabularies)")
+        check_same_features(model, reranker)
     out = generate_features(model, sentence, width=width, max_frames=max_frames,
                             method=method, samples=samples, seed=seed, min_frames=min_frames,
                             length_norm=length_norm, temperature=temperature,
                             n_frames=n_frames)
     if reranker is not None:
-        from motionlang.decoding.rerank import check_same_features, rerank   # builds on this
-        check_same_features(model, reranker)
         out = [(f, m2l_score) for f, _, m2l_score in rerank(out, reranker, sentence)]
     kw = {} if skeleton is None else {"skeleton": skeleton}
     return [(fs.decode(frames_to_features(fs, f), **kw), score) for f, score in out]
