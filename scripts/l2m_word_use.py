@@ -9,6 +9,9 @@ same sentence with the word replaced by ``--instead`` (default "forward"):
   frames (sum_k pi_k mu_k) under teacher forcing, and its own ancestral samples (of the
   first 12 sentences, at most as long as the true motions).
 
+A model fed a plan (``--plan-parts``) follows the plan it predicts from the sentence here,
+as when it generates, not the true motion's.
+
 A model that reads the word assigns the true sentence the lower NLL and moves its expected
 feature the truth's way; one that generates it also samples that way.
 
@@ -46,7 +49,9 @@ def evaluate(model, items: list[dict], column: int, p_own: float) -> tuple[float
     B, T, F = b["motion"].shape
     with torch.no_grad():
         params = model.rollout_forward(b["tokens"], b["token_lengths"], b["motion"], p_own,
-                                       seed=0, motion_lengths=b["motion_lengths"]).flatten()
+                                       seed=0, motion_lengths=b["motion_lengths"],
+                                       # a planning model: the plan it reads from the sentence
+                                       sentence_plan=True).flatten()
     valid = (torch.arange(T)[None] < b["motion_lengths"][:, None]).reshape(-1)
     nll = -mdn.mixture_log_prob(params, b["motion"].reshape(B * T, F))[valid].mean()
     expected = mdn.mixture_mean(params)[valid][:, column].mean()

@@ -89,6 +89,15 @@ def _add_train(sub, name: str, help_: str) -> None:
         p.add_argument("--energy", type=float, default=d.energy_weight, metavar="W",
                        help="weight of a loss on the local speeds of the expected frames "
                             "against the reference's, over ~1 s windows (paper: 0)")
+        p.add_argument("--plan-parts", type=int, default=d.plan_parts, metavar="K",
+                       help="feed every decoder step a coarse plan of the motion (per part of "
+                            "K of its duration: mean features and mean change), the true one "
+                            "in training, one predicted from the sentence when generating; "
+                            "needs --progress-input (0: off, the paper's)")
+        p.add_argument("--plan-weight", type=float, default=d.plan_weight, metavar="W",
+                       help="weight of the plan head's mean squared error")
+        p.add_argument("--plan-noise", type=float, default=d.plan_noise, metavar="STD",
+                       help="std of Gaussian noise on the true plan fed while training")
     p.set_defaults(func=cmd_train, model_kind=name)
 
 
@@ -133,6 +142,10 @@ def cmd_train(args: argparse.Namespace) -> int:
             raise MotionlangError(f"--root-weight must be >= 0, got {args.root_weight}")
         if not args.energy >= 0:
             raise MotionlangError(f"--energy must be >= 0, got {args.energy}")
+        if args.plan_parts < 0 or not (args.plan_weight >= 0 and args.plan_noise >= 0):
+            raise MotionlangError("--plan-parts, --plan-weight and --plan-noise must be >= 0")
+        if args.plan_parts and not args.progress_input:
+            raise MotionlangError("--plan-parts needs --progress-input")
     # one line per epoch from the trainer (the progress bar only shows on a terminal)
     logging.basicConfig(level=logging.INFO, format="%(message)s")
     data = build_pairs(args.data, features=args.features, offsets=args.offsets, seed=args.seed,
@@ -177,6 +190,9 @@ def cmd_train(args: argparse.Namespace) -> int:
                                            loss_weights=loss_weights,
                                            input_mask=input_mask,
                                            energy_weight=args.energy,
+                                           plan_parts=args.plan_parts,
+                                           plan_weight=args.plan_weight,
+                                           plan_noise=args.plan_noise,
                                            max_frames=int(1.5 * longest), **sizes),
                                  data.vocab, features=data.features)
         if args.progress_input:   # it plans its length from the sentence

@@ -44,6 +44,12 @@ And ``energy_weight``: a term on the *local speeds* of the expected frames
 (:func:`motionlang.models.sequence_losses.energy_loss`, the two-stream model's remedy for
 motions that die down to standing). It does not care about phase, only about moving as
 much as the reference where the reference moves.
+
+And ``plan_parts`` (:mod:`motionlang.models.plan`): every decoder step also reads a coarse
+plan of the motion, its part's mean features and mean absolute change; the true motion's
+plan while training, the plan a head predicts from the sentence context when generating
+(that head is fitted with an MSE term). The decoder learns to follow the plan, so the
+sentence steers every frame, not only the first ones.
 """
 from __future__ import annotations
 
@@ -56,6 +62,7 @@ from motionlang.errors import MotionlangError
 from motionlang.models import mdn
 from motionlang.models.checkpoint import Seq2SeqCheckpoint
 from motionlang.models.length import SentenceLength
+from motionlang.models.plan import motion_plan, plan_at
 from motionlang.models.recurrent import AdditiveAttention, BiGRUEncoder, StackedDecoder
 from motionlang.models.sequence_losses import energy_loss
 from motionlang.models.seq2seq_config import L2MConfig  # noqa: F401 (re-exported)
@@ -88,6 +95,13 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
         if not (c.energy_weight >= 0 and c.energy_window >= 3 and c.energy_window % 2 == 1):
             raise MotionlangError("L2MConfig.energy_weight must be >= 0 and energy_window odd "
                                   f">= 3, got {c.energy_weight!r} and {c.energy_window!r}")
+        if c.plan_parts and not c.progress_input:
+            raise MotionlangError("L2MConfig.plan_parts needs progress_input (a frame's part "
+                                  "of the plan follows from the fraction of the motion done)")
+        if not (c.plan_parts >= 0 and c.plan_weight >= 0 and c.plan_noise >= 0):
+            raise MotionlangError("L2MConfig.plan_parts, plan_weight and plan_noise must be "
+                                  f">= 0, got {c.plan_parts!r}, {c.plan_weight!r}, "
+                                  f"{c.plan_noise!r}")
         self.vocab, self.normalizer, self.features = vocab, normalizer, features
         self.embed = nn.Embedding(c.vocab_size, c.embed_dim, padding_idx=c.pad_id)
         self.embed_norm = nn.LayerNorm(c.embed_dim)
@@ -95,6 +109,7 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
         self.encoder = BiGRUEncoder(c.embed_dim, c.enc_hidden, c.enc_layers, c.dropout)
         ctx = self.encoder.out_dim
         extra = int(c.time_input) + int(c.progress_input)
+        extra += 2 * c.n_features if c.plan_parts else 0   # the plan's current part
         self.decoder = StackedDecoder(ctx + c.n_features + extra, c.dec_hidden, c.dec_layers,
                                       c.dropout, layer_norm=True)
         head_in = self.decoder.out_dim
@@ -103,6 +118,10 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
             self.attn = AdditiveAttention(c.dec_hidden, ctx, c.attn_dim)
             head_in += ctx
         self.head = mdn.MixtureDensityHead(head_in, c.n_features, c.n_components)
+        self.plan_head = None
+        if c.plan_parts:   # context -> (parts, 2F): per part, mean features and mean change
+            self.plan_head = nn.Sequential(nn.Linear(ctx, c.dec_hidden), nn.Tanh(),
+                                           nn.Linear(c.dec_hidden, c.plan_parts * 2 * c.n_features))
         if not 0.0 <= c.rollout <= 1.0:
             raise MotionlangError(f"L2MConfig.rollout must be in [0, 1], not {c.rollout!r}")
         # not saved with the weights: it follows from the config
@@ -125,16 +144,22 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
         return c.rollout * min(1.0, float(self.rollout_steps) / c.rollout_warmup)
 
     def encode(self, tokens: torch.Tensor, lengths: torch.Tensor,
-               n_frames: torch.Tensor | None = None) -> dict:
+               n_frames: torch.Tensor | None = None, plan: torch.Tensor | None = None) -> dict:
         """tokens (B, L) long, lengths (B,) -> decoder state dict (batch-first tensors).
 
         n_frames (B,): each motion's length in frames, needed to decode with
-        ``progress_input`` (not for the context alone).
+        ``progress_input`` (not for the context alone). plan (B, parts, 2F): the plan the
+        decoder follows (``plan_parts`` models); default the one predicted from the sentence,
+        which the state also holds as ``plan_pred``.
         """
         x = self.drop(self.embed_norm(self.embed(tokens)))
         context, memory, mask = self.encoder(x, lengths)
         h = x.new_zeros(tokens.shape[0], self.config.dec_layers, self.config.dec_hidden)
         state = {"h": h, "context": context, "memory": memory, "mask": mask}
+        if self.plan_head is not None:
+            pred = self.plan_head(context).view(tokens.shape[0], self.config.plan_parts, -1)
+            state["plan_pred"] = pred
+            state["plan"] = pred if plan is None else plan
         if self.config.progress_input and n_frames is not None:
             state["n_frames"] = torch.as_tensor(n_frames, dtype=x.dtype).reshape(-1)
         return state
@@ -162,6 +187,9 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
             t = torch.arange(T, dtype=prev.dtype) + t0
             done = t.view(1, T) / (state["n_frames"].view(B, 1) - 1).clamp(min=1)
             inputs.append(done.unsqueeze(-1))
+        if self.plan_head is not None:
+            t = torch.arange(T) + t0
+            inputs.append(plan_at(state["plan"], t, state["n_frames"]).to(prev.dtype))
         outs, h = self.decoder(torch.cat(inputs, dim=-1), state["h"])
         if self.attn is not None:
             att, _ = self.attn(outs[..., -self.config.dec_hidden:], state["memory"],
@@ -178,7 +206,8 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
         prev = _previous_frames(motion)
         if self.training and self.config.input_noise > 0:
             prev = prev + self.config.input_noise * torch.randn_like(prev)
-        state = self.encode(tokens, token_lengths, _lengths(motion, motion_lengths))
+        lengths = _lengths(motion, motion_lengths)
+        state = self.encode(tokens, token_lengths, lengths, self._true_plan(motion, lengths))
         p = self.rollout_prob() if self.training else 0.0
         if self.training and self.config.rollout > 0:
             self.rollout_steps += 1
@@ -189,12 +218,28 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
 
     def rollout_forward(self, tokens: torch.Tensor, token_lengths: torch.Tensor,
                         motion: torch.Tensor, p: float, seed: int = 0,
-                        motion_lengths: torch.Tensor | None = None) -> mdn.MixtureParams:
+                        motion_lengths: torch.Tensor | None = None,
+                        sentence_plan: bool = False) -> mdn.MixtureParams:
         """Params (B, T, ...) with own-frame probability ``p`` in [0, 1], reproducible (its own
-        RNG seeded with ``seed``); no input noise, whatever the mode."""
+        RNG seeded with ``seed``); no input noise, whatever the mode. A ``plan_parts`` model
+        follows the motion's own plan, or with ``sentence_plan`` the one it predicts from
+        the sentence (as when generating)."""
         prev = _previous_frames(motion)
-        state = self.encode(tokens, token_lengths, _lengths(motion, motion_lengths))
+        lengths = _lengths(motion, motion_lengths)
+        plan = None if sentence_plan else self._true_plan(motion, lengths)
+        state = self.encode(tokens, token_lengths, lengths, plan)
         return self._rollout(state, prev, p, torch.Generator().manual_seed(seed))
+
+    def _true_plan(self, motion: torch.Tensor, lengths: torch.Tensor) -> torch.Tensor | None:
+        """The plan fed while training (``plan_parts`` models; else None): the motion's own,
+        with noise of std ``plan_noise`` in training mode, so that the decoder tolerates a
+        predicted plan's errors."""
+        if self.plan_head is None:
+            return None
+        plan = motion_plan(motion, lengths, self.config.plan_parts)
+        if self.training and self.config.plan_noise > 0:
+            plan = plan + self.config.plan_noise * torch.randn_like(plan)
+        return plan
 
     def _rollout(self, state: dict, prev: torch.Tensor, p: float,
                  generator: torch.Generator | None = None) -> mdn.MixtureParams:
@@ -228,7 +273,9 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
         pairs); ``nll`` is the
         frame's negative log density (surrogate or exact; per-feature weighted by
         ``config.loss_weights`` when set), ``active_bce`` the flag's; ``energy`` (with
-        ``config.energy_weight`` > 0) the local-speed term of the expected frames."""
+        ``config.energy_weight`` > 0) the local-speed term of the expected frames, ``plan``
+        (with ``config.plan_parts``) the mean squared error of the plan predicted from the
+        sentence."""
         motion, lengths = batch["motion"], batch["motion_lengths"]
         B, T, _ = motion.shape
         if not self.training and self.config.rollout > 0:
@@ -262,6 +309,13 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
                                  self.config.energy_window)
             out["loss"] = out["loss"] + self.config.energy_weight * energy
             out["energy"] = energy.detach()
+        if self.plan_head is not None:
+            # the head that plans from the sentence at generation time (the decoder above
+            # was fed the true plan)
+            pred = self.encode(batch["tokens"], batch["token_lengths"])["plan_pred"]
+            plan_mse = ((pred - motion_plan(motion, lengths, self.config.plan_parts)) ** 2).mean()
+            out["loss"] = out["loss"] + self.config.plan_weight * plan_mse
+            out["plan"] = plan_mse.detach()
         return out
 
     def to_checkpoint(self) -> dict:

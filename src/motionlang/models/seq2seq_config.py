@@ -76,6 +76,14 @@ class L2MConfig:
     # at 10 Hz); 0 = off (the paper's loss). Beyond the paper, as for the two-stream model.
     energy_weight: float = 0.0
     energy_window: int = 11
+    # a coarse plan fed to every decoder step (``models.plan``; 0 = off, the paper's): per
+    # part of ``plan_parts`` of the motion's duration, each feature's mean and mean absolute
+    # change. Training feeds the true motion's plan (plus Gaussian noise of std
+    # ``plan_noise``) and fits a head from the sentence context to it (MSE, weight
+    # ``plan_weight``); generation feeds the head's plan. Needs ``progress_input``.
+    plan_parts: int = 0
+    plan_weight: float = 1.0
+    plan_noise: float = 0.0
     pad_id: int = 0
     max_frames: int = 300       # decoding cap (frames)
 

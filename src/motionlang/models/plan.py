@@ -1,0 +1,54 @@
+"""A coarse plan of a motion: what it does in each of K equal parts of its duration.
+
+The L2M's decoder drops the sentence once a motion is under way (it follows its previous
+frames; ``scripts/l2m_word_use.py``), although its context holds the direction
+(``scripts/l2m_context_probe.py``). A plan moves the sentence's say into every frame: per
+part k of K (by the fraction of the motion done), the mean of each feature and the mean
+absolute frame-to-frame change of each feature (how much it moves there). The root's mean
+ground velocity per part is the path; a limb's change per part says when it acts.
+
+While training, the decoder is fed the plan of the motion it is learning (so that it learns
+to follow a plan, as FastSpeech 2 feeds the true pitch and energy); a head learns to
+predict the plan from the sentence, and generation feeds that prediction.
+"""
+from __future__ import annotations
+
+import torch
+
+
+def part_index(t: torch.Tensor, n_frames: torch.Tensor, parts: int) -> torch.Tensor:
+    """Part of each frame: t (B, T) or (T,) frame indices, n_frames (B,) lengths ->
+    (B, T) long in [0, parts - 1]: floor(t * parts / n_frames), clamped (frames past the
+    end stay in the last part)."""
+    n = n_frames.to(torch.float64).reshape(-1, 1).clamp(min=1)
+    k = torch.floor(t.to(torch.float64).reshape(1, -1) * parts / n) if t.dim() == 1 \
+        else torch.floor(t.to(torch.float64) * parts / n)
+    return k.clamp(0, parts - 1).long()
+
+
+def motion_plan(motion: torch.Tensor, lengths: torch.Tensor, parts: int) -> torch.Tensor:
+    """motion (B, T, F) padded, lengths (B,) valid frames -> plan (B, parts, 2F).
+
+    [..., :F]: mean of each feature over the part's frames; [..., F:]: mean |x_t - x_{t-1}|
+    over the part's frames t >= 1. A part without frames (a motion shorter than ``parts``)
+    is 0.
+    """
+    B, T, F = motion.shape
+    t = torch.arange(T)
+    part = part_index(t, lengths, parts)                          # (B, T)
+    valid = (t.view(1, T) < lengths.view(B, 1)).to(motion.dtype)  # (B, T)
+    onehot = torch.nn.functional.one_hot(part, parts).to(motion.dtype) * valid.unsqueeze(-1)
+    count = onehot.sum(1).clamp(min=1).unsqueeze(-1)              # (B, parts, 1)
+    mean = torch.einsum("btk,btf->bkf", onehot, motion) / count
+    change = torch.zeros_like(motion)
+    change[:, 1:] = (motion[:, 1:] - motion[:, :-1]).abs()
+    moved = onehot.clone()
+    moved[:, 0] = 0                                               # frame 0 has no change
+    speed = torch.einsum("btk,btf->bkf", moved, change) / moved.sum(1).clamp(min=1).unsqueeze(-1)
+    return torch.cat([mean, speed], dim=-1)
+
+
+def plan_at(plan: torch.Tensor, t: torch.Tensor, n_frames: torch.Tensor) -> torch.Tensor:
+    """plan (B, K, P), t (T,) frame indices, n_frames (B,) -> (B, T, P): each frame's part."""
+    k = part_index(t, n_frames, plan.shape[1])                    # (B, T)
+    return torch.gather(plan, 1, k.unsqueeze(-1).expand(-1, -1, plan.shape[2]))

@@ -1,0 +1,126 @@
+"""The L2M's coarse motion plan (models.plan): hand-worked plans, and that the decoder
+follows the plan it is given, the true one in training and the predicted one otherwise."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+
+from motionlang.errors import MotionlangError
+from motionlang.models.l2m import LanguageToMotion
+from motionlang.models.plan import motion_plan, part_index, plan_at
+from tests.test_seq2seq_models import F_DIM, make_batch, tiny
+
+
+def test_part_index_by_fraction_done():
+    # 6 frames in 3 parts: 0 0 1 1 2 2; 4 frames: 0 0 1 2 (floor(t * 3 / 4)); past the end: 2
+    got = part_index(torch.arange(8), torch.tensor([6, 4]), 3)
+    assert got.tolist() == [[0, 0, 1, 1, 2, 2, 2, 2], [0, 0, 1, 2, 2, 2, 2, 2]]
+
+
+def test_motion_plan_by_hand():
+    # one feature, 6 valid frames of 8 (the last two are padding and must not count)
+    x = torch.tensor([0.0, 2.0, 3.0, 7.0, 7.0, 4.0, 100.0, 100.0]).view(1, 8, 1)
+    plan = motion_plan(x, torch.tensor([6]), 3)
+    assert plan.shape == (1, 3, 2)
+    # part means: (0 + 2) / 2, (3 + 7) / 2, (7 + 4) / 2
+    torch.testing.assert_close(plan[0, :, 0], torch.tensor([1.0, 5.0, 5.5]))
+    # changes |x_t - x_{t-1}| of frames 1..5: 2, 1, 4, 0, 3; part 0 holds frame 1 only
+    torch.testing.assert_close(plan[0, :, 1], torch.tensor([2.0, 2.5, 1.5]))
+    # a motion shorter than the parts (frames in parts floor(0 * 3 / 2) = 0 and
+    # floor(1 * 3 / 2) = 1) leaves its empty part at 0
+    short = motion_plan(torch.tensor([1.0, 3.0]).view(1, 2, 1), torch.tensor([2]), 3)
+    torch.testing.assert_close(short[0], torch.tensor([[1.0, 0.0], [3.0, 2.0], [0.0, 0.0]]))
+
+
+def test_plan_at_reads_each_frames_part():
+    plan = torch.arange(2 * 3 * 2, dtype=torch.float32).view(2, 3, 2)
+    got = plan_at(plan, torch.arange(4), torch.tensor([6, 4]))
+    assert got[0, :, 0].tolist() == [0.0, 0.0, 2.0, 2.0]        # parts 0 0 1 1
+    assert got[1, :, 0].tolist() == [6.0, 6.0, 8.0, 10.0]       # parts 0 0 1 2
+
+
+def plan_model(**kw):
+    return tiny("l2m", False, progress_input=True, plan_parts=3, **kw).eval()
+
+
+def test_plan_needs_the_progress_input_and_valid_options():
+    with pytest.raises(MotionlangError, match="progress_input"):
+        tiny("l2m", False, plan_parts=3)
+    with pytest.raises(MotionlangError, match="plan_noise"):
+        tiny("l2m", False, progress_input=True, plan_parts=3, plan_noise=-1.0)
+
+
+def test_teacher_forcing_follows_the_true_plan_and_step_decoding_the_given_one():
+    model, batch = plan_model(), make_batch()
+    tok, tl, motion, lengths = (batch[k] for k in ("tokens", "token_lengths", "motion",
+                                                   "motion_lengths"))
+    with torch.no_grad():
+        full = model(tok, tl, motion, lengths)
+        # the last third of motion 0 changed: only part 2 of its plan differs
+        other = motion.clone()
+        other[0, 5:7] += 3.0           # motion 0 has 7 frames: parts 0 0 0 1 1 2 2
+        moved = model(tok, tl, other, lengths)
+        # frame 5 is predicted from frame 4 (the same) and part 2 of the plan (not the same)
+        assert not torch.allclose(full.mu[0, 5], moved.mu[0, 5])
+        torch.testing.assert_close(full.mu[0, :5], moved.mu[0, :5])
+        torch.testing.assert_close(full.mu[1:], moved.mu[1:])
+        # step decoding with the true plan reproduces teacher forcing; with the predicted
+        # plan (the default) it does not
+        true = motion_plan(motion, lengths, 3)
+        for plan, same in ((true, True), (None, False)):
+            state = model.encode(tok, tl, lengths, plan)
+            p, _ = model.step(state, torch.zeros(4, F_DIM))
+            assert torch.allclose(p.mu, full.mu[:, 0], atol=1e-5) == same
+
+
+def test_the_plan_head_is_fitted_and_rides_in_the_checkpoint(tmp_path):
+    from motionlang.datasets.text import Vocabulary
+    from motionlang.decoding.seq2seq import generate_features
+    from motionlang.models.length import SentenceLength
+    model, batch = plan_model(), make_batch()
+    model.train()
+    opt = torch.optim.Adam(model.parameters(), lr=1e-2)
+    first = None
+    for _ in range(150):
+        out = model.loss(batch)
+        opt.zero_grad()
+        out["loss"].backward()
+        opt.step()
+        first = float(out["plan"]) if first is None else first
+    # the head learns the four motions' plans from their sentences
+    assert float(out["plan"]) < 0.1 * first
+    model.eval()
+    with torch.no_grad():
+        pred = model.encode(batch["tokens"], batch["token_lengths"])["plan_pred"]
+        true = motion_plan(batch["motion"], batch["motion_lengths"], 3)
+        assert ((pred - true) ** 2).mean() < 0.1 * first
+    model.vocab = Vocabulary.build(["a person waves", "a person walks far"])
+    model.length_model = SentenceLength.fit(["a person waves", "a person walks far"], [4, 8],
+                                            ridge=0.0)
+    model.save(tmp_path / "plan.pt")
+    loaded = LanguageToMotion.load(tmp_path / "plan.pt").eval()
+    assert loaded.config.plan_parts == 3
+    for name, a in model.plan_head.state_dict().items():
+        torch.testing.assert_close(loaded.plan_head.state_dict()[name], a)
+    # generation decodes with the predicted plan: the same motion from both, and a different
+    # one when the plan head is changed
+    a = generate_features(model, "a person waves", width=1, method="mean", min_frames=4)
+    b = generate_features(loaded, "a person waves", width=1, method="mean", min_frames=4)
+    np.testing.assert_allclose(a[0][0], b[0][0], rtol=1e-5, atol=1e-5)
+    with torch.no_grad():
+        loaded.plan_head[-1].bias += 2.0
+    c = generate_features(loaded, "a person waves", width=1, method="mean", min_frames=4)
+    n = min(len(a[0][0]), len(c[0][0]))
+    assert not np.allclose(a[0][0][:n], c[0][0][:n])
+
+
+def test_train_l2m_plan_options_are_checked_before_any_data_is_read(tmp_path, capsys):
+    from motionlang.cli.main import main
+    out = tmp_path / "run"
+    for args, message in ((["--plan-parts", "4"], "--progress-input"),
+                          (["--plan-parts", "-1", "--progress-input"], ">= 0")):
+        code = main(["train", "l2m", "--data", str(tmp_path / "missing"), "--out", str(out),
+                     *args])
+        assert code != 0 and message in capsys.readouterr().err
+        assert not out.exists()
