@@ -74,7 +74,7 @@ def test_teacher_forcing_follows_the_true_plan_and_step_decoding_the_given_one()
             assert torch.allclose(p.mu, full.mu[:, 0], atol=1e-5) == same
 
 
-def test_the_plan_head_is_fitted_and_rides_in_the_checkpoint(tmp_path):
+def test_the_planner_is_fitted_and_rides_in_the_checkpoint(tmp_path):
     from motionlang.datasets.text import Vocabulary
     from motionlang.decoding.seq2seq import generate_features
     from motionlang.models.length import SentenceLength
@@ -88,11 +88,11 @@ def test_the_plan_head_is_fitted_and_rides_in_the_checkpoint(tmp_path):
         out["loss"].backward()
         opt.step()
         first = float(out["plan"]) if first is None else first
-    # the head learns the four motions' plans from their sentences
+    # the planner learns the four motions' plans from their sentences
     assert float(out["plan"]) < 0.1 * first
     model.eval()
     with torch.no_grad():
-        pred = model.encode(batch["tokens"], batch["token_lengths"])["plan_pred"]
+        pred = model.encode(batch["tokens"], batch["token_lengths"])["plan"]
         true = motion_plan(batch["motion"], batch["motion_lengths"], 3)
         assert ((pred - true) ** 2).mean() < 0.1 * first
     model.vocab = Vocabulary.build(["a person waves", "a person walks far"])
@@ -101,15 +101,15 @@ def test_the_plan_head_is_fitted_and_rides_in_the_checkpoint(tmp_path):
     model.save(tmp_path / "plan.pt")
     loaded = LanguageToMotion.load(tmp_path / "plan.pt").eval()
     assert loaded.config.plan_parts == 3
-    for name, a in model.plan_head.state_dict().items():
-        torch.testing.assert_close(loaded.plan_head.state_dict()[name], a)
+    for name, a in model.planner.state_dict().items():
+        torch.testing.assert_close(loaded.planner.state_dict()[name], a)
     # generation decodes with the predicted plan: the same motion from both, and a different
-    # one when the plan head is changed
+    # one when the planner is changed
     a = generate_features(model, "a person waves", width=1, method="mean", min_frames=4)
     b = generate_features(loaded, "a person waves", width=1, method="mean", min_frames=4)
     np.testing.assert_allclose(a[0][0], b[0][0], rtol=1e-5, atol=1e-5)
     with torch.no_grad():
-        loaded.plan_head[-1].bias += 2.0
+        loaded.planner.head[-1].bias += 2.0
     c = generate_features(loaded, "a person waves", width=1, method="mean", min_frames=4)
     n = min(len(a[0][0]), len(c[0][0]))
     assert not np.allclose(a[0][0][:n], c[0][0][:n])
@@ -124,3 +124,64 @@ def test_train_l2m_plan_options_are_checked_before_any_data_is_read(tmp_path, ca
                      *args])
         assert code != 0 and message in capsys.readouterr().err
         assert not out.exists()
+
+
+def test_fit_planner_fits_the_planner_alone_and_keeps_the_best_epoch():
+    from motionlang.training.plan_fit import fit_planner, true_plans
+    model, batch = plan_model(), make_batch()
+    items = [{"tokens": batch["tokens"][b, :int(batch["token_lengths"][b])].tolist(),
+              "motion": batch["motion"][b, :int(batch["motion_lengths"][b])].numpy()}
+             for b in range(4)]
+    plans = true_plans(items, 3, F_DIM)
+    torch.testing.assert_close(plans[1], motion_plan(batch["motion"][1:2, :5],
+                                                     torch.tensor([5]), 3)[0])
+    others = {k: v.clone() for k, v in model.state_dict().items() if not k.startswith("planner.")}
+    history = fit_planner(model, items, items, epochs=60, batch_size=2, lr=1e-2, fresh=True)
+    assert len(history) == 60 and history[-1]["train"] < 0.2 * history[0]["train"]
+    for k, v in model.state_dict().items():       # nothing but the planner moved
+        if not k.startswith("planner."):
+            torch.testing.assert_close(v, others[k])
+    with torch.no_grad():
+        got = model.encode(batch["tokens"], batch["token_lengths"])["plan"]
+    best = min(r["val"] for r in history)
+    assert float(((got - plans) ** 2).mean()) == pytest.approx(best, rel=1e-4)
+    with pytest.raises(MotionlangError, match="no planner"):
+        fit_planner(tiny("l2m", False), items)
+
+
+def test_fit_planner_script_on_a_tiny_trained_model(tmp_path, capsys):
+    import importlib.util
+    from pathlib import Path
+
+    from motionlang.cli.main import main
+    from motionlang.datasets.synth.corpus import write_corpus
+    corpus = tmp_path / "corpus"
+    write_corpus(corpus, 12, seed=3, workers=1, show_progress=False)
+    run = tmp_path / "run"
+    assert main(["train", "l2m", "--data", str(corpus), "--out", str(run), "--epochs", "1",
+                 "--batch-size", "8", "--offsets", "1", "--dec-hidden", "8", "--dec-layers",
+                 "1", "--enc-hidden", "8", "--embed-dim", "8", "--components", "2",
+                 "--progress-input", "--plan-parts", "4"]) == 0
+    trained = LanguageToMotion.load(run / "model.pt")
+    assert trained.config.plan_parts == 4 and trained.planner is not None
+    path = Path(__file__).resolve().parents[1] / "scripts" / "l2m_fit_planner.py"
+    spec = importlib.util.spec_from_file_location("l2m_fit_planner", path)
+    script = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(script)
+    out = tmp_path / "refit.pt"
+    capsys.readouterr()
+    assert script.main([str(run / "model.pt"), "--data", str(corpus), "--out", str(out),
+                        "--epochs", "3", "--fresh"]) == 0
+    assert "planner: epoch" in capsys.readouterr().out
+    refit = LanguageToMotion.load(out)
+    same = [torch.equal(v, trained.state_dict()[k]) for k, v in refit.state_dict().items()]
+    changed = [k for k, v in refit.state_dict().items()
+               if not torch.equal(v, trained.state_dict()[k])]
+    assert changed and all(k.startswith("planner.") for k in changed) and any(same)
+    assert refit.length_model == trained.length_model
+    # a model without a plan is refused, and nothing is written
+    plain = tmp_path / "plain.pt"
+    tiny("l2m", False).save(plain)
+    assert script.main([str(plain), "--data", str(corpus), "--out",
+                        str(tmp_path / "no.pt")]) == 1
+    assert "has no plan" in capsys.readouterr().err and not (tmp_path / "no.pt").exists()

@@ -47,8 +47,8 @@ much as the reference where the reference moves.
 
 And ``plan_parts`` (:mod:`motionlang.models.plan`): every decoder step also reads a coarse
 plan of the motion, its part's mean features and mean absolute change; the true motion's
-plan while training, the plan a head predicts from the sentence context when generating
-(that head is fitted with an MSE term). The decoder learns to follow the plan, so the
+plan while training, the plan a :class:`motionlang.models.plan.Planner` (its own sentence
+encoder, fitted with an MSE term) predicts from the sentence when generating. The decoder learns to follow the plan, so the
 sentence steers every frame, not only the first ones.
 """
 from __future__ import annotations
@@ -62,7 +62,7 @@ from motionlang.errors import MotionlangError
 from motionlang.models import mdn
 from motionlang.models.checkpoint import Seq2SeqCheckpoint
 from motionlang.models.length import SentenceLength
-from motionlang.models.plan import motion_plan, plan_at
+from motionlang.models.plan import Planner, motion_plan, plan_at
 from motionlang.models.recurrent import AdditiveAttention, BiGRUEncoder, StackedDecoder
 from motionlang.models.sequence_losses import energy_loss
 from motionlang.models.seq2seq_config import L2MConfig  # noqa: F401 (re-exported)
@@ -118,10 +118,10 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
             self.attn = AdditiveAttention(c.dec_hidden, ctx, c.attn_dim)
             head_in += ctx
         self.head = mdn.MixtureDensityHead(head_in, c.n_features, c.n_components)
-        self.plan_head = None
-        if c.plan_parts:   # context -> (parts, 2F): per part, mean features and mean change
-            self.plan_head = nn.Sequential(nn.Linear(ctx, c.dec_hidden), nn.Tanh(),
-                                           nn.Linear(c.dec_hidden, c.plan_parts * 2 * c.n_features))
+        self.planner = None
+        if c.plan_parts:   # sentence -> (parts, 2F): per part, mean features and mean change
+            self.planner = Planner(c.vocab_size, c.n_features, c.plan_parts, c.plan_hidden,
+                                   c.embed_dim, c.pad_id, c.dropout)
         if not 0.0 <= c.rollout <= 1.0:
             raise MotionlangError(f"L2MConfig.rollout must be in [0, 1], not {c.rollout!r}")
         # not saved with the weights: it follows from the config
@@ -149,17 +149,15 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
 
         n_frames (B,): each motion's length in frames, needed to decode with
         ``progress_input`` (not for the context alone). plan (B, parts, 2F): the plan the
-        decoder follows (``plan_parts`` models); default the one predicted from the sentence,
-        which the state also holds as ``plan_pred``.
+        decoder follows (``plan_parts`` models); default the one its planner predicts from the
+        sentence.
         """
         x = self.drop(self.embed_norm(self.embed(tokens)))
         context, memory, mask = self.encoder(x, lengths)
         h = x.new_zeros(tokens.shape[0], self.config.dec_layers, self.config.dec_hidden)
         state = {"h": h, "context": context, "memory": memory, "mask": mask}
-        if self.plan_head is not None:
-            pred = self.plan_head(context).view(tokens.shape[0], self.config.plan_parts, -1)
-            state["plan_pred"] = pred
-            state["plan"] = pred if plan is None else plan
+        if self.planner is not None:
+            state["plan"] = self.planner(tokens, lengths) if plan is None else plan
         if self.config.progress_input and n_frames is not None:
             state["n_frames"] = torch.as_tensor(n_frames, dtype=x.dtype).reshape(-1)
         return state
@@ -187,7 +185,7 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
             t = torch.arange(T, dtype=prev.dtype) + t0
             done = t.view(1, T) / (state["n_frames"].view(B, 1) - 1).clamp(min=1)
             inputs.append(done.unsqueeze(-1))
-        if self.plan_head is not None:
+        if self.planner is not None:
             t = torch.arange(T) + t0
             inputs.append(plan_at(state["plan"], t, state["n_frames"]).to(prev.dtype))
         outs, h = self.decoder(torch.cat(inputs, dim=-1), state["h"])
@@ -234,7 +232,7 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
         """The plan fed while training (``plan_parts`` models; else None): the motion's own,
         with noise of std ``plan_noise`` in training mode, so that the decoder tolerates a
         predicted plan's errors."""
-        if self.plan_head is None:
+        if self.planner is None:
             return None
         plan = motion_plan(motion, lengths, self.config.plan_parts)
         if self.training and self.config.plan_noise > 0:
@@ -309,10 +307,10 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
                                  self.config.energy_window)
             out["loss"] = out["loss"] + self.config.energy_weight * energy
             out["energy"] = energy.detach()
-        if self.plan_head is not None:
-            # the head that plans from the sentence at generation time (the decoder above
-            # was fed the true plan)
-            pred = self.encode(batch["tokens"], batch["token_lengths"])["plan_pred"]
+        if self.planner is not None:
+            # the planner that plans from the sentence at generation time (the decoder above
+            # was fed the true plan); its parameters are its own
+            pred = self.planner(batch["tokens"], batch["token_lengths"])
             plan_mse = ((pred - motion_plan(motion, lengths, self.config.plan_parts)) ** 2).mean()
             out["loss"] = out["loss"] + self.config.plan_weight * plan_mse
             out["plan"] = plan_mse.detach()

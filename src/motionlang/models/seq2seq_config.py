@@ -79,9 +79,11 @@ class L2MConfig:
     # a coarse plan fed to every decoder step (``models.plan``; 0 = off, the paper's): per
     # part of ``plan_parts`` of the motion's duration, each feature's mean and mean absolute
     # change. Training feeds the true motion's plan (plus Gaussian noise of std
-    # ``plan_noise``) and fits a head from the sentence context to it (MSE, weight
-    # ``plan_weight``); generation feeds the head's plan. Needs ``progress_input``.
+    # ``plan_noise``) and fits a planner (its own sentence encoder, ``plan_hidden`` units
+    # per direction) to it (MSE, weight ``plan_weight``); generation feeds the planner's
+    # plan. Needs ``progress_input``.
     plan_parts: int = 0
+    plan_hidden: int = 128
     plan_weight: float = 1.0
     plan_noise: float = 0.0
     pad_id: int = 0
