@@ -1,6 +1,7 @@
 """Speed of the Plappert et al. (2018) seq2seq models at paper size on this CPU.
 
     .venv/bin/python benchmarks/bench_seq2seq.py [--features 50] [--vocab 1000] [--repeats 7]
+        [--packaged] [--l2m MODEL]
 
 Prints medians of repeated runs: training throughput (sequences/s, batch 128) of M2L and L2M,
 ``describe`` latency (beam width 5, batch 1, a 10 s motion at 10 Hz) and ``generate``
@@ -49,6 +50,8 @@ def main() -> None:
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--packaged", action="store_true",
                     help="time the packaged (shipped) models instead of paper-size ones")
+    ap.add_argument("--l2m", metavar="MODEL", help="with --packaged: time this L2M file "
+                    "(e.g. one trained with --plan-parts) instead of the packaged one")
     args = ap.parse_args()
     torch.set_num_threads(args.threads)
     torch.manual_seed(0)
@@ -57,9 +60,11 @@ def main() -> None:
     if args.packaged:
         from motionlang.cli.demo import packaged_model
         m2l = MotionToLanguage.load(packaged_model("m2l"))
-        l2m = LanguageToMotion.load(packaged_model("l2m"))
+        l2m = LanguageToMotion.load(args.l2m or packaged_model("l2m"))
         F, V = m2l.config.n_features, m2l.config.vocab_size
         print(f"packaged models: M2L {m2l.config}\nL2M {l2m.config}")
+    elif args.l2m:
+        raise SystemExit("--l2m needs --packaged (its M2L ranks and describes)")
     else:
         m2l = MotionToLanguage(M2LConfig(n_features=F, vocab_size=V))
         l2m = LanguageToMotion(L2MConfig(vocab_size=V, n_features=F))
