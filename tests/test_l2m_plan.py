@@ -33,6 +33,20 @@ def test_motion_plan_by_hand():
     torch.testing.assert_close(short[0], torch.tensor([[1.0, 0.0], [3.0, 2.0], [0.0, 0.0]]))
 
 
+def test_a_mean_mask_keeps_only_the_chosen_features_means():
+    x = torch.tensor([[0.0, 5.0], [2.0, 5.0], [4.0, 7.0], [4.0, 9.0]]).view(1, 4, 2)
+    plan = motion_plan(x, torch.tensor([4]), 2, torch.tensor([1.0, 0.0]))
+    # means of feature 0 kept (1, 4), of feature 1 dropped; changes of both kept
+    torch.testing.assert_close(plan[0], torch.tensor([[1.0, 0.0, 2.0, 0.0],
+                                                      [4.0, 0.0, 1.0, 2.0]]))
+    model = plan_model(plan_mean_mask=[1.0] + [0.0] * (F_DIM - 1))
+    batch = make_batch()
+    got = model.plan_target(batch["motion"], batch["motion_lengths"])
+    assert torch.all(got[:, :, 1:F_DIM] == 0) and torch.any(got[:, :, 0] != 0)
+    with pytest.raises(MotionlangError, match="plan_mean_mask"):
+        plan_model(plan_mean_mask=[1.0])
+
+
 def test_plan_at_reads_each_frames_part():
     plan = torch.arange(2 * 3 * 2, dtype=torch.float32).view(2, 3, 2)
     got = plan_at(plan, torch.arange(4), torch.tensor([6, 4]))
@@ -132,7 +146,7 @@ def test_fit_planner_fits_the_planner_alone_and_keeps_the_best_epoch():
     items = [{"tokens": batch["tokens"][b, :int(batch["token_lengths"][b])].tolist(),
               "motion": batch["motion"][b, :int(batch["motion_lengths"][b])].numpy()}
              for b in range(4)]
-    plans = true_plans(items, 3, F_DIM)
+    plans = true_plans(model, items)
     torch.testing.assert_close(plans[1], motion_plan(batch["motion"][1:2, :5],
                                                      torch.tensor([5]), 3)[0])
     others = {k: v.clone() for k, v in model.state_dict().items() if not k.startswith("planner.")}
@@ -161,9 +175,13 @@ def test_fit_planner_script_on_a_tiny_trained_model(tmp_path, capsys):
     assert main(["train", "l2m", "--data", str(corpus), "--out", str(run), "--epochs", "1",
                  "--batch-size", "8", "--offsets", "1", "--dec-hidden", "8", "--dec-layers",
                  "1", "--enc-hidden", "8", "--embed-dim", "8", "--components", "2",
-                 "--progress-input", "--plan-parts", "4"]) == 0
+                 "--progress-input", "--plan-parts", "4", "--plan-means", "root"]) == 0
     trained = LanguageToMotion.load(run / "model.pt")
     assert trained.config.plan_parts == 4 and trained.planner is not None
+    names = list(trained.features.names)[:trained.config.n_features]
+    kept = [n for n, w in zip(names, trained.config.plan_mean_mask) if w]
+    assert kept == ["root_vx", "root_vz", "root_dyaw"] or sorted(kept) == sorted(
+        ["root_vx", "root_vz", "root_dyaw"])
     path = Path(__file__).resolve().parents[1] / "scripts" / "l2m_fit_planner.py"
     spec = importlib.util.spec_from_file_location("l2m_fit_planner", path)
     script = importlib.util.module_from_spec(spec)

@@ -96,6 +96,10 @@ def _add_train(sub, name: str, help_: str) -> None:
                             "needs --progress-input (0: off, the paper's)")
         p.add_argument("--plan-weight", type=float, default=d.plan_weight, metavar="W",
                        help="weight of the plan head's mean squared error")
+        p.add_argument("--plan-means", choices=("all", "root"), default="all",
+                       help="which features' part means the plan holds: all, or only the "
+                            "root's ground velocity and heading change (every feature's "
+                            "change is in it either way)")
         p.add_argument("--plan-noise", type=float, default=d.plan_noise, metavar="STD",
                        help="std of Gaussian noise on the true plan fed while training")
     p.set_defaults(func=cmd_train, model_kind=name)
@@ -163,6 +167,10 @@ def cmd_train(args: argparse.Namespace) -> int:
     input_mask = None
     if args.model_kind == "l2m" and args.hide_root_input:
         input_mask = root_loss_weights(data.features, 0.0, "--hide-root-input")
+    plan_mean_mask = None
+    if args.model_kind == "l2m" and args.plan_parts and args.plan_means == "root":
+        plan_mean_mask = [1.0 - w for w in root_loss_weights(data.features, 0.0,
+                                                              "--plan-means root")]
     out = Path(args.out)
     save_splits(data.splits, out / "splits")
     log_command(out / "commands.jsonl", args)
@@ -193,6 +201,7 @@ def cmd_train(args: argparse.Namespace) -> int:
                                            plan_parts=args.plan_parts,
                                            plan_weight=args.plan_weight,
                                            plan_noise=args.plan_noise,
+                                           plan_mean_mask=plan_mean_mask,
                                            max_frames=int(1.5 * longest), **sizes),
                                  data.vocab, features=data.features)
         if args.progress_input:   # it plans its length from the sentence

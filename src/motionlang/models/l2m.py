@@ -118,6 +118,9 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
             self.attn = AdditiveAttention(c.dec_hidden, ctx, c.attn_dim)
             head_in += ctx
         self.head = mdn.MixtureDensityHead(head_in, c.n_features, c.n_components)
+        if c.plan_mean_mask is not None and len(c.plan_mean_mask) != c.n_features:
+            raise MotionlangError(f"L2MConfig.plan_mean_mask must have {c.n_features} factors, "
+                                  f"got {len(c.plan_mean_mask)}")
         self.planner = None
         if c.plan_parts:   # sentence -> (parts, 2F): per part, mean features and mean change
             self.planner = Planner(c.vocab_size, c.n_features, c.plan_parts, c.plan_hidden,
@@ -228,13 +231,20 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
         state = self.encode(tokens, token_lengths, lengths, plan)
         return self._rollout(state, prev, p, torch.Generator().manual_seed(seed))
 
+    def plan_target(self, motion: torch.Tensor, lengths: torch.Tensor) -> torch.Tensor:
+        """The plan (B, parts, 2F) of motions (B, T, F) with valid ``lengths`` (B,), as this
+        model plans (``plan_parts``, ``plan_mean_mask``)."""
+        c = self.config
+        mask = None if c.plan_mean_mask is None else torch.tensor(c.plan_mean_mask)
+        return motion_plan(motion, lengths, c.plan_parts, mask)
+
     def _true_plan(self, motion: torch.Tensor, lengths: torch.Tensor) -> torch.Tensor | None:
         """The plan fed while training (``plan_parts`` models; else None): the motion's own,
         with noise of std ``plan_noise`` in training mode, so that the decoder tolerates a
         predicted plan's errors."""
         if self.planner is None:
             return None
-        plan = motion_plan(motion, lengths, self.config.plan_parts)
+        plan = self.plan_target(motion, lengths)
         if self.training and self.config.plan_noise > 0:
             plan = plan + self.config.plan_noise * torch.randn_like(plan)
         return plan
@@ -311,7 +321,7 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
             # the planner that plans from the sentence at generation time (the decoder above
             # was fed the true plan); its parameters are its own
             pred = self.planner(batch["tokens"], batch["token_lengths"])
-            plan_mse = ((pred - motion_plan(motion, lengths, self.config.plan_parts)) ** 2).mean()
+            plan_mse = ((pred - self.plan_target(motion, lengths)) ** 2).mean()
             out["loss"] = out["loss"] + self.config.plan_weight * plan_mse
             out["plan"] = plan_mse.detach()
         return out

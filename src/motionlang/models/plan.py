@@ -32,12 +32,14 @@ def part_index(t: torch.Tensor, n_frames: torch.Tensor, parts: int) -> torch.Ten
     return k.clamp(0, parts - 1).long()
 
 
-def motion_plan(motion: torch.Tensor, lengths: torch.Tensor, parts: int) -> torch.Tensor:
+def motion_plan(motion: torch.Tensor, lengths: torch.Tensor, parts: int,
+                mean_mask: torch.Tensor | None = None) -> torch.Tensor:
     """motion (B, T, F) padded, lengths (B,) valid frames -> plan (B, parts, 2F).
 
-    [..., :F]: mean of each feature over the part's frames; [..., F:]: mean |x_t - x_{t-1}|
-    over the part's frames t >= 1. A part without frames (a motion shorter than ``parts``)
-    is 0.
+    [..., :F]: mean of each feature over the part's frames (times ``mean_mask`` (F,), e.g.
+    1 for the root's velocity and 0 for the posture, whose mean a planner can only guess
+    as an average of different postures); [..., F:]: mean |x_t - x_{t-1}| over the part's
+    frames t >= 1. A part without frames (a motion shorter than ``parts``) is 0.
     """
     B, T, F = motion.shape
     t = torch.arange(T)
@@ -46,6 +48,8 @@ def motion_plan(motion: torch.Tensor, lengths: torch.Tensor, parts: int) -> torc
     onehot = torch.nn.functional.one_hot(part, parts).to(motion.dtype) * valid.unsqueeze(-1)
     count = onehot.sum(1).clamp(min=1).unsqueeze(-1)              # (B, parts, 1)
     mean = torch.einsum("btk,btf->bkf", onehot, motion) / count
+    if mean_mask is not None:
+        mean = mean * mean_mask.to(mean)
     change = torch.zeros_like(motion)
     change[:, 1:] = (motion[:, 1:] - motion[:, :-1]).abs()
     moved = onehot.clone()

@@ -84,6 +84,8 @@ class L2MConfig:
     # plan. Needs ``progress_input``.
     plan_parts: int = 0
     plan_hidden: int = 128
+    # per feature, 1 = its mean is in the plan, 0 = not (only its change); None = all
+    plan_mean_mask: list[float] | None = None
     plan_weight: float = 1.0
     plan_noise: float = 0.0
     pad_id: int = 0

@@ -15,18 +15,20 @@ import numpy as np
 import torch
 
 from motionlang.errors import MotionlangError
-from motionlang.models.plan import Planner, motion_plan
+from motionlang.models.plan import Planner
 from motionlang.training.collate import pad_sequences
 
 log = logging.getLogger(__name__)
 
 
-def true_plans(items: Sequence[dict], parts: int, n_features: int) -> torch.Tensor:
-    """Items with ``motion`` (T, >= F) -> their plans (N, parts, 2F) (first F features)."""
-    return torch.stack([motion_plan(torch.as_tensor(np.asarray(it["motion"])[None, :, :n_features],
-                                                    dtype=torch.float32),
-                                    torch.tensor([len(it["motion"])]), parts)[0]
-                        for it in items])
+def true_plans(model, items: Sequence[dict]) -> torch.Tensor:
+    """Items with ``motion`` (T, >= F) -> their plans (N, parts, 2F) as ``model`` (an L2M
+    with ``plan_parts``) plans them (its first F features)."""
+    F = model.config.n_features
+    return torch.cat([model.plan_target(torch.as_tensor(np.asarray(it["motion"])[None, :, :F],
+                                                        dtype=torch.float32),
+                                        torch.tensor([len(it["motion"])]))
+                      for it in items])
 
 
 def _mse(planner: Planner, tokens: torch.Tensor, lengths: torch.Tensor, plans: torch.Tensor,
@@ -61,7 +63,7 @@ def fit_planner(model, train: Sequence[dict], val: Sequence[dict] | None = None,
         if items:
             tokens, lengths = pad_sequences([it["tokens"] for it in items], pad=c.pad_id,
                                             dtype=torch.long)
-            sets[name] = (tokens, lengths, true_plans(items, c.plan_parts, c.n_features))
+            sets[name] = (tokens, lengths, true_plans(model, items))
     opt = torch.optim.Adam(planner.parameters(), lr=lr)
     g = torch.Generator().manual_seed(seed)
     tokens, lengths, plans = sets["train"]
