@@ -48,8 +48,8 @@ much as the reference where the reference moves.
 And ``plan_parts`` (:mod:`motionlang.models.plan`): every decoder step also reads a coarse
 plan of the motion, its part's mean features and mean absolute change; the true motion's
 plan while training, the plan a :class:`motionlang.models.plan.Planner` (its own sentence
-encoder, fitted with an MSE term) predicts from the sentence when generating. The decoder learns to follow the plan, so the
-sentence steers every frame, not only the first ones.
+encoder, fitted with an MSE term) predicts from the sentence when generating. The decoder
+learns to follow the plan, so the sentence steers every frame, not only the first ones.
 """
 from __future__ import annotations
 
