@@ -48,8 +48,7 @@ def main(argv=None) -> int:
                                   "--plan-parts)")
         if args.fresh:
             torch.manual_seed(args.seed)
-            new = Planner(c.vocab_size, c.n_features, c.plan_parts, c.plan_hidden,
-                          c.embed_dim, c.pad_id, c.dropout).state_dict()
+            new = Planner.for_config(c).state_dict()
             # "plan_head.": the planner's first form, a head on the decoder's own sentence
             # context, which learnt too slowly (the runs of 2026-11-23 hold it)
             kept = {k: v for k, v in d["state_dict"].items()

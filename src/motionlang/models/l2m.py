@@ -123,8 +123,7 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
                                   f"got {len(c.plan_mean_mask)}")
         self.planner = None
         if c.plan_parts:   # sentence -> (parts, 2F): per part, mean features and mean change
-            self.planner = Planner(c.vocab_size, c.n_features, c.plan_parts, c.plan_hidden,
-                                   c.embed_dim, c.pad_id, c.dropout)
+            self.planner = Planner.for_config(c)
         if not 0.0 <= c.rollout <= 1.0:
             raise MotionlangError(f"L2MConfig.rollout must be in [0, 1], not {c.rollout!r}")
         # not saved with the weights: it follows from the config

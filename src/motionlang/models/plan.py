@@ -78,6 +78,12 @@ class Planner(nn.Module):
         self.head = nn.Sequential(nn.Linear(self.encoder.out_dim, 2 * hidden), nn.Tanh(),
                                   nn.Linear(2 * hidden, parts * 2 * n_features))
 
+    @classmethod
+    def for_config(cls, c) -> "Planner":
+        """The planner of an L2M config (``L2MConfig`` with ``plan_parts`` > 0)."""
+        return cls(c.vocab_size, c.n_features, c.plan_parts, c.plan_hidden, c.embed_dim,
+                   c.pad_id, c.dropout)
+
     def forward(self, tokens: torch.Tensor, lengths: torch.Tensor) -> torch.Tensor:
         context, _, _ = self.encoder(self.drop(self.embed(tokens)), lengths)
         return self.head(self.drop(context)).view(tokens.shape[0], self.parts, -1)

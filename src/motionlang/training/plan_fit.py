@@ -55,8 +55,7 @@ def fit_planner(model, train: Sequence[dict], val: Sequence[dict] | None = None,
         raise MotionlangError("fit_planner needs training pairs")
     torch.manual_seed(seed)
     if fresh:
-        model.planner = Planner(c.vocab_size, c.n_features, c.plan_parts, c.plan_hidden,
-                                c.embed_dim, c.pad_id, c.dropout)
+        model.planner = Planner.for_config(c)
     planner = model.planner
     sets = {}
     for name, items in (("train", train), ("val", val or [])):
