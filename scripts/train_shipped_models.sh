@@ -37,7 +37,7 @@ L2M_OPTS=(--data "$WORK/corpus6000" --out "$WORK/l2m" --batch-size 64 --offsets 
   && "$PY" "$HERE/scripts/l2m_fit_planner.py" "$WORK/l2m/model.pt" --data "$WORK/corpus6000" \
          --out "$WORK/l2m/planned.pt" --epochs 20; } &
 L2M=$!
-wait $M2L && wait $L2M   # a failed run stops the script before anything is shipped
+wait $M2L; wait $L2M   # (set -e) a failed run stops the script before anything is shipped
 # 3. ship the final checkpoints (self-describing: config, vocabulary, normaliser, weights)
 mkdir -p "$HERE/src/motionlang/data/models"
 cp "$WORK/m2l/model.pt" "$HERE/src/motionlang/data/models/m2l.pt"

@@ -102,7 +102,7 @@ def run_demo(input_path: str | Path | None, out_dir: str | Path, *, asf: str | N
 # ------------------------------------------------------------------ the main job
 DEFAULT_SENTENCE = "a person waves with the left hand"
 #: Length cap of the demo's generated motion, in model frames (10 Hz, so 10 s); the
-#: packaged L2M ends its motions itself (flag P(active) < 0.5), usually well before.
+#: packaged L2M plans its length from the sentence (its length model), usually well below.
 DEMO_MAX_FRAMES = 100
 #: The packaged models were trained on corpus seed 0; this seed's samples are unseen.
 SYNTH_SEED = 2026
