@@ -184,3 +184,27 @@ def test_sample_decode_temperature_draws_from_the_sharpened_mixture():
         sorted(tuple(h.frames[0].round(5)) for h in hyps)
     for h in hyps:                         # scored under the model's own distribution
         assert h.score == pytest.approx(replay_score(params_for, h.frames), abs=1e-3)
+
+
+@pytest.mark.parametrize("sampled", [False, True])
+def test_a_given_first_frame_is_kept_and_continued_from(sampled):
+    """``first``: frame 0 is the given one, the next frames follow the mixture that reads
+    it (the means follow the previous frame), and the score is the replayed likelihood."""
+    step, params_for = make_step(stop_at=4)
+    first = torch.tensor([3.0, -2.0])
+    if sampled:
+        hyps = sample_decode(step, torch.zeros(1, dtype=torch.long), width=2, max_frames=10,
+                             dim=D, first=first, generator=torch.Generator().manual_seed(0))
+    else:
+        hyps = mean_decode(step, torch.zeros(1, dtype=torch.long), batch_size=1,
+                           max_frames=10, dim=D, first=first)
+    for h in hyps:
+        assert len(h.frames) == 5
+        np.testing.assert_array_equal(h.frames[0], first.numpy())
+        assert h.score == pytest.approx(replay_score(params_for, h.frames), abs=1e-3)
+    if not sampled:   # the heaviest component's mean given frame 0 = (3, -2)
+        p = params_for(torch.tensor([1]), first[None])
+        np.testing.assert_allclose(hyps[0].frames[1], p.mu[0, 0].numpy(), rtol=1e-6)
+        plain = mean_decode(step, torch.zeros(1, dtype=torch.long), batch_size=1,
+                            max_frames=10, dim=D)[0]
+        assert not np.allclose(plain.frames[1], hyps[0].frames[1])

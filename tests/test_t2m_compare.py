@@ -103,6 +103,7 @@ def test_l2m_on_the_test_subjects_bodies(data):
     """An angles L2M with --true-start: the same generated angles drive each test subject's
     own MMM body, so only bone lengths change (and the root's start stays at the origin)."""
     from motionlang.datasets.text import Vocabulary
+    from motionlang.decoding.seq2seq import model_dim
     from motionlang.decoding.t2m import generate_positions21
     from motionlang.features.angles import AnglesFeatures
     from motionlang.formats.mmm_model import mmm_skeleton
@@ -110,7 +111,8 @@ def test_l2m_on_the_test_subjects_bodies(data):
     fs = AnglesFeatures().fit([r.load_motion() for r in list(data.records.values())[:3]])
     vocab = Vocabulary.build([s for r in data.records.values() for s in r.annotations])
     torch.manual_seed(0)
-    l2m = LanguageToMotion(L2MConfig(vocab_size=len(vocab), n_features=fs.dim, embed_dim=8,
+    # frames as trained models see them: without the features' active flag
+    l2m = LanguageToMotion(L2MConfig(vocab_size=len(vocab), n_features=model_dim(fs), embed_dim=8,
                                      enc_hidden=8, enc_layers=1, dec_hidden=8, dec_layers=1,
                                      n_components=2, dropout=0.0, max_frames=12),
                            vocab, features=fs).eval()
@@ -127,6 +129,21 @@ def test_l2m_on_the_test_subjects_bodies(data):
             assert not np.allclose(body[it.id], mean)
             other += 1
     assert other >= 1
+    # the second row: on the same body, each motion starts with the test motion's first
+    # frame in the L2M's features (its posture) and goes on from there
+    from motionlang.decoding.seq2seq import motion_frames
+    primed = results["L2M, from the test motion's first pose, on its body"]["generated"]
+    for it in eval_items(data, "train", 3):
+        rec = data.records[it.id]
+        h = rec.meta["subject"]["height_m"]
+        f0 = motion_frames(fs, rec.load_motion())[0][0]
+        np.testing.assert_allclose(primed[it.id], generate_positions21(
+            l2m, it.sentence, len(it.target), skeleton=mmm_skeleton(h), first_frame=f0))
+        assert not np.allclose(primed[it.id], body[it.id])
+        # its first frame is the test motion's first pose (joints relative to the root;
+        # the angles features round-trip the pose to ~1 mm)
+        want = it.target[0] - it.target[0, :1]
+        np.testing.assert_allclose(primed[it.id][0] - primed[it.id][0, :1], want, atol=5e-3)
 
 
 def test_l2m_and_twostream_positions(data):

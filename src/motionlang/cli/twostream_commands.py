@@ -226,7 +226,8 @@ def register(subparsers) -> None:
                    help="also score each two-stream model generating from the sentence but "
                         "starting at the test motion's first pose (as JL2P and Ghosh et al. "
                         "evaluate), each L2M model (joint angles) on the test subject's own "
-                        "body, and standing in the first pose")
+                        "body, and on it starting with the test motion's first frame, and "
+                        "standing in the first pose")
     p.add_argument("--figures", type=int, default=3, help="trajectory figures to draw")
     p.add_argument("--oracle", type=int, default=0, metavar="K",
                    help="procedural corpus: a second table on the test motions whose exact "

@@ -131,7 +131,8 @@ def mean_decode(step: MotionStep, state: Any, *, batch_size: int, max_frames: in
                 threshold: float = 0.5, min_frames: int = 1,
                 generator: torch.Generator | None = None,
                 sample_frames: bool = False, temperature: float = 1.0,
-                expected: bool = False) -> list[MotionHypothesis]:
+                expected: bool = False, first: torch.Tensor | None = None
+                ) -> list[MotionHypothesis]:
     """Decoding one motion per row: each frame is the mean of the heaviest mixture component
     (with ``expected``, the mixture's mean sum_k pi_k mu_k; with ``sample_frames``, a draw
     from the mixture: ancestral sampling), and the motion
@@ -141,15 +142,21 @@ def mean_decode(step: MotionStep, state: Any, *, batch_size: int, max_frames: in
 
     The flag is thresholded rather than sampled even when frames are sampled: a per-frame
     stop probability of a few percent, drawn at every frame, ends most motions early.
+
+    ``first`` (D,) or (B, D): the first output frame is this one instead of the model's
+    (it is scored all the same), and decoding continues from it: a motion primed with a
+    given first pose.
     """
     B = batch_size
     prev = _start(start, B, dim)
+    given = None if first is None else _start(first, B, None)
     out: list[list[torch.Tensor]] = [[] for _ in range(B)]
     score = torch.zeros(B)
     alive = torch.ones(B, dtype=torch.bool)
     for t in range(max_frames):
         params, state = step(state, prev)
-        x = (sample(params, 1, generator, temperature)[0][:, 0] if sample_frames
+        x = (given if t == 0 and given is not None
+             else sample(params, 1, generator, temperature)[0][:, 0] if sample_frames
              else mixture_mean(params) if expected else mode_frame(params))
         a = (torch.sigmoid(params.active_logit) >= threshold).float()
         if t == max_frames - 1:
@@ -172,13 +179,13 @@ def sample_decode(step: MotionStep, state: Any, *, width: int, max_frames: int,
                   dim: int | None = None, start: torch.Tensor | None = None,
                   min_frames: int = 1, generator: torch.Generator | None = None,
                   length_norm: bool = False, temperature: float = 1.0,
-                  reorder: Callable[[Any, torch.Tensor], Any] = select_state
-                  ) -> list[MotionHypothesis]:
+                  reorder: Callable[[Any, torch.Tensor], Any] = select_state,
+                  first: torch.Tensor | None = None) -> list[MotionHypothesis]:
     """W independent ancestral samples for ONE input (``state`` has one row), drawn at
     ``temperature`` (``mdn.sample``), sorted by decreasing log likelihood (per frame with
-    ``length_norm``)."""
+    ``length_norm``); ``first`` (D,): a given first frame (see :func:`mean_decode`)."""
     rows = reorder(state, torch.zeros(width, dtype=torch.long))
     hyps = mean_decode(step, rows, batch_size=width, max_frames=max_frames, start=start,
                        dim=dim, min_frames=min_frames, generator=generator,
-                       sample_frames=True, temperature=temperature)
+                       sample_frames=True, temperature=temperature, first=first)
     return sorted(hyps, key=lambda h: -h.score / (len(h.frames) if length_norm else 1))

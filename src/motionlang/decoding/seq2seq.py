@@ -130,7 +130,8 @@ def generate_features(model: LanguageToMotion, sentence: str | Sequence[int], *,
                       width: int = 5, max_frames: int | None = None, method: str = "beam",
                       samples: int = 5, seed: int = 0, min_frames: int = 1,
                       length_norm: bool = False, temperature: float = 1.0,
-                      n_frames: int | None = None) -> list[tuple[np.ndarray, float]]:
+                      n_frames: int | None = None, first_frame: np.ndarray | None = None
+                      ) -> list[tuple[np.ndarray, float]]:
     """Sentence -> W motions as raw features (T, F) with their log likelihood, best first.
 
     method: "beam" (the sampled beam, ``samples`` candidates per hypothesis and step),
@@ -144,9 +145,21 @@ def generate_features(model: LanguageToMotion, sentence: str | Sequence[int], *,
     n_frames: the motion's length for a model told it (``progress_input``; it ends there at
     the latest), a cap like ``max_frames`` for the others. Without it such a model plans the
     length from the sentence (its length model), at most ``max_frames``.
+    first_frame: (F,) raw model features ("mean" and "sample"): every motion starts with this
+    frame and continues from it (a given first pose, e.g. the start of a test motion).
     """
     if method not in METHODS:
         raise MotionlangError(f"method must be one of {METHODS}, not {method!r}")
+    first = None
+    if first_frame is not None:
+        if method == "beam":
+            raise MotionlangError("a given first frame works with method 'mean' or 'sample', "
+                                  "not the sampled beam")
+        first = np.asarray(first_frame, dtype=np.float32)
+        if first.shape != (model.config.n_features,):
+            raise MotionlangError(f"first_frame must be ({model.config.n_features},) model "
+                                  f"features, got {first.shape}")
+        first = torch.from_numpy(_normalize(model.normalizer, first[None])[0].astype(np.float32))
     if width < 1:
         raise MotionlangError(f"width must be >= 1, got {width}")
     if not temperature > 0:
@@ -163,12 +176,12 @@ def generate_features(model: LanguageToMotion, sentence: str | Sequence[int], *,
     if method == "mean":
         # a model trained on its own expected frames continues from those
         hyps = mean_decode(model.step, state, batch_size=1, max_frames=cap, dim=F,
-                           min_frames=min_frames,
+                           min_frames=min_frames, first=first,
                            expected=model.config.rollout_input == "mean")
     elif method == "sample":
         hyps = sample_decode(model.step, state, width=width, max_frames=cap, dim=F,
                              min_frames=min_frames, length_norm=length_norm,
-                             temperature=temperature,
+                             temperature=temperature, first=first,
                              generator=torch.Generator().manual_seed(seed))
     else:
         hyps = sampled_beam(model.step, state, batch_size=1, width=width, max_frames=cap,
@@ -198,7 +211,8 @@ def generate(model: LanguageToMotion, sentence: str | Sequence[int], *, width: i
              max_frames: int | None = None, method: str = "beam", samples: int = 5,
              seed: int = 0, min_frames: int = 1, length_norm: bool = False,
              temperature: float = 1.0, skeleton=None, n_frames: int | None = None,
-             reranker: MotionToLanguage | None = None) -> list[tuple[Any, float]]:
+             reranker: MotionToLanguage | None = None, first_frame: np.ndarray | None = None
+             ) -> list[tuple[Any, float]]:
     """Sentence -> W decoded motions with their log likelihood, best first.
 
     Each motion is what the feature set's ``decode`` returns: a :class:`Motion` for joint
@@ -207,6 +221,9 @@ def generate(model: LanguageToMotion, sentence: str | Sequence[int], *, width: i
 
     reranker: an M2L model with the same features; the motions then come ranked by its log
     P(sentence | motion) instead, and that is the number beside each (``decoding.rerank``).
+
+    first_frame: (F,) model features (``motion_frames(model.features, motion)[0][0]``):
+    every motion starts with this frame ("mean" and "sample"; see ``generate_features``).
     """
     fs = _features_of(model)
     if reranker is not None:   # before the (slower) generation
@@ -218,7 +235,7 @@ def generate(model: LanguageToMotion, sentence: str | Sequence[int], *, width: i
     out = generate_features(model, sentence, width=width, max_frames=max_frames,
                             method=method, samples=samples, seed=seed, min_frames=min_frames,
                             length_norm=length_norm, temperature=temperature,
-                            n_frames=n_frames)
+                            n_frames=n_frames, first_frame=first_frame)
     if reranker is not None:
         out = [(f, m2l_score) for f, _, m2l_score in rerank(out, reranker, sentence)]
     kw = {} if skeleton is None else {"skeleton": skeleton}

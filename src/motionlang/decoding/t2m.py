@@ -96,7 +96,7 @@ def stretch(p: np.ndarray, n_frames: int) -> np.ndarray:
 @torch.no_grad()
 def generate_positions21(model, sentence: str, n_frames: int, *, seed: int = 0,
                          method: str = "mean", skeleton=None, width: int = 1,
-                         reranker=None) -> np.ndarray:
+                         reranker=None, first_frame: np.ndarray | None = None) -> np.ndarray:
     """Sentence -> global 21-joint positions (n_frames, 21, 3) metres at 12.5 Hz, anchored
     at the origin facing +Z.
 
@@ -109,6 +109,8 @@ def generate_positions21(model, sentence: str, n_frames: int, *, seed: int = 0,
     its joint angles drive (default: the training subjects' mean build). ``width`` > 1
     with "sample": the likeliest of that many samples, or with ``reranker`` (an M2L model)
     the one under which it finds the sentence likeliest (``decoding.rerank``).
+    ``first_frame`` (L2M only): its motion starts with this frame of its own features
+    (``decoding.seq2seq.generate_features``).
     """
     if getattr(model, "kind", None) == "twostream":
         return model.generate_positions(sentence, n_frames)
@@ -118,7 +120,8 @@ def generate_positions21(model, sentence: str, n_frames: int, *, seed: int = 0,
     fps = float(getattr(getattr(model, "features", None), "fps", FPS))
     cap = max(1, int(np.ceil(n_frames * fps / FPS)))
     result, _ = generate(model, sentence, width=width, method=method, seed=seed,
-                         n_frames=cap, skeleton=skeleton, reranker=reranker)[0]
+                         n_frames=cap, skeleton=skeleton, reranker=reranker,
+                         first_frame=first_frame)[0]
     if isinstance(result, np.ndarray):  # positions features: already (T, 21, 3) at fps
         p = result
         if abs(fps - FPS) > 1e-9:

@@ -191,12 +191,17 @@ def subject_height(record) -> float | None:
 
 def _l2m_on_subjects(results, name, model, data, items, protos, method, width: int = 1,
                      reranker=None) -> None:
-    """The L2M's counterpart of a true start: its joint angles drive each test subject's
-    own body (``mmm_skeleton`` of the subject's height) instead of the mean build. Only for
-    angles models; skipped, with a log line, when a test motion's height is unknown (an
-    MMM file without one reads as the reader's default height, so not for those)."""
+    """The L2M's counterparts of a true start, two rows: its joint angles drive each test
+    subject's own body (``mmm_skeleton`` of the subject's height) instead of the mean
+    build; and on that body, its motion also starts with the test motion's first frame in
+    its own features (posture and root speed included) and continues from it, which is
+    what the two-stream model is told with a true start. Only for angles models; skipped,
+    with a log line, when a test motion's height is unknown (an MMM file without one reads
+    as the reader's default height, so not for those). The second row needs "mean" or
+    "sample" decoding."""
     import logging
 
+    from motionlang.decoding.seq2seq import motion_frames
     from motionlang.decoding.t2m import generate_positions21
     from motionlang.formats.mmm_model import mmm_skeleton
     if getattr(getattr(model, "features", None), "kind", None) != "angles":
@@ -205,11 +210,17 @@ def _l2m_on_subjects(results, name, model, data, items, protos, method, width: i
     if any(h is None for h in heights.values()):
         logging.getLogger(__name__).info("%s: no subject heights, no row on their bodies", name)
         return
-    gen = {it.id: generate_positions21(model, it.sentence, len(it.target), method=method,
-                                       skeleton=mmm_skeleton(heights[it.id]), width=width,
-                                       reranker=reranker) for it in items}
-    results[f"{name}, on the test subject's body"] = score_generated(gen, items, data.features,
-                                                                    protos)
+    rows = {"on the test subject's body": None}
+    if method != "beam":
+        rows["from the test motion's first pose, on its body"] = {
+            it.id: motion_frames(model.features, data.records[it.id].load_motion())[0][0]
+            for it in items}
+    for row, firsts in rows.items():
+        gen = {it.id: generate_positions21(
+                   model, it.sentence, len(it.target), method=method,
+                   skeleton=mmm_skeleton(heights[it.id]), width=width, reranker=reranker,
+                   first_frame=None if firsts is None else firsts[it.id]) for it in items}
+        results[f"{name}, {row}"] = score_generated(gen, items, data.features, protos)
 
 
 def compare(models: dict[str, object], data, *, split: str = "test", limit: int | None = None,
@@ -227,7 +238,8 @@ def compare(models: dict[str, object], data, *, split: str = "test", limit: int 
     (``TwoStreamModel.reconstruct``); with ``true_start``, each two-stream model
     generating from the sentence but starting at the test motion's first pose, as JL2P and
     Ghosh et al. evaluate (it tells the model the subject's build and posture), each L2M
-    model on the test subject's own body (``_l2m_on_subjects``), and the no-motion
+    model on the test subject's own body, and on it starting with the test motion's
+    first frame (``_l2m_on_subjects``), and the no-motion
     baseline holding the test motion's first pose. With ``oracle`` = k > 0, a second table
     (``t2m_oracle.oracle_table``): every row again on the test motions with k training
     motions of the same parameters, beside the oracles; its rows go into the results with
