@@ -18,7 +18,7 @@ from motionlang.errors import MotionlangError
 from motionlang.models.twostream import TwoStreamModel
 from motionlang.training.trainer import TrainConfig
 from motionlang.training.twostream_train import (ForcingSchedule, TwoStreamTrainer, make_config,
-                                                 train_twostream)
+                                                 refit_sentence_encoder, train_twostream)
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_twostream import HashTokens  # noqa: E402  (fake token features, no language model)
@@ -170,6 +170,41 @@ def test_two_stage_ablation(data, tmp_path):
         torch.testing.assert_close(v, after_pose.pose_encoder.state_dict()[k], rtol=0, atol=0)
 
 
+@pytest.mark.parametrize("decode", [True, False])
+def test_refit_moves_the_sentence_encoder_only(data, tmp_path, monkeypatch, decode):
+    """The refit trains the sentence encoder alone and lowers its loss; with the pose and
+    energy weights at 0 it fits the embedding term without decoding a single motion."""
+    m = tiny(data)
+    items = data.items["train"]
+    cfg = TrainConfig(epochs=1, batch_size=8, out_dir=str(tmp_path / "joint"), plot=False,
+                      progress=False)
+    m, _ = train_twostream(m, items, cfg, schedule=ForcingSchedule(1.0, 0.0, 2))
+    before = {k: v.clone() for k, v in m.state_dict().items()}
+    if not decode:
+        m.config.lambdas.update(pose=0.0, energy=0.0)
+
+        def no_decoding(*a, **k):
+            raise AssertionError("decoded a motion")
+        monkeypatch.setattr(m.decoder, "forward", no_decoding)
+    batch = TwoStreamModel.collate(items)
+    m.set_stage("text")
+    term = "pose" if decode else "embedding"
+    loss0 = float(m.loss(batch)[term])
+    m.set_stage("joint")
+    cfg = TrainConfig(epochs=4, batch_size=8, lr=3e-3, out_dir=str(tmp_path / "refit"),
+                      plot=False, progress=False)
+    m2, hist = refit_sentence_encoder(m, items, cfg)
+    assert [h["stage"] for h in hist] == ["text"] * 4 and m2.stage == "joint"
+    assert ("pose" in hist[-1]["train"]) == decode and "embedding" in hist[-1]["train"]
+    changed = {k for k, v in m2.state_dict().items() if not torch.equal(v, before[k])}
+    assert changed and all(k.startswith("sentence_encoder.") for k in changed)
+    m2.set_stage("text")
+    assert float(m2.loss(batch)[term]) < loss0
+    # the stage is back: joint training would move every part again
+    m2.set_stage("joint")
+    assert all(p.requires_grad for p in m2.decoder.parameters())
+
+
 def test_load_any_t2m(data, tmp_path):
     from motionlang.decoding.t2m import generate_any, load_any_t2m
     m = tiny(data).eval()
@@ -241,6 +276,21 @@ def test_train_command(corpus, tmp_path, monkeypatch, capsys):
     n = int(res.stdout.split()[0])
     assert n >= 1 and "commonest wrong labels" in res.stdout
     assert len([l for l in res.stdout.splitlines() if "first " in l]) >= 1
+    # the sentence encoder refitted by its script (the embedding term alone: no decoding)
+    script = Path(__file__).resolve().parents[1] / "scripts" / "twostream_fit_sentence.py"
+    spec = importlib.util.spec_from_file_location("twostream_fit_sentence", script)
+    fit = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(fit)
+    refit = tmp_path / "refit.pt"
+    common = ["--data", str(corpus), "--max-frames", "12", "--epochs", "2",
+              "--batch-size", "16", "--weight", "pose=0", "--weight", "energy=0"]
+    assert fit.main([str(out), "--out", str(refit), *common]) == 0
+    a, b = TwoStreamModel.load(out).state_dict(), TwoStreamModel.load(refit).state_dict()
+    changed = [k for k in a if not torch.equal(a[k], b[k])]
+    assert changed and all(k.startswith("sentence_encoder.") for k in changed)
+    # another split seed: other training motions, another normaliser; refused, no file
+    assert fit.main([str(out), "--out", str(tmp_path / "r2.pt"), *common, "--seed", "1"]) == 2
+    assert "not the ones" in capsys.readouterr().err and not (tmp_path / "r2.pt").exists()
     assert main(["train", "twostream", "--data", str(corpus), "--out",
                  str(tmp_path / "bad.txt")]) == 2
     for bad in (["adversarial"], ["gan=1"], ["pose=-1"], ["pose=nan"], ["pose=x"],

@@ -1,5 +1,6 @@
 """Training the two-stream model with the shared trainer: annealed teacher forcing, the
-rest pose from the training set, and the two-stage "w/o joint training" ablation.
+rest pose from the training set, the two-stage "w/o joint training" ablation, and a refit
+of a trained model's sentence encoder alone.
 
 Annealed teacher forcing: the decoder is unrolled from the initial pose; trained on its own
 outputs from the first step it collapses to the mean pose (the core's notes: local APE 211
@@ -101,5 +102,33 @@ def train_twostream(model, train_items: Sequence[dict], config: TrainConfig, *,
                                    val_set=list(val_items) if val_items else None,
                                    schedule=schedule)
         history += [{**h, "stage": stage} for h in trainer.fit(resume=resume)]
+    model.teacher_forcing = 0.0
+    return model.eval(), history
+
+
+def refit_sentence_encoder(model, train_items: Sequence[dict], config: TrainConfig, *,
+                           val_items: Sequence[dict] | None = None, resume: bool = False):
+    """Train the sentence encoder of a trained ``model`` alone (stage "text": the pose
+    encoder, decoder and discriminator frozen, no teacher forcing) for ``config.epochs``
+    epochs in ``config.out_dir``, with a fresh optimiser; the model keeps its stage.
+
+    The loss is the text stage's: pose (and energy, with a weight) of the motion decoded
+    from the sentence embedding, plus the embedding term. With ``lambdas["pose"]`` and
+    ``["energy"]`` at 0 it is the embedding term alone, and no motion is decoded.
+
+    Returns:
+        (model in eval mode, history)
+    """
+    from motionlang.models.twostream import TwoStreamModel
+
+    stage = model.stage
+    model.set_stage("text")
+    try:
+        trainer = TwoStreamTrainer(model, list(train_items), TwoStreamModel.collate, config,
+                                   val_set=list(val_items) if val_items else None,
+                                   schedule=ForcingSchedule(0.0, 0.0, 0))
+        history = [{**h, "stage": "text"} for h in trainer.fit(resume=resume)]
+    finally:
+        model.set_stage(stage)
     model.teacher_forcing = 0.0
     return model.eval(), history

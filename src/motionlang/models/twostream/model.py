@@ -165,11 +165,15 @@ class TwoStreamModel(nn.Module):
             if energy:
                 terms["energy"] = L.energy_loss(qp, x, mask)
             fake = qp
+        # the text stage with neither pose nor energy weight fits the embedding alone: no
+        # decoding (a refit of the sentence encoder onto the pose embeddings, seconds)
+        decode = stage == "joint" or c.lambdas["pose"] > 0 or energy
         if stage in ("joint", "text"):
             zs = self.sentence_encoder(*self._tokens(batch))
+            terms["embedding"] = L.embedding_loss(zs, zp)
+        if stage in ("joint", "text") and decode:
             qs = self.decoder(zs, x[:, 0], T, x, self._forcing(), lengths)
             terms["pose"] = terms.get("pose", 0.0) + L.masked_smooth_l1(qs, x, mask)
-            terms["embedding"] = L.embedding_loss(zs, zp)
             if extra and stage == "joint":  # the text stage fits embeddings + poses only
                 terms["velocity"] = terms.get("velocity", 0.0) + L.velocity_loss(qs, x, mask)
             if energy:

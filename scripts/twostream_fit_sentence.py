@@ -1,0 +1,96 @@
+"""Train the sentence encoder of a trained two-stream model on its own, and save the model
+with it: the pose encoder, the decoder and the discriminator are kept as they are.
+
+    .venv/bin/python scripts/twostream_fit_sentence.py MODEL --data corpus --out NEW.pt \
+        [--epochs 2] [--lr 1e-3] [--weight pose=0 --weight energy=0]
+
+Why: decoded from the motions' *own* pose embeddings, our models get the order of actions
+right more often than from the sentence (README), so the sentence embedding, not the
+decoder, is where orders are lost. The loss is the "text" stage of the no-joint-training
+ablation (``training.twostream_train.refit_sentence_encoder``): the motion decoded from the
+sentence embedding against the true one (pose, and energy with the model's weight) plus
+the embedding term. ``--weight pose=0 --weight energy=0`` fits the embedding term alone
+(nothing is decoded: seconds per epoch). The training and validation pairs are those
+``train twostream`` made from the same corpus (split seed ``--seed``, ``--max-seconds``,
+``--max-frames``); the model's normaliser must be the corpus's.
+"""
+from __future__ import annotations
+
+import argparse
+import logging
+import sys
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("model", help="a trained two-stream model file")
+    ap.add_argument("--data", required=True, help="the corpus the model was trained on")
+    ap.add_argument("--out", required=True, help="where to write the model")
+    ap.add_argument("--run-dir", help="checkpoints and history (default: OUT_run)")
+    ap.add_argument("--epochs", type=int, default=2)
+    ap.add_argument("--batch-size", type=int, default=32)
+    ap.add_argument("--lr", type=float, default=1e-3)
+    ap.add_argument("--decay-epochs", type=float, default=0.0,
+                    help="lower the rate along a half cosine over the last N epochs")
+    ap.add_argument("--weight", action="append", metavar="TERM=W",
+                    help="loss weights for this fit (default: the model's own)")
+    ap.add_argument("--seed", type=int, default=0, help="split seed of the training run")
+    ap.add_argument("--max-seconds", type=float, default=30.0)
+    ap.add_argument("--max-frames", type=int, default=None)
+    ap.add_argument("--length-buckets", type=int, default=20)
+    ap.add_argument("--threads", type=int, default=1)
+    ap.add_argument("--resume", action="store_true", help="continue from the run's last.pt")
+    args = ap.parse_args(argv)
+    from pathlib import Path
+
+    import numpy as np
+    import torch
+
+    from motionlang.cli.twostream_commands import parse_lambdas
+    from motionlang.errors import MotionlangError
+    from motionlang.models.twostream import TwoStreamModel
+    from motionlang.training.trainer import TrainConfig, check_schedule
+    from motionlang.training.twostream_data import build_twostream_data
+    from motionlang.training.twostream_train import refit_sentence_encoder
+
+    logging.basicConfig(level=logging.INFO, format="%(message)s")
+    torch.set_num_threads(max(1, args.threads))
+    try:
+        if args.epochs < 1:
+            raise MotionlangError(f"--epochs must be >= 1, got {args.epochs}")
+        check_schedule(args.decay_epochs, 0.01, args.epochs)
+        out = Path(args.out)
+        if out.suffix != ".pt":
+            raise MotionlangError(f"{out}: the model file must end in .pt")
+        lambdas = parse_lambdas(args.weight)
+        model = TwoStreamModel.load(args.model)
+        model.config.lambdas = {**model.config.lambdas, **lambdas}
+        data = build_twostream_data(args.data, seed=args.seed, max_seconds=args.max_seconds,
+                                    max_frames=args.max_frames)
+        mine, theirs = model.normalizer, data.features.normalizer
+        if mine is None or not (np.allclose(mine.mean, theirs.mean)
+                                and np.allclose(mine.std, theirs.std)):
+            raise MotionlangError(f"--data {args.data}: its features are not the ones "
+                                  f"{args.model} was trained on (another corpus or split "
+                                  "seed?)")
+        run = Path(args.run_dir) if args.run_dir else out.parent / f"{out.stem}_run"
+        cfg = TrainConfig(epochs=args.epochs, batch_size=args.batch_size, lr=args.lr,
+                          grad_clip=5.0, seed=args.seed, out_dir=str(run),
+                          length_buckets=args.length_buckets,
+                          decay_epochs=args.decay_epochs)
+        model, history = refit_sentence_encoder(model, data.items["train"], cfg,
+                                                val_items=data.items.get("val") or None,
+                                                resume=args.resume)
+    except MotionlangError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    model.save(out)
+    last = history[-1] if history else {}
+    print(f"{out}: epoch {last.get('epoch')}, train loss "
+          f"{last.get('train', {}).get('loss', float('nan')):.4g}, val loss "
+          f"{last.get('val', {}).get('loss', float('nan')):.4g}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
