@@ -133,6 +133,18 @@ class TwoStreamModel(nn.Module):
     def _forcing(self) -> float:
         return self.teacher_forcing if self.training else 0.0
 
+    def _unroll(self, embeddings: dict[str, dict[str, torch.Tensor]], x: torch.Tensor,
+                lengths: torch.Tensor | None) -> dict[str, torch.Tensor]:
+        """{name: {stream: (B, H)}} -> {name: (B, T, F)}: each embedding decoded from the
+        batch's first frames, teacher-forced towards ``x`` (B, T, F), all in ONE unroll over
+        the stacked batch: the T-step Python loop is most of a training step, and one
+        unroll of 2B rows costs little more than one of B."""
+        k, (B, T, _) = len(embeddings), x.shape
+        z = {s: torch.cat([e[s] for e in embeddings.values()]) for s in self.decoder.cells}
+        q = self.decoder(z, x[:, 0].repeat(k, 1), T, x.repeat(k, 1, 1), self._forcing(),
+                         None if lengths is None else lengths.repeat(k))
+        return dict(zip(embeddings, q.split(B)))
+
     def loss(self, batch: dict) -> dict[str, torch.Tensor]:
         """-> {"loss": weighted sum, and each named term (detached)}.
 
@@ -155,30 +167,33 @@ class TwoStreamModel(nn.Module):
         terms: dict[str, torch.Tensor] = {}
         with torch.set_grad_enabled(stage != "text" and torch.is_grad_enabled()):
             zp = self.pose_encoder(x, lengths)
+        zs = None
+        if stage in ("joint", "text"):
+            zs = self.sentence_encoder(*self._tokens(batch))
+            terms["embedding"] = L.embedding_loss(zs, zp)
+        # the text stage with neither pose nor energy weight fits the embedding alone: no
+        # decoding (a refit of the sentence encoder onto the pose embeddings, seconds)
+        decode_s = zs is not None and (stage == "joint" or c.lambdas["pose"] > 0 or energy)
+        todo = {"pose": zp} if stage != "text" else {}
+        if decode_s:
+            todo["sentence"] = zs
+        q = self._unroll(todo, x, lengths) if todo else {}
         fake = None
-        if stage in ("joint", "pose"):
-            qp = self.decoder(zp, x[:, 0], T, x, self._forcing(), lengths)
+        if "pose" in q:
+            qp = fake = q["pose"]
             terms["pose"] = L.masked_smooth_l1(qp, x, mask)
             if extra:
                 terms["manifold"] = L.embedding_loss(self.pose_encoder(qp, lengths), zp)
                 terms["velocity"] = L.velocity_loss(qp, x, mask)
             if energy:
                 terms["energy"] = L.energy_loss(qp, x, mask)
-            fake = qp
-        # the text stage with neither pose nor energy weight fits the embedding alone: no
-        # decoding (a refit of the sentence encoder onto the pose embeddings, seconds)
-        decode = stage == "joint" or c.lambdas["pose"] > 0 or energy
-        if stage in ("joint", "text"):
-            zs = self.sentence_encoder(*self._tokens(batch))
-            terms["embedding"] = L.embedding_loss(zs, zp)
-        if stage in ("joint", "text") and decode:
-            qs = self.decoder(zs, x[:, 0], T, x, self._forcing(), lengths)
+        if "sentence" in q:
+            qs = fake = q["sentence"]   # what generation produces
             terms["pose"] = terms.get("pose", 0.0) + L.masked_smooth_l1(qs, x, mask)
             if extra and stage == "joint":  # the text stage fits embeddings + poses only
                 terms["velocity"] = terms.get("velocity", 0.0) + L.velocity_loss(qs, x, mask)
             if energy:
                 terms["energy"] = terms.get("energy", 0.0) + L.energy_loss(qs, x, mask)
-            fake = qs  # what generation produces
         if extra and stage != "text":
             terms["adversarial"] = L.bce_logits(self._disc(fake, lengths, frozen=True), True)
             terms["discriminator"] = (
