@@ -65,7 +65,8 @@ def test_forward_shapes(two_stream):
         m.loss({**b, "motion": b["motion"][..., :60]})
 
 
-@pytest.mark.parametrize("two_stream,every_step", [(True, False), (False, False), (True, True)])
+@pytest.mark.parametrize("two_stream,every_step", [(True, False), (False, False), (True, True),
+                                                   (False, True)])
 def test_folded_unroll_matches_layered_unroll(two_stream, every_step):
     m = tiny(two_stream=two_stream, z_every_step=every_step, time_input=every_step,
              progress_input=every_step)

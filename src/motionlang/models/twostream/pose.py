@@ -114,41 +114,13 @@ class PoseDecoder(nn.Module):
         (B, 1) is each sequence's T - 1 (at least 1), for the progress input."""
         c = self.config
         parts = [x[..., cols]]
-        if c.z_every_step and z is not None:  # None: z's share is added by _gru_step
+        if c.z_every_step:
             parts.append(z)
         if c.time_input:
             parts.append(x.new_full((x.shape[0], 1), (t - 1) / 100.0))
         if c.progress_input:  # the step reads frame t - 1 and predicts frame t
             parts.append(((t - 1) / span).clamp(max=1.0))
         return torch.cat(parts, dim=-1) if len(parts) > 1 else parts[0]
-
-    def _z_gate(self, cell: nn.GRUCell, cols: torch.Tensor, z: torch.Tensor
-                ) -> torch.Tensor | None:
-        """z's share of the input gates, W_ih[:, z columns] z + b_ih: (B, 3H), or None
-        without ``z_every_step``."""
-        if not self.config.z_every_step:
-            return None
-        n = len(cols)
-        return torch.addmm(cell.bias_ih, z, cell.weight_ih[:, n:n + z.shape[1]].t())
-
-    @staticmethod
-    def _gru_step(cell: nn.GRUCell, inp: torch.Tensor, n_pose: int, zgate: torch.Tensor,
-                  h: torch.Tensor) -> torch.Tensor:
-        """One ``nn.GRUCell`` step on the input [pose columns (n_pose), z, clocks] given as
-        ``inp`` = [pose columns, clocks] and z's share of the input gates ``zgate`` (B, 3H):
-        PyTorch's GRU equations, written out."""
-        w = cell.weight_ih
-        n_clock = inp.shape[1] - n_pose
-        gi = torch.addmm(zgate, inp[:, :n_pose], w[:, :n_pose].t())
-        if n_clock:
-            gi = torch.addmm(gi, inp[:, n_pose:], w[:, w.shape[1] - n_clock:].t())
-        gh = torch.addmm(cell.bias_hh, h, cell.weight_hh.t())
-        i_r, i_u, i_n = gi.chunk(3, dim=1)
-        h_r, h_u, h_n = gh.chunk(3, dim=1)
-        r = torch.sigmoid(i_r + h_r)
-        u = torch.sigmoid(i_u + h_u)
-        n = torch.tanh(i_n + r * h_n)
-        return n + u * (h - n)
 
     @staticmethod
     def _span(x0: torch.Tensor, n_frames: int, lengths: torch.Tensor | None) -> torch.Tensor:
@@ -170,33 +142,86 @@ class PoseDecoder(nn.Module):
         paper), hence one affine map of the stacked stream states. It is found once per call
         by passing the unit vectors through the block (differentiably, so training works
         the same), and each of the T steps is then one matrix product instead of a dozen
-        small layers: several times faster at h = 512. :meth:`unroll_layered` is the
-        literal layer-by-layer version (the reference the tests compare with)."""
+        small layers: several times faster at h = 512. Likewise the streams' GRU cells run
+        as one (:meth:`_fused_gates`). :meth:`unroll_layered` is the literal
+        layer-by-layer version with ``nn.GRUCell`` (the reference the tests compare with)."""
         streams = list(self.cells)
         H = self.config.stream_size
         probe = torch.cat([torch.zeros(1, H * len(streams)),
                            torch.eye(H * len(streams))]).to(x0)
         out = self.hier({s: probe[:, k * H:(k + 1) * H] for k, s in enumerate(streams)})
         bias, weight = out[0], out[1:] - out[0]               # (F,), (S*H, F)
-        cells = [(self.cells[s], getattr(self, f"cols_{s}"), z[s]) for s in streams]
-        hs = [z[s] for s in streams]
+        w_x, w_h, b_h, gate_base = self._fused_gates(z, x0, n_frames, lengths)
+        h = torch.cat([z[s] for s in streams], dim=-1)        # (B, S*H)
         x = x0
         frames = [x0]
-        span = self._span(x0, n_frames, lengths)
         forcing = target is not None and teacher_forcing > 0
-        # with z_every_step, z's share of every step's input gates is the same: computed once
-        # here (a third of the work at h 512), the steps then multiply the other inputs only
-        zgate = [self._z_gate(cell, cols, zs) for cell, cols, zs in cells]
+        # per-step slices by unbind, not indexing: the backward of an index is a zero
+        # tensor of the whole source per step (that zero-filling was 86 % of a training step)
+        true_prev = target.unbind(1) if forcing else None
+        gate_steps = gate_base.unbind(0)
         for t in range(1, n_frames):
             if forcing:
                 use = torch.rand(x.shape[0], 1, device=x.device) < teacher_forcing
-                x = torch.where(use, target[:, t - 1], x)
-            hs = [cell(self._inputs(x, cols, zs, t, span), h) if zg is None else
-                  self._gru_step(cell, self._inputs(x, cols, None, t, span), len(cols), zg, h)
-                  for (cell, cols, zs), zg, h in zip(cells, zgate, hs)]
-            x = torch.addmm(x + bias, torch.cat(hs, dim=-1), weight)
+                x = torch.where(use, true_prev[t - 1], x)
+            # every stream's GRU step at once, gates laid out [r | u | n], streams within
+            i_r, i_u, i_n = torch.addmm(gate_steps[t - 1], x, w_x).chunk(3, dim=1)
+            h_r, h_u, h_n = torch.addmm(b_h, h, w_h).chunk(3, dim=1)
+            r = torch.sigmoid(i_r + h_r)
+            u = torch.sigmoid(i_u + h_u)
+            n = torch.tanh(i_n + r * h_n)
+            h = n + u * (h - n)
+            x = torch.addmm(x + bias, h, weight)
             frames.append(x)
         return torch.stack(frames, dim=1)
+
+    def _fused_gates(self, z: dict[str, torch.Tensor], x0: torch.Tensor, n_frames: int,
+                     lengths: torch.Tensor | None):
+        """The streams' GRU cells as one: per step, input gates ``x @ w_x + base[t - 1]``
+        and hidden gates ``h @ w_h + b_h`` for the stacked hidden state h (B, S*H), gate
+        columns laid out [r | u | n], each of them [stream 1 | stream 2 ...].
+
+        Returns:
+            w_x (F, 3SH): each cell's pose-column weights placed at its feature columns
+            (zero elsewhere); w_h (SH, 3SH) block-diagonal; b_h (3SH,); base
+            (n_frames - 1, B, 3SH): the input bias plus what z (``z_every_step``) and the
+            clocks add, which do not depend on the unrolled poses: computed for all steps
+            at once, so that each step is two matrix products and a few element-wise ops
+            (a few autograd nodes per step instead of dozens: the backward pass is most of
+            a training step).
+        """
+        c = self.config
+        H, S, F, B = c.stream_size, len(self.cells), c.n_features, x0.shape[0]
+        steps = torch.arange(1, n_frames, dtype=x0.dtype, device=x0.device)   # t = 1..T-1
+        clocks = []
+        if c.time_input:
+            clocks.append(((steps - 1) / 100.0)[:, None].expand(-1, B))
+        if c.progress_input:
+            span = self._span(x0, n_frames, lengths)[:, 0]                    # (B,)
+            clocks.append(((steps - 1)[:, None] / span[None]).clamp(max=1.0))
+        w_x, w_h, b_h, base = [], [], [], []
+        for s, cell in self.cells.items():
+            cols = getattr(self, f"cols_{s}")
+            n = len(cols)
+            w = cell.weight_ih                                   # (3H, n + [H] + clocks)
+            w_x.append(w.new_zeros(3 * H, F).index_copy(1, cols, w[:, :n]))
+            g = cell.bias_ih.expand(B, -1)
+            if c.z_every_step:
+                g = torch.addmm(g, z[s], w[:, n:n + H].t())
+            g = g.expand(max(n_frames - 1, 0), B, 3 * H)
+            if clocks:
+                g = g + torch.stack(clocks, dim=-1) @ w[:, w.shape[1] - len(clocks):].t()
+            base.append(g)
+            w_h.append(cell.weight_hh)
+            b_h.append(cell.bias_hh)
+        # stream-major [s1: r u n | s2: r u n] -> gate-major [r: s1 s2 | u: s1 s2 | n: ...]
+        order = torch.arange(3 * S * H, device=x0.device).view(S, 3, H).transpose(0, 1
+                                                                               ).reshape(-1)
+        w_x = torch.cat(w_x)[order].t()                          # (F, 3SH)
+        w_h = torch.block_diag(*[w.t() for w in w_h])[:, order]  # (SH, 3SH)
+        b_h = torch.cat(b_h)[order]
+        base = torch.cat(base, dim=-1)[..., order]               # (T - 1, B, 3SH)
+        return w_x, w_h, b_h, base
 
     def unroll_layered(self, z: dict[str, torch.Tensor], x0: torch.Tensor, n_frames: int,
                        lengths: torch.Tensor | None = None) -> torch.Tensor:
