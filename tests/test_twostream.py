@@ -74,11 +74,37 @@ def test_folded_unroll_matches_layered_unroll(two_stream, every_step):
     ref = m.decoder.unroll_layered(z, x0, 12)
     fast = m.decoder(z, x0, 12)
     torch.testing.assert_close(fast, ref, rtol=1e-4, atol=1e-4)
-    # and the gradients agree: the folded map is built differentiably
-    g_ref = torch.autograd.grad(ref.square().sum(), list(m.decoder.parameters()))
-    g_fast = torch.autograd.grad(fast.square().sum(), list(m.decoder.parameters()))
+    # and the gradients agree, the embeddings' too (the sentence encoder learns through
+    # them): the folded map is built differentiably, the recurrence's backward by hand
+    wrt = list(m.decoder.parameters()) + list(z.values())
+    g_ref = torch.autograd.grad(ref.square().sum(), wrt)
+    g_fast = torch.autograd.grad(fast.square().sum(), wrt)
     for a, b in zip(g_ref, g_fast):
         torch.testing.assert_close(a, b, rtol=1e-3, atol=1e-3)
+
+
+@pytest.mark.parametrize("forcing", [False, True])
+def test_hand_written_backward_through_time_passes_gradcheck(forcing):
+    """``unroll.unroll``'s backward against finite differences, in float64, for every
+    tensor argument (with teacher forcing, the target's gradient too)."""
+    from motionlang.models.twostream.unroll import unroll
+    g = torch.Generator().manual_seed(0)
+    B, F, SH, T = 3, 5, 4, 6
+
+    def r(*shape, scale=1.0):
+        return (scale * torch.randn(*shape, generator=g, dtype=torch.float64)).requires_grad_()
+    args = [r(B, F), r(B, SH), r(T - 1, B, 3 * SH), r(F, 3 * SH, scale=0.5),
+            r(SH, 3 * SH, scale=0.5), r(3 * SH), r(SH, F, scale=0.5), r(F)]
+    if forcing:
+        use = torch.rand(T - 1, B, 1, generator=g) < 0.5
+        assert use.any() and not use.all()
+        assert torch.autograd.gradcheck(lambda *a: unroll(*a, use=use), args + [r(T - 1, B, F)])
+    else:
+        assert torch.autograd.gradcheck(unroll, args)
+    # a one-frame motion: nothing to unroll, x0 and h0 still get (zero or identity) gradients
+    one = unroll(*[a[:0] if i == 2 else a for i, a in enumerate(args)])
+    assert one.shape == (B, 1, F)
+    one.sum().backward()
 
 
 def test_teacher_forcing_reads_the_true_previous_frame():
@@ -375,3 +401,29 @@ def test_progress_input_is_the_fraction_of_each_sequences_own_length():
     ref = m.decoder.unroll_layered(z, x, 9, lengths=torch.tensor([5, 9]))
     torch.testing.assert_close(b, ref, rtol=1e-4, atol=1e-4)
     assert torch.isfinite(m.loss(batch())["loss"])
+
+
+@pytest.mark.parametrize("kind,layers", [("gru", 1), ("lstm", 2)])
+def test_last_valid_output_is_the_packed_final_state(kind, layers):
+    """Unpacked, the stack's output at each sequence's last valid step is the final state a
+    packed run gives (values and gradients), whatever the padding after it holds."""
+    from motionlang.models.recurrent import last_valid_output
+    torch.manual_seed(0)
+    rnn = (torch.nn.GRU if kind == "gru" else torch.nn.LSTM)(3, 5, num_layers=layers,
+                                                                 batch_first=True)
+    x = torch.randn(3, 7, 3, requires_grad=True)
+    lengths = torch.tensor([7, 2, 5])
+    packed = torch.nn.utils.rnn.pack_padded_sequence(x, lengths, batch_first=True,
+                                                     enforce_sorted=False)
+    _, h = rnn(packed)
+    want = (h if kind == "gru" else h[0])[-1]
+    got = last_valid_output(rnn, x, lengths)
+    torch.testing.assert_close(got, want)
+    g_want, = torch.autograd.grad(want.square().sum(), x)
+    g_got, = torch.autograd.grad(got.square().sum(), x)
+    torch.testing.assert_close(g_got, g_want)
+    assert g_got[1, 2:].abs().max() == 0                    # padding gets no gradient
+    torch.testing.assert_close(last_valid_output(rnn, x, None), last_valid_output(
+        rnn, x, torch.tensor([7, 7, 7])))
+    with pytest.raises(ValueError):
+        last_valid_output(torch.nn.GRU(3, 5, bidirectional=True, batch_first=True), x, lengths)

@@ -5,6 +5,8 @@ from __future__ import annotations
 import torch
 from torch import nn
 
+from motionlang.models.recurrent import last_valid_output
+
 
 class PoseDiscriminator(nn.Module):
     """poses (B, T, F), lengths (B,) -> logits (B,) that the sequence is real motion
@@ -18,9 +20,4 @@ class PoseDiscriminator(nn.Module):
                                   nn.Linear(hidden, 1))
 
     def forward(self, poses: torch.Tensor, lengths: torch.Tensor | None = None) -> torch.Tensor:
-        x = poses
-        if lengths is not None:
-            x = nn.utils.rnn.pack_padded_sequence(x, lengths.cpu(), batch_first=True,
-                                                  enforce_sorted=False)
-        _, h = self.gru(x)
-        return self.head(h[-1]).squeeze(-1)
+        return self.head(last_valid_output(self.gru, poses, lengths)).squeeze(-1)

@@ -27,7 +27,9 @@ from __future__ import annotations
 import torch
 from torch import nn
 
+from motionlang.models.recurrent import last_valid_output
 from motionlang.models.twostream.config import PART_NAMES, TwoStreamConfig
+from motionlang.models.twostream.unroll import unroll
 
 
 def _cols(config: TwoStreamConfig, parts) -> list[int]:
@@ -58,12 +60,7 @@ class PoseEncoder(nn.Module):
         for s, limbs in self.config.streams().items():
             x = torch.cat([self.layer2[p](torch.cat([l1[p], l1["trunk"]], dim=-1))
                            for p in limbs], dim=-1)
-            x = self.norm[s](x)
-            if lengths is not None:
-                x = nn.utils.rnn.pack_padded_sequence(x, lengths.cpu(), batch_first=True,
-                                                      enforce_sorted=False)
-            _, h = self.gru[s](x)
-            out[s] = h[-1]
+            out[s] = last_valid_output(self.gru[s], self.norm[s](x), lengths)
         return out
 
 
@@ -143,7 +140,8 @@ class PoseDecoder(nn.Module):
         by passing the unit vectors through the block (differentiably, so training works
         the same), and each of the T steps is then one matrix product instead of a dozen
         small layers: several times faster at h = 512. Likewise the streams' GRU cells run
-        as one (:meth:`_fused_gates`). :meth:`unroll_layered` is the literal
+        as one (:meth:`_fused_gates`), and the recurrence is one autograd function with its
+        own backward pass (``unroll.unroll``). :meth:`unroll_layered` is the literal
         layer-by-layer version with ``nn.GRUCell`` (the reference the tests compare with)."""
         streams = list(self.cells)
         H = self.config.stream_size
@@ -152,28 +150,12 @@ class PoseDecoder(nn.Module):
         out = self.hier({s: probe[:, k * H:(k + 1) * H] for k, s in enumerate(streams)})
         bias, weight = out[0], out[1:] - out[0]               # (F,), (S*H, F)
         w_x, w_h, b_h, gate_base = self._fused_gates(z, x0, n_frames, lengths)
-        h = torch.cat([z[s] for s in streams], dim=-1)        # (B, S*H)
-        x = x0
-        frames = [x0]
-        forcing = target is not None and teacher_forcing > 0
-        # per-step slices by unbind, not indexing: the backward of an index is a zero
-        # tensor of the whole source per step (that zero-filling was 86 % of a training step)
-        true_prev = target.unbind(1) if forcing else None
-        gate_steps = gate_base.unbind(0)
-        for t in range(1, n_frames):
-            if forcing:
-                use = torch.rand(x.shape[0], 1, device=x.device) < teacher_forcing
-                x = torch.where(use, true_prev[t - 1], x)
-            # every stream's GRU step at once, gates laid out [r | u | n], streams within
-            i_r, i_u, i_n = torch.addmm(gate_steps[t - 1], x, w_x).chunk(3, dim=1)
-            h_r, h_u, h_n = torch.addmm(b_h, h, w_h).chunk(3, dim=1)
-            r = torch.sigmoid(i_r + h_r)
-            u = torch.sigmoid(i_u + h_u)
-            n = torch.tanh(i_n + r * h_n)
-            h = n + u * (h - n)
-            x = torch.addmm(x + bias, h, weight)
-            frames.append(x)
-        return torch.stack(frames, dim=1)
+        h0 = torch.cat([z[s] for s in streams], dim=-1)       # (B, S*H)
+        target_prev = use = None
+        if target is not None and teacher_forcing > 0:
+            use = torch.rand(n_frames - 1, x0.shape[0], 1, device=x0.device) < teacher_forcing
+            target_prev = target[:, :n_frames - 1].transpose(0, 1)
+        return unroll(x0, h0, gate_base, w_x, w_h, b_h, weight, bias, target_prev, use)
 
     def _fused_gates(self, z: dict[str, torch.Tensor], x0: torch.Tensor, n_frames: int,
                      lengths: torch.Tensor | None):

@@ -4,6 +4,7 @@ from __future__ import annotations
 import torch
 from torch import nn
 
+from motionlang.models.recurrent import last_valid_output
 from motionlang.models.twostream.config import TwoStreamConfig
 
 
@@ -18,9 +19,6 @@ class SentenceEncoder(nn.Module):
                             batch_first=True)
 
     def forward(self, tokens: torch.Tensor, lengths: torch.Tensor) -> dict[str, torch.Tensor]:
-        packed = nn.utils.rnn.pack_padded_sequence(tokens, lengths.cpu(), batch_first=True,
-                                                   enforce_sorted=False)
-        _, (h, _) = self.lstm(packed)
-        z = h[-1]
+        z = last_valid_output(self.lstm, tokens, lengths)
         streams = list(self.config.streams())
         return dict(zip(streams, z.split(self.config.stream_size, dim=-1)))
