@@ -89,12 +89,12 @@ def test_hand_written_backward_through_time_passes_gradcheck(forcing):
     tensor argument (with teacher forcing, the target's gradient too)."""
     from motionlang.models.twostream.unroll import unroll
     g = torch.Generator().manual_seed(0)
-    B, F, SH, T = 3, 5, 4, 6
+    B, F, S, H, T = 3, 5, 2, 3, 6
 
     def r(*shape, scale=1.0):
         return (scale * torch.randn(*shape, generator=g, dtype=torch.float64)).requires_grad_()
-    args = [r(B, F), r(B, SH), r(T - 1, B, 3 * SH), r(F, 3 * SH, scale=0.5),
-            r(SH, 3 * SH, scale=0.5), r(3 * SH), r(SH, F, scale=0.5), r(F)]
+    args = [r(B, F), r(B, S, H), r(T - 1, B, S, 3 * H), r(F, S * 3 * H, scale=0.5),
+            r(S, H, 3 * H, scale=0.5), r(S, 3 * H), r(S * H, F, scale=0.5), r(F)]
     if forcing:
         use = torch.rand(T - 1, B, 1, generator=g) < 0.5
         assert use.any() and not use.all()

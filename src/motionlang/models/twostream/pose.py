@@ -150,7 +150,7 @@ class PoseDecoder(nn.Module):
         out = self.hier({s: probe[:, k * H:(k + 1) * H] for k, s in enumerate(streams)})
         bias, weight = out[0], out[1:] - out[0]               # (F,), (S*H, F)
         w_x, w_h, b_h, gate_base = self._fused_gates(z, x0, n_frames, lengths)
-        h0 = torch.cat([z[s] for s in streams], dim=-1)       # (B, S*H)
+        h0 = torch.stack([z[s] for s in streams], dim=1)      # (B, S, H)
         target_prev = use = None
         if target is not None and teacher_forcing > 0:
             use = torch.rand(n_frames - 1, x0.shape[0], 1, device=x0.device) < teacher_forcing
@@ -159,21 +159,19 @@ class PoseDecoder(nn.Module):
 
     def _fused_gates(self, z: dict[str, torch.Tensor], x0: torch.Tensor, n_frames: int,
                      lengths: torch.Tensor | None):
-        """The streams' GRU cells as one: per step, input gates ``x @ w_x + base[t - 1]``
-        and hidden gates ``h @ w_h + b_h`` for the stacked hidden state h (B, S*H), gate
-        columns laid out [r | u | n], each of them [stream 1 | stream 2 ...].
+        """The streams' GRU cells side by side: per step, input gates
+        ``x @ w_x + base[t - 1]`` and hidden gates ``h[:, s] @ w_h[s] + b_h[s]`` for the
+        states h (B, S, H), gate columns [r | u | n] per stream.
 
         Returns:
-            w_x (F, 3SH): each cell's pose-column weights placed at its feature columns
-            (zero elsewhere); w_h (SH, 3SH) block-diagonal; b_h (3SH,); base
-            (n_frames - 1, B, 3SH): the input bias plus what z (``z_every_step``) and the
+            w_x (F, S*3H): each cell's pose-column weights placed at its feature columns
+            (zero elsewhere), stream by stream; w_h (S, H, 3H); b_h (S, 3H); base
+            (n_frames - 1, B, S, 3H): the input bias plus what z (``z_every_step``) and the
             clocks add, which do not depend on the unrolled poses: computed for all steps
-            at once, so that each step is two matrix products and a few element-wise ops
-            (a few autograd nodes per step instead of dozens: the backward pass is most of
-            a training step).
+            at once, so that each step is two matrix products and a few element-wise ops.
         """
         c = self.config
-        H, S, F, B = c.stream_size, len(self.cells), c.n_features, x0.shape[0]
+        H, F, B = c.stream_size, c.n_features, x0.shape[0]
         steps = torch.arange(1, n_frames, dtype=x0.dtype, device=x0.device)   # t = 1..T-1
         clocks = []
         if c.time_input:
@@ -181,7 +179,7 @@ class PoseDecoder(nn.Module):
         if c.progress_input:
             span = self._span(x0, n_frames, lengths)[:, 0]                    # (B,)
             clocks.append(((steps - 1)[:, None] / span[None]).clamp(max=1.0))
-        w_x, w_h, b_h, base = [], [], [], []
+        w_x, base = [], []
         for s, cell in self.cells.items():
             cols = getattr(self, f"cols_{s}")
             n = len(cols)
@@ -194,16 +192,9 @@ class PoseDecoder(nn.Module):
             if clocks:
                 g = g + torch.stack(clocks, dim=-1) @ w[:, w.shape[1] - len(clocks):].t()
             base.append(g)
-            w_h.append(cell.weight_hh)
-            b_h.append(cell.bias_hh)
-        # stream-major [s1: r u n | s2: r u n] -> gate-major [r: s1 s2 | u: s1 s2 | n: ...]
-        order = torch.arange(3 * S * H, device=x0.device).view(S, 3, H).transpose(0, 1
-                                                                               ).reshape(-1)
-        w_x = torch.cat(w_x)[order].t()                          # (F, 3SH)
-        w_h = torch.block_diag(*[w.t() for w in w_h])[:, order]  # (SH, 3SH)
-        b_h = torch.cat(b_h)[order]
-        base = torch.cat(base, dim=-1)[..., order]               # (T - 1, B, 3SH)
-        return w_x, w_h, b_h, base
+        cells = list(self.cells.values())
+        return (torch.cat(w_x).t(), torch.stack([cell.weight_hh.t() for cell in cells]),
+                torch.stack([cell.bias_hh for cell in cells]), torch.stack(base, dim=2))
 
     def unroll_layered(self, z: dict[str, torch.Tensor], x0: torch.Tensor, n_frames: int,
                        lengths: torch.Tensor | None = None) -> torch.Tensor:

@@ -1,15 +1,20 @@
 """The two-stream decoder's unrolled recurrence as one autograd function with a hand-written
 backward pass through time.
 
-Per step t = 1 .. T-1, with the streams' GRU cells fused (gate columns [r | u | n]) and the
-Hier block folded into one affine map (``pose.PoseDecoder``):
+Per step t = 1 .. T-1, with the S streams' GRU cells run side by side (states h (B, S, H),
+gates [r | u | n] per stream) and the Hier block folded into one affine map
+(``pose.PoseDecoder``):
 
     x~  = target[t-1] where use[t-1] else x[t-1]          (teacher forcing)
-    gi  = base[t-1] + x~ @ w_x          gh = h[t-1] @ w_h + b_h
+    gi  = base[t-1] + x~ @ w_x          gh[s] = h[t-1, s] @ w_h[s] + b_h[s]
     r   = sigmoid(gi_r + gh_r)          u  = sigmoid(gi_u + gh_u)
     n   = tanh(gi_n + r * gh_n)
     h[t] = n + u * (h[t-1] - n)
-    x[t] = x~ + bias + h[t] @ w_o
+    x[t] = x~ + bias + h[t] (flattened, stream by stream) @ w_o
+
+The streams' hidden weights stay separate matrices (a batched product), not one
+block-diagonal matrix: generating one motion is bound by reading the weights, and half of
+a block-diagonal matrix is zeros.
 
 Why by hand: left to autograd, every step leaves a dozen small nodes, and the weight
 gradients are small matrix products summed into the same tensors T times; the backward
@@ -25,8 +30,7 @@ import torch
 class _Unroll(torch.autograd.Function):
     @staticmethod
     def forward(ctx, x0, h0, base, w_x, w_h, b_h, w_o, bias, target_prev, use):
-        steps = base.shape[0]
-        H3 = base.shape[-1]
+        steps, B, S, H3 = base.shape
         xs_in, hs, gates, ghn = [], [h0], [], []
         x, h = x0, h0
         frames = [x0]
@@ -34,17 +38,17 @@ class _Unroll(torch.autograd.Function):
             if use is not None:
                 x = torch.where(use[t], target_prev[t], x)
             xs_in.append(x)
-            gi = torch.addmm(base[t], x, w_x)
-            gh = torch.addmm(b_h, h, w_h)
-            i_r, i_u, i_n = gi.split(H3 // 3, dim=1)
-            h_r, h_u, h_n = gh.split(H3 // 3, dim=1)
+            gi = torch.addmm(base[t].reshape(B, S * H3), x, w_x).view(B, S, H3)
+            gh = torch.baddbmm(b_h[:, None], h.transpose(0, 1), w_h).transpose(0, 1)
+            i_r, i_u, i_n = gi.chunk(3, dim=-1)
+            h_r, h_u, h_n = gh.chunk(3, dim=-1)
             r = torch.sigmoid(i_r + h_r)
             u = torch.sigmoid(i_u + h_u)
             n = torch.tanh(i_n + r * h_n)
-            h = n + u * (h - n)
-            x = torch.addmm(x + bias, h, w_o)
+            h = n + u * (h - n)                                   # (B, S, H)
+            x = torch.addmm(x + bias, h.reshape(B, -1), w_o)
             hs.append(h)
-            gates.append(torch.cat([r, u, n], dim=1))
+            gates.append(torch.cat([r, u, n], dim=-1))
             ghn.append(h_n)
             frames.append(x)
         empty = x0.new_zeros(0)
@@ -59,51 +63,49 @@ class _Unroll(torch.autograd.Function):
     def backward(ctx, grad_frames):
         xs_in, hs, gates, ghn, w_x, w_h, w_o, use = ctx.saved_tensors
         steps = hs.shape[0] - 1
-        H = w_h.shape[1] // 3
+        B, S, H = hs.shape[1:]
         g = grad_frames.unbind(1)                     # dL/dx[t] from the outputs
-        w_xt, w_ht, w_ot = w_x.t(), w_h.t(), w_o.t()
-        d_x = g[steps] if steps else g[0]
+        w_xt, w_ht, w_ot = w_x.t(), w_h.transpose(1, 2), w_o.t()
+        d_x = g[steps]
         d_h = torch.zeros_like(hs[0])
         d_gi_all, d_gh_all, d_x_out, d_target = [], [], [], []
         for t in reversed(range(steps)):
             # x[t+1] = x~ + bias + h[t+1] @ w_o
             d_x_out.append(d_x)
-            d_h = d_h + d_x @ w_ot
-            d_xt = d_x                                # into x~
-            r, u, n = gates[t].split(H, dim=1)
+            d_h = d_h + (d_x @ w_ot).view(B, S, H)
+            r, u, n = gates[t].chunk(3, dim=-1)
             h_prev = hs[t]
             d_n = d_h * (1 - u)
             d_u = d_h * (h_prev - n)
-            d_hprev = d_h * u
             d_an = d_n * (1 - n * n)
             d_ar = d_an * ghn[t] * r * (1 - r)
             d_au = d_u * u * (1 - u)
-            d_gi = torch.cat([d_ar, d_au, d_an], dim=1)
-            d_gh = torch.cat([d_ar, d_au, d_an * r], dim=1)
+            d_gi = torch.cat([d_ar, d_au, d_an], dim=-1)          # (B, S, 3H)
+            d_gh = torch.cat([d_ar, d_au, d_an * r], dim=-1)
             d_gi_all.append(d_gi)
             d_gh_all.append(d_gh)
-            d_h = torch.addmm(d_hprev, d_gh, w_ht)
-            d_xt = torch.addmm(d_xt, d_gi, w_xt)
+            d_h = d_h * u + torch.bmm(d_gh.transpose(0, 1), w_ht).transpose(0, 1)
+            d_xt = torch.addmm(d_x, d_gi.reshape(B, -1), w_xt)   # into x~
             if ctx.has_use:   # a forced step read the target, not x[t]
                 d_target.append(torch.where(use[t], d_xt, torch.zeros_like(d_xt)))
                 d_xt = torch.where(use[t], torch.zeros_like(d_xt), d_xt)
             d_x = g[t] + d_xt
         d_x0, d_h0 = d_x, d_h
         if not steps:
-            zero = lambda *s: grad_frames.new_zeros(s)
-            return (d_x0, d_h0, None, zero(*w_x.shape), zero(*w_h.shape), zero(w_h.shape[1]),
-                    zero(*w_o.shape), zero(w_o.shape[1]), None, None)
+            return (d_x0, d_h0, None, torch.zeros_like(w_x), torch.zeros_like(w_h),
+                    w_h.new_zeros(S, w_h.shape[2]), torch.zeros_like(w_o),
+                    w_o.new_zeros(w_o.shape[1]), None, None)
         # lists run from the last step to the first: flip to step order
-        d_gi = torch.stack(d_gi_all[::-1])            # (S, B, 3SH)
+        d_gi = torch.stack(d_gi_all[::-1])            # (steps, B, S, 3H)
         d_gh = torch.stack(d_gh_all[::-1])
-        d_out = torch.stack(d_x_out[::-1])            # (S, B, F): dL/dx[t+1]
-        flat = lambda a: a.reshape(-1, a.shape[-1])
-        d_w_x = flat(xs_in).t() @ flat(d_gi)
-        d_w_h = flat(hs[:-1]).t() @ flat(d_gh)
-        d_w_o = flat(hs[1:]).t() @ flat(d_out)
+        d_out = torch.stack(d_x_out[::-1])            # (steps, B, F): dL/dx[t+1]
+        d_w_x = xs_in.reshape(-1, xs_in.shape[-1]).t() @ d_gi.reshape(steps * B, -1)
+        per_stream = lambda a: a.reshape(steps * B, S, a.shape[-1]).transpose(0, 1)
+        d_w_h = torch.bmm(per_stream(hs[:-1]).transpose(1, 2), per_stream(d_gh))
+        d_w_o = hs[1:].reshape(steps * B, -1).t() @ d_out.reshape(steps * B, -1)
         d_target_prev = torch.stack(d_target[::-1]) if ctx.has_use else None
-        return (d_x0, d_h0, d_gi, d_w_x, d_w_h, flat(d_gh).sum(0), d_w_o,
-                flat(d_out).sum(0), d_target_prev, None)
+        return (d_x0, d_h0, d_gi, d_w_x, d_w_h, d_gh.sum(dim=(0, 1)), d_w_o,
+                d_out.sum(dim=(0, 1)), d_target_prev, None)
 
 
 def unroll(x0: torch.Tensor, h0: torch.Tensor, base: torch.Tensor, w_x: torch.Tensor,
@@ -113,9 +115,10 @@ def unroll(x0: torch.Tensor, h0: torch.Tensor, base: torch.Tensor, w_x: torch.Te
     """Run the recurrence of the module docstring; differentiable in every tensor argument.
 
     Args:
-        x0: (B, F) first frame; h0: (B, SH) stacked stream states.
-        base: (T-1, B, 3SH) input-gate terms that do not depend on the poses.
-        w_x: (F, 3SH); w_h: (SH, 3SH); b_h: (3SH,); w_o: (SH, F); bias: (F,).
+        x0: (B, F) first frame; h0: (B, S, H) the streams' states.
+        base: (T-1, B, S, 3H) input-gate terms that do not depend on the poses.
+        w_x: (F, S*3H) (stream by stream, gates [r | u | n] within); w_h: (S, H, 3H);
+            b_h: (S, 3H); w_o: (S*H, F); bias: (F,).
         target_prev, use: teacher forcing, (T-1, B, F) true previous frames and (T-1, B, 1)
             bool; both or neither.
 
