@@ -172,7 +172,7 @@ class TwoStreamModel(nn.Module):
             zs = self.sentence_encoder(*self._tokens(batch))
             terms["embedding"] = L.embedding_loss(zs, zp)
         # the text stage with neither pose nor energy weight fits the embedding alone: no
-        # decoding (a refit of the sentence encoder onto the pose embeddings, seconds)
+        # decoding (a refit of the sentence encoder onto the pose embeddings: no unroll)
         decode_s = zs is not None and (stage == "joint" or c.lambdas["pose"] > 0 or energy)
         todo = {"pose": zp} if stage != "text" else {}
         if decode_s:
