@@ -13,7 +13,9 @@ the embedding term. ``--weight pose=0 --weight energy=0`` fits the embedding ter
 (nothing is decoded: a few minutes per epoch on the 6,000-motion corpus, the pose encoder
 reading every motion). The training and validation pairs are those
 ``train twostream`` made from the same corpus (split seed ``--seed``, ``--max-seconds``,
-``--max-frames``); the model's normaliser must be the corpus's.
+``--max-frames``, ``--mirror``); the model's normaliser must be the corpus's. OUT keeps the
+model's own loss weights and stage; the checkpoints in the run folder (``OUT_run``) are the
+trainer's, in the "text" stage with this fit's weights.
 """
 from __future__ import annotations
 
@@ -39,8 +41,12 @@ def main(argv=None) -> int:
     ap.add_argument("--max-seconds", type=float, default=30.0)
     ap.add_argument("--max-frames", type=int, default=None)
     ap.add_argument("--length-buckets", type=int, default=20)
+    ap.add_argument("--mirror", action="store_true",
+                    help="also the mirrored training motions (as the model's run, if it had them)")
     ap.add_argument("--threads", type=int, default=1)
-    ap.add_argument("--resume", action="store_true", help="continue from the run's last.pt")
+    ap.add_argument("--resume", action="store_true",
+                    help="continue this fit from its run's last.pt (which holds the whole "
+                         "model: MODEL is then only read for its settings)")
     args = ap.parse_args(argv)
     from pathlib import Path
 
@@ -65,9 +71,10 @@ def main(argv=None) -> int:
             raise MotionlangError(f"{out}: the model file must end in .pt")
         lambdas = parse_lambdas(args.weight)
         model = TwoStreamModel.load(args.model)
-        model.config.lambdas = {**model.config.lambdas, **lambdas}
+        own = dict(model.config.lambdas)
+        model.config.lambdas = {**own, **lambdas}   # for this fit only, not saved
         data = build_twostream_data(args.data, seed=args.seed, max_seconds=args.max_seconds,
-                                    max_frames=args.max_frames)
+                                    max_frames=args.max_frames, mirror=args.mirror)
         mine, theirs = model.normalizer, data.features.normalizer
         if mine is None or not (np.allclose(mine.mean, theirs.mean)
                                 and np.allclose(mine.std, theirs.std)):
@@ -85,6 +92,7 @@ def main(argv=None) -> int:
     except MotionlangError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
+    model.config.lambdas = own
     model.save(out)
     last = history[-1] if history else {}
     print(f"{out}: epoch {last.get('epoch')}, train loss "

@@ -102,9 +102,17 @@ def test_hand_written_backward_through_time_passes_gradcheck(forcing):
     else:
         assert torch.autograd.gradcheck(unroll, args)
     # a one-frame motion: nothing to unroll, x0 and h0 still get (zero or identity) gradients
-    one = unroll(*[a[:0] if i == 2 else a for i, a in enumerate(args)])
+    x0, h0 = args[0].detach().requires_grad_(), args[1].detach().requires_grad_()
+    one = unroll(x0, h0, args[2][:0], *args[3:8])
     assert one.shape == (B, 1, F)
     one.sum().backward()
+    assert torch.equal(x0.grad, torch.ones_like(x0)) and torch.equal(h0.grad, torch.zeros_like(h0))
+    with pytest.raises(RuntimeError):   # no second derivatives, rather than wrong ones
+        gx, = torch.autograd.grad(unroll(*args).sum(), args[3], create_graph=True)
+        gx.sum().backward()
+    with pytest.raises(ValueError, match="use must be"):
+        unroll(*args, target_prev=torch.zeros(T - 1, B, F, dtype=torch.float64),
+               use=torch.ones(T - 1, B, dtype=torch.bool))
 
 
 def test_teacher_forcing_reads_the_true_previous_frame():
@@ -427,3 +435,6 @@ def test_last_valid_output_is_the_packed_final_state(kind, layers):
         rnn, x, torch.tensor([7, 7, 7])))
     with pytest.raises(ValueError):
         last_valid_output(torch.nn.GRU(3, 5, bidirectional=True, batch_first=True), x, lengths)
+    for bad in ([7, 0, 5], [8, 2, 5]):     # as packing did, no empty or too long sequence
+        with pytest.raises(ValueError, match="lengths must be in 1..7"):
+            last_valid_output(rnn, x, torch.tensor(bad))

@@ -113,6 +113,9 @@ def generate_positions21(model, sentence: str, n_frames: int, *, seed: int = 0,
     (``decoding.seq2seq.generate_features``).
     """
     if getattr(model, "kind", None) == "twostream":
+        if first_frame is not None:
+            raise MotionlangError("first_frame is for L2M models; a two-stream model takes "
+                                  "its start pose in generate(start=...)")
         return model.generate_positions(sentence, n_frames)
     from motionlang.decoding.seq2seq import generate
     from motionlang.features.base import downsample

@@ -211,7 +211,10 @@ def _l2m_on_subjects(results, name, model, data, items, protos, method, width: i
         logging.getLogger(__name__).info("%s: no subject heights, no row on their bodies", name)
         return
     rows = {"on the test subject's body": None}
-    if method != "beam":
+    if method == "beam":
+        logging.getLogger(__name__).info("%s: the sampled beam takes no first pose, no row "
+                                         "from the test motion's first pose", name)
+    else:
         rows["from the test motion's first pose, on its body"] = {
             it.id: motion_frames(model.features, data.records[it.id].load_motion())[0][0]
             for it in items}

@@ -31,10 +31,14 @@ def last_valid_output(rnn: nn.RNNBase, x: torch.Tensor, lengths: torch.Tensor | 
     step; unpacked, the fused kernel runs once."""
     if rnn.bidirectional or not rnn.batch_first:
         raise ValueError("last_valid_output needs a one-way, batch-first recurrent module")
+    if lengths is not None and len(lengths) and not (
+            1 <= int(lengths.min()) and int(lengths.max()) <= x.shape[1]):
+        raise ValueError(f"sequence lengths must be in 1..{x.shape[1]} (the padded length), "
+                         f"got {int(lengths.min())}..{int(lengths.max())}")
     out, _ = rnn(x)
     if lengths is None:
         return out[:, -1]
-    last = (lengths.to(device=x.device, dtype=torch.long) - 1).clamp(min=0)
+    last = lengths.to(device=x.device, dtype=torch.long) - 1
     return out[torch.arange(len(x), device=x.device), last]
 
 

@@ -152,7 +152,8 @@ class TwoStreamModel(nn.Module):
         embedding), ``manifold`` (re-encoded decoded poses vs their embedding), ``velocity``,
         ``embedding`` (sentence vs pose embedding), ``adversarial`` (generator),
         ``discriminator``, and ``energy`` (local speeds, only with a weight > 0). Which
-        terms exist depends on the stage and ``extra_losses``.
+        terms exist depends on the stage and ``extra_losses``; the text stage with pose and
+        energy weights 0 has the embedding term only (nothing is decoded).
         """
         c, stage = self.config, self.stage
         x = batch["motion"]

@@ -25,6 +25,7 @@ end. Checked against autograd (``torch.autograd.gradcheck`` in the tests).
 from __future__ import annotations
 
 import torch
+from torch.autograd.function import once_differentiable
 
 
 class _Unroll(torch.autograd.Function):
@@ -60,8 +61,10 @@ class _Unroll(torch.autograd.Function):
         return torch.stack(frames, dim=1)
 
     @staticmethod
+    @once_differentiable   # the saved states carry no graph: no second derivatives
     def backward(ctx, grad_frames):
         xs_in, hs, gates, ghn, w_x, w_h, w_o, use = ctx.saved_tensors
+        need = ctx.needs_input_grad    # (x0, h0, base, w_x, w_h, b_h, w_o, bias, target, use)
         steps = hs.shape[0] - 1
         B, S, H = hs.shape[1:]
         g = grad_frames.unbind(1)                     # dL/dx[t] from the outputs
@@ -87,7 +90,8 @@ class _Unroll(torch.autograd.Function):
             d_h = d_h * u + torch.bmm(d_gh.transpose(0, 1), w_ht).transpose(0, 1)
             d_xt = torch.addmm(d_x, d_gi.reshape(B, -1), w_xt)   # into x~
             if ctx.has_use:   # a forced step read the target, not x[t]
-                d_target.append(torch.where(use[t], d_xt, torch.zeros_like(d_xt)))
+                if need[8]:
+                    d_target.append(torch.where(use[t], d_xt, torch.zeros_like(d_xt)))
                 d_xt = torch.where(use[t], torch.zeros_like(d_xt), d_xt)
             d_x = g[t] + d_xt
         d_x0, d_h0 = d_x, d_h
@@ -95,17 +99,22 @@ class _Unroll(torch.autograd.Function):
             return (d_x0, d_h0, None, torch.zeros_like(w_x), torch.zeros_like(w_h),
                     w_h.new_zeros(S, w_h.shape[2]), torch.zeros_like(w_o),
                     w_o.new_zeros(w_o.shape[1]), None, None)
-        # lists run from the last step to the first: flip to step order
+        # lists run from the last step to the first: flip to step order. Weight gradients
+        # only when asked (a frozen decoder, e.g. refitting the sentence encoder, needs none)
         d_gi = torch.stack(d_gi_all[::-1])            # (steps, B, S, 3H)
-        d_gh = torch.stack(d_gh_all[::-1])
-        d_out = torch.stack(d_x_out[::-1])            # (steps, B, F): dL/dx[t+1]
-        d_w_x = xs_in.reshape(-1, xs_in.shape[-1]).t() @ d_gi.reshape(steps * B, -1)
+        d_gh = torch.stack(d_gh_all[::-1]) if need[4] or need[5] else None
+        d_out = torch.stack(d_x_out[::-1]) if need[6] or need[7] else None   # dL/dx[t+1]
+        d_w_x = (xs_in.reshape(-1, xs_in.shape[-1]).t() @ d_gi.reshape(steps * B, -1)
+                 if need[3] else None)
         per_stream = lambda a: a.reshape(steps * B, S, a.shape[-1]).transpose(0, 1)
-        d_w_h = torch.bmm(per_stream(hs[:-1]).transpose(1, 2), per_stream(d_gh))
-        d_w_o = hs[1:].reshape(steps * B, -1).t() @ d_out.reshape(steps * B, -1)
-        d_target_prev = torch.stack(d_target[::-1]) if ctx.has_use else None
-        return (d_x0, d_h0, d_gi, d_w_x, d_w_h, d_gh.sum(dim=(0, 1)), d_w_o,
-                d_out.sum(dim=(0, 1)), d_target_prev, None)
+        d_w_h = (torch.bmm(per_stream(hs[:-1]).transpose(1, 2), per_stream(d_gh))
+                 if need[4] else None)
+        d_w_o = hs[1:].reshape(steps * B, -1).t() @ d_out.reshape(steps * B, -1) \
+            if need[6] else None
+        d_target_prev = torch.stack(d_target[::-1]) if d_target else None
+        return (d_x0, d_h0, d_gi if need[2] else None, d_w_x, d_w_h,
+                d_gh.sum(dim=(0, 1)) if need[5] else None, d_w_o,
+                d_out.sum(dim=(0, 1)) if need[7] else None, d_target_prev, None)
 
 
 def unroll(x0: torch.Tensor, h0: torch.Tensor, base: torch.Tensor, w_x: torch.Tensor,
@@ -127,4 +136,14 @@ def unroll(x0: torch.Tensor, h0: torch.Tensor, base: torch.Tensor, w_x: torch.Te
     """
     if (target_prev is None) != (use is None):
         raise ValueError("give both target_prev and use, or neither")
+    steps, B, S, H3 = base.shape
+    F = x0.shape[-1]
+    expected = {"x0": (x0, (B, F)), "h0": (h0, (B, S, H3 // 3)), "w_x": (w_x, (F, S * H3)),
+                "w_h": (w_h, (S, H3 // 3, H3)), "b_h": (b_h, (S, H3)),
+                "w_o": (w_o, (S * H3 // 3, F)), "bias": (bias, (F,))}
+    if use is not None:
+        expected.update(target_prev=(target_prev, (steps, B, F)), use=(use, (steps, B, 1)))
+    for name, (tensor, shape) in expected.items():
+        if tuple(tensor.shape) != shape:
+            raise ValueError(f"unroll: {name} must be {shape}, got {tuple(tensor.shape)}")
     return _Unroll.apply(x0, h0, base, w_x, w_h, b_h, w_o, bias, target_prev, use)
