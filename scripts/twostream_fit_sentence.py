@@ -53,7 +53,7 @@ def main(argv=None) -> int:
     import numpy as np
     import torch
 
-    from motionlang.cli.twostream_commands import parse_lambdas
+    from motionlang.cli.twostream_commands import parse_lambdas, run_summary
     from motionlang.errors import MotionlangError
     from motionlang.models.twostream import TwoStreamModel
     from motionlang.training.trainer import TrainConfig, check_schedule
@@ -94,10 +94,7 @@ def main(argv=None) -> int:
         return 2
     model.config.lambdas = own
     model.save(out)
-    last = history[-1] if history else {}
-    print(f"{out}: epoch {last.get('epoch')}, train loss "
-          f"{last.get('train', {}).get('loss', float('nan')):.4g}, val loss "
-          f"{last.get('val', {}).get('loss', float('nan')):.4g}")
+    print(run_summary(out, history))
     return 0
 
 

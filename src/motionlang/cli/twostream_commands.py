@@ -75,11 +75,16 @@ def cmd_train(args: argparse.Namespace) -> int:
     if not lead:
         return 0
     model.save(out)
-    last = history[-1] if history else {}
-    print(f"{out}: epoch {last.get('epoch')}, train loss "
-          f"{last.get('train', {}).get('loss', float('nan')):.4g}, "
-          f"val loss {last.get('val', {}).get('loss', float('nan')):.4g}")
+    print(run_summary(out, history))
     return 0
+
+
+def run_summary(out, history: list[dict]) -> str:
+    """One line for a finished run: the model file, its last epoch and losses."""
+    last = history[-1] if history else {}
+    return (f"{out}: epoch {last.get('epoch')}, train loss "
+            f"{last.get('train', {}).get('loss', float('nan')):.4g}, "
+            f"val loss {last.get('val', {}).get('loss', float('nan')):.4g}")
 
 
 def parse_lambdas(specs: list[str] | None) -> dict[str, float]:

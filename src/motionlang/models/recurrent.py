@@ -27,8 +27,7 @@ def last_valid_output(rnn: nn.RNNBase, x: torch.Tensor, lengths: torch.Tensor | 
     ignored: a recurrence only looks back). ``lengths`` None: every sequence is T long.
 
     Why not pack: on CPU the backward pass of a packed GRU zero-fills the whole
-    (B*T, 3H) gate tensor once per time step, which was most of a two-stream training
-    step; unpacked, the fused kernel runs once."""
+    (B*T, 3H) gate tensor once per time step; unpacked, the fused kernel runs once."""
     if rnn.bidirectional or not rnn.batch_first:
         raise ValueError("last_valid_output needs a one-way, batch-first recurrent module")
     if lengths is not None and len(lengths) and not (
