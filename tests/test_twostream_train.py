@@ -252,7 +252,7 @@ def test_train_command(corpus, tmp_path, monkeypatch, capsys):
     from motionlang.training.twostream_data import build_twostream_data
     n_plain = len(build_twostream_data(corpus, max_frames=12).items["train"])
     assert f"twostream (full): {2 * n_plain} training pairs" in capsys.readouterr().out
-    # generate draws and saves the model's joint positions; BVH needs joint angles
+    # generate draws and saves the model's joint positions (BVH: angles fitted to them)
     for ext in (".gif", ".png", ".npz"):
         assert main(["generate", "a person walks", "--model", str(out), "--max-frames", "6",
                      "-o", str(tmp_path / f"g{ext}")]) == 0
@@ -262,9 +262,25 @@ def test_train_command(corpus, tmp_path, monkeypatch, capsys):
     assert saved["positions"].shape == (6, 21, 3) and float(saved["fps"]) == 12.5
     printed = capsys.readouterr().out       # deterministic: no likelihood, no "nan"
     assert "1. 6 frames  -> " in printed and "log L" not in printed and "nan" not in printed
+    assert main(["generate", "a person walks", "--model", str(out), "--max-frames", "6",
+                 "-o", str(tmp_path / "g.bvh")]) == 0
+    assert "mm from the generated ones on average" in capsys.readouterr().out
+    from motionlang.features.joint_map import KIT21_NAMES
+    from motionlang.formats import read_motion
+    bvh = read_motion(tmp_path / "g.bvh")
+    assert bvh.n_frames == 6 and bvh.fps == pytest.approx(12.5)
+    # each bone points where the generated one does (lengths: their medians)
+    got, want = bvh.positions(), saved["positions"]
+    for child, parent in ((6, 5), (12, 11), (2, 1)):     # LE-LS, LK-LH, BT-BP
+        a = got[:, bvh.skeleton.index(KIT21_NAMES[child])] - \
+            got[:, bvh.skeleton.index(KIT21_NAMES[parent])]
+        b = want[:, child] - want[:, parent]
+        cos = np.sum(a * b, -1) / np.linalg.norm(a, axis=-1) / np.linalg.norm(b, axis=-1)
+        assert cos.min() > 1 - 1e-6
+    np.testing.assert_allclose(got[:, 0], want[:, 0], atol=1e-5)   # the root's path
     assert main(["generate", "a person walks", "--model", str(out), "-o",
-                 str(tmp_path / "g.bvh")]) == 2
-    assert "not joint angles" in capsys.readouterr().err and not (tmp_path / "g.bvh").exists()
+                 str(tmp_path / "g.xml")]) == 2
+    assert "joint positions" in capsys.readouterr().err and not (tmp_path / "g.xml").exists()
     # the per-action order check script runs on the trained model (on the training split:
     # the tiny corpus's test split may hold no compositional sentence)
     script = Path(__file__).resolve().parents[1] / "scripts" / "t2m_segments.py"

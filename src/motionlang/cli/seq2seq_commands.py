@@ -262,26 +262,42 @@ def cmd_describe(args: argparse.Namespace) -> int:
     return 0
 
 
-def _write(result, path: Path, title: str, fps: float) -> None:
+def _write(result, path: Path, title: str, fps: float) -> str:
     """A generated Motion, or 21-joint positions (T, 21, 3) at ``fps`` Hz, to ``path``:
-    .npz (positions and fps), .bvh (Motions only), .gif / .mp4 animation or .png pose strip."""
+    .npz (positions and fps), .bvh (positions: on a 21-joint skeleton fitted to them), .xml /
+    .amc (Motions on such skeletons only), .gif / .mp4 animation or .png pose strip.
+
+    Returns a note for the user ("" or how far a fitted skeleton is from the positions)."""
     from motionlang.kinematics import Motion
     ext = path.suffix.lower()
+    note = ""
     if ext == ".npz":
         from motionlang.utils.atomic import atomic_write
         data = {"positions": result, "fps": np.float64(fps)} if isinstance(result, np.ndarray) \
             else {"positions": result.positions(), "fps": np.float64(result.fps)}
         with atomic_write(path, "wb") as fh:
             np.savez(fh, **data)
-        return
+        return note
     if ext not in MOTION_OUT + RENDER_OUT + (".png",):
         raise MotionlangError(f"{path}: output must be .bvh, .gif, .mp4, .png or .npz")
     if not isinstance(result, Motion):
         if ext in MOTION_OUT:
-            raise MotionlangError(f"{path}: this model's features decode to joint positions, "
-                                  "not joint angles; write .npz, .gif, .mp4 or .png")
-        from motionlang.render.scene import kit21_scene
-        result = kit21_scene(result, fps)
+            if ext != ".bvh":
+                raise MotionlangError(f"{path}: this model's features decode to joint "
+                                      "positions; write .bvh, .npz, .gif, .mp4 or .png")
+            # joint angles fitted to the 21 positions (bone lengths made constant)
+            from motionlang.features.joint_map import KIT21_NAMES, KIT21_PARENTS
+            from motionlang.kinematics.from_positions import (motion_from_positions,
+                                                              position_error)
+            positions = result
+            result = motion_from_positions(positions, fps, KIT21_NAMES, KIT21_PARENTS,
+                                           name=path.stem)
+            err = position_error(result, positions) * 1000.0
+            note = (f" (joints {err.mean():.1f} mm from the generated ones on average, "
+                    f"at most {err.max():.0f} mm: bone lengths held at their medians)")
+        else:
+            from motionlang.render.scene import kit21_scene
+            result = kit21_scene(result, fps)
     if ext in MOTION_OUT:
         from motionlang.formats import write_motion
         write_motion(result, path)
@@ -291,6 +307,7 @@ def _write(result, path: Path, title: str, fps: float) -> None:
     else:
         from motionlang.render import render_animation
         render_animation(result, path, title=title)
+    return note
 
 
 def cmd_generate(args: argparse.Namespace) -> int:
@@ -337,8 +354,8 @@ def cmd_generate(args: argparse.Namespace) -> int:
         line = f"{i}.{likelihood} {n} frames"
         if i == 1 or args.all:
             path = out if i == 1 else out.with_name(f"{out.stem}_{i}{out.suffix}")
-            _write(result, path, f"{args.text} (#{i})", fps)
-            line += f"  -> {path}"
+            note = _write(result, path, f"{args.text} (#{i})", fps)
+            line += f"  -> {path}{note}"
         print(line)
     return 0
 
@@ -525,9 +542,10 @@ def register(subparsers) -> None:
     p = subparsers.add_parser("generate", help="generate a motion from English (L2M)")
     p.add_argument("text", help="sentence, e.g. \"a person waves with the left hand\"")
     p.add_argument("-o", "--output", required=True,
-                   help="out.gif, .mp4 (animation), .png (pose strip), .bvh (joint-angle "
-                        "models) or .npz (joint positions and fps)")
-    p.add_argument("--model", help="L2M model file (default: the packaged one)")
+                   help="out.gif, .mp4 (animation), .png (pose strip), .bvh (for "
+                        "position models, e.g. two-stream: angles fitted on a 21-joint "
+                        "skeleton) or .npz (joint positions and fps)")
+    p.add_argument("--model", help="L2M or two-stream model file (default: the packaged L2M)")
     p.add_argument("-w", "--width", type=int, default=5, help="hypotheses (samples or beam width)")
     p.add_argument("--method", choices=("sample", "beam", "mean"), default=None,
                    help="W ancestral samples (default), the paper's sampled beam, or "

@@ -1,0 +1,154 @@
+"""Joint positions -> a ``Motion`` with joint angles, so that position-only output (the
+two-stream model's 21 joints) can be written as BVH and taken into Blender.
+
+The skeleton has one node per given joint, BVH-style (``pre = post = I``, ``Z X Y`` Euler
+channels, world = canonical Y-up frame). A node's offset is its bone (parent -> node) in
+the rest pose, scaled to the bone's median length over the motion: positions predicted by
+a network do not keep bone lengths, a skeleton must. Each frame, every node's global
+rotation G is chosen so that it carries its children's rest bones onto their current ones:
+
+* one child: the smallest rotation, relative to the parent's frame, that turns the rest
+  bone into the current bone (its twist about the bone is not in the positions; this
+  choice keeps it still relative to the parent, so no spin appears from nowhere);
+* several children (pelvis: lumbar + hips; neck: head + shoulders): the least-squares
+  rotation of all of them (Kabsch), which fixes the twist too.
+
+Bone directions are reproduced exactly, lengths become constant; the node's own position
+error is what :func:`position_error` reports (millimetres on generated motions, zero on
+positions of a rigid skeleton).
+"""
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+
+from motionlang.errors import MotionlangError
+from motionlang.kinematics.motion import Motion
+from motionlang.kinematics.rotations import matrix_to_chain
+from motionlang.kinematics.skeleton import Joint, Skeleton
+
+#: BVH's usual Euler order, as intrinsic DOF axes (z, then x, then y)
+ZXY = np.eye(3)[[2, 0, 1]]
+_EPS = 1e-9
+
+
+def _check(positions: np.ndarray, names: Sequence[str], parents: Sequence[int]) -> np.ndarray:
+    p = np.asarray(positions, dtype=float)
+    if p.ndim != 3 or p.shape[-1] != 3 or len(p) == 0:
+        raise MotionlangError(f"positions must be (T, J, 3) with T >= 1, got {p.shape}")
+    if not (len(names) == len(parents) == p.shape[1]):
+        raise MotionlangError(f"{p.shape[1]} joints in the positions, {len(names)} names and "
+                              f"{len(parents)} parents")
+    if parents[0] != -1 or any(not 0 <= q < i for i, q in enumerate(parents) if i):
+        raise MotionlangError("parents must list the root (-1) first and every parent before "
+                              "its child")
+    if not np.isfinite(p).all():
+        frame = int(np.argwhere(~np.isfinite(p))[0][0])
+        raise MotionlangError(f"positions: non-finite value at frame {frame}")
+    return p
+
+
+def _unit(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(..., 3) -> unit vectors and a mask of those too short to have a direction."""
+    n = np.linalg.norm(v, axis=-1, keepdims=True)
+    return v / np.maximum(n, _EPS), n[..., 0] > _EPS
+
+
+def _swing(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Smallest rotations taking unit vectors u to v; (T, 3), (T, 3) -> (T, 3, 3)."""
+    c = np.sum(u * v, axis=-1)
+    w = np.cross(u, v)
+    K = np.zeros(u.shape[:-1] + (3, 3))
+    K[..., 0, 1], K[..., 0, 2], K[..., 1, 2] = -w[..., 2], w[..., 1], -w[..., 0]
+    K[..., 1, 0], K[..., 2, 0], K[..., 2, 1] = w[..., 2], -w[..., 1], w[..., 0]
+    # Rodrigues with sin and (1 - cos) folded in: R = I + K + K^2 / (1 + c), for c > -1
+    R = np.eye(3) + K + (K @ K) / np.maximum(1.0 + c, _EPS)[..., None, None]
+    flip = c < -1.0 + 1e-9
+    if flip.any():   # opposite vectors: half a turn about any axis across u
+        a = np.cross(u[flip], np.array([1.0, 0.0, 0.0]))
+        small = np.linalg.norm(a, axis=-1) < 1e-6
+        a[small] = np.cross(u[flip][small], np.array([0.0, 1.0, 0.0]))
+        a /= np.linalg.norm(a, axis=-1, keepdims=True)
+        R[flip] = 2.0 * a[:, :, None] * a[:, None, :] - np.eye(3)
+    return R
+
+
+def _kabsch(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Rotations R minimising sum_i |R a_i - b_i|^2; a (k, 3) rest, b (T, k, 3) -> (T, 3, 3)."""
+    H = np.einsum("ki,tkj->tij", a, b)            # sum_i a_i b_i^T
+    U, _, Vt = np.linalg.svd(H)
+    d = np.sign(np.linalg.det(np.swapaxes(Vt, -1, -2) @ np.swapaxes(U, -1, -2)))
+    D = np.broadcast_to(np.eye(3), H.shape).copy()
+    D[:, 2, 2] = np.where(d == 0, 1.0, d)
+    return np.swapaxes(Vt, -1, -2) @ D @ np.swapaxes(U, -1, -2)
+
+
+def skeleton_from_positions(positions: np.ndarray, names: Sequence[str],
+                            parents: Sequence[int], rest: np.ndarray | None = None,
+                            name: str = "positions") -> Skeleton:
+    """A BVH-style skeleton for ``positions`` (T, J, 3) metres, Y up.
+
+    Offsets: the bone directions of ``rest`` (J, 3) (default: the first frame) times each
+    bone's median length over the T frames. Nodes with children get ``Z X Y`` rotation
+    DOFs, leaves none (BVH End Sites).
+    """
+    p = _check(positions, names, parents)
+    rest = p[0] if rest is None else np.asarray(rest, dtype=float)
+    if rest.shape != p.shape[1:]:
+        raise MotionlangError(f"rest pose must be {p.shape[1:]}, got {rest.shape}")
+    joints = [Joint(names[0], -1, np.zeros(3))]
+    has_kids = {q for q in parents if q >= 0}
+    for j in range(1, len(names)):
+        q = parents[j]
+        length = float(np.median(np.linalg.norm(p[:, j] - p[:, q], axis=-1)))
+        direction, ok = _unit(rest[j] - rest[q])
+        if not ok:
+            raise MotionlangError(f"rest pose: joint {names[j]!r} sits on its parent "
+                                  f"{names[q]!r}, its bone has no direction")
+        axes = ZXY if j in has_kids else np.zeros((0, 3))
+        dofs = tuple(f"{names[j]}_{c}rotation" for c in "ZXY") if j in has_kids else ()
+        joints.append(Joint(names[j], q, direction * length, axes=axes, dof_names=dofs))
+    return Skeleton(joints, root_axes=ZXY, name=name)
+
+
+def motion_from_positions(positions: np.ndarray, fps: float, names: Sequence[str],
+                          parents: Sequence[int], *, rest: np.ndarray | None = None,
+                          name: str = "positions") -> Motion:
+    """Joint angles that reproduce ``positions`` (T, J, 3) metres (canonical frame, Y up,
+    joint 0 the root) at ``fps`` Hz on :func:`skeleton_from_positions`' skeleton.
+
+    Angles are radians, unwrapped over time (no 360-degree jumps in the BVH curves).
+    """
+    p = _check(positions, names, parents)
+    sk = skeleton_from_positions(p, names, parents, rest=rest, name=name)
+    T, J = p.shape[:2]
+    kids = [sk.children(j) for j in range(J)]
+    G = np.broadcast_to(np.eye(3), (T, J, 3, 3)).copy()   # global rotation of each node
+    for j in range(J):
+        base = G[:, parents[j]] if j else G[:, 0]          # the root's "parent": the world
+        if not kids[j]:
+            G[:, j] = base
+            continue
+        rest_bones = np.stack([sk.joints[c].offset for c in kids[j]])     # (k, 3)
+        bones = p[:, kids[j]] - p[:, j, None]                              # (T, k, 3)
+        if len(kids[j]) >= 2:
+            G[:, j] = _kabsch(rest_bones, bones)
+            continue
+        u = np.einsum("tij,j->ti", base, rest_bones[0])
+        u, _ = _unit(u)
+        v, ok = _unit(bones[:, 0])
+        v = np.where(ok[:, None], v, u)   # a bone of zero length keeps the parent's frame
+        G[:, j] = _swing(u, v) @ base
+    local = np.swapaxes(G[:, parents[1:]], -1, -2) @ G[:, 1:]             # (T, J-1, 3, 3)
+    angles = [np.unwrap(matrix_to_chain(local[:, j - 1], ZXY), axis=0)
+              for j in range(1, J) if sk.joints[j].ndof]
+    joint_angles = np.concatenate(angles, axis=1) if angles else np.zeros((T, 0))
+    root_rotation = np.unwrap(matrix_to_chain(G[:, 0], ZXY), axis=0)
+    return Motion(sk, float(fps), p[:, 0].copy(), root_rotation, joint_angles, name=name,
+                  source_format="positions")
+
+
+def position_error(motion: Motion, positions: np.ndarray) -> np.ndarray:
+    """(T, J) metres between ``motion``'s joints and the ``positions`` it was made from."""
+    return np.linalg.norm(motion.positions() - np.asarray(positions, dtype=float), axis=-1)
