@@ -53,6 +53,27 @@ def test_angles_unwrapped():
     np.testing.assert_allclose(m.root_rotation[:, :2], 0, atol=1e-9)
 
 
+def test_no_twist_when_a_bone_turns_past_half_round():
+    # a bone points down at rest, turns up through the front, then circles 3 degrees off
+    # straight up: its frame should turn as little as the bone does (a swing from the rest
+    # direction each frame would spin it by the circle's 6 degrees a frame about the bone)
+    a = 0.05
+    phi = np.linspace(0, np.pi - a, 60)
+    psi = np.linspace(np.pi / 2, 2.5 * np.pi, 61)[1:]
+    d = np.concatenate([np.stack([0 * phi, -np.cos(phi), np.sin(phi)], 1),
+                        np.stack([np.sin(a) * np.cos(psi), np.cos(a) + 0 * psi,
+                                  np.sin(a) * np.sin(psi)], 1)])
+    p = np.zeros((len(d), 2, 3))
+    p[:, 1] = d
+    m = motion_from_positions(p, 10.0, ["a", "b"], [-1, 0])
+    np.testing.assert_allclose(m.positions(), p, atol=1e-9)
+    R, _ = m.global_transforms()
+    step = np.einsum("tji,tjk->tik", R[:-1, 0], R[1:, 0])     # frame-to-frame turn
+    turn = np.arccos(np.clip((np.trace(step, axis1=1, axis2=2) - 1) / 2, -1, 1))
+    bone = np.arccos(np.clip(np.sum(d[:-1] * d[1:], 1), -1, 1))
+    np.testing.assert_allclose(turn, bone, atol=1e-6)           # the smallest turn: no twist
+
+
 def _rigid_motion(T=40, seed=0) -> tuple[Motion, np.ndarray]:
     """A smooth random motion of a skeleton built on REST, and its joint positions."""
     sk = skeleton_from_positions(REST[None], KIT21_NAMES, KIT21_PARENTS)
@@ -117,9 +138,39 @@ def test_bad_input():
     q[3, 7, 1] = np.nan
     with pytest.raises(MotionlangError, match="frame 3"):
         motion_from_positions(q, 25.0, KIT21_NAMES, KIT21_PARENTS)
-    with pytest.raises(MotionlangError, match="parent"):
+    with pytest.raises(MotionlangError, match=r"root \(-1\) first"):
         motion_from_positions(p[:, :2], 25.0, ["a", "b"], [0, -1])
+    with pytest.raises(MotionlangError, match="joint 'LW'"):                 # names the joint
+        motion_from_positions(q, 25.0, KIT21_NAMES, KIT21_PARENTS)
+    q = p.copy()
+    q[:, KIT21_NAMES.index("LW")] = q[:, KIT21_NAMES.index("LE")]
+    with pytest.raises(MotionlangError, match="'LW' sits on its parent 'LE' in every frame"):
+        motion_from_positions(q, 25.0, KIT21_NAMES, KIT21_PARENTS)
     rest = REST.copy()
     rest[6] = rest[5]
     with pytest.raises(MotionlangError, match="'LE' sits on its parent 'LS'"):
         motion_from_positions(p, 25.0, KIT21_NAMES, KIT21_PARENTS, rest=rest)
+
+
+def test_bone_without_length_in_the_first_frame():
+    _, p = _rigid_motion(T=6, seed=2)
+    q = p.copy()
+    k = KIT21_NAMES.index("LW")
+    q[0, k] = q[0, k - 1]                  # the wrist on the elbow in frame 0 only
+    m = motion_from_positions(q, 25.0, KIT21_NAMES, KIT21_PARENTS)
+    # its rest direction is taken from frame 1, and frames 1.. come out exact
+    assert position_error(m, q)[1:].max() < 1e-6
+
+
+def test_children_on_one_line_fall_back_to_one_bone():
+    # a root whose two children lie on one line through it, with a little noise: the
+    # least-squares rotation about that line is undetermined; one-bone fitting keeps it still
+    rng = np.random.default_rng(0)
+    T = 30
+    p = np.zeros((T, 3, 3))
+    p[:, 1], p[:, 2] = [0.1, 0, 0], [-0.1, 0, 0]
+    p[:, 1:] += rng.normal(0, 1e-7, (T, 2, 3))
+    m = motion_from_positions(p, 10.0, ["root", "a", "b"], [-1, 0, 0])
+    R, _ = m.global_transforms()
+    step = np.einsum("tji,tjk->tik", R[:-1, 0], R[1:, 0])
+    assert np.arccos(np.clip((np.trace(step, axis1=1, axis2=2) - 1) / 2, -1, 1)).max() < 1e-4

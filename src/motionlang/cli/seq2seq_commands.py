@@ -264,8 +264,9 @@ def cmd_describe(args: argparse.Namespace) -> int:
 
 def _write(result, path: Path, title: str, fps: float) -> str:
     """A generated Motion, or 21-joint positions (T, 21, 3) at ``fps`` Hz, to ``path``:
-    .npz (positions and fps), .bvh (positions: on a 21-joint skeleton fitted to them), .xml /
-    .amc (Motions on such skeletons only), .gif / .mp4 animation or .png pose strip.
+    .npz (positions and fps), .bvh (a Motion as it is; positions on a 21-joint skeleton
+    fitted to them), .xml / .amc (Motions on such skeletons only), .gif / .mp4 animation or
+    .png pose strip.
 
     Returns a note for the user ("" or how far a fitted skeleton is from the positions)."""
     from motionlang.kinematics import Motion
@@ -294,7 +295,8 @@ def _write(result, path: Path, title: str, fps: float) -> str:
                                            name=path.stem)
             err = position_error(result, positions) * 1000.0
             note = (f" (joints {err.mean():.1f} mm from the generated ones on average, "
-                    f"at most {err.max():.0f} mm: bone lengths held at their medians)")
+                    f"at most {err.max():.0f} mm: bone lengths held at their medians, "
+                    "pelvis and neck turned by least squares)")
         else:
             from motionlang.render.scene import kit21_scene
             result = kit21_scene(result, fps)
@@ -542,8 +544,8 @@ def register(subparsers) -> None:
     p = subparsers.add_parser("generate", help="generate a motion from English (L2M)")
     p.add_argument("text", help="sentence, e.g. \"a person waves with the left hand\"")
     p.add_argument("-o", "--output", required=True,
-                   help="out.gif, .mp4 (animation), .png (pose strip), .bvh (for "
-                        "position models, e.g. two-stream: angles fitted on a 21-joint "
+                   help="out.gif, .mp4 (animation), .png (pose strip), .bvh (joint angles; "
+                        "for position models such as two-stream fitted on a 21-joint "
                         "skeleton) or .npz (joint positions and fps)")
     p.add_argument("--model", help="L2M or two-stream model file (default: the packaged L2M)")
     p.add_argument("-w", "--width", type=int, default=5, help="hypotheses (samples or beam width)")
