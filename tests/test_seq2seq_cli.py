@@ -228,6 +228,11 @@ def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
                  str(tmp_path / "none.npz"), "-w", "0"]) == 2
     assert "width must be >= 1" in capsys.readouterr().err
     assert not (tmp_path / "none.npz").exists()
+    assert main(["generate", "a person walks", "--model", str(l2m_dir / "model.pt"), "-o",
+                 str(tmp_path / "gen.obj")]) == 2
+    assert "gen.obj: output must be .bvh, .xml, .amc, .gif, .mp4, .png or .npz" in \
+        capsys.readouterr().err
+    assert not (tmp_path / "gen.obj").exists()
     from motionlang.formats import read_motion
     for path in (out, tmp_path / "gen_2.bvh"):
         m = read_motion(path)

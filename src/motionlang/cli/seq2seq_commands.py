@@ -280,7 +280,8 @@ def _write(result, path: Path, title: str, fps: float) -> str:
             np.savez(fh, **data)
         return note
     if ext not in MOTION_OUT + RENDER_OUT + (".png",):
-        raise MotionlangError(f"{path}: output must be .bvh, .gif, .mp4, .png or .npz")
+        raise MotionlangError(f"{path}: output must be .bvh, .xml, .amc, .gif, .mp4, .png "
+                              "or .npz")
     if not isinstance(result, Motion):
         if ext in MOTION_OUT:
             if ext != ".bvh":
