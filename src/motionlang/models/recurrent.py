@@ -1,7 +1,8 @@
 """Recurrent building blocks shared by the seq2seq models of Plappert et al. (2018).
 
 - :class:`BiGRUEncoder`: stack of bidirectional GRUs over padded sequences; the context
-  vector is the last output of the last layer in each direction, concatenated.
+  vector is the last output of the last layer in each direction, concatenated. Runs
+  unpacked (:func:`reverse_within_lengths` for the backward direction).
 - :class:`StackedDecoder`: stack of GRUs where every layer sees the same input (context +
   previous token/frame) and the previous layer's output; used for teacher forcing (L steps)
   and for one decoding step (L = 1) by the same code.
@@ -14,7 +15,7 @@ from __future__ import annotations
 
 import torch
 from torch import nn
-from torch.nn.utils.rnn import pack_padded_sequence, pad_packed_sequence
+from torch.func import functional_call
 
 from motionlang.features.collate import lengths_to_mask
 
@@ -41,29 +42,67 @@ def last_valid_output(rnn: nn.RNNBase, x: torch.Tensor, lengths: torch.Tensor | 
     return out[torch.arange(len(x), device=x.device), last]
 
 
+def reverse_within_lengths(x: torch.Tensor, lengths: torch.Tensor) -> torch.Tensor:
+    """x (B, T, D) -> each sequence's first lengths[b] steps in reverse order, the padding
+    behind them left in place; its own inverse. lengths (B,) in 1..T, on any device."""
+    T = x.shape[1]
+    t = torch.arange(T, device=x.device)[None, :]
+    n = lengths.to(device=x.device, dtype=torch.long)[:, None]
+    idx = torch.where(t < n, n - 1 - t, t)                       # (B, T)
+    return x.gather(1, idx[:, :, None].expand(-1, -1, x.shape[2]))
+
+
 class BiGRUEncoder(nn.Module):
-    """x (B, T, in_dim) with lengths (B,) -> context (B, 2H), outputs (B, T, 2H), mask (B, T)."""
+    """x (B, T, in_dim) with lengths (B,) -> context (B, 2H), outputs (B, T, 2H), mask (B, T).
+
+    The same function as a bidirectional ``nn.GRU`` over the packed batch: each direction
+    starts at its end of every sequence, outputs past a sequence's end are 0 and the context
+    is the last layer's final state in each direction. It runs unpacked -- per layer, one
+    one-way GRU over the batch and one over the batch reversed within each length -- because
+    on CPU the backward pass of a packed GRU zero-fills its whole gate tensor once per time
+    step (``benchmarks/bench_seq2seq.py`` measures the training speed). The parameters stay
+    those of ``self.gru``, so checkpoints keep their layout."""
 
     def __init__(self, in_dim: int, hidden: int, layers: int, dropout: float = 0.0):
         super().__init__()
         self.hidden = hidden
         self.gru = nn.GRU(in_dim, hidden, num_layers=layers, batch_first=True,
                           bidirectional=True, dropout=dropout if layers > 1 else 0.0)
+        # one-way, one-layer GRUs to call with self.gru's weights of one layer and direction;
+        # kept in a tuple so that their own (unused) parameters are not the module's
+        self._cells = tuple(nn.GRU(in_dim if k == 0 else 2 * hidden, hidden, batch_first=True)
+                            for k in range(layers))
 
     @property
     def out_dim(self) -> int:
         return 2 * self.hidden
 
+    def _direction(self, k: int, suffix: str, x: torch.Tensor) -> torch.Tensor:
+        """Layer k's one direction ("" forward, "_reverse" backward) over x (B, T, D)."""
+        names = ("weight_ih_l0", "weight_hh_l0", "bias_ih_l0", "bias_hh_l0")
+        weights = {n: getattr(self.gru, f"{n[:-1]}{k}{suffix}") for n in names}
+        return functional_call(self._cells[k], weights, (x,))[0]
+
     def forward(self, x: torch.Tensor, lengths: torch.Tensor):
-        T = x.shape[1]
+        B, T = x.shape[:2]
         lengths = lengths.cpu().long().clamp(min=1)
-        packed = pack_padded_sequence(x, lengths, batch_first=True, enforce_sorted=False)
-        out, h_n = self.gru(packed)
-        out, _ = pad_packed_sequence(out, batch_first=True, total_length=T)
-        # h_n: (layers * 2, B, H); the forward direction ends at the last valid step and the
-        # backward one at step 0 -- packing makes both respect each sequence's length.
-        context = torch.cat([h_n[-2], h_n[-1]], dim=-1)
-        return context, out, lengths_to_mask(lengths, T)
+        if len(lengths) and int(lengths.max()) > T:
+            raise ValueError(f"sequence lengths must be at most {T} (the padded length), "
+                             f"got {int(lengths.max())}")
+        lengths_x = lengths.to(x.device)
+        mask = lengths_to_mask(lengths_x, T)                          # (B, T)
+        inp = x
+        for k in range(self.gru.num_layers):
+            if k:                             # nn.GRU's dropout: between layers, not after
+                inp = nn.functional.dropout(inp, self.gru.dropout, self.training)
+            fwd = self._direction(k, "", inp)
+            bwd_rev = self._direction(k, "_reverse", reverse_within_lengths(inp, lengths_x))
+            # padded steps hold states run on past the end: zero them, as unpacking does
+            inp = torch.cat([fwd, reverse_within_lengths(bwd_rev, lengths_x)], -1) \
+                * mask[:, :, None]
+        last = (lengths_x - 1)[:, None, None].expand(-1, 1, self.hidden)
+        context = torch.cat([fwd.gather(1, last)[:, 0], bwd_rev.gather(1, last)[:, 0]], -1)
+        return context, inp, mask
 
 
 class StackedDecoder(nn.Module):
