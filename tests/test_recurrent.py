@@ -46,6 +46,21 @@ def test_encoder_matches_the_packed_gru_with_gradients(layers):
     assert (got[0][1, 3:] == 0).all()                        # padding gets no gradient
 
 
+def test_encoder_ignores_padding_and_draws_like_a_plain_gru():
+    torch.manual_seed(0)
+    enc = BiGRUEncoder(4, 6, 2).eval()
+    after_enc = torch.rand(3)
+    torch.manual_seed(0)
+    torch.nn.GRU(4, 6, num_layers=2, batch_first=True, bidirectional=True)
+    assert torch.equal(torch.rand(3), after_enc)     # seeded runs build the same models
+    x = torch.randn(2, 5, 4)
+    lengths = torch.tensor([3, 5])
+    bad = x.clone()
+    bad[0, 3:] = float("nan")                              # whatever fills the padding
+    for a, b in zip(enc(x, lengths), enc(bad, lengths)):
+        assert torch.equal(a, b)
+
+
 def test_encoder_keeps_the_checkpoint_layout_and_refuses_long_lengths():
     enc = BiGRUEncoder(4, 6, 2)
     assert set(enc.state_dict()) == {f"gru.{n}" for n, _ in enc.gru.named_parameters()}

@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import torch
 from torch import nn
-from torch.func import functional_call
 
 from motionlang.features.collate import lengths_to_mask
 
@@ -68,20 +67,20 @@ class BiGRUEncoder(nn.Module):
         self.hidden = hidden
         self.gru = nn.GRU(in_dim, hidden, num_layers=layers, batch_first=True,
                           bidirectional=True, dropout=dropout if layers > 1 else 0.0)
-        # one-way, one-layer GRUs to call with self.gru's weights of one layer and direction;
-        # kept in a tuple so that their own (unused) parameters are not the module's
-        self._cells = tuple(nn.GRU(in_dim if k == 0 else 2 * hidden, hidden, batch_first=True)
-                            for k in range(layers))
 
     @property
     def out_dim(self) -> int:
         return 2 * self.hidden
 
     def _direction(self, k: int, suffix: str, x: torch.Tensor) -> torch.Tensor:
-        """Layer k's one direction ("" forward, "_reverse" backward) over x (B, T, D)."""
-        names = ("weight_ih_l0", "weight_hh_l0", "bias_ih_l0", "bias_hh_l0")
-        weights = {n: getattr(self.gru, f"{n[:-1]}{k}{suffix}") for n in names}
-        return functional_call(self._cells[k], weights, (x,))[0]
+        """Layer k's one direction ("" forward, "_reverse" backward) over x (B, T, D) from a
+        zero state -> outputs (B, T, H). ``torch.gru`` is the stateless kernel ``nn.GRU``
+        calls: no module whose weights would be swapped in and out (not thread-safe)."""
+        weights = [getattr(self.gru, f"{n}{k}{suffix}")
+                   for n in ("weight_ih_l", "weight_hh_l", "bias_ih_l", "bias_hh_l")]
+        h0 = x.new_zeros(1, x.shape[0], self.hidden)
+        # args: has_biases, num_layers, dropout, train, bidirectional, batch_first
+        return torch.gru(x, h0, weights, True, 1, 0.0, False, False, True)[0]
 
     def forward(self, x: torch.Tensor, lengths: torch.Tensor):
         B, T = x.shape[:2]
@@ -91,7 +90,7 @@ class BiGRUEncoder(nn.Module):
                              f"got {int(lengths.max())}")
         lengths_x = lengths.to(x.device)
         mask = lengths_to_mask(lengths_x, T)                          # (B, T)
-        inp = x
+        inp = x.masked_fill(~mask[:, :, None], 0.0)   # NaN padding: 0 * NaN would be NaN
         for k in range(self.gru.num_layers):
             if k:                             # nn.GRU's dropout: between layers, not after
                 inp = nn.functional.dropout(inp, self.gru.dropout, self.training)
