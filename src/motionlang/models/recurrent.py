@@ -83,7 +83,7 @@ class BiGRUEncoder(nn.Module):
         return torch.gru(x, h0, weights, True, 1, 0.0, False, False, True)[0]
 
     def forward(self, x: torch.Tensor, lengths: torch.Tensor):
-        B, T = x.shape[:2]
+        T = x.shape[1]
         lengths = lengths.cpu().long().clamp(min=1)
         if len(lengths) and int(lengths.max()) > T:
             raise ValueError(f"sequence lengths must be at most {T} (the padded length), "
