@@ -4,7 +4,7 @@ import pytest
 from motionlang.errors import MotionlangError, SkeletonError
 from motionlang.features import PositionFeatures, downsample, features_from_dict
 from motionlang.features.joint_map import KIT21_NAMES, positions21
-from motionlang.features.positions import facing_yaw
+from motionlang.features.positions import facing_yaw, floor_height
 from motionlang.formats.asf_amc import read_asf_amc
 from motionlang.formats.mmm import read_mmm
 from tests.conftest import shared_file
@@ -29,7 +29,8 @@ def test_layout_and_rate(fitted):
 def test_round_trip_and_default_placement(fitted):
     f, m = fitted
     x = f.encode(m)
-    ref = positions21(m[::8])
+    ref = f.body(m)
+    assert np.allclose(ref, positions21(m[::8]) - [0, floor_height(positions21(m[::8])), 0])
     assert np.abs(f.decode(x, start=f.start(m)) - ref).max() < 1e-5
     # default: frame 0's root over the origin, body facing +z
     out = f.decode(x)
@@ -70,8 +71,24 @@ def test_real_motion_round_trip(which):
         m = read_asf_amc(shared_file("cmu35/35.asf"), shared_file("cmu35/35_01.amc"))
     f = PositionFeatures().fit([m])
     x = f.encode(m)
-    ref = positions21(downsample(m, 12.5))
+    ref = f.body(m)
+    assert np.allclose(ref[..., [0, 2]], positions21(downsample(m, 12.5))[..., [0, 2]])
     assert len(x) == int(np.floor((len(m) - 1) / m.fps * 12.5 + 1e-9)) + 1
     assert np.abs(f.decode(x, start=f.start(m)) - ref).max() < 1e-5
     raw = f.normalizer.inverse(x.astype(float))
     assert raw[:, 64].mean() * 12.5 > 0.3  # both subjects walk forwards (m/s)
+
+
+def test_floor_moves_feet_onto_the_ground(fitted):
+    f, m = fitted
+    lifted = m.replace(root_translation=m.root_translation + [0, 0, 0.7])  # MMM: Z up
+    p = f.body(lifted)
+    assert abs(floor_height(p)) < 1e-9
+    assert np.allclose(f.encode(lifted), f.encode(m), atol=1e-4)
+    # the option off keeps the file's floor
+    off = PositionFeatures(floor=False).fit([m])
+    assert np.allclose(off.body(lifted)[..., 1] - off.body(m)[..., 1], 0.7)
+    # files written before the option read back with it off
+    d = f.to_dict()
+    del d["config"]["floor"]
+    assert features_from_dict(d).config.floor is False

@@ -13,7 +13,8 @@ Facing direction: the horizontal perpendicular to the left->right hips + shoulde
 The inverse (:meth:`PositionFeatures.decode`) integrates heading and steps and returns
 global positions (T, 21, 3). Frame 0 is placed at ``start = (x0, z0, yaw0)``; by default at
 the origin facing +Z. :meth:`PositionFeatures.start` gives a motion's own placement, so
-``decode(encode(m), start=start(m))`` reproduces ``positions21`` exactly.
+``decode(encode(m), start=start(m))`` reproduces :meth:`PositionFeatures.body` (``positions21``
+moved vertically so that the feet stand on y = 0) exactly.
 """
 from __future__ import annotations
 
@@ -40,11 +41,28 @@ class PositionsConfig:
         fps: frame rate of the sequences (12.5 Hz in Ghosh et al. 2021).
         joint_map: a key of ``joint_map.JOINT_MAPS``, or None to pick from joint names.
         dtype: numpy dtype of ``encode``'s output.
+        floor: move each motion vertically so that its feet stand on y = 0
+            (:func:`floor_height`), whatever floor height the source file uses. Checkpoints
+            written before this option existed read back with it off.
     """
 
     fps: float = 12.5
     joint_map: str | None = None
     dtype: str = "float32"
+    floor: bool = True
+
+
+#: the six foot joints of the 21-joint body (ankles, mid-feet, toes)
+FOOT = tuple(KIT21_NAMES.index(n) for n in ("LA", "LMrot", "LF", "RA", "RMrot", "RF"))
+
+
+def floor_height(p21: np.ndarray) -> float:
+    """Height of the floor under a motion (T, 21, 3): the 5th percentile over frames of the
+    lowest foot joint. A percentile, not the minimum, so that one glitched frame of a real
+    capture cannot sink the whole motion; jumps and lifted feet do not raise it as long as
+    one foot is down in more than 5 % of the frames."""
+    lowest = p21[:, FOOT, 1].min(axis=1)
+    return float(np.percentile(lowest, 5.0))
 
 
 def facing_yaw(p21: np.ndarray) -> np.ndarray:
@@ -83,9 +101,17 @@ class PositionFeatures(FeatureSet):
         return [f"{j}_{c}" for j in KIT21_NAMES for c in "xyz"] + [
             "root_vx", "root_vz", "root_dyaw"]
 
+    def body(self, motion: Motion) -> np.ndarray:
+        """(T, 21, 3) metres at ``fps``: the global positions these features describe
+        (``positions21``, moved onto the floor when ``config.floor``)."""
+        p = positions21(downsample(motion, self.fps), self.config.joint_map)
+        if self.config.floor:
+            p = p - np.array([0.0, floor_height(p), 0.0])
+        return p
+
     def _raw(self, motion: Motion) -> tuple[np.ndarray, np.ndarray]:
         """-> un-normalised (T, 66) of ``motion`` at ``fps``, and its start (3,)."""
-        p = positions21(downsample(motion, self.fps), self.config.joint_map)
+        p = self.body(motion)
         local, v, dyaw, start = split_global(p)
         return np.concatenate([local.reshape(len(p), -1), v, dyaw[:, None]], axis=1), start
 
@@ -97,6 +123,12 @@ class PositionFeatures(FeatureSet):
             raise MotionlangError("PositionFeatures.fit: no motions")
         self.normalizer = Normalizer(names=self.names).fit([self._raw(m)[0] for m in motions])
         return self
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "PositionFeatures":
+        # files from before the floor option: it was off
+        d = {**d, "config": {"floor": False, **d.get("config", {})}}
+        return super().from_dict(d)
 
     def encode(self, motion: Motion) -> np.ndarray:
         """Motion (any supported skeleton, any fps) -> (T, 66) normalised features."""
