@@ -151,7 +151,8 @@ def test_mmm_to_bvh_is_y_up(tmp_path):
 
 
 def test_constant_inner_position_channels(tmp_path):
-    """LAFAN1-style files put constant position channels on every joint: accepted."""
+    """LAFAN1-style files put constant position channels on every joint: accepted; a moving
+    one is averaged (tests/test_bvh_wild.py has more)."""
     text = HAND.replace("    CHANNELS 3 Yrotation Zrotation Xrotation",
                         "    CHANNELS 6 Xposition Yposition Zposition "
                         "Yrotation Zrotation Xrotation")
@@ -167,9 +168,13 @@ def test_constant_inner_position_channels(tmp_path):
     m = read_bvh(tmp_path / "l.bvh")
     assert np.allclose(m.skeleton.joints[m.skeleton.index("RightUpLeg")].offset, [-0.2, 0, 0])
     assert np.allclose(m.angle("RightUpLeg_Xrotation"), np.deg2rad([0, 3, -3]))
+    assert m.meta["bvh_position_spread_m"] == {}
+    # moving ones cannot be represented: their mean becomes the offset, the spread is kept
     write(["-20", "-21", "-20"])
-    with pytest.raises(MotionFormatError, match="animated position"):
-        read_bvh(tmp_path / "l.bvh")
+    m = read_bvh(tmp_path / "l.bvh")
+    assert np.allclose(m.skeleton.joints[m.skeleton.index("RightUpLeg")].offset,
+                       [-0.61 / 3, 0, 0])
+    assert m.meta["bvh_position_spread_m"] == pytest.approx({"RightUpLeg": 0.02 / 3})
 
 
 # ------------------------------------------------------------------ bad input

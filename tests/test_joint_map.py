@@ -74,7 +74,7 @@ def _bvh_skeleton(prefix, cmu_spine):
 
 
 @pytest.mark.parametrize("prefix,cmu_spine,expect", [
-    ("", True, "cmu-bvh"), ("mixamorig:", False, "bvh"), ("", False, "bvh")])
+    ("", True, "cmu-bvh"), ("mixamorig:", False, "mixamo"), ("", False, "bvh")])
 def test_bvh_naming_schemes(prefix, cmu_spine, expect):
     sk = _bvh_skeleton(prefix, cmu_spine)
     name, W = kit21_weights(sk)

@@ -16,6 +16,7 @@ from motionlang.errors import MotionlangError
 # Modules that register subcommands; one line each, order = order in --help.
 COMMAND_MODULES = [
     "motionlang.cli.motion_commands",   # info, render, convert
+    "motionlang.cli.rig_commands",      # rig show | template
     "motionlang.cli.data_commands",     # data ...
     "motionlang.cli.demo",              # demo (the main job)
     "motionlang.cli.train_commands",    # train crbm | seq2seq | twostream

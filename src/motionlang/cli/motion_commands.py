@@ -24,6 +24,14 @@ def add_input_args(p: argparse.ArgumentParser) -> None:
                    help="frame rate of an .amc input (AMC files do not store it; default 120)")
     p.add_argument("--sequence", type=int, default=None, metavar="N",
                    help="which sequence of a .mat input holding several (1-based; default 1)")
+    add_joint_map_arg(p)
+
+
+def add_joint_map_arg(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--joint-map", metavar="MAP.json", default=None,
+                   help="how the input's rig maps onto the 21-joint body, for rigs no "
+                        "built-in map recognises (write a template with 'motionlang rig "
+                        "template FILE > map.json'; default: chosen by joint names)")
 
 
 def load_input(args: argparse.Namespace) -> Motion:
@@ -31,17 +39,19 @@ def load_input(args: argparse.Namespace) -> Motion:
     for MAT files)."""
     from motionlang.formats import read_motion
 
-    path = Path(args.input)
+    path = Path(getattr(args, "input"))
+    joint_map = getattr(args, "joint_map", None)
     ext = path.suffix.lower()
     if ext != ".amc" and (args.asf is not None or args.source_fps is not None):
         raise MotionlangError(f"{path}: --asf and --source-fps apply to .amc inputs only")
     if ext != ".mat" and args.sequence is not None:
         raise MotionlangError(f"{path}: --sequence applies to .mat inputs only")
     if ext == ".amc":
-        return read_motion(path, skeleton=args.asf, fps=args.source_fps)
+        return read_motion(path, skeleton=args.asf, fps=args.source_fps, joint_map=joint_map)
     if ext == ".mat":
-        return read_motion(path, sequence=1 if args.sequence is None else args.sequence)
-    return read_motion(path)
+        return read_motion(path, sequence=1 if args.sequence is None else args.sequence,
+                           joint_map=joint_map)
+    return read_motion(path, joint_map=joint_map)
 
 
 def add_clip_args(p: argparse.ArgumentParser) -> None:
@@ -81,6 +91,7 @@ def cmd_info(args: argparse.Namespace) -> int:
     print(f"  frames    {info['frames']} at {info['fps']:g} Hz = {info['duration_s']:.2f} s")
     print(f"  joints    {info['joints']} with {info['dofs']} DOFs (+ root), "
           f"{info['nodes']} skeleton nodes")
+    print(f"  body      {info['stature_m']:.2f} m tall; lengths in {info['unit']}")
     print(f"  names     {shown}")
     return 0
 

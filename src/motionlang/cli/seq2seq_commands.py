@@ -32,7 +32,12 @@ def _add_train(sub, name: str, help_: str) -> None:
     p.add_argument("--data", required=True, metavar="DIR", help="KIT-ML-format or custom folder")
     p.add_argument("--out", default=f"runs/{name}", metavar="DIR",
                    help="run folder: last.pt, best.pt, model.pt, history, splits")
-    p.add_argument("--features", choices=("angles", "positions"), default="angles")
+    p.add_argument("--features", choices=("angles", "positions"), default="angles",
+                   help="angles: the 44 MMM joint angles (KIT MMM motions only); positions: "
+                        "the 21-joint body (any rig that maps onto it)")
+    p.add_argument("--joint-map", metavar="MAP.json", default=None,
+                   help="how a custom folder's rig maps onto the 21-joint body (default: "
+                        "joint_map.json in the folder, else chosen by joint names)")
     p.add_argument("--offsets", type=int, default=10,
                    help="down-sampling start offsets per motion (augmentation, default 10)")
     p.add_argument("--max-seconds", type=float, default=30.0, help="drop longer motions")
@@ -154,7 +159,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     logging.basicConfig(level=logging.INFO, format="%(message)s")
     data = build_pairs(args.data, features=args.features, offsets=args.offsets, seed=args.seed,
                        min_count=args.min_count, max_seconds=args.max_seconds,
-                       mirror=args.mirror)
+                       mirror=args.mirror, joint_map=args.joint_map)
     train_items = data.items["train"]
     if args.balance > 1:   # before anything is written
         repeats = balance_repeats(data.labels, data.splits["train"], args.balance)
@@ -245,13 +250,15 @@ def _model_path(arg: str | None, kind: str) -> Path:
 
 
 def cmd_describe(args: argparse.Namespace) -> int:
+    from motionlang.cli.motion_commands import load_input
     from motionlang.decoding.seq2seq import describe
-    from motionlang.formats import read_motion
     from motionlang.models.m2l import MotionToLanguage
 
     _check_length_penalty(args.length_penalty)
+    if args.width < 1:
+        raise MotionlangError(f"-w/--width must be >= 1, got {args.width}")
     model = MotionToLanguage.load(_model_path(args.model, "m2l"))
-    hyps = describe(model, read_motion(args.motion), width=args.width,
+    hyps = describe(model, load_input(args), width=args.width,
                     length_penalty=args.length_penalty)
     if args.json:
         print(json.dumps([{"rank": i + 1, "text": t, "log_p": s} for i, (t, s) in
@@ -262,7 +269,46 @@ def cmd_describe(args: argparse.Namespace) -> int:
     return 0
 
 
-def _write(result, path: Path, title: str, fps: float) -> str:
+def _read_rig(args: argparse.Namespace, out: Path):
+    """The ``--rig`` motion file (its skeleton is the target of a .bvh output), or None."""
+    if args.rig is None:
+        if args.rig_asf is not None:
+            raise MotionlangError("--rig-asf needs --rig")
+        return None
+    if out.suffix.lower() != ".bvh":
+        raise MotionlangError(f"{out}: --rig writes .bvh files; got {out.suffix or 'none'!r}")
+    from motionlang.formats import read_motion
+    return read_motion(args.rig, skeleton=args.rig_asf, joint_map=args.joint_map)
+
+
+def _first_frame(model, args: argparse.Namespace) -> np.ndarray:
+    """(F,) model features of the first pose of ``--start-from``."""
+    from motionlang.decoding.seq2seq import motion_frames
+    from motionlang.formats import read_motion
+    if getattr(model, "features", None) is None or not hasattr(model.config, "rollout_input"):
+        raise MotionlangError("--start-from applies to L2M models")
+    motion = read_motion(args.start_from, joint_map=args.joint_map)
+    return motion_frames(model.features, motion, 1)[0][0]
+
+
+def _on_rig(result, fps: float, rig) -> tuple:
+    """Generated positions (T, 21, 3) at ``fps`` or a Motion -> (Motion on ``rig``'s
+    skeleton, note on how far its body joints are from the generated ones)."""
+    from motionlang.features.joint_map import kit21_weights, positions21
+    from motionlang.kinematics import Motion
+    from motionlang.kinematics.retarget import retarget
+    if isinstance(result, Motion):
+        fps, result = result.fps, positions21(result)
+    W = kit21_weights(rig.skeleton, joint_map=rig.meta.get("joint_map"))[1]
+    motion = retarget(result, fps, rig, weights=W)
+    err = np.linalg.norm(np.einsum("kj,tjc->tkc", W, motion.positions()) - result,
+                         axis=-1) * 1000.0
+    return motion, (f" (on the rig of {rig.meta.get('path', rig.name)}: body joints "
+                    f"{err.mean():.1f} mm from the generated ones on average, at most "
+                    f"{err.max():.0f} mm)")
+
+
+def _write(result, path: Path, title: str, fps: float, rig=None) -> str:
     """A generated Motion, or 21-joint positions (T, 21, 3) at ``fps`` Hz, to ``path``:
     .npz (positions and fps), .bvh (a Motion as it is; positions on a 21-joint skeleton
     fitted to them), .xml / .amc (Motions on such skeletons only), .gif / .mp4 animation or
@@ -272,6 +318,8 @@ def _write(result, path: Path, title: str, fps: float) -> str:
     from motionlang.kinematics import Motion
     ext = path.suffix.lower()
     note = ""
+    if rig is not None:
+        result, note = _on_rig(result, fps, rig)
     if ext == ".npz":
         from motionlang.utils.atomic import atomic_write
         data = {"positions": result, "fps": np.float64(fps)} if isinstance(result, np.ndarray) \
@@ -315,7 +363,7 @@ def _write(result, path: Path, title: str, fps: float) -> str:
 
 def cmd_generate(args: argparse.Namespace) -> int:
     # any text-to-motion checkpoint: L2M (seq2seq) or the two-stream model
-    from motionlang.decoding.t2m import FPS, generate_any, load_any_t2m
+    from motionlang.decoding.t2m import FPS, default_method, generate_any, load_any_t2m
 
     if not args.temperature > 0:
         raise MotionlangError(f"--temperature must be > 0, got {args.temperature}")
@@ -323,15 +371,14 @@ def cmd_generate(args: argparse.Namespace) -> int:
         raise MotionlangError("--temperature applies to 'sample' and 'beam'; mean decoding "
                               "draws nothing")
     model = load_any_t2m(_model_path(args.model, "l2m"))
-    if args.method is None:   # how the model was trained to continue its own frames
-        expected = getattr(getattr(model, "config", None), "rollout_input", None) == "mean"
-        args.method = "mean" if expected else "sample"
-        if expected and args.temperature != 1.0:
-            raise MotionlangError("--temperature: this model generates with mean decoding "
-                                  "(trained on its expected frames); add --method sample")
     if args.temperature != 1.0 and getattr(model, "kind", None) == "twostream":
         raise MotionlangError("--temperature applies to L2M models; the two-stream model is "
                               "deterministic")
+    if args.method is None:   # how the model was trained to continue its own frames
+        args.method = default_method(model)
+        if args.method == "mean" and args.temperature != 1.0:
+            raise MotionlangError("--temperature: this model generates with mean decoding "
+                                  "(trained on its expected frames); add --method sample")
     extra = {}
     if args.rerank:
         if getattr(model, "kind", None) == "twostream" or args.method == "mean" \
@@ -342,10 +389,13 @@ def cmd_generate(args: argparse.Namespace) -> int:
         from motionlang.models.m2l import MotionToLanguage
         extra["reranker"] = MotionToLanguage.load(args.rerank)
         check_same_features(model, extra["reranker"], f"--rerank {args.rerank}")
+    out = Path(args.output)
+    rig = _read_rig(args, out)
+    if args.start_from:
+        extra["first_frame"] = _first_frame(model, args)
     hyps = generate_any(model, args.text, width=args.width, method=args.method, seed=args.seed,
                         max_frames=args.max_frames, min_frames=args.min_frames,
                         length_norm=args.length_norm, temperature=args.temperature, **extra)
-    out = Path(args.output)
     # rate of position outputs: the two-stream model's 12.5 Hz, else the model's features'
     fps = FPS if getattr(model, "kind", None) == "twostream" else \
         float(getattr(getattr(model, "features", None), "fps", FPS))
@@ -357,7 +407,7 @@ def cmd_generate(args: argparse.Namespace) -> int:
         line = f"{i}.{likelihood} {n} frames"
         if i == 1 or args.all:
             path = out if i == 1 else out.with_name(f"{out.stem}_{i}{out.suffix}")
-            note = _write(result, path, f"{args.text} (#{i})", fps)
+            note = _write(result, path, f"{args.text} (#{i})", fps, rig)
             line += f"  -> {path}{note}"
         print(line)
     return 0
@@ -533,8 +583,9 @@ def _context_tsne(path: Path, m2l, l2m, test: dict, records: dict) -> None:
 
 
 def register(subparsers) -> None:
+    from motionlang.cli.motion_commands import add_input_args, add_joint_map_arg
     p = subparsers.add_parser("describe", help="describe a motion in English (M2L, beam search)")
-    p.add_argument("motion", help="motion file (.xml MMM, .bvh, .amc)")
+    add_input_args(p)
     p.add_argument("--model", help="M2L model file (default: the packaged one)")
     p.add_argument("-w", "--width", type=int, default=5, help="beam width = hypotheses shown")
     p.add_argument("--length-penalty", type=float, default=0.0, metavar="ALPHA",
@@ -571,6 +622,16 @@ def register(subparsers) -> None:
     p.add_argument("--rerank", metavar="M2L", help="rank the W motions by this M2L model's "
                    "log P(text | motion) instead of their own likelihood (L2M, sample or beam)")
     p.add_argument("--all", action="store_true", help="write every hypothesis (OUT_2, ...)")
+    p.add_argument("--rig", metavar="FILE", default=None,
+                   help="write the .bvh on this rig (a motion file of yours: its skeleton, "
+                        "joint names, units and rest pose), retargeted from the 21-joint "
+                        "body (default: the 21-joint body itself)")
+    p.add_argument("--rig-asf", metavar="PATH", default=None,
+                   help="ASF skeleton of an .amc --rig (default: <subject>.asf next to it)")
+    p.add_argument("--start-from", metavar="FILE", default=None,
+                   help="begin every motion with the first pose of this motion file (any "
+                        "rig that maps onto the 21-joint body; L2M models)")
+    add_joint_map_arg(p)
     p.set_defaults(func=cmd_generate)
     p = subparsers.add_parser("evaluate", help="BLEU/ROUGE/CIDEr of M2L, baseline, L2M round trip")
     p.add_argument("--m2l", required=True, help="M2L model file (its run folder holds splits/)")

@@ -43,15 +43,17 @@ class CustomRecord:
     annotations: list[str] = field(default_factory=list)
     meta: dict = field(default_factory=dict)
     fps: float | None = None
+    joint_map: dict | None = None
 
     @property
     def has_annotations(self) -> bool:
         return bool(self.annotations)
 
     def load_motion(self) -> "Motion":
-        """Read the file with ``motionlang.formats.read_motion`` (ASF found automatically)."""
+        """Read the file with ``motionlang.formats.read_motion`` (ASF found automatically;
+        the dataset's joint map, if any, attached)."""
         from motionlang.formats import read_motion  # lower layer, loaded lazily
-        return read_motion(self.path, fps=self.fps)
+        return read_motion(self.path, fps=self.fps, joint_map=self.joint_map)
 
 
 def _read_csv(path: Path) -> list[tuple[int, str, str]]:
@@ -111,14 +113,21 @@ def read_captions(path: str | Path) -> list[tuple[int, str, str]]:
     return rows
 
 
+JOINT_MAP_NAME = "joint_map.json"
+
+
 def load_custom(folder: str | Path, captions: str | Path | None = None, *,
-                fps: float | None = None) -> list[CustomRecord]:
+                fps: float | None = None, joint_map: str | Path | dict | None = None
+                ) -> list[CustomRecord]:
     """Records of a folder of motion files and its captions, sorted by id.
 
     Args:
         folder: dataset folder (motion files searched recursively).
         captions: captions file (default: ``captions.csv`` or ``captions.jsonl`` in ``folder``).
         fps: passed to the reader (AMC frame rate; other formats are resampled).
+        joint_map: how the folder's rig maps onto the 21-joint body (a map dict or JSON
+            file; default: ``joint_map.json`` in ``folder`` if there is one, else the
+            built-in maps chosen by joint names).
 
     Raises:
         DatasetError: missing folder or captions file, a bad row, or a row naming a motion
@@ -134,6 +143,11 @@ def load_custom(folder: str | Path, captions: str | Path | None = None, *,
                                f"(found {len(found)}); pass captions=")
         captions = found[0]
     captions = Path(captions)
+    if joint_map is None and (folder / JOINT_MAP_NAME).is_file():
+        joint_map = folder / JOINT_MAP_NAME
+    if joint_map is not None and not isinstance(joint_map, dict):
+        from motionlang.formats import read_joint_map
+        joint_map = read_joint_map(joint_map)
     records: dict[Path, CustomRecord] = {}
     for p in sorted(folder.rglob("*")):
         if p.suffix.lower() in MOTION_EXTENSIONS and p.is_file():
@@ -141,7 +155,8 @@ def load_custom(folder: str | Path, captions: str | Path | None = None, *,
             if p.suffix.lower() == ".xml" and not p.name.endswith("_mmm.xml"):
                 continue  # only MMM motions; other XML (model files) is not a motion
             records[p.resolve()] = CustomRecord(rel.with_suffix("").as_posix(), p,
-                                                meta={"captions_lines": []}, fps=fps)
+                                                meta={"captions_lines": []}, fps=fps,
+                                                joint_map=joint_map)
     for line, f, text in read_captions(captions):
         target = (folder / f).resolve()
         rec = records.get(target)

@@ -159,3 +159,41 @@ def safe_extract(archive: str | Path, dest: str | Path, *,
         with contextlib.suppress(FileNotFoundError):
             shutil.rmtree(tmp)
     return dest
+
+
+def safe_extract_tar(archive: str | Path, dest: str | Path, *,
+                     keep: Callable[[str], bool] | None = None) -> Path:
+    """:func:`safe_extract` for tar archives (``.tar``, ``.tar.gz``, ``.tar.xz``...):
+    regular files only (links, devices and FIFOs refused), no absolute or ``..`` paths,
+    extracted to a temporary folder renamed onto ``dest`` when complete."""
+    import lzma
+    import tarfile
+    import zlib
+
+    archive, dest = Path(archive), Path(dest)
+    if dest.exists():
+        raise DatasetError(f"{dest}: already exists; remove it to extract {archive} again")
+    dest.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{dest.name}.", dir=dest.parent))
+    try:
+        with tarfile.open(archive) as tf:
+            for info in tf:
+                rel = _member_path(info.name, archive)
+                if info.isdir() or not rel.parts or (keep and not keep(info.name)):
+                    continue
+                if not info.isfile():
+                    raise DatasetError(f"{archive}: not a regular file in archive: {info.name!r}")
+                out = tmp.joinpath(*rel.parts)
+                out.parent.mkdir(parents=True, exist_ok=True)
+                src = tf.extractfile(info)
+                with src, open(out, "wb") as dst:
+                    shutil.copyfileobj(src, dst, CHUNK)
+        os.replace(tmp, dest)
+    except (tarfile.TarError, EOFError, lzma.LZMAError, zlib.error) as exc:
+        raise DatasetError(f"{archive}: not a valid tar archive ({exc})") from None
+    except OSError as exc:
+        raise DatasetError(f"{archive}: cannot extract: {exc.strerror or exc}") from None
+    finally:
+        with contextlib.suppress(FileNotFoundError):
+            shutil.rmtree(tmp)
+    return dest

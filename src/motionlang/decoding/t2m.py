@@ -48,6 +48,16 @@ def load_any_t2m(path: str | Path, text_encoder=None):
                           "expected 'l2m' or 'twostream')")
 
 
+def default_method(model) -> str:
+    """How a text-to-motion model decodes unless told: an L2M trained on its own expected
+    frames (``rollout_input == "mean"``) with mean decoding, any other L2M by ancestral
+    sampling (a beam keeps the likeliest frames, and standing still is always likelier than
+    moving); the two-stream model is deterministic ("mean")."""
+    if getattr(model, "kind", None) == "twostream":
+        return "mean"
+    return "mean" if getattr(model.config, "rollout_input", None) == "mean" else "sample"
+
+
 def generate_any(model, sentence: str, *, max_frames: int | None = None, **kw
                  ) -> list[tuple[Any, float]]:
     """``decoding.seq2seq.generate`` for L2M (``kw`` passed on); for a two-stream model one

@@ -41,7 +41,9 @@ def mmm_columns(skeleton) -> np.ndarray:
     missing = [n for n in MMM_DOF_ORDER if n not in names]
     if missing:
         raise SkeletonError(f"angles features need an MMM skeleton; {skeleton.name!r} lacks "
-                            f"DOFs {missing[:5]}{'...' if len(missing) > 5 else ''}")
+                            f"DOFs {missing[:5]}{'...' if len(missing) > 5 else ''} (models on "
+                            "'positions' features read any rig that maps onto the 21-joint "
+                            "body)")
     return np.array([names.index(n) for n in MMM_DOF_ORDER])
 
 

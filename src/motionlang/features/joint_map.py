@@ -1,4 +1,4 @@
-"""The 21-joint KIT layout and named maps onto it from MMM, CMU-ASF and BVH skeletons.
+"""The 21-joint KIT layout, and maps onto it from every supported rig.
 
 The 21 joints are the ones the processed KIT-ML position data of later work (language2pose,
 Ghosh et al. 2021, HumanML3D's ``kit``) uses, named after the MMM segments, in this order::
@@ -14,12 +14,16 @@ Ghosh et al. 2021, HumanML3D's ``kit``) uses, named after the MMM segments, in t
 Left means the subject's left (MMM's ``L*`` nodes, CMU's ``l*`` bones, BVH ``Left*``).
 Tree: root-BP-BT-BLN-BUN; BLN-shoulders-elbows-wrists; root-hips-knees-ankles-midfoot-toes.
 
-A map entry is a node name, ``("mid", a, b)`` (midpoint of two nodes) or
-``("lerp", a, b, t)`` (``(1-t) a + t b``). Synthetic points are needed where the source
-skeleton has no node: CMU and BVH roots sit above the hips, so ``root`` is the midpoint of
-the two hip joints (the MMM root lies on that line); CMU has no mid-foot joint, so ``LMrot``
-is put 40 % of the way from ankle to toe base (the MMM proportion, 31 of 82 mm/m). Names
-are matched case-insensitively after dropping a ``namespace:`` prefix (``mixamorig:Hips``).
+A map sends each of the 21 joints to a rig node name, ``("mid", a, b)`` or
+``("lerp", a, b, t)``. The built-in maps (MMM, CMU ASF and its BVH conversions, Bandai Namco,
+iClone CC, Second Life, Poser/DAZ, SMPL, Mixamo, generic BVH and Biped namings) and the facts
+behind their synthetic points are in :mod:`.rig_maps`; one is chosen from the joint names. A
+user's own map is a JSON file (:func:`load_joint_map`, :func:`template_map`)::
+
+    {"name": "my-rig", "joints": {"root": ["mid", "L_hip", "R_hip"], "BP": "spine_01", ...,
+                                  "LMrot": ["lerp", "L_ankle", "L_ball", 0.4], ...}}
+
+given to :func:`positions21` as ``joint_map`` or kept in ``motion.meta["joint_map"]``.
 
 Limb bones of CMU subject 35 and KIT 00001 agree within 20 % after scaling by stature; the
 four trunk bones do not, whatever CMU spine nodes are chosen (MMM puts the lumbar joint BP
@@ -28,11 +32,15 @@ root-to-head-base chain is comparable (``tests/test_joint_map.py`` checks both f
 """
 from __future__ import annotations
 
-from typing import Union
+import json
+import re
+from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
-from motionlang.errors import SkeletonError
+from motionlang.errors import MotionlangError, SkeletonError
+from motionlang.features.rig_maps import RIG_MAPS, SMPL_JOINT_NAMES, RigMap, Spec
 from motionlang.kinematics.motion import Motion
 from motionlang.kinematics.skeleton import Skeleton
 
@@ -47,117 +55,160 @@ KIT21_MIRROR: tuple[int, ...] = tuple(
     KIT21_NAMES.index(("R" + n[1:]) if n[0] == "L" else ("L" + n[1:]) if n[0] == "R" else n)
     for n in KIT21_NAMES)
 
-Spec = Union[str, tuple]
+#: named maps (``rig_maps.RIG_MAPS``), tried in this order, most specific first.
+JOINT_MAPS: dict[str, dict[str, Spec]] = {m.name: m.joints for m in RIG_MAPS}
+_BY_NAME = {m.name: m for m in RIG_MAPS}
+HINT = "pass --joint-map FILE; write a template with: motionlang rig template FILE > map.json"
 
 
-def _sided(table: dict[str, Spec], left: str, right: str) -> dict[str, Spec]:
-    """Expand entries written for the left side ("L*") into both sides."""
-    out = {}
-    for k, v in table.items():
-        if not k.startswith("L"):
-            out[k] = v
-            continue
-        for side, pre in (("L", left), ("R", right)):
-            out[side + k[1:]] = (tuple(x.format(s=pre) if isinstance(x, str) else x for x in v)
-                                 if isinstance(v, tuple) else v.format(s=pre))
-    return out
+@dataclass
+class RigMatch:
+    """A map applied to one rig: ``weights`` (21, J) give ``positions21 = W @ positions``;
+    ``sources`` says where each body joint comes from, in the rig's own names."""
 
-
-_MMM = _sided({
-    "root": "root_joint", "BP": "BPSegment_joint", "BT": "BTSegment_joint",
-    "BLN": "BLNsegment_joint", "BUN": "BUNsegment_joint",
-    "LS": "{s}Ssegment_joint", "LE": "{s}Esegment_joint", "LW": "{s}Wsegment_joint",
-    "LH": "{s}Hsegment_joint", "LK": "{s}Ksegment_joint", "LA": "{s}Asegment_joint",
-    "LMrot": "{s}Mrot_joint", "LF": "{s}Fx_joint"}, "L", "R")
-
-# CMU ASF: a node sits at its bone's start, e.g. "ltibia" is the knee.
-_CMU_ASF = _sided({
-    "root": ("mid", "lfemur", "rfemur"), "BP": "lowerback", "BT": "upperback",
-    "BLN": "lowerneck", "BUN": "head",
-    "LS": "{s}humerus", "LE": "{s}radius", "LW": "{s}wrist",
-    "LH": "{s}femur", "LK": "{s}tibia", "LA": "{s}foot",
-    "LMrot": ("lerp", "{s}foot", "{s}toes", 0.4), "LF": "{s}toes"}, "l", "r")
-
-_BVH_LIMBS = {
-    "root": ("mid", "LeftUpLeg", "RightUpLeg"),
-    "LS": "{s}Arm", "LE": "{s}ForeArm", "LW": "{s}Hand",
-    "LH": "{s}UpLeg", "LK": "{s}Leg", "LA": "{s}Foot",
-    "LMrot": ("lerp", "{s}Foot", "{s}ToeBase", 0.4), "LF": "{s}ToeBase"}
-# CMU converted to BVH: Hips, LowerBack (= CMU lowerback), Spine (upperback), Spine1, Neck...
-_CMU_BVH = _sided({**_BVH_LIMBS, "BP": "LowerBack", "BT": "Spine", "BLN": "Neck",
-                   "BUN": "Head"}, "Left", "Right")
-# Mixamo and similar: Hips, Spine, Spine1, Spine2, Neck, Head.
-_MIXAMO_BVH = _sided({**_BVH_LIMBS, "BP": "Spine", "BT": "Spine1", "BLN": "Neck",
-                      "BUN": "Head"}, "Left", "Right")
-
-#: named maps, tried in this order.
-JOINT_MAPS: dict[str, dict[str, Spec]] = {
-    "mmm": _MMM, "cmu-asf": _CMU_ASF, "cmu-bvh": _CMU_BVH, "bvh": _MIXAMO_BVH}
+    name: str
+    about: str
+    weights: np.ndarray
+    sources: dict[str, Spec]
 
 
 def _key(name: str) -> str:
     return name.rsplit(":", 1)[-1].lower()
 
 
-def _resolve(skeleton: Skeleton, table: dict[str, Spec]
-             ) -> tuple[np.ndarray | None, list[str]]:
-    """-> weight matrix (21, J) or None, and the list of missing source names."""
-    index = {}
-    for i, n in enumerate(skeleton.names):
+def _parts(spec: Spec) -> list[tuple[str, float]]:
+    if isinstance(spec, str):
+        return [(spec, 1.0)]
+    if spec[0] == "mid":
+        return [(spec[1], 0.5), (spec[2], 0.5)]
+    return [(spec[1], 1.0 - spec[3]), (spec[2], spec[3])]  # ("lerp", a, b, t)
+
+
+def _resolve(names: list[str], table: dict[str, Spec]
+             ) -> tuple[np.ndarray, list[str], dict[str, Spec]]:
+    """-> W (21, J), the names the rig lacks, and each resolvable body joint's spec written
+    with the rig's own names (``"a|b"`` alternatives: the first the rig has)."""
+    index: dict[str, int] = {}
+    for i, n in enumerate(names):
         index.setdefault(_key(n), i)
-    W = np.zeros((len(KIT21_NAMES), len(skeleton)))
-    missing = []
-    for k, name in enumerate(KIT21_NAMES):
-        spec = table[name]
-        if isinstance(spec, str):
-            parts = [(spec, 1.0)]
-        elif spec[0] == "mid":
-            parts = [(spec[1], 0.5), (spec[2], 0.5)]
-        else:  # ("lerp", a, b, t)
-            parts = [(spec[1], 1.0 - spec[3]), (spec[2], spec[3])]
-        for src, w in parts:
-            j = index.get(_key(src))
+    W = np.zeros((len(KIT21_NAMES), len(names)))
+    missing, sources = [], {}
+    for k, body in enumerate(KIT21_NAMES):
+        spec, found = table[body], []
+        for src, w in _parts(spec):
+            j = next((index[_key(a)] for a in src.split("|") if _key(a) in index), None)
             if j is None:
                 missing.append(src)
             else:
                 W[k, j] += w
-    return (None if missing else W), missing
+                found.append(names[j])
+        if len(found) == len(_parts(spec)):
+            sources[body] = found[0] if isinstance(spec, str) else (spec[0], *found, *spec[3:])
+    return W, missing, sources
 
 
-def kit21_weights(skeleton: Skeleton, map_name: str | None = None) -> tuple[str, np.ndarray]:
-    """Pick the joint map for a skeleton.
+def _signed(rig: RigMap, names: list[str]) -> bool:
+    return all(any(re.fullmatch(p, n, re.IGNORECASE) for n in names) for p in rig.signature)
+
+
+def _listed(items: list[str], limit: int = 12) -> str:
+    items = list(dict.fromkeys(items))
+    more = f", ... ({len(items) - limit} more)" if len(items) > limit else ""
+    return ", ".join(items[:limit]) + more
+
+
+def closest_map(skeleton: Skeleton) -> tuple[RigMap, list[str], dict[str, Spec]]:
+    """The built-in map the rig comes nearest to (its signature matches, it places the most
+    body joints, lacks the fewest names; then table order): (map, names it lacks, the body
+    joints it can place, in the rig's names)."""
+    names = list(skeleton.names)
+    best = None
+    for rig in RIG_MAPS:
+        _, missing, sources = _resolve(names, rig.joints)
+        score = (not _signed(rig, names), -len(sources), len(set(missing)))
+        if best is None or score < best[0]:
+            best = (score, rig, missing, sources)
+    return best[1], best[2], best[3]
+
+
+def match_rig(skeleton: Skeleton, map_name: str | None = None,
+              joint_map: dict | str | Path | None = None) -> RigMatch:
+    """Map a skeleton onto the 21 body joints with ``joint_map`` (a map dict or a JSON file),
+    else the built-in map ``map_name``, else the first built-in map that fits its names.
+
+    Raises:
+        SkeletonError: the map names joints the rig lacks, or no built-in map fits (the
+            message names the rig's joints the closest map leaves unmatched).
+    """
+    names, label = list(skeleton.names), skeleton.name
+    if joint_map is not None:
+        jm = as_joint_map(joint_map)
+        W, missing, sources = _resolve(names, jm["joints"])
+        if missing:
+            raise SkeletonError(f"joint map {jm['name']!r} ({jm['source']}) names joints that "
+                                f"rig {label!r} lacks: {_listed(missing)}; its joints: "
+                                f"{_listed(names, 40)}")
+        return RigMatch(jm["name"], f"user map {jm['source']}", W, sources)
+    if map_name is not None:
+        if map_name not in _BY_NAME:
+            raise SkeletonError(f"unknown joint map {map_name!r}; known: {sorted(_BY_NAME)}")
+        rigs = [_BY_NAME[map_name]]
+    else:
+        rigs = list(RIG_MAPS)
+    for rig in rigs:
+        if map_name is None and not _signed(rig, names):
+            continue
+        W, missing, sources = _resolve(names, rig.joints)
+        if not missing:
+            return RigMatch(rig.name, rig.about, W, sources)
+    if map_name is not None:
+        raise SkeletonError(f"skeleton {label!r} cannot be mapped to the 21 KIT joints with "
+                            f"map {map_name!r}: it lacks {_listed(missing)}; {HINT}")
+    rig, missing, sources = closest_map(skeleton)
+    used = {n for s in sources.values() for n in ([s] if isinstance(s, str) else s[1:3])}
+    unmatched = [n for n in names if n not in used and not re.search(r"_end\d*$", n, re.I)]
+    closest = f" (closest map {rig.name!r} lacks {_listed(missing)})" if sources else ""
+    raise SkeletonError(f"skeleton {label!r} cannot be mapped to the 21 KIT joints: no "
+                        f"built-in map fits; rig joints not matched: {_listed(unmatched, 40)}"
+                        f"{closest}; {HINT}")
+
+
+def kit21_weights(skeleton: Skeleton, map_name: str | None = None, *,
+                  joint_map: dict | str | Path | None = None) -> tuple[str, np.ndarray]:
+    """Pick the joint map for a skeleton (see :func:`match_rig`).
 
     Returns:
         (map name, W (21, J)) with ``positions21 = W @ positions`` per frame.
-
-    Raises:
-        SkeletonError: no map fits; names the source joints the closest map misses.
     """
-    names = [map_name] if map_name else list(JOINT_MAPS)
-    best = None
-    for name in names:
-        if name not in JOINT_MAPS:
-            raise SkeletonError(f"unknown joint map {name!r}; known: {sorted(JOINT_MAPS)}")
-        W, missing = _resolve(skeleton, JOINT_MAPS[name])
-        if W is not None:
-            return name, W
-        if best is None or len(missing) < len(best[1]):
-            best = (name, missing)
-    raise SkeletonError(f"skeleton {skeleton.name!r} cannot be mapped to the 21 KIT joints: "
-                        f"closest map {best[0]!r} lacks joints {sorted(set(best[1]))}")
+    m = match_rig(skeleton, map_name, joint_map)
+    return m.name, m.weights
 
 
-def positions21(motion: Motion, map_name: str | None = None) -> np.ndarray:
+def positions21(motion: Motion, map_name: str | None = None,
+                joint_map: dict | str | Path | None = None) -> np.ndarray:
     """(T, 21, 3) metres, canonical frame (Y up), of the KIT joints ``KIT21_NAMES``.
 
-    Works for MMM, CMU-ASF and BVH (CMU-converted or Mixamo naming) skeletons; the map is
-    chosen from the joint names unless ``map_name`` (a key of ``JOINT_MAPS``) is given.
+    The map is ``joint_map`` (a map dict or JSON path), else the built-in ``map_name`` (a
+    key of ``JOINT_MAPS``), else ``motion.meta["joint_map"]`` (a map given when the motion
+    was read), else chosen from the joint names.
 
     Raises:
-        SkeletonError: the skeleton lacks joints every map needs.
+        SkeletonError: the skeleton lacks joints the map needs, or no map fits.
     """
-    _, W = kit21_weights(motion.skeleton, map_name)
+    if joint_map is None and map_name is None:
+        joint_map = motion.meta.get("joint_map")
+    _, W = kit21_weights(motion.skeleton, map_name, joint_map=joint_map)
     return np.einsum("kj,tjc->tkc", W, motion.positions())
+
+
+def positions21_from_smpl(joints) -> np.ndarray:
+    """SMPL / SMPL-X joint positions (..., J >= 22, 3), first 22 in ``SMPL_JOINT_NAMES``
+    order, -> (..., 21, 3) KIT joints in the same frame and unit (map ``smpl``)."""
+    p = np.asarray(joints, dtype=float)
+    if p.ndim < 2 or p.shape[-1] != 3 or p.shape[-2] < len(SMPL_JOINT_NAMES):
+        raise MotionlangError(f"SMPL joints must be (..., >=22, 3), got {p.shape}")
+    W, _, _ = _resolve(list(SMPL_JOINT_NAMES), _BY_NAME["smpl"].joints)
+    return np.einsum("kj,...jc->...kc", W, p[..., :len(SMPL_JOINT_NAMES), :])
 
 
 def bone_lengths21(pos21: np.ndarray) -> np.ndarray:
@@ -165,3 +216,84 @@ def bone_lengths21(pos21: np.ndarray) -> np.ndarray:
     child = np.arange(1, len(KIT21_NAMES))
     parent = np.array(KIT21_PARENTS[1:])
     return np.linalg.norm(pos21[..., child, :] - pos21[..., parent, :], axis=-1)
+
+
+# ----------------------------------------------------------------------- user maps (JSON)
+def _check_spec(body: str, v, where: str) -> Spec:
+    def bad(why: str) -> SkeletonError:
+        return SkeletonError(f"{where}: body joint {body!r} {why}")
+
+    if isinstance(v, str):
+        if not v.strip():
+            raise bad('is not filled in (""); give one of the rig\'s joints')
+        return v.strip()
+    ok = isinstance(v, (list, tuple)) and (
+        (len(v) == 3 and v[0] == "mid") or
+        (len(v) == 4 and v[0] == "lerp" and isinstance(v[3], (int, float))
+         and not isinstance(v[3], bool) and np.isfinite(v[3])))
+    if not ok or not all(isinstance(x, str) and x.strip() for x in v[1:3]):
+        raise bad(f'must be a joint name, ["mid", a, b] or ["lerp", a, b, t]; got '
+                  f"{json.dumps(v)[:80]}")
+    return (v[0], v[1].strip(), v[2].strip(), *[float(t) for t in v[3:]])
+
+
+def check_joint_map(d, where: str = "joint map") -> dict:
+    """Validate a map dict -> ``{"name", "joints" (21 specs, lists as tuples), "source"}``.
+    Whether the names exist is checked when the map meets a rig (:func:`match_rig`)."""
+    if not isinstance(d, dict) or not isinstance(d.get("joints"), dict):
+        raise SkeletonError(f'{where}: expected a JSON object with a "joints" object mapping '
+                            f"each of the 21 body joints ({', '.join(KIT21_NAMES)})")
+    joints = d["joints"]
+    lacking = [k for k in KIT21_NAMES if k not in joints]
+    unknown = [k for k in joints if k not in KIT21_NAMES]
+    if lacking or unknown:
+        raise SkeletonError(f"{where}: " + "; ".join(
+            ([f"missing body joints {lacking}"] if lacking else []) +
+            ([f"unknown body joints {unknown} (the 21 are {', '.join(KIT21_NAMES)})"]
+             if unknown else [])))
+    source = d.get("source") or d.get("path") or where  # "path": formats.read_joint_map
+    return {"name": str(d.get("name") or source), "source": str(source),
+            "joints": {k: _check_spec(k, joints[k], where) for k in KIT21_NAMES}}
+
+
+def load_joint_map(path: str | Path) -> dict:
+    """Read and check a joint map JSON file (see the module docstring)."""
+    path = Path(path)
+    try:
+        d = json.loads(path.read_text(encoding="utf-8"))
+    except OSError as exc:
+        why = exc.strerror or exc
+        raise MotionlangError(f"{path}: cannot read joint map: {why}") from None
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise MotionlangError(f"{path}: joint map is not valid JSON: {exc}") from None
+    if isinstance(d, dict):
+        d = {**d, "name": d.get("name") or path.stem, "source": str(path)}
+    return check_joint_map(d, str(path))
+
+
+def as_joint_map(joint_map: dict | str | Path) -> dict:
+    """A checked map from a map dict or the path of a JSON map."""
+    if isinstance(joint_map, (str, Path)):
+        return load_joint_map(joint_map)
+    where = "joint map"
+    if isinstance(joint_map, dict):
+        where = str(joint_map.get("source") or joint_map.get("path") or joint_map.get("name")
+                    or where)
+    return check_joint_map(joint_map, where)
+
+
+def template_map(skeleton: Skeleton) -> dict:
+    """A map to fill in for a rig: the closest built-in map's entries written with the rig's
+    names, ``""`` where it has no match, and the rig's joints (``rig_joints``) to use."""
+    rig, _, sources = closest_map(skeleton)
+    joints = {k: list(sources[k]) if isinstance(sources.get(k), tuple) else sources.get(k, "")
+              for k in KIT21_NAMES}
+    todo = [k for k, v in joints.items() if v == ""]
+    guesses = (f"guesses from the built-in map {rig.name!r}" if len(todo) < len(joints)
+               else "no built-in map matches its joints")
+    fill = (f"fill in {', '.join(todo)} with joints of rig_joints" if todo
+            else "every body joint is filled in")
+    return {"name": f"{skeleton.name}-map",
+            "about": f'{guesses}; {fill} (a name, ["mid", a, b] or ["lerp", a, b, t]); '
+                     "left = the subject's left",
+            "joints": joints, "rig_joints": list(skeleton.names)}

@@ -39,7 +39,8 @@ class PositionsConfig:
 
     Attributes:
         fps: frame rate of the sequences (12.5 Hz in Ghosh et al. 2021).
-        joint_map: a key of ``joint_map.JOINT_MAPS``, or None to pick from joint names.
+        joint_map: a key of ``joint_map.JOINT_MAPS``, or None: the map a motion carries in
+            ``meta["joint_map"]``, else one picked from its joint names.
         dtype: numpy dtype of ``encode``'s output.
         floor: move each motion vertically so that its feet stand on y = 0
             (:func:`floor_height`), whatever floor height the source file uses. Checkpoints

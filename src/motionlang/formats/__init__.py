@@ -40,8 +40,33 @@ def find_asf(amc_path: str | Path) -> Path:
                                       f"{why} .asf files in {folder}; pass skeleton=")
 
 
+def read_joint_map(path: str | Path) -> dict:
+    """A user's joint map file (JSON; format in ``motionlang.features.joint_map``), parsed
+    but not yet checked against a skeleton.
+
+    Raises:
+        MotionFormatError: the file is missing or not a JSON object.
+    """
+    import json
+
+    path = Path(path)
+    try:
+        with open(path, encoding="utf-8") as fh:
+            spec = json.load(fh)
+    except OSError as exc:
+        raise MotionFormatError(path, f"cannot read joint map: {exc.strerror or exc}") from None
+    except ValueError as exc:
+        raise MotionFormatError(path, f"joint map is not valid JSON: {exc}") from None
+    if not isinstance(spec, dict):
+        raise MotionFormatError(path, "joint map must be a JSON object")
+    spec.setdefault("name", path.stem)
+    spec.setdefault("path", str(path))
+    return spec
+
+
 def read_motion(path: str | Path, *, skeleton: Skeleton | str | Path | None = None,
-                fps: float | None = None, sequence: int = 1) -> Motion:
+                fps: float | None = None, sequence: int = 1,
+                joint_map: dict | str | Path | None = None) -> Motion:
     """Read a motion file, choosing the reader from the extension.
 
     Args:
@@ -51,12 +76,21 @@ def read_motion(path: str | Path, *, skeleton: Skeleton | str | Path | None = No
         fps: for ``.amc`` (default 120); for other formats, the motion is resampled to
             ``fps`` if given.
         sequence: for ``.mat`` files holding several sequences: which one (1-based).
+        joint_map: how this rig maps onto the 21-joint body, for rigs no built-in map
+            recognises: a map dict or the path of its JSON file (``motionlang rig template``
+            writes one). Kept in ``meta["joint_map"]``, so it follows the motion into
+            every feature, model and command.
 
     Raises:
         MotionFormatError: missing file, unknown extension, malformed content, or a
             ``sequence`` the file does not hold.
     """
     path = Path(path)
+    if joint_map is not None:
+        spec = joint_map if isinstance(joint_map, dict) else read_joint_map(joint_map)
+        motion = read_motion(path, skeleton=skeleton, fps=fps, sequence=sequence)
+        motion.meta["joint_map"] = spec
+        return motion
     ext = path.suffix.lower()
     if ext not in READ_EXTENSIONS:
         raise MotionFormatError(path, f"unknown motion file extension {ext or '(none)'!r}; "
@@ -125,15 +159,23 @@ def motion_info(motion: Motion) -> dict:
     joints that carry rotation DOFs: 44 for MMM, where each revolute axis is a joint),
     ``dofs`` (joint DOFs, without the root's translation and rotation), ``nodes`` /
     ``node_names`` (every node of the skeleton tree, fixed segments and end sites included),
-    ``source_format``, ``skeleton``.
+    ``source_format``, ``skeleton``, ``unit`` (the file's length unit: what a BVH reader
+    decided, e.g. ``"cm"`` or ``"BVH units"``, else the one the format defines: ``"mm"``
+    for MMM, ``"1/0.45 inch"`` for a CMU ASF), ``stature_m`` (the body's stature in metres,
+    :func:`motionlang.formats.units.estimate_stature`).
     """
+    from motionlang.formats.units import motion_stature, unit_name
+
     sk = motion.skeleton
     moving = [j.name for j in sk.joints if len(j.dof_names)]
+    unit = motion.meta.get("unit") if motion.source_format == "bvh" else None
+    stature = motion.meta.get("stature_m") if motion.source_format == "bvh" else None
     return {"name": motion.name, "frames": motion.n_frames, "fps": float(motion.fps),
             "duration_s": float(motion.duration), "joints": len(moving),
             "joint_names": moving, "dofs": int(sk.ndof), "nodes": len(sk),
             "node_names": list(sk.names), "source_format": motion.source_format,
-            "skeleton": sk.name}
+            "skeleton": sk.name, "unit": str(unit or unit_name(sk.file_unit)),
+            "stature_m": float(stature if stature is not None else motion_stature(motion))}
 
 
-__all__ = ["read_motion", "write_motion", "motion_info", "find_asf"]
+__all__ = ["read_motion", "write_motion", "motion_info", "find_asf", "read_joint_map"]

@@ -12,6 +12,8 @@ from motionlang.errors import MotionFormatError, SkeletonError
 from motionlang.kinematics.rotations import chain
 from motionlang.kinematics.skeleton import Skeleton
 
+_EYE = np.eye(3)
+
 
 @dataclass
 class Motion:
@@ -123,26 +125,39 @@ class Motion:
         Returns:
             rotations (T, J, 3, 3) joint frames to source frame, positions (T, J, 3) metres.
         """
+        rots, pos = self._forward()
+        return (np.stack(rots, axis=1) if rots else np.empty((self.n_frames, 0, 3, 3))), pos
+
+    def _forward(self) -> tuple[list[np.ndarray], np.ndarray]:
+        """Joint rotations as J blocks (T, 3, 3) and positions (T, J, 3) metres.
+
+        Long takes spend their time here, hence: contiguous per-joint blocks (products of
+        strided views of one (T, J, 3, 3) array are several times slower), and identity
+        factors skipped (BVH joints have ``pre = post = I``, End Sites no DOFs).
+        """
         sk = self.skeleton
-        T, J = self.n_frames, len(sk)
-        rot = np.empty((T, J, 3, 3))
-        pos = np.empty((T, J, 3))
-        root_R = chain(sk.root_axes, self.root_rotation)
+        rots: list[np.ndarray] = []
+        pos = np.empty((self.n_frames, len(sk), 3))
         for j, joint in enumerate(sk.joints):
-            local = joint.pre @ chain(joint.axes, self.joint_angles[:, sk.dof_slice(j)]) @ joint.post
+            local = None if not joint.ndof else \
+                chain(joint.axes, self.joint_angles[:, sk.dof_slice(j)])
+            for fixed, before in ((joint.pre, True), (joint.post, False)):
+                if not np.array_equal(fixed, _EYE):
+                    local = fixed if local is None else fixed @ local if before else local @ fixed
             if joint.parent < 0:
-                rot[:, j] = root_R @ local
+                R = chain(sk.root_axes, self.root_rotation)
                 pos[:, j] = self.root_translation + joint.offset
             else:
-                parent_R = rot[:, joint.parent]
-                rot[:, j] = parent_R @ local
-                pos[:, j] = pos[:, joint.parent] + parent_R @ joint.offset
-        return rot, pos
+                R = rots[joint.parent]
+                pos[:, j] = pos[:, joint.parent] + R @ joint.offset
+            rots.append(R if local is None else R @ local)
+        return rots, pos
 
     def positions(self) -> np.ndarray:
         """(T, J, 3) joint positions in metres, canonical frame (Y up)."""
-        _, pos = self.global_transforms()
-        return pos @ self.skeleton.world.T
+        _, pos = self._forward()
+        W = self.skeleton.world
+        return pos if np.array_equal(W, _EYE) else pos @ W.T
 
     # ---------------------------------------------------------------- edits
     def resample(self, fps: float) -> "Motion":

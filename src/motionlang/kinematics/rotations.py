@@ -35,9 +35,23 @@ def axis_angle(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
 def chain(axes: np.ndarray, angles: np.ndarray) -> np.ndarray:
     """Product ``R(a_1, t_1) @ ... @ R(a_k, t_k)``; axes (k, 3), angles (..., k) -> (..., 3, 3)."""
     angles = np.asarray(angles, dtype=float)
-    out = np.broadcast_to(np.eye(3), angles.shape[:-1] + (3, 3)).copy()
-    for i, a in enumerate(np.asarray(axes, dtype=float).reshape(-1, 3)):
-        out = out @ axis_angle(a, angles[..., i])
+    axes = np.asarray(axes, dtype=float).reshape(-1, 3)
+    if not len(axes):
+        return np.broadcast_to(np.eye(3), angles.shape[:-1] + (3, 3)).copy()
+    out = axis_angle(axes[0], angles[..., 0])  # not I @ R_1: a (T, 3, 3) product saved
+    for i in range(1, len(axes)):
+        k = int(np.argmax(np.abs(axes[i])))
+        if np.count_nonzero(axes[i]) != 1 or abs(abs(axes[i, k]) - 1.0) > 1e-12:
+            out = out @ axis_angle(axes[i], angles[..., i])
+            continue
+        # a coordinate axis (BVH, ASF): right-multiplying turns two columns in their plane,
+        # several times cheaper than a product of (..., 3, 3) stacks
+        a, b = (k + 1) % 3, (k + 2) % 3
+        t = np.sign(axes[i, k]) * angles[..., i, None]
+        c, s = np.cos(t), np.sin(t)
+        col_a = out[..., :, a].copy()
+        out[..., :, a] = c * col_a + s * out[..., :, b]
+        out[..., :, b] = c * out[..., :, b] - s * col_a
     return out
 
 

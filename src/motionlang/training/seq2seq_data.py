@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import json
 import logging
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any, Sequence
 
@@ -35,12 +35,14 @@ CACHE_VERSION = "seq2seq-pairs-1"
 log = logging.getLogger(__name__)
 
 
-def load_records(data: str | Path, max_seconds: float | None = 30.0) -> list:
-    """KIT-ML-format records if ``data`` holds ``*_mmm.xml`` files, else a custom dataset."""
+def load_records(data: str | Path, max_seconds: float | None = 30.0,
+                 joint_map: str | Path | dict | None = None) -> list:
+    """KIT-ML-format records if ``data`` holds ``*_mmm.xml`` files, else a custom dataset
+    (whose rig maps onto the 21-joint body by ``joint_map``, see ``load_custom``)."""
     try:
         find_kitml_root(data)
     except DatasetError:
-        return load_custom(data)
+        return load_custom(data, joint_map=joint_map)
     return load_kitml(data, max_seconds=max_seconds)
 
 
@@ -90,6 +92,14 @@ def _thin(motion, fps: float):
     return motion[::step]
 
 
+def _add_joint_maps(key: dict, records: Sequence) -> None:
+    """A user's joint map changes every motion's body: it belongs in the cache key (added
+    only when there is one, so that other keys stay those of earlier caches)."""
+    maps = [getattr(r, "joint_map", None) for r in records]
+    if any(maps):
+        key["joint_maps"] = maps
+
+
 def _fit_features(kind: str, train: Sequence) -> FeatureSet:
     """Fit on the training motions (cached by file identity)."""
     def compute():
@@ -103,7 +113,9 @@ def _fit_features(kind: str, train: Sequence) -> FeatureSet:
         blob = json.dumps(fs.to_dict()).encode("utf-8")
         return {"json": np.frombuffer(blob, dtype=np.uint8)}
     key = {"v": CACHE_VERSION, "stage": "fit", "kind": kind,
+           "config": asdict(make_features(kind).config),
            "files": [file_identity(record_path(r)) for r in train]}
+    _add_joint_maps(key, train)
     out = cached(key, compute, name=f"seq2seq-fit-{kind}")
     return features_from_dict(json.loads(out["json"].tobytes().decode("utf-8")))
 
@@ -126,6 +138,7 @@ def _encode(fs: FeatureSet, records: Sequence, offsets: int, mirror: bool = Fals
            "files": [file_identity(record_path(r)) for r in records]}
     if mirror:   # keys without it stay those of earlier caches
         key["mirror"] = True
+    _add_joint_maps(key, records)
     out = cached(key, compute, name="seq2seq-encode")
     seqs: dict[str, list[np.ndarray]] = {r.id: [] for r in records}
     for name in sorted(out, key=lambda n: tuple(map(int, n.split("_")))):
@@ -137,8 +150,10 @@ def _encode(fs: FeatureSet, records: Sequence, offsets: int, mirror: bool = Fals
 def build_pairs(data: str | Path, *, features: str = "angles", offsets: int = 10,
                 fractions: Sequence[float] = (0.8, 0.1, 0.1), seed: int = 0,
                 min_count: int = 1, max_seconds: float | None = 30.0,
-                mirror: bool = False) -> PairData:
+                mirror: bool = False, joint_map: str | Path | dict | None = None) -> PairData:
     """Read ``data``, split by motion, fit features and vocabulary on train, make pairs.
+
+    joint_map: for a custom folder whose rig no built-in map recognises (``load_custom``).
 
     mirror: the training items also hold every training motion mirrored left/right with
     its sentences' sides swapped (``datasets.synth.augment.mirror_text``; items marked
@@ -146,7 +161,7 @@ def build_pairs(data: str | Path, *, features: str = "angles", offsets: int = 10
     features are fitted on the unmirrored motions; references, sequences and the other
     splits stay unmirrored.
     """
-    records = [r for r in load_records(data, max_seconds) if r.annotations]
+    records = [r for r in load_records(data, max_seconds, joint_map) if r.annotations]
     if len(records) < 2:
         raise DatasetError(f"{data}: need at least 2 described motions, found {len(records)}")
     splits = random_split([r.id for r in records], fractions, seed=seed)

@@ -1,0 +1,70 @@
+"""One body for every rig: the 21 KIT joints standing on the floor, facing +Z, at a stature.
+
+:func:`body21` maps any motion onto the 21-joint body (``joint_map.positions21``) and
+normalises it (:func:`normalise21`): the floor at y = 0 (``positions.floor_height``: the
+5th percentile over frames of the lowest foot joint), frame 0's root over the origin, frame
+0 facing +Z (``positions.facing_yaw``, from the hips and shoulders), and optionally scaled
+to a stature. Everything works on posed positions; no rig's rest pose is assumed to be a
+T-pose (Bandai Namco's rest pose lays every bone along its local x axis).
+
+:func:`stature21` estimates standing height from bone lengths, whatever the pose: legs
+(hip-knee-ankle) plus the trunk chain (root-BP-BT-BLN-BUN) are 0.831 of stature in the MMM
+reference model (thigh 0.245, shank 0.246, trunk 0.040 + 0.060 + 0.210 + 0.030), from which
+KIT motion 00001 comes back at its subject's 1.82 m. Other rigs place their spine and head
+nodes differently, which moves the estimate by a few per cent: CMU subject 35 comes out at
+1.83 m, where its legs alone (86 cm, 0.491 of stature in MMM) would say 1.76 m.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from motionlang.errors import MotionlangError
+from motionlang.features.joint_map import KIT21_NAMES, bone_lengths21, positions21
+from motionlang.features.positions import facing_yaw, floor_height
+from motionlang.features.root import to_heading
+from motionlang.kinematics.motion import Motion
+
+#: (thigh + shank + trunk chain) / stature in the MMM reference model
+LEGS_TRUNK_PER_STATURE = 0.831
+_BONE = {KIT21_NAMES[i]: i - 1 for i in range(1, len(KIT21_NAMES))}  # child -> bone index
+_LEGS = [(_BONE["LK"], _BONE["LA"]), (_BONE["RK"], _BONE["RA"])]
+_TRUNK = [_BONE[n] for n in ("BP", "BT", "BLN", "BUN")]
+
+
+def _check(p21) -> np.ndarray:
+    p = np.asarray(p21, dtype=float)
+    if p.ndim != 3 or p.shape[1:] != (len(KIT21_NAMES), 3) or not len(p):
+        raise MotionlangError(f"21-joint positions must be (T, 21, 3) with T >= 1, got "
+                              f"{p.shape}")
+    return p
+
+
+def stature21(p21) -> float:
+    """Standing height (in the unit of ``p21`` (T, 21, 3)) from the median bone lengths."""
+    lengths = np.median(bone_lengths21(_check(p21)), axis=0)
+    legs = np.mean([lengths[list(leg)].sum() for leg in _LEGS])
+    return float((legs + lengths[_TRUNK].sum()) / LEGS_TRUNK_PER_STATURE)
+
+
+def normalise21(p21, *, stature: float | None = None) -> np.ndarray:
+    """(T, 21, 3) Y-up positions -> the same motion with its feet on y = 0, frame 0's root
+    over the origin and facing +Z, scaled to ``stature`` (same unit) if given."""
+    p = _check(p21)
+    p = p - np.array([0.0, floor_height(p), 0.0])
+    origin = np.array([p[0, 0, 0], 0.0, p[0, 0, 2]])
+    p = to_heading(p - origin, facing_yaw(p[:1])[0])
+    if stature is not None:
+        if not (np.isfinite(stature) and stature > 0):
+            raise MotionlangError(f"stature must be a positive number, got {stature}")
+        p = p * (stature / stature21(p))
+    return p
+
+
+def body21(motion: Motion, *, map_name: str | None = None,
+           joint_map: dict | str | Path | None = None,
+           stature: float | None = None) -> np.ndarray:
+    """Any motion -> (T, 21, 3) metres: the 21 KIT joints (``positions21``, same choice of
+    map) on the floor, frame 0 at the origin facing +Z, scaled to ``stature`` m if given."""
+    return normalise21(positions21(motion, map_name, joint_map), stature=stature)
