@@ -9,5 +9,18 @@ from motionlang.kinematics import Joint, Motion, Skeleton
 
 __version__ = "0.1.0"
 
+#: the Python API (:mod:`motionlang.api`), imported on first use so that ``import
+#: motionlang`` stays light (no torch until a model is needed)
+_API = ("read_motion", "write_motion", "load_model", "describe", "generate", "body21",
+        "retarget", "render")
+
+
+def __getattr__(name: str):
+    if name in _API:
+        from motionlang import api
+        return getattr(api, name)
+    raise AttributeError(f"module 'motionlang' has no attribute {name!r}")
+
+
 __all__ = ["Motion", "Skeleton", "Joint", "MotionlangError", "MotionFormatError",
-           "DatasetError", "SkeletonError", "__version__"]
+           "DatasetError", "SkeletonError", "__version__", *_API]

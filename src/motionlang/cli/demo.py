@@ -62,7 +62,7 @@ def kit_caption(motion_path: Path) -> str | None:
 
 
 def run_demo(input_path: str | Path | None, out_dir: str | Path, *, asf: str | None = None,
-             n_poses: int = 8) -> list[Path]:
+             n_poses: int = 8, joint_map: str | Path | None = None) -> list[Path]:
     """Render ``input_path`` (default: the KIT demo motion) into ``out_dir``.
 
     Returns:
@@ -83,10 +83,7 @@ def run_demo(input_path: str | Path | None, out_dir: str | Path, *, asf: str | N
                 f"with 'motionlang demo --input FILE' (.xml, .bvh or .amc) or set {DATA_ENV} "
                 "to the folder that holds kitml/00001_mmm.xml")
     input_path = Path(input_path)
-    if asf is not None:
-        motion = read_motion(input_path, skeleton=asf)
-    else:
-        motion = read_motion(input_path)
+    motion = read_motion(input_path, skeleton=asf, joint_map=joint_map)
     out_dir = Path(out_dir)
     stem = input_path.stem
     title = kit_caption(input_path) or motion.name
@@ -127,6 +124,7 @@ def generate_part(out_dir: Path, sentence: str, *, width: int = 5, seed: int = 0
 
     max_frames: length cap in model frames (None: the model's own cap).
     """
+    from motionlang.api import body_motion
     from motionlang.decoding.seq2seq import generate
     from motionlang.formats import write_motion
     from motionlang.models.l2m import LanguageToMotion
@@ -138,9 +136,10 @@ def generate_part(out_dir: Path, sentence: str, *, width: int = 5, seed: int = 0
     hyps = generate(model, sentence, width=width, seed=seed, min_frames=5,
                     max_frames=max_frames, method="sample")
     echo(f'generate "{sentence}" (L2M, {width} ancestral samples, likeliest first):')
-    _print_hyps(echo, [(f"{m.n_frames} frames, {m.duration:.1f} s", s) for m, s in hyps],
-                "log L")
-    best = hyps[0][0].replace(name="generated")
+    fps = model.features.fps
+    _print_hyps(echo, [(f"{len(m)} frames, {len(m) / fps:.1f} s", s) for m, s in hyps], "log L")
+    # position features decode to 21 joints: joint angles fitted to them for the BVH
+    best = body_motion(hyps[0][0], fps, name="generated")[0]
     title = f'"{sentence}" (L2M #1)'
     stem = out_dir / "generated"
     written = [render_animation(best, stem.with_suffix(".gif"), title=title),
@@ -163,7 +162,7 @@ def describe_part(motions: list[tuple[str, object]], *, width: int = 5,
         echo(f"describe {label} (M2L, beam search, W={width}):")
         try:
             hyps = describe(model, motion, width=width)
-        except MotionlangError as exc:  # e.g. a CMU skeleton: the M2L reads MMM angles
+        except MotionlangError as exc:  # e.g. a rig no joint map fits
             echo(f"  (not described: {exc})")
             hyps = []
         _print_hyps(echo, hyps, "log P")
@@ -183,7 +182,8 @@ def run_main_job(out_dir: str | Path, *, sentence: str = DEFAULT_SENTENCE, width
                  seed: int = 0, max_frames: int | None = DEMO_MAX_FRAMES,
                  input_path: str | Path | None = None, asf: str | None = None,
                  render_real: bool = True, m2l: str | Path | None = None,
-                 l2m: str | Path | None = None, echo=print) -> list[Path]:
+                 l2m: str | Path | None = None, joint_map: str | Path | None = None,
+                 echo=print) -> list[Path]:
     """The whole demo (see the module docstring); returns the files written."""
     from motionlang.formats import read_motion
 
@@ -195,7 +195,7 @@ def run_main_job(out_dir: str | Path, *, sentence: str = DEFAULT_SENTENCE, width
     to_describe = [("a procedural-corpus sample", motion)]
     real = Path(input_path) if input_path else find_demo_motion()
     if real is not None:
-        real_motion = read_motion(real, skeleton=asf) if asf else read_motion(real)
+        real_motion = read_motion(real, skeleton=asf, joint_map=joint_map)
         caption = kit_caption(real)
         if caption:
             echo(f"reference of {caption}")
@@ -205,14 +205,14 @@ def run_main_job(out_dir: str | Path, *, sentence: str = DEFAULT_SENTENCE, width
              f"set {DATA_ENV} or pass --input FILE)")
     describe_part(to_describe, width=width, model_path=m2l, echo=echo)
     if real is not None and render_real:
-        written += run_demo(real, out_dir, asf=asf)
+        written += run_demo(real, out_dir, asf=asf, joint_map=joint_map)
     return written
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
     written = run_main_job(args.out, sentence=args.sentence, width=args.width, seed=args.seed,
                            max_frames=args.max_frames, input_path=args.input, asf=args.asf,
-                           render_real=not args.no_render)
+                           render_real=not args.no_render, joint_map=args.joint_map)
     print("written:")
     for path in written:
         print(f"  {path}")
@@ -238,6 +238,8 @@ def register(subparsers) -> None:
                    help="real motion to describe and render (default: kitml/00001_mmm.xml "
                         "in the shared data, when present)")
     p.add_argument("--asf", default=None, metavar="PATH", help="ASF skeleton of an .amc input")
+    from motionlang.cli.motion_commands import add_joint_map_arg
+    add_joint_map_arg(p)
     p.add_argument("--no-render", action="store_true",
                    help="skip rendering the real motion (the generated one is always rendered)")
     p.add_argument("--out", default="out/demo", metavar="DIR",

@@ -294,15 +294,9 @@ def _first_frame(model, args: argparse.Namespace) -> np.ndarray:
 def _on_rig(result, fps: float, rig) -> tuple:
     """Generated positions (T, 21, 3) at ``fps`` or a Motion -> (Motion on ``rig``'s
     skeleton, note on how far its body joints are from the generated ones)."""
-    from motionlang.features.joint_map import kit21_weights, positions21
-    from motionlang.kinematics import Motion
-    from motionlang.kinematics.retarget import retarget
-    if isinstance(result, Motion):
-        fps, result = result.fps, positions21(result)
-    W = kit21_weights(rig.skeleton, joint_map=rig.meta.get("joint_map"))[1]
-    motion = retarget(result, fps, rig, weights=W)
-    err = np.linalg.norm(np.einsum("kj,tjc->tkc", W, motion.positions()) - result,
-                         axis=-1) * 1000.0
+    from motionlang.api import body_motion
+    motion, err = body_motion(result, fps, rig)
+    err = err * 1000.0
     return motion, (f" (on the rig of {rig.meta.get('path', rig.name)}: body joints "
                     f"{err.mean():.1f} mm from the generated ones on average, at most "
                     f"{err.max():.0f} mm)")
@@ -336,13 +330,9 @@ def _write(result, path: Path, title: str, fps: float, rig=None) -> str:
                 raise MotionlangError(f"{path}: this model's features decode to joint "
                                       "positions; write .bvh, .npz, .gif, .mp4 or .png")
             # joint angles fitted to the 21 positions (bone lengths made constant)
-            from motionlang.features.joint_map import KIT21_NAMES, KIT21_PARENTS
-            from motionlang.kinematics.from_positions import (motion_from_positions,
-                                                              position_error)
-            positions = result
-            result = motion_from_positions(positions, fps, KIT21_NAMES, KIT21_PARENTS,
-                                           name=path.stem)
-            err = position_error(result, positions) * 1000.0
+            from motionlang.api import body_motion
+            result, err = body_motion(result, fps, name=path.stem)
+            err = err * 1000.0
             note = (f" (joints {err.mean():.1f} mm from the generated ones on average, "
                     f"at most {err.max():.0f} mm: bone lengths held at their medians, "
                     "pelvis and neck turned by least squares)")

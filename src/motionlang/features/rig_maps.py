@@ -85,8 +85,16 @@ _MMM = RigMap("mmm", _sided({
     "LMrot": "{s}Mrot_joint", "LF": "{s}Fx_joint"}, s=("L", "R")),
     "KIT MMM reference model (KIT-ML motions)")
 
+# The 21-joint body itself, as motionlang writes it (generated motions, ``--out x.bvh``):
+# every body joint is the node of its own name. Its leaves' End Sites carry no joint.
+_BODY21 = RigMap("body21", {n: n for n in (
+    "root", "BP", "BT", "BLN", "BUN", "LS", "LE", "LW", "RS", "RE", "RW",
+    "LH", "LK", "LA", "LMrot", "LF", "RH", "RK", "RA", "RMrot", "RF")},
+    "motionlang's own 21-joint body (generated motions)")
+
 RIG_MAPS: tuple[RigMap, ...] = (
     _MMM,
+    _BODY21,
     # CMU ASF: a node sits at its bone's start, e.g. "ltibia" is the knee.
     _rig("cmu-asf", "CMU ASF/AMC skeletons",
          ("lowerback", "upperback", "lowerneck", "head"),
