@@ -51,3 +51,22 @@ def tiny_motion() -> Motion:
     T = 20
     return Motion(sk, 30.0, rng.normal(size=(T, 3)), rng.uniform(-1, 1, (T, 3)),
                   rng.uniform(-1, 1, (T, sk.ndof)), name="tiny")
+
+
+def bandai_takes(takes: list[str] | tuple[str, ...], dest: Path) -> Path:
+    """Dataset-1 Bandai Namco takes (``"walk_normal_001"``...) extracted from the archive in
+    the shared data into ``dest`` as ``<take>.bvh`` (never from a copy in the repo); skips
+    where the archive is absent."""
+    import tarfile
+
+    archive = shared_file("bandai/Bandai-Namco-Research-Motiondataset-1.tar.xz")
+    want = {f"Bandai-Namco-Research-Motiondataset-1/data/dataset-1_{t}.bvh": t for t in takes}
+    with tarfile.open(archive, "r:xz") as tar:
+        for member in tar:
+            if member.name in want:
+                (dest / f"{want.pop(member.name)}.bvh").write_bytes(
+                    tar.extractfile(member).read())
+                if not want:
+                    break
+    assert not want, f"missing from the archive: {sorted(want)}"
+    return dest

@@ -6,7 +6,6 @@ writing back in the file's own layout, and real Bandai Namco takes."""
 from __future__ import annotations
 
 import json
-import tarfile
 from dataclasses import replace
 
 import numpy as np
@@ -16,7 +15,7 @@ from motionlang.errors import MotionFormatError
 from motionlang.formats import motion_info
 from motionlang.formats.bvh import read_bvh, write_bvh
 from motionlang.kinematics.rotations import AXES, chain, matrix_to_chain
-from tests.conftest import shared_file
+from tests.conftest import bandai_takes, shared_file
 
 ROT = ["Zrotation", "Xrotation", "Yrotation"]
 POS = ["Xposition", "Yposition", "Zposition"]
@@ -309,18 +308,7 @@ TAKES = ("walk_normal_001", "dash_normal_001", "bow_active_001")
 @pytest.fixture(scope="module")
 def bandai(tmp_path_factory):
     """A few dataset-1 takes extracted from the archive (never from a copy in the repo)."""
-    archive = shared_file("bandai/Bandai-Namco-Research-Motiondataset-1.tar.xz")
-    out = tmp_path_factory.mktemp("bandai")
-    want = {f"Bandai-Namco-Research-Motiondataset-1/data/dataset-1_{t}.bvh": t for t in TAKES}
-    with tarfile.open(archive, "r:xz") as tar:
-        for member in tar:
-            if member.name in want:
-                (out / f"{want.pop(member.name)}.bvh").write_bytes(
-                    tar.extractfile(member).read())
-                if not want:
-                    break
-    assert not want, f"missing from the archive: {sorted(want)}"
-    return out
+    return bandai_takes(TAKES, tmp_path_factory.mktemp("bandai"))
 
 
 @pytest.mark.parametrize("take", TAKES)

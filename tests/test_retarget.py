@@ -2,19 +2,18 @@
 back exactly (BVH rig with bones along X, and a rig with fixed pre/post rotations in a Z-up
 frame), another body's motion keeps the rig's bones and the source's directions and floor,
 no twist flips, the BVH keeps the rig's names and unit, and the Bandai round trip."""
-import tarfile
 
 import numpy as np
 import pytest
 
-from conftest import shared_file
-from motionlang.errors import MotionFormatError, MotionlangError, SkeletonError
+from motionlang.errors import MotionlangError, SkeletonError
 from motionlang.features.joint_map import KIT21_NAMES, KIT21_PARENTS, kit21_weights, positions21
 from motionlang.formats import read_motion
 from motionlang.formats.bvh import read_bvh, write_bvh
 from motionlang.kinematics import Joint, Motion, Skeleton
 from motionlang.kinematics.retarget import retarget
 from motionlang.kinematics.rotations import chain, matrix_to_chain
+from tests.conftest import bandai_takes, shared_file
 
 ZXY = np.eye(3)[[2, 0, 1]]
 K = {n: i for i, n in enumerate(KIT21_NAMES)}
@@ -236,23 +235,14 @@ def test_hinge_joints_and_bad_input_are_refused(rig):
         retarget(p[0], 30.0, rig, weights=W)
 
 
-BANDAI_TAKE = "Bandai-Namco-Research-Motiondataset-1/data/dataset-1_walk_normal_001.bvh"
 
 
 def test_bandai_round_trip(tmp_path):
-    """Bandai BVH -> body -> BVH on the Bandai rig -> body, within 1 cm. Needs the BVH reader
-    to read Bandai's files (6 channels on every joint, Hips re-rooted) and a Bandai joint map."""
-    archive = shared_file("bandai/Bandai-Namco-Research-Motiondataset-1.tar.xz")
-    with tarfile.open(archive) as tar:
-        tar.extract(tar.getmember(BANDAI_TAKE), tmp_path, filter="data")
-    try:
-        rig = read_bvh(tmp_path / BANDAI_TAKE)
-    except MotionFormatError as exc:
-        pytest.skip(f"the BVH reader cannot read Bandai files yet: {exc}")
-    try:
-        _, W = kit21_weights(rig.skeleton)
-    except SkeletonError as exc:
-        pytest.skip(f"no joint map for the Bandai rig yet: {exc}")
+    """Bandai BVH -> body -> BVH on the Bandai rig -> body, within 1 cm."""
+    bandai_takes(["walk_normal_001"], tmp_path)
+    rig = read_bvh(tmp_path / "walk_normal_001.bvh")
+    name, W = kit21_weights(rig.skeleton)
+    assert name == "bandai"
     p = _mapped(rig, W)
     write_bvh(retarget(p, rig.fps, rig, weights=W), tmp_path / "out.bvh")
     back = read_bvh(tmp_path / "out.bvh")

@@ -154,6 +154,22 @@ RIG_MAPS: tuple[RigMap, ...] = (
          ("Spine", "Spine1", "Neck", "Head"),
          ("{s}Arm", "{s}ForeArm", "{s}Hand", "{s}UpLeg", "{s}Leg", "{s}Foot",
           "{s}ToeBase|{s}Toe"), s=("Left", "Right")),
+    # The MIT walking data as Taylor distributed it (formats.mit): no lumbar joint and no
+    # head. The clavicles start together at the base of the neck (BLN); the lumbar joint
+    # is put 40 % of the way from the pelvis to the thorax node (MMM: 0.040 of 0.100
+    # stature from the hip line to BT), the head base 18 % of the thorax-to-neck span above
+    # the neck (MMM: BLN to BUN 0.030 of stature, about 0.18 x MIT's 0.305 m span). Its
+    # toes node is the tip of the foot, 0.110 of stature from the ankle: the toe joint is
+    # put at MMM's 0.082 (75 % of the way) and the mid-foot at MMM's 0.031 (28 %).
+    RigMap("mit", {**_sided({"LS": "{s}shoulder", "LE": "{s}elbow", "LW": "{s}wrist",
+                             "LH": "{s}hip", "LK": "{s}knee", "LA": "{s}ankle",
+                             "LMrot": ("lerp", "{s}ankle", "{s}toes", 0.28),
+                             "LF": ("lerp", "{s}ankle", "{s}toes", 0.75)},
+                            s=("l", "r")),
+                   "root": ("mid", "lhip", "rhip"), "BP": ("lerp", "pelvis", "thorax", 0.4),
+                   "BT": "thorax", "BLN": "lclavicle",
+                   "BUN": ("lerp", "thorax", "lclavicle", 1.18)},
+           "MIT walking data, Taylor's 18-node tree (pelvis, thorax, lclavicle)"),
     # 3ds Max Character Studio / Biovision naming (also Xsens MVN BVH exports): here
     # LeftShoulder is the shoulder joint and LeftCollar the clavicle.
     _rig("biped", "3ds Max Biped / Biovision naming (Chest, Chest2, LeftCollar, LeftElbow)",
