@@ -81,3 +81,9 @@ def test_unknown_joint_and_concatenate(tiny_motion):
         tiny_motion.skeleton.index("nope")
     both = concatenate([tiny_motion, tiny_motion[:5]])
     assert both.n_frames == 25
+
+
+def test_positions_of_some_joints_match_all_joints(tiny_motion):
+    everything = tiny_motion.positions()
+    for joints in ([3], [0], [6, 2], [7, 3, 5]):
+        assert np.array_equal(tiny_motion.positions(joints), everything[:, joints])

@@ -198,7 +198,8 @@ def positions21(motion: Motion, map_name: str | None = None,
     if joint_map is None and map_name is None:
         joint_map = motion.meta.get("joint_map")
     _, W = kit21_weights(motion.skeleton, map_name, joint_map=joint_map)
-    return np.einsum("kj,tjc->tkc", W, motion.positions())
+    used = np.flatnonzero(np.abs(W).sum(axis=0))   # only the joints the map reads
+    return np.matmul(W[:, used], motion.positions(used))
 
 
 def positions21_from_smpl(joints) -> np.ndarray:

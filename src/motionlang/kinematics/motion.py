@@ -128,17 +128,24 @@ class Motion:
         rots, pos = self._forward()
         return (np.stack(rots, axis=1) if rots else np.empty((self.n_frames, 0, 3, 3))), pos
 
-    def _forward(self) -> tuple[list[np.ndarray], np.ndarray]:
+    def _forward(self, needed: set[int] | None = None
+                 ) -> tuple[list[np.ndarray | None], np.ndarray]:
         """Joint rotations as J blocks (T, 3, 3) and positions (T, J, 3) metres.
 
         Long takes spend their time here, hence: contiguous per-joint blocks (products of
-        strided views of one (T, J, 3, 3) array are several times slower), and identity
-        factors skipped (BVH joints have ``pre = post = I``, End Sites no DOFs).
+        strided views of one (T, J, 3, 3) array are several times slower), identity
+        factors skipped (BVH joints have ``pre = post = I``, End Sites no DOFs), and, given
+        ``needed`` (joints closed under ancestors), the other joints not computed at all
+        (their rotation None, their position left undefined): fingers and twist bones of a
+        production rig are often half its joints.
         """
         sk = self.skeleton
-        rots: list[np.ndarray] = []
+        rots: list[np.ndarray | None] = []
         pos = np.empty((self.n_frames, len(sk), 3))
         for j, joint in enumerate(sk.joints):
+            if needed is not None and j not in needed:
+                rots.append(None)
+                continue
             local = None if not joint.ndof else \
                 chain(joint.axes, self.joint_angles[:, sk.dof_slice(j)])
             for fixed, before in ((joint.pre, True), (joint.post, False)):
@@ -153,9 +160,21 @@ class Motion:
             rots.append(R if local is None else R @ local)
         return rots, pos
 
-    def positions(self) -> np.ndarray:
-        """(T, J, 3) joint positions in metres, canonical frame (Y up)."""
-        _, pos = self._forward()
+    def positions(self, joints=None) -> np.ndarray:
+        """(T, J, 3) joint positions in metres, canonical frame (Y up); with ``joints`` (a
+        sequence of joint indices) only those, (T, len(joints), 3), computing no joint that
+        is neither one of them nor an ancestor of one."""
+        needed = None
+        if joints is not None:
+            joints = [int(j) for j in joints]
+            needed = set()
+            for j in joints:
+                while j >= 0 and j not in needed:
+                    needed.add(j)
+                    j = self.skeleton.joints[j].parent
+        _, pos = self._forward(needed)
+        if joints is not None:
+            pos = pos[:, joints]
         W = self.skeleton.world
         return pos if np.array_equal(W, _EYE) else pos @ W.T
 
