@@ -3,9 +3,11 @@
     motionlang data download kitml --dest DIR [--url URL] [--sha256 HEX]
     motionlang data info DIR [--max-seconds 30] [--json]
     motionlang data split DIR --fractions 0.8 0.1 0.1 --seed 0 --out DIR
+    motionlang data export-h3d --data DATA --out DIR [--body kit|smpl] [--mirror]
 
 ``DIR`` is an extracted KIT-ML release (or a folder above it) or a custom dataset folder
-with ``captions.csv`` / ``captions.jsonl``.
+with ``captions.csv`` / ``captions.jsonl``. ``DATA`` is anything training reads (such a
+folder, ``humanml3d:DIR`` or ``kitml-h3d:DIR``).
 """
 from __future__ import annotations
 
@@ -84,6 +86,62 @@ def cmd_split(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_export_h3d(args: argparse.Namespace) -> int:
+    import os
+    import time
+
+    from motionlang.datasets.humanml3d_export import export_h3d
+    from motionlang.training.seq2seq_data import load_records
+    if args.workers is not None and args.workers < 1:
+        raise DatasetError(f"--workers must be at least 1, got {args.workers}")
+    t0 = time.perf_counter()
+    records = load_records(args.data, args.max_seconds, args.joint_map)
+    print(f"export-h3d: {len(records)} motions from {args.data} "
+          f"({time.perf_counter() - t0:.1f} s to list)", flush=True)
+    t0 = time.perf_counter()
+
+    def report(done: int, total: int, _id: str) -> None:
+        if done % max(1, total // 20) == 0 or done == total:
+            spent = time.perf_counter() - t0
+            print(f"export-h3d: {done}/{total} motions, {spent:.1f} s, "
+                  f"{spent / done * (total - done):.0f} s to go", flush=True)
+
+    workers = args.workers or max(1, min(2, os.cpu_count() or 1))
+    info = export_h3d(records, args.out, args.body, mirror=args.mirror, heading=args.heading,
+                      seed=args.seed, workers=workers, on_progress=report)
+    mirrored = f" (+{info['motions']} mirrored)" if info["mirrored"] else ""
+    skipped = f"; skipped {len(info['skipped'])} too short" if info["skipped"] else ""
+    print(f"wrote {info['motions']} motions{mirrored} to {args.out}: {info['body']} body, "
+          f"{info['vector_dim']} numbers a row at {info['fps']:g} fps{skipped}")
+    return 0
+
+
+def _register_export_h3d(sub) -> None:
+    e = sub.add_parser("export-h3d", help="write a dataset in the HumanML3D layout",
+                       description="Write new_joint_vecs/, new_joints/, texts/, Mean.npy, "
+                                   "Std.npy and train/val/test.txt (HumanML3D layout) for "
+                                   "every motion of a dataset; the folder appears only once "
+                                   "complete.")
+    e.add_argument("--data", required=True,
+                   help="dataset folder, humanml3d:DIR or kitml-h3d:DIR")
+    e.add_argument("--out", required=True, help="new output folder")
+    e.add_argument("--body", choices=["kit", "smpl"], default="kit",
+                   help="kit: the 21-joint body of any rig, 12.5 fps, mm (default); smpl: the "
+                        "22 SMPL joints of an SMPL-named rig, 20 fps, m")
+    e.add_argument("--mirror", action="store_true",
+                   help="also write mirrored copies M<ID> (captions' left/right swapped)")
+    e.add_argument("--heading", choices=["public", "body"], default="public",
+                   help="per-frame heading: as the public code computes it (default) or the "
+                        "unsmoothed hips + shoulders")
+    e.add_argument("--seed", type=int, default=0, help="seed of the train/val/test split")
+    e.add_argument("--max-seconds", type=float, default=None,
+                   help="skip motions longer than this (default: keep all)")
+    e.add_argument("--joint-map", help="JSON joint map for a custom folder's rig")
+    e.add_argument("--workers", type=int, default=None,
+                   help="processes converting motions (default: min(2, CPUs))")
+    e.set_defaults(func=cmd_export_h3d)
+
+
 def register(subparsers) -> None:
     p = subparsers.add_parser("data", help="download, inspect and split datasets",
                               description="Download KIT-ML, summarise a dataset folder, write splits.")
@@ -116,6 +174,8 @@ def register(subparsers) -> None:
                    help="KIT-ML: split only motions shorter than this")
     s.add_argument("--out", required=True, help="folder for train.txt, val.txt, test.txt")
     s.set_defaults(func=cmd_split)
+
+    _register_export_h3d(sub)
 
     try:  # the corpus team's ``data synth`` lives in its own module
         synth = importlib.import_module("motionlang.cli.synth_commands")

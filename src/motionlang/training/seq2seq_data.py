@@ -38,7 +38,12 @@ log = logging.getLogger(__name__)
 def load_records(data: str | Path, max_seconds: float | None = 30.0,
                  joint_map: str | Path | dict | None = None) -> list:
     """KIT-ML-format records if ``data`` holds ``*_mmm.xml`` files, else a custom dataset
-    (whose rig maps onto the 21-joint body by ``joint_map``, see ``load_custom``)."""
+    (whose rig maps onto the 21-joint body by ``joint_map``, see ``load_custom``);
+    ``humanml3d:DIR`` / ``kitml-h3d:DIR``: a HumanML3D-layout folder (``load_h3d``)."""
+    from motionlang.datasets.humanml3d import load_prefixed
+    h3d = load_prefixed(data, max_seconds)
+    if h3d is not None:
+        return h3d
     try:
         find_kitml_root(data)
     except DatasetError:

@@ -1,0 +1,266 @@
+"""The HumanML3D folder layout (Guo et al. 2022), read as a motion-language dataset.
+
+Layout of the public HumanML3D release and its KIT-ML version (``datasets.humanml3d_export``
+writes the same)::
+
+    DIR/new_joint_vecs/ID.npy   (T-1, 263 | 251) float32 rows (``features.h3d_vectors``)
+    DIR/new_joints/ID.npy       (T-1, 22 | 21, 3) float32, the joints recovered from them
+    DIR/texts/ID.txt            one caption a line: ``caption#word/POS word/POS ...#start#end``
+    DIR/Mean.npy, DIR/Std.npy   per-column mean and grouped std of all the rows
+    DIR/train.txt, val.txt, test.txt (all.txt)   one id a line
+    DIR/.../M<ID>.npy           the mirrored copy of ID, its captions with left/right swapped
+
+Bodies: ``smpl`` (``humanml3d:DIR``), the 22 SMPL joints at 20 fps in metres; ``kit``
+(``kitml-h3d:DIR``), the 21 KIT joints (``features.joint_map``) at 12.5 fps in millimetres,
+the unit of the public KIT-ML files. ``new_joints`` has as many frames as there are rows
+(the public code saves ``recover_from_ric`` of the rows), one fewer than the source motion.
+
+A caption with a time span (``start``/``end`` in seconds, not both 0) describes only
+frames ``int(start * fps)`` to ``int(end * fps)``, as the public loader cuts them: each such
+span is a record of its own, id ``ID@start-end``. :meth:`H3DRecord.load_motion` gives a
+``Motion`` fitted to the stored joints (``kinematics.from_positions``: bone lengths held
+constant, so joints that do not move rigidly, such as KIT's shoulders, come back within
+about a centimetre); :meth:`H3DRecord.load_joints` gives the stored joints themselves.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from motionlang.errors import DatasetError
+from motionlang.features.h3d_vectors import H3D_BODIES, H3DBody, vectors_to_joints
+
+VECS, JOINTS, TEXTS = "new_joint_vecs", "new_joints", "texts"
+SPLITS = ("train", "val", "test")
+PREFIXES = {"humanml3d:": "smpl", "kitml-h3d:": "kit"}
+
+# Closed-class English words and their universal POS tags; other words get "X" (see
+# ``tag_caption``). The public release tags with spaCy, which this package does not need.
+_POS = {tag: set(words.split()) for tag, words in {
+    "DET": "a an the this that these those each every some any another both all no",
+    "ADP": "in on at to from with by of for into onto over under around across through "
+           "towards toward up down off out about behind above below along after before "
+           "like between near against upon",
+    "PRON": "he she it they them his her their its him himself herself themselves itself "
+            "someone something somebody i you we us our",
+    "AUX": "is are was were be been being has have had does do did will would can could "
+           "should may might must",
+    "CCONJ": "and or but nor", "SCONJ": "while as if until because when whilst",
+    "PART": "not", "NUM": "one two three four five six seven eight nine ten twice"}.items()}
+
+
+def tag_caption(caption: str) -> list[str]:
+    """``"A man walks."`` -> ``["a/DET", "man/X", "walks/X"]``: lower-case alphabetic words
+    with a universal POS tag for closed-class words and ``X`` for all others (no lemmas).
+    The public release has spaCy's tags and lemmas; pass a tagger to the writer for those."""
+    words = "".join(c.lower() if c.isalpha() else " " for c in caption).split()
+    return [f"{w}/{next((t for t, ws in _POS.items() if w in ws), 'X')}" for w in words]
+
+
+def format_caption_line(caption: str, tokens: list[str], start: float = 0.0,
+                        end: float = 0.0) -> str:
+    """One ``texts/ID.txt`` line (no newline); '#' and line breaks in the caption become
+    spaces. ``start = end = 0`` means the whole motion."""
+    clean = " ".join(caption.replace("#", " ").split())
+    return f"{clean}#{' '.join(tokens)}#{float(start)}#{float(end)}"
+
+
+def parse_caption_line(line: str, where: str = "caption") -> tuple[str, list[str], float, float]:
+    """A ``texts/ID.txt`` line -> (caption, tokens, start, end); a bare caption has no tokens
+    and no span; a NaN time is 0, as in the public loader."""
+    parts = line.strip().split("#")
+    tokens = parts[1].split() if len(parts) > 1 else []
+    times = []
+    for s in parts[2:4]:
+        try:
+            t = float(s)
+        except ValueError:
+            raise DatasetError(f"{where}: time {s!r} is not a number") from None
+        times.append(0.0 if math.isnan(t) else t)
+    start, end = (times + [0.0, 0.0])[:2]
+    return parts[0].strip(), tokens, start, end
+
+
+@dataclass
+class H3DRecord:
+    """One motion (or one captioned span of it) of a HumanML3D-layout folder.
+
+    Attributes:
+        id: file stem, ``ID@start-end`` for a span. path: the file read (new_joints, else
+        new_joint_vecs). annotations: captions. body: the layout's body. split: from the
+        split files, or None. span: (start, end) seconds, or None for the whole motion.
+        meta: ``{"h3d_id", "tokens": [[word/POS, ...] per caption]}``.
+    """
+
+    id: str
+    path: Path
+    annotations: list[str]
+    body: H3DBody
+    split: str | None = None
+    span: tuple[float, float] | None = None
+    meta: dict = field(default_factory=dict)
+
+    @property
+    def has_annotations(self) -> bool:
+        return bool(self.annotations)
+
+    def _cut(self, x: np.ndarray) -> np.ndarray:
+        if self.span is None:
+            return x
+        fps = self.body.fps
+        return x[int(self.span[0] * fps):int(self.span[1] * fps)]
+
+    def _load(self, path: Path, shape: tuple[int, ...]) -> np.ndarray:
+        x = _npy(path)
+        if x.shape[1:] != shape or not len(x):
+            raise DatasetError(f"{path}: expected (N >= 1, {', '.join(map(str, shape))}) for "
+                               f"the {self.body.name} body, got {x.shape}")
+        return x
+
+    def load_vectors(self) -> np.ndarray:
+        """(N, D) rows in the files' unit (metres for SMPL, millimetres for KIT); a span's
+        rows are cut out of the motion's, as the public loader does."""
+        cut = self._cut(self._load(self.path.parent.parent / VECS / self.path.name,
+                                   (self.body.dim,)))
+        if not len(cut):
+            raise DatasetError(f"{self.path}: span {self.span} holds no frames")
+        return cut
+
+    def load_joints(self) -> np.ndarray:
+        """(N, J, 3) metres, Y up: ``new_joints`` (or the joints recovered from the rows);
+        a span's frames are cut out of the whole motion's, in its place."""
+        if self.path.parent.name == JOINTS:
+            p = self._load(self.path, (self.body.n_joints, 3))
+        else:
+            rows = self._load(self.path, (self.body.dim,))
+            p = vectors_to_joints(rows, self.body)
+        p = self._cut(p)
+        if not len(p):
+            raise DatasetError(f"{self.path}: span {self.span} holds no frames")
+        return np.asarray(p, dtype=float) * self.body.unit
+
+    def load_motion(self):
+        """A ``Motion`` fitted to :meth:`load_joints` (``motion_from_positions``); the KIT
+        body carries its identity joint map, so ``positions21`` works on it."""
+        from motionlang.kinematics.from_positions import motion_from_positions
+        b = self.body
+        motion = motion_from_positions(self.load_joints(), b.fps, b.joint_names, b.parents,
+                                       name=self.id)
+        motion.source_format = "humanml3d"
+        motion.meta.update(dataset=f"h3d-{b.name}", annotations=list(self.annotations))
+        if b.name == "kit":
+            motion.meta["joint_map"] = {"name": "kit21", "joints":
+                                        {n: n for n in b.joint_names}}
+        return motion
+
+
+def _npy(path: Path, header_only: bool = False) -> np.ndarray:
+    try:
+        return np.load(path, mmap_mode="r" if header_only else None)
+    except (OSError, ValueError, EOFError) as exc:
+        raise DatasetError(f"{path}: cannot read ({exc})") from None
+
+
+def _ids(root: Path) -> list[str]:
+    found = {p.stem for d in (VECS, JOINTS) if (root / d).is_dir()
+             for p in (root / d).glob("*.npy")}
+    return sorted(found)
+
+
+def _splits(root: Path) -> dict[str, str]:
+    out = {}
+    for name in SPLITS:
+        path = root / f"{name}.txt"
+        if path.is_file():
+            for line in path.read_text(encoding="utf-8").split():
+                out.setdefault(line.strip(), name)
+    return out
+
+
+def _check_body(root: Path, mid: str, body: H3DBody) -> None:
+    """Fail early, with the right prefix named, when the folder holds the other body."""
+    for folder, axis, want, what in ((VECS, -1, body.dim, "numbers a row"),
+                                     (JOINTS, -2, body.n_joints, "joints")):
+        path = root / folder / f"{mid}.npy"
+        if not path.is_file():
+            continue
+        shape = _npy(path, header_only=True).shape
+        got = shape[axis] if len(shape) >= -axis else None
+        if got != want:
+            size = "dim" if folder == VECS else "n_joints"
+            other = [p for p, b in PREFIXES.items() if getattr(H3D_BODIES[b], size) == got]
+            hint = f"; use {other[0]}{root}" if other else ""
+            raise DatasetError(f"{path}: {got} {what}, not the {want} of the {body.name} "
+                               f"body{hint}")
+
+
+def _read_texts(path: Path) -> list[tuple[str, list[str], float, float]]:
+    if not path.is_file():
+        return []
+    lines = path.read_text(encoding="utf-8").splitlines()
+    return [parse_caption_line(line, f"{path}:{i}") for i, line in enumerate(lines, 1)
+            if line.strip() and line.split("#")[0].strip()]
+
+
+def _records_of(root: Path, mid: str, body: H3DBody, split: str | None) -> list[H3DRecord]:
+    joints = root / JOINTS / f"{mid}.npy"
+    path = joints if joints.is_file() else root / VECS / f"{mid}.npy"
+    whole, spans = H3DRecord(mid, path, [], body, split, meta={"h3d_id": mid, "tokens": []}), {}
+    for caption, tokens, start, end in _read_texts(root / TEXTS / f"{mid}.txt"):
+        if start == 0.0 and end == 0.0:
+            rec = whole
+        else:
+            rec = spans.setdefault((start, end), H3DRecord(
+                f"{mid}@{start:g}-{end:g}", path, [], body, split, (start, end),
+                {"h3d_id": mid, "tokens": []}))
+        rec.annotations.append(caption)
+        rec.meta["tokens"].append(tokens)
+    return [whole, *spans.values()]
+
+
+def load_h3d(root: str | Path, body: str = "smpl", *, mirrored: bool = False,
+             max_seconds: float | None = None) -> list[H3DRecord]:
+    """Records of a HumanML3D-layout folder, sorted by id (spans after their motion).
+
+    Args:
+        body: ``"smpl"`` (HumanML3D) or ``"kit"`` (its KIT-ML version).
+        mirrored: keep the ``M<ID>`` copies whose original is there too (default off: a
+            random split by id would put copies of test motions in training).
+        max_seconds: drop motions longer than this (reads each file's header).
+
+    Raises:
+        DatasetError: no such folder, no ``new_joint_vecs``/``new_joints`` files, rows of
+            the other body, or a malformed caption time.
+    """
+    root = Path(root)
+    if body not in H3D_BODIES:
+        raise DatasetError(f"unknown HumanML3D body {body!r} (smpl or kit)")
+    spec = H3D_BODIES[body]
+    if not root.is_dir():
+        raise DatasetError(f"{root}: HumanML3D folder not found")
+    ids = _ids(root)
+    if not ids:
+        raise DatasetError(f"{root}: no {VECS}/*.npy or {JOINTS}/*.npy files (not a "
+                           "HumanML3D-layout folder)")
+    _check_body(root, ids[0], spec)
+    if not mirrored:
+        present = set(ids)
+        ids = [i for i in ids if not (i[:1] == "M" and i[1:] in present)]
+    split = _splits(root)
+    records = [r for mid in ids for r in _records_of(root, mid, spec, split.get(mid))]
+    if max_seconds is not None:
+        records = [r for r in records if r.span is not None or
+                   len(_npy(r.path, header_only=True)) / spec.fps <= max_seconds]
+    return records
+
+
+def load_prefixed(data: str | Path, max_seconds: float | None = None) -> list[H3DRecord] | None:
+    """``humanml3d:DIR`` / ``kitml-h3d:DIR`` -> :func:`load_h3d`; anything else -> None."""
+    text = str(data)
+    for prefix, body in PREFIXES.items():
+        if text.startswith(prefix):
+            return load_h3d(text[len(prefix):], body, max_seconds=max_seconds)
+    return None
