@@ -96,6 +96,8 @@ def test_bad_sources_are_refused(tmp_path, monkeypatch):
     _archive(evil, 1, ["walk_normal_001"], {"../outside/data/x.bvh": BVH})
     with pytest.raises(DatasetError, match="unsafe path"):
         load_bandai(evil)
+    # the member would have landed beside the extraction folder, in cache/bandai
+    assert not (tmp_path / "cache" / "bandai" / "outside").exists()
     assert not (tmp_path / "cache" / "outside").exists()
     leftovers = [p for p in (tmp_path / "cache" / "bandai").iterdir() if p.name.startswith(".")]
     assert leftovers == []

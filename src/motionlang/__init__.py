@@ -2,7 +2,7 @@
 
 Layers (data flows downwards only): ``kinematics`` and ``formats`` -> ``datasets`` and
 ``features`` -> ``models`` -> ``decoding`` -> ``training`` -> ``evaluation`` ->
-``render`` -> ``cli``.
+``render`` -> ``api`` -> ``cli``.
 """
 from motionlang.errors import DatasetError, MotionFormatError, MotionlangError, SkeletonError
 from motionlang.kinematics import Joint, Motion, Skeleton
@@ -12,7 +12,7 @@ __version__ = "0.1.0"
 #: the Python API (:mod:`motionlang.api`), imported on first use so that ``import
 #: motionlang`` stays light (no torch until a model is needed)
 _API = ("read_motion", "write_motion", "load_model", "describe", "generate", "body21",
-        "retarget", "render")
+        "retarget", "render_motion")
 
 
 def __getattr__(name: str):

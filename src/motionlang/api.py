@@ -7,6 +7,7 @@
     >>> ml.write_motion(w, "wave.bvh")            # the 21-joint body, for Blender
     >>> ml.write_motion(ml.generate("a person walks", rig="my_character.bvh"), "walk.bvh")
 
+(``render_motion`` draws a motion; ``motionlang.render`` is the drawing package.)
 Packaged models are named ``"m2l"`` and ``"l2m"``; anything else is a checkpoint path.
 Generated motions come back as :class:`Motion` objects: on the 21-joint body (joint angles
 fitted to the generated positions) or, with ``rig=``, retargeted onto the user's skeleton.
@@ -50,13 +51,65 @@ def load_model(name_or_path: str | Path, kind: str | None = None):
     return load_any_t2m(path)
 
 
+def read_mapped(path: str | Path, joint_map: dict | str | Path | None = None,
+                **kw) -> Motion:
+    """``read_motion`` with ``joint_map`` checked against the file's rig at once: a map that
+    names joints the rig lacks, misses body joints or is malformed is refused here, naming
+    the map file, not later inside a model."""
+    motion = read_motion(path, joint_map=joint_map, **kw)
+    if joint_map is not None:
+        check_map(motion, joint_map)
+    return motion
+
+
+def check_map(motion: Motion, joint_map) -> None:
+    """Raise MotionlangError (naming the map) unless ``joint_map`` maps ``motion``'s rig."""
+    from motionlang.features.joint_map import as_joint_map, match_rig
+    where = joint_map if isinstance(joint_map, (str, Path)) else "joint map"
+    try:
+        match_rig(motion.skeleton, joint_map=as_joint_map(joint_map))
+    except MotionlangError as exc:
+        raise MotionlangError(f"{where}: {exc}") from None
+
+
 def _motion(motion: Motion | str | Path, joint_map) -> Motion:
     if isinstance(motion, Motion):
         if joint_map is not None:
             from motionlang.features.joint_map import as_joint_map
+            check_map(motion, joint_map)
             motion = motion.replace(meta={**motion.meta, "joint_map": as_joint_map(joint_map)})
         return motion
-    return read_motion(motion, joint_map=joint_map)
+    return read_mapped(motion, joint_map)
+
+
+def load_rig(rig: Motion | str | Path, joint_map: dict | str | Path | None = None) -> Motion:
+    """A rig to write generated motions on, checked before anything is generated: its map
+    onto the 21-joint body is found and its joints can be aimed (BVH-like rigs with full
+    3-axis joints; hinge knees of ASF or MMM skeletons cannot be).
+
+    Raises:
+        MotionlangError: naming the rig file and the problem.
+    """
+    from motionlang.features.joint_map import kit21_weights, positions21
+    from motionlang.kinematics.retarget import retarget
+    where = rig if isinstance(rig, (str, Path)) else rig.meta.get("path", rig.name)
+    motion = _motion(rig, joint_map)
+    try:
+        W = kit21_weights(motion.skeleton, joint_map=motion.meta.get("joint_map"))[1]
+        retarget(positions21(motion[:1]), motion.fps, motion, weights=W)  # one-frame trial
+    except MotionlangError as exc:
+        raise MotionlangError(f"rig {where}: {exc}") from None
+    return motion
+
+
+def first_frame(model, start: Motion | str | Path,
+                joint_map: dict | str | Path | None = None) -> np.ndarray:
+    """(F,) model features of the first pose of ``start`` (a Motion or file), for L2M models
+    to begin their motions with."""
+    from motionlang.decoding.seq2seq import motion_frames
+    if getattr(model, "kind", None) != "l2m":
+        raise MotionlangError("a start pose applies to L2M models")
+    return motion_frames(model.features, _motion(start, joint_map), 1)[0][0]
 
 
 def describe(motion: Motion | str | Path, model: Any = None, width: int = 5, *,
@@ -108,7 +161,8 @@ def generate(text: str, model: Any = None, *, width: int = 5, method: str | None
              seed: int = 0, max_frames: int | None = None,
              rig: Motion | str | Path | None = None,
              start_from: Motion | str | Path | None = None,
-             joint_map: dict | str | Path | None = None) -> Motion:
+             joint_map: dict | str | Path | None = None,
+             rig_joint_map: dict | str | Path | None = None) -> Motion:
     """A motion for ``text`` (the best of ``width`` hypotheses), as a :class:`Motion`.
 
     model: a loaded text-to-motion model, a checkpoint path, or None for the packaged L2M.
@@ -116,24 +170,19 @@ def generate(text: str, model: Any = None, *, width: int = 5, method: str | None
     or mean decoding for models trained on their expected frames), else "sample", "beam"
     or "mean". rig: a Motion or motion file whose skeleton the result is retargeted onto.
     start_from: a Motion or file whose first pose begins the motion (L2M models).
-    joint_map: how ``rig`` / ``start_from`` map onto the 21-joint body, if no built-in
-    map fits them.
+    joint_map / rig_joint_map: how ``start_from`` / ``rig`` map onto the 21-joint body,
+    if no built-in map fits them.
     """
-    from motionlang.decoding.seq2seq import motion_frames
-    from motionlang.decoding.t2m import FPS, default_method, generate_any
+    from motionlang.decoding.t2m import default_method, generate_any, output_fps
     if model is None or isinstance(model, (str, Path)):
         model = load_model(model or "l2m")
+    rig_motion = None if rig is None else load_rig(rig, rig_joint_map)
     kw: dict[str, Any] = {}
     if start_from is not None:
-        if getattr(model, "features", None) is None or getattr(model, "kind", "") == "twostream":
-            raise MotionlangError("start_from applies to L2M models")
-        kw["first_frame"] = motion_frames(model.features, _motion(start_from, joint_map), 1)[0][0]
+        kw["first_frame"] = first_frame(model, start_from, joint_map)
     hyps = generate_any(model, text, width=width, method=method or default_method(model),
                         seed=seed, max_frames=max_frames, min_frames=5, **kw)
-    fps = FPS if getattr(model, "kind", None) == "twostream" else \
-        float(getattr(getattr(model, "features", None), "fps", FPS))
-    rig_motion = None if rig is None else _motion(rig, joint_map)
-    return body_motion(hyps[0][0], fps, rig_motion)[0]
+    return body_motion(hyps[0][0], output_fps(model), rig_motion)[0]
 
 
 def body21(motion: Motion | str | Path, *, joint_map: dict | str | Path | None = None,
@@ -150,12 +199,12 @@ def retarget(motion: Motion | str | Path, rig: Motion | str | Path, *,
     """``motion`` (any rig) moved onto ``rig``'s skeleton through the 21-joint body."""
     from motionlang.features.joint_map import positions21
     src = _motion(motion, joint_map)
-    return body_motion(positions21(src), src.fps, _motion(rig, rig_joint_map),
+    return body_motion(positions21(src), src.fps, load_rig(rig, rig_joint_map),
                        name=src.name)[0]
 
 
-def render(motion: Motion | str | Path, path: str | Path, *, title: str | None = None,
-           joint_map: dict | str | Path | None = None) -> Path:
+def render_motion(motion: Motion | str | Path, path: str | Path, *, title: str | None = None,
+                  joint_map: dict | str | Path | None = None) -> Path:
     """Draw a motion: ``.gif`` / ``.mp4`` animation or ``.png`` pose strip."""
     from motionlang.render import render_animation, render_strip
     m = _motion(motion, joint_map)
@@ -164,5 +213,6 @@ def render(motion: Motion | str | Path, path: str | Path, *, title: str | None =
     return render_animation(m, path, title=title or m.name)
 
 
-__all__ = ["read_motion", "write_motion", "load_model", "describe", "generate", "body21",
-           "retarget", "render", "body_motion", "model_path"]
+__all__ = ["read_motion", "write_motion", "read_mapped", "load_model", "describe",
+           "generate", "body21", "retarget", "render_motion", "body_motion", "load_rig",
+           "first_frame", "check_map", "model_path"]

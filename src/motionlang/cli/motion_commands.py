@@ -47,11 +47,16 @@ def load_input(args: argparse.Namespace) -> Motion:
     if ext != ".mat" and args.sequence is not None:
         raise MotionlangError(f"{path}: --sequence applies to .mat inputs only")
     if ext == ".amc":
-        return read_motion(path, skeleton=args.asf, fps=args.source_fps, joint_map=joint_map)
-    if ext == ".mat":
-        return read_motion(path, sequence=1 if args.sequence is None else args.sequence,
-                           joint_map=joint_map)
-    return read_motion(path, joint_map=joint_map)
+        motion = read_motion(path, skeleton=args.asf, fps=args.source_fps, joint_map=joint_map)
+    elif ext == ".mat":
+        motion = read_motion(path, sequence=1 if args.sequence is None else args.sequence,
+                             joint_map=joint_map)
+    else:
+        motion = read_motion(path, joint_map=joint_map)
+    if joint_map is not None:   # a wrong map is named now, whatever the command does next
+        from motionlang.api import check_map
+        check_map(motion, joint_map)
+    return motion
 
 
 def add_clip_args(p: argparse.ArgumentParser) -> None:

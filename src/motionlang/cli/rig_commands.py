@@ -79,24 +79,15 @@ def cmd_template(args: argparse.Namespace) -> int:
     return 0
 
 
-def _add_joint_map_arg(p: argparse.ArgumentParser) -> None:
-    try:  # add_input_args may come to define it for every command that reads a motion
-        p.add_argument("--joint-map", metavar="MAP", default=None,
-                       help="JSON joint map of the rig (write one with 'rig template')")
-    except argparse.ArgumentError:
-        pass
-
-
 def register(subparsers) -> None:
     p = subparsers.add_parser("rig", help="how a file's rig maps onto the 21-joint body",
                               description="Show the joint map chosen for a motion file's "
                                           "rig, or write a map template to fill in.")
     sub = p.add_subparsers(dest="rig_command", metavar="ACTION")
-    p.set_defaults(func=lambda args: (p.print_help(), 1)[1])
+    p.set_defaults(func=lambda args: (p.print_help(), 2)[1])
 
     s = sub.add_parser("show", help="the rig's joints, its map, each body joint's source")
-    add_input_args(s)
-    _add_joint_map_arg(s)
+    add_input_args(s)   # with --joint-map: show how a map of yours applies
     s.add_argument("--json", action="store_true", help="print JSON instead of text")
     s.set_defaults(func=cmd_show)
 

@@ -270,25 +270,16 @@ def cmd_describe(args: argparse.Namespace) -> int:
 
 
 def _read_rig(args: argparse.Namespace, out: Path):
-    """The ``--rig`` motion file (its skeleton is the target of a .bvh output), or None."""
+    """The ``--rig`` motion file (its skeleton is the target of a .bvh output), checked
+    before anything is generated, or None."""
     if args.rig is None:
-        if args.rig_asf is not None:
-            raise MotionlangError("--rig-asf needs --rig")
+        if args.rig_joint_map is not None:
+            raise MotionlangError("--rig-joint-map needs --rig")
         return None
     if out.suffix.lower() != ".bvh":
         raise MotionlangError(f"{out}: --rig writes .bvh files; got {out.suffix or 'none'!r}")
-    from motionlang.formats import read_motion
-    return read_motion(args.rig, skeleton=args.rig_asf, joint_map=args.joint_map)
-
-
-def _first_frame(model, args: argparse.Namespace) -> np.ndarray:
-    """(F,) model features of the first pose of ``--start-from``."""
-    from motionlang.decoding.seq2seq import motion_frames
-    from motionlang.formats import read_motion
-    if getattr(model, "features", None) is None or not hasattr(model.config, "rollout_input"):
-        raise MotionlangError("--start-from applies to L2M models")
-    motion = read_motion(args.start_from, joint_map=args.joint_map)
-    return motion_frames(model.features, motion, 1)[0][0]
+    from motionlang.api import load_rig
+    return load_rig(args.rig, args.rig_joint_map)
 
 
 def _on_rig(result, fps: float, rig) -> tuple:
@@ -353,7 +344,7 @@ def _write(result, path: Path, title: str, fps: float, rig=None) -> str:
 
 def cmd_generate(args: argparse.Namespace) -> int:
     # any text-to-motion checkpoint: L2M (seq2seq) or the two-stream model
-    from motionlang.decoding.t2m import FPS, default_method, generate_any, load_any_t2m
+    from motionlang.decoding.t2m import default_method, generate_any, load_any_t2m, output_fps
 
     if not args.temperature > 0:
         raise MotionlangError(f"--temperature must be > 0, got {args.temperature}")
@@ -382,13 +373,13 @@ def cmd_generate(args: argparse.Namespace) -> int:
     out = Path(args.output)
     rig = _read_rig(args, out)
     if args.start_from:
-        extra["first_frame"] = _first_frame(model, args)
+        from motionlang.api import first_frame
+        extra["first_frame"] = first_frame(model, args.start_from, args.joint_map)
     hyps = generate_any(model, args.text, width=args.width, method=args.method, seed=args.seed,
                         max_frames=args.max_frames, min_frames=args.min_frames,
                         length_norm=args.length_norm, temperature=args.temperature, **extra)
     # rate of position outputs: the two-stream model's 12.5 Hz, else the model's features'
-    fps = FPS if getattr(model, "kind", None) == "twostream" else \
-        float(getattr(getattr(model, "features", None), "fps", FPS))
+    fps = output_fps(model)
     for i, (result, score) in enumerate(hyps, 1):
         n = len(result.joint_angles) if hasattr(result, "joint_angles") else len(result)
         # the two-stream model is deterministic: it has no likelihood to rank by
@@ -612,16 +603,17 @@ def register(subparsers) -> None:
     p.add_argument("--rerank", metavar="M2L", help="rank the W motions by this M2L model's "
                    "log P(text | motion) instead of their own likelihood (L2M, sample or beam)")
     p.add_argument("--all", action="store_true", help="write every hypothesis (OUT_2, ...)")
-    p.add_argument("--rig", metavar="FILE", default=None,
-                   help="write the .bvh on this rig (a motion file of yours: its skeleton, "
-                        "joint names, units and rest pose), retargeted from the 21-joint "
-                        "body (default: the 21-joint body itself)")
-    p.add_argument("--rig-asf", metavar="PATH", default=None,
-                   help="ASF skeleton of an .amc --rig (default: <subject>.asf next to it)")
+    p.add_argument("--rig", metavar="FILE.bvh", default=None,
+                   help="write the .bvh on this rig (a BVH file of yours: its skeleton, "
+                        "joint names, units, rest pose and channel layout), retargeted from "
+                        "the 21-joint body (default: the 21-joint body itself). Needs joints "
+                        "that turn about 3 axes, as BVH rigs have; not ASF or MMM hinges")
+    p.add_argument("--rig-joint-map", metavar="MAP.json", default=None,
+                   help="how the --rig maps onto the 21-joint body, if no built-in map fits")
     p.add_argument("--start-from", metavar="FILE", default=None,
                    help="begin every motion with the first pose of this motion file (any "
                         "rig that maps onto the 21-joint body; L2M models)")
-    add_joint_map_arg(p)
+    add_joint_map_arg(p)   # for --start-from
     p.set_defaults(func=cmd_generate)
     p = subparsers.add_parser("evaluate", help="BLEU/ROUGE/CIDEr of M2L, baseline, L2M round trip")
     p.add_argument("--m2l", required=True, help="M2L model file (its run folder holds splits/)")

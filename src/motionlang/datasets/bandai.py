@@ -127,6 +127,8 @@ def load_bandai(source: str | Path, split: str | None = None) -> list[BandaiReco
         DatasetError: missing folders or label files, or a take whose labels disagree with
             its file name.
     """
+    if split not in (None, "train", "val", "test"):
+        raise DatasetError(f"unknown split {split!r}; use 'train', 'val' or 'test'")
     records = []
     for folder in bandai_folders(source):
         contents, styles = _labels(folder, "content_label.txt"), _labels(folder, "style_label.txt")

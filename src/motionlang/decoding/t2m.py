@@ -58,6 +58,14 @@ def default_method(model) -> str:
     return "mean" if getattr(model.config, "rollout_input", None) == "mean" else "sample"
 
 
+def output_fps(model) -> float:
+    """Frame rate of a text-to-motion model's output: the two-stream model's 12.5 Hz, an
+    L2M's features' rate."""
+    if getattr(model, "kind", None) == "twostream":
+        return FPS
+    return float(model.features.fps)
+
+
 def generate_any(model, sentence: str, *, max_frames: int | None = None, **kw
                  ) -> list[tuple[Any, float]]:
     """``decoding.seq2seq.generate`` for L2M (``kw`` passed on); for a two-stream model one

@@ -85,9 +85,11 @@ _MMM = RigMap("mmm", _sided({
     "LMrot": "{s}Mrot_joint", "LF": "{s}Fx_joint"}, s=("L", "R")),
     "KIT MMM reference model (KIT-ML motions)")
 
-# The 21-joint body itself, as motionlang writes it (generated motions, ``--out x.bvh``):
-# every body joint is the node of its own name. Its leaves' End Sites carry no joint.
-_BODY21 = RigMap("body21", {n: n for n in (
+# The 21-joint body itself, as motionlang writes it (generated motions, ``-o x.bvh``):
+# every body joint is the node of its own name, but the five leaves without DOFs (head
+# base, wrists, toes) are written as End Sites and read back as ``<parent>_end``.
+_BODY21_END = {"BUN": "BLN", "LW": "LE", "RW": "RE", "LF": "LMrot", "RF": "RMrot"}
+_BODY21 = RigMap("body21", {n: f"{n}|{_BODY21_END[n]}_end" if n in _BODY21_END else n for n in (
     "root", "BP", "BT", "BLN", "BUN", "LS", "LE", "LW", "RS", "RE", "RW",
     "LH", "LK", "LA", "LMrot", "LF", "RH", "RK", "RA", "RMrot", "RF")},
     "motionlang's own 21-joint body (generated motions)")

@@ -82,8 +82,10 @@ def matrix_to_expmap(R: np.ndarray) -> np.ndarray:
     sin = np.sin(theta)
     out = np.zeros(R.shape[:-2] + (3,))
     regular = sin > 1e-6
-    out[regular] = v[regular] * (theta[regular] / (2.0 * sin[regular]))[:, None] if v.ndim > 1 \
-        else v * theta / (2.0 * sin)
+    if v.ndim > 1:
+        out[regular] = v[regular] * (theta[regular] / (2.0 * sin[regular]))[:, None]
+    elif regular:   # one matrix: divide only when sin is not ~0 (no warning at the identity)
+        out[...] = v * theta / (2.0 * sin)
     near_pi = (~regular) & (theta > 1.0)
     if np.any(near_pi):
         # sin ~ 0 and theta ~ pi: axis from the largest diagonal entry of (R + I) / 2.
