@@ -107,7 +107,7 @@ SYNTH_SEED = 2026
 
 def packaged_model(kind: str) -> Path:
     """Path of the packaged ``m2l`` or ``l2m`` model (MotionlangError if missing)."""
-    from motionlang.cli.seq2seq_commands import _model_path
+    from motionlang.cli.text_commands import _model_path
 
     return _model_path(None, kind)
 

@@ -21,7 +21,8 @@ COMMAND_MODULES = [
     "motionlang.cli.demo",              # demo (the main job)
     "motionlang.cli.train_commands",    # train crbm | seq2seq | twostream
     "motionlang.cli.crbm_commands",     # crbm generate | fill | reproduce
-    "motionlang.cli.seq2seq_commands",  # describe, generate (train m2l | l2m via train)
+    "motionlang.cli.text_commands",     # describe, generate
+    "motionlang.cli.seq2seq_commands",  # evaluate (train m2l | l2m via train)
     "motionlang.cli.twostream_commands",  # evaluate-t2m (train twostream via train)
 ]
 

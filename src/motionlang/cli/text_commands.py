@@ -1,0 +1,233 @@
+"""``motionlang describe MOTION`` and ``motionlang generate TEXT``: the packaged (or any)
+motion-to-language and text-to-motion models on motion files of any rig.
+
+Thin wrappers over :mod:`motionlang.api` (rigs, start poses, positions to Motions) and
+:mod:`motionlang.decoding`.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from motionlang.api import PACKAGED
+from motionlang.errors import MotionlangError
+
+MOTION_OUT = (".bvh", ".xml", ".amc")
+RENDER_OUT = (".gif", ".mp4")
+
+
+def check_length_penalty(alpha: float) -> None:
+    if not (math.isfinite(alpha) and alpha >= 0):
+        raise MotionlangError(f"--length-penalty must be a finite number >= 0, got {alpha}")
+
+
+def _model_path(arg: str | None, kind: str) -> Path:
+    path = Path(arg) if arg else PACKAGED / f"{kind}.pt"
+    if not path.is_file():
+        hint = "" if arg else f" (no packaged {kind} model; pass --model)"
+        raise MotionlangError(f"{path}: no such model file{hint}")
+    return path
+
+
+def cmd_describe(args: argparse.Namespace) -> int:
+    from motionlang.cli.motion_commands import load_input
+    from motionlang.decoding.seq2seq import describe
+    from motionlang.models.m2l import MotionToLanguage
+
+    check_length_penalty(args.length_penalty)
+    if args.width < 1:
+        raise MotionlangError(f"-w/--width must be >= 1, got {args.width}")
+    model = MotionToLanguage.load(_model_path(args.model, "m2l"))
+    hyps = describe(model, load_input(args), width=args.width,
+                    length_penalty=args.length_penalty)
+    if args.json:
+        print(json.dumps([{"rank": i + 1, "text": t, "log_p": s} for i, (t, s) in
+                          enumerate(hyps)], indent=1))
+    else:
+        for i, (text, score) in enumerate(hyps, 1):
+            print(f"{i}. log P = {score:8.3f}  {text}")
+    return 0
+
+
+def _read_rig(args: argparse.Namespace, out: Path):
+    """The ``--rig`` motion file (its skeleton is the target of a .bvh output), checked
+    before anything is generated, or None."""
+    if args.rig is None:
+        if args.rig_joint_map is not None:
+            raise MotionlangError("--rig-joint-map needs --rig")
+        return None
+    if out.suffix.lower() != ".bvh":
+        raise MotionlangError(f"{out}: --rig writes .bvh files; got {out.suffix or 'none'!r}")
+    from motionlang.api import load_rig
+    return load_rig(args.rig, args.rig_joint_map)
+
+
+def _on_rig(result, fps: float, rig) -> tuple:
+    """Generated positions (T, 21, 3) at ``fps`` or a Motion -> (Motion on ``rig``'s
+    skeleton, note on how far its body joints are from the generated ones)."""
+    from motionlang.api import body_motion
+    motion, err = body_motion(result, fps, rig)
+    err = err * 1000.0
+    return motion, (f" (on the rig of {rig.meta.get('path', rig.name)}: body joints "
+                    f"{err.mean():.1f} mm from the generated ones on average, at most "
+                    f"{err.max():.0f} mm)")
+
+
+def _write(result, path: Path, title: str, fps: float, rig=None) -> str:
+    """A generated Motion, or 21-joint positions (T, 21, 3) at ``fps`` Hz, to ``path``:
+    .npz (positions and fps), .bvh (a Motion as it is; positions on a 21-joint skeleton
+    fitted to them), .xml / .amc (Motions on such skeletons only), .gif / .mp4 animation or
+    .png pose strip.
+
+    Returns a note for the user ("" or how far a fitted skeleton is from the positions)."""
+    from motionlang.kinematics import Motion
+    ext = path.suffix.lower()
+    note = ""
+    if rig is not None:
+        result, note = _on_rig(result, fps, rig)
+    if ext == ".npz":
+        from motionlang.utils.atomic import atomic_write
+        data = {"positions": result, "fps": np.float64(fps)} if isinstance(result, np.ndarray) \
+            else {"positions": result.positions(), "fps": np.float64(result.fps)}
+        with atomic_write(path, "wb") as fh:
+            np.savez(fh, **data)
+        return note
+    if ext not in MOTION_OUT + RENDER_OUT + (".png",):
+        raise MotionlangError(f"{path}: output must be .bvh, .xml, .amc, .gif, .mp4, .png "
+                              "or .npz")
+    if not isinstance(result, Motion):
+        if ext in MOTION_OUT:
+            if ext != ".bvh":
+                raise MotionlangError(f"{path}: this model's features decode to joint "
+                                      "positions; write .bvh, .npz, .gif, .mp4 or .png")
+            # joint angles fitted to the 21 positions (bone lengths made constant)
+            from motionlang.api import body_motion
+            result, err = body_motion(result, fps, name=path.stem)
+            err = err * 1000.0
+            note = (f" (joints {err.mean():.1f} mm from the generated ones on average, "
+                    f"at most {err.max():.0f} mm: bone lengths held at their medians, "
+                    "pelvis and neck turned by least squares)")
+        else:
+            from motionlang.render.scene import kit21_scene
+            result = kit21_scene(result, fps)
+    if ext in MOTION_OUT:
+        from motionlang.formats import write_motion
+        write_motion(result, path)
+    elif ext == ".png":
+        from motionlang.render import render_strip
+        render_strip(result, path, title=title)
+    else:
+        from motionlang.render import render_animation
+        render_animation(result, path, title=title)
+    return note
+
+
+def cmd_generate(args: argparse.Namespace) -> int:
+    # any text-to-motion checkpoint: L2M (seq2seq) or the two-stream model
+    from motionlang.decoding.t2m import default_method, generate_any, load_any_t2m, output_fps
+
+    if not args.temperature > 0:
+        raise MotionlangError(f"--temperature must be > 0, got {args.temperature}")
+    if args.temperature != 1.0 and args.method == "mean":
+        raise MotionlangError("--temperature applies to 'sample' and 'beam'; mean decoding "
+                              "draws nothing")
+    model = load_any_t2m(_model_path(args.model, "l2m"))
+    if args.temperature != 1.0 and getattr(model, "kind", None) == "twostream":
+        raise MotionlangError("--temperature applies to L2M models; the two-stream model is "
+                              "deterministic")
+    if args.method is None:   # how the model was trained to continue its own frames
+        args.method = default_method(model)
+        if args.method == "mean" and args.temperature != 1.0:
+            raise MotionlangError("--temperature: this model generates with mean decoding "
+                                  "(trained on its expected frames); add --method sample")
+    extra = {}
+    if args.rerank:
+        if getattr(model, "kind", None) == "twostream" or args.method == "mean" \
+                or args.width < 2:
+            raise MotionlangError("--rerank ranks several L2M motions: an L2M model with "
+                                  "--method sample or beam and -w 2 or more")
+        from motionlang.decoding.rerank import check_same_features
+        from motionlang.models.m2l import MotionToLanguage
+        extra["reranker"] = MotionToLanguage.load(args.rerank)
+        check_same_features(model, extra["reranker"], f"--rerank {args.rerank}")
+    out = Path(args.output)
+    rig = _read_rig(args, out)
+    if args.start_from:
+        from motionlang.api import first_frame
+        extra["first_frame"] = first_frame(model, args.start_from, args.joint_map)
+    hyps = generate_any(model, args.text, width=args.width, method=args.method, seed=args.seed,
+                        max_frames=args.max_frames, min_frames=args.min_frames,
+                        length_norm=args.length_norm, temperature=args.temperature, **extra)
+    # rate of position outputs: the two-stream model's 12.5 Hz, else the model's features'
+    fps = output_fps(model)
+    for i, (result, score) in enumerate(hyps, 1):
+        n = len(result.joint_angles) if hasattr(result, "joint_angles") else len(result)
+        # the two-stream model is deterministic: it has no likelihood to rank by
+        likelihood = "" if math.isnan(score) else \
+            f" log P(text | motion) = {score:8.2f} " if args.rerank else f" log L = {score:10.2f} "
+        line = f"{i}.{likelihood} {n} frames"
+        if i == 1 or args.all:
+            path = out if i == 1 else out.with_name(f"{out.stem}_{i}{out.suffix}")
+            note = _write(result, path, f"{args.text} (#{i})", fps, rig)
+            line += f"  -> {path}{note}"
+        print(line)
+    return 0
+
+
+
+def register(subparsers) -> None:
+    from motionlang.cli.motion_commands import add_input_args, add_joint_map_arg
+    p = subparsers.add_parser("describe", help="describe a motion in English (M2L, beam search)")
+    add_input_args(p)
+    p.add_argument("--model", help="M2L model file (default: the packaged one)")
+    p.add_argument("-w", "--width", type=int, default=5, help="beam width = hypotheses shown")
+    p.add_argument("--length-penalty", type=float, default=0.0, metavar="ALPHA",
+                   help="rank by log P / length**ALPHA (default 0: total log P, the paper's; "
+                        "no effect with -w 1)")
+    p.add_argument("--json", action="store_true")
+    p.set_defaults(func=cmd_describe)
+    p = subparsers.add_parser("generate", help="generate a motion from English (L2M)")
+    p.add_argument("text", help="sentence, e.g. \"a person waves with the left hand\"")
+    p.add_argument("-o", "--output", required=True,
+                   help="out.gif, .mp4 (animation), .png (pose strip), .bvh (joint angles; "
+                        "for position models such as two-stream fitted on a 21-joint "
+                        "skeleton) or .npz (joint positions and fps)")
+    p.add_argument("--model", help="L2M or two-stream model file (default: the packaged L2M)")
+    p.add_argument("-w", "--width", type=int, default=5, help="hypotheses (samples or beam width)")
+    p.add_argument("--method", choices=("sample", "beam", "mean"), default=None,
+                   help="W ancestral samples (default), the paper's sampled beam, or "
+                        "heaviest-component means (the beam, ranked by likelihood, favours "
+                        "standing still); default for a model trained on its expected "
+                        "frames (--rollout-input mean): mean")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--max-frames", type=int, default=None,
+                   help="length cap in model frames (default: the model's); a two-stream "
+                        "model, or an L2M trained with --progress-input, generates exactly "
+                        "this many (default: the length its length model predicts for the "
+                        "sentence; a two-stream model without one: 125 = 10 s)")
+    p.add_argument("--min-frames", type=int, default=5,
+                   help="no end-of-motion before this many model frames (default 5)")
+    p.add_argument("--length-norm", action="store_true",
+                   help="rank hypotheses (beam, sample) by log likelihood per frame (default: total)")
+    p.add_argument("--temperature", type=float, default=1.0, metavar="TAU",
+                   help="sample (beam, sample) from the mixture sharpened by TAU: weights "
+                        "softmax(logits / TAU), deviations x TAU (default 1: as trained)")
+    p.add_argument("--rerank", metavar="M2L", help="rank the W motions by this M2L model's "
+                   "log P(text | motion) instead of their own likelihood (L2M, sample or beam)")
+    p.add_argument("--all", action="store_true", help="write every hypothesis (OUT_2, ...)")
+    p.add_argument("--rig", metavar="FILE.bvh", default=None,
+                   help="write the .bvh on this rig (a BVH file of yours: its skeleton, "
+                        "joint names, units, rest pose and channel layout), retargeted from "
+                        "the 21-joint body (default: the 21-joint body itself). Needs joints "
+                        "that turn about 3 axes, as BVH rigs have; not ASF or MMM hinges")
+    p.add_argument("--rig-joint-map", metavar="MAP.json", default=None,
+                   help="how the --rig maps onto the 21-joint body, if no built-in map fits")
+    p.add_argument("--start-from", metavar="FILE", default=None,
+                   help="begin every motion with the first pose of this motion file (any "
+                        "rig that maps onto the 21-joint body; L2M models)")
+    add_joint_map_arg(p)   # for --start-from
+    p.set_defaults(func=cmd_generate)
