@@ -246,3 +246,35 @@ def test_windows_line_ends_and_bom(hand, tmp_path):
     path = tmp_path / "win.bvh"
     path.write_bytes(b"\xef\xbb\xbf" + HAND.replace("\n", "\r\n").encode())
     assert np.array_equal(read_bvh(path).joint_angles, read_bvh(hand).joint_angles)
+
+
+def test_limits_are_checked_before_reading_the_numbers(tmp_path, monkeypatch):
+    """A 2 MB file declaring 9,990 nested joints and a million frames asked numpy for
+    447 GiB; the joints, frames and memory a file asks for are now checked first."""
+    path = tmp_path / "big.bvh"
+    head = "HIERARCHY\nROOT j0\n{\nOFFSET 0 0 0\nCHANNELS 1 Xrotation\n" + "".join(
+        f"JOINT j{i}\n{{\nOFFSET 0 1 0\nCHANNELS 0\n" for i in range(1, 9990))
+    path.write_text(head + "End Site\n{\nOFFSET 0 1 0\n}\n" + "}\n" * 9990
+                    + "MOTION\nFrames: 1000000\nFrame Time: 0.01\n" + "0\n" * 1_000_000)
+    with pytest.raises(MotionFormatError, match="joint count 2,001 exceeds the limit of 2,000 "
+                                                r"\(raise it with MOTIONLANG_MAX_JOINTS=...\)"):
+        read_bvh(path)
+    monkeypatch.setenv("MOTIONLANG_MAX_JOINTS", "20000")
+    with pytest.raises(MotionFormatError, match="memory needed for 1,000,000 frames of 9,991 "
+                                                "joints .* exceeds .*MOTIONLANG_MAX_MEMORY"):
+        read_bvh(path)
+    monkeypatch.setenv("MOTIONLANG_MAX_FRAMES", "999999")
+    with pytest.raises(MotionFormatError, match="frame count 1,000,000 exceeds"):
+        read_bvh(path)
+    monkeypatch.setenv("MOTIONLANG_MAX_FILE_BYTES", "1M")
+    with pytest.raises(MotionFormatError, match="file size .* exceeds the limit of 1 MiB"):
+        read_bvh(path)
+
+
+def test_huge_declared_frame_counts(tmp_path):
+    for frames in ("1000000000000", "9" * 5000, "\u00b2"):
+        path = tmp_path / "f.bvh"
+        path.write_text(_edit("Frames: 3", f"Frames: {frames}"), encoding="utf-8")
+        with pytest.raises(MotionFormatError, match="frame count|malformed") as info:
+            read_bvh(path)
+        assert "\n" not in str(info.value)

@@ -112,3 +112,34 @@ def test_cli_info_on_custom_folder(folder, capsys):
     info = json.loads(capsys.readouterr().out)
     assert (info["kind"], info["motions"], info["annotations"],
             info["without_annotations"]) == ("custom", 2, 2, 1)
+
+
+@pytest.mark.parametrize("name", ["../outside/x.bvh", "/etc/x.bvh", "sub/../../outside/x.bvh",
+                                  "..\\outside\\x.bvh", "C:/data/x.bvh"])
+def test_captions_cannot_leave_the_folder(tmp_path, name):
+    folder = tmp_path / "data"
+    folder.mkdir()
+    (tmp_path / "outside").mkdir()
+    (tmp_path / "outside" / "x.bvh").write_text(BVH)
+    (folder / "walk.bvh").write_text(BVH)
+    (folder / "link.bvh").symlink_to(tmp_path / "outside" / "x.bvh")  # a link inside
+    (folder / "captions.csv").write_text(f"file,text\nwalk.bvh,ok\n{name},escaped\n")
+    with pytest.raises(DatasetError, match=r"captions.csv:3: motion file .* is outside the "
+                                           "dataset folder"):
+        load_custom(folder)
+
+
+def test_links_inside_the_folder(tmp_path):
+    folder = tmp_path / "data"
+    folder.mkdir()
+    (tmp_path / "outside").mkdir()
+    (tmp_path / "outside" / "x.bvh").write_text(BVH)
+    (folder / "link.bvh").symlink_to(tmp_path / "outside" / "x.bvh")
+    (folder / "dirlink").symlink_to(tmp_path / "outside")
+    (folder / "captions.csv").write_text("file,text\nlink.bvh,a file linked in\n"
+                                         "./sub/../link.bvh,the same, spelt oddly\n")
+    (rec,) = load_custom(folder)     # a file linked into the folder is one of its files
+    assert rec.id == "link" and len(rec.annotations) == 2
+    (folder / "captions.csv").write_text("file,text\ndirlink/x.bvh,through a folder link\n")
+    with pytest.raises(DatasetError, match="a symbolic link in .* leads outside it"):
+        load_custom(folder)

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
+import io
 import socket
 import threading
 import zipfile
@@ -10,8 +11,10 @@ from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 
 import pytest
 
-from motionlang.datasets.download import download_file, safe_extract
+from motionlang.datasets.download import download_file, safe_extract, safe_extract_tar
 from motionlang.errors import DatasetError
+from motionlang.utils import atomic
+from motionlang.utils.atomic import TAG
 
 
 class _Handler(BaseHTTPRequestHandler):
@@ -102,11 +105,11 @@ def test_interrupted_download_resumes_with_range(tmp_path):
 
 
 def test_server_ignoring_range_restarts(tmp_path):
-    (tmp_path / "a.zip.part").write_bytes(b"x" * 1000)   # stale bytes that are no prefix
+    (tmp_path / "a.bin.part").write_bytes(b"x" * 1000)   # stale bytes that are no prefix
     with serve(PAYLOAD, mode="norange") as srv:
-        download_file(srv.url, tmp_path / "a.zip")
+        download_file(srv.url, tmp_path / "a.bin")   # not named as an archive: not checked
         assert srv.requests[0][1] == "bytes=1000-"
-    assert (tmp_path / "a.zip").read_bytes() == PAYLOAD
+    assert (tmp_path / "a.bin").read_bytes() == PAYLOAD
 
 
 def test_checksum_mismatch(tmp_path):
@@ -154,3 +157,109 @@ def test_safe_extract(tmp_path):
     with pytest.raises(DatasetError, match="not a valid zip"):
         safe_extract(tmp_path / "junk.zip", tmp_path / "j_out")
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
+
+
+# ------------------------------------------------------------------ hostile archives
+HTML = b"<!DOCTYPE html>\n<html><body>Service temporarily unavailable</body></html>\n"
+
+
+def _zip_bytes(members: dict[str, bytes]) -> bytes:
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED) as zf:
+        for name, data in members.items():
+            zf.writestr(name, data)
+    return buf.getvalue()
+
+
+def test_a_web_page_is_not_kept_as_the_archive(tmp_path):
+    good = _zip_bytes({"a.txt": b"a"})
+    with serve(HTML) as srv:
+        with pytest.raises(DatasetError, match=r"web page \(HTML\), not the zip archive; "
+                                               "nothing was kept"):
+            download_file(srv.url, tmp_path / "a.zip")
+        assert list(tmp_path.iterdir()) == []
+        srv.payload = good                                   # the server is fixed
+        assert download_file(srv.url, tmp_path / "a.zip").read_bytes() == good
+        (tmp_path / "a.zip").write_bytes(HTML)               # as an older version saved it
+        assert download_file(srv.url, tmp_path / "a.zip").read_bytes() == good
+        assert len(srv.requests) == 3
+
+
+def test_zip_bomb_is_refused_before_writing(tmp_path, monkeypatch):
+    bomb = tmp_path / "bomb.zip"
+    with zipfile.ZipFile(bomb, "w", zipfile.ZIP_DEFLATED) as zf, zf.open("zeros.bin", "w") as fh:
+        for _ in range(100):
+            fh.write(bytes(1 << 20))                         # 100 MiB in ~100 KB
+    with pytest.raises(DatasetError, match=r"refused: the sizes its members declare would "
+                                           r"expand it to more than 64 MiB \(100 times the "
+                                           r"archive's size, 64 MiB at least\); raise it with "
+                                           "MOTIONLANG_MAX_ARCHIVE_RATIO"):
+        safe_extract(bomb, tmp_path / "out")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bomb.zip"]
+    monkeypatch.setenv("MOTIONLANG_MAX_ARCHIVE_RATIO", "2000")
+    monkeypatch.setenv("MOTIONLANG_MAX_ARCHIVE_BYTES", "50M")
+    with pytest.raises(DatasetError, match="MOTIONLANG_MAX_ARCHIVE_BYTES"):
+        safe_extract(bomb, tmp_path / "out")
+    monkeypatch.setenv("MOTIONLANG_MAX_ARCHIVE_BYTES", "200M")
+    assert (safe_extract(bomb, tmp_path / "out") / "zeros.bin").stat().st_size == 100 << 20
+
+
+def test_zip_bomb_served_as_kitml(tmp_path):
+    from motionlang.datasets.kitml import download_kitml
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED) as zf, zf.open("00001_mmm.xml", "w") as fh:
+        for _ in range(100):
+            fh.write(b" " * (1 << 20))
+    with serve(buf.getvalue()) as srv, pytest.raises(DatasetError, match="refused"):
+        download_kitml(tmp_path, url=srv.url)
+    assert not (tmp_path / "kitml").exists()
+    assert [p.name for p in tmp_path.iterdir()] == ["data.zip"]
+
+
+def _patch_zip(data: bytes, local: int, central: int, value: int) -> bytes:
+    """Set a 2-byte field of every local header and central directory record."""
+    out = bytearray(data)
+    for sig, off in ((b"PK\x03\x04", local), (b"PK\x01\x02", central)):
+        i = out.find(sig)
+        while i >= 0:
+            out[i + off:i + off + 2] = value.to_bytes(2, "little")
+            i = out.find(sig, i + 4)
+    return bytes(out)
+
+
+@pytest.mark.parametrize("data, words", [
+    (_zip_bytes({"d/a.txt": b"1", "d/b.txt": b"2"}).replace(b"d/b.txt", b"d/a.txt"),
+     "name clash in archive: 'd/a.txt'"),
+    (_zip_bytes({"d": b"1", "d/b.txt": b"2"}), "name clash in archive: 'd/b.txt'"),
+    (_patch_zip(_zip_bytes({"a.txt": b"1"}), 6, 8, 0x1), "encrypted member 'a.txt'"),
+    (_patch_zip(_zip_bytes({"a.txt": b"1"}), 8, 10, 99), "compression method 99"),
+    (_zip_bytes({"a.txt": b"1"})[:-30], "not a valid zip archive"),
+])
+def test_bad_zip_members_are_one_line_errors(tmp_path, data, words):
+    (tmp_path / "x.zip").write_bytes(data)
+    with pytest.raises(DatasetError, match=words) as info:
+        safe_extract(tmp_path / "x.zip", tmp_path / "out")
+    assert "\n" not in str(info.value)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["x.zip"]
+
+
+def test_tar_name_clash_and_stale_extraction_folder(tmp_path):
+    import tarfile
+    with tarfile.open(tmp_path / "x.tar", "w") as tf:
+        for name in ("d/a.txt", "d/a.txt"):
+            info = tarfile.TarInfo(name)
+            info.size = 1
+            tf.addfile(info, io.BytesIO(b"1"))
+    stale = tmp_path / f".out{TAG}{atomic._host()}.{_dead_pid()}.abcdefgh.extract"
+    (stale / "half").mkdir(parents=True)
+    with pytest.raises(DatasetError, match="name clash in archive: 'd/a.txt'"):
+        safe_extract_tar(tmp_path / "x.tar", tmp_path / "out")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["x.tar"]  # the stale one swept too
+
+
+def _dead_pid() -> int:
+    import subprocess
+    import sys
+    proc = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True)
+    return int(proc.stdout)

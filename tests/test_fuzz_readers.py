@@ -1,222 +1,136 @@
-"""Fuzzing every reader with mutated real files: the only acceptable outcomes are a
-``MotionlangError`` or a valid ``Motion`` (finite arrays, consistent shapes, finite joint
-positions) — never another exception and never a hang.
+"""Fuzzing every reader, each input read in a child process under a memory cap (RLIMIT_AS)
+and a time limit (``motionlang.formats.fuzzing``): the only acceptable outcomes are a
+``MotionlangError`` whose message is one line naming the file, or a valid Motion (finite
+arrays, consistent shapes, finite joint positions); never a crash, a hang, an uncaught
+exception.
 
-The real files are cut to their first few frames so that one parse takes milliseconds;
-hypothesis runs derandomized (reproducible in CI), 600 examples per reader (ASF, AMC, BVH,
-MMM XML and the MIT ``.mat``).
+Per format (MMM XML, ASF, AMC, BVH, MIT ``.mat``): edits of seeds (hand-made files and real
+ones cut to a few frames) and files crafted against that reader (encodings and DTDs, deep
+and wide skeletons, child-first bone lists, huge numbers and frame counts, MAT fields of the
+wrong type, long inputs). Hypothesis runs derandomized (reproducible in CI). The findings of
+the fuzzing issue are pinned as explicit examples. ``benchmarks/fuzz_readers.py`` runs the
+same at 10,000 inputs per format.
 """
 from __future__ import annotations
 
-import atexit
-import re
-import shutil
-import tempfile
-from datetime import timedelta
-from pathlib import Path
+import io
+import os
+import signal
 
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from motionlang.errors import MotionlangError
-from motionlang.formats.asf_amc import read_amc, read_asf
-from motionlang.formats.bvh import read_bvh, write_bvh
-from motionlang.kinematics import Motion
+from motionlang.formats.fuzzing import FORMATS, Sandbox, crafted, mutate, seeds
+from motionlang.formats.fuzzing.seeds import TINY_ASF, mit_sequence, mit_tree, write_mit
 from tests.conftest import SHARED
-from tests.test_asf_amc import TINY_ASF, tiny_amc
-from tests.test_bvh import HAND
 
-EXAMPLES = 600
-FUZZ = settings(max_examples=EXAMPLES, derandomize=True, database=None,
-                deadline=timedelta(seconds=2), print_blob=True,
-                suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
-SPECIAL = [b"1e308", b"-1e308", b"nan", b"NaN", b"inf", b"-inf", b"1e999", b"", b"0x10",
-           b"1e-400", b"123456789012345678901234567890", b"1.5.5", b"-", b"{", b"}", b"9" * 400]
-NUMBER = re.compile(rb"-?\d+(?:\.\d+)?(?:e[-+]?\d+)?")
-TOKEN = re.compile(rb"[^\s<>=']+")
-
-
-def _cut_amc(text: str, frames: int) -> str:
-    """The header and the first ``frames`` frames of an AMC text."""
-    out, seen = [], 0
-    for line in text.splitlines():
-        if line.strip().isdigit():
-            seen += 1
-            if seen > frames:
-                break
-        out.append(line)
-    return "\n".join(out) + "\n"
-
-
-def _cut_mmm(text: str, frames: int) -> str:
-    """An MMM XML text with only its first ``frames`` MotionFrame elements."""
-    lines = text.splitlines()
-    ends = [i for i, ln in enumerate(lines) if ln.strip() == "</MotionFrame>"]
-    tail = lines[next(i for i, ln in enumerate(lines) if ln.strip() == "</MotionFrames>"):]
-    return "\n".join(lines[:ends[frames - 1] + 1] + tail) + "\n"
-
-
-def _write(name: str, data: bytes) -> Path:
-    path = WORK / name
-    path.write_bytes(data)
-    return path
-
-
-def _bases() -> dict[str, list[bytes]]:
-    asf, amc = SHARED / "cmu35/35.asf", SHARED / "cmu35/35_01.amc"
-    real = asf.is_file() and amc.is_file()
-    bases = {
-        "asf": [TINY_ASF.encode()] + ([asf.read_bytes()] if real else []),
-        "amc": [_cut_amc(amc.read_text(), 3).encode()] if real else [],
-        "bvh": [HAND.encode()],
-        "mmm": [],
-        "mit": [],
-    }
-    if real:  # a BVH with CMU's 38 joints, written by motionlang from two AMC frames
-        m = read_amc(_write("base.amc", bases["amc"][0]), read_asf(asf))[:2]
-        write_bvh(m, WORK / "base.bvh")
-        bases["bvh"].append((WORK / "base.bvh").read_bytes())
-    mmm = SHARED / "kitml/00001_mmm.xml"
-    if mmm.is_file():
-        bases["mmm"].append(_cut_mmm(mmm.read_text(), 3).encode())
-    mit = SHARED / "mit/motion.mat"
-    if mit.is_file():
-        bases["mit"].append(_cut_mit(mit))
-    return bases
-
-
-def _cut_mit(path: Path) -> bytes:
-    """Taylor's MIT ``motion.mat`` with two sequences of 3 and 2 frames (uncompressed MAT
-    bytes, so that flipped bytes land in headers, the tree and the numbers alike)."""
-    import io
-
-    import scipy.io as sio
-    d = sio.loadmat(str(path))
-    seqs = np.empty((1, 2), dtype=object)
-    seqs[0, 0], seqs[0, 1] = d["Motion"][0, 0][:3], d["Motion"][0, 1][:2]
-    buf = io.BytesIO()
-    sio.savemat(buf, {"skel": d["skel"], "Motion": seqs})
-    return buf.getvalue()
-
-
-WORK = Path(tempfile.mkdtemp(prefix="motionlang-fuzz-"))  # one folder per test process
-atexit.register(shutil.rmtree, WORK, ignore_errors=True)
-BASES = _bases()
-TINY_ASF_PATH = WORK / "tiny.asf"
-TINY_ASF_PATH.write_text(TINY_ASF)
-TINY_AMC = tiny_amc([([0, 1, 2, 3, 4, 5], [10, 20, 30], 40, 50)] * 3).encode()
-
-
-@st.composite
-def mutated(draw, bases: list[bytes]) -> bytes:
-    """One of ``bases`` with 1-3 random edits: truncation, a flipped byte, a deleted,
-    duplicated or swapped line, a number replaced by an extreme or broken one, a word
-    replaced by another word of the file, inserted garbage."""
-    data = draw(st.sampled_from(bases))
-    for _ in range(draw(st.integers(1, 3))):
-        op = draw(st.sampled_from(["truncate", "flip", "delete", "duplicate", "swap",
-                                   "number", "number", "token", "garbage"]))
-        lines = data.split(b"\n")
-        if op == "truncate":
-            data = data[:draw(st.integers(0, len(data)))]
-        elif op == "flip" and data:
-            i = draw(st.integers(0, len(data) - 1))
-            data = data[:i] + bytes([draw(st.integers(0, 255))]) + data[i + 1:]
-        elif op in ("delete", "duplicate", "swap"):
-            i = draw(st.integers(0, len(lines) - 1))
-            if op == "delete":
-                del lines[i]
-            elif op == "duplicate":
-                lines.insert(i, lines[i])
-            else:
-                j = draw(st.integers(0, len(lines) - 1))
-                lines[i], lines[j] = lines[j], lines[i]
-            data = b"\n".join(lines)
-        elif op == "number":
-            spans = [m.span() for m in NUMBER.finditer(data)]
-            if spans:
-                a, b = spans[draw(st.integers(0, len(spans) - 1))]
-                data = data[:a] + draw(st.sampled_from(SPECIAL)) + data[b:]
-        elif op == "token":  # a word replaced by another word of the file (a keyword...)
-            spans = [m.span() for m in TOKEN.finditer(data)]
-            if spans:
-                a, b = spans[draw(st.integers(0, len(spans) - 1))]
-                c, d = spans[draw(st.integers(0, len(spans) - 1))]
-                data = data[:a] + data[c:d] + data[b:]
-        elif op == "garbage":
-            i = draw(st.integers(0, len(data)))
-            data = data[:i] + draw(st.binary(max_size=24)) + data[i:]
-    return data
-
-
-def _check(read) -> None:
-    """Run ``read()``; accept a MotionlangError or a valid Motion."""
-    try:
-        m = read()
-    except MotionlangError:
-        return
-    if not isinstance(m, Motion):  # read_asf returns a Skeleton: check its numbers
-        offsets = m.offsets
-        assert np.all(np.isfinite(offsets)) and np.isfinite(m.file_unit) and m.file_unit > 0
-        return
-    T = m.n_frames
-    assert T >= 1 and np.isfinite(m.fps) and m.fps > 0
-    assert m.root_translation.shape == (T, 3)
-    assert m.root_rotation.shape == (T, len(m.skeleton.root_axes))
-    assert m.joint_angles.shape == (T, m.skeleton.ndof)
-    for arr in (m.root_translation, m.root_rotation, m.joint_angles):
-        assert np.all(np.isfinite(arr))
-    assert np.all(np.isfinite(m.positions()))
-
-
-@FUZZ
-@given(mutated(BASES["asf"]))
-def test_fuzz_asf(data):
-    _check(lambda: read_asf(_write("fuzz.asf", data)))
+pytest.importorskip("resource")  # the sandbox needs Unix
+MUTATED, CRAFTED = 150, 60  # inputs per format: 210, a couple of minutes in all
+FUZZ = dict(derandomize=True, database=None, deadline=None, print_blob=True,
+            suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+SEEDS = {fmt: seeds(fmt, SHARED if SHARED.is_dir() else None) for fmt in FORMATS}
 
 
 @pytest.fixture(scope="module")
-def cmu35():
-    path = SHARED / "cmu35/35.asf"
-    if not BASES["amc"] or not path.is_file():
-        pytest.skip("real CMU subject 35 not present")
-    return read_asf(path)
+def sandbox():
+    with Sandbox(memory_bytes=1 << 30, time_limit=30.0) as sb:
+        yield sb
 
 
-@FUZZ
-@given(data=mutated(BASES["amc"] or [TINY_AMC]))
-def test_fuzz_amc(cmu35, data):
-    _check(lambda: read_amc(_write("fuzz.amc", data), cmu35))
+def _ok(outcome) -> None:
+    assert outcome.ok, f"{outcome.kind}: {outcome.detail}"
 
 
-@FUZZ
-@given(mutated(BASES["bvh"]))
-def test_fuzz_bvh(data):
-    _check(lambda: read_bvh(_write("fuzz.bvh", data)))
+def _chooser(data):
+    return lambda n: data.draw(st.integers(0, n - 1))
 
 
-@FUZZ
-@given(data=mutated(BASES["mit"] or [b"MATLAB"]))
-@pytest.mark.filterwarnings("ignore::UserWarning")  # scipy on corrupt headers
-def test_fuzz_mit(data):
-    from motionlang.formats.mit import read_mit
-    if not BASES["mit"]:
-        pytest.skip("real MIT motion.mat not present")
-    try:
-        motions = read_mit(_write("fuzz.mat", data))
-    except MotionlangError:
-        return
-    assert motions
-    for m in motions:
-        _check(lambda: m)
+@pytest.mark.parametrize("fmt", FORMATS)
+@settings(max_examples=MUTATED, **FUZZ)
+@given(data=st.data())
+def test_mutated_files(sandbox, fmt, data):
+    choose = _chooser(data)
+    base, skeleton = SEEDS[fmt][choose(len(SEEDS[fmt]))]
+    _ok(sandbox.run(fmt, mutate(base, choose, fmt), skeleton))
 
 
-@FUZZ
-@given(data=mutated(BASES["mmm"] or [b"<MMM/>"]))
-def test_fuzz_mmm(data):
-    mmm = pytest.importorskip("motionlang.formats.mmm")
-    if not BASES["mmm"]:
-        pytest.skip("real KIT motion 00001 not present")
-    _check(lambda: mmm.read_mmm(_write("fuzz_mmm.xml", data)))
+@pytest.mark.parametrize("fmt", FORMATS)
+@settings(max_examples=CRAFTED, **FUZZ)
+@given(data=st.data())
+def test_crafted_files(sandbox, fmt, data):
+    _ok(sandbox.run(fmt, *crafted(fmt, _chooser(data))))
+
+
+# ------------------------------------------------------------------ the issue's findings
+def _mat_double_tag_as_8() -> bytes:
+    """A small MAT file whose first double array's data tag says type 8 instead of 9 (it
+    made scipy's reader die with SIGSEGV)."""
+    import scipy.io as sio
+    buf = io.BytesIO()
+    sio.savemat(buf, {"Motion": np.zeros((2, 3))})
+    data = buf.getvalue()
+    i = 128 + 8 + 16 + 16 + 16  # header, matrix tag, flags, dimensions, name: the data tag
+    assert data[i:i + 4] == b"\x09\x00\x00\x00"
+    return data[:i] + b"\x08" + data[i + 1:]
+
+
+def _asf_child_first(n: int) -> bytes:
+    bones = "".join(f"begin\nname b{i}\ndirection 0 1 0\nlength 1\ndof rx\nend\n"
+                    for i in reversed(range(n)))
+    hier = "".join(f"b{i - 1} b{i}\n" if i else "root b0\n" for i in reversed(range(n)))
+    return f":units\nangle deg\n:bonedata\n{bones}:hierarchy\nbegin\n{hier}end\n".encode()
+
+
+def _bvh_447_gib() -> bytes:
+    """9,990 nested joints and 1,000,000 frames of one channel: 2 MB that once asked numpy
+    for hundreds of GiB once a Motion was built."""
+    head = "HIERARCHY\nROOT j0\n{\nOFFSET 0 0 0\nCHANNELS 1 Xrotation\n" + "".join(
+        f"JOINT j{i}\n{{\nOFFSET 0 1 0\nCHANNELS 0\n" for i in range(1, 9990))
+    tail = "End Site\n{\nOFFSET 0 1 0\n}\n" + "}\n" * 9990
+    return (head + tail + "MOTION\nFrames: 1000000\nFrame Time: 0.01\n").encode() + \
+        b"0\n" * 1_000_000
+
+
+def _mit_with(field: str, value) -> bytes:
+    tree = mit_tree(2)
+    tree[1][field] = value
+    return write_mit(tree, [mit_sequence()])
+
+
+FINDINGS = [
+    ("mit", _mat_double_tag_as_8, None, "number data of element type 8"),
+    ("mit", lambda: _mit_with("parent", "text"), None, "parent must be numbers"),
+    ("mit", lambda: _mit_with("or", "abc"), None, "or must be numbers"),
+    ("mit", lambda: write_mit(mit_tree(2), "Motion"), None, "'Motion' must be a cell"),
+    ("mit", lambda: write_mit([{k: v for k, v in n.items() if k != "offset"}
+                               for n in mit_tree(2)], [mit_sequence()]), None, "no 'offset'"),
+    ("asf", lambda: _asf_child_first(16000), None, "exceeds the limit"),
+    ("amc", lambda: b"1\nroot 0 0 0 0 0 0\nchest 0 0 0\nlarm 0\nrarm 0\n" + b"9" * 5000 + b"\n",
+     TINY_ASF, "out of range"),
+    ("amc", lambda: "\u00b2\nroot 0 0 0 0 0 0\n".encode(), TINY_ASF, "expected a frame number"),
+    ("mmm", lambda: b"<?xml version='1.0' encoding='utf-32'?><MMM/>", None, "encoding"),
+    ("mmm", lambda: b"<?xml version='1.0' encoding='klingon'?><MMM/>", None, "encoding"),
+    ("bvh", _bvh_447_gib, None, "exceeds the limit"),
+]
+
+
+@pytest.mark.parametrize("fmt, make, skeleton, words", FINDINGS,
+                         ids=[f"{f[0]}-{f[3][:20]}" for f in FINDINGS])
+def test_findings_are_clean_errors(sandbox, fmt, make, skeleton, words):
+    out = sandbox.run(fmt, make(), skeleton)
+    assert out.kind == "error" and words in out.detail, out
+
+
+def test_sandbox_reports_crashes_and_hangs(tmp_path):
+    with Sandbox(time_limit=30.0) as sb:
+        assert sb.run("bvh", SEEDS["bvh"][0][0]).kind == "valid"
+        os.kill(sb.proc.pid, signal.SIGSEGV)  # our own child, as if a reader crashed it
+        sb.proc.wait()
+        out = sb.run("bvh", SEEDS["bvh"][0][0])
+        assert out.kind == "crash" and "SIGSEGV" in out.detail
+        assert sb.run("bvh", SEEDS["bvh"][0][0]).kind == "valid"  # started again
+        sb.time_limit = 1e-4
+        assert sb.run("asf", _asf_child_first(1500)).kind == "hang"
+        assert sb.starts == 2

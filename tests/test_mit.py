@@ -148,3 +148,113 @@ def test_bad_inputs(tmp_path):
         read_mit(_mat(tmp_path, skel=_tree(), Motion=_cell(moving)))
     with pytest.raises(MotionFormatError):
         read_mit(tmp_path / "missing.mat")
+
+
+# ------------------------------------------------------------------ the MAT reader itself
+def _element(mtype: int, payload: bytes, order: str = "<") -> bytes:
+    pad = b"\0" * (-len(payload) % 8)
+    return np.array([mtype, len(payload)], order + "u4").tobytes() + payload + pad
+
+
+def _double_array(name: bytes, values, order: str = "<", data_type: int = 9) -> bytes:
+    values = np.asarray(values, dtype=float)
+    body = (_element(6, np.array([6, 0], order + "u4").tobytes(), order)      # double class
+            + _element(5, np.array([1, values.size], order + "i4").tobytes(), order)
+            + _element(1, name, order)
+            + _element(data_type, values.astype(order + "f8").tobytes(), order))
+    return _element(14, body, order)
+
+
+def _mat_file(*elements: bytes, order: str = "<", version: int = 0x0100) -> bytes:
+    head = b"MATLAB 5.0 MAT-file, hand-made".ljust(116) + b"\0" * 8
+    head += version.to_bytes(2, "little" if order == "<" else "big")
+    return head + (b"IM" if order == "<" else b"MI") + b"".join(elements)
+
+
+@pytest.mark.parametrize("order", ["<", ">"])
+def test_read_mat_both_byte_orders(tmp_path, order):
+    from motionlang.formats.matfile import read_mat
+    path = tmp_path / "x.mat"
+    path.write_bytes(_mat_file(_double_array(b"x", [1.5, -2, 3], order), order=order))
+    x = read_mat(path)["x"]
+    assert x.shape == (1, 3) and x.dtype == float and x.tolist() == [[1.5, -2.0, 3.0]]
+
+
+def test_read_mat_agrees_with_scipy_on_real_files():
+    from scipy.io import loadmat
+
+    from motionlang.formats.matfile import read_mat
+    for rel in ("mit/motion.mat", "cmu35/cmu35WalkJog.mat"):
+        ours, ref = read_mat(shared_file(rel)), loadmat(str(shared_file(rel)), mat_dtype=True)
+        for k in ours:
+            if ours[k].dtype != object:
+                assert np.array_equal(ours[k], ref[k]), (rel, k)
+    ours = read_mat(shared_file("mit/motion.mat"))
+    ref = loadmat(str(shared_file("mit/motion.mat")), mat_dtype=True)
+    assert all(np.array_equal(a, b) for a, b in zip(ours["Motion"].ravel(), ref["Motion"].ravel()))
+    node, ref_node = ours["skel"][0, 0]["tree"][0, 3], ref["skel"][0, 0]["tree"][0, 3]
+    assert all(np.array_equal(node[k], ref_node[k]) for k in ("parent", "or", "offset"))
+
+
+@pytest.mark.parametrize("data, words", [
+    # the crash: a double array's data tag says type 8 (scipy died with SIGSEGV)
+    (_mat_file(_double_array(b"x", [1.0, 2.0], data_type=8)), "number data of element type 8"),
+    (_mat_file(_double_array(b"x", [1.0, 2.0])[:-12]), "claims"),
+    (_mat_file(_element(14, _element(6, b"\0" * 4))), "array flags"),
+    (_mat_file(_element(99, b"12345678")), "unexpected element type 99"),
+    (_mat_file(_element(15, b"not zlib at all")), "corrupt compressed"),
+    (_mat_file(_double_array(b"x", [1.0]), version=0x0200), "v7.3"),
+    (b"MATLAB 5.0 MAT-file" + b"\0" * 40, "not a MATLAB 5 MAT-file"),
+])
+def test_read_mat_refuses_malformed_files(tmp_path, data, words):
+    from motionlang.formats.matfile import read_mat
+    path = tmp_path / "bad.mat"
+    path.write_bytes(data)
+    with pytest.raises(MotionFormatError, match=words) as info:
+        read_mat(path)
+    assert str(info.value).startswith(str(path)) and "\n" not in str(info.value)
+
+
+def test_read_mat_bounds_decompression(tmp_path, monkeypatch):
+    import zlib
+
+    from motionlang.formats.matfile import read_mat
+    bomb = zlib.compress(_double_array(b"z", np.zeros(1 << 20)), 9)  # 8 MiB in ~8 KiB
+    path = tmp_path / "bomb.mat"
+    path.write_bytes(_mat_file(_element(15, bomb)))
+    assert read_mat(path)["z"].size == 1 << 20
+    monkeypatch.setenv("MOTIONLANG_MAX_MEMORY", "4M")
+    with pytest.raises(MotionFormatError, match="MOTIONLANG_MAX_MEMORY"):
+        read_mat(path)
+
+
+@pytest.mark.parametrize("field, value, words", [
+    ("parent", "text", "skel.tree(2).parent must be numbers, got text"),
+    ("parent", np.array([[np.nan]]), "parent must be finite numbers"),
+    ("parent", np.array([[1.5]]), "is not a parent listed before it"),
+    ("or", "abc", "skel.tree(2).or must be numbers"),
+    ("or", np.array([[1 + 2j, 2, 3]]), "or must be numbers"),
+    ("offset", {"a": np.ones(3)}, "offset must be numbers, got a struct"),
+    ("offset", np.array([[7.0, 8, 9, 10]]), "must be 3 column numbers"),
+])
+def test_wrong_field_types(tmp_path, field, value, words):
+    tree = _tree()
+    tree[0, 0]["tree"][0, 1][field] = value
+    with pytest.raises(MotionFormatError, match=words.replace("(", r"\(").replace(")", r"\)")):
+        read_mit(_mat(tmp_path, skel=tree, Motion=_cell(_seq())))
+
+
+def test_wrong_motion_types_and_missing_fields(tmp_path):
+    for motion, words in (("walk", "'Motion' must be a cell"), (_cell("walk"), "sequence 1 must "
+                          "be numbers, got text"), (_cell(_seq() * 1e300), "out-of-range")):
+        with pytest.raises(MotionFormatError, match=words):
+            read_mit(_mat(tmp_path, skel=_tree(), Motion=motion))
+    tree = _tree()
+    nodes = np.zeros((1, 2), dtype=[(k, "O") for k in ("children", "parent", "or")])
+    for k in nodes.dtype.names:
+        nodes[0, 0][k], nodes[0, 1][k] = tree[0, 0]["tree"][0, 0][k], tree[0, 0]["tree"][0, 1][k]
+    tree[0, 0]["tree"] = nodes
+    with pytest.raises(MotionFormatError, match="has no 'offset' field"):
+        read_mit(_mat(tmp_path, skel=tree, Motion=_cell(_seq())))
+    with pytest.raises(MotionFormatError, match="'skel' must be a struct"):
+        read_mit(_mat(tmp_path, skel="mit", Motion=_cell(_seq())))

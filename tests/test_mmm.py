@@ -337,3 +337,44 @@ def test_object_motion_before_the_human(tmp_path):
 def test_missing_file(tmp_path):
     with pytest.raises(MotionFormatError):
         read_mmm(tmp_path / "nope.xml")
+
+
+@pytest.mark.parametrize("decl, words", [
+    ("encoding='utf-32'", "cannot read the declared encoding"),
+    ("encoding='klingon'", "cannot read the declared encoding"),
+    ("encoding='utf-16'", "encoding"),  # declared, but the bytes are not UTF-16
+])
+def test_unreadable_encodings(tmp_path, decl, words):
+    err = _error(tmp_path, _doc().replace("<?xml version='1.0'?>", f"<?xml version='1.0' {decl}?>"))
+    assert words in err.reason and "\n" not in str(err)
+
+
+def test_a_real_utf16_file_reads(tmp_path):
+    p = tmp_path / "u16.xml"
+    p.write_bytes(_doc().replace("<?xml version='1.0'?>",
+                                 "<?xml version='1.0' encoding='utf-16'?>").encode("utf-16"))
+    assert read_mmm(p).n_frames == 3
+
+
+LAUGHS = ('<!DOCTYPE MMM [<!ENTITY a "aaaaaaaaaa">' + "".join(
+    f'<!ENTITY {chr(98 + i)} "{("&" + chr(97 + i) + ";") * 10}">' for i in range(8)) + "]>")
+
+
+@pytest.mark.parametrize("dtd, use", [
+    (LAUGHS, "&i;"),                                               # billion laughs
+    ('<!DOCTYPE MMM [<!ENTITY e SYSTEM "file:///etc/passwd">]>', "&e;"),  # external entity
+    ('<!DOCTYPE MMM [<!ENTITY % p SYSTEM "http://127.0.0.1:9/x.dtd"> %p;]>', "0"),
+    ('<!DOCTYPE MMM SYSTEM "http://127.0.0.1:9/mmm.dtd">', "0"),
+    ('<!DOCTYPE MMM [<!ENTITY e "-0.3">]>', "&e;"),                # even a harmless one
+])
+def test_dtds_and_entities_are_refused(tmp_path, dtd, use):
+    text = _doc().replace("<?xml version='1.0'?>", "<?xml version='1.0'?>" + dtd, 1)
+    err = _error(tmp_path, text.replace("-0.3", use, 1))
+    assert "document type declaration" in err.reason and err.line is None
+
+
+def test_frame_limit(tmp_path, monkeypatch):
+    monkeypatch.setenv("MOTIONLANG_MAX_FRAMES", "2")
+    err = _error(tmp_path, _doc())
+    assert "frame count 3 exceeds the limit of 2" in err.reason
+    assert "MOTIONLANG_MAX_FRAMES" in err.reason

@@ -8,13 +8,16 @@ Layout::
         jump/02.amc         # ASF/AMC: the .asf is found next to the .amc
         jump/02.asf
 
-``file`` is relative to the folder; a file may have several caption lines. Motion files
-without captions are kept with no annotations, like KIT-ML records without any.
+``file`` is relative to the folder (``/`` or ``\\`` separated) and may not leave it; a
+file may have several caption lines. Motion files without captions are kept with no
+annotations, like KIT-ML records without any.
 """
 from __future__ import annotations
 
 import csv
 import json
+import posixpath
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -131,7 +134,8 @@ def load_custom(folder: str | Path, captions: str | Path | None = None, *,
 
     Raises:
         DatasetError: missing folder or captions file, a bad row, or a row naming a motion
-            file that does not exist or is not a motion file (captions file and line named).
+            file that does not exist, is not a motion file, or is outside the folder
+            (captions file and line named).
     """
     folder = Path(folder)
     if not folder.is_dir():
@@ -148,23 +152,52 @@ def load_custom(folder: str | Path, captions: str | Path | None = None, *,
     if joint_map is not None and not isinstance(joint_map, dict):
         from motionlang.formats import read_joint_map
         joint_map = read_joint_map(joint_map)
-    records: dict[Path, CustomRecord] = {}
+    records: dict[str, CustomRecord] = {}  # by path in the folder, not by resolved path
     for p in sorted(folder.rglob("*")):
         if p.suffix.lower() in MOTION_EXTENSIONS and p.is_file():
             rel = p.relative_to(folder)
             if p.suffix.lower() == ".xml" and not p.name.endswith("_mmm.xml"):
                 continue  # only MMM motions; other XML (model files) is not a motion
-            records[p.resolve()] = CustomRecord(rel.with_suffix("").as_posix(), p,
-                                                meta={"captions_lines": []}, fps=fps,
-                                                joint_map=joint_map)
+            records[rel.as_posix()] = CustomRecord(rel.with_suffix("").as_posix(), p,
+                                                   meta={"captions_lines": []}, fps=fps,
+                                                   joint_map=joint_map)
     for line, f, text in read_captions(captions):
-        target = (folder / f).resolve()
-        rec = records.get(target)
+        rel = _inside(f, folder, f"{captions}:{line}")
+        rec = records.get(rel)
         if rec is None:
-            why = "not found" if not target.exists() else \
-                f"not a motion file ({', '.join(MOTION_EXTENSIONS)})"
-            raise DatasetError(f"{captions}:{line}: unknown motion file {f!r} ({why} in "
-                               f"{folder})")
+            raise DatasetError(f"{captions}:{line}: unknown motion file {f!r} "
+                               f"({_why_unknown(folder, rel)})")
         rec.annotations.append(text)
         rec.meta["captions_lines"].append(line)
     return sorted(records.values(), key=lambda r: r.id)
+
+
+def _why_unknown(folder: Path, rel: str) -> str:
+    """Why no motion file of ``folder`` has the path ``rel``."""
+    target = folder / rel
+    try:
+        if not target.exists():
+            return f"not found in {folder}"
+        if rel != "." and folder.resolve() not in target.resolve().parents:
+            return f"a symbolic link in {folder} leads outside it"
+    except OSError as exc:
+        return f"cannot be read: {exc.strerror or exc}"
+    return f"not a motion file ({', '.join(MOTION_EXTENSIONS)}) in {folder}"
+
+
+def _inside(name: str, folder: Path, where: str) -> str:
+    """A caption's ``file`` as a normalised ``/``-separated path inside ``folder``.
+
+    Matched against the files found in the folder by that path (never by resolving links,
+    which would let ``../outside/x.bvh`` through wherever a link inside points there).
+
+    Raises:
+        DatasetError: an absolute path, or one that ``..`` takes out of the folder.
+    """
+    posix = name.replace("\\", "/")
+    norm = posixpath.normpath(posix)
+    if posix.startswith("/") or re.match(r"^[A-Za-z]:", posix) or "\0" in posix or \
+            norm == ".." or norm.startswith("../"):
+        raise DatasetError(f"{where}: motion file {name!r} is outside the dataset folder "
+                           f"{folder} (paths are relative to it and stay inside)")
+    return norm

@@ -1,26 +1,37 @@
-"""Resumable HTTP downloads with checksum checks, and safe zip extraction.
+"""Resumable HTTP downloads with checksum checks, and safe zip and tar extraction.
 
 Standard library only (``urllib``): a dataset download must work in a bare environment.
+Downloads named as archives are checked to be archives before they are kept; extraction
+refuses path tricks, links, name clashes, encrypted members, unknown compression and
+archives that expand beyond the limits of :mod:`motionlang.utils.limits`
+(``MOTIONLANG_MAX_ARCHIVE_RATIO``, ``MOTIONLANG_MAX_ARCHIVE_BYTES``), each with one
+``DatasetError`` line, leaving nothing behind.
 """
 from __future__ import annotations
 
 import contextlib
 import hashlib
 import http.client
+import lzma
 import os
 import shutil
 import stat
-import tempfile
+import tarfile
 import urllib.error
 import urllib.request
 import zipfile
+import zlib
 from pathlib import Path, PurePosixPath
 from typing import Callable
 
 from motionlang.errors import DatasetError
+from motionlang.utils import limits
+from motionlang.utils.atomic import make_temp
 from motionlang.utils.progress import progress
 
 CHUNK = 1 << 20  # bytes per read
+ZIP_METHODS = {zipfile.ZIP_STORED, zipfile.ZIP_DEFLATED, zipfile.ZIP_BZIP2, zipfile.ZIP_LZMA}
+TAR_SUFFIXES = (".tar", ".tar.gz", ".tgz", ".tar.bz2", ".tbz2", ".tar.xz", ".txz")
 
 
 def sha256_file(path: str | Path, chunk: int = CHUNK) -> str:
@@ -50,6 +61,12 @@ def download_file(url: str, target: str | Path, *, sha256: str | None = None,
     partial. The ``.part`` file is not written through ``utils.atomic`` on purpose: keeping
     the partial bytes across failures is the point of it.
 
+    A ``target`` named as an archive (``.zip``, ``.tar``, ``.tar.gz``, ``.tar.xz``...) must
+    hold one: without a checksum, what the server sent is checked to be such an archive
+    before it becomes ``target`` (a login or error page served with status 200 is refused
+    and not kept), and an existing ``target`` that is not one (left by an older version) is
+    downloaded again rather than reused.
+
     Args:
         url: http(s) URL.
         target: final file path; an existing file is reused (after the checksum, if given).
@@ -58,8 +75,8 @@ def download_file(url: str, target: str | Path, *, sha256: str | None = None,
         timeout: seconds without data before giving up.
 
     Raises:
-        DatasetError: offline / connection refused, HTTP error, short read, bad checksum;
-            the message names the URL.
+        DatasetError: offline / connection refused, HTTP error, short read, bad checksum,
+            not the archive the name promises; the message names the URL.
     """
     if not url.lower().startswith(("http://", "https://")):
         raise DatasetError(f"{url}: only http(s) URLs can be downloaded")
@@ -67,9 +84,11 @@ def download_file(url: str, target: str | Path, *, sha256: str | None = None,
     target.parent.mkdir(parents=True, exist_ok=True)
     expected = sha256.lower().strip() if sha256 else None
     if target.exists():
-        if expected is None or sha256_file(target) == expected:
+        ok = sha256_file(target) == expected if expected else \
+            _archive_problem(target, target.name) is None
+        if ok:
             return target
-        target.unlink()  # stale or corrupt: fetch again
+        target.unlink()  # stale, corrupt, or a web page saved as the archive: fetch again
     part = target.with_name(target.name + ".part")
     offset = part.stat().st_size if part.exists() else 0
     try:
@@ -112,25 +131,138 @@ def download_file(url: str, target: str | Path, *, sha256: str | None = None,
         if got != expected:
             part.unlink()
             raise DatasetError(f"{url}: sha256 mismatch: expected {expected}, got {got}")
+    elif (problem := _archive_problem(part, target.name)) is not None:
+        part.unlink()
+        raise DatasetError(f"{url}: {problem}; nothing was kept: check the URL, or run again "
+                           "later")
     os.replace(part, target)
     return target
 
 
+def _archive_problem(path: Path, name: str) -> str | None:
+    """Why the file ``path`` is not the archive that ``name`` promises; None if it is one,
+    or if ``name`` promises none."""
+    name = name.lower()
+    if name.endswith(".zip"):
+        kind, ok = "zip", zipfile.is_zipfile(path)
+    elif name.endswith(TAR_SUFFIXES):
+        kind = "tar"
+        try:
+            with tarfile.open(path) as tf:
+                ok = tf.next() is not None
+        except (tarfile.TarError, EOFError, lzma.LZMAError, zlib.error, OSError):
+            ok = False
+    else:
+        return None
+    if ok:
+        return None
+    with open(path, "rb") as fh:
+        head = fh.read(2048).lstrip().lower()
+    if head.startswith((b"<!doctype html", b"<html", b"<?xml")) or b"<html" in head:
+        return f"the server sent a web page (HTML), not the {kind} archive"
+    return f"what the server sent is not a {kind} archive"
+
+
 def _member_path(name: str, archive: Path) -> PurePosixPath:
-    """The relative path of a zip member, refusing anything that could leave the folder."""
+    """The relative path of an archive member, refusing anything that could leave the folder."""
     p = PurePosixPath(name.replace("\\", "/"))
-    if p.is_absolute() or ".." in p.parts or (p.parts and ":" in p.parts[0]):
+    if p.is_absolute() or ".." in p.parts or (p.parts and ":" in p.parts[0]) or "\0" in name:
         raise DatasetError(f"{archive}: unsafe path in archive: {name!r}")
     return p
 
 
+class _Budget:
+    """What an extraction may still write: the limits of ``utils.limits`` (total bytes,
+    expansion ratio over the archive's size beyond a floor) and the free disk space; and
+    the names written so far, to refuse name clashes."""
+
+    def __init__(self, archive: Path, dest: Path):
+        lim = limits.current()
+        self.archive, self.left, self.name = archive, lim.max_archive_bytes, "max_archive_bytes"
+        by_ratio = max(limits.RATIO_FLOOR_BYTES, lim.max_archive_ratio * archive.stat().st_size)
+        if by_ratio < self.left:
+            self.left, self.name = int(by_ratio), "max_archive_ratio"
+        self.limit, self.ratio = self.left, lim.max_archive_ratio
+        self.free = shutil.disk_usage(dest).free
+        self.files: set[PurePosixPath] = set()
+        self.folders: set[PurePosixPath] = set()
+
+    def check(self, nbytes: int, what: str) -> None:
+        """Refuse if ``nbytes`` more would not fit."""
+        if nbytes > self.left:
+            why = "" if self.name == "max_archive_bytes" else \
+                f" ({self.ratio:g} times the archive's size, " \
+                f"{limits.human('max_archive_bytes', limits.RATIO_FLOOR_BYTES)} at least)"
+            raise DatasetError(
+                f"{self.archive}: refused: {what} would expand it to more than "
+                f"{limits.human('max_archive_bytes', self.limit)}{why}; raise it with "
+                f"{limits.ENV[self.name]}=... if the archive is genuine")
+        if nbytes > self.free:
+            raise DatasetError(f"{self.archive}: not enough free disk space to extract it "
+                               f"({what})")
+
+    def take(self, nbytes: int, what: str) -> None:
+        """Account for ``nbytes`` more, written for member ``what``."""
+        self.check(nbytes, f"member {what!r}")
+        self.left -= nbytes
+        self.free -= nbytes
+
+    def add_name(self, rel: PurePosixPath, folder: bool, name: str) -> None:
+        """Refuse a member whose path another member already has, as a file or a folder."""
+        parents = set(rel.parents) - {PurePosixPath(".")}
+        if (not folder and (rel in self.files or rel in self.folders)) or \
+                (folder and rel in self.files) or parents & self.files:
+            raise DatasetError(f"{self.archive}: name clash in archive: {name!r} (two members "
+                               "with the same path, or a file where a folder is needed)")
+        (self.folders if folder else self.files).add(rel)
+        self.folders |= parents
+
+
+def _copy(src, out: Path, budget: _Budget, name: str) -> None:
+    out.parent.mkdir(parents=True, exist_ok=True)
+    with open(out, "wb") as dst:
+        for block in iter(lambda: src.read(CHUNK), b""):
+            budget.take(len(block), name)
+            dst.write(block)
+
+
+def _zip_members(zf: zipfile.ZipFile, archive: Path, budget: _Budget, keep):
+    """The members to extract, checked before anything is written: safe paths, no links,
+    no clash, not encrypted, a compression zipfile reads, declared sizes within budget."""
+    out = []
+    for info in zf.infolist():
+        rel = _member_path(info.filename, archive)
+        if stat.S_ISLNK(info.external_attr >> 16):
+            raise DatasetError(f"{archive}: symbolic link in archive: {info.filename!r}")
+        if not rel.parts or (keep and not info.is_dir() and not keep(info.filename)):
+            continue
+        budget.add_name(rel, info.is_dir(), info.filename)
+        if info.is_dir():
+            continue
+        if info.flag_bits & 0x1:
+            raise DatasetError(f"{archive}: encrypted member {info.filename!r} "
+                               "(password-protected archives are not supported)")
+        if info.compress_type not in ZIP_METHODS:
+            raise DatasetError(f"{archive}: member {info.filename!r} uses compression method "
+                               f"{info.compress_type}, which cannot be read (stored, deflate, "
+                               "bzip2 and lzma can)")
+        out.append((info, rel))
+    budget.check(sum(info.file_size for info, _ in out), "the sizes its members declare")
+    return out
+
+
 def safe_extract(archive: str | Path, dest: str | Path, *,
                  keep: Callable[[str], bool] | None = None) -> Path:
-    """Extract a zip into ``dest`` without path traversal, atomically.
+    """Extract a zip into ``dest`` safely and atomically.
 
-    Members are written to a temporary folder next to ``dest`` that is renamed onto
-    ``dest`` at the end, so ``dest`` either does not exist or is complete. Absolute paths,
-    ``..`` components and symbolic links are refused with ``DatasetError``.
+    Members are written to a temporary folder next to ``dest`` (named and swept as in
+    :mod:`motionlang.utils.atomic`) that is renamed onto ``dest`` at the end, so ``dest``
+    either does not exist or is complete. Refused with a ``DatasetError``, before anything is
+    written: absolute paths, ``..`` components, symbolic links, two members with one path,
+    encrypted members, unknown compression methods, and archives that expand beyond
+    ``MOTIONLANG_MAX_ARCHIVE_BYTES``, beyond ``MOTIONLANG_MAX_ARCHIVE_RATIO`` times their
+    own size, or beyond the free disk space (:mod:`motionlang.utils.limits`); the sizes are
+    also counted as the bytes come, whatever the archive declares.
 
     Args:
         keep: predicate on member names; members it rejects are skipped.
@@ -138,23 +270,20 @@ def safe_extract(archive: str | Path, dest: str | Path, *,
     archive, dest = Path(archive), Path(dest)
     if dest.exists():
         raise DatasetError(f"{dest}: already exists; remove it to extract {archive} again")
-    dest.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{dest.name}.", dir=dest.parent))
+    tmp = make_temp(dest, ".extract", directory=True)
     try:
+        budget = _Budget(archive, dest.parent)
         with zipfile.ZipFile(archive) as zf:
-            for info in zf.infolist():
-                rel = _member_path(info.filename, archive)
-                if stat.S_ISLNK(info.external_attr >> 16):
-                    raise DatasetError(f"{archive}: symbolic link in archive: {info.filename!r}")
-                if info.is_dir() or not rel.parts or (keep and not keep(info.filename)):
-                    continue
-                out = tmp.joinpath(*rel.parts)
-                out.parent.mkdir(parents=True, exist_ok=True)
-                with zf.open(info) as src, open(out, "wb") as dst:
-                    shutil.copyfileobj(src, dst, CHUNK)
+            for info, rel in _zip_members(zf, archive, budget, keep):
+                with zf.open(info) as src:
+                    _copy(src, tmp.joinpath(*rel.parts), budget, info.filename)
         os.replace(tmp, dest)
-    except zipfile.BadZipFile as exc:
-        raise DatasetError(f"{archive}: not a valid zip archive ({exc})") from None
+    except (zipfile.BadZipFile, zlib.error, EOFError, lzma.LZMAError, NotImplementedError,
+            ValueError) as exc:
+        raise DatasetError(f"{archive}: not a valid zip archive ({exc}); if it was "
+                           "downloaded, delete it and download it again") from None
+    except OSError as exc:
+        raise DatasetError(f"{archive}: cannot extract: {exc.strerror or exc}") from None
     finally:
         with contextlib.suppress(FileNotFoundError):
             shutil.rmtree(tmp)
@@ -164,33 +293,31 @@ def safe_extract(archive: str | Path, dest: str | Path, *,
 def safe_extract_tar(archive: str | Path, dest: str | Path, *,
                      keep: Callable[[str], bool] | None = None) -> Path:
     """:func:`safe_extract` for tar archives (``.tar``, ``.tar.gz``, ``.tar.xz``...):
-    regular files only (links, devices and FIFOs refused), no absolute or ``..`` paths,
-    extracted to a temporary folder renamed onto ``dest`` when complete."""
-    import lzma
-    import tarfile
-    import zlib
-
+    regular files only (links, devices and FIFOs refused), no absolute or ``..`` paths, no
+    name clash, the same size limits (checked member by member as the stream is read, a
+    compressed tar having no index), extracted to a temporary folder renamed onto ``dest``
+    when complete."""
     archive, dest = Path(archive), Path(dest)
     if dest.exists():
         raise DatasetError(f"{dest}: already exists; remove it to extract {archive} again")
-    dest.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{dest.name}.", dir=dest.parent))
+    tmp = make_temp(dest, ".extract", directory=True)
     try:
+        budget = _Budget(archive, dest.parent)
         with tarfile.open(archive) as tf:
             for info in tf:
                 rel = _member_path(info.name, archive)
-                if info.isdir() or not rel.parts or (keep and not keep(info.name)):
+                if not rel.parts or (keep and not info.isdir() and not keep(info.name)):
                     continue
-                if not info.isfile():
+                if not (info.isdir() or info.isfile()):
                     raise DatasetError(f"{archive}: not a regular file in archive: {info.name!r}")
-                out = tmp.joinpath(*rel.parts)
-                out.parent.mkdir(parents=True, exist_ok=True)
-                src = tf.extractfile(info)
-                with src, open(out, "wb") as dst:
-                    shutil.copyfileobj(src, dst, CHUNK)
+                budget.add_name(rel, info.isdir(), info.name)
+                if info.isfile():
+                    budget.check(info.size, f"member {info.name!r}")
+                    _copy(tf.extractfile(info), tmp.joinpath(*rel.parts), budget, info.name)
         os.replace(tmp, dest)
     except (tarfile.TarError, EOFError, lzma.LZMAError, zlib.error) as exc:
-        raise DatasetError(f"{archive}: not a valid tar archive ({exc})") from None
+        raise DatasetError(f"{archive}: not a valid tar archive ({exc}); if it was "
+                           "downloaded, delete it and download it again") from None
     except OSError as exc:
         raise DatasetError(f"{archive}: cannot extract: {exc.strerror or exc}") from None
     finally:

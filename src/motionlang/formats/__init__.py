@@ -4,7 +4,13 @@
 * ``.bvh`` — Biovision hierarchy (:mod:`motionlang.formats.bvh`)
 * ``.amc`` — Acclaim motion with its ``.asf`` skeleton (:mod:`motionlang.formats.asf_amc`)
 * ``.mat`` — the MIT walking data as Taylor distributed it (:mod:`motionlang.formats.mit`;
-  read only, one sequence at a time)
+  read only, one sequence at a time), through a strict MAT-file reader of our own
+  (:mod:`motionlang.formats.matfile`: scipy's can be crashed by a crafted file)
+
+Every reader turns a bad file into one :class:`MotionFormatError` naming the file (and the
+line or frame), never another exception, and checks what a file asks for (size, joints,
+frames, memory) against :mod:`motionlang.utils.limits` before asking the system for it.
+:mod:`motionlang.formats.fuzzing` holds the fuzzing that checks this.
 """
 from __future__ import annotations
 

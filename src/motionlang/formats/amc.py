@@ -10,6 +10,7 @@ That is the column order of ``cmu35WalkJog.mat`` (Taylor 2006): its first 90 row
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -19,7 +20,10 @@ from motionlang.formats.asf import ROT_DOFS, parse_float, read_asf, read_lines
 from motionlang.kinematics.motion import Motion
 from motionlang.kinematics.rotations import AXES
 from motionlang.kinematics.skeleton import Skeleton
+from motionlang.utils import limits
 from motionlang.utils.atomic import atomic_write
+
+_INTEGER = re.compile(r"-?[0-9]+")  # ASCII digits only: "²".isdigit() is True, int() fails
 
 
 # ------------------------------------------------------------------------------ channel layout
@@ -133,6 +137,10 @@ def read_amc(path: str | Path, skeleton: Skeleton, fps: float = 120.0) -> Motion
     Returns:
         Motion at ``fps`` (CMU: 120), ``source_format="amc"``, ``meta["path"]``,
         ``meta["first_frame"]`` (the first frame number in the file).
+
+    Raises:
+        MotionFormatError: malformed content (file and line named), or a file or motion
+            beyond the limits (``utils.limits``).
     """
     path = Path(path)
     try:
@@ -154,6 +162,7 @@ def read_amc(path: str | Path, skeleton: Skeleton, fps: float = 120.0) -> Motion
         if j.ndof == 0 and j.parent >= 0 and not j.name.endswith("_end"):
             slots.setdefault(j.name, (0, 0))
     C = 6 + len(cols)
+    max_frames = limits.current().max_frames
     info = getattr(skeleton, "asf_layout", None)
     degrees = info["degrees"] if info else True
     frames: list[np.ndarray] = []
@@ -181,9 +190,14 @@ def read_amc(path: str | Path, skeleton: Skeleton, fps: float = 120.0) -> Motion
             elif key == ":RADIANS":
                 degrees = False
             continue
-        if len(tok) == 1 and tok[0].lstrip("-").isdigit():
+        if len(tok) == 1 and _INTEGER.fullmatch(tok[0]):
+            if len(tok[0].lstrip("-")) > 15:  # int() of 4,300+ digits raises; none is real
+                raise MotionFormatError(path, f"frame number {tok[0][:20]}... out of range",
+                                        line=ln)
             if row is not None:
                 close(ln)
+                if len(frames) >= max_frames:
+                    limits.check(path, "max_frames", len(frames) + 1, "frame count", line=ln)
             numbers.append(int(tok[0]))
             row, seen = np.zeros(C), set()
             continue
@@ -205,6 +219,7 @@ def read_amc(path: str | Path, skeleton: Skeleton, fps: float = 120.0) -> Motion
     if row is None:
         raise MotionFormatError(path, "no frames", line=len(lines))
     close(len(lines))
+    limits.check_motion(path, len(frames), len(skeleton), C)
     ch = np.stack(frames)
     if not degrees:
         rot_ch = [i for i, (k, _) in enumerate(root_map) if k == "r"] + list(range(6, C))

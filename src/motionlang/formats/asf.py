@@ -23,6 +23,7 @@ The motion side (AMC files, flat channel arrays) is :mod:`motionlang.formats.amc
 """
 from __future__ import annotations
 
+import heapq
 import math
 import re
 from pathlib import Path
@@ -32,6 +33,7 @@ import numpy as np
 from motionlang.errors import MotionFormatError, SkeletonError
 from motionlang.kinematics.rotations import AXES, chain
 from motionlang.kinematics.skeleton import Joint, Skeleton
+from motionlang.utils import limits
 
 INCH = 0.0254
 MAX_ABS = 1e12  # largest magnitude accepted for any number in a file
@@ -39,8 +41,12 @@ ROT_DOFS = {"rx": "x", "ry": "y", "rz": "z"}
 
 
 # ------------------------------------------------------------------------------ helpers
+PARSE_FACTOR = 8  # memory of the lines as Python strings, and more, per byte of file
+
+
 def read_lines(path: Path) -> list[str]:
     """The lines of a text file (UTF-8, BOM and bad bytes tolerated)."""
+    limits.check_file(path, PARSE_FACTOR)
     try:
         raw = path.read_bytes()
     except OSError as exc:
@@ -122,10 +128,12 @@ def read_asf(path: str | Path) -> Skeleton:
         ``limits`` per bone as (lo, hi) pairs in the file's angle unit, ``degrees``).
 
     Raises:
-        MotionFormatError: on any malformed content, naming the file and line.
+        MotionFormatError: on any malformed content, naming the file and line, or a file
+            or skeleton beyond the limits (``utils.limits``).
     """
     path = Path(path)
     lines = read_lines(path)
+    max_bones = limits.current().max_joints - 1  # the root is a node too
     length_scale, deg = 1.0, True
     root_order, root_axis, root_orient = ["TX", "TY", "TZ", "RX", "RY", "RZ"], "XYZ", np.zeros(3)
     bones: dict[str, _Bone] = {}
@@ -178,6 +186,8 @@ def read_asf(path: str | Path) -> Skeleton:
                                                   f"DOFs but {len(bone.limits)} limits", line=ln)
                 if bone.name in bones or bone.name == "root":
                     raise MotionFormatError(path, f"duplicate bone name {bone.name!r}", line=ln)
+                if len(bones) >= max_bones:
+                    limits.check(path, "max_joints", len(bones) + 2, "joint count", line=ln)
                 bones[bone.name] = bone
                 bone = None
             elif key == "name" and len(tok) == 2:
@@ -226,21 +236,19 @@ def read_asf(path: str | Path) -> Skeleton:
     if not hier_seen:
         raise MotionFormatError(path, "no :hierarchy section", line=len(lines))
     unit = INCH / length_scale
+    if not math.isfinite(unit):
+        raise MotionFormatError(path, f"units length {length_scale:g} is too small")
     ang = (lambda a: np.deg2rad(a)) if deg else (lambda a: np.asarray(a, dtype=float))
 
-    # nodes in bonedata order, parents first (stable topological order; catches cycles)
+    # nodes parents first, each time the first bone in bonedata order whose parent is
+    # placed: a heap of the bones ready to place, n log n whatever order the file lists
+    order = {n: i for i, n in enumerate(bones)}
+    names = list(bones)
     placed: dict[str, int] = {"root": 0}
     joints = [Joint("root", -1, np.zeros(3), pre=_euler(root_axis, ang(root_orient)))]
-    pending = list(bones)
-    while pending:
-        # the first bone (in bonedata order) whose parent is already placed
-        name = next((n for n in pending if parent_of.get(n) in placed), None)
-        if name is None:
-            b = bones[pending[0]]
-            why = "not connected to the root" if pending[0] not in parent_of else "in a cycle"
-            raise MotionFormatError(path, f"bone {pending[0]!r} is {why} in the hierarchy",
-                                    line=b.line)
-        pending.remove(name)
+    ready = sorted(order[c] for c in children.get("root", []))
+    while ready:
+        name = names[heapq.heappop(ready)]
         b, par = bones[name], parent_of[name]
         offset = np.zeros(3) if par == "root" else _bone_vector(bones[par], unit, path)
         C = _euler(b.order, ang(b.axis))
@@ -251,6 +259,13 @@ def read_asf(path: str | Path) -> Skeleton:
                             pre=C, post=C.T, dof_names=tuple(f"{name}_r{d}" for d in comp)))
         if not children.get(name):
             joints.append(Joint(f"{name}_end", len(joints) - 1, _bone_vector(b, unit, path)))
+        for child in children.get(name, ()):
+            heapq.heappush(ready, order[child])
+    if len(placed) <= len(bones):
+        first = next(n for n in bones if n not in placed)
+        raise MotionFormatError(path, f"bone {first!r} is {_unplaced_why(first, parent_of)} "
+                                      "in the hierarchy", line=bones[first].line)
+    limits.check(path, "max_joints", len(joints), "joint count (bones and end points)")
     root_axes = np.array([AXES[c] for c in reversed(root_axis.lower())])
     try:
         sk = Skeleton(joints, world=np.eye(3), root_axes=root_axes, file_unit=unit,
@@ -262,6 +277,15 @@ def read_asf(path: str | Path) -> Skeleton:
                      "dofs": {n: list(b.dofs) for n, b in bones.items()},
                      "limits": {n: list(b.limits) for n, b in bones.items() if b.limits}}
     return sk
+
+
+def _unplaced_why(name: str, parent_of: dict[str, str]) -> str:
+    """Why a bone never got placed: its chain of parents ends off the root, or loops."""
+    seen = set()
+    while name in parent_of and name not in seen:
+        seen.add(name)
+        name = parent_of[name]
+    return "in a cycle" if name in seen else "not connected to the root"
 
 
 def _bone_vector(b: _Bone, unit: float, path) -> np.ndarray:

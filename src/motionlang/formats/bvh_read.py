@@ -18,6 +18,7 @@ from motionlang.errors import MotionFormatError
 from motionlang.formats.bvh_build import CHANNELS, MAX_ABS, build_motion
 from motionlang.formats.units import resolve_unit
 from motionlang.kinematics.motion import Motion
+from motionlang.utils import limits
 
 FPS_TOLERANCE = 2e-3  # 0.0333 s is 30 fps (30.03); 0.033 s is not (30.3)
 
@@ -79,6 +80,7 @@ def _parse_hierarchy(tk: _Tokens) -> list[dict]:
     units, ``channels`` (canonical names, file order), ``line``, ``end`` (End Site) and
     ``site_name`` (the name token of an End Site, None when it has none)."""
     tk.expect("HIERARCHY")
+    max_joints = limits.current().max_joints
     nodes: list[dict] = []
     stack: list[int] = []
     tok, ln = tk.next("ROOT")
@@ -132,8 +134,8 @@ def _parse_hierarchy(tk: _Tokens) -> list[dict]:
                     return nodes
             else:
                 break  # a child node starts
-        if len(nodes) > 10000:
-            raise MotionFormatError(tk.path, "more than 10000 joints", line=ln)
+        if len(nodes) > max_joints:
+            limits.check(tk.path, "max_joints", len(nodes), "joint count", line=ln)
 
 
 # ------------------------------------------------------------------------------ frames
@@ -143,7 +145,8 @@ def _read_frames(path: Path, fh, first_line: int, n_frames: int, C: int) -> np.n
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # "input contained no data"
         try:
-            data = np.loadtxt(fh, dtype=float, comments=None, ndmin=2)
+            # one row more than declared is enough to tell that there are too many
+            data = np.loadtxt(fh, dtype=float, comments=None, ndmin=2, max_rows=n_frames + 1)
         except Exception:  # noqa: BLE001 - whatever it is, the scan below names it exactly
             data = None
     # NaN fails both comparisons, inf the range; no (T, C) temporaries
@@ -196,6 +199,7 @@ def _is_float(x: bytes) -> bool:
 def _open(path: Path):
     """A binary file object; files with old-Mac ``\\r``-only line ends are read whole and
     given ``\\n`` (line-by-line reading needs them)."""
+    limits.check_file(path)
     try:
         fh = open(path, "rb")
     except OSError as exc:
@@ -222,7 +226,8 @@ def read_bvh(path: str | Path, unit: float | str | None = None) -> Motion:
         ``bvh_root_channels``, ``bvh_hierarchy``, ``bvh_position_spread_m``.
 
     Raises:
-        MotionFormatError: on malformed content, naming the file and line.
+        MotionFormatError: on malformed content, naming the file and line, or a file or
+            motion beyond the limits (``utils.limits``), checked before reading the numbers.
         ValueError: an unknown ``unit``.
     """
     path = Path(path)
@@ -248,6 +253,7 @@ def read_bvh(path: str | Path, unit: float | str | None = None) -> Motion:
         if round(fps) >= 1 and abs(fps - round(fps)) <= FPS_TOLERANCE * fps:
             fps = float(round(fps))   # 0.0333333 s -> 30 fps, not 30.00003
         C = sum(len(n["channels"]) for n in nodes)
+        limits.check_motion(path, n_frames, len(nodes), C)  # before asking for the memory
         data = _read_frames(path, fh, tk.ln + 1, n_frames, C)
     motion = build_motion(path, nodes, data, fps, given)
     motion.meta["frame_time"] = dt

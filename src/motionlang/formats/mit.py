@@ -32,9 +32,11 @@ from pathlib import Path
 import numpy as np
 
 from motionlang.errors import MotionFormatError
+from motionlang.formats.matfile import read_mat
 from motionlang.kinematics.motion import Motion
 from motionlang.kinematics.rotations import chain, matrix_to_chain
 from motionlang.kinematics.skeleton import Joint, Skeleton
+from motionlang.utils import limits
 
 MIT_FPS = 30.0
 #: names of the 18 nodes of Taylor's MIT tree, in file order (node positions: the joint
@@ -54,6 +56,7 @@ Q_CYCLE = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 ROOT_FILE_AXES = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]])
 ROOT_AXES = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]])
 XYZ = np.eye(3)
+MAX_ABS = 1e12  # largest magnitude accepted for any value (as the BVH and ASF readers)
 
 
 def root_matrix(channels: np.ndarray) -> np.ndarray:
@@ -62,30 +65,50 @@ def root_matrix(channels: np.ndarray) -> np.ndarray:
     return Q_CYCLE @ chain(ROOT_FILE_AXES, channels[..., [0, 2, 1]]) @ Q_CYCLE
 
 
-def _field(struct, name: str, path) -> np.ndarray:
-    try:
-        return np.asarray(struct[name]).squeeze()
-    except (KeyError, ValueError, IndexError):
-        raise MotionFormatError(path, f"MIT skeleton node has no {name!r} field") from None
+def _describe(value) -> str:
+    if isinstance(value, str):
+        return f"text {value[:20]!r}"
+    if isinstance(value, np.ndarray) and value.dtype == object:
+        return "a struct" if value.size and isinstance(value.flat[0], dict) else "a cell array"
+    return type(value).__name__
 
 
-def _columns(node, name: str, ncols: int, path, i: int) -> np.ndarray:
-    cols = np.atleast_1d(_field(node, name, path)).astype(float).ravel()
+def _numbers(value, what: str, path) -> np.ndarray:
+    """``value`` as a float array; MotionFormatError if it is text, a cell, a struct, or
+    holds NaN or inf."""
+    if not isinstance(value, np.ndarray) or value.dtype.kind not in "biuf":
+        raise MotionFormatError(path, f"{what} must be numbers, got {_describe(value)}")
+    out = value.astype(float)
+    if not np.all(np.isfinite(out)):
+        raise MotionFormatError(path, f"{what} must be finite numbers")
+    return out
+
+
+def _structs(value, what: str, path) -> list[dict]:
+    """The elements of a MATLAB struct array, in MATLAB's (column-major) order."""
+    if not (isinstance(value, np.ndarray) and value.dtype == object and value.size
+            and all(isinstance(v, dict) for v in value.flat)):
+        raise MotionFormatError(path, f"{what} must be a struct, got {_describe(value)}")
+    return list(value.ravel(order="F"))
+
+
+def _field(node: dict, name: str, path, i: int):
+    if name not in node:
+        raise MotionFormatError(path, f"skel.tree({i + 1}) has no {name!r} field")
+    return node[name]
+
+
+def _columns(node: dict, name: str, ncols: int, path, i: int) -> np.ndarray:
+    what = f"skel.tree({i + 1}).{name}"
+    cols = _numbers(_field(node, name, path, i), what, path).ravel()
     if cols.shape != (3,) or np.any(cols != np.round(cols)) or cols.min() < 1 or cols.max() > ncols:
-        raise MotionFormatError(path, f"skel.tree({i + 1}).{name} must be 3 column numbers in "
-                                      f"1..{ncols}, got {cols.tolist()}")
+        raise MotionFormatError(path, f"{what} must be 3 column numbers in 1..{ncols}, got "
+                                      f"{cols.tolist()[:6]}")
     return cols.astype(int) - 1
 
 
-def _load(path: Path):
-    from scipy.io import loadmat  # scipy is a dependency; imported late to keep imports light
-
-    try:
-        data = loadmat(str(path))
-    except FileNotFoundError:
-        raise MotionFormatError(path, "file not found") from None
-    except Exception as exc:  # scipy raises a mix of ValueError/TypeError/MatReadError
-        raise MotionFormatError(path, f"not a readable MATLAB file: {exc}") from None
+def _load(path: Path) -> dict:
+    data = read_mat(path)  # no scipy: see formats.matfile for why
     if "skel" not in data or "Motion" not in data:
         found = sorted(k for k in data if not k.startswith("__"))
         raise MotionFormatError(path, "expected variables 'skel' and 'Motion' (Taylor's MIT "
@@ -93,21 +116,48 @@ def _load(path: Path):
     return data
 
 
-def _tree(data, path):
-    try:
-        tree = np.asarray(data["skel"][0, 0]["tree"]).ravel()
-    except (KeyError, ValueError, IndexError, TypeError):
-        raise MotionFormatError(path, "'skel' has no 'tree' field") from None
-    if len(tree) == 0:
-        raise MotionFormatError(path, "'skel.tree' is empty")
+def _tree(data, path) -> tuple[list[dict], list[int]]:
+    skel = _structs(data["skel"], "'skel'", path)[0]
+    if "tree" not in skel:
+        raise MotionFormatError(path, "'skel' has no 'tree' field")
+    tree = _structs(skel["tree"], "'skel.tree'", path)
+    limits.check(path, "max_joints", len(tree), "joint count")
     parents = []
     for i, node in enumerate(tree):
-        p = np.atleast_1d(_field(node, "parent", path)).ravel()
-        parents.append(int(p[0]) - 1 if p.size else -1)
-        if not (parents[-1] == -1) == (i == 0) or not -1 <= parents[-1] < i:
-            raise MotionFormatError(path, f"skel.tree({i + 1}).parent {p.tolist()} is not a "
-                                          "parent listed before it (the root must come first)")
+        p = _numbers(_field(node, "parent", path, i), f"skel.tree({i + 1}).parent", path).ravel()
+        ok = p.size <= 1 and (p.size == 0 or p[0] == round(p[0]))
+        parents.append(int(p[0]) - 1 if ok and p.size else -1)
+        if not ok or not (parents[-1] == -1) == (i == 0) or not -1 <= parents[-1] < i:
+            raise MotionFormatError(path, f"skel.tree({i + 1}).parent {p.tolist()[:4]} is not "
+                                          "a parent listed before it (the root must come first)")
     return tree, parents
+
+
+def _sequences(data, ncols: int, J: int, path) -> list[np.ndarray]:
+    cells = data["Motion"]
+    if not isinstance(cells, np.ndarray) or cells.dtype != object or \
+            any(isinstance(c, dict) for c in cells.flat):
+        raise MotionFormatError(path, "'Motion' must be a cell array of (frames, "
+                                      f"{ncols}) number arrays, got {_describe(cells)}")
+    if not cells.size:
+        raise MotionFormatError(path, "'Motion' holds no sequences")
+    seqs = []
+    for k, X in enumerate(cells.ravel(order="F")):
+        if not isinstance(X, np.ndarray) or X.dtype.kind not in "biuf":
+            raise MotionFormatError(path, f"sequence {k + 1} must be numbers, got "
+                                          f"{_describe(X)}")
+        if X.ndim != 2 or X.shape[1] != ncols or X.shape[0] == 0:
+            raise MotionFormatError(path, f"sequence {k + 1} has shape {X.shape}, expected "
+                                          f"(frames, {ncols})")
+        limits.check_motion(path, X.shape[0], J, ncols)
+        X = X.astype(float)
+        bad = ~(np.abs(X) <= MAX_ABS)  # NaN, inf, or so big that kinematics overflows
+        if bad.any():
+            f, c = np.argwhere(bad)[0]
+            raise MotionFormatError(path, f"sequence {k + 1}: non-finite or out-of-range "
+                                          f"value in column {int(c) + 1}", frame=int(f))
+        seqs.append(X)
+    return seqs
 
 
 def read_mit(path: str | Path) -> list[Motion]:
@@ -117,26 +167,18 @@ def read_mit(path: str | Path) -> list[Motion]:
     that the file's channels survive a round trip). Lengths in metres.
 
     Raises:
-        MotionFormatError: not a MAT file, missing variables, a malformed tree, a sequence
-            with the wrong width, non-finite values (frame named) or varying bone offsets.
+        MotionFormatError: not a MAT file or a malformed one (``formats.matfile``),
+            missing variables, a malformed tree (text, a missing field or a bad number where
+            ``parent``, ``or`` or ``offset`` should be), a sequence that is not numbers or
+            has the wrong width, non-finite values (frame named), varying bone offsets, or
+            a size beyond the limits (``utils.limits``).
     """
     path = Path(path)
     data = _load(path)
     tree, parents = _tree(data, path)
     J = len(tree)
     ncols = 6 * J
-    seqs = [np.asarray(s, dtype=float) for s in np.asarray(data["Motion"], dtype=object).ravel()]
-    if not seqs:
-        raise MotionFormatError(path, "'Motion' holds no sequences")
-    for k, X in enumerate(seqs):
-        if X.ndim != 2 or X.shape[1] != ncols or X.shape[0] == 0:
-            raise MotionFormatError(path, f"sequence {k + 1} has shape {X.shape}, expected "
-                                          f"(frames, {ncols})")
-        bad = ~np.isfinite(X)
-        if bad.any():
-            raise MotionFormatError(path, f"sequence {k + 1}: non-finite value in column "
-                                          f"{int(np.argwhere(bad)[0][1]) + 1}",
-                                    frame=int(np.argwhere(bad)[0][0]))
+    seqs = _sequences(data, ncols, J, path)
     rot_cols = [_columns(n, "or", ncols, path, i) for i, n in enumerate(tree)]
     off_cols = [_columns(n, "offset", ncols, path, i) for i, n in enumerate(tree)]
     standard = tuple(parents) == MIT_PARENTS
@@ -158,7 +200,7 @@ def read_mit(path: str | Path) -> list[Motion]:
     motions = []
     for k, X in enumerate(seqs):
         root_R = root_matrix(X[:, rot_cols[0]])
-        angles = np.concatenate([X[:, rot_cols[i]] for i in range(1, J)], axis=1)
+        angles = X[:, [c for i in range(1, J) for c in rot_cols[i]]]
         motions.append(Motion(skeleton, MIT_FPS, X[:, off_cols[0]] / 1000.0,
                               np.unwrap(matrix_to_chain(root_R, ROOT_AXES), axis=0), angles,
                               name=f"{path.stem}_{k + 1}", source_format="mit",

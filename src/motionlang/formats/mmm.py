@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import re
 import xml.etree.ElementTree as ET
+from xml.parsers import expat
 from xml.sax.saxutils import escape
 from pathlib import Path
 
@@ -19,12 +20,14 @@ import numpy as np
 from motionlang.errors import MotionFormatError, SkeletonError
 from motionlang.formats.mmm_model import MMM_DOF_ORDER, mmm_height, mmm_skeleton
 from motionlang.kinematics.motion import Motion
+from motionlang.utils import limits
 from motionlang.utils.atomic import atomic_write
 
 __all__ = ["MMM_DOF_ORDER", "mmm_skeleton", "read_mmm", "write_mmm"]
 
 DEFAULT_HEIGHT_M = 1.75
 DEFAULT_FPS = 100.0  # KIT records at 100 Hz; used when a file has a single frame
+PARSE_FACTOR = 10    # memory of the element tree and its texts per byte of file
 
 
 def _frame_line(text: bytes, frame: int) -> int | None:
@@ -86,6 +89,41 @@ def _is_float(token: str) -> bool:
         return False
 
 
+class _Stop(Exception):
+    """Internal: the prolog ends where the root element starts."""
+
+
+def _check_prolog(text: bytes, path) -> None:
+    """Refuse a document type declaration and an encoding expat cannot read, parsing only
+    up to the root element.
+
+    No MMM file has a DTD, and a DTD is what XML bombs need (entities expanding a
+    billionfold, external entities reading local files or URLs). expat already refuses
+    those (amplification limit; ElementTree resolves no external entity); refusing every
+    DTD keeps it so whatever the next trick is. Works in any encoding the file declares.
+    """
+    parser = expat.ParserCreate()
+
+    def doctype(name, *_):
+        raise MotionFormatError(path, f"document type declaration <!DOCTYPE {name}> not "
+                                      "allowed (MMM files have none; entities are refused)")
+
+    def stop(*_):
+        raise _Stop
+
+    parser.StartDoctypeDeclHandler = doctype
+    parser.StartElementHandler = stop
+    try:
+        parser.Parse(text, True)
+    except _Stop:
+        return
+    except expat.ExpatError as exc:
+        raise MotionFormatError(path, f"invalid XML: {expat.ErrorString(exc.code)}",
+                                line=exc.lineno) from None
+    except (ValueError, LookupError) as exc:  # 'utf-32' / unknown encoding declared
+        raise MotionFormatError(path, f"cannot read the declared encoding ({exc})") from None
+
+
 def _config_value(motion: ET.Element, tag: str, default: float, path) -> float:
     el = motion.find(f"ModelProcessorConfig/{tag}")
     if el is None or not (el.text or "").strip():
@@ -107,20 +145,25 @@ def read_mmm(path: str | Path) -> Motion:
     ``<Motion name>``).
 
     Raises:
-        MotionFormatError: unreadable XML, no JointOrder, an unknown joint name, no frames,
-            a frame with a malformed number, a wrong value count or NaN (file, line and
-            frame index named).
+        MotionFormatError: unreadable XML (an encoding that cannot be read, a DTD), no
+            JointOrder, an unknown joint name, no frames, a frame with a malformed number,
+            a wrong value count or NaN (file, line and frame index named), or a file or
+            motion beyond the limits (``utils.limits``).
     """
     path = Path(path)
+    limits.check_file(path, PARSE_FACTOR)
     try:
         text = path.read_bytes()  # bytes: expat then honours the file's declared encoding
     except OSError as exc:
         raise MotionFormatError(path, f"cannot read file: {exc.strerror or exc}") from None
+    _check_prolog(text, path)
     try:
         root = ET.fromstring(text)
     except ET.ParseError as exc:
         line, _col = exc.position
         raise MotionFormatError(path, f"invalid XML: {exc}", line=line) from None
+    except (ValueError, LookupError) as exc:  # in case the prolog check let one through
+        raise MotionFormatError(path, f"cannot read the declared encoding ({exc})") from None
     # A file may also animate objects; the human is the Motion on the model "mmm.xml".
     candidates = [m for m in root.iter("Motion") if m.find("JointOrder") is not None]
     if not candidates:
@@ -145,6 +188,7 @@ def read_mmm(path: str | Path) -> Motion:
     if not frames:
         raise MotionFormatError(path, "motion has no frames")
     T = len(frames)
+    limits.check_motion(path, T, len(skeleton), 7 + len(order))
 
     def fail(frame: int, msg: str):
         raise MotionFormatError(path, msg, line=_frame_line(text, frame), frame=frame)

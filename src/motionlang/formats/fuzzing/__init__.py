@@ -1,0 +1,10 @@
+"""Fuzzing the motion readers: mutated and crafted inputs (:mod:`.inputs`), the seeds they
+start from (:mod:`.seeds`), and a child process that runs a reader on each under memory and
+time limits and tells a clean error from a crash, a hang or an uncaught exception
+(:mod:`.sandbox`). Used by ``tests/test_fuzz_readers.py`` and ``benchmarks/fuzz_readers.py``.
+"""
+from motionlang.formats.fuzzing.inputs import FORMATS, crafted, mutate
+from motionlang.formats.fuzzing.sandbox import Outcome, Sandbox
+from motionlang.formats.fuzzing.seeds import seeds
+
+__all__ = ["FORMATS", "Outcome", "Sandbox", "crafted", "mutate", "seeds"]
