@@ -130,10 +130,10 @@ def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
     normed = json.loads(capsys.readouterr().out)
     assert len(normed) == 3 and all(h["text"] for h in normed)
     assert main(["describe", str(motion), "--length-penalty", "-1"]) == 2
-    assert "--length-penalty must be" in capsys.readouterr().err
+    assert "argument --length-penalty: must be a finite number >= 0" in capsys.readouterr().err
     assert main(["train", "l2m", "--data", str(corpus), "--out", str(tmp_path / "bad"), *TINY,
                  "--input-noise", "-1"]) == 2
-    assert "input_noise" in capsys.readouterr().err
+    assert "argument --input-noise" in capsys.readouterr().err
     l2m = LanguageToMotion.load(l2m_dir / "model.pt")
     assert l2m.config.attention and l2m.config.time_input and l2m.config.input_noise == 0.3
     assert l2m.config.rollout == 0.5 and int(l2m.rollout_steps) > 0
@@ -217,16 +217,16 @@ def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
     assert not (tmp_path / "rr.json").exists()
     assert main(["evaluate", "--m2l", str(m2l_dir / "model.pt"), "--data", str(corpus),
                  "--l2m-width", "0"]) == 2
-    assert "--l2m-width must be >= 1" in capsys.readouterr().err
+    assert "argument --l2m-width: must be an integer in 1..1000" in capsys.readouterr().err
     assert main(["evaluate", "--m2l", str(m2l_dir / "model.pt"), "--data", str(corpus),
                  "--l2m-width", "3"]) == 2                      # mean decoding: one motion
     assert "--l2m-width applies to" in capsys.readouterr().err
     assert main(["train", "l2m", "--data", str(corpus), "--out", str(tmp_path / "bad"), *TINY,
                  "--rollout", "1.5"]) == 2
-    assert "--rollout must be in [0, 1]" in capsys.readouterr().err
+    assert "argument --rollout: must be a finite number >= 0 and <= 1" in capsys.readouterr().err
     assert main(["generate", "a person walks", "--model", str(l2m_dir / "model.pt"), "-o",
                  str(tmp_path / "none.npz"), "-w", "0"]) == 2
-    assert "width must be >= 1" in capsys.readouterr().err
+    assert "argument -w/--width: must be an integer in 1..1000" in capsys.readouterr().err
     assert not (tmp_path / "none.npz").exists()
     assert main(["generate", "a person walks", "--model", str(l2m_dir / "model.pt"), "-o",
                  str(tmp_path / "gen.obj")]) == 2
@@ -297,11 +297,11 @@ def test_errors_are_one_line(tmp_path, capsys):
     assert main(["train", "m2l", "--data", str(tmp_path), "--out", str(tmp_path / "o")]) == 2
     capsys.readouterr()
     assert main(["train", "l2m", "--data", str(tmp_path), "--balance", "0"]) == 2
-    assert "--balance must be >= 1" in capsys.readouterr().err
+    assert "argument --balance: must be an integer >= 1" in capsys.readouterr().err
     assert main(["train", "l2m", "--data", str(tmp_path), "--energy", "-1"]) == 2
-    assert "--energy must be >= 0" in capsys.readouterr().err
+    assert "argument --energy: must be a finite number >= 0" in capsys.readouterr().err
     # sampling options are checked before any model is read (no model file here)
-    for opts, msg in ((["--temperature", "0"], "temperature must be > 0"),
+    for opts, msg in ((["--temperature", "0"], "argument --temperature: must be a finite"),
                       (["--temperature", "0.5", "--method", "mean"], "mean decoding draws")):
         assert main(["generate", "a person walks", "-o", str(tmp_path / "g.npz"),
                      "--model", str(tmp_path / "none.pt"), *opts]) == 2

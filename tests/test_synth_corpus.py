@@ -183,7 +183,7 @@ def test_cli_data_synth(tmp_path, capsys):
     assert sorted(p.name for p in out.glob("*_mmm.xml")) == ["00001_mmm.xml", "00002_mmm.xml"]
     assert "wrote 2 motions" in capsys.readouterr().out
     assert main(["data", "synth", "--out", str(out), "--n", "0"]) == 2
-    assert "--n must be at least 1" in capsys.readouterr().err
+    assert "argument --n: must be an integer >= 1" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("index", [0, 1, 5, 12])

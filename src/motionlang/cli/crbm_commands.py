@@ -14,6 +14,9 @@ from pathlib import Path
 
 import numpy as np
 
+from motionlang.cli.options import (
+    frames_int, nonneg_float, order_int, output_dir, output_file, positive_float, positive_int,
+    probability, seed_int, size_int)
 from motionlang.errors import MotionlangError
 
 MOTION_EXTENSIONS = (".bvh", ".amc")
@@ -28,20 +31,23 @@ def _add_data(p: argparse.ArgumentParser) -> None:
 def _add_crbm_options(p: argparse.ArgumentParser) -> None:
     from motionlang.models.crbm import CRBMConfig
     d = CRBMConfig()
-    p.add_argument("--hidden", type=int, default=d.n_hidden, help=f"hidden units (default {d.n_hidden})")
-    p.add_argument("--order", type=int, default=d.order, help=f"frames of past (default {d.order})")
-    p.add_argument("--epochs", type=int, default=d.epochs, help=f"passes over the data (default {d.epochs})")
-    p.add_argument("--batch-size", type=int, default=d.batch_size)
-    p.add_argument("--lr", type=float, default=d.lr)
-    p.add_argument("--momentum", type=float, default=d.momentum)
-    p.add_argument("--weight-decay", type=float, default=d.weight_decay)
-    p.add_argument("--ar-weight-decay", type=float, default=d.weight_decay_autoregressive,
+    p.add_argument("--hidden", type=size_int, default=d.n_hidden,
+                   help=f"hidden units (default {d.n_hidden})")
+    p.add_argument("--order", type=order_int, default=d.order,
+                   help=f"frames of past (default {d.order})")
+    p.add_argument("--epochs", type=positive_int, default=d.epochs,
+                   help=f"passes over the data (default {d.epochs})")
+    p.add_argument("--batch-size", type=positive_int, default=d.batch_size)
+    p.add_argument("--lr", type=positive_float, default=d.lr)
+    p.add_argument("--momentum", type=probability, default=d.momentum)
+    p.add_argument("--weight-decay", type=nonneg_float, default=d.weight_decay)
+    p.add_argument("--ar-weight-decay", type=nonneg_float, default=d.weight_decay_autoregressive,
                    help="weight decay of the autoregressive weights A (train crbm / crbm reproduce: "
                         "the selected 2e-2; elsewhere --weight-decay's)")
-    p.add_argument("--history-noise", type=float, default=d.history_noise, metavar="STD",
+    p.add_argument("--history-noise", type=nonneg_float, default=d.history_noise, metavar="STD",
                    help="noise on the past frames while training (normalised units; not in "
                         "the paper; train crbm / crbm reproduce: the selected 0.3)")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seed", type=seed_int, default=0)
 
 
 def _crbm_config(args: argparse.Namespace):
@@ -226,12 +232,13 @@ def register_train(train_sub: argparse._SubParsersAction) -> None:
     p = train_sub.add_parser("crbm", help="train a conditional RBM on CMU subject 35 walk/jog",
                              description="Train a CRBM (Taylor et al. 2006) on the 31 training trials.")
     _add_data(p)
-    p.add_argument("output", metavar="OUT.npz", help="checkpoint (config + weights + normaliser)")
+    p.add_argument("output", metavar="OUT.npz", type=output_file,
+                   help="checkpoint (config + weights + normaliser)")
     _add_crbm_options(p)
-    p.add_argument("--level2", metavar="OUT2.npz", default=None,
+    p.add_argument("--level2", metavar="OUT2.npz", default=None, type=output_file,
                    help="also train a second level on the hidden activations; save both here")
-    p.add_argument("--level2-hidden", type=int, default=200)
-    p.add_argument("--level2-order", type=int, default=3)
+    p.add_argument("--level2-hidden", type=size_int, default=200)
+    p.add_argument("--level2-order", type=order_int, default=3)
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     from motionlang.evaluation.crbm_reproduce import SELECTED
     # defaults: the paper's sizes with the settings selected on held-out training trials
@@ -249,26 +256,29 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
     g = sub.add_parser("generate", help="generate motion on-line from real starting frames")
     g.add_argument("model", metavar="MODEL.npz", help="a CRBM, or a two-level model (train --level2)")
-    g.add_argument("output", metavar="OUT", help=".npy (features), .bvh/.amc, or .gif/.mp4")
+    g.add_argument("output", metavar="OUT", type=output_file,
+                   help=".npy (features), .bvh/.amc, or .gif/.mp4")
     _add_data(g)
     g.add_argument("--start", choices=["walk", "jog"], default="walk",
                    help="start from the walking (35_29) or jogging (35_18) test trial")
-    g.add_argument("--frames", type=int, default=1000)
-    g.add_argument("--noise", type=float, default=0.0, help="std of noise on the hidden biases")
-    g.add_argument("--gibbs", type=int, default=30, help="Gibbs updates per frame")
-    g.add_argument("--seed", type=int, default=0)
+    g.add_argument("--frames", type=frames_int, default=1000)
+    g.add_argument("--noise", type=nonneg_float, default=0.0,
+                   help="std of noise on the hidden biases")
+    g.add_argument("--gibbs", type=positive_int, default=30, help="Gibbs updates per frame")
+    g.add_argument("--seed", type=seed_int, default=0)
     g.add_argument("--json", action="store_true")
     g.set_defaults(func=cmd_generate)
 
     f = sub.add_parser("fill", help="fill in an erased leg or upper body of a test trial")
     f.add_argument("model", metavar="MODEL.npz")
-    f.add_argument("output", metavar="OUT", help=".png (angles plot), .npy, .bvh/.amc, or .gif/.mp4")
+    f.add_argument("output", metavar="OUT", type=output_file,
+                   help=".png (angles plot), .npy, .bvh/.amc, or .gif/.mp4")
     _add_data(f)
     f.add_argument("--trial", choices=["35_29", "35_18"], default="35_29")
     f.add_argument("--part", choices=["leg", "upper-body"], default="leg")
-    f.add_argument("--repeats", type=int, default=100)
-    f.add_argument("--gibbs", type=int, default=30)
-    f.add_argument("--seed", type=int, default=0)
+    f.add_argument("--repeats", type=positive_int, default=100)
+    f.add_argument("--gibbs", type=positive_int, default=30)
+    f.add_argument("--seed", type=seed_int, default=0)
     f.add_argument("--sampled", dest="mean_field", action="store_false",
                    help="write/plot a fill-in with sampled hiddens (default: mean-field, the "
                         "selected setting; the sampled one is scored beside it either way)")
@@ -279,9 +289,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     _add_data(r)
     r.add_argument("--model", metavar="MODEL.npz", default=None, help="use this CRBM instead of training")
     _add_crbm_options(r)
-    r.add_argument("--repeats", type=int, default=100, help="stochastic fill-ins averaged per cell")
-    r.add_argument("--gibbs", type=int, default=30)
-    r.add_argument("--plots", metavar="DIR", default=None, help="write Figure-4 plots and GIFs here")
+    r.add_argument("--repeats", type=positive_int, default=100,
+                   help="stochastic fill-ins averaged per cell")
+    r.add_argument("--gibbs", type=positive_int, default=30)
+    r.add_argument("--plots", metavar="DIR", default=None, type=output_dir,
+                   help="write Figure-4 plots and GIFs here")
     r.add_argument("--sampled", dest="mean_field", action="store_false",
                    help="report sampled-hidden fill-ins as \"CRBM\" (default: mean-field, as selected)")
     r.add_argument("--json", action="store_true")

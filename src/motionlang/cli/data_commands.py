@@ -16,6 +16,7 @@ import importlib
 import json
 from pathlib import Path
 
+from motionlang.cli.options import nonneg_float, output_dir, positive_float, positive_int, seed_int
 from motionlang.errors import DatasetError
 
 
@@ -124,7 +125,7 @@ def _register_export_h3d(sub) -> None:
                                    "complete.")
     e.add_argument("--data", required=True,
                    help="dataset folder, humanml3d:DIR or kitml-h3d:DIR")
-    e.add_argument("--out", required=True, help="new output folder")
+    e.add_argument("--out", required=True, type=output_dir, help="new output folder")
     e.add_argument("--body", choices=["kit", "smpl"], default="kit",
                    help="kit: the 21-joint body of any rig, 12.5 fps, mm (default); smpl: the "
                         "22 SMPL joints of an SMPL-named rig, 20 fps, m")
@@ -133,11 +134,11 @@ def _register_export_h3d(sub) -> None:
     e.add_argument("--heading", choices=["public", "body"], default="public",
                    help="per-frame heading: as the public code computes it (default) or the "
                         "unsmoothed hips + shoulders")
-    e.add_argument("--seed", type=int, default=0, help="seed of the train/val/test split")
-    e.add_argument("--max-seconds", type=float, default=None,
+    e.add_argument("--seed", type=seed_int, default=0, help="seed of the train/val/test split")
+    e.add_argument("--max-seconds", type=positive_float, default=None,
                    help="skip motions longer than this (default: keep all)")
     e.add_argument("--joint-map", help="JSON joint map for a custom folder's rig")
-    e.add_argument("--workers", type=int, default=None,
+    e.add_argument("--workers", type=positive_int, default=None,
                    help="processes converting motions (default: min(2, CPUs))")
     e.set_defaults(func=cmd_export_h3d)
 
@@ -160,19 +161,20 @@ def register(subparsers) -> None:
 
     i = sub.add_parser("info", help="counts and durations of a dataset folder")
     i.add_argument("dir")
-    i.add_argument("--max-seconds", type=float, default=30.0,
+    i.add_argument("--max-seconds", type=positive_float, default=30.0,
                    help="duration filter for the 'kept' counts (default 30)")
     i.add_argument("--json", action="store_true", help="print JSON")
     i.set_defaults(func=cmd_info)
 
     s = sub.add_parser("split", help="write a seeded random train/val/test split")
     s.add_argument("dir")
-    s.add_argument("--fractions", type=float, nargs="+", default=[0.8, 0.1, 0.1],
+    s.add_argument("--fractions", type=nonneg_float, nargs="+", default=[0.8, 0.1, 0.1],
                    help="2 (train test) or 3 (train val test) fractions summing to 1")
-    s.add_argument("--seed", type=int, default=0)
-    s.add_argument("--max-seconds", type=float, default=30.0,
+    s.add_argument("--seed", type=seed_int, default=0)
+    s.add_argument("--max-seconds", type=positive_float, default=30.0,
                    help="KIT-ML: split only motions shorter than this")
-    s.add_argument("--out", required=True, help="folder for train.txt, val.txt, test.txt")
+    s.add_argument("--out", required=True, type=output_dir,
+                   help="folder for train.txt, val.txt, test.txt")
     s.set_defaults(func=cmd_split)
 
     _register_export_h3d(sub)

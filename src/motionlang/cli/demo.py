@@ -1,8 +1,8 @@
 """``motionlang demo``: the main job, with no download and no shared data needed.
 
 1. Generate a motion for a sentence with the packaged language-to-motion model (L2M) and
-   write it as an animated GIF, a pose strip and a BVH file; print W ancestral samples
-   with their log likelihoods, likeliest first.
+   write it as an animated GIF, a pose strip and a BVH file; print its log likelihood
+   (W ancestral samples, likeliest first, for models that decode by sampling).
 2. Describe a motion with the packaged motion-to-language model (M2L): a procedural-corpus
    sample generated on the fly (from a corpus seed the packaged models never saw) and,
    when the shared data is present, KIT-ML motion 00001; print the W beam hypotheses with
@@ -19,6 +19,7 @@ import os
 import re
 from pathlib import Path
 
+from motionlang.cli.options import frames_int, output_dir, seed_int, width_int
 from motionlang.errors import MotionlangError
 
 DATA_ENV = "MOTIONLANG_DATA"
@@ -126,16 +127,21 @@ def generate_part(out_dir: Path, sentence: str, *, width: int = 5, seed: int = 0
     """
     from motionlang.api import body_motion
     from motionlang.decoding.seq2seq import generate
+    from motionlang.decoding.t2m import default_method
     from motionlang.formats import write_motion
     from motionlang.models.l2m import LanguageToMotion
     from motionlang.render import render_animation, render_strip
 
     model = LanguageToMotion.load(model_path or packaged_model("l2m"))
-    # ancestral samples: the sampled beam keeps the likeliest frames, and standing still
-    # is always likelier than moving (round-trip figures in the README)
+    # as `motionlang generate` does: expected frames for joint-position models (a draw
+    # stretches bones), ancestral samples otherwise (the sampled beam keeps the likeliest
+    # frames, and standing still is always likelier than moving)
+    method = default_method(model)
+    width = 1 if method == "mean" else width
     hyps = generate(model, sentence, width=width, seed=seed, min_frames=5,
-                    max_frames=max_frames, method="sample")
-    echo(f'generate "{sentence}" (L2M, {width} ancestral samples, likeliest first):')
+                    max_frames=max_frames, method=method)
+    how = "expected frames" if method == "mean" else f"{width} ancestral samples, likeliest first"
+    echo(f'generate "{sentence}" (L2M, {how}):')
     fps = model.features.fps
     _print_hyps(echo, [(f"{len(m)} frames, {len(m) / fps:.1f} s", s) for m, s in hyps], "log L")
     # position features decode to 21 joints: joint angles fitted to them for the BVH
@@ -229,9 +235,10 @@ def register(subparsers) -> None:
                     "real motion (GIF, pose strip, trajectory plot).")
     p.add_argument("--sentence", default=DEFAULT_SENTENCE,
                    help=f'text to generate a motion for (default: "{DEFAULT_SENTENCE}")')
-    p.add_argument("-w", "--width", type=int, default=5, help="hypotheses shown (beam width / samples)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the sampling")
-    p.add_argument("--max-frames", type=int, default=DEMO_MAX_FRAMES,
+    p.add_argument("-w", "--width", type=width_int, default=5,
+                   help="hypotheses shown (beam width / samples)")
+    p.add_argument("--seed", type=seed_int, default=0, help="seed of the sampling")
+    p.add_argument("--max-frames", type=frames_int, default=DEMO_MAX_FRAMES,
                    help=f"length cap of the generated motion in 10 Hz frames "
                         f"(default {DEMO_MAX_FRAMES})")
     p.add_argument("--input", default=None, metavar="FILE",
@@ -242,6 +249,6 @@ def register(subparsers) -> None:
     add_joint_map_arg(p)
     p.add_argument("--no-render", action="store_true",
                    help="skip rendering the real motion (the generated one is always rendered)")
-    p.add_argument("--out", default="out/demo", metavar="DIR",
+    p.add_argument("--out", default="out/demo", metavar="DIR", type=output_dir,
                    help="output folder (default: out/demo, as the README says)")
     p.set_defaults(func=cmd_demo)

@@ -9,6 +9,7 @@ import argparse
 import json
 from pathlib import Path
 
+from motionlang.cli.options import nonneg_float, output_file, positive_float, positive_int
 from motionlang.errors import MotionlangError
 from motionlang.kinematics import Motion
 
@@ -20,9 +21,9 @@ def add_input_args(p: argparse.ArgumentParser) -> None:
                    help="motion file: .xml (KIT MMM), .bvh, .amc or .mat (MIT walking data)")
     p.add_argument("--asf", metavar="PATH", default=None,
                    help="ASF skeleton of an .amc input (default: <subject>.asf next to it)")
-    p.add_argument("--source-fps", type=float, default=None, metavar="HZ",
+    p.add_argument("--source-fps", type=positive_float, default=None, metavar="HZ",
                    help="frame rate of an .amc input (AMC files do not store it; default 120)")
-    p.add_argument("--sequence", type=int, default=None, metavar="N",
+    p.add_argument("--sequence", type=positive_int, default=None, metavar="N",
                    help="which sequence of a .mat input holding several (1-based; default 1)")
     add_joint_map_arg(p)
 
@@ -60,8 +61,8 @@ def load_input(args: argparse.Namespace) -> Motion:
 
 
 def add_clip_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--start", type=float, default=None, metavar="S", help="start, seconds")
-    p.add_argument("--end", type=float, default=None, metavar="E", help="end, seconds")
+    p.add_argument("--start", type=nonneg_float, default=None, metavar="S", help="start, seconds")
+    p.add_argument("--end", type=nonneg_float, default=None, metavar="E", help="end, seconds")
 
 
 def clip_seconds(motion: Motion, start: float | None, end: float | None,
@@ -110,10 +111,6 @@ def cmd_render(args: argparse.Namespace) -> int:
     if ext not in RENDER_EXTENSIONS:  # checked before the (slow) read
         raise MotionlangError(f"{out}: cannot render to {ext or '(no extension)'!r}; use "
                               f"{', '.join(RENDER_EXTENSIONS)}")
-    if args.fps is not None and not args.fps > 0:
-        raise MotionlangError(f"{out}: --fps must be positive, got {args.fps}")
-    if args.strip is not None and args.strip < 1:
-        raise MotionlangError(f"{out}: --strip must be >= 1, got {args.strip}")
     motion = clip_seconds(load_input(args), args.start, args.end, str(args.input))
     title = args.title if args.title is not None else motion.name
     if ext == ".png" and args.trajectory:
@@ -151,11 +148,11 @@ def register(subparsers) -> None:
         description="Render a stick figure. OUT's extension picks the output: .gif or .mp4 "
                     "animation, .png strip of poses (or trajectory with --trajectory).")
     add_input_args(p)
-    p.add_argument("output", metavar="OUT", help="output .gif, .mp4 or .png")
-    p.add_argument("--fps", type=float, default=None,
+    p.add_argument("output", metavar="OUT", type=output_file, help="output .gif, .mp4 or .png")
+    p.add_argument("--fps", type=positive_float, default=None,
                    help="animation frame rate (default: min(25, source rate))")
     add_clip_args(p)
-    p.add_argument("--strip", type=int, default=None, metavar="N",
+    p.add_argument("--strip", type=positive_int, default=None, metavar="N",
                    help="number of poses in a .png strip (default 8)")
     p.add_argument("--trajectory", action="store_true",
                    help="for .png: top view of the root path with footsteps instead of poses")
@@ -169,6 +166,6 @@ def register(subparsers) -> None:
         description="Read IN and write OUT in the format of OUT's extension (.bvh for any "
                     "skeleton; .xml for MMM and .amc for ASF skeletons).")
     add_input_args(p)
-    p.add_argument("output", metavar="OUT", help="output file, e.g. out.bvh")
+    p.add_argument("output", metavar="OUT", type=output_file, help="output file, e.g. out.bvh")
     add_clip_args(p)
     p.set_defaults(func=cmd_convert)

@@ -12,6 +12,9 @@ import argparse
 import json
 from pathlib import Path
 
+from motionlang.cli.options import (
+    dropout_float, layers_int, nonneg_float, nonneg_int, output_dir, output_file,
+    positive_float, positive_int, probability, seed_int, size_int, width_int)
 from motionlang.cli.run_log import log_command
 from motionlang.cli.text_commands import check_length_penalty
 from motionlang.cli.train_commands import add_schedule_args, schedule_options
@@ -24,7 +27,7 @@ def _add_train(sub, name: str, help_: str) -> None:
     d = M2LConfig(1, 1) if name == "m2l" else L2MConfig(1, 1)
     p = sub.add_parser(name, help=help_, description=help_)
     p.add_argument("--data", required=True, metavar="DIR", help="KIT-ML-format or custom folder")
-    p.add_argument("--out", default=f"runs/{name}", metavar="DIR",
+    p.add_argument("--out", default=f"runs/{name}", metavar="DIR", type=output_dir,
                    help="run folder: last.pt, best.pt, model.pt, history, splits")
     p.add_argument("--features", choices=("angles", "positions"), default="angles",
                    help="angles: the 44 MMM joint angles (KIT MMM motions only); positions: "
@@ -32,74 +35,76 @@ def _add_train(sub, name: str, help_: str) -> None:
     p.add_argument("--joint-map", metavar="MAP.json", default=None,
                    help="how a custom folder's rig maps onto the 21-joint body (default: "
                         "joint_map.json in the folder, else chosen by joint names)")
-    p.add_argument("--offsets", type=int, default=10,
+    p.add_argument("--offsets", type=positive_int, default=10,
                    help="down-sampling start offsets per motion (augmentation, default 10)")
-    p.add_argument("--max-seconds", type=float, default=30.0, help="drop longer motions")
-    p.add_argument("--min-count", type=int, default=1, help="vocabulary: minimum word count")
-    p.add_argument("--epochs", type=int, default=20)
-    p.add_argument("--batch-size", type=int, default=128)
-    p.add_argument("--lr", type=float, default=1e-3)
+    p.add_argument("--max-seconds", type=positive_float, default=30.0, help="drop longer motions")
+    p.add_argument("--min-count", type=positive_int, default=1,
+                   help="vocabulary: minimum word count")
+    p.add_argument("--epochs", type=positive_int, default=20)
+    p.add_argument("--batch-size", type=positive_int, default=128)
+    p.add_argument("--lr", type=positive_float, default=1e-3)
     add_schedule_args(p)
-    p.add_argument("--grad-clip", type=float, default=None if name == "m2l" else 25.0)
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--grad-clip", type=nonneg_float, default=None if name == "m2l" else 25.0)
+    p.add_argument("--seed", type=seed_int, default=0)
     p.add_argument("--resume", action="store_true", help="continue from OUT/last.pt")
-    p.add_argument("--checkpoint-every", type=int, default=0, metavar="STEPS")
-    p.add_argument("--enc-hidden", type=int, default=d.enc_hidden)
-    p.add_argument("--enc-layers", type=int, default=d.enc_layers)
-    p.add_argument("--dec-hidden", type=int, default=d.dec_hidden)
-    p.add_argument("--dec-layers", type=int, default=d.dec_layers)
-    p.add_argument("--embed-dim", type=int, default=d.embed_dim)
-    p.add_argument("--dropout", type=float, default=d.dropout)
+    p.add_argument("--checkpoint-every", type=nonneg_int, default=0, metavar="STEPS")
+    p.add_argument("--enc-hidden", type=size_int, default=d.enc_hidden)
+    p.add_argument("--enc-layers", type=layers_int, default=d.enc_layers)
+    p.add_argument("--dec-hidden", type=size_int, default=d.dec_hidden)
+    p.add_argument("--dec-layers", type=layers_int, default=d.dec_layers)
+    p.add_argument("--embed-dim", type=size_int, default=d.embed_dim)
+    p.add_argument("--dropout", type=dropout_float, default=d.dropout)
     p.add_argument("--attention", action="store_true", help="additive attention variant")
     p.add_argument("--mirror", action="store_true",
                    help="also train on every training motion mirrored left/right, its "
                         "sentences' left and right swapped (with --balance a mirrored copy "
                         "is repeated as often as its original)")
-    p.add_argument("--balance", type=int, default=1, metavar="MAX",
+    p.add_argument("--balance", type=positive_int, default=1, metavar="MAX",
                    help="repeat training motions with rare ground-truth primitives (e.g. "
                         "walking backwards) up to MAX times per epoch; needs a procedural "
                         "corpus (default 1: off)")
     if name == "l2m":
-        p.add_argument("--components", type=int, default=d.n_components)
+        p.add_argument("--components", type=size_int, default=d.n_components)
         p.add_argument("--loss", choices=("surrogate", "exact"), default=d.loss)
-        p.add_argument("--end-weight", type=float, default=d.end_weight,
+        p.add_argument("--end-weight", type=nonneg_float, default=d.end_weight,
                        help="BCE weight of each motion's last (stop) frame (paper: 1)")
-        p.add_argument("--input-noise", type=float, default=d.input_noise,
+        p.add_argument("--input-noise", type=nonneg_float, default=d.input_noise,
                        help="std of noise on teacher-forced previous frames (paper: 0)")
         p.add_argument("--time-input", action="store_true",
                        help="decoder also sees the elapsed time (not in the paper)")
         p.add_argument("--progress-input", action="store_true",
                        help="decoder also sees the fraction of the motion done; generation "
                             "plans the length from the sentence (not in the paper)")
-        p.add_argument("--rollout", type=float, default=d.rollout, metavar="P",
+        p.add_argument("--rollout", type=probability, default=d.rollout, metavar="P",
                        help="scheduled sampling: while training, feed the model's own sampled "
                             "frame instead of the true one with probability P (paper: 0)")
-        p.add_argument("--root-weight", type=float, default=1.0, metavar="W",
+        p.add_argument("--root-weight", type=nonneg_float, default=1.0, metavar="W",
                        help="weight of the root's ground velocity and heading change "
                             "(root_vx, root_vz, root_dyaw) in the frame NLL (paper: 1)")
         p.add_argument("--hide-root-input", action="store_true",
                        help="the decoder does not read the previous frame's root velocity and "
                             "heading change (it still predicts them; not in the paper)")
-        p.add_argument("--rollout-warmup", type=int, default=d.rollout_warmup, metavar="STEPS",
+        p.add_argument("--rollout-warmup", type=nonneg_int, default=d.rollout_warmup,
+                       metavar="STEPS",
                        help="optimiser steps over which that probability ramps up from 0")
         p.add_argument("--rollout-input", choices=("sample", "mean"), default=d.rollout_input,
                        help="own frame fed back: a draw from the mixture, or its expected "
                             "frame (then generate with --method mean)")
-        p.add_argument("--energy", type=float, default=d.energy_weight, metavar="W",
+        p.add_argument("--energy", type=nonneg_float, default=d.energy_weight, metavar="W",
                        help="weight of a loss on the local speeds of the expected frames "
                             "against the reference's, over ~1 s windows (paper: 0)")
-        p.add_argument("--plan-parts", type=int, default=d.plan_parts, metavar="K",
+        p.add_argument("--plan-parts", type=nonneg_int, default=d.plan_parts, metavar="K",
                        help="feed every decoder step a coarse plan of the motion (per part of "
                             "K of its duration: mean features and mean change), the true one "
                             "in training, one predicted from the sentence when generating; "
                             "needs --progress-input (0: off, the paper's)")
-        p.add_argument("--plan-weight", type=float, default=d.plan_weight, metavar="W",
+        p.add_argument("--plan-weight", type=nonneg_float, default=d.plan_weight, metavar="W",
                        help="weight of the plan head's mean squared error")
         p.add_argument("--plan-means", choices=("all", "root"), default="all",
                        help="which features' part means the plan holds: all, or only the "
                             "root's ground velocity and heading change (every feature's "
                             "change is in it either way)")
-        p.add_argument("--plan-noise", type=float, default=d.plan_noise, metavar="STD",
+        p.add_argument("--plan-noise", type=nonneg_float, default=d.plan_noise, metavar="STD",
                        help="std of Gaussian noise on the true plan fed while training")
     p.set_defaults(func=cmd_train, model_kind=name)
 
@@ -131,22 +136,13 @@ def cmd_train(args: argparse.Namespace) -> int:
     from motionlang.training.collate import collate_pairs
     from motionlang.training.seq2seq_data import (balance_repeats, build_pairs, oversample,
                                                   sentence_lengths)
-    from motionlang.training.trainer import TrainConfig, Trainer
+    from motionlang.training.trainer import TrainConfig, Trainer, check_resume
 
-    if args.balance < 1:   # before the (long) data preparation
-        raise MotionlangError(f"--balance must be >= 1, got {args.balance}")
+    if args.resume:   # before the (long) data preparation and before anything is written
+        check_resume(args.out)
     schedule = schedule_options(args)
     if args.model_kind == "l2m":
-        if not 0.0 <= args.rollout <= 1.0:
-            raise MotionlangError(f"--rollout must be in [0, 1], got {args.rollout}")
-        if args.rollout_warmup < 0:
-            raise MotionlangError(f"--rollout-warmup must be >= 0, got {args.rollout_warmup}")
-        if not args.root_weight >= 0:
-            raise MotionlangError(f"--root-weight must be >= 0, got {args.root_weight}")
-        if not args.energy >= 0:
-            raise MotionlangError(f"--energy must be >= 0, got {args.energy}")
-        if args.plan_parts < 0 or not (args.plan_weight >= 0 and args.plan_noise >= 0):
-            raise MotionlangError("--plan-parts, --plan-weight and --plan-noise must be >= 0")
+        # numbers are checked by their argparse types (cli/options.py)
         if args.plan_parts and not args.progress_input:
             raise MotionlangError("--plan-parts needs --progress-input")
     # one line per epoch from the trainer (the progress bar only shows on a terminal)
@@ -245,8 +241,6 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     from motionlang.utils.progress import progress
 
     check_length_penalty(args.length_penalty)
-    if args.l2m_width < 1:
-        raise MotionlangError(f"--l2m-width must be >= 1, got {args.l2m_width}")
     if args.l2m_method == "mean" and args.l2m_width != 1:
         raise MotionlangError("--l2m-width applies to 'sample' and 'beam'; mean decoding gives "
                               "one motion")
@@ -406,20 +400,21 @@ def register(subparsers) -> None:
     p.add_argument("--data", required=True, metavar="DIR", help="the dataset trained on")
     p.add_argument("--splits", metavar="DIR", help="split files (default: M2L_DIR/splits)")
     p.add_argument("--split", default="test")
-    p.add_argument("-w", "--width", type=int, default=5)
-    p.add_argument("--limit", type=int, default=0, help="evaluate at most N motions")
-    p.add_argument("--max-seconds", type=float, default=30.0)
-    p.add_argument("-o", "--output", help="report.json (+ report.md beside it)")
-    p.add_argument("--tsne", metavar="PNG", help="also plot the context vectors' t-SNE map")
-    p.add_argument("--length-penalty", type=float, default=0.0, metavar="ALPHA",
+    p.add_argument("-w", "--width", type=width_int, default=5)
+    p.add_argument("--limit", type=nonneg_int, default=0, help="evaluate at most N motions")
+    p.add_argument("--max-seconds", type=positive_float, default=30.0)
+    p.add_argument("-o", "--output", type=output_file, help="report.json (+ report.md beside it)")
+    p.add_argument("--tsne", metavar="PNG", type=output_file,
+                   help="also plot the context vectors' t-SNE map")
+    p.add_argument("--length-penalty", type=nonneg_float, default=0.0, metavar="ALPHA",
                    help="rank M2L hypotheses by log P / length**ALPHA (default 0: total, the paper's)")
     p.add_argument("--l2m-method", choices=("mean", "sample", "beam"), default="mean",
                    help="round trip: how each motion is generated (default: heaviest-component "
                         "means); the likeliest of --l2m-width hypotheses is described (with "
                         "--l2m-rerank: the one that M2L ranks first)")
-    p.add_argument("--l2m-width", type=int, default=1, metavar="W",
+    p.add_argument("--l2m-width", type=width_int, default=1, metavar="W",
                    help="hypotheses per sentence for 'sample' / 'beam' (default 1)")
-    p.add_argument("--l2m-temperature", type=float, default=1.0, metavar="TAU",
+    p.add_argument("--l2m-temperature", type=positive_float, default=1.0, metavar="TAU",
                    help="sampling temperature for 'sample' / 'beam' (see generate --temperature)")
     p.add_argument("--l2m-rerank", metavar="M2L", help="round trip: describe the hypothesis "
                    "under which this other M2L model finds the sentence likeliest, not the "

@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import time
 
+from motionlang.cli.options import nonneg_int, output_dir, positive_int, seed_int
+
 
 def register_synth(data_subparsers) -> None:
     """Add ``synth`` to the ``motionlang data`` subcommands."""
@@ -11,12 +13,12 @@ def register_synth(data_subparsers) -> None:
         description="Write N synthetic motions with 2-4 sentences and ground truth each, in "
                     "the KIT-ML release layout (NNNNN_mmm.xml, _annotations.json, _meta.json). "
                     "The same seed gives byte-identical files.")
-    p.add_argument("--out", required=True, help="output folder")
-    p.add_argument("--n", type=int, default=1000, help="number of motions (default 1000)")
-    p.add_argument("--seed", type=int, default=0, help="corpus seed (default 0)")
-    p.add_argument("--start", type=int, default=0,
+    p.add_argument("--out", required=True, type=output_dir, help="output folder")
+    p.add_argument("--n", type=positive_int, default=1000, help="number of motions (default 1000)")
+    p.add_argument("--seed", type=seed_int, default=0, help="corpus seed (default 0)")
+    p.add_argument("--start", type=nonneg_int, default=0,
                    help="index of the first sample (to extend a corpus; default 0)")
-    p.add_argument("--workers", type=int, default=None,
+    p.add_argument("--workers", type=positive_int, default=None,
                    help="worker processes (default: min(2, CPUs))")
     p.set_defaults(func=_run)
 

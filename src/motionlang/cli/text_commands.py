@@ -14,6 +14,8 @@ from pathlib import Path
 import numpy as np
 
 from motionlang.api import PACKAGED
+from motionlang.cli.options import (
+    frames_int, nonneg_float, nonneg_int, output_file, positive_float, seed_int, width_int)
 from motionlang.errors import MotionlangError
 
 MOTION_OUT = (".bvh", ".xml", ".amc")
@@ -39,8 +41,6 @@ def cmd_describe(args: argparse.Namespace) -> int:
     from motionlang.models.m2l import MotionToLanguage
 
     check_length_penalty(args.length_penalty)
-    if args.width < 1:
-        raise MotionlangError(f"-w/--width must be >= 1, got {args.width}")
     model = MotionToLanguage.load(_model_path(args.model, "m2l"))
     hyps = describe(model, load_input(args), width=args.width,
                     length_penalty=args.length_penalty)
@@ -130,8 +130,6 @@ def cmd_generate(args: argparse.Namespace) -> int:
     # any text-to-motion checkpoint: L2M (seq2seq) or the two-stream model
     from motionlang.decoding.t2m import default_method, generate_any, load_any_t2m, output_fps
 
-    if not args.temperature > 0:
-        raise MotionlangError(f"--temperature must be > 0, got {args.temperature}")
     if args.temperature != 1.0 and args.method == "mean":
         raise MotionlangError("--temperature applies to 'sample' and 'beam'; mean decoding "
                               "draws nothing")
@@ -184,36 +182,38 @@ def register(subparsers) -> None:
     p = subparsers.add_parser("describe", help="describe a motion in English (M2L, beam search)")
     add_input_args(p)
     p.add_argument("--model", help="M2L model file (default: the packaged one)")
-    p.add_argument("-w", "--width", type=int, default=5, help="beam width = hypotheses shown")
-    p.add_argument("--length-penalty", type=float, default=0.0, metavar="ALPHA",
+    p.add_argument("-w", "--width", type=width_int, default=5,
+                   help="beam width = hypotheses shown")
+    p.add_argument("--length-penalty", type=nonneg_float, default=0.0, metavar="ALPHA",
                    help="rank by log P / length**ALPHA (default 0: total log P, the paper's; "
                         "no effect with -w 1)")
     p.add_argument("--json", action="store_true")
     p.set_defaults(func=cmd_describe)
     p = subparsers.add_parser("generate", help="generate a motion from English (L2M)")
     p.add_argument("text", help="sentence, e.g. \"a person waves with the left hand\"")
-    p.add_argument("-o", "--output", required=True,
+    p.add_argument("-o", "--output", required=True, type=output_file,
                    help="out.gif, .mp4 (animation), .png (pose strip), .bvh (joint angles; "
                         "for position models such as two-stream fitted on a 21-joint "
                         "skeleton) or .npz (joint positions and fps)")
     p.add_argument("--model", help="L2M or two-stream model file (default: the packaged L2M)")
-    p.add_argument("-w", "--width", type=int, default=5, help="hypotheses (samples or beam width)")
+    p.add_argument("-w", "--width", type=width_int, default=5,
+                   help="hypotheses (samples or beam width)")
     p.add_argument("--method", choices=("sample", "beam", "mean"), default=None,
                    help="W ancestral samples (default), the paper's sampled beam, or "
                         "heaviest-component means (the beam, ranked by likelihood, favours "
                         "standing still); default for a model trained on its expected "
                         "frames (--rollout-input mean): mean")
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--max-frames", type=int, default=None,
+    p.add_argument("--seed", type=seed_int, default=0)
+    p.add_argument("--max-frames", type=frames_int, default=None,
                    help="length cap in model frames (default: the model's); a two-stream "
                         "model, or an L2M trained with --progress-input, generates exactly "
                         "this many (default: the length its length model predicts for the "
                         "sentence; a two-stream model without one: 125 = 10 s)")
-    p.add_argument("--min-frames", type=int, default=5,
+    p.add_argument("--min-frames", type=nonneg_int, default=5,
                    help="no end-of-motion before this many model frames (default 5)")
     p.add_argument("--length-norm", action="store_true",
                    help="rank hypotheses (beam, sample) by log likelihood per frame (default: total)")
-    p.add_argument("--temperature", type=float, default=1.0, metavar="TAU",
+    p.add_argument("--temperature", type=positive_float, default=1.0, metavar="TAU",
                    help="sample (beam, sample) from the mixture sharpened by TAU: weights "
                         "softmax(logits / TAU), deviations x TAU (default 1: as trained)")
     p.add_argument("--rerank", metavar="M2L", help="rank the W motions by this M2L model's "

@@ -9,6 +9,8 @@ from __future__ import annotations
 import argparse
 import importlib
 
+from motionlang.cli.options import nonneg_float
+
 TRAIN_MODULES = [
     "motionlang.cli.crbm_commands",       # train crbm
     "motionlang.cli.seq2seq_commands",    # train seq2seq (when it exists)
@@ -18,11 +20,11 @@ TRAIN_MODULES = [
 
 def add_schedule_args(p: argparse.ArgumentParser) -> None:
     """``--decay-epochs`` / ``--decay-to`` of the shared trainer (``TrainConfig``)."""
-    p.add_argument("--decay-epochs", type=float, default=0.0, metavar="N",
+    p.add_argument("--decay-epochs", type=nonneg_float, default=0.0, metavar="N",
                    help="lower the learning rate along a half cosine over the last N epochs "
                         "(also when resuming a run trained at a constant rate; default 0: "
                         "constant)")
-    p.add_argument("--decay-to", type=float, default=0.01, metavar="F",
+    p.add_argument("--decay-to", type=nonneg_float, default=0.01, metavar="F",
                    help="the rate at the last step, as a fraction of --lr (default 0.01)")
 
 

@@ -11,6 +11,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from motionlang.cli.options import (
+    frames_int, layers_int, nonneg_float, nonneg_int, output_dir, output_file, positive_float,
+    positive_int, seed_int, size_int, width_int)
 from motionlang.cli.run_log import lead_process, log_command
 from motionlang.cli.train_commands import add_schedule_args, schedule_options
 from motionlang.errors import MotionlangError
@@ -32,7 +35,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     from motionlang.datasets.splits import save_splits
     from motionlang.models.length import SentenceLength
     from motionlang.models.twostream import TwoStreamModel
-    from motionlang.training.trainer import TrainConfig
+    from motionlang.training.trainer import TrainConfig, check_resume
     from motionlang.training.twostream_data import build_twostream_data
     from motionlang.training.twostream_train import ForcingSchedule, make_config, train_twostream
 
@@ -42,8 +45,8 @@ def cmd_train(args: argparse.Namespace) -> int:
     if out.suffix != ".pt":
         raise MotionlangError(f"{out}: the model file must end in .pt")
     run = Path(args.run_dir) if args.run_dir else out.parent / f"{out.stem}_run"
-    if args.length_buckets < 0:   # before anything is written
-        raise MotionlangError(f"--length-buckets must be >= 0, got {args.length_buckets}")
+    if args.resume:   # before anything is written: the run's first (or only) stage's
+        check_resume(run if (run / "last.pt").is_file() else run / "pose")
     lambdas = parse_lambdas(args.weight)
     schedule = schedule_options(args)
     lead = lead_process()  # under torchrun only rank 0 writes files and prints
@@ -125,14 +128,15 @@ def register_train(train_sub) -> None:
     h = "train the two-stream text-to-motion model (Ghosh et al. 2021)"
     p = train_sub.add_parser("twostream", help=h, description=h)
     p.add_argument("--data", required=True, metavar="DIR", help="KIT-ML-format or custom folder")
-    p.add_argument("--out", required=True, metavar="MODEL.pt", help="the trained model file")
+    p.add_argument("--out", required=True, metavar="MODEL.pt", type=output_file,
+                   help="the trained model file")
     p.add_argument("--run-dir", metavar="DIR",
                    help="checkpoints, history, splits (default: MODEL_run beside MODEL.pt)")
     p.add_argument("--ablation", choices=ABLATION_NAMES, default="full")
-    p.add_argument("--h", type=int, default=512, help="stream embedding size (paper 512)")
-    p.add_argument("--h1", type=int, default=32, help="per-part layer size (paper 32)")
-    p.add_argument("--h2", type=int, default=128, help="trunk+limb layer size (paper 128)")
-    p.add_argument("--lstm-layers", type=int, default=2)
+    p.add_argument("--h", type=size_int, default=512, help="stream embedding size (paper 512)")
+    p.add_argument("--h1", type=size_int, default=32, help="per-part layer size (paper 32)")
+    p.add_argument("--h2", type=size_int, default=128, help="trunk+limb layer size (paper 128)")
+    p.add_argument("--lstm-layers", type=layers_int, default=2)
     p.add_argument("--z-every-step", action="store_true",
                    help="beyond the paper: every decoder step reads its stream's embedding")
     p.add_argument("--time-input", action="store_true",
@@ -146,26 +150,27 @@ def register_train(train_sub) -> None:
                         "paper's weights (energy: 0, beyond the paper)")
     p.add_argument("--text-layers", metavar="I,J,..",
                    help="hidden states of the text model to concatenate (default 3,4,5,6)")
-    p.add_argument("--epochs", type=int, default=20)
-    p.add_argument("--batch-size", type=int, default=32)
-    p.add_argument("--lr", type=float, default=1e-3)
+    p.add_argument("--epochs", type=positive_int, default=20)
+    p.add_argument("--batch-size", type=positive_int, default=32)
+    p.add_argument("--lr", type=positive_float, default=1e-3)
     add_schedule_args(p)
-    p.add_argument("--grad-clip", type=float, default=5.0)
-    p.add_argument("--forcing-steps", type=int, default=200,
+    p.add_argument("--grad-clip", type=nonneg_float, default=5.0)
+    p.add_argument("--forcing-steps", type=nonneg_int, default=200,
                    help="optimiser steps over which teacher forcing anneals 1 -> 0")
-    p.add_argument("--max-frames", type=int, default=None,
+    p.add_argument("--max-frames", type=frames_int, default=None,
                    help="crop sequences to this many 12.5 Hz frames")
-    p.add_argument("--max-seconds", type=float, default=30.0, help="drop longer motions")
-    p.add_argument("--length-buckets", type=int, default=0, metavar="N",
+    p.add_argument("--max-seconds", type=positive_float, default=30.0, help="drop longer motions")
+    p.add_argument("--length-buckets", type=nonneg_int, default=0, metavar="N",
                    help="batch motions of similar lengths (pools of N batches sorted by "
                         "length; 0: plain shuffle): less padding, faster epochs")
     p.add_argument("--mirror", action="store_true",
                    help="also train on every training motion mirrored left/right, its "
                         "sentences' sides swapped (beyond the paper)")
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--threads", type=int, default=0, help="torch threads (0: torch's default)")
+    p.add_argument("--seed", type=seed_int, default=0)
+    p.add_argument("--threads", type=nonneg_int, default=0,
+                   help="torch threads (0: torch's default)")
     p.add_argument("--resume", action="store_true", help="continue from the run's last.pt")
-    p.add_argument("--checkpoint-every", type=int, default=0, metavar="STEPS")
+    p.add_argument("--checkpoint-every", type=nonneg_int, default=0, metavar="STEPS")
     p.set_defaults(func=cmd_train)
 
 
@@ -221,9 +226,9 @@ def register(subparsers) -> None:
     p.add_argument("--model", required=True, action="append", metavar="[NAME=]PATH",
                    help="an L2M or two-stream checkpoint; repeat for each model")
     p.add_argument("--split", default="test")
-    p.add_argument("--seed", type=int, default=0, help="the split seed used in training")
-    p.add_argument("--max-seconds", type=float, default=30.0)
-    p.add_argument("--limit", type=int, default=0, help="evaluate at most N motions")
+    p.add_argument("--seed", type=seed_int, default=0, help="the split seed used in training")
+    p.add_argument("--max-seconds", type=positive_float, default=30.0)
+    p.add_argument("--limit", type=nonneg_int, default=0, help="evaluate at most N motions")
     p.add_argument("--autoencode", action="store_true",
                    help="also score each two-stream model decoding the test motions from their "
                         "own pose embeddings and first poses (a reference for the sentence path)")
@@ -233,19 +238,19 @@ def register(subparsers) -> None:
                         "evaluate), each L2M model (joint angles) on the test subject's own "
                         "body, and on it starting with the test motion's first frame, and "
                         "standing in the first pose")
-    p.add_argument("--figures", type=int, default=3, help="trajectory figures to draw")
-    p.add_argument("--oracle", type=int, default=0, metavar="K",
+    p.add_argument("--figures", type=nonneg_int, default=3, help="trajectory figures to draw")
+    p.add_argument("--oracle", type=nonneg_int, default=0, metavar="K",
                    help="procedural corpus: a second table on the test motions whose exact "
                         "parameters K or more training motions share, with the APE of those "
                         "motions (how much of APE no sentence can explain)")
-    p.add_argument("--threads", type=int, default=0)
-    p.add_argument("-o", "--output", metavar="DIR",
+    p.add_argument("--threads", type=nonneg_int, default=0)
+    p.add_argument("-o", "--output", metavar="DIR", type=output_dir,
                    help="write t2m_table.md, t2m_report.json and trajectory PNGs here")
     p.add_argument("--l2m-method", choices=("mean", "sample"), default="mean",
                    help="how L2M models generate (default: heaviest-component means; "
                         "sample: one ancestral sample per sentence, or the best of "
                         "--l2m-width)")
-    p.add_argument("--l2m-width", type=int, default=1, metavar="W",
+    p.add_argument("--l2m-width", type=width_int, default=1, metavar="W",
                    help="sample: draw W and keep the likeliest (default 1)")
     p.add_argument("--l2m-rerank", metavar="M2L", help="sample: keep the one of the W under "
                    "which this M2L model finds the sentence likeliest")

@@ -105,7 +105,8 @@ def evaluate_round_trip(l2m, m2l, references: Mapping[str, Sequence[str]],
     It must not be ``m2l`` itself, which would grade its own choice.
 
     Returns ``{"n_sentences", "bleu", "bleu1", "rouge_l", ("cider"), "relative",
-    "descriptions"}`` with relative = bleu / m2l_bleu (NaN if m2l_bleu is 0) and
+    "descriptions"}`` with relative = bleu / m2l_bleu (NaN if m2l_bleu is below
+    ``MIN_BLEU``, when the ratio means nothing) and
     descriptions = [[motion id, sentence, description of the generated motion], ...].
     """
     if reranker is not None:
@@ -131,6 +132,19 @@ def evaluate_round_trip_nn(index, train_frames: Mapping[str, np.ndarray], m2l,
     return round_trip(lambda s: train_frames[index.nearest(s)[0]], m2l, references, m2l_bleu)
 
 
+# BLEU below this (0.1 of 100 points) means no n-gram of some order matched: a smoothed value
+# such as 1e-154 whose ratios (2.4e155, or 0.945 for two of them) say nothing
+MIN_BLEU = 1e-3
+
+
+def relative_bleu(bleu: float, m2l_bleu: float) -> float:
+    """The round trip's BLEU as a fraction of M2L's on the real motions; NaN (undefined)
+    when M2L's is below :data:`MIN_BLEU`, and 0 for a round trip's below it."""
+    if not m2l_bleu >= MIN_BLEU:
+        return float("nan")
+    return bleu / m2l_bleu if bleu >= MIN_BLEU else 0.0
+
+
 def round_trip(motion_for, m2l, references: Mapping[str, Sequence[str]],
                m2l_bleu: float) -> dict:
     """Describe ``motion_for(sentence) -> (T, F) frames`` of every reference sentence with
@@ -141,7 +155,7 @@ def round_trip(motion_for, m2l, references: Mapping[str, Sequence[str]],
         hyps.append(normalize(describe_features(m2l, motion_for(sentence), width=1)[0][0]))
         refs.append([normalize(s) for s in references[i]])
     scores = text_scores(refs, hyps)
-    rel = scores["bleu"] / m2l_bleu if m2l_bleu > 0 else float("nan")
+    rel = relative_bleu(scores["bleu"], m2l_bleu)
     return {"n_sentences": len(pairs), **scores, "relative": rel,
             "descriptions": [[i, s, h] for (i, s), h in zip(pairs, hyps)]}
 

@@ -90,12 +90,29 @@ def write_checkpoint(payload: dict, path: str | Path) -> None:
         torch.save(payload, tmp)
 
 
+def load_checkpoint(path: str | Path) -> Any:
+    """``torch.load(path, weights_only=True)``, its failures as one line.
+
+    A file that is not a checkpoint, a truncated one or one holding pickled classes fails
+    the same way. torch's own message advises retrying with ``weights_only=False``, which
+    would run code from the file: it is not repeated, and that is never done here.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise MotionlangError(f"{path}: no such checkpoint file")
+    try:
+        return torch.load(path, map_location="cpu", weights_only=True)
+    except OSError as exc:
+        raise MotionlangError(f"{path}: cannot read checkpoint: "
+                              f"{exc.strerror or type(exc).__name__}") from exc
+    except Exception as exc:   # UnpicklingError, RuntimeError (zip), EOFError, ...
+        raise MotionlangError(f"{path}: not a readable motionlang checkpoint (truncated, "
+                              f"or another kind of file)") from exc
+
+
 def read_model_dict(path: str | Path, kind: str) -> dict:
     """Load a model checkpoint (or a trainer checkpoint holding one) and check its kind."""
-    try:
-        d = torch.load(path, map_location="cpu", weights_only=True)
-    except (OSError, RuntimeError, EOFError, ValueError) as exc:
-        raise MotionlangError(f"{path}: cannot read checkpoint: {exc}") from exc
+    d = load_checkpoint(path)
     if isinstance(d, dict) and "model" in d and isinstance(d["model"], dict):
         d = d["model"]
     if not isinstance(d, dict) or d.get("kind") != kind:
@@ -134,4 +151,9 @@ class Seq2SeqCheckpoint:
     @classmethod
     def load(cls, path: str | Path):
         """Rebuild from a file written by :meth:`save` or by the trainer; in eval mode."""
-        return cls.from_checkpoint(read_model_dict(path, cls.kind))
+        d = read_model_dict(path, cls.kind)
+        try:
+            return cls.from_checkpoint(d)
+        except (KeyError, TypeError, ValueError, RuntimeError) as exc:
+            raise MotionlangError(f"{path}: a damaged {cls.kind} checkpoint "
+                                  f"({type(exc).__name__}: {str(exc).splitlines()[0]})") from exc

@@ -73,6 +73,13 @@ class CRBMConfig:
         if self.negative_start not in ("data", "previous"):
             raise MotionlangError(f"CRBMConfig.negative_start must be 'data' or 'previous', "
                                   f"got {self.negative_start!r}")
+        from motionlang.utils.checks import check_numbers
+        check_numbers("CRBMConfig", self, positive_ints=("n_hidden", "order", "batch_size",
+                                                         "cd_steps"),
+                      nonneg_ints=("epochs",), positive=("lr",),
+                      nonneg=("lr_autoregressive", "weight_decay", "init_std",
+                              "history_noise", "weight_decay_autoregressive"),
+                      unit=("momentum",))
         if self.cd_steps < 1:
             raise MotionlangError("CRBMConfig.cd_steps must be >= 1")
         if not (self.history_noise >= 0 and np.isfinite(self.history_noise)):
@@ -275,6 +282,11 @@ class CRBM:
                     velocity[k] += rates[k] * g
                     getattr(self, k).__iadd__(velocity[k])
             self.history.append(err / len(order))
+            if not (np.isfinite(err) and all(np.isfinite(getattr(self, k)).all()
+                                             for k in PARAMS)):
+                raise MotionlangError(f"training stopped at epoch {len(self.history)}: the "
+                                      "reconstruction error or weights are not finite (lower "
+                                      "--lr)")
             if on_epoch is not None:
                 on_epoch(len(self.history), self)
 

@@ -7,6 +7,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from motionlang.errors import MotionlangError
+from motionlang.utils.checks import check_numbers
+
 
 @dataclass
 class M2LConfig:
@@ -30,6 +33,11 @@ class M2LConfig:
     sos_id: int = 1
     eos_id: int = 2
     max_len: int = 40          # decoding cap in tokens, EOS included
+
+    def __post_init__(self):
+        check_numbers("M2LConfig", self, unit=("dropout",), positive_ints=(
+            "n_features", "vocab_size", "enc_hidden", "enc_layers", "dec_hidden",
+            "dec_layers", "embed_dim", "attn_dim", "max_len"))
 
 
 @dataclass
@@ -90,4 +98,13 @@ class L2MConfig:
     plan_noise: float = 0.0
     pad_id: int = 0
     max_frames: int = 300       # decoding cap (frames)
+
+    def __post_init__(self):
+        check_numbers("L2MConfig", self, unit=("dropout",), positive_ints=(
+            "vocab_size", "n_features", "embed_dim", "enc_hidden", "enc_layers", "dec_hidden",
+            "dec_layers", "n_components", "attn_dim", "max_frames", "energy_window",
+            "plan_hidden"), nonneg_ints=("rollout_warmup", "plan_parts"),
+            nonneg=("end_weight", "input_noise", "energy_weight", "plan_weight", "plan_noise"))
+        if not 0 <= self.rollout <= 1:
+            raise MotionlangError(f"L2MConfig.rollout must be in [0, 1], got {self.rollout!r}")
 

@@ -34,7 +34,7 @@ import torch
 import torch.distributed as dist
 
 from motionlang.errors import MotionlangError
-from motionlang.models.checkpoint import write_checkpoint
+from motionlang.models.checkpoint import load_checkpoint, write_checkpoint
 from motionlang.utils.atomic import atomic_path, atomic_write
 from motionlang.utils.progress import progress
 
@@ -103,6 +103,38 @@ def check_schedule(decay_epochs: float, decay_to: float, epochs: int) -> None:
         raise MotionlangError(f"decay_epochs must be in [0, epochs={epochs}], got {decay_epochs}")
     if not 0.0 <= decay_to <= 1.0:
         raise MotionlangError(f"decay_to must be in [0, 1], got {decay_to}")
+
+
+def check_resume(out_dir: str | Path, *, read: bool = True) -> Path:
+    """``out_dir/last.pt``, which a resumed run continues from; an error if there is none
+    (a resume that silently started afresh would overwrite the run) or, with ``read``, if
+    it is not a readable training checkpoint. Commands call it before anything is written."""
+    last = Path(out_dir) / "last.pt"
+    if not last.is_file():
+        raise MotionlangError(f"--resume: no checkpoint {last} to continue from")
+    if read:
+        read_training_checkpoint(last)
+    return last
+
+
+def read_training_checkpoint(path: Path) -> dict:
+    """A ``last.pt`` / ``best.pt`` written by :class:`Trainer` (one-line error otherwise)."""
+    ck = load_checkpoint(path)
+    if not (isinstance(ck, dict) and {"model", "optimizer", "rng", "step"} <= set(ck)):
+        raise MotionlangError(f"{path}: not a training checkpoint (last.pt) to resume")
+    return ck
+
+
+def check_finite(terms: dict[str, float], model: torch.nn.Module, step: int) -> None:
+    """Stop a run whose loss or weights stopped being finite numbers (too high a learning
+    rate, bad data): training on would only write checkpoints of NaNs."""
+    bad = [k for k, v in terms.items() if not math.isfinite(v)]
+    trained = (p for p in model.parameters() if p.requires_grad)   # frozen ones stay as they are
+    if not bad and all(bool(torch.isfinite(p).all()) for p in trained):
+        return
+    what = f"loss term {', '.join(bad)}" if bad else "weights"
+    raise MotionlangError(f"training stopped at step {step}: {what} not finite (lower --lr "
+                          f"or check the data); the last good checkpoint is kept")
 
 
 def init_distributed() -> tuple[int, int]:
@@ -291,7 +323,7 @@ class Trainer:
                           **pos}, self.out_dir / name)
 
     def _load(self, path: Path) -> dict:
-        ck = torch.load(path, map_location="cpu", weights_only=True)
+        ck = read_training_checkpoint(path)
         try:
             self.model.load_state_dict(ck["model"]["state_dict"])
         except RuntimeError as exc:   # e.g. another vocabulary size or model size
@@ -349,8 +381,8 @@ class Trainer:
         epoch, start_batch, step = 0, 0, 0
         sums, count, best = {}, 0, math.inf
         last = self.out_dir / "last.pt"
-        if resume and last.exists():
-            ck = self._load(last)
+        if resume:
+            ck = self._load(check_resume(self.out_dir, read=False))
             epoch, start_batch, step = ck["epoch"], ck["batch"], ck["step"]
             sums, count, best = dict(ck["epoch_sums"]), ck["epoch_count"], ck["best"]
             self._check_batching(ck, last)
@@ -374,6 +406,7 @@ class Trainer:
             for b in range(start_batch, len(batches)):
                 lr = self._set_lr(epoch, b, len(batches))
                 terms = self._train_step(batches[b])
+                check_finite(terms, self.model, step + 1)
                 n = len(self._share(batches[b]))
                 for k, v in terms.items():
                     sums[k] = sums.get(k, 0.0) + v * n

@@ -101,7 +101,9 @@ def train_twostream(model, train_items: Sequence[dict], config: TrainConfig, *,
         trainer = TwoStreamTrainer(model, list(train_items), TwoStreamModel.collate, cfg,
                                    val_set=list(val_items) if val_items else None,
                                    schedule=schedule)
-        history += [{**h, "stage": stage} for h in trainer.fit(resume=resume)]
+        # a later stage resumes only if it had begun (the first must have a checkpoint)
+        begun = stage == stages[0] or (Path(cfg.out_dir) / "last.pt").is_file()
+        history += [{**h, "stage": stage} for h in trainer.fit(resume=resume and begun)]
     model.teacher_forcing = 0.0
     return model.eval(), history
 

@@ -8,11 +8,13 @@ spine, neck, head and the root trajectory columns).
 """
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass, field, fields
 from typing import Any
 
 from motionlang.errors import MotionlangError
 from motionlang.features.joint_map import KIT21_NAMES
+from motionlang.utils.checks import check_numbers
 
 #: joint names of each body part, subject's left/right (MMM naming, ``KIT21_NAMES``).
 KIT21_PART_JOINTS: dict[str, tuple[str, ...]] = {
@@ -103,6 +105,12 @@ class TwoStreamConfig:
     progress_input: bool = False
 
     def __post_init__(self):
+        check_numbers("TwoStreamConfig", self, nonneg_ints=("text_dim",), positive_ints=(
+            "n_features", "h1", "h2", "h", "lstm_layers", "disc_hidden"))
+        bad = {k: v for k, v in self.lambdas.items()
+               if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0)}
+        if bad:
+            raise MotionlangError(f"loss weights must be finite numbers >= 0, got {bad}")
         if set(self.parts) != set(PART_NAMES):
             raise MotionlangError(f"parts must be exactly {PART_NAMES}, got {sorted(self.parts)}")
         cols = sorted(c for p in self.parts.values() for c in p)

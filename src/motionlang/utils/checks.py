@@ -1,0 +1,38 @@
+"""One place for the range checks of config dataclasses (``__post_init__``).
+
+Every model config checks its numbers where it is built, so a bad value is one
+:class:`MotionlangError` naming the field, whether it came from the command line, the
+Python API or a checkpoint, instead of a crash (or a silent model of NaNs) further on.
+"""
+from __future__ import annotations
+
+import math
+from typing import Any, Iterable
+
+from motionlang.errors import MotionlangError
+
+
+def check_numbers(owner: str, cfg: Any, *, positive_ints: Iterable[str] = (),
+                  nonneg_ints: Iterable[str] = (), positive: Iterable[str] = (),
+                  nonneg: Iterable[str] = (), unit: Iterable[str] = ()) -> None:
+    """Raise if a field of ``cfg`` is out of range. ``positive_ints``: integers >= 1;
+    ``nonneg_ints``: integers >= 0; ``positive``: finite numbers > 0; ``nonneg``: finite
+    numbers >= 0; ``unit``: numbers in [0, 1). A field set to None is not checked."""
+    rules = [(positive_ints, lambda v: _is_int(v) and v >= 1, "an integer >= 1"),
+             (nonneg_ints, lambda v: _is_int(v) and v >= 0, "an integer >= 0"),
+             (positive, lambda v: _is_real(v) and v > 0, "a finite number > 0"),
+             (nonneg, lambda v: _is_real(v) and v >= 0, "a finite number >= 0"),
+             (unit, lambda v: _is_real(v) and 0 <= v < 1, "a number in [0, 1)")]
+    for names, ok, what in rules:
+        for name in names:
+            v = getattr(cfg, name)
+            if v is not None and not ok(v):
+                raise MotionlangError(f"{owner}.{name} must be {what}, got {v!r}")
+
+
+def _is_int(v: Any) -> bool:
+    return isinstance(v, int) and not isinstance(v, bool)
+
+
+def _is_real(v: Any) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
