@@ -1,11 +1,13 @@
-"""Fuzz every reader: N inputs per format (MMM, ASF, AMC, BVH, MIT), each read in a child
-process under a memory cap and a time limit (``motionlang.formats.fuzzing``), and count what
-became of them.
+"""Fuzz every reader: N inputs per format (MMM, ASF, AMC, BVH, MIT, H3D), each read in a
+child process under a memory cap and a time limit (``motionlang.formats.fuzzing``), and count
+what became of them.
 
 Inputs: random edits of seeds (hand-made files and real ones from ../shared/data cut to a
-few frames) and, for a share of them, files crafted to stress one reader (deep and wide
-skeletons, child-first bone lists, huge frame declarations, encodings and DTDs, MAT fields
-of the wrong type). The bar: 0 crashes, 0 hangs, 0 uncaught exceptions, 0 invalid results.
+few frames; for H3D tiny HumanML3D-layout folders built in code) and, for a share of them,
+files crafted to stress one reader (deep and wide skeletons, child-first bone lists, huge
+frame declarations, encodings and DTDs, MAT fields of the wrong type; for H3D ``.npy``
+headers with other dtypes and huge shapes, NaN data, broken caption spans and split files).
+The bar: 0 crashes, 0 hangs, 0 uncaught exceptions, 0 invalid results.
 Prints a table per format and the first few examples of each bad kind; exit status 1 if
 there is any. Inputs are reproducible from ``--seed``; ``--keep DIR`` saves the bad ones.
 
@@ -62,7 +64,8 @@ def fuzz_format(fmt: str, n: int, args, sandbox: Sandbox) -> dict:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("n", nargs="?", type=int, default=10_000, help="inputs per format")
-    ap.add_argument("--formats", default=",".join(FORMATS))
+    ap.add_argument("--formats", default=",".join(FORMATS),
+                    help=f"comma-separated, of {','.join(FORMATS)} (any case)")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--crafted", type=float, default=0.25, help="share of crafted inputs")
     ap.add_argument("--time-limit", type=float, default=20.0, help="seconds per input")
@@ -71,7 +74,10 @@ def main(argv=None) -> int:
     ap.add_argument("--examples", type=int, default=3, help="examples shown per bad kind")
     ap.add_argument("--keep", help="folder to save the bad inputs in")
     args = ap.parse_args(argv)
-    fmts = [f for f in args.formats.split(",") if f]
+    fmts = [f.strip().lower() for f in args.formats.split(",") if f.strip()]
+    unknown = [f for f in fmts if f not in FORMATS]
+    if unknown:
+        ap.error(f"unknown format {unknown[0]!r} (choose from {', '.join(FORMATS)})")
     print(f"fuzzing {', '.join(fmts)}: {args.n:,} inputs each ({args.crafted:.0%} crafted), "
           f"seed {args.seed}, limits {args.time_limit:g} s and {args.memory_mib} MiB per "
           f"input, real seeds {'from ' + str(DATA) if DATA.is_dir() else 'absent'}")

@@ -4,12 +4,14 @@ and a time limit (``motionlang.formats.fuzzing``): the only acceptable outcomes 
 arrays, consistent shapes, finite joint positions); never a crash, a hang, an uncaught
 exception.
 
-Per format (MMM XML, ASF, AMC, BVH, MIT ``.mat``): edits of seeds (hand-made files and real
-ones cut to a few frames) and files crafted against that reader (encodings and DTDs, deep
-and wide skeletons, child-first bone lists, huge numbers and frame counts, MAT fields of the
-wrong type, long inputs). Hypothesis runs derandomized (reproducible in CI). The findings of
-the fuzzing issue are pinned as explicit examples. ``benchmarks/fuzz_readers.py`` runs the
-same at 10,000 inputs per format.
+Per format (MMM XML, ASF, AMC, BVH, MIT ``.mat``, H3D: a HumanML3D-layout folder packed as a
+tar): edits of seeds (hand-made files and real ones cut to a few frames) and files crafted
+against that reader (encodings and DTDs, deep and wide skeletons, child-first bone lists,
+huge numbers and frame counts, MAT fields of the wrong type, long inputs; ``.npy`` headers
+with object dtypes or huge shapes, NaN rows, broken caption spans, odd split files).
+Hypothesis runs derandomized (reproducible in CI). The findings of the fuzzing issue are
+pinned as explicit examples. ``benchmarks/fuzz_readers.py`` runs the same at 10,000 inputs
+per format.
 """
 from __future__ import annotations
 
@@ -23,7 +25,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from motionlang.formats.fuzzing import FORMATS, Sandbox, crafted, mutate, seeds
-from motionlang.formats.fuzzing.seeds import TINY_ASF, mit_sequence, mit_tree, write_mit
+from motionlang.formats.fuzzing.seeds import (TINY_ASF, h3d_files, mit_sequence, mit_tree,
+                                              npy_bytes, pack_h3d, write_mit)
 from tests.conftest import SHARED
 
 pytest.importorskip("resource")  # the sandbox needs Unix
@@ -99,6 +102,29 @@ def _mit_with(field: str, value) -> bytes:
     return write_mit(tree, [mit_sequence()])
 
 
+def _h3d_with(name: str, data, body: str = "kit", **kw) -> bytes:
+    """A tiny HumanML3D-layout folder (packed) with file ``name`` replaced by ``data``
+    (bytes, or an array saved as ``.npy``)."""
+    files = h3d_files(body, **kw)
+    files[name] = data if isinstance(data, bytes) else npy_bytes(data)
+    return pack_h3d(files, body)
+
+
+def _npy_huge() -> bytes:
+    buf = io.BytesIO()
+    np.lib.format.write_array_header_1_0(
+        buf, {"descr": "<f4", "fortran_order": False, "shape": (2 ** 40, 251)})
+    return buf.getvalue() + bytes(16)
+
+
+def _npy_unterminated() -> bytes:
+    """A header numpy's parser dies on with tokenize.TokenError (an open bracket)."""
+    good = npy_bytes(np.zeros((2, 251), np.float32))
+    end = good.index(b"\n")
+    head = good[:10] + b"{'descr': '<f4', 'fortran_order': False, 'shape': (2, 251"
+    return head + b" " * (end - len(head)) + good[end:]
+
+
 FINDINGS = [
     ("mit", _mat_double_tag_as_8, None, "number data of element type 8"),
     ("mit", lambda: _mit_with("parent", "text"), None, "parent must be numbers"),
@@ -113,6 +139,23 @@ FINDINGS = [
     ("mmm", lambda: b"<?xml version='1.0' encoding='utf-32'?><MMM/>", None, "encoding"),
     ("mmm", lambda: b"<?xml version='1.0' encoding='klingon'?><MMM/>", None, "encoding"),
     ("bvh", _bvh_447_gib, None, "exceeds the limit"),
+    ("h3d", lambda: _h3d_with("new_joints/000001.npy", np.empty((2, 3), dtype=object)), None,
+     "not real numbers"),
+    ("h3d", lambda: _h3d_with("new_joints/000001.npy", _npy_huge()), None, "header declares"),
+    ("h3d", lambda: _h3d_with("new_joints/000001.npy", _npy_unterminated()), None,
+     "not a readable .npy file"),
+    ("h3d", lambda: _h3d_with("new_joint_vecs/000001.npy", np.full((3, 251), np.nan, np.float32)),
+     None, "non-finite"),
+    ("h3d", lambda: _h3d_with("new_joints/000001.npy", np.zeros((3, 21, 3), np.float32)), None,
+     "sits on its parent"),
+    ("h3d", lambda: _h3d_with("texts/000001.txt", "walks#w#0#0\n".encode("utf-16")), None,
+     "not UTF-8"),
+    ("h3d", lambda: _h3d_with("texts/000001.txt", b"walks#w#2.0#1.0\n"), None,
+     "ends before it starts"),
+    ("h3d", lambda: _h3d_with("texts/000001.txt", b"walks#w#inf#inf\n"), None,
+     "not two finite times"),
+    ("h3d", lambda: _h3d_with("texts/000001.txt", b"walks#w#1e308#1e308\n"), None,
+     "holds no frames"),
 ]
 
 
@@ -121,6 +164,11 @@ FINDINGS = [
 def test_findings_are_clean_errors(sandbox, fmt, make, skeleton, words):
     out = sandbox.run(fmt, make(), skeleton)
     assert out.kind == "error" and words in out.detail, out
+
+
+def test_h3d_split_files_naming_missing_ids_and_paths(sandbox):
+    data = _h3d_with("train.txt", b"../x\n/etc/passwd\nmissing\n000001\n" + b"a" * 100_000)
+    assert sandbox.run("h3d", data).kind == "valid"
 
 
 def test_sandbox_reports_crashes_and_hangs(tmp_path):

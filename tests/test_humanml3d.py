@@ -216,3 +216,44 @@ def test_cli_export(corpus, tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert err.startswith("motionlang data: error:") and "--body kit" in err and "\n" not in err
     assert not (tmp_path / "s").exists()
+
+
+def test_corrupt_folders_are_clean_errors(tmp_path):
+    """Caption spans, encodings and .npy files a reader must refuse in one line naming the
+    file (the fuzzing in tests/test_fuzz_readers.py covers many more)."""
+    for line, words in (("c#t#2.0#1.0", "ends before it starts"), ("c#t#-1#2", ">= 0"),
+                        ("c#t#inf#inf", "finite"), ("c#t#1.0", "ends before it starts")):
+        with pytest.raises(DatasetError, match=words):
+            parse_caption_line(line, "x.txt:1")
+    p = np.stack([positions_walk(t) for t in range(6)])
+    rows, layout = joints_to_vectors(p, KIT_H3D)
+    for d in ("new_joint_vecs", "new_joints", "texts"):
+        (tmp_path / d).mkdir()
+    vecs, joints = tmp_path / "new_joint_vecs/1.npy", tmp_path / "new_joints/1.npy"
+    np.save(vecs, rows.astype(np.float32))
+    np.save(joints, layout[:-1].astype(np.float32))
+    (tmp_path / "texts/1.txt").write_bytes("walks#w#0#0".encode("utf-16"))
+    with pytest.raises(DatasetError, match=r"texts/1.txt: not UTF-8"):
+        load_h3d(tmp_path, "kit")
+    (tmp_path / "texts/1.txt").write_text("walks#w#0#0\n")
+    (tmp_path / "train.txt").write_text("../x\n/etc/passwd\nmissing\n1\n")
+    (rec,) = load_h3d(tmp_path, "kit")
+    assert rec.split == "train" and rec.load_motion().n_frames == 5
+    np.save(joints, np.empty((5, 21, 3), dtype=object), allow_pickle=True)
+    with pytest.raises(DatasetError, match=r"1.npy: holds \|O values, not real numbers"):
+        rec.load_joints()
+    bad = layout[:-1].astype(np.float32)
+    bad[2, 3, 1] = np.nan
+    np.save(joints, bad)
+    with pytest.raises(DatasetError, match="non-finite"):
+        rec.load_joints()
+    with open(joints, "wb") as fh:      # 2**40 frames declared over 16 bytes: nothing allocated
+        np.lib.format.write_array_header_1_0(
+            fh, {"descr": "<f4", "fortran_order": False, "shape": (2 ** 40, 21, 3)})
+        fh.write(bytes(16))
+    with pytest.raises(MotionlangError, match="header declares"):
+        rec.load_joints()
+    np.save(joints, np.zeros((0, 21, 3), np.float32))
+    with pytest.raises(DatasetError, match=r"expected \(N >= 1, 21, 3\)"):
+        rec.load_joints()
+    assert rec.load_vectors().shape == (5, 251)

@@ -25,17 +25,21 @@ about a centimetre); :meth:`H3DRecord.load_joints` gives the stored joints thems
 from __future__ import annotations
 
 import math
+import tokenize
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from motionlang.errors import DatasetError
+from motionlang.errors import DatasetError, MotionlangError
 from motionlang.features.h3d_vectors import H3D_BODIES, H3DBody, vectors_to_joints
+from motionlang.utils.limits import check, check_file, check_motion
 
 VECS, JOINTS, TEXTS = "new_joint_vecs", "new_joints", "texts"
 SPLITS = ("train", "val", "test")
 PREFIXES = {"humanml3d:": "smpl", "kitml-h3d:": "kit"}
+#: joint positions farther than this from the origin (metres) are refused as corrupt
+MAX_METRES = 1e6
 
 # Closed-class English words and their universal POS tags; other words get "X" (see
 # ``tag_caption``). The public release tags with spaCy, which this package does not need.
@@ -78,9 +82,14 @@ def parse_caption_line(line: str, where: str = "caption") -> tuple[str, list[str
         try:
             t = float(s)
         except ValueError:
-            raise DatasetError(f"{where}: time {s!r} is not a number") from None
+            raise DatasetError(f"{where}: time {s[:40]!r} is not a number") from None
         times.append(0.0 if math.isnan(t) else t)
     start, end = (times + [0.0, 0.0])[:2]
+    if not (math.isfinite(start) and math.isfinite(end)) or start < 0 or end < 0:
+        raise DatasetError(f"{where}: time span {start:g}-{end:g} is not two finite times "
+                           ">= 0")
+    if end < start:
+        raise DatasetError(f"{where}: time span {start:g}-{end:g} ends before it starts")
     return parts[0].strip(), tokens, start, end
 
 
@@ -110,14 +119,19 @@ class H3DRecord:
     def _cut(self, x: np.ndarray) -> np.ndarray:
         if self.span is None:
             return x
-        fps = self.body.fps
-        return x[int(self.span[0] * fps):int(self.span[1] * fps)]
+        fps, n = self.body.fps, len(x)   # a huge time (1e308 s) is past the end, not inf
+        return x[int(min(self.span[0] * fps, n)):int(min(self.span[1] * fps, n))]
 
     def _load(self, path: Path, shape: tuple[int, ...]) -> np.ndarray:
-        x = _npy(path)
-        if x.shape[1:] != shape or not len(x):
+        declared, _ = _header(path)
+        if declared[1:] != shape or not declared[:1] or declared[0] < 1:
             raise DatasetError(f"{path}: expected (N >= 1, {', '.join(map(str, shape))}) for "
-                               f"the {self.body.name} body, got {x.shape}")
+                               f"the {self.body.name} body, got {declared}")
+        # the rows as float64, their joints and the Motion fitted to them
+        check_motion(path, declared[0], self.body.n_joints, 2 * self.body.dim)
+        x = _npy(path)
+        if not np.isfinite(x).all():
+            raise DatasetError(f"{path}: non-finite values (NaN or inf)")
         return x
 
     def load_vectors(self) -> np.ndarray:
@@ -140,15 +154,22 @@ class H3DRecord:
         p = self._cut(p)
         if not len(p):
             raise DatasetError(f"{self.path}: span {self.span} holds no frames")
-        return np.asarray(p, dtype=float) * self.body.unit
+        p = np.asarray(p, dtype=float) * self.body.unit
+        if not np.isfinite(p).all() or np.abs(p).max() > MAX_METRES:
+            raise DatasetError(f"{self.path}: joint positions beyond {MAX_METRES:g} m or "
+                               "not finite")
+        return p
 
     def load_motion(self):
         """A ``Motion`` fitted to :meth:`load_joints` (``motion_from_positions``); the KIT
         body carries its identity joint map, so ``positions21`` works on it."""
         from motionlang.kinematics.from_positions import motion_from_positions
         b = self.body
-        motion = motion_from_positions(self.load_joints(), b.fps, b.joint_names, b.parents,
-                                       name=self.id)
+        joints = self.load_joints()
+        try:
+            motion = motion_from_positions(joints, b.fps, b.joint_names, b.parents, name=self.id)
+        except MotionlangError as exc:  # e.g. a bone of length 0 in every frame
+            raise DatasetError(f"{self.path}: {exc}") from None
         motion.source_format = "humanml3d"
         motion.meta.update(dataset=f"h3d-{b.name}", annotations=list(self.annotations))
         if b.name == "kit":
@@ -157,11 +178,58 @@ class H3DRecord:
         return motion
 
 
-def _npy(path: Path, header_only: bool = False) -> np.ndarray:
+def _header(path: Path) -> tuple[tuple[int, ...], np.dtype]:
+    """(shape, dtype) an ``.npy`` file declares, checked against its size and refused
+    unless it holds plain numbers (no objects: nothing is unpickled)."""
+    from numpy.lib import format as npy_format
     try:
-        return np.load(path, mmap_mode="r" if header_only else None)
-    except (OSError, ValueError, EOFError) as exc:
-        raise DatasetError(f"{path}: cannot read ({exc})") from None
+        size = path.stat().st_size
+        with open(path, "rb") as fh:
+            version = npy_format.read_magic(fh)
+            read = {(1, 0): npy_format.read_array_header_1_0,
+                    (2, 0): npy_format.read_array_header_2_0}.get(version)
+            if read is None:
+                raise ValueError(f"unsupported .npy version {version}")
+            shape, _, dtype = read(fh)
+            offset = fh.tell()
+    except FileNotFoundError:
+        raise DatasetError(f"{path}: missing") from None
+    except (OSError, ValueError, EOFError, TypeError, SyntaxError, OverflowError,
+            RecursionError, tokenize.TokenError) as exc:  # a header numpy cannot parse
+        why = "unterminated header" if isinstance(exc, tokenize.TokenError) else \
+            " ".join(str(exc).split())[:200]
+        raise DatasetError(f"{path}: not a readable .npy file ({why})") from None
+    if dtype.kind not in "fiu" or dtype.fields is not None or dtype.subdtype is not None:
+        raise DatasetError(f"{path}: holds {dtype.str} values, not real numbers")
+    need = math.prod(shape) * dtype.itemsize
+    if need > size - offset:
+        raise DatasetError(f"{path}: header declares {shape} ({need:,} bytes of data), the "
+                           f"file holds {max(size - offset, 0):,} (truncated or corrupt)")
+    return tuple(shape), dtype
+
+
+def _npy(path: Path, header_only: bool = False):
+    """An ``.npy`` file's numbers (``header_only``: its declared shape, nothing read)."""
+    shape, _ = _header(path)
+    if header_only:
+        return shape
+    check(path, "max_memory_bytes", 8 * math.prod(shape), "memory needed to read it")
+    try:
+        return np.load(path, allow_pickle=False)
+    except (OSError, ValueError, EOFError, TypeError) as exc:
+        raise DatasetError(f"{path}: cannot read ({' '.join(str(exc).split())[:200]})") \
+            from None
+
+
+def _text(path: Path) -> str:
+    """A caption or split file as text: UTF-8 (a byte-order mark allowed)."""
+    check_file(path, parse_factor=10.0)
+    try:
+        return path.read_text(encoding="utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise DatasetError(f"{path}: not UTF-8 text (byte {exc.start})") from None
+    except OSError as exc:
+        raise DatasetError(f"{path}: cannot read ({exc.strerror or exc})") from None
 
 
 def _ids(root: Path) -> list[str]:
@@ -175,7 +243,7 @@ def _splits(root: Path) -> dict[str, str]:
     for name in SPLITS:
         path = root / f"{name}.txt"
         if path.is_file():
-            for line in path.read_text(encoding="utf-8").split():
+            for line in _text(path).split():
                 out.setdefault(line.strip(), name)
     return out
 
@@ -187,7 +255,7 @@ def _check_body(root: Path, mid: str, body: H3DBody) -> None:
         path = root / folder / f"{mid}.npy"
         if not path.is_file():
             continue
-        shape = _npy(path, header_only=True).shape
+        shape = _npy(path, header_only=True)
         got = shape[axis] if len(shape) >= -axis else None
         if got != want:
             size = "dim" if folder == VECS else "n_joints"
@@ -200,7 +268,7 @@ def _check_body(root: Path, mid: str, body: H3DBody) -> None:
 def _read_texts(path: Path) -> list[tuple[str, list[str], float, float]]:
     if not path.is_file():
         return []
-    lines = path.read_text(encoding="utf-8").splitlines()
+    lines = _text(path).splitlines()
     return [parse_caption_line(line, f"{path}:{i}") for i, line in enumerate(lines, 1)
             if line.strip() and line.split("#")[0].strip()]
 
@@ -233,7 +301,11 @@ def load_h3d(root: str | Path, body: str = "smpl", *, mirrored: bool = False,
 
     Raises:
         DatasetError: no such folder, no ``new_joint_vecs``/``new_joints`` files, rows of
-            the other body, or a malformed caption time.
+            the other body, a malformed caption time or span (not a number, infinite,
+            negative, ending before it starts), a caption or split file that is not UTF-8, or
+            an ``.npy`` header that is corrupt, truncated or not of real numbers (objects are
+            never unpickled). Reading a record's rows or joints also refuses NaN and inf, and
+            (``MotionFormatError``) files beyond ``utils.limits`` before allocating them.
     """
     root = Path(root)
     if body not in H3D_BODIES:
@@ -253,7 +325,7 @@ def load_h3d(root: str | Path, body: str = "smpl", *, mirrored: bool = False,
     records = [r for mid in ids for r in _records_of(root, mid, spec, split.get(mid))]
     if max_seconds is not None:
         records = [r for r in records if r.span is not None or
-                   len(_npy(r.path, header_only=True)) / spec.fps <= max_seconds]
+                   (_npy(r.path, header_only=True) or (0,))[0] / spec.fps <= max_seconds]
     return records
 
 

@@ -7,7 +7,8 @@ what came back and answers one JSON line. The outcome (:data:`KINDS`):
 * ``error``: a ``MotionlangError`` whose message is one line starting with the file's path,
   the one acceptable failure;
 * ``valid``: a Motion (for ASF a Skeleton) with consistent shapes, finite values and finite
-  joint positions;
+  joint positions (for ``h3d``, a HumanML3D-layout folder unpacked from the input's tar:
+  ``load_h3d`` and, for its first records, rows, joints and a Motion, all such);
 * ``invalid``: a value that is not that, or an error message that does not name the file;
 * ``uncaught``: any other exception (MemoryError included: readers must refuse first);
 * ``crash``: the child died (SIGSEGV, SIGBUS, an abort); it is started again;
@@ -36,7 +37,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 KINDS = ("error", "valid", "invalid", "uncaught", "crash", "hang")
-EXTENSIONS = {"asf": ".asf", "amc": ".amc", "bvh": ".bvh", "mmm": ".xml", "mit": ".mat"}
+EXTENSIONS = {"asf": ".asf", "amc": ".amc", "bvh": ".bvh", "mmm": ".xml", "mit": ".mat",
+              "h3d": ".tar"}
+H3D_RECORDS = 4  # records of an h3d folder whose rows, joints and Motion are read
 _CHILD = "from motionlang.formats.fuzzing.sandbox import serve; serve()"
 
 
@@ -134,18 +137,31 @@ class Sandbox:
 
     # ------------------------------------------------------------------ one input
     def run(self, fmt: str, data: bytes, skeleton: bytes | None = None) -> Outcome:
-        """Read ``data`` as format ``fmt`` (``asf``, ``amc``, ``bvh``, ``mmm``, ``mit``);
-        for ``amc`` pass the ASF text as ``skeleton``."""
+        """Read ``data`` as format ``fmt`` (``asf``, ``amc``, ``bvh``, ``mmm``, ``mit``, ``h3d``:
+        a tar of a HumanML3D-layout folder, :func:`.seeds.pack_h3d`); for ``amc`` pass the ASF
+        text as ``skeleton``."""
         if self.proc is None:
             self._start()
-        path = self.folder / f"input{EXTENSIONS[fmt]}"
-        path.write_bytes(data)
+        body = None
+        if fmt == "h3d":
+            from motionlang.formats.fuzzing.seeds import unpack_h3d
+            body, files = unpack_h3d(data)
+            path = self.folder / "h3d"
+            shutil.rmtree(path, ignore_errors=True)
+            path.mkdir()
+            for name, content in files.items():
+                (path / name).parent.mkdir(parents=True, exist_ok=True)
+                (path / name).write_bytes(content)
+        else:
+            path = self.folder / f"input{EXTENSIONS[fmt]}"
+            path.write_bytes(data)
         asf = None
         if skeleton is not None:
             asf = self.folder / f"skeleton-{hashlib.sha1(skeleton).hexdigest()[:16]}.asf"
             if not asf.exists():
                 asf.write_bytes(skeleton)
-        request = json.dumps({"fmt": fmt, "path": str(path), "asf": asf and str(asf)})
+        request = json.dumps({"fmt": fmt, "path": str(path), "asf": asf and str(asf),
+                              "body": body})
         t0 = time.monotonic()
         try:
             self.proc.stdin.write(request.encode() + b"\n")
@@ -205,12 +221,37 @@ def _check(result) -> str | None:
     return None
 
 
+class _Invalid(Exception):
+    """A reading that returned something other than what it promises."""
+
+
+def _read_h3d(req: dict):
+    """``load_h3d`` of the folder; rows, joints and a Motion of its first records."""
+    import numpy as np
+
+    from motionlang.datasets.humanml3d import load_h3d
+    records = load_h3d(req["path"], req["body"], mirrored=True)
+    motions = []
+    for rec in records[:H3D_RECORDS]:
+        rows, joints = rec.load_vectors(), rec.load_joints()
+        b = rec.body
+        if rows.ndim != 2 or rows.shape[1] != b.dim or not len(rows) or \
+                joints.shape != (len(joints), b.n_joints, 3) or not len(joints):
+            raise _Invalid(f"{rec.id}: rows {rows.shape}, joints {joints.shape}")
+        if not (np.isfinite(rows).all() and np.isfinite(joints).all()):
+            raise _Invalid(f"{rec.id}: non-finite rows or joints")
+        motions.append(rec.load_motion())
+    return motions
+
+
 def _read(req: dict, skeletons: dict):
     from motionlang.formats.asf_amc import read_amc, read_asf
     from motionlang.formats.bvh import read_bvh
     from motionlang.formats.mit import read_mit
     from motionlang.formats.mmm import read_mmm
     fmt, path = req["fmt"], req["path"]
+    if fmt == "h3d":
+        return _read_h3d(req)
     if fmt == "amc":
         if req["asf"] not in skeletons:
             skeletons[req["asf"]] = read_asf(req["asf"])
@@ -223,6 +264,8 @@ def _one(req: dict, skeletons: dict) -> tuple[str, str]:
     try:
         result = _read(req, skeletons)
         problem = _check(result)
+    except _Invalid as exc:
+        return "invalid", str(exc)
     except MotionlangError as exc:
         msg = str(exc)
         if "\n" in msg or not msg.startswith(req["path"]):
@@ -246,6 +289,8 @@ def serve() -> None:
     import motionlang.formats.bvh  # noqa: F401
     import motionlang.formats.mit  # noqa: F401
     import motionlang.formats.mmm  # noqa: F401
+    import motionlang.datasets.humanml3d  # noqa: F401
+    import motionlang.kinematics.from_positions  # noqa: F401
     warnings.simplefilter("ignore")  # a warning is not a failure; its text is not wanted
     _limit_memory(int(sys.argv[1]))
     proto.write(b'{"kind": "ready"}\n')

@@ -4,6 +4,10 @@ milliseconds.
 
 :func:`seeds` returns ``(data, skeleton)`` pairs: ``skeleton`` is the ASF text an AMC is read
 with, None for the other formats.
+
+HumanML3D-layout folders (format ``h3d``) travel as an uncompressed tar of the folder's
+files under one top folder named after the body (``kit/new_joints/000001.npy``...):
+:func:`h3d_files` builds a tiny one, :func:`pack_h3d` / :func:`unpack_h3d` convert.
 """
 from __future__ import annotations
 
@@ -164,6 +168,90 @@ def write_mit(tree: list[dict], sequences, compress: bool = False,
     return buf.getvalue()
 
 
+# a KIT stick body standing at attention (mm), as in tests/test_humanml3d.py
+_STAND = np.stack([
+    [0, 0, 0, 0, 0, 200, 200, 200, -200, -200, -200, 100, 100, 100, 100, 100, -100, -100,
+     -100, -100, -100],
+    [900, 1000, 1100, 1400, 1500, 1400, 1100, 850, 1400, 1100, 850, 900, 500, 100, 100, 100,
+     900, 500, 100, 100, 100],
+    [0] * 14 + [60, 160] + [0] * 3 + [60, 160]], axis=1).astype(float)
+_SMPL_FROM_KIT = [0, 11, 16, 1, 12, 17, 2, 13, 18, 3, 14, 19, 3, 5, 8, 4, 5, 8, 6, 9, 7, 10]
+
+
+def h3d_walk(T: int, body: str = "kit") -> np.ndarray:
+    """(T, J, 3) joints of a stick body walking and turning, in the body's file unit."""
+    out = []
+    for t in range(T):
+        c, s = np.cos(0.02 * t), np.sin(0.02 * t)
+        rel = (_STAND - _STAND[0]) @ np.array([[c, 0, -s], [0, 1, 0], [s, 0, c]])
+        out.append(rel + _STAND[0] + [0, 0, 60.0 * t])
+    p = np.stack(out)
+    if body == "smpl":
+        p = p[:, _SMPL_FROM_KIT] / 1000.0
+        p[:, [12, 13, 14], 1] += 0.03
+        p[:, 15, 1] += 0.05
+    return p
+
+
+def npy_bytes(array) -> bytes:
+    buf = io.BytesIO()
+    np.save(buf, array, allow_pickle=True)
+    return buf.getvalue()
+
+
+def h3d_files(body: str = "kit", frames: int = 6, ids=("000001", "M000001"),
+              captions: bytes | None = None) -> dict[str, bytes]:
+    """A tiny HumanML3D-layout folder: relative path -> bytes."""
+    from motionlang.features.h3d_vectors import H3D_BODIES, joints_to_vectors, mirror_joints
+    spec = H3D_BODIES[body]
+    p = h3d_walk(frames, body)
+    files: dict[str, bytes] = {}
+    every = []
+    for i, mid in enumerate(ids):
+        rows, layout = joints_to_vectors(mirror_joints(p, spec) if i % 2 else p, spec)
+        files[f"new_joint_vecs/{mid}.npy"] = npy_bytes(rows.astype(np.float32))
+        files[f"new_joints/{mid}.npy"] = npy_bytes(layout[:-1].astype(np.float32))
+        files[f"texts/{mid}.txt"] = captions or (
+            b"a person walks forward#a/DET person/NOUN walk/VERB forward/ADV#0.0#0.0\n"
+            b"someone takes a step#someone/PRON#0.0#0.2\n")
+        every.append(rows)
+    rows = np.concatenate(every)
+    files["Mean.npy"] = npy_bytes(rows.mean(0).astype(np.float32))
+    files["Std.npy"] = npy_bytes((rows.std(0) + 1).astype(np.float32))
+    files["train.txt"] = ("\n".join(ids) + "\n").encode()
+    files["val.txt"], files["test.txt"] = b"", b"000002\n"
+    return files
+
+
+def pack_h3d(files: dict[str, bytes], body: str = "kit") -> bytes:
+    """An uncompressed tar of ``files`` under the folder ``body``."""
+    buf = io.BytesIO()
+    with tarfile.open(fileobj=buf, mode="w", format=tarfile.PAX_FORMAT) as tf:
+        for name, data in files.items():
+            info = tarfile.TarInfo(f"{body}/{name}")
+            info.size, info.mtime = len(data), 0
+            tf.addfile(info, io.BytesIO(data))
+    return buf.getvalue()
+
+
+def unpack_h3d(data: bytes) -> tuple[str, dict[str, bytes]]:
+    """(body, files) of :func:`pack_h3d`'s bytes: only regular files whose names stay in the
+    folder (no ``..``, not absolute); body ``kit`` unless it says ``smpl``."""
+    body, files = "kit", {}
+    try:
+        with tarfile.open(fileobj=io.BytesIO(data), mode="r:") as tf:
+            for info in tf:
+                parts = info.name.split("/")
+                if not info.isfile() or len(parts) < 2 or info.name.startswith("/") \
+                        or any(x in ("", ".", "..") for x in parts):
+                    continue
+                body = "smpl" if parts[0] == "smpl" else "kit"
+                files["/".join(parts[1:])] = tf.extractfile(info).read()
+    except (tarfile.TarError, EOFError, OSError, ValueError):
+        pass  # what was read so far
+    return body, files
+
+
 def _cut(text: bytes, start: bytes, frames: int) -> bytes:
     """``text`` without the frames after the first ``frames`` (blocks starting ``start``)."""
     hits = [m.start() for m in re.finditer(start, text, re.MULTILINE)]
@@ -205,10 +293,13 @@ def seeds(fmt: str, shared: str | Path | None = None) -> list[tuple[bytes, bytes
     """Hand-made and (if ``shared`` is the real-data folder) real seeds of format ``fmt``."""
     hand = {"asf": [(TINY_ASF, None)], "amc": [(tiny_amc(), TINY_ASF)],
             "bvh": [(TINY_BVH, None)], "mmm": [(tiny_mmm(), None)],
-            "mit": [(write_mit(mit_tree(), [mit_sequence(), mit_sequence(3)]), None)]}[fmt]
+            "mit": [(write_mit(mit_tree(), [mit_sequence(), mit_sequence(3)]), None)],
+            "h3d": [(pack_h3d(h3d_files("kit"), "kit"), None),
+                    (pack_h3d(h3d_files("smpl", 5, ("a1",)), "smpl"), None)]}[fmt]
     real = _real(fmt, Path(shared)) if shared is not None and Path(shared).is_dir() else []
     return hand + real
 
 
 __all__ = ["TINY_ASF", "TINY_BVH", "tiny_amc", "tiny_mmm", "mit_tree", "mit_sequence",
-           "write_mit", "seeds"]
+           "write_mit", "h3d_walk", "h3d_files", "pack_h3d", "unpack_h3d", "npy_bytes",
+           "seeds"]
