@@ -2,10 +2,12 @@
 # Rebuild the M2L and L2M models shipped in src/motionlang/data/models/.
 # Usage: scripts/train_shipped_models.sh [WORKDIR]   (default /tmp/motionlang_shipped)
 # Needs ~4 GB of disk in WORKDIR. On this project's 2-core machine (one core per model):
-# corpus ~2 min, M2L ~50 min (24 epochs, ~120 seq/s), L2M ~50 min (3 teacher-forced epochs
-# at ~40 seq/s, then 3 on its own frames at ~25 seq/s, then ~4 min for its planner).
+# corpus ~2 min, features ~15 min (both runs fit and encode the corpus), M2L ~30 min alone
+# (12 epochs at ~110 seq/s), L2M ~60 min (3 teacher-forced epochs at ~40 seq/s, then 3 on
+# its own frames at ~25 seq/s, then a few minutes for its planner). On 2026-11-24, with
+# other work sharing the two cores, the whole rebuild took about 1 h 45 min.
 # RESUME=--resume continues interrupted runs from their last checkpoint (stage 1 of the L2M
-# and the M2L); M2L_EPOCHS overrides the M2L's 24 epochs.
+# and the M2L); M2L_EPOCHS overrides the M2L's 12 epochs.
 set -euo pipefail
 WORK=${1:-/tmp/motionlang_shipped}
 RESUME=${RESUME:-}
@@ -22,7 +24,10 @@ for n in 6000; do
 done
 # 2. the two models, in parallel, both on the 21-joint position features (rig-independent:
 #    any motion that maps onto the 21-joint body can be described, and generated motions
-#    can be retargeted onto any such rig): paper-size M2L with additive attention (the paper's
+#    can be retargeted onto any such rig; since 2026-11-24, the angle-feature models before
+#    them read MMM motions only). The M2L runs 12 epochs at a constant rate (the shipped one
+#    was a 20-epoch run stopped after its 12th, the same thing; its validation loss still
+#    fell by ~0.005 an epoch there): paper-size M2L with additive attention (the paper's
 #    proposed next step; test BLEU 0.403 vs 0.386 without); L2M with a 2 x 256 decoder,
 #    5 components, a clock, the fraction of the motion done and a plan of 8 parts (the
 #    planner predicts it from the sentence): 3 teacher-forced epochs with noisy inputs, then
@@ -30,7 +35,7 @@ done
 #    with the learning rate decayed; each model.pt is the epoch with the best validation
 #    loss (the L2M's: among the epochs of its second stage, on its own frames); then the
 #    L2M's planner alone 20 epochs more (minutes; validation MSE ~0.172 -> ~0.158)
-"$ML" train m2l --data "$WORK/corpus6000" --out "$WORK/m2l" --epochs ${M2L_EPOCHS:-24} --batch-size 64 \
+"$ML" train m2l --data "$WORK/corpus6000" --out "$WORK/m2l" --epochs ${M2L_EPOCHS:-12} --batch-size 64 \
     --offsets 1 --attention --features positions --checkpoint-every 200 $RESUME &
 M2L=$!
 L2M_OPTS=(--data "$WORK/corpus6000" --out "$WORK/l2m" --batch-size 64 --offsets 1 --features positions

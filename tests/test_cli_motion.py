@@ -120,7 +120,9 @@ def test_demo_main_job_offline_with_packaged_models(tmp_path, capsys, monkeypatc
     assert code == 0
     assert "no shared data" in out
     gen, desc = _scores(out, "log L"), _scores(out, "log P")
-    assert len(gen) == 3 and len(desc) == 3          # one procedural motion described
+    # the packaged L2M (joint positions) decodes its expected frames: one motion
+    assert len(gen) == 1 and "expected frames" in out
+    assert len(desc) == 3                            # one procedural motion described
     assert desc == sorted(desc, reverse=True) and all(s < 0 for s in desc)
     assert gen == sorted(gen, reverse=True)
     written = out.split("written:")[1].split()
@@ -143,13 +145,26 @@ def test_demo_with_input_describes_and_renders_it(tmp_path, capsys):
     assert names[3:] == ["00001_mmm.gif", "00001_mmm_strip.png", "00001_mmm_trajectory.png"]
 
 
-def test_demo_renders_a_cmu_input_it_cannot_describe(tmp_path, capsys):
+def test_demo_describes_and_renders_a_cmu_input(tmp_path, capsys):
     src = shared_file("cmu35/35_01.amc")
     code, out, _ = run(capsys, "demo", "--input", src, "--out", tmp_path, "-w", "1",
                        "--max-frames", "6")
-    assert code == 0 and "not described" in out
+    # the packaged M2L reads the 21-joint body, which CMU's skeleton maps onto
+    assert code == 0 and "not described" not in out
+    assert out.split(f"describe {src}")[1].splitlines()[1].lstrip().startswith("1. log P =")
     names = [p.rsplit("/", 1)[1] for p in out.split("written:")[1].split()]
-    assert "35_01_strip.png" in names
+    assert "35_01_strip.png" in names and "generated.bvh" in names
+
+
+def test_demo_says_when_a_rig_cannot_be_described(tmp_path, capsys):
+    bvh = tmp_path / "odd.bvh"
+    bvh.write_text("HIERARCHY\nROOT a\n{\n OFFSET 0 0 0\n CHANNELS 3 Xposition Yposition "
+                   "Zposition\n JOINT b\n {\n  OFFSET 0 10 0\n  CHANNELS 3 Zrotation "
+                   "Xrotation Yrotation\n  End Site\n  {\n   OFFSET 0 10 0\n  }\n }\n}\n"
+                   "MOTION\nFrames: 2\nFrame Time: 0.1\n0 0 0 0 0 0\n0 0 1 0 0 0\n")
+    code, out, _ = run(capsys, "demo", "--input", bvh, "--out", tmp_path / "o", "-w", "1",
+                       "--max-frames", "6", "--no-render")
+    assert code == 0 and "not described" in out and "rig joints not matched: a, b" in out
 
 
 def test_demo_finds_shared_data(monkeypatch, tmp_path):
