@@ -268,26 +268,35 @@ def safe_extract(archive: str | Path, dest: str | Path, *,
         keep: predicate on member names; members it rejects are skipped.
     """
     archive, dest = Path(archive), Path(dest)
-    if dest.exists():
-        raise DatasetError(f"{dest}: already exists; remove it to extract {archive} again")
-    tmp = make_temp(dest, ".extract", directory=True)
-    try:
-        budget = _Budget(archive, dest.parent)
+    bad = (zipfile.BadZipFile, zlib.error, EOFError, lzma.LZMAError, NotImplementedError,
+           ValueError)
+    with _staged(archive, dest, "zip", bad) as (tmp, budget):
         with zipfile.ZipFile(archive) as zf:
             for info, rel in _zip_members(zf, archive, budget, keep):
                 with zf.open(info) as src:
                     _copy(src, tmp.joinpath(*rel.parts), budget, info.filename)
+    return dest
+
+
+@contextlib.contextmanager
+def _staged(archive: Path, dest: Path, kind: str, bad: tuple):
+    """Extraction into a temporary folder beside ``dest``, renamed onto it when the body
+    ends without error and removed in every case; yields (folder, size budget). ``bad``:
+    the exceptions that mean a broken ``kind`` archive."""
+    if dest.exists():
+        raise DatasetError(f"{dest}: already exists; remove it to extract {archive} again")
+    tmp = make_temp(dest, ".extract", directory=True)
+    try:
+        yield tmp, _Budget(archive, dest.parent)
         os.replace(tmp, dest)
-    except (zipfile.BadZipFile, zlib.error, EOFError, lzma.LZMAError, NotImplementedError,
-            ValueError) as exc:
-        raise DatasetError(f"{archive}: not a valid zip archive ({exc}); if it was "
+    except bad as exc:
+        raise DatasetError(f"{archive}: not a valid {kind} archive ({exc}); if it was "
                            "downloaded, delete it and download it again") from None
     except OSError as exc:
         raise DatasetError(f"{archive}: cannot extract: {exc.strerror or exc}") from None
     finally:
         with contextlib.suppress(FileNotFoundError):
             shutil.rmtree(tmp)
-    return dest
 
 
 def safe_extract_tar(archive: str | Path, dest: str | Path, *,
@@ -298,11 +307,8 @@ def safe_extract_tar(archive: str | Path, dest: str | Path, *,
     compressed tar having no index), extracted to a temporary folder renamed onto ``dest``
     when complete."""
     archive, dest = Path(archive), Path(dest)
-    if dest.exists():
-        raise DatasetError(f"{dest}: already exists; remove it to extract {archive} again")
-    tmp = make_temp(dest, ".extract", directory=True)
-    try:
-        budget = _Budget(archive, dest.parent)
+    bad = (tarfile.TarError, EOFError, lzma.LZMAError, zlib.error)
+    with _staged(archive, dest, "tar", bad) as (tmp, budget):
         with tarfile.open(archive) as tf:
             for info in tf:
                 rel = _member_path(info.name, archive)
@@ -314,13 +320,4 @@ def safe_extract_tar(archive: str | Path, dest: str | Path, *,
                 if info.isfile():
                     budget.check(info.size, f"member {info.name!r}")
                     _copy(tf.extractfile(info), tmp.joinpath(*rel.parts), budget, info.name)
-        os.replace(tmp, dest)
-    except (tarfile.TarError, EOFError, lzma.LZMAError, zlib.error) as exc:
-        raise DatasetError(f"{archive}: not a valid tar archive ({exc}); if it was "
-                           "downloaded, delete it and download it again") from None
-    except OSError as exc:
-        raise DatasetError(f"{archive}: cannot extract: {exc.strerror or exc}") from None
-    finally:
-        with contextlib.suppress(FileNotFoundError):
-            shutil.rmtree(tmp)
     return dest
