@@ -16,9 +16,9 @@ import sys
 import time
 from pathlib import Path
 
-from motionlang.evaluation.crbm_fill import load_cmu35
-from motionlang.evaluation.crbm_reproduce import model_frames, selected_crbm_config
-from motionlang.models.crbm import CRBM
+from motionlang.evaluation.crbm.fill import load_cmu35
+from motionlang.evaluation.crbm.reproduce import model_frames, selected_crbm_config
+from motionlang.models.crbm.model import CRBM
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "cmu35"
 

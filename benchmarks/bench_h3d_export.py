@@ -56,7 +56,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
 
     from motionlang.datasets.humanml3d_export import export_h3d
-    from motionlang.training.seq2seq_data import load_records
+    from motionlang.datasets.seq2seq_pairs import load_records
 
     t0 = time.perf_counter()
     if args.data:

@@ -20,8 +20,8 @@ import numpy as np
 import torch
 
 from motionlang.decoding.seq2seq import describe_features, generate_features
-from motionlang.models.l2m import L2MConfig, LanguageToMotion
-from motionlang.models.m2l import M2LConfig, MotionToLanguage
+from motionlang.models.seq2seq.l2m import L2MConfig, LanguageToMotion
+from motionlang.models.seq2seq.m2l import M2LConfig, MotionToLanguage
 from motionlang.training.collate import collate_pairs
 
 

@@ -5,7 +5,7 @@ walk backwards when that is one of two things it sees?".
     .venv/bin/python scripts/corpus_subset.py corpus walkfb --only walk/forward walk/backward stand
 
 A motion is kept when each of its primitives is in ``--only`` (labels as
-``training.seq2seq_data.primitive_labels`` writes them: "action/direction" or "action") and
+``datasets.seq2seq_pairs.primitive_labels`` writes them: "action/direction" or "action") and
 at least one is not "stand". Prints how many motions have each label.
 """
 from __future__ import annotations
@@ -25,7 +25,7 @@ def main(argv=None) -> int:
     ap.add_argument("out", type=Path, help="new folder (must not exist)")
     ap.add_argument("--only", nargs="+", required=True, metavar="LABEL")
     args = ap.parse_args(argv)
-    from motionlang.training.seq2seq_data import primitive_labels
+    from motionlang.datasets.seq2seq_pairs import primitive_labels
     if args.out.exists():
         raise SystemExit(f"{args.out}: already exists")
     metas = sorted(args.source.glob("*_meta.json"))

@@ -8,7 +8,7 @@ Prints one JSON line per (setting, snapshot) and writes the whole grid to --out.
 import argparse
 import json
 
-from motionlang.evaluation.crbm_select import SelectionConfig, select
+from motionlang.evaluation.crbm.select import SelectionConfig, select
 from motionlang.utils.atomic import atomic_write
 
 

@@ -60,8 +60,8 @@ def main(argv=None) -> int:
     torch.set_num_threads(1)
 
     from motionlang.cli.demo import packaged_model
-    from motionlang.models.l2m import LanguageToMotion
-    from motionlang.training.seq2seq_data import build_pairs
+    from motionlang.models.seq2seq.l2m import LanguageToMotion
+    from motionlang.datasets.seq2seq_pairs import build_pairs
     path = args.model or packaged_model("l2m")
     model = LanguageToMotion.load(path).eval()
     fs = model.features

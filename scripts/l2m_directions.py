@@ -24,7 +24,7 @@ SENTENCES = {"a person walks forward": "forward", "a person walks backwards": "b
 
 def body_frame_distances(fs, frames: np.ndarray) -> tuple[float, float, float]:
     """Feature-space frames (T, D) -> (sideways m, forward m, turn deg), summed over time."""
-    from motionlang.decoding.seq2seq import frames_to_features
+    from motionlang.features.frames import frames_to_features
     x = frames_to_features(fs, frames)
     raw = fs.normalizer.inverse(x[:, :fs.n_normalised])
     v = raw[:, fs.names.index("root_vx")], raw[:, fs.names.index("root_vz")]
@@ -36,7 +36,7 @@ def left_sign(fs, corpus: Path) -> float:
     """+1 if a positive sideways step is to the left, from a sample described 'leftwards'."""
     import json
 
-    from motionlang.decoding.seq2seq import motion_frames
+    from motionlang.features.frames import motion_frames
     from motionlang.formats.mmm import read_mmm
     for ann in sorted(corpus.glob("*_annotations.json")):
         texts = json.loads(ann.read_text())
@@ -61,7 +61,7 @@ def main() -> None:
     args = ap.parse_args()
     from motionlang.cli.demo import packaged_model
     from motionlang.decoding.seq2seq import generate_features
-    from motionlang.models.l2m import LanguageToMotion
+    from motionlang.models.seq2seq.l2m import LanguageToMotion
     model = LanguageToMotion.load(args.model or packaged_model("l2m"))
     fs = model.features
     method = args.method or ("mean" if model.config.rollout_input == "mean" else "sample")
@@ -71,7 +71,7 @@ def main() -> None:
     reranker = None
     if args.rerank:
         from motionlang.decoding.rerank import check_same_features, rerank
-        from motionlang.models.m2l import MotionToLanguage
+        from motionlang.models.seq2seq.m2l import MotionToLanguage
         reranker = MotionToLanguage.load(args.rerank)
         check_same_features(model, reranker, f"--rerank {args.rerank}")
     for sentence, way in SENTENCES.items():

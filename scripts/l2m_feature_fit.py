@@ -26,7 +26,7 @@ ROOT = ("root_vx", "root_vz", "root_dyaw", "root_height")
 def feature_fit(model, items: list[dict], columns: list[int]) -> dict[int, dict]:
     """Per column: ``lag1``, ``corr``, ``sigma`` (mixture), ``std`` (data) over valid frames
     1..T-1 of each item (frame 0 has no true previous frame)."""
-    from motionlang.models import mdn
+    from motionlang.models.seq2seq import mdn
     from motionlang.training.collate import collate_pairs
     b = collate_pairs(items)
     B, T, F = b["motion"].shape
@@ -59,9 +59,9 @@ def main(argv=None) -> int:
     torch.set_num_threads(1)
 
     from motionlang.cli.demo import packaged_model
-    from motionlang.decoding.seq2seq import model_dim
-    from motionlang.models.l2m import LanguageToMotion
-    from motionlang.training.seq2seq_data import build_pairs
+    from motionlang.features.frames import model_dim
+    from motionlang.models.seq2seq.l2m import LanguageToMotion
+    from motionlang.datasets.seq2seq_pairs import build_pairs
     path = args.model or packaged_model("l2m")
     model = LanguageToMotion.load(path).eval()
     names = list(model.features.names[:model_dim(model.features)])

@@ -4,7 +4,7 @@ with it: the decoder, its encoder and the rest are kept as they are.
     .venv/bin/python scripts/l2m_fit_planner.py MODEL --data corpus --out NEW.pt \
         [--epochs 30] [--fresh]
 
-The planner maps a sentence to the coarse plan the decoder follows (``models.plan``); it
+The planner maps a sentence to the coarse plan the decoder follows (``models.seq2seq.plan``); it
 needs no decoder to be fitted, so many epochs take minutes. ``--fresh`` starts it from new
 weights (and replaces whatever planner the file held). The training and validation pairs
 are the ones ``train l2m`` made from the same corpus (split seed ``--seed``); the model's
@@ -32,10 +32,10 @@ def main(argv=None) -> int:
 
     from motionlang.errors import MotionlangError
     from motionlang.models.checkpoint import read_model_dict
-    from motionlang.models.l2m import L2MConfig, LanguageToMotion
-    from motionlang.models.plan import Planner
+    from motionlang.models.seq2seq.l2m import L2MConfig, LanguageToMotion
+    from motionlang.models.seq2seq.plan import Planner
     from motionlang.training.plan_fit import fit_planner
-    from motionlang.training.seq2seq_data import build_pairs
+    from motionlang.datasets.seq2seq_pairs import build_pairs
 
     logging.basicConfig(level=logging.INFO, format="%(message)s")
     try:

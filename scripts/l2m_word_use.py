@@ -43,7 +43,7 @@ def with_sentences(items: list[dict], vocab, sentences: list[str]) -> list[dict]
 
 def evaluate(model, items: list[dict], column: int, p_own: float) -> tuple[float, float]:
     """(exact NLL per valid frame, mean expected feature value in normalised units)."""
-    from motionlang.models import mdn
+    from motionlang.models.seq2seq import mdn
     from motionlang.training.collate import collate_pairs
     b = collate_pairs(items)
     B, T, F = b["motion"].shape
@@ -71,9 +71,10 @@ def main(argv=None) -> int:
     torch.set_num_threads(1)
 
     from motionlang.cli.demo import packaged_model
-    from motionlang.decoding.seq2seq import _normalize, generate_features, model_dim
-    from motionlang.models.l2m import LanguageToMotion
-    from motionlang.training.seq2seq_data import build_pairs
+    from motionlang.decoding.seq2seq import _normalize, generate_features
+    from motionlang.features.frames import model_dim
+    from motionlang.models.seq2seq.l2m import LanguageToMotion
+    from motionlang.datasets.seq2seq_pairs import build_pairs
     path = args.model or packaged_model("l2m")
     model = LanguageToMotion.load(path).eval()
     fs, vocab = model.features, model.vocab

@@ -2,7 +2,7 @@
 
 Reads a report written by ``motionlang evaluate --l2m ... -o REPORT.json`` on a procedural
 corpus and prints, for the L2M's round trip and its nearest-neighbour baseline, how often the
-first, the later and the only action of a motion is named (``evaluation.seq2seq_eval
+first, the later and the only action of a motion is named (``evaluation.seq2seq
 .actions_named``). ``evaluate`` prints the same line for new reports; this script reads
 older ones.
 
@@ -19,7 +19,7 @@ from pathlib import Path
 def main(argv=None) -> int:
     from motionlang.cli.seq2seq_commands import named_line
     from motionlang.datasets.synth import ground_truth
-    from motionlang.evaluation.seq2seq_eval import actions_named
+    from motionlang.evaluation.seq2seq import actions_named
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("report", help="JSON report of motionlang evaluate --l2m")

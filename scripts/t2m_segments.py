@@ -17,9 +17,9 @@ def main(argv=None) -> int:
 
     from motionlang.decoding.t2m import generate_positions21, load_any_t2m
     from motionlang.evaluation.action_order import segment_labels, segment_tally
-    from motionlang.evaluation.t2m_compare import (eval_items, fit_prototypes,
+    from motionlang.evaluation.t2m.compare import (eval_items, fit_prototypes,
                                                    positions_to_features)
-    from motionlang.training.twostream_data import build_twostream_data
+    from motionlang.datasets.twostream_items import build_twostream_data
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--data", required=True, help="the procedural corpus trained on")

@@ -57,7 +57,7 @@ def main(argv=None) -> int:
     from motionlang.errors import MotionlangError
     from motionlang.models.twostream import TwoStreamModel
     from motionlang.training.trainer import TrainConfig, check_schedule
-    from motionlang.training.twostream_data import build_twostream_data
+    from motionlang.datasets.twostream_items import build_twostream_data
     from motionlang.training.twostream_train import refit_sentence_encoder
 
     logging.basicConfig(level=logging.INFO, format="%(message)s")

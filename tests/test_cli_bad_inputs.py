@@ -139,8 +139,8 @@ def test_non_finite_loss_stops_training_keeping_the_last_good_checkpoint(tmp_pat
 
 
 def test_configs_check_their_numbers():
-    from motionlang.models.crbm import CRBMConfig
-    from motionlang.models.seq2seq_config import L2MConfig, M2LConfig
+    from motionlang.models.crbm.model import CRBMConfig
+    from motionlang.models.seq2seq.config import L2MConfig, M2LConfig
     from motionlang.models.twostream.config import TwoStreamConfig
     for make, match in ((lambda: M2LConfig(4, 9, dropout=2.0), "M2LConfig.dropout"),
                         (lambda: M2LConfig(4, 9, enc_hidden=0), "M2LConfig.enc_hidden"),
@@ -154,7 +154,7 @@ def test_configs_check_their_numbers():
 
 
 def test_relative_bleu_is_undefined_for_a_vanishing_reference():
-    from motionlang.evaluation.seq2seq_eval import relative_bleu
+    from motionlang.evaluation.seq2seq import relative_bleu
     assert math.isnan(relative_bleu(2.4e-154, 1e-309))
     assert math.isnan(relative_bleu(0.945e-154, 1e-154))
     assert relative_bleu(0.2, 0.4) == pytest.approx(0.5)
@@ -164,7 +164,7 @@ def test_relative_bleu_is_undefined_for_a_vanishing_reference():
 def test_diverging_crbm_stops_with_its_epoch_named():
     import numpy as np
 
-    from motionlang.models.crbm import CRBM, CRBMConfig
+    from motionlang.models.crbm.model import CRBM, CRBMConfig
     rng = np.random.default_rng(0)
     seqs = [rng.standard_normal((30, 3)) for _ in range(2)]
     model = CRBM(CRBMConfig(n_hidden=4, order=1, epochs=5, batch_size=10, lr=1e6,

@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 from motionlang.errors import MotionFormatError, MotionlangError
-from motionlang.models.ar import ARConfig, ARModel
-from motionlang.models.crbm import CRBM, CRBMConfig, PARAMS, chunk_index, gather_past
+from motionlang.models.crbm.ar import ARConfig, ARModel
+from motionlang.models.crbm.model import CRBM, CRBMConfig, PARAMS, chunk_index, gather_past
 
 
 def _random_model(visible: str, seed: int = 0) -> CRBM:
@@ -178,7 +178,7 @@ def test_ar_recovers_a_linear_process():
 
 
 def test_two_level_stack_round_trip_and_generation(tmp_path, trained):
-    from motionlang.models.crbm_stack import CRBMStack
+    from motionlang.models.crbm.stack import CRBMStack
     m, seqs = trained
     stack = CRBMStack.fit(m, seqs, CRBMConfig(n_hidden=4, order=2, epochs=5, batch_size=20))
     hidden = m.hidden_activations(seqs)
@@ -239,7 +239,7 @@ def test_cd_k_and_negative_start_options():
 
 
 def test_history_noise_perturbs_only_the_past_it_trains_on(monkeypatch):
-    from motionlang.models.crbm import gather_past
+    from motionlang.models.crbm.model import gather_past
     seqs = _sines()
     seen = []
     real = CRBM.cd_gradients

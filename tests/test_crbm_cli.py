@@ -8,11 +8,11 @@ import pytest
 
 from conftest import shared_file
 from motionlang.cli.main import main
-from motionlang.evaluation.crbm_fill import load_cmu35
-from motionlang.evaluation.crbm_generation import StyleLabeller, generation_report
-from motionlang.evaluation.crbm_reproduce import frames_to_motion, model_frames, model_frames_to_channels
-from motionlang.models.crbm import CRBM, CRBMConfig
-from motionlang.models.crbm_stack import CRBMStack
+from motionlang.evaluation.crbm.fill import load_cmu35
+from motionlang.evaluation.crbm.generation import StyleLabeller, generation_report
+from motionlang.evaluation.crbm.reproduce import frames_to_motion, model_frames, model_frames_to_channels
+from motionlang.models.crbm.model import CRBM, CRBMConfig
+from motionlang.models.crbm.stack import CRBMStack
 
 
 @pytest.fixture(scope="module")
@@ -34,7 +34,7 @@ def test_train_writes_a_reloadable_checkpoint(model_path):
     assert m.config.n_hidden == 12 and len(m.history) == 3 and m.n_visible == 59
     # the selected noise on the past frames is the default, kept in the checkpoint; the
     # second level (hidden probabilities, not normalised units) trains without it
-    from motionlang.evaluation.crbm_reproduce import SELECTED
+    from motionlang.evaluation.crbm.reproduce import SELECTED
     assert m.config.history_noise == SELECTED["history_noise"] > 0
     stack = CRBMStack.load(model_path.with_name("two.npz"))
     assert stack.level2.config.history_noise == 0.0

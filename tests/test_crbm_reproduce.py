@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 
 from conftest import shared_file
-from motionlang.evaluation.crbm_fill import (
+from motionlang.evaluation.crbm.fill import (
     ERASED, GAP_START_PAIR, fill_error, frame_mask, hold_last_fill, load_cmu35,
     nearest_neighbour_fill, per_frame_dims, score_space, taylor59)
-from motionlang.evaluation.crbm_reproduce import ReproduceConfig, format_table, model_frames, reproduce
-from motionlang.models.crbm import CRBMConfig
+from motionlang.evaluation.crbm.reproduce import ReproduceConfig, format_table, model_frames, reproduce
+from motionlang.models.crbm.model import CRBMConfig
 
 
 @pytest.fixture(scope="module")
@@ -79,8 +79,8 @@ def test_reproduce_runs_and_is_deterministic(data):
 def test_model_frames_unwrap_joint_angles_and_fold_back_to_the_protocol(data):
     """The model sees a jogging knee bend past 90 degrees as it is (the protocol's
     asin(sin(x)) folds 110 into 70); folding the model frames gives the protocol's values."""
-    from motionlang.evaluation.crbm_fill import JOINT_CHANNELS
-    from motionlang.evaluation.crbm_reproduce import to_protocol59, unwrap_degrees
+    from motionlang.evaluation.crbm.fill import JOINT_CHANNELS
+    from motionlang.evaluation.crbm.reproduce import to_protocol59, unwrap_degrees
     jog = data.train[data.train_names.index("35_20")]
     mf, t59 = model_frames(jog), taylor59(jog)
     np.testing.assert_allclose(to_protocol59(mf)[:, 9:], t59[:, 9:], atol=1e-9)

@@ -4,13 +4,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from motionlang.evaluation.crbm_generation import FPS, METRES_PER_UNIT, forward_speed
-from motionlang.models.crbm import CRBM, CRBMConfig
+from motionlang.evaluation.crbm.generation import FPS, METRES_PER_UNIT, forward_speed
+from motionlang.models.crbm.model import CRBM, CRBMConfig
 
 
 @pytest.mark.parametrize("ry_deg", [0.0, 30.0, -120.0])
 def test_forward_speed_is_the_step_along_the_facing_direction(ry_deg):
-    from motionlang.evaluation.crbm_reproduce import body_to_world, model_frames, world_to_body
+    from motionlang.evaluation.crbm.reproduce import body_to_world, model_frames, world_to_body
     T, ry = 20, np.deg2rad(ry_deg)
     fwd = np.array([np.sin(ry), np.cos(ry)])          # facing direction in the (x, z) plane
     side = np.array([np.cos(ry), -np.sin(ry)])
@@ -49,8 +49,8 @@ def test_on_epoch_sees_every_snapshot_of_one_run():
 
 def test_validation_split_holds_out_training_trials_only():
     from conftest import shared_file
-    from motionlang.evaluation.crbm_fill import load_cmu35
-    from motionlang.evaluation.crbm_select import VALIDATION_TRIALS, validation_split
+    from motionlang.evaluation.crbm.fill import load_cmu35
+    from motionlang.evaluation.crbm.select import VALIDATION_TRIALS, validation_split
     data = load_cmu35(shared_file("cmu35/cmu35WalkJog.mat").parent)
     val = validation_split(data)
     assert len(val.train) == 27 and set(val.test) == set(VALIDATION_TRIALS)
@@ -62,7 +62,7 @@ def test_validation_split_holds_out_training_trials_only():
 
 
 def test_choose_prefers_the_best_eligible_run_and_falls_back_to_the_best():
-    from motionlang.evaluation.crbm_select import choose
+    from motionlang.evaluation.crbm.select import choose
 
     def run(score, kept):
         return {"score": score, "generation": {"a": {"style_kept": kept[0]},

@@ -8,7 +8,7 @@ import pytest
 from motionlang.datasets.custom import CustomRecord
 from motionlang.datasets.kitml import KitMLRecord
 from motionlang.errors import MotionlangError
-from motionlang.features.dataset_cache import dataset_features, record_sources
+from motionlang.datasets.feature_cache import dataset_features, record_sources
 from motionlang.formats.bvh import write_bvh
 from tests.conftest import shared_file
 

@@ -1,5 +1,5 @@
 """Fuzzing every reader, each input read in a child process under a memory cap (RLIMIT_AS)
-and a time limit (``motionlang.formats.fuzzing``): the only acceptable outcomes are a
+and a time limit (``motionlang.evaluation.fuzzing``): the only acceptable outcomes are a
 ``MotionlangError`` whose message is one line naming the file, or a valid Motion (finite
 arrays, consistent shapes, finite joint positions); never a crash, a hang, an uncaught
 exception.
@@ -24,8 +24,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from motionlang.formats.fuzzing import FORMATS, Sandbox, crafted, mutate, seeds
-from motionlang.formats.fuzzing.seeds import (TINY_ASF, h3d_files, mit_sequence, mit_tree,
+from motionlang.evaluation.fuzzing import FORMATS, Sandbox, crafted, mutate, seeds
+from motionlang.evaluation.fuzzing.seeds import (TINY_ASF, h3d_files, mit_sequence, mit_tree,
                                               npy_bytes, pack_h3d, write_mit)
 from tests.conftest import SHARED
 

@@ -18,7 +18,7 @@ from motionlang.features.h3d_vectors import (KIT_H3D, SMPL_H3D, group_std, joint
                                              vectors_to_joints)
 from motionlang.features.joint_map import positions21
 from motionlang.kinematics.from_positions import motion_from_positions
-from motionlang.training.seq2seq_data import build_pairs, load_records
+from motionlang.datasets.seq2seq_pairs import build_pairs, load_records
 
 
 @pytest.fixture(scope="module")

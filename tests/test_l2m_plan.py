@@ -1,4 +1,4 @@
-"""The L2M's coarse motion plan (models.plan): hand-worked plans, and that the decoder
+"""The L2M's coarse motion plan (models.seq2seq.plan): hand-worked plans, and that the decoder
 follows the plan it is given, the true one in training and the predicted one otherwise."""
 from __future__ import annotations
 
@@ -7,8 +7,8 @@ import pytest
 import torch
 
 from motionlang.errors import MotionlangError
-from motionlang.models.l2m import LanguageToMotion
-from motionlang.models.plan import motion_plan, part_index, plan_at
+from motionlang.models.seq2seq.l2m import LanguageToMotion
+from motionlang.models.seq2seq.plan import motion_plan, part_index, plan_at
 from tests.test_seq2seq_models import F_DIM, make_batch, tiny
 
 

@@ -7,7 +7,7 @@ import torch
 from scipy.stats import multivariate_normal
 from torch import distributions as td
 
-from motionlang.models import mdn
+from motionlang.models.seq2seq import mdn
 
 torch.set_num_threads(1)
 

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from motionlang.errors import MotionlangError
-from motionlang.evaluation.motion_metrics import (ape, ave, cee, gram, position_metrics_mm,
+from motionlang.evaluation.metrics.motion import (ape, ave, cee, gram, position_metrics_mm,
                                                   see, temporal_variance)
 
 

@@ -135,7 +135,8 @@ def test_generate_errors_for_rig_and_start(tmp_path, capsys):
 
 
 def test_generate_starts_from_a_real_pose(tmp_path, capsys):
-    from motionlang.decoding.seq2seq import generate, motion_frames
+    from motionlang.decoding.seq2seq import generate
+    from motionlang.features.frames import motion_frames
     from motionlang.features.body21 import normalise21
     start = write(RIGS["bandai"], tmp_path, T=20)
     model = ml.load_model("l2m")

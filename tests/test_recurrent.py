@@ -3,7 +3,7 @@ import pytest
 import torch
 from torch.nn.utils.rnn import pack_padded_sequence, pad_packed_sequence
 
-from motionlang.models.recurrent import BiGRUEncoder, reverse_within_lengths
+from motionlang.models.seq2seq.layers import BiGRUEncoder, reverse_within_lengths
 
 torch.set_num_threads(1)
 

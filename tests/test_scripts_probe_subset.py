@@ -32,7 +32,7 @@ def test_probes_find_a_linear_signal_and_no_signal_in_noise():
 
 def test_corpus_subset_links_the_motions_made_only_of_the_given_primitives(tmp_path, capsys):
     from motionlang.datasets.synth.corpus import write_corpus
-    from motionlang.training.seq2seq_data import primitive_labels
+    from motionlang.datasets.seq2seq_pairs import primitive_labels
     src = tmp_path / "corpus"
     write_corpus(src, 12, seed=3, workers=1, show_progress=False)
     labels = {m.name[:-len("_meta.json")]: primitive_labels(json.loads(m.read_text()))
@@ -59,10 +59,10 @@ def test_directions_script_measures_the_way_true_motions_go(tmp_path):
     backward, a forward walk forward, and a second leftward sidestep goes left by the sign
     calibrated on the first."""
     from motionlang.datasets.synth.corpus import write_corpus
-    from motionlang.decoding.seq2seq import motion_frames
+    from motionlang.features.frames import motion_frames
     from motionlang.features.angles import AnglesFeatures
     from motionlang.formats.mmm import read_mmm
-    from motionlang.training.seq2seq_data import primitive_labels
+    from motionlang.datasets.seq2seq_pairs import primitive_labels
     directions = load("l2m_directions")
     root = tmp_path / "corpus"
     write_corpus(root, 40, seed=5, workers=1, show_progress=False)

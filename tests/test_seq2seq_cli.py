@@ -14,8 +14,8 @@ import torch
 
 from motionlang.cli.main import main
 from motionlang.errors import MotionlangError
-from motionlang.models.l2m import LanguageToMotion
-from motionlang.models.m2l import MotionToLanguage
+from motionlang.models.seq2seq.l2m import LanguageToMotion
+from motionlang.models.seq2seq.m2l import MotionToLanguage
 
 torch.set_num_threads(1)
 TINY = ["--epochs", "2", "--batch-size", "8", "--offsets", "2", "--enc-hidden", "8",
@@ -39,7 +39,7 @@ def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
     m2l_dir, l2m_dir = tmp_path / "m2l", tmp_path / "l2m"
     assert main(["train", "m2l", "--data", str(corpus), "--out", str(m2l_dir), *TINY,
                  "--decay-epochs", "1", "--decay-to", "0.2", "--mirror"]) == 0
-    from motionlang.training.seq2seq_data import build_pairs
+    from motionlang.datasets.seq2seq_pairs import build_pairs
     n_plain = len(build_pairs(corpus, offsets=2).items["train"])
     assert f"m2l: {2 * n_plain} training pairs" in capsys.readouterr().out   # mirrored too
     lrs = [h["lr"] for h in json.loads((m2l_dir / "history.json").read_text())]
@@ -52,7 +52,7 @@ def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
     balanced = [l for l in capsys.readouterr().out.splitlines() if l.startswith("balanced:")]
     assert len(balanced) == 1
     before, after = (int(w) for w in balanced[0].split()[1:4:2])
-    from motionlang.training.seq2seq_data import balance_repeats, build_pairs, oversample
+    from motionlang.datasets.seq2seq_pairs import balance_repeats, build_pairs, oversample
     data = build_pairs(corpus, offsets=2)          # the same pairs (cached)
     assert before == len(data.items["train"])
     assert after == len(oversample(data.items["train"],
@@ -72,7 +72,7 @@ def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
     # the length model is fitted on the training sentences (model frames at 10 Hz)
     assert l2m.config.progress_input
     from motionlang.models.length import SentenceLength
-    from motionlang.training.seq2seq_data import sentence_lengths
+    from motionlang.datasets.seq2seq_pairs import sentence_lengths
     want = SentenceLength.fit(*sentence_lengths(build_pairs(corpus, offsets=2), "train"))
     assert l2m.length_model == want
     names = l2m.features.names[:l2m.config.n_features]
@@ -162,7 +162,7 @@ def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
     assert "| nearest training sentence, round trip |" in md and "naming exactly" in md
     # the round trip's actions named by place, also from the saved report by the script
     from motionlang.datasets.synth import ground_truth
-    from motionlang.evaluation.seq2seq_eval import actions_named
+    from motionlang.evaluation.seq2seq import actions_named
     descr = rep["l2m_round_trip"]["descriptions"]
     truths = {i: ground_truth(json.loads((corpus / f"{i}_meta.json").read_text()))
               for i, _, _ in descr}
@@ -319,7 +319,7 @@ def test_building_the_parser_does_not_import_torch():
     import sys
     code = ("import sys, motionlang.cli.main as m; p = m.build_parser(); "
             "p.parse_args(['train', 'l2m', '--data', 'x']); "
-            "heavy = [k for k in ('torch', 'motionlang.models.l2m', 'motionlang.models.m2l', "
+            "heavy = [k for k in ('torch', 'motionlang.models.seq2seq.l2m', 'motionlang.models.seq2seq.m2l', "
             "'transformers', 'sklearn') if k in sys.modules]; print(heavy)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout.strip()
@@ -331,21 +331,21 @@ def test_data_preparation_logs_its_stages_once(corpus, caplog):
     # the second call reads the cache and has nothing to announce
     import logging
 
-    from motionlang.training.seq2seq_data import build_pairs
-    with caplog.at_level(logging.INFO, logger="motionlang.training.seq2seq_data"):
+    from motionlang.datasets.seq2seq_pairs import build_pairs
+    with caplog.at_level(logging.INFO, logger="motionlang.datasets.seq2seq_pairs"):
         build_pairs(corpus, offsets=2)
     msgs = [r.getMessage() for r in caplog.records]
     assert any(m.startswith("fitting angles features on") for m in msgs)
     assert any(m.startswith("encoding") and "x 2 offsets" in m for m in msgs)
     caplog.clear()
-    with caplog.at_level(logging.INFO, logger="motionlang.training.seq2seq_data"):
+    with caplog.at_level(logging.INFO, logger="motionlang.datasets.seq2seq_pairs"):
         build_pairs(corpus, offsets=2)
     assert not caplog.records
 
 
 def test_balance_repeats_by_rarest_primitive():
     from motionlang.errors import DatasetError, MotionlangError
-    from motionlang.training.seq2seq_data import balance_repeats, oversample
+    from motionlang.datasets.seq2seq_pairs import balance_repeats, oversample
     labels = {f"f{i}": ["walk/forward"] for i in range(15)}
     labels |= {"fw": ["walk/forward", "wave"], "b": ["walk/backward"],
                **{f"t{i}": ["turn"] for i in range(4)}}
@@ -366,8 +366,8 @@ def test_balance_repeats_by_rarest_primitive():
 def test_mirror_adds_the_mirrored_training_motions_with_swapped_sides(corpus):
     from motionlang.datasets.kitml import load_kitml
     from motionlang.datasets.synth.augment import mirror_text
-    from motionlang.decoding.seq2seq import motion_frames
-    from motionlang.training.seq2seq_data import build_pairs
+    from motionlang.features.frames import motion_frames
+    from motionlang.datasets.seq2seq_pairs import build_pairs
     plain = build_pairs(corpus, offsets=1)
     mirrored = build_pairs(corpus, offsets=1, mirror=True)
     n = len(plain.items["train"])

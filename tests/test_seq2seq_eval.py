@@ -11,7 +11,7 @@ from test_seq2seq_models import tiny
 
 from motionlang.datasets.text import normalize
 from motionlang.errors import MotionlangError
-from motionlang.evaluation import seq2seq_eval as ev
+from motionlang.evaluation import seq2seq as ev
 from motionlang.training.collate import collate_pairs
 from motionlang.training.trainer import TrainConfig, Trainer
 

@@ -9,10 +9,10 @@ import torch
 
 from motionlang.decoding.beam import beam_search
 from motionlang.decoding.motion_beam import mean_decode, sampled_beam
-from motionlang.models.l2m import L2MConfig, LanguageToMotion
-from motionlang.models.m2l import M2LConfig, MotionToLanguage
+from motionlang.models.seq2seq.l2m import L2MConfig, LanguageToMotion
+from motionlang.models.seq2seq.m2l import M2LConfig, MotionToLanguage
 from motionlang.errors import MotionlangError
-from motionlang.models.mdn import sample
+from motionlang.models.seq2seq.mdn import sample
 
 torch.set_num_threads(1)
 F_DIM, V = 5, 9      # features per frame; vocabulary with PAD SOS EOS UNK + 5 words
@@ -190,7 +190,7 @@ def test_step_matches_teacher_forcing(kind, attention, options):
 
 
 def test_l2m_end_weight_reweights_the_stop_frames():
-    from motionlang.models import mdn
+    from motionlang.models.seq2seq import mdn
     model, batch = tiny("l2m", False), make_batch()
     model.eval()
     with torch.no_grad():
@@ -210,7 +210,7 @@ def test_l2m_end_weight_reweights_the_stop_frames():
 
 
 def test_l2m_loss_weights_reweight_the_frame_nll():
-    from motionlang.models import mdn
+    from motionlang.models.seq2seq import mdn
     model, batch = tiny("l2m", False), make_batch()
     model.eval()
     F = model.config.n_features
@@ -232,8 +232,8 @@ def test_l2m_loss_weights_reweight_the_frame_nll():
 
 
 def test_l2m_energy_term_on_the_expected_frames():
-    from motionlang.models import mdn
-    from motionlang.models.sequence_losses import energy_loss, frame_mask
+    from motionlang.models.seq2seq import mdn
+    from motionlang.models.seq2seq.losses import energy_loss, frame_mask
     model, batch = tiny("l2m", False), make_batch()
     model.eval()
     with torch.no_grad():
@@ -427,7 +427,7 @@ def test_l2m_rollout_is_teacher_forcing_at_zero_and_feeds_own_frames_at_one():
 
 def test_l2m_rollout_on_expected_frames_and_their_mean_decoding():
     from motionlang.decoding.seq2seq import generate_features
-    from motionlang.models import mdn
+    from motionlang.models.seq2seq import mdn
     batch = make_batch()
     model = tiny("l2m", False, time_input=True, rollout=1.0, rollout_input="mean")
     model.train()

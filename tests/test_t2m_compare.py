@@ -14,7 +14,7 @@ import torch
 
 from motionlang.errors import MotionlangError
 from motionlang.evaluation.action_order import segment_labels
-from motionlang.evaluation.t2m_compare import (GROUND_TRUTH, NEAREST, compare, eval_items,
+from motionlang.evaluation.t2m.compare import (GROUND_TRUTH, NEAREST, compare, eval_items,
                                                evaluate_model, fit_prototypes,
                                                markdown_table, positions_to_features)
 
@@ -34,7 +34,7 @@ def corpus(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def data(corpus, tmp_path_factory):
-    from motionlang.training.twostream_data import build_twostream_data
+    from motionlang.datasets.twostream_items import build_twostream_data
     return build_twostream_data(corpus, cache_dir=tmp_path_factory.mktemp("cache"))
 
 
@@ -90,7 +90,7 @@ def test_oracle_and_wrong_models(data):
 
 def _tiny_l2m(data):
     from motionlang.datasets.text import Vocabulary
-    from motionlang.models.l2m import L2MConfig, LanguageToMotion
+    from motionlang.models.seq2seq.l2m import L2MConfig, LanguageToMotion
     vocab = Vocabulary.build([s for r in data.records.values() for s in r.annotations])
     torch.manual_seed(0)
     cfg = L2MConfig(vocab_size=len(vocab), n_features=66, embed_dim=8, enc_hidden=8,
@@ -103,11 +103,11 @@ def test_l2m_on_the_test_subjects_bodies(data):
     """An angles L2M with --true-start: the same generated angles drive each test subject's
     own MMM body, so only bone lengths change (and the root's start stays at the origin)."""
     from motionlang.datasets.text import Vocabulary
-    from motionlang.decoding.seq2seq import model_dim
+    from motionlang.features.frames import model_dim
     from motionlang.decoding.t2m import generate_positions21
     from motionlang.features.angles import AnglesFeatures
     from motionlang.formats.mmm_model import mmm_skeleton
-    from motionlang.models.l2m import L2MConfig, LanguageToMotion
+    from motionlang.models.seq2seq.l2m import L2MConfig, LanguageToMotion
     fs = AnglesFeatures().fit([r.load_motion() for r in list(data.records.values())[:3]])
     vocab = Vocabulary.build([s for r in data.records.values() for s in r.annotations])
     torch.manual_seed(0)
@@ -131,7 +131,7 @@ def test_l2m_on_the_test_subjects_bodies(data):
     assert other >= 1
     # the second row: on the same body, each motion starts with the test motion's first
     # frame in the L2M's features (its posture) and goes on from there
-    from motionlang.decoding.seq2seq import motion_frames
+    from motionlang.features.frames import motion_frames
     primed = results["L2M, from the test motion's first pose, on its body"]["generated"]
     for it in eval_items(data, "train", 3):
         rec = data.records[it.id]
@@ -297,7 +297,7 @@ def test_positions_of_the_sample_an_m2l_ranks_first(data, monkeypatch):
     import motionlang.decoding.rerank as rr
     from motionlang.decoding.seq2seq import generate_features
     from motionlang.decoding.t2m import anchor, fit_length, generate_positions21
-    from motionlang.models.m2l import M2LConfig, MotionToLanguage
+    from motionlang.models.seq2seq.m2l import M2LConfig, MotionToLanguage
     l2m = _tiny_l2m(data)
     torch.manual_seed(1)
     m2l = MotionToLanguage(M2LConfig(n_features=66, vocab_size=len(l2m.vocab), enc_hidden=8,
@@ -331,7 +331,7 @@ def test_generate_any_passes_l2m_options(data):
 
 def test_ranges_of_cropped_sequences(data):
     from motionlang.evaluation.action_order import rescale_ranges
-    from motionlang.evaluation.t2m_compare import _ranges, body_primitives
+    from motionlang.evaluation.t2m.compare import _ranges, body_primitives
     rid = max(data.splits["train"], key=lambda i: len(body_primitives(data.records[i])))
     rec, n = data.records[rid], len(data.sequences[rid])
     prims = body_primitives(rec)
@@ -360,8 +360,8 @@ def test_same_parameter_oracles(data):
     from types import SimpleNamespace
 
     from motionlang.decoding.t2m import stretch
-    from motionlang.evaluation.motion_metrics import position_metrics_mm
-    from motionlang.evaluation.t2m_oracle import (MEAN_ROW, ONE_ROW, oracle_generations,
+    from motionlang.evaluation.metrics.motion import position_metrics_mm
+    from motionlang.evaluation.t2m.oracle import (MEAN_ROW, ONE_ROW, oracle_generations,
                                                   oracle_table, parameter_key)
     train = data.splits["train"]
     kind = {rid: "walk" if k % 3 == 0 else "wave" for k, rid in enumerate(train)}

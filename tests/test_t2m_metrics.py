@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from motionlang.errors import MotionlangError
-from motionlang.evaluation.t2m_metrics import (activation_statistics, diversity,
+from motionlang.evaluation.metrics.t2m import (activation_statistics, diversity,
                                                euclidean_distance_matrix, fid,
                                                frechet_distance, mean_interval, mm_dist,
                                                multimodality, r_precision, repeat,

@@ -6,7 +6,7 @@ import math
 import pytest
 
 from motionlang.errors import MotionlangError
-from motionlang.evaluation import text_metrics as tm
+from motionlang.evaluation.metrics import text as tm
 
 
 def test_bleu_of_one_sentence_by_hand():

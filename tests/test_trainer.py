@@ -80,7 +80,7 @@ def test_outputs_and_learning(tmp_path):
 def test_trains_a_seq2seq_model_and_checkpoint_loads(tmp_path):
     from test_seq2seq_models import make_batch, outputs, tiny
 
-    from motionlang.models.m2l import MotionToLanguage
+    from motionlang.models.seq2seq.m2l import MotionToLanguage
     batch = make_batch()
     items = [{k: v[i] for k, v in batch.items()} for i in range(4)]
 

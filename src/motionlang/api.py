@@ -45,7 +45,7 @@ def load_model(name_or_path: str | Path, kind: str | None = None):
     path = model_path(name_or_path)
     kind = kind or _KINDS.get(str(name_or_path), "t2m")
     if kind == "m2l":
-        from motionlang.models.m2l import MotionToLanguage
+        from motionlang.models.seq2seq.m2l import MotionToLanguage
         return MotionToLanguage.load(path)
     from motionlang.decoding.t2m import load_any_t2m
     return load_any_t2m(path)
@@ -106,7 +106,7 @@ def first_frame(model, start: Motion | str | Path,
                 joint_map: dict | str | Path | None = None) -> np.ndarray:
     """(F,) model features of the first pose of ``start`` (a Motion or file), for L2M models
     to begin their motions with."""
-    from motionlang.decoding.seq2seq import motion_frames
+    from motionlang.features.frames import motion_frames
     if getattr(model, "kind", None) != "l2m":
         raise MotionlangError("a start pose applies to L2M models")
     return motion_frames(model.features, _motion(start, joint_map), 1)[0][0]

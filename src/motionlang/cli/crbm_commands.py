@@ -1,7 +1,7 @@
 """``motionlang train crbm`` and ``motionlang crbm generate | fill | reproduce``.
 
-Thin wrappers over :mod:`motionlang.models.crbm` and the CMU subject-35 experiment in
-:mod:`motionlang.evaluation.crbm_reproduce`. ``--data`` is the folder holding
+Thin wrappers over :mod:`motionlang.models.crbm.model` and the CMU subject-35 experiment in
+:mod:`motionlang.evaluation.crbm.reproduce`. ``--data`` is the folder holding
 ``cmu35WalkJog.mat``, ``cmu35TaylorScaleBias.mat`` and ``35.asf``.
 """
 from __future__ import annotations
@@ -29,7 +29,7 @@ def _add_data(p: argparse.ArgumentParser) -> None:
 
 
 def _add_crbm_options(p: argparse.ArgumentParser) -> None:
-    from motionlang.models.crbm import CRBMConfig
+    from motionlang.models.crbm.model import CRBMConfig
     d = CRBMConfig()
     p.add_argument("--hidden", type=size_int, default=d.n_hidden,
                    help=f"hidden units (default {d.n_hidden})")
@@ -51,7 +51,7 @@ def _add_crbm_options(p: argparse.ArgumentParser) -> None:
 
 
 def _crbm_config(args: argparse.Namespace):
-    from motionlang.models.crbm import CRBMConfig
+    from motionlang.models.crbm.model import CRBMConfig
     return CRBMConfig(n_hidden=args.hidden, order=args.order, epochs=args.epochs,
                       batch_size=args.batch_size, lr=args.lr, lr_autoregressive=args.lr,
                       momentum=args.momentum, weight_decay=args.weight_decay,
@@ -61,8 +61,8 @@ def _crbm_config(args: argparse.Namespace):
 
 def _load_model(path: str, allow_stack: bool = False):
     """A CRBM checkpoint (or, where allowed, a two-level one written by --level2)."""
-    from motionlang.models.crbm import CRBM
-    from motionlang.models.crbm_stack import CRBMStack
+    from motionlang.models.crbm.model import CRBM
+    from motionlang.models.crbm.stack import CRBMStack
     if not Path(path).is_file():
         raise MotionlangError(f"{path}: no such model file")
     if allow_stack:
@@ -80,7 +80,7 @@ def _write_frames(frames: np.ndarray, out: Path, data, data_dir: str, *, name: s
                   start_xz=(0.0, 0.0), title: str | None = None, compare: np.ndarray | None = None
                   ) -> None:
     """Write (T, 59) model features as .npy, a motion file (.bvh/.amc) or an animation."""
-    from motionlang.evaluation.crbm_reproduce import frames_to_motion
+    from motionlang.evaluation.crbm.reproduce import frames_to_motion
     ext = out.suffix.lower()
     if ext == ".npy":
         from motionlang.utils.atomic import atomic_write
@@ -105,16 +105,16 @@ def _write_frames(frames: np.ndarray, out: Path, data, data_dir: str, *, name: s
 
 # ------------------------------------------------------------------ train crbm
 def cmd_train(args: argparse.Namespace) -> int:
-    from motionlang.evaluation.crbm_fill import load_cmu35
-    from motionlang.evaluation.crbm_reproduce import model_frames
-    from motionlang.models.crbm import CRBM
+    from motionlang.evaluation.crbm.fill import load_cmu35
+    from motionlang.evaluation.crbm.reproduce import model_frames
+    from motionlang.models.crbm.model import CRBM
     data = load_cmu35(args.data)
     seqs = [model_frames(c) for c in data.train]
     model = CRBM(_crbm_config(args), 59).fit(seqs, show_progress=not args.quiet)
     model.save(args.output)
     print(f"{args.output}: {model.describe()}")
     if args.level2:
-        from motionlang.models.crbm_stack import CRBMStack
+        from motionlang.models.crbm.stack import CRBMStack
         # level 2's visibles are hidden probabilities in [0, 1]: level 1's noise (normalised
         # units) does not carry over
         cfg2 = dataclasses.replace(model.config, visible="binary", n_hidden=args.level2_hidden,
@@ -127,9 +127,9 @@ def cmd_train(args: argparse.Namespace) -> int:
 
 # ------------------------------------------------------------------ crbm generate
 def cmd_generate(args: argparse.Namespace) -> int:
-    from motionlang.evaluation.crbm_fill import load_cmu35
-    from motionlang.evaluation.crbm_generation import StyleLabeller, forward_speed
-    from motionlang.evaluation.crbm_reproduce import model_frames
+    from motionlang.evaluation.crbm.fill import load_cmu35
+    from motionlang.evaluation.crbm.generation import StyleLabeller, forward_speed
+    from motionlang.evaluation.crbm.reproduce import model_frames
     if not (args.noise >= 0 and np.isfinite(args.noise)) or args.frames < 1 or args.gibbs < 1:
         raise MotionlangError("--noise must be a finite number >= 0, --frames and --gibbs >= 1")
     model = _load_model(args.model, allow_stack=True)
@@ -161,9 +161,9 @@ def cmd_generate(args: argparse.Namespace) -> int:
 
 # ------------------------------------------------------------------ crbm fill
 def cmd_fill(args: argparse.Namespace) -> int:
-    from motionlang.evaluation.crbm_fill import load_cmu35
-    from motionlang.evaluation.crbm_reproduce import ReproduceConfig, fill_trial, model_frames
-    from motionlang.models.ar import ARConfig, ARModel
+    from motionlang.evaluation.crbm.fill import load_cmu35
+    from motionlang.evaluation.crbm.reproduce import ReproduceConfig, fill_trial, model_frames
+    from motionlang.models.crbm.ar import ARConfig, ARModel
     model = _load_model(args.model)
     data = load_cmu35(args.data)
     ar = ARModel(ARConfig(order=model.config.order), 59).fit([model_frames(c) for c in data.train])
@@ -174,7 +174,7 @@ def cmd_fill(args: argparse.Namespace) -> int:
     out = Path(args.output)
     title = f"{args.trial}: {part} erased from frame {res['gap_start']}"
     if out.suffix.lower() == ".png":
-        from motionlang.evaluation.crbm_plots import plot_fill
+        from motionlang.evaluation.crbm.plots import plot_fill
         plot_fill(res, out, title=title)
     else:
         frames = model_frames(data.test[args.trial])
@@ -190,7 +190,7 @@ def cmd_fill(args: argparse.Namespace) -> int:
 
 # ------------------------------------------------------------------ crbm reproduce
 def cmd_reproduce(args: argparse.Namespace) -> int:
-    from motionlang.evaluation.crbm_reproduce import ReproduceConfig, format_table, reproduce
+    from motionlang.evaluation.crbm.reproduce import ReproduceConfig, format_table, reproduce
     model = _load_model(args.model) if args.model else None
     cfg = ReproduceConfig(crbm=model.config if model else _crbm_config(args),
                           n_repeats=args.repeats, n_gibbs=args.gibbs, seed=args.seed,
@@ -198,7 +198,7 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
     result = reproduce(args.data, cfg, crbm=model, show_progress=not (args.quiet or args.json),
                        keep_fills=bool(args.plots))
     if args.plots:
-        from motionlang.evaluation.crbm_plots import plot_fill
+        from motionlang.evaluation.crbm.plots import plot_fill
         folder = Path(args.plots)
         for (trial, part), res in result.pop("fills").items():
             slug = f"{trial}_{part.replace(' ', '_')}"
@@ -215,8 +215,8 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
 
 def _gif_of_fill(trial: str, res: dict, crbm59: np.ndarray, path: Path, args) -> None:
     """True vs CRBM-filled motion side by side (``crbm59``: (T, 59) model-space frames)."""
-    from motionlang.evaluation.crbm_fill import load_cmu35
-    from motionlang.evaluation.crbm_reproduce import model_frames
+    from motionlang.evaluation.crbm.fill import load_cmu35
+    from motionlang.evaluation.crbm.reproduce import model_frames
     data = load_cmu35(args.data)
     truth = model_frames(data.test[trial])
     filled = truth.copy()
@@ -240,7 +240,7 @@ def register_train(train_sub: argparse._SubParsersAction) -> None:
     p.add_argument("--level2-hidden", type=size_int, default=200)
     p.add_argument("--level2-order", type=order_int, default=3)
     p.add_argument("--quiet", action="store_true", help="no progress bar")
-    from motionlang.evaluation.crbm_reproduce import SELECTED
+    from motionlang.evaluation.crbm.reproduce import SELECTED
     # defaults: the paper's sizes with the settings selected on held-out training trials
     p.set_defaults(func=cmd_train, epochs=SELECTED["epochs"], lr=SELECTED["lr"],
                    weight_decay=SELECTED["weight_decay"],
@@ -298,7 +298,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="report sampled-hidden fill-ins as \"CRBM\" (default: mean-field, as selected)")
     r.add_argument("--json", action="store_true")
     r.add_argument("--quiet", action="store_true")
-    from motionlang.evaluation.crbm_reproduce import SELECTED
+    from motionlang.evaluation.crbm.reproduce import SELECTED
     # the experiment's defaults are the settings selected on held-out training trials
     r.set_defaults(func=cmd_reproduce, epochs=SELECTED["epochs"], lr=SELECTED["lr"],
                    weight_decay=SELECTED["weight_decay"], gibbs=SELECTED["n_gibbs"],

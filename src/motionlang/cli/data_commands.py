@@ -92,7 +92,7 @@ def cmd_export_h3d(args: argparse.Namespace) -> int:
     import time
 
     from motionlang.datasets.humanml3d_export import export_h3d
-    from motionlang.training.seq2seq_data import load_records
+    from motionlang.datasets.seq2seq_pairs import load_records
     if args.workers is not None and args.workers < 1:
         raise DatasetError(f"--workers must be at least 1, got {args.workers}")
     t0 = time.perf_counter()

@@ -129,7 +129,7 @@ def generate_part(out_dir: Path, sentence: str, *, width: int = 5, seed: int = 0
     from motionlang.decoding.seq2seq import generate
     from motionlang.decoding.t2m import default_method
     from motionlang.formats import write_motion
-    from motionlang.models.l2m import LanguageToMotion
+    from motionlang.models.seq2seq.l2m import LanguageToMotion
     from motionlang.render import render_animation, render_strip
 
     model = LanguageToMotion.load(model_path or packaged_model("l2m"))
@@ -160,7 +160,7 @@ def describe_part(motions: list[tuple[str, object]], *, width: int = 5,
     """M2L: each (label, Motion) -> W sentences with log P, printed; returns the lists
     (empty for a motion the model's feature set cannot read, e.g. a non-MMM skeleton)."""
     from motionlang.decoding.seq2seq import describe
-    from motionlang.models.m2l import MotionToLanguage
+    from motionlang.models.seq2seq.m2l import MotionToLanguage
 
     model = MotionToLanguage.load(model_path or packaged_model("m2l"))
     out = []

@@ -1,7 +1,7 @@
 """``motionlang train m2l|l2m`` and ``motionlang evaluate`` (``describe`` and ``generate``
 live in :mod:`motionlang.cli.text_commands`).
 
-Thin wrappers over :mod:`motionlang.training.seq2seq_data` (dataset -> pairs),
+Thin wrappers over :mod:`motionlang.datasets.seq2seq_pairs` (dataset -> pairs),
 :class:`motionlang.training.trainer.Trainer` and :mod:`motionlang.decoding.seq2seq`.
 ``--data`` is a KIT-ML-format folder (the release, or a procedural corpus) or a custom
 folder of motion files with ``captions.csv``/``captions.jsonl``.
@@ -23,7 +23,7 @@ from motionlang.errors import MotionlangError
 # ------------------------------------------------------------------ train m2l | l2m
 def _add_train(sub, name: str, help_: str) -> None:
     # torch-free config module: building the parser must not import torch
-    from motionlang.models.seq2seq_config import L2MConfig, M2LConfig
+    from motionlang.models.seq2seq.config import L2MConfig, M2LConfig
     d = M2LConfig(1, 1) if name == "m2l" else L2MConfig(1, 1)
     p = sub.add_parser(name, help=help_, description=help_)
     p.add_argument("--data", required=True, metavar="DIR", help="KIT-ML-format or custom folder")
@@ -116,7 +116,7 @@ def root_loss_weights(features, weight: float, option: str = "--root-weight") ->
     """Per-feature factors: ``weight`` for the root's ground velocity and heading change
     (``ROOT_MOTION``), 1 elsewhere; the model's features (active flag excluded). NLL weights
     (``--root-weight``) and, with weight 0, the input mask of ``--hide-root-input``."""
-    from motionlang.decoding.seq2seq import model_dim
+    from motionlang.features.frames import model_dim
     names = list(features.names)[:model_dim(features)]
     missing = [n for n in ROOT_MOTION if n not in names]
     if missing:
@@ -132,9 +132,9 @@ def cmd_train(args: argparse.Namespace) -> int:
     import torch
 
     from motionlang.datasets.splits import save_splits
-    from motionlang.decoding.seq2seq import model_dim
+    from motionlang.features.frames import model_dim
     from motionlang.training.collate import collate_pairs
-    from motionlang.training.seq2seq_data import (balance_repeats, build_pairs, oversample,
+    from motionlang.datasets.seq2seq_pairs import (balance_repeats, build_pairs, oversample,
                                                   sentence_lengths)
     from motionlang.training.trainer import TrainConfig, Trainer, check_resume
 
@@ -175,11 +175,11 @@ def cmd_train(args: argparse.Namespace) -> int:
     torch.manual_seed(args.seed)
     F, V = model_dim(data.features), len(data.vocab)
     if args.model_kind == "m2l":
-        from motionlang.models.m2l import M2LConfig, MotionToLanguage
+        from motionlang.models.seq2seq.m2l import M2LConfig, MotionToLanguage
         model = MotionToLanguage(M2LConfig(n_features=F, vocab_size=V, **sizes),
                                  data.vocab, features=data.features)
     else:
-        from motionlang.models.l2m import L2MConfig, LanguageToMotion
+        from motionlang.models.seq2seq.l2m import L2MConfig, LanguageToMotion
         longest = max(len(it["motion"]) for it in data.items["train"])
         model = LanguageToMotion(L2MConfig(vocab_size=V, n_features=F,
                                            n_components=args.components, loss=args.loss,
@@ -233,10 +233,10 @@ def register_train(train_sub) -> None:
 # ------------------------------------------------------------------ describe / generate
 def cmd_evaluate(args: argparse.Namespace) -> int:
     from motionlang.datasets.splits import load_splits
-    from motionlang.decoding.seq2seq import motion_frames
-    from motionlang.evaluation import seq2seq_eval as ev
-    from motionlang.models.m2l import MotionToLanguage
-    from motionlang.training.seq2seq_data import load_records
+    from motionlang.features.frames import motion_frames
+    from motionlang.evaluation import seq2seq as ev
+    from motionlang.models.seq2seq.m2l import MotionToLanguage
+    from motionlang.datasets.seq2seq_pairs import load_records
     from motionlang.utils.atomic import atomic_write
     from motionlang.utils.progress import progress
 
@@ -261,7 +261,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
                                   "the describer (--m2l), which would grade its own choice")
     l2m = reranker = None
     if args.l2m:
-        from motionlang.models.l2m import LanguageToMotion
+        from motionlang.models.seq2seq.l2m import LanguageToMotion
         l2m = LanguageToMotion.load(args.l2m)
     if args.l2m_rerank:   # before the long M2L evaluation
         from motionlang.decoding.rerank import check_same_features
@@ -358,7 +358,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
 
 
 def named_line(named: dict) -> str:
-    """``evaluation.seq2seq_eval.actions_named``'s result as one line of text."""
+    """``evaluation.seq2seq.actions_named``'s result as one line of text."""
     return ", ".join(f"{place} {named[place]:.1%} of {named['n_' + place]}"
                      for place in ("first", "later", "only"))
 

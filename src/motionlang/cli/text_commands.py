@@ -38,7 +38,7 @@ def _model_path(arg: str | None, kind: str) -> Path:
 def cmd_describe(args: argparse.Namespace) -> int:
     from motionlang.cli.motion_commands import load_input
     from motionlang.decoding.seq2seq import describe
-    from motionlang.models.m2l import MotionToLanguage
+    from motionlang.models.seq2seq.m2l import MotionToLanguage
 
     check_length_penalty(args.length_penalty)
     model = MotionToLanguage.load(_model_path(args.model, "m2l"))
@@ -149,7 +149,7 @@ def cmd_generate(args: argparse.Namespace) -> int:
             raise MotionlangError("--rerank ranks several L2M motions: an L2M model with "
                                   "--method sample or beam and -w 2 or more")
         from motionlang.decoding.rerank import check_same_features
-        from motionlang.models.m2l import MotionToLanguage
+        from motionlang.models.seq2seq.m2l import MotionToLanguage
         extra["reranker"] = MotionToLanguage.load(args.rerank)
         check_same_features(model, extra["reranker"], f"--rerank {args.rerank}")
     out = Path(args.output)

@@ -1,8 +1,8 @@
 """``motionlang train twostream`` and ``motionlang evaluate-t2m``.
 
-Thin wrappers over :mod:`motionlang.training.twostream_data` (dataset -> items),
+Thin wrappers over :mod:`motionlang.datasets.twostream_items` (dataset -> items),
 :mod:`motionlang.training.twostream_train` (shared trainer + annealed teacher forcing,
-ablations) and :mod:`motionlang.evaluation.t2m_compare` (one table for every
+ablations) and :mod:`motionlang.evaluation.t2m.compare` (one table for every
 text-to-motion model). torch is imported inside the commands only, so building the CLI
 parser stays cheap.
 """
@@ -36,7 +36,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     from motionlang.models.length import SentenceLength
     from motionlang.models.twostream import TwoStreamModel
     from motionlang.training.trainer import TrainConfig, check_resume
-    from motionlang.training.twostream_data import build_twostream_data
+    from motionlang.datasets.twostream_items import build_twostream_data
     from motionlang.training.twostream_train import ForcingSchedule, make_config, train_twostream
 
     logging.basicConfig(level=logging.INFO, format="%(message)s")
@@ -176,8 +176,8 @@ def register_train(train_sub) -> None:
 
 def cmd_evaluate(args: argparse.Namespace) -> int:
     from motionlang.decoding.t2m import load_any_t2m
-    from motionlang.evaluation.t2m_compare import compare
-    from motionlang.training.twostream_data import build_twostream_data
+    from motionlang.evaluation.t2m.compare import compare
+    from motionlang.datasets.twostream_items import build_twostream_data
 
     _threads(args.threads)
     if args.oracle < 0:
@@ -200,7 +200,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
             raise MotionlangError("--l2m-rerank needs several samples: --l2m-method sample "
                                   "--l2m-width 2 or more")
         from motionlang.decoding.rerank import check_same_features
-        from motionlang.models.m2l import MotionToLanguage
+        from motionlang.models.seq2seq.m2l import MotionToLanguage
         reranker = MotionToLanguage.load(args.l2m_rerank)
         for model in models.values():
             if getattr(model, "kind", None) == "l2m":

@@ -1,7 +1,7 @@
 """Write any motionlang dataset in the HumanML3D layout (``motionlang data export-h3d``).
 
 Records are anything with ``id``, ``annotations`` and ``load_motion()`` (KIT-ML, the
-procedural corpus, a custom folder, a HumanML3D folder: ``training.seq2seq_data.
+procedural corpus, a custom folder, a HumanML3D folder: ``datasets.seq2seq_pairs.
 load_records``). The layout and what the rows mean: ``datasets.humanml3d`` and
 ``features.h3d_vectors``. Bodies:
 

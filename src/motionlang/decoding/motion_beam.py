@@ -20,7 +20,7 @@ import numpy as np
 import torch
 
 from motionlang.decoding.beam import select_state
-from motionlang.models.mdn import (MixtureParams, active_log_prob, mixture_log_prob,
+from motionlang.models.seq2seq.mdn import (MixtureParams, active_log_prob, mixture_log_prob,
                                    mixture_mean, mode_frame, sample)
 
 MotionStep = Callable[[Any, torch.Tensor], "tuple[MixtureParams, Any]"]

@@ -25,7 +25,7 @@ import torch.nn.functional as F
 from motionlang.decoding.seq2seq import _normalize, encode_sentence
 from motionlang.errors import MotionlangError
 from motionlang.features.collate import pad_batch
-from motionlang.models.m2l import MotionToLanguage
+from motionlang.models.seq2seq.m2l import MotionToLanguage
 
 
 def check_same_features(l2m, m2l: MotionToLanguage, what: str = "the reranker") -> None:

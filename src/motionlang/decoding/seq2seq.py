@@ -18,35 +18,14 @@ import torch
 from motionlang.decoding.beam import beam_search, greedy_search
 from motionlang.decoding.motion_beam import mean_decode, sample_decode, sampled_beam
 from motionlang.errors import MotionlangError
-from motionlang.models.l2m import LanguageToMotion
-from motionlang.models.m2l import MotionToLanguage
+from motionlang.features.frames import frames_to_features, model_dim, motion_frames
+from motionlang.models.seq2seq.l2m import LanguageToMotion
+from motionlang.models.seq2seq.m2l import MotionToLanguage
 
 #: motion decoding methods of :func:`generate_features`
 METHODS = ("beam", "mean", "sample")
 
 UNK_ID = 3
-
-
-def model_dim(fs: Any) -> int:
-    """Frame size the models see: the feature set's dims without its active flag."""
-    return int(getattr(fs, "n_normalised", fs.dim))
-
-
-def motion_frames(fs: Any, motion, offsets: int = 1) -> list[np.ndarray]:
-    """Up to ``offsets`` sequences (T, model_dim) float32 of one motion (start offsets
-    of the down-sampling, for feature sets that have them)."""
-    seqs = fs.encode_all(motion)[:max(1, offsets)] if hasattr(fs, "encode_all") \
-        else [fs.encode(motion)]
-    n = model_dim(fs)
-    return [np.ascontiguousarray(s[:, :n], dtype=np.float32) for s in seqs]
-
-
-def frames_to_features(fs: Any, frames: np.ndarray) -> np.ndarray:
-    """Model frames (T, model_dim) -> the feature set's (T, dim), active flag set to 1."""
-    extra = fs.dim - frames.shape[1]
-    if extra <= 0:
-        return frames
-    return np.concatenate([frames, np.ones((len(frames), extra), frames.dtype)], axis=1)
 
 
 def _normalize(norm: Any, x: np.ndarray) -> np.ndarray:
@@ -140,7 +119,7 @@ def generate_features(model: LanguageToMotion, sentence: str | Sequence[int], *,
     (W independent ancestral samples, ranked by log likelihood). The library default stays
     the paper's sampled beam; the CLI's is "sample" (the beam favours standing still).
     length_norm: rank by log likelihood per frame ("beam" and "sample").
-    temperature: tau of the frames drawn by "beam" and "sample" (``models.mdn.sample``: 1 =
+    temperature: tau of the frames drawn by "beam" and "sample" (``models.seq2seq.mdn.sample``: 1 =
     the model's distribution, -> 0 = its heaviest component's means).
     n_frames: the motion's length for a model told it (``progress_input``; it ends there at
     the latest), a cap like ``max_frames`` for the others. Without it such a model plans the

@@ -39,7 +39,7 @@ def load_any_t2m(path: str | Path, text_encoder=None):
         from motionlang.models.twostream import TwoStreamModel
         return TwoStreamModel.from_checkpoint(d, text_encoder)
     if kind == "l2m":
-        from motionlang.models.l2m import LanguageToMotion
+        from motionlang.models.seq2seq.l2m import LanguageToMotion
         return LanguageToMotion.from_checkpoint(d).eval()
     raise MotionlangError(f"{path}: not a text-to-motion checkpoint (kind {kind!r}; "
                           "expected 'l2m' or 'twostream')")

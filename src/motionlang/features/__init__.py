@@ -5,7 +5,7 @@
   (Ghosh et al. 2021).
 * :class:`TaylorFeatures` — root increments + per-bone exp-maps, 30 Hz (Taylor et al. 2006).
 * :class:`Normalizer`, padding/masks (:mod:`.collate`), the 21-joint map (:mod:`.joint_map`).
-* :func:`~motionlang.features.dataset_cache.dataset_features` — a dataset fitted and encoded
+* :func:`~motionlang.datasets.feature_cache.dataset_features` — a dataset fitted and encoded
   once, cached on disk keyed by source files and options.
 """
 from motionlang.features.angles import AnglesConfig, AnglesFeatures

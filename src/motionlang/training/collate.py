@@ -2,8 +2,8 @@
 
 An item is a dict with ``"motion"`` (T, F) float array/tensor of per-frame features and
 ``"tokens"`` a list/array of token ids SOS w1 .. wn EOS (``Vocabulary.encode``). The batch is
-the dict both :class:`~motionlang.models.m2l.MotionToLanguage` and
-:class:`~motionlang.models.l2m.LanguageToMotion` take in ``loss``.
+the dict both :class:`~motionlang.models.seq2seq.m2l.MotionToLanguage` and
+:class:`~motionlang.models.seq2seq.l2m.LanguageToMotion` take in ``loss``.
 """
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Fitting an L2M's planner on its own (``models.plan.Planner``), the rest of the model frozen.
+"""Fitting an L2M's planner on its own (``models.seq2seq.plan.Planner``), the rest of the model frozen.
 
 The planner only maps a sentence to a coarse plan, so it can be fitted from the sentences and
 the true plans alone, without the decoder: an epoch over 14,388 pairs takes seconds. Used to
@@ -15,7 +15,7 @@ import numpy as np
 import torch
 
 from motionlang.errors import MotionlangError
-from motionlang.models.plan import Planner
+from motionlang.models.seq2seq.plan import Planner
 from motionlang.training.collate import pad_sequences
 
 log = logging.getLogger(__name__)

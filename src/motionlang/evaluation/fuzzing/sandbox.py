@@ -40,7 +40,7 @@ KINDS = ("error", "valid", "invalid", "uncaught", "crash", "hang")
 EXTENSIONS = {"asf": ".asf", "amc": ".amc", "bvh": ".bvh", "mmm": ".xml", "mit": ".mat",
               "h3d": ".tar"}
 H3D_RECORDS = 4  # records of an h3d folder whose rows, joints and Motion are read
-_CHILD = "from motionlang.formats.fuzzing.sandbox import serve; serve()"
+_CHILD = "from motionlang.evaluation.fuzzing.sandbox import serve; serve()"
 
 
 @dataclass
@@ -144,7 +144,7 @@ class Sandbox:
             self._start()
         body = None
         if fmt == "h3d":
-            from motionlang.formats.fuzzing.seeds import unpack_h3d
+            from motionlang.evaluation.fuzzing.seeds import unpack_h3d
             body, files = unpack_h3d(data)
             path = self.folder / "h3d"
             shutil.rmtree(path, ignore_errors=True)

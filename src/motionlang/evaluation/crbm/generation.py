@@ -20,9 +20,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from motionlang.evaluation.crbm_fill import Cmu35
-from motionlang.evaluation.crbm_reproduce import model_frames
-from motionlang.models.crbm import CRBM
+from motionlang.evaluation.crbm.fill import Cmu35
+from motionlang.evaluation.crbm.reproduce import model_frames
+from motionlang.models.crbm.model import CRBM
 
 STYLE_DIMS = np.r_[1, 3:59]   # all model features but the root's ground step
 METRES_PER_UNIT = 0.0254 / 0.45   # 35.asf: ":units length 0.45" of inches

@@ -3,8 +3,8 @@ start from (:mod:`.seeds`), and a child process that runs a reader on each under
 time limits and tells a clean error from a crash, a hang or an uncaught exception
 (:mod:`.sandbox`). Used by ``tests/test_fuzz_readers.py`` and ``benchmarks/fuzz_readers.py``.
 """
-from motionlang.formats.fuzzing.inputs import FORMATS, crafted, mutate
-from motionlang.formats.fuzzing.sandbox import Outcome, Sandbox
-from motionlang.formats.fuzzing.seeds import seeds
+from motionlang.evaluation.fuzzing.inputs import FORMATS, crafted, mutate
+from motionlang.evaluation.fuzzing.sandbox import Outcome, Sandbox
+from motionlang.evaluation.fuzzing.seeds import seeds
 
 __all__ = ["FORMATS", "Outcome", "Sandbox", "crafted", "mutate", "seeds"]

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from motionlang.evaluation.crbm_fill import JOINT_CHANNELS
+from motionlang.evaluation.crbm.fill import JOINT_CHANNELS
 from motionlang.utils.atomic import atomic_path
 
 # 59-space index -> readable name, for the dimensions the plots show (ASF 35 channel names).

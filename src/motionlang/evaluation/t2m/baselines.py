@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Sequence
 import numpy as np
 
 if TYPE_CHECKING:   # t2m_compare imports this module
-    from motionlang.evaluation.t2m_compare import T2MItem
+    from motionlang.evaluation.t2m.compare import T2MItem
 
 GROUND_TRUTH = "ground truth (order check's ceiling)"
 NEAREST = "nearest training sentence's motion (bag of words)"

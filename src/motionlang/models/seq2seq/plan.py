@@ -19,7 +19,7 @@ from __future__ import annotations
 import torch
 from torch import nn
 
-from motionlang.models.recurrent import BiGRUEncoder
+from motionlang.models.seq2seq.layers import BiGRUEncoder
 
 
 def part_index(t: torch.Tensor, n_frames: torch.Tensor, parts: int) -> torch.Tensor:

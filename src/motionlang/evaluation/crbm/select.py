@@ -28,10 +28,10 @@ from pathlib import Path
 
 import numpy as np
 
-from motionlang.evaluation.crbm_fill import ERASED, Cmu35, load_cmu35
-from motionlang.evaluation.crbm_reproduce import ReproduceConfig, fill_trial, model_frames
-from motionlang.models.ar import ARConfig, ARModel
-from motionlang.models.crbm import CRBM, CRBMConfig
+from motionlang.evaluation.crbm.fill import ERASED, Cmu35, load_cmu35
+from motionlang.evaluation.crbm.reproduce import ReproduceConfig, fill_trial, model_frames
+from motionlang.models.crbm.ar import ARConfig, ARModel
+from motionlang.models.crbm.model import CRBM, CRBMConfig
 
 VALIDATION_TRIALS = ("35_15", "35_16", "35_25", "35_26")   # 2 walks, 2 jogs, all training trials
 
@@ -78,7 +78,7 @@ def validation_generation(crbm: CRBM, val: Cmu35, n_frames: int, seed: int) -> d
     """Generation from the first frames of every trial the model may see: the held-out four
     and its own 27 training trials (see ``crbm_generation``). Per held-out trial and, as
     "training walks" / "training jogs", the worst case over the training starts."""
-    from motionlang.evaluation.crbm_generation import StyleLabeller, forward_speed
+    from motionlang.evaluation.crbm.generation import StyleLabeller, forward_speed
     lab = StyleLabeller(val, crbm.mean, crbm.std)
     n = crbm.config.order
     names = list(val.test) + list(val.train_names)

@@ -1,11 +1,11 @@
 """From a dataset folder to the two-stream model's training items (Ghosh et al. 2021).
 
 Reads a KIT-ML-format folder (the release or a procedural corpus) or a custom folder
-(``training.seq2seq_data.load_records``), drops motions without descriptions, splits by
+(``datasets.seq2seq_pairs.load_records``), drops motions without descriptions, splits by
 motion (``datasets.splits.random_split``), fits the *positions* features (21 joints + root
 trajectory, 12.5 Hz, ``features.positions.PositionFeatures``) on the training motions only
 and encodes every motion once through the on-disk feature cache
-(``features.dataset_cache.dataset_features``). Each motion is paired with each of its
+(``datasets.feature_cache.dataset_features``). Each motion is paired with each of its
 descriptions: items ``{"motion": (T, 66) float32 normalised, "sentence": str, "id": str}``,
 the input of ``TwoStreamModel.collate``. With ``mirror`` the training items also hold
 every training motion mirrored left/right with its sentences' sides swapped.
@@ -20,7 +20,7 @@ import numpy as np
 
 from motionlang.datasets.splits import random_split
 from motionlang.errors import DatasetError
-from motionlang.features.dataset_cache import dataset_features
+from motionlang.datasets.feature_cache import dataset_features
 
 #: frame rate of the positions features (Ghosh et al. 2021: KIT-ML at 12.5 Hz)
 FPS = 12.5
@@ -68,7 +68,7 @@ def build_twostream_data(data: str | Path, *, fractions: Sequence[float] = (0.8,
             equally often. Features are fitted on the unmirrored motions; ``sequences`` and
             the other splits stay unmirrored.
     """
-    from motionlang.training.seq2seq_data import load_records
+    from motionlang.datasets.seq2seq_pairs import load_records
 
     records = [r for r in load_records(data, max_seconds) if r.annotations]
     if len(records) < 2:

@@ -11,7 +11,7 @@ ground-plane position (x, z) replaced by its frame-to-frame step in the root's f
 folded back (:func:`to_protocol59`) and scored in the protocol space.
 
 Hyper-parameters (:data:`SELECTED`) were chosen on training trials only
-(``scripts/crbm_select.py`` / ``evaluation/crbm_select.py``: train on 27 trials, fill in
+(``scripts/crbm_select.py`` / ``evaluation/crbm/select.py``: train on 27 trials, fill in
 35_15, 35_16 (walks) and 35_25, 35_26 (jogs) with the same erase protocol, score = mean CRBM /
 nearest-neighbour error ratio over the 8 cells, 20 repeats; eligible only if generation from
 each held-out trial keeps its walk/jog label on >= 90 % of 1000 frames). Grid (2026-11-22,
@@ -40,11 +40,11 @@ from pathlib import Path
 
 import numpy as np
 
-from motionlang.evaluation.crbm_fill import (
+from motionlang.evaluation.crbm.fill import (
     ERASED, JOINT_CHANNELS, Cmu35, fill_error, frame_mask, hold_last_fill, load_cmu35, nearest_neighbour_fill,
     per_frame_dims, score_space, taylor59)
-from motionlang.models.ar import ARConfig, ARModel
-from motionlang.models.crbm import CRBM, CRBMConfig
+from motionlang.models.crbm.ar import ARConfig, ARModel
+from motionlang.models.crbm.model import CRBM, CRBMConfig
 
 PAPER = {  # Taylor et al. 2006, walking test sequence; the paper reports no jogging numbers
     "35_29": {"nearest neighbour": {"leg": 11.68, "upper body": 22.20},
@@ -54,7 +54,7 @@ METHODS = ("nearest neighbour", "hold last value", "AR(n)", "CRBM", "CRBM (sampl
 TRIAL_NAMES = {"35_29": "walking (35_29)", "35_18": "jogging (35_18)"}
 
 
-# Chosen by ``evaluation/crbm_select.py`` on 4 held-out TRAINING trials (grid and scores in
+# Chosen by ``evaluation/crbm/select.py`` on 4 held-out TRAINING trials (grid and scores in
 # this module's docstring). The test trials' numbers played no part in the choice of values;
 # history noise as a remedy was prompted by generation from the walking test frames.
 SELECTED = {"weight_decay": 2e-3, "weight_decay_autoregressive": 2e-2, "lr": 1e-3, "epochs": 4000,

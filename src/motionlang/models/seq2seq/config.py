@@ -1,6 +1,6 @@
 """Configs of the seq2seq models (Plappert, Mandery & Asfour 2018), free of torch.
 
-Kept apart from :mod:`motionlang.models.m2l` / :mod:`motionlang.models.l2m` so that the CLI
+Kept apart from :mod:`motionlang.models.seq2seq.m2l` / :mod:`motionlang.models.seq2seq.l2m` so that the CLI
 can read the default sizes for ``--help`` without importing torch (2-10 s per call).
 """
 from __future__ import annotations
@@ -84,7 +84,7 @@ class L2MConfig:
     # at 10 Hz); 0 = off (the paper's loss). Beyond the paper, as for the two-stream model.
     energy_weight: float = 0.0
     energy_window: int = 11
-    # a coarse plan fed to every decoder step (``models.plan``; 0 = off, the paper's): per
+    # a coarse plan fed to every decoder step (``models.seq2seq.plan``; 0 = off, the paper's): per
     # part of ``plan_parts`` of the motion's duration, each feature's mean and mean absolute
     # change. Training feeds the true motion's plan (plus Gaussian noise of std
     # ``plan_noise``) and fits a planner (its own sentence encoder, ``plan_hidden`` units

@@ -15,7 +15,7 @@ from typing import Sequence
 import numpy as np
 
 from motionlang.errors import MotionFormatError
-from motionlang.models.crbm import CRBM, CRBMConfig, check_sequences, config_from_dict
+from motionlang.models.crbm.model import CRBM, CRBMConfig, check_sequences, config_from_dict
 from motionlang.utils.atomic import atomic_path
 
 

@@ -29,8 +29,8 @@ from motionlang.errors import MotionlangError
 from motionlang.evaluation.action_order import (Prototypes, merge_repeats, order_accuracy,
                                                 rescale_ranges, segment_accuracy,
                                                 segment_labels)
-from motionlang.evaluation.motion_metrics import position_metrics_mm
-from motionlang.evaluation.t2m_baselines import (
+from motionlang.evaluation.metrics.motion import position_metrics_mm
+from motionlang.evaluation.t2m.baselines import (
     GROUND_TRUTH, NEAREST, length_errors, retrieval_baseline, still_baseline)
 
 
@@ -82,7 +82,7 @@ def _ranges(record, n_frames: int) -> tuple[list[tuple[int, int]], list[str]]:
 
 
 def eval_items(data, split: str = "test", limit: int | None = None) -> list[T2MItem]:
-    """The evaluation items of a ``training.twostream_data.TwoStreamData`` split."""
+    """The evaluation items of a ``datasets.twostream_items.TwoStreamData`` split."""
     out = []
     for rid in data.splits[split][:limit or None]:
         rec, seq = data.records[rid], data.sequences[rid]
@@ -201,7 +201,7 @@ def _l2m_on_subjects(results, name, model, data, items, protos, method, width: i
     "sample" decoding."""
     import logging
 
-    from motionlang.decoding.seq2seq import motion_frames
+    from motionlang.features.frames import motion_frames
     from motionlang.decoding.t2m import generate_positions21
     from motionlang.formats.mmm_model import mmm_skeleton
     if getattr(getattr(model, "features", None), "kind", None) != "angles":
@@ -254,7 +254,7 @@ def compare(models: dict[str, object], data, *, split: str = "test", limit: int 
     items = eval_items(data, split, limit)
     protos = fit_prototypes(data)
     if oracle:   # before the models run: a K no test motion meets fails at once
-        from motionlang.evaluation.t2m_oracle import oracle_generations, oracle_table
+        from motionlang.evaluation.t2m.oracle import oracle_generations, oracle_table
         kept, oracle_gens = oracle_generations(data, items, oracle)
     results = {name: evaluate_model(lambda s, t, m=model: generate_positions21(
                                         m, s, t, method=l2m_method, width=l2m_width,

@@ -28,7 +28,7 @@ from typing import Callable
 
 import numpy as np
 
-from motionlang.formats.fuzzing.seeds import (TINY_ASF, h3d_files, mit_sequence,
+from motionlang.evaluation.fuzzing.seeds import (TINY_ASF, h3d_files, mit_sequence,
                                               mit_tree, npy_bytes, pack_h3d, unpack_h3d,
                                               write_mit)
 

@@ -25,7 +25,7 @@ from motionlang.datasets.text import normalize
 from motionlang.decoding.rerank import check_same_features, rerank
 from motionlang.decoding.seq2seq import describe_features, generate_features
 from motionlang.errors import MotionlangError
-from motionlang.evaluation import text_metrics as tm
+from motionlang.evaluation.metrics import text as tm
 from motionlang.utils.progress import progress
 
 

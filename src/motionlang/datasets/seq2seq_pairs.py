@@ -26,7 +26,7 @@ from motionlang.datasets.custom import load_custom
 from motionlang.datasets.kitml import find_kitml_root, load_kitml
 from motionlang.datasets.splits import random_split
 from motionlang.datasets.text import Vocabulary
-from motionlang.decoding.seq2seq import motion_frames
+from motionlang.features.frames import motion_frames
 from motionlang.errors import DatasetError, MotionlangError
 from motionlang.features.base import FeatureSet, features_from_dict
 from motionlang.utils.progress import progress

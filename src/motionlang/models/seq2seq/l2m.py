@@ -7,7 +7,7 @@ Output: a mixture of K (paper: 20) diagonal Gaussians over the next frame plus a
 "active" flag (1 = the motion goes on after this frame; 0 on a motion's last frame).
 Loss: the paper's stable surrogate ``-sum_k pi_k log N_k`` (or the exact mixture NLL with
 ``loss="exact"``) per frame, plus the flag's binary cross-entropy. Optional additive
-attention as in :mod:`motionlang.models.m2l`.
+attention as in :mod:`motionlang.models.seq2seq.m2l`.
 
 Frames are model features (usually normalised); the first decoder input is a zero frame.
 
@@ -41,13 +41,13 @@ fixed RNG, so that the best epoch is the one that does best on its own frames.
 
 And ``energy_weight``: a term on the *local speeds* of the expected frames
 (sum_k pi_k mu_k) against the reference's over ~1 s windows
-(:func:`motionlang.models.sequence_losses.energy_loss`, the two-stream model's remedy for
+(:func:`motionlang.models.seq2seq.losses.energy_loss`, the two-stream model's remedy for
 motions that die down to standing). It does not care about phase, only about moving as
 much as the reference where the reference moves.
 
-And ``plan_parts`` (:mod:`motionlang.models.plan`): every decoder step also reads a coarse
+And ``plan_parts`` (:mod:`motionlang.models.seq2seq.plan`): every decoder step also reads a coarse
 plan of the motion, its part's mean features and mean absolute change; the true motion's
-plan while training, the plan a :class:`motionlang.models.plan.Planner` (its own sentence
+plan while training, the plan a :class:`motionlang.models.seq2seq.plan.Planner` (its own sentence
 encoder, fitted with an MSE term) predicts from the sentence when generating. The decoder
 learns to follow the plan, so the sentence steers every frame, not only the first ones.
 """
@@ -59,13 +59,13 @@ import torch
 from torch import nn
 
 from motionlang.errors import MotionlangError
-from motionlang.models import mdn
+from motionlang.models.seq2seq import mdn
 from motionlang.models.checkpoint import Seq2SeqCheckpoint
 from motionlang.models.length import SentenceLength
-from motionlang.models.plan import Planner, motion_plan, plan_at
-from motionlang.models.recurrent import AdditiveAttention, BiGRUEncoder, StackedDecoder
-from motionlang.models.sequence_losses import energy_loss
-from motionlang.models.seq2seq_config import L2MConfig  # noqa: F401 (re-exported)
+from motionlang.models.seq2seq.plan import Planner, motion_plan, plan_at
+from motionlang.models.seq2seq.layers import AdditiveAttention, BiGRUEncoder, StackedDecoder
+from motionlang.models.seq2seq.losses import energy_loss
+from motionlang.models.seq2seq.config import L2MConfig  # noqa: F401 (re-exported)
 
 
 class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):

@@ -84,7 +84,7 @@ def oracle_table(results: dict[str, dict], data, kept: Sequence, gens: dict, n_i
     """Every row of ``results`` (``t2m_compare.compare``'s, with ``generated``) re-scored on
     ``kept``, and the oracle rows ``gens`` (both from :func:`oracle_generations` over
     ``n_items`` test items). Returns (rows, markdown)."""
-    from motionlang.evaluation.t2m_compare import markdown_table, score_generated
+    from motionlang.evaluation.t2m.compare import markdown_table, score_generated
     rows = {name: score_generated({it.id: r["generated"][it.id] for it in kept}, kept,
                                   data.features, prototypes) for name, r in results.items()}
     rows.update({name: score_generated(g, kept, data.features, prototypes)

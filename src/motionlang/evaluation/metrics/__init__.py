@@ -1,0 +1,3 @@
+"""Metrics as pure functions: text (:mod:`.text`: BLEU, ROUGE-L, CIDEr), motion
+(:mod:`.motion`: APE, AVE and friends) and the text-to-motion yardstick (:mod:`.t2m`:
+R-precision, FID, MM-Dist, Diversity, MultiModality)."""

@@ -1,0 +1,114 @@
+"""The package's shape: imports flow down the layers the README states, no module-level
+import loops, no source file over 400 lines."""
+from __future__ import annotations
+
+import ast
+import re
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+SRC = ROOT / "src" / "motionlang"
+#: a README line such as ``utils, errors → kinematics → formats → ... → cli``
+LAYER_LINE = re.compile(r"^\s*([a-z_]+(?:, [a-z_]+)*)((?: → [a-z_]+(?:, [a-z_]+)*)+)\s*$")
+
+
+def readme_layers() -> dict[str, int]:
+    """Top-level package/module name -> its layer number, from the README."""
+    for line in (ROOT / "README.md").read_text(encoding="utf-8").splitlines():
+        m = LAYER_LINE.match(line)
+        if m:
+            groups = [g.split(", ") for g in line.strip().split(" → ")]
+            return {name: i for i, names in enumerate(groups) for name in names}
+    raise AssertionError("README.md states no layer order (a line 'a, b → c → ...')")
+
+
+def modules() -> dict[str, Path]:
+    return {".".join(("motionlang",) + p.relative_to(SRC).with_suffix("").parts)
+            .removesuffix(".__init__"): p for p in SRC.rglob("*.py")}
+
+
+def imports(path: Path, top_level_only: bool) -> list[str]:
+    """motionlang modules imported by a file (at module level only, if asked); ``from X
+    import y`` counts as X.y when that is a module, else X."""
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    nodes = tree.body if top_level_only else ast.walk(tree)
+    known = modules()
+    out = []
+    for node in nodes:
+        if isinstance(node, ast.Import):
+            out += [a.name for a in node.names if a.name.startswith("motionlang")]
+        elif isinstance(node, ast.ImportFrom) and (node.module or "").startswith("motionlang"):
+            for a in node.names:
+                sub = f"{node.module}.{a.name}"
+                out.append(sub if sub in known else node.module)
+    return out
+
+
+def layer_of(module: str, layers: dict[str, int]) -> int | None:
+    parts = module.split(".")
+    return layers.get(parts[1]) if len(parts) > 1 else None
+
+
+def test_every_top_level_part_has_a_layer():
+    layers = readme_layers()
+    tops = {p.relative_to(SRC).parts[0].removesuffix(".py") for p in SRC.rglob("*.py")}
+    missing = sorted(tops - set(layers) - {"__init__"})
+    assert not missing, f"parts of motionlang without a layer in the README: {missing}"
+
+
+def test_no_module_imports_from_a_higher_layer():
+    layers = readme_layers()
+    bad = []
+    for mod, path in modules().items():
+        here = layer_of(mod, layers)
+        if here is None:   # motionlang/__init__ re-exports lazily from every layer
+            continue
+        for dep in imports(path, top_level_only=False):
+            there = layer_of(dep, layers)
+            if dep == "motionlang":   # the package's __init__ re-exports the api layer
+                there = layers["api"]
+            if there is not None and there > here:
+                bad.append(f"{mod} imports {dep}")
+    assert not bad, "\n".join(bad)
+
+
+def test_no_import_loops_at_module_level():
+    known = modules()
+    graph = {m: [d for d in imports(p, top_level_only=True) if d in known and d != m]
+             for m, p in known.items()}
+    state: dict[str, int] = {}
+    loops = []
+
+    def visit(m, stack):
+        state[m] = 1
+        for d in graph[m]:
+            if state.get(d) == 1:
+                loops.append(" -> ".join(stack[stack.index(d):] + [d]))
+            elif d not in state:
+                visit(d, stack + [d])
+        state[m] = 2
+
+    for m in graph:
+        if m not in state:
+            visit(m, [m])
+    # a package importing its own submodules in __init__ is not a loop unless they import
+    # the package back; those are reported like any other
+    assert not loops, "\n".join(loops)
+
+
+@pytest.mark.parametrize("path", sorted(SRC.rglob("*.py")), ids=lambda p: str(p.relative_to(SRC)))
+def test_no_source_file_over_400_lines(path):
+    n = len(path.read_text(encoding="utf-8").splitlines())
+    assert n <= 400, f"{path.relative_to(ROOT)}: {n} lines (split it)"
+
+
+def test_the_checks_can_fail(tmp_path):
+    """The layer reader finds a violation when one is there."""
+    f = tmp_path / "m.py"
+    f.write_text("def f():\n    from motionlang.cli.main import main\n")
+    assert imports(f, top_level_only=False) == ["motionlang.cli.main"]
+    assert imports(f, top_level_only=True) == []
+    layers = readme_layers()
+    assert layer_of("motionlang.cli.main", layers) > layer_of("motionlang.formats", layers)
