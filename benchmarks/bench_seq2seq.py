@@ -58,9 +58,9 @@ def main() -> None:
     rng = np.random.default_rng(0)
     F, V = args.features, args.vocab
     if args.packaged:
-        from motionlang.cli.demo import packaged_model
-        m2l = MotionToLanguage.load(packaged_model("m2l"))
-        l2m = LanguageToMotion.load(args.l2m or packaged_model("l2m"))
+        from motionlang.models.registry import load_model
+        m2l = load_model("m2l", kind="m2l")
+        l2m = load_model(args.l2m or "l2m", kind="l2m")
         F, V = m2l.config.n_features, m2l.config.vocab_size
         print(f"packaged models: M2L {m2l.config}\nL2M {l2m.config}")
     elif args.l2m:

@@ -42,13 +42,13 @@ def cases() -> list[tuple[str, list[str], int]]:
         rows += [(f"render OUT {where}", ["render", m, f(".gif")], 2),
                  (f"convert OUT {where}", ["convert", m, f(".bvh")], 2),
                  (f"generate -o {where}", ["generate", "a person walks", "-o", f(".gif")], 2),
-                 (f"train twostream --out {where}", ["train", "twostream", "--data", "corpus",
-                                                     "--out", f(".pt")], 2),
-                 (f"train crbm OUT {where}", ["train", "crbm", "--data", "corpus",
-                                              f(".npz")], 2),
                  (f"evaluate -o {where}", ["evaluate", "--m2l", "junk.pt", "--data", "corpus",
                                            "-o", f(".json")], 2)]
     for where, path in BAD_DIRS.items():
+        rows += [(f"train twostream --out {where}", ["train", "twostream", "--data", "corpus",
+                                                     "--out", path], 2),
+                 (f"train crbm --out {where}", ["train", "crbm", "--data", "corpus",
+                                                "--out", path], 2)]
         rows += [(f"demo --out {where}", ["demo", "--out", path], 2),
                  (f"data synth --out {where}", ["data", "synth", "--out", path, "--n", "1"], 2),
                  (f"data split --out {where}", ["data", "split", "--data", "corpus",
@@ -111,10 +111,10 @@ def cases() -> list[tuple[str, list[str], int]]:
     l2m = ["train", "l2m", "--data", "corpus", "--out", "run"]
     rows += [(f"train l2m {' '.join(o)}", l2m + o, 2) for o in (
         ["--components", "0"], ["--lr", "nan"], ["--rollout", "2"], ["--resume"])]
-    ts = ["train", "twostream", "--data", "corpus", "--out", "ts.pt"]
+    ts = ["train", "twostream", "--data", "corpus", "--out", "ts"]
     rows += [(f"train twostream {' '.join(o)}", ts + o, 2) for o in (
         ["--h", "0"], ["--lr", "nan"], ["--batch-size", "0"], ["--seed", "-1"], ["--resume"])]
-    crbm = ["train", "crbm", "--data", "corpus", "c.npz"]
+    crbm = ["train", "crbm", "--data", "corpus", "--out", "crbm"]
     rows += [(f"train crbm {' '.join(o)}", crbm + o, 2) for o in (
         ["--order", "1000000"], ["--lr", "nan"], ["--hidden", "0"], ["--batch-size", "0"],
         ["--momentum", "inf"], ["--seed", "-1"])]

@@ -8,6 +8,9 @@
 # other work sharing the two cores, the whole rebuild took about 1 h 45 min.
 # RESUME=--resume continues interrupted runs from their last checkpoint (stage 1 of the L2M
 # and the M2L); M2L_EPOCHS overrides the M2L's 12 epochs.
+# Every --out is a run folder: the final model is its model.pt (beside best.pt, last.pt,
+# history.json, loss_curve.png, splits/ and commands.jsonl); OMP_NUM_THREADS=1 below is also
+# every command's --threads default, one thread per model as the two run side by side.
 set -euo pipefail
 WORK=${1:-/tmp/motionlang_shipped}
 RESUME=${RESUME:-}

@@ -1,4 +1,5 @@
-"""Shared fixtures: where the real data lives, and a tiny hand-made skeleton."""
+"""Shared fixtures: the real data folder and a tiny motion. Helpers that tests import
+live in :mod:`helpers` (this folder's ``helpers/``), not here."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -6,10 +7,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from motionlang.kinematics import Joint, Motion, Skeleton
+from motionlang.kinematics import Motion
 
-ROOT = Path(__file__).resolve().parents[1]
-SHARED = ROOT.parent / "shared" / "data"
+from helpers.data import SHARED
+from helpers.mocap import tiny_skeleton
 
 
 @pytest.fixture(scope="session")
@@ -20,30 +21,6 @@ def shared_data() -> Path:
     return SHARED
 
 
-def shared_file(rel: str) -> Path:
-    path = SHARED / rel
-    if not path.exists():
-        pytest.skip(f"real data file {path} not present")
-    return path
-
-
-def tiny_skeleton() -> Skeleton:
-    """Hips with two 2-link legs (1 m thigh along -y, knee about x) and a spine."""
-    S = np.diag([-1.0, 1.0, 1.0])
-    x, y, z = np.eye(3)
-    joints = [
-        Joint("Hips", -1, [0, 0, 0]),
-        Joint("LeftUpLeg", 0, [0.1, 0, 0], axes=[z, x, y]),
-        Joint("LeftLeg", 1, [0, -1.0, 0], axes=[x]),
-        Joint("LeftFoot", 2, [0, -1.0, 0]),
-        Joint("RightUpLeg", 0, [-0.1, 0, 0], axes=[z, x, y]),
-        Joint("RightLeg", 4, [0, -1.0, 0], axes=[x]),
-        Joint("RightFoot", 5, [0, -1.0, 0]),
-        Joint("Spine", 0, [0, 0.5, 0], axes=[z, x, y]),
-    ]
-    return Skeleton(joints, name="tiny", mirror=S)
-
-
 @pytest.fixture
 def tiny_motion() -> Motion:
     rng = np.random.default_rng(0)
@@ -51,22 +28,3 @@ def tiny_motion() -> Motion:
     T = 20
     return Motion(sk, 30.0, rng.normal(size=(T, 3)), rng.uniform(-1, 1, (T, 3)),
                   rng.uniform(-1, 1, (T, sk.ndof)), name="tiny")
-
-
-def bandai_takes(takes: list[str] | tuple[str, ...], dest: Path) -> Path:
-    """Dataset-1 Bandai Namco takes (``"walk_normal_001"``...) extracted from the archive in
-    the shared data into ``dest`` as ``<take>.bvh`` (never from a copy in the repo); skips
-    where the archive is absent."""
-    import tarfile
-
-    archive = shared_file("bandai/Bandai-Namco-Research-Motiondataset-1.tar.xz")
-    want = {f"Bandai-Namco-Research-Motiondataset-1/data/dataset-1_{t}.bvh": t for t in takes}
-    with tarfile.open(archive, "r:xz") as tar:
-        for member in tar:
-            if member.name in want:
-                (dest / f"{want.pop(member.name)}.bvh").write_bytes(
-                    tar.extractfile(member).read())
-                if not want:
-                    break
-    assert not want, f"missing from the archive: {sorted(want)}"
-    return dest

@@ -6,65 +6,9 @@ import pytest
 from motionlang.errors import MotionFormatError, SkeletonError
 from motionlang.formats.asf_amc import (INCH, motion_from_channels, motion_to_channels,
                                         read_amc, read_asf, read_asf_amc, write_amc)
-from tests.conftest import shared_file
 
-TINY_ASF = """\
-# a hand-made skeleton: two bones up the Y axis
-:version 1.10
-:name tiny
-:units
-  mass 1.0
-  length 1.0
-  angle deg
-:root
-   order TX TY TZ RX RY RZ
-   axis XYZ
-   position 0 0 0
-   orientation 0 0 0
-:bonedata
-  begin
-     id 1
-     name chest
-     direction 0 1 0
-     length 10
-     axis 0 0 0 XYZ
-    dof rx ry rz
-    limits (-180 180)
-           (-180 180)
-           (-180 180)
-  end
-  begin
-     id 2
-     name larm
-     direction 1 0 0
-     length 5
-     axis 0 0 90 XYZ
-    dof rx
-    limits (-180 180)
-  end
-  begin
-     id 3
-     name rarm
-     direction -1 0 0
-     length 5
-     axis 0 0 -90 XYZ
-    dof rx
-  end
-:hierarchy
-  begin
-    root chest
-    chest larm rarm
-  end
-"""
-
-
-def tiny_amc(frames):
-    """AMC text; frames = list of (root6, chest3, larm1, rarm1)."""
-    out = [":FULLY-SPECIFIED", ":DEGREES"]
-    for i, (root, chest, larm, rarm) in enumerate(frames, start=1):
-        out += [str(i), "root " + " ".join(map(str, root)), "chest " + " ".join(map(str, chest)),
-                f"larm {larm}", f"rarm {rarm}"]
-    return "\n".join(out) + "\n"
+from helpers.data import shared_file
+from helpers.mocap import tiny_amc, TINY_ASF
 
 
 @pytest.fixture

@@ -9,7 +9,8 @@ import pytest
 
 from motionlang.datasets.bandai import bandai_folders, load_bandai, split_of
 from motionlang.errors import DatasetError
-from tests.conftest import shared_file
+
+from helpers.data import shared_file
 
 BVH = """HIERARCHY
 ROOT Hips

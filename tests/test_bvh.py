@@ -5,55 +5,9 @@ import pytest
 
 from motionlang.errors import MotionFormatError
 from motionlang.formats.bvh import guess_unit, read_bvh, write_bvh
-from tests.conftest import shared_file
 
-# non-ZXY orders, an interleaved root, a 2-channel joint and End Sites; units: cm
-HAND = """\
-HIERARCHY
-ROOT Hips
-{
-  OFFSET 0 90 0
-  CHANNELS 6 Xposition Yposition Zposition Yrotation Xrotation Zrotation
-  JOINT LeftUpLeg
-  {
-    OFFSET 10 0 0
-    CHANNELS 3 Xrotation Yrotation Zrotation
-    JOINT LeftLeg
-    {
-      OFFSET 0 -45 0
-      CHANNELS 2 Xrotation Zrotation
-      End Site
-      {
-        OFFSET 0 -45 0
-      }
-    }
-  }
-  JOINT RightUpLeg
-  {
-    OFFSET -10 0 0
-    CHANNELS 3 Yrotation Zrotation Xrotation
-    End Site
-    {
-      OFFSET 0 -90 0
-    }
-  }
-  JOINT Chest
-  {
-    OFFSET 0 30 0
-    CHANNELS 3 Zrotation Yrotation Xrotation
-    End Site
-    {
-      OFFSET 0 50 0
-    }
-  }
-}
-MOTION
-Frames: 3
-Frame Time: 0.0333333
-1 2 3 90 0 0 0 0 0 90 0 0 0 0 0 0 0
-1.5 2 3.25 10.5 -20 30 5 6 7 -80 15 1 2 3 4 5 6
-2 2 3.5 -170 89 179 -5 -6 -7 100 -15 -1 -2 -3 -4 -5 -6
-"""
+from helpers.data import shared_file
+from helpers.mocap import HAND
 
 
 def _values(text):

@@ -15,7 +15,8 @@ from motionlang.errors import MotionFormatError
 from motionlang.formats import motion_info
 from motionlang.formats.bvh import read_bvh, write_bvh
 from motionlang.kinematics.rotations import AXES, chain, matrix_to_chain
-from tests.conftest import bandai_takes, shared_file
+
+from helpers.data import bandai_takes, shared_file
 
 ROT = ["Zrotation", "Xrotation", "Yrotation"]
 POS = ["Xposition", "Yposition", "Zposition"]

@@ -35,9 +35,9 @@ def one_line_error(capsys, *fragments: str) -> str:
     (["train", "m2l", "--data", "d", "--enc-hidden", "0"], "--enc-hidden"),
     (["train", "m2l", "--data", "d", "--dropout", "2"], "--dropout"),
     (["train", "l2m", "--data", "d", "--components", "0"], "--components"),
-    (["train", "twostream", "--data", "d", "--out", "m.pt", "--h", "0"], "--h"),
-    (["train", "crbm", "--data", "d", "c.npz", "--order", "1000000"], "--order"),
-    (["train", "crbm", "--data", "d", "c.npz", "--lr", "nan"], "--lr"),
+    (["train", "twostream", "--data", "d", "--out", "run", "--h", "0"], "--h"),
+    (["train", "crbm", "--data", "d", "--out", "run", "--order", "1000000"], "--order"),
+    (["train", "crbm", "--data", "d", "--out", "run", "--lr", "nan"], "--lr"),
     (["data", "split", "--data", "d", "--out", "s", "--fractions", "nan", "0.1", "0.1"],
      "--fractions"),
 ])
@@ -99,7 +99,7 @@ def test_text_without_words_is_an_error(text):
 
 
 def test_resume_needs_a_readable_checkpoint(tmp_path):
-    from motionlang.training.trainer import check_resume
+    from motionlang.training.run_files import check_resume
     with pytest.raises(MotionlangError, match="no checkpoint"):
         check_resume(tmp_path)
     (tmp_path / "last.pt").write_bytes(b"PK\x03\x04")
@@ -116,7 +116,7 @@ def test_train_resume_without_checkpoint_writes_nothing(tmp_path, capsys):
 
 def test_non_finite_loss_stops_training_keeping_the_last_good_checkpoint(tmp_path):
     import torch
-    from trainer_tiny import TinyReg, collate, make_data
+    from helpers.trainer_tiny import TinyReg, collate, make_data
 
     from motionlang.training.trainer import TrainConfig, Trainer
 
@@ -139,7 +139,7 @@ def test_non_finite_loss_stops_training_keeping_the_last_good_checkpoint(tmp_pat
 
 
 def test_configs_check_their_numbers():
-    from motionlang.models.crbm.model import CRBMConfig
+    from motionlang.models.crbm.config import CRBMConfig
     from motionlang.models.seq2seq.config import L2MConfig, M2LConfig
     from motionlang.models.twostream.config import TwoStreamConfig
     for make, match in ((lambda: M2LConfig(4, 9, dropout=2.0), "M2LConfig.dropout"),
@@ -164,7 +164,8 @@ def test_relative_bleu_is_undefined_for_a_vanishing_reference():
 def test_diverging_crbm_stops_with_its_epoch_named():
     import numpy as np
 
-    from motionlang.models.crbm.model import CRBM, CRBMConfig
+    from motionlang.models.crbm.config import CRBMConfig
+    from motionlang.models.crbm.model import CRBM
     rng = np.random.default_rng(0)
     seqs = [rng.standard_normal((30, 3)) for _ in range(2)]
     model = CRBM(CRBMConfig(n_hidden=4, order=1, epochs=5, batch_size=10, lr=1e6,

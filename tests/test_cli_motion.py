@@ -7,7 +7,8 @@ import pytest
 
 from motionlang.cli import demo as demo_mod
 from motionlang.cli.main import main
-from tests.conftest import shared_file
+
+from helpers.data import shared_file
 
 
 def run(capsys, *argv):

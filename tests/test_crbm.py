@@ -6,7 +6,9 @@ import pytest
 
 from motionlang.errors import MotionFormatError, MotionlangError
 from motionlang.models.crbm.ar import ARConfig, ARModel
-from motionlang.models.crbm.model import CRBM, CRBMConfig, PARAMS, chunk_index, gather_past
+from motionlang.models.crbm.config import PARAMS, CRBMConfig
+from motionlang.models.crbm.model import CRBM
+from motionlang.models.crbm.sequences import chunk_index, gather_past
 
 
 def _random_model(visible: str, seed: int = 0) -> CRBM:
@@ -239,7 +241,7 @@ def test_cd_k_and_negative_start_options():
 
 
 def test_history_noise_perturbs_only_the_past_it_trains_on(monkeypatch):
-    from motionlang.models.crbm.model import gather_past
+    from motionlang.models.crbm.sequences import gather_past
     seqs = _sines()
     seen = []
     real = CRBM.cd_gradients

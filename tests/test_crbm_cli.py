@@ -6,13 +6,15 @@ import json
 import numpy as np
 import pytest
 
-from conftest import shared_file
 from motionlang.cli.main import main
 from motionlang.evaluation.crbm.fill import load_cmu35
 from motionlang.evaluation.crbm.generation import StyleLabeller, generation_report
 from motionlang.evaluation.crbm.reproduce import frames_to_motion, model_frames, model_frames_to_channels
-from motionlang.models.crbm.model import CRBM, CRBMConfig
+from motionlang.models.crbm.config import CRBMConfig
+from motionlang.models.crbm.model import CRBM
 from motionlang.models.crbm.stack import CRBMStack
+
+from helpers.data import shared_file
 
 
 @pytest.fixture(scope="module")
@@ -22,11 +24,12 @@ def data_dir():
 
 @pytest.fixture(scope="module")
 def model_path(data_dir, tmp_path_factory):
-    path = tmp_path_factory.mktemp("crbm") / "m.npz"
-    assert main(["train", "crbm", "--data", str(data_dir), str(path), "--epochs", "3",
-                 "--hidden", "12", "--quiet", "--level2", str(path.with_name("two.npz")),
+    run = tmp_path_factory.mktemp("crbm") / "run"
+    assert main(["train", "crbm", "--data", str(data_dir), "--out", str(run), "--epochs", "3",
+                 "--hidden", "12", "--quiet", "--level2",
                  "--level2-hidden", "5", "--level2-order", "2"]) == 0
-    return path
+    assert json.loads((run / "commands.jsonl").read_text())["hidden"] == 12
+    return run / "model.npz"
 
 
 def test_train_writes_a_reloadable_checkpoint(model_path):
@@ -36,7 +39,7 @@ def test_train_writes_a_reloadable_checkpoint(model_path):
     # second level (hidden probabilities, not normalised units) trains without it
     from motionlang.evaluation.crbm.reproduce import SELECTED
     assert m.config.history_noise == SELECTED["history_noise"] > 0
-    stack = CRBMStack.load(model_path.with_name("two.npz"))
+    stack = CRBMStack.load(model_path.with_name("stack.npz"))
     assert stack.level2.config.history_noise == 0.0
 
 
@@ -47,14 +50,15 @@ def test_generate_and_fill_outputs(model_path, data_dir, tmp_path, capsys):
     report = json.loads(capsys.readouterr().out)
     assert np.load(out).shape == (23, 59)
     assert report["fraction_walk"] + report["fraction_jog"] == pytest.approx(1.0)
-    two = model_path.with_name("two.npz")
+    two = model_path.with_name("stack.npz")
     assert main(["crbm", "generate", str(two), str(out), "--data", str(data_dir), "--start", "jog",
                  "--frames", "10", "--gibbs", "2", "--json"]) == 0
     json.loads(capsys.readouterr().out)
     assert np.load(out).shape == (15, 59)   # 3 + 2 real frames start a two-level model
     assert report["fraction_walk"] + report["fraction_jog"] == pytest.approx(1.0)
     png = tmp_path / "fill.png"
-    assert main(["crbm", "fill", str(model_path), str(png), "--data", str(data_dir),
+    # a run folder stands for its model.npz
+    assert main(["crbm", "fill", str(model_path.parent), str(png), "--data", str(data_dir),
                  "--part", "upper-body", "--repeats", "2", "--gibbs", "2", "--json"]) == 0
     errs = json.loads(capsys.readouterr().out)
     assert png.stat().st_size > 1000
@@ -77,7 +81,8 @@ def test_errors_are_one_line(data_dir, tmp_path, capsys):
     assert main(["crbm", "generate", str(tmp_path / "none.npz"), str(tmp_path / "o.npy"),
                  "--data", str(data_dir)]) == 2
     assert "no such model file" in capsys.readouterr().err
-    assert main(["train", "crbm", "--data", str(tmp_path), str(tmp_path / "m.npz"), "--quiet"]) == 2
+    assert main(["train", "crbm", "--data", str(tmp_path), "--out", str(tmp_path / "run"),
+                 "--quiet"]) == 2
 
 
 def test_model_frames_invert_to_channels_and_a_motion(data_dir):

@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 
 from motionlang.evaluation.crbm.generation import FPS, METRES_PER_UNIT, forward_speed
-from motionlang.models.crbm.model import CRBM, CRBMConfig
+from motionlang.models.crbm.config import CRBMConfig
+from motionlang.models.crbm.model import CRBM
 
 
 @pytest.mark.parametrize("ry_deg", [0.0, 30.0, -120.0])
@@ -48,7 +49,7 @@ def test_on_epoch_sees_every_snapshot_of_one_run():
 
 
 def test_validation_split_holds_out_training_trials_only():
-    from conftest import shared_file
+    from helpers.data import shared_file
     from motionlang.evaluation.crbm.fill import load_cmu35
     from motionlang.evaluation.crbm.select import VALIDATION_TRIALS, validation_split
     data = load_cmu35(shared_file("cmu35/cmu35WalkJog.mat").parent)

@@ -6,9 +6,10 @@ import shutil
 
 import pytest
 
-from conftest import shared_file
 from motionlang.datasets.custom import load_custom, read_captions
 from motionlang.errors import DatasetError
+
+from helpers.data import shared_file
 
 BVH = """HIERARCHY
 ROOT Hips

@@ -6,8 +6,9 @@ from motionlang.features import AnglesFeatures, FeatureSet, features_from_dict, 
 from motionlang.features.root import root_trajectory
 from motionlang.formats.mmm import read_mmm
 from motionlang.formats.mmm_model import MMM_DOF_ORDER
-from tests.conftest import shared_file
-from tests.test_features_root import synthetic_mmm, turn
+
+from helpers.data import shared_file
+from helpers.mocap import synthetic_mmm, turn
 
 
 @pytest.fixture(scope="module")

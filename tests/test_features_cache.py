@@ -10,7 +10,8 @@ from motionlang.datasets.kitml import KitMLRecord
 from motionlang.errors import MotionlangError
 from motionlang.datasets.feature_cache import dataset_features, record_sources
 from motionlang.formats.bvh import write_bvh
-from tests.conftest import shared_file
+
+from helpers.data import shared_file
 
 
 class Counting:

@@ -1,41 +1,11 @@
-"""features.root (heading-frame root trajectory) + helpers shared by the feature tests."""
+"""features.root (heading-frame root trajectory)."""
 import numpy as np
 import pytest
 
 from motionlang.features import root as rootlib
-from motionlang.formats.mmm_model import mmm_skeleton
 from motionlang.kinematics import Motion
-from motionlang.kinematics.rotations import chain, matrix_to_chain
-from tests.conftest import tiny_skeleton
 
-
-def synthetic_mmm(T=201, fps=100.0, seed=0, height=1.75) -> Motion:
-    """A smooth MMM motion: the root walks a curve (Z-up source frame), joints swing."""
-    sk = mmm_skeleton(height)
-    rng = np.random.default_rng(seed)
-    t = np.arange(T) / fps
-    yaw = 0.3 + 0.4 * t                                       # turning left slowly
-    step = 1.2 / fps * np.stack([np.cos(yaw), np.sin(yaw)], 1)  # source x/y ground plane
-    xy = np.cumsum(step, 0) + [0.4, -0.7]
-    trans = np.column_stack([xy, 0.95 + 0.02 * np.sin(2 * np.pi * 2 * t)])
-    rot = np.column_stack([yaw, 0.05 * np.sin(2 * np.pi * t), 0.03 * np.cos(3 * t)])
-    phase = rng.uniform(0, 2 * np.pi, sk.ndof)
-    amp = rng.uniform(0.05, 0.4, sk.ndof)
-    angles = amp * np.sin(2 * np.pi * 1.5 * t[:, None] + phase)
-    return Motion(sk, fps, trans, rot, angles, name="synthetic", source_format="mmm",
-                  meta={"height": height})
-
-
-def turn(motion: Motion, theta: float, dx: float, dz: float) -> Motion:
-    """The same motion rotated by ``theta`` about the vertical and shifted (dx, 0, dz) on the
-    ground, as a rigid motion of the whole body (canonical frame)."""
-    sk = motion.skeleton
-    W, Ry = sk.world, rootlib.rot_y(theta)
-    o = sk.joints[0].offset
-    p = (motion.root_translation + o) @ W.T @ Ry.T + [dx, 0.0, dz]
-    R = W.T @ Ry @ W @ chain(sk.root_axes, motion.root_rotation)
-    return motion.replace(root_translation=p @ W - o,
-                          root_rotation=matrix_to_chain(R, sk.root_axes))
+from helpers.mocap import synthetic_mmm, tiny_skeleton, turn
 
 
 def test_turn_is_rigid():

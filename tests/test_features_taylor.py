@@ -6,8 +6,10 @@ from motionlang.features import TaylorFeatures, features_from_dict
 from motionlang.features.root import rot_y
 from motionlang.formats.asf_amc import read_asf_amc
 from motionlang.kinematics import Motion
-from tests.conftest import shared_file, tiny_skeleton
-from tests.test_features_root import synthetic_mmm, turn
+
+from helpers.data import shared_file
+from helpers.mocap import synthetic_mmm, turn
+from helpers.mocap import tiny_skeleton
 
 
 @pytest.fixture(scope="module")

@@ -5,9 +5,10 @@ import pytest
 
 from motionlang.errors import MotionFormatError
 from motionlang.formats import find_asf, motion_info, read_motion, write_motion
-from tests.conftest import shared_file
-from tests.test_asf_amc import TINY_ASF, tiny_amc
-from tests.test_bvh import HAND
+
+from helpers.data import shared_file
+from helpers.mocap import HAND
+from helpers.mocap import tiny_amc, TINY_ASF
 
 FRAME = ([0, 0, 0, 0, 0, 0], [1, 2, 3], 4, 5)
 

@@ -10,7 +10,9 @@ from motionlang.formats.asf_amc import read_asf_amc
 from motionlang.formats.mmm import read_mmm
 from motionlang.formats.mmm_model import mmm_skeleton
 from motionlang.kinematics import Joint, Motion, Skeleton
-from tests.conftest import shared_file, tiny_skeleton
+
+from helpers.data import shared_file
+from helpers.mocap import tiny_skeleton
 
 # bones whose segmentation differs between the MMM and CMU models (see test below)
 TRUNK = {("BP", "root"), ("BT", "BP"), ("BLN", "BT"), ("BUN", "BLN")}

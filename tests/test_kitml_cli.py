@@ -3,10 +3,11 @@ from __future__ import annotations
 
 import json
 
-from conftest import shared_file
 from motionlang.cli.main import main
-from test_download import free_port, serve
-from test_kitml import build_release
+
+from helpers.data import shared_file
+from helpers.http_server import free_port, serve
+from helpers.kitml import build_release
 
 
 def test_data_cli(tmp_path, capsys):

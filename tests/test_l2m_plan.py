@@ -9,7 +9,9 @@ import torch
 from motionlang.errors import MotionlangError
 from motionlang.models.seq2seq.l2m import LanguageToMotion
 from motionlang.models.seq2seq.plan import motion_plan, part_index, plan_at
-from tests.test_seq2seq_models import F_DIM, make_batch, tiny
+
+from helpers.scripts import SCRIPTS, load_script
+from helpers.seq2seq import F_DIM, make_batch, tiny
 
 
 def test_part_index_by_fraction_done():
@@ -164,8 +166,6 @@ def test_fit_planner_fits_the_planner_alone_and_keeps_the_best_epoch():
 
 
 def test_fit_planner_script_on_a_tiny_trained_model(tmp_path, capsys):
-    import importlib.util
-    from pathlib import Path
 
     from motionlang.cli.main import main
     from motionlang.datasets.synth.corpus import write_corpus
@@ -181,10 +181,7 @@ def test_fit_planner_script_on_a_tiny_trained_model(tmp_path, capsys):
     names = list(trained.features.names)[:trained.config.n_features]
     kept = [n for n, w in zip(names, trained.config.plan_mean_mask) if w]
     assert sorted(kept) == ["root_dyaw", "root_vx", "root_vz"]
-    path = Path(__file__).resolve().parents[1] / "scripts" / "l2m_fit_planner.py"
-    spec = importlib.util.spec_from_file_location("l2m_fit_planner", path)
-    script = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(script)
+    script = load_script(SCRIPTS / "l2m_fit_planner.py")
     out = tmp_path / "refit.pt"
     capsys.readouterr()
     assert script.main([str(run / "model.pt"), "--data", str(corpus), "--out", str(out),

@@ -5,7 +5,8 @@ from scipy.io import savemat
 
 from motionlang.errors import MotionFormatError
 from motionlang.formats.mit import MIT_JOINT_NAMES, read_mit
-from tests.conftest import shared_file
+
+from helpers.data import shared_file
 
 
 @pytest.fixture(scope="module")

@@ -9,8 +9,8 @@ from motionlang.errors import MotionFormatError, SkeletonError
 from motionlang.formats.mmm import MMM_DOF_ORDER, mmm_skeleton, read_mmm, write_mmm
 from motionlang.formats.mmm_model import mmm_height, mmm_kinematics
 from motionlang.kinematics import Motion
-from tests.conftest import shared_file
 
+from helpers.data import shared_file
 
 # ------------------------------------------------------------------ model facts
 def _simox_nodes(path):

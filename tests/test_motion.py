@@ -3,7 +3,8 @@ import pytest
 
 from motionlang.errors import MotionFormatError, SkeletonError
 from motionlang.kinematics import Motion, concatenate
-from tests.conftest import tiny_skeleton
+
+from helpers.mocap import tiny_skeleton
 
 
 def test_fk_by_hand():

@@ -15,8 +15,9 @@ import motionlang as ml
 from motionlang.cli.main import main
 from motionlang.features.joint_map import KIT21_NAMES, positions21
 from motionlang.formats import read_motion
-from tests.conftest import shared_file
-from tests.rig_fixtures import RIGS, write
+
+from helpers.data import shared_file
+from helpers.rigs import RIGS, write
 
 torch.set_num_threads(1)
 RW, LW, ROOT = (KIT21_NAMES.index(n) for n in ("RW", "LW", "root"))
@@ -167,8 +168,8 @@ def test_python_api_one_call_each(tmp_path):
     assert on_rig.skeleton.names == m.skeleton.names
     b = ml.body21(m, stature=1.75)
     assert b.shape == (m.n_frames, 21, 3) and abs(b[..., 1].min()) < 0.05
-    assert ml.render_motion(m, tmp_path / "s.png").is_file()
-    assert ml.render_motion(m, tmp_path / "t.png").is_file()   # (not shadowed by the package)
+    assert ml.render(m, tmp_path / "s.png").is_file()
+    assert ml.render(m, tmp_path / "t.png").is_file()   # (not shadowed by the package)
 
 
 def test_train_on_a_custom_folder_of_an_unknown_rig_with_its_map(tmp_path, capsys):

@@ -9,24 +9,14 @@ import pytest
 
 from motionlang.errors import MotionlangError
 from motionlang.kinematics import Motion
-from motionlang.render import (build_scene, contact_frames, footsteps, plot_trajectory,
+from motionlang.rendering import (build_scene, contact_frames, footsteps, plot_trajectory,
                                render_animation, render_strip)
-from motionlang.render import animation as animation_mod
-from motionlang.render.scene import (LEFT, RIGHT, TO_MPL, camera_basis, joint_sides,
+from motionlang.rendering import animation as animation_mod
+from motionlang.rendering.scene import (LEFT, RIGHT, TO_MPL, camera_basis, joint_sides,
                                      sample_times, scene_from_positions, view_azimuth)
-from tests.conftest import ROOT, shared_file, tiny_skeleton
 
-
-def walker(T=45, fps=30.0, speed=1.2) -> Motion:
-    """Tiny skeleton swinging its legs while its root moves along +Z (its facing side)."""
-    sk = tiny_skeleton()
-    t = np.arange(T) / fps
-    ph = 2 * np.pi * t
-    ang = np.zeros((T, sk.ndof))
-    ang[:, sk.dof_slice("LeftUpLeg").start + 1] = -0.4 * np.sin(ph)
-    ang[:, sk.dof_slice("RightUpLeg").start + 1] = 0.4 * np.sin(ph)
-    root = np.stack([np.zeros(T), 2.0 + 0.02 * np.cos(2 * ph), speed * t], axis=1)
-    return Motion(sk, fps, root, np.zeros((T, 3)), ang, name="walker")
+from helpers.data import ROOT, shared_file
+from helpers.mocap import walker
 
 
 def expected_frames(motion: Motion, out_fps: float = 25.0) -> int:
@@ -142,11 +132,12 @@ def test_trajectory_plot(tmp_path):
 def test_no_pyplot_state(tmp_path):
     # pyplot (and so a backend switch) is never touched; matplotlib.get_backend() itself
     # imports pyplot, so the check looks at sys.modules only
-    code = ("import sys, numpy as np; import motionlang.render as r; from tests.test_render "
+    code = ("import sys, numpy as np; import motionlang.rendering as r; from helpers.mocap "
             "import walker; r.render_strip(walker(), sys.argv[1]); "
             "print('matplotlib.pyplot' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code, str(tmp_path / "s.png")],
-                         capture_output=True, text=True, check=True, cwd=ROOT).stdout.split()
+                         capture_output=True, text=True, check=True,
+                         cwd=ROOT / "tests").stdout.split()
     assert out == ["False"]
 
 
@@ -171,7 +162,7 @@ def test_real_kit_walker_scene():
 
 
 def test_animation_frames_lazy_and_counted():
-    from motionlang.render import animation_frames
+    from motionlang.rendering import animation_frames
 
     m = walker(T=30)
     fps, n, frames = animation_frames([m, m], fps=10, dpi=20, layout="overlay")
@@ -184,7 +175,7 @@ def test_animation_frames_lazy_and_counted():
 
 def test_kit21_scene_colours_sides_and_picks_one_foot_per_side(tmp_path):
     from motionlang.features.joint_map import KIT21_NAMES
-    from motionlang.render.scene import kit21_scene
+    from motionlang.rendering.scene import kit21_scene
     T = 5
     pos = np.zeros((T, 21, 3))
     pos[:, :, 1] = 1.0                              # everything 1 m up ...

@@ -13,7 +13,8 @@ from motionlang.formats.bvh import read_bvh, write_bvh
 from motionlang.kinematics import Joint, Motion, Skeleton
 from motionlang.kinematics.retarget import retarget
 from motionlang.kinematics.rotations import chain, matrix_to_chain
-from tests.conftest import bandai_takes, shared_file
+
+from helpers.data import bandai_takes, shared_file
 
 ZXY = np.eye(3)[[2, 0, 1]]
 K = {n: i for i, n in enumerate(KIT21_NAMES)}
@@ -233,8 +234,6 @@ def test_hinge_joints_and_bad_input_are_refused(rig):
         retarget(p, 30.0, rig, weights=2 * W)
     with pytest.raises(MotionlangError, match=r"\(T, K, 3\)"):
         retarget(p[0], 30.0, rig, weights=W)
-
-
 
 
 def test_bandai_round_trip(tmp_path):

@@ -3,8 +3,9 @@ import json
 
 from motionlang.cli.main import main
 from motionlang.features.joint_map import KIT21_NAMES
-from tests import rig_fixtures as rf
-from tests.conftest import shared_file
+
+from helpers import rigs as rf
+from helpers.data import shared_file
 
 ODD = rf.Rig("odd", 0.01, """
 pelvis_bone 0 0 0

@@ -1,4 +1,4 @@
-"""One body for every rig: hand-written BVH fixtures (``tests/rig_fixtures.py``) in each
+"""One body for every rig: hand-written BVH fixtures (``tests/helpers/rigs.py``) in each
 built-in map's naming, unit and axes choose that map, and their 21-joint body, normalised,
 has KIT proportions, stands on the floor and faces +Z; user JSON maps and templates; the
 error when no map fits; real KIT and CMU motions; MMM and CMU choices unchanged."""
@@ -21,8 +21,9 @@ from motionlang.formats.asf_amc import read_asf_amc
 from motionlang.formats.mmm import read_mmm
 from motionlang.formats.mmm_model import mmm_skeleton
 from motionlang.kinematics import Joint, Motion, Skeleton
-from tests import rig_fixtures as rf
-from tests.conftest import shared_file
+
+from helpers import rigs as rf
+from helpers.data import shared_file
 
 I = {n: i for i, n in enumerate(KIT21_NAMES)}
 BONES = [f"{KIT21_NAMES[i]}-{KIT21_NAMES[KIT21_PARENTS[i]]}" for i in range(1, 21)]
@@ -265,7 +266,7 @@ def test_map_names_the_rig_lacks_and_explicit_built_in_maps(rigify, tmp_path):
 
 
 def test_real_mit_and_bandai_motions_map(tmp_path):
-    from tests.conftest import bandai_takes
+    from helpers.data import bandai_takes
     mit = read_motion(shared_file("mit/motion.mat"))
     assert kit21_weights(mit.skeleton)[0] == "mit"
     # a real capture: the floor is the 5th percentile of the lowest foot joint, and MIT's

@@ -4,7 +4,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import torch
-from test_seq2seq_models import F_DIM, V, tiny
 
 from motionlang.decoding.motion_beam import mean_decode
 from motionlang.decoding.seq2seq import describe_features, encode_sentence, generate_features
@@ -12,25 +11,9 @@ from motionlang.errors import MotionlangError
 from motionlang.training.collate import collate_pairs
 from motionlang.training.trainer import TrainConfig, Trainer
 
+from helpers.seq2seq import F_DIM, items, tiny, WORDS
+
 torch.set_num_threads(1)
-WORDS = [f"w{i}" for i in range(V)]
-
-
-def items(seed=0):
-    """Two kinds of motion (rising / falling first feature), each with its sentence."""
-    rng = np.random.default_rng(seed)
-    out = []
-    for i in range(8):
-        up = i % 2 == 0
-        T = 6 + i % 3
-        ramp = np.linspace(0, 1, T) if up else np.linspace(1, 0, T)
-        motion = 3.0 + 2.0 * rng.normal(size=(T, F_DIM)) * 0.05
-        motion[:, 0] += 2.0 * ramp
-        tokens = [1, 4, 5, 6, 7, 2] if up else [1, 8, 7, 6, 5, 4, 2]
-        out.append({"motion": motion.astype(np.float32), "tokens": tokens})
-    return out
-
-
 def test_collate_pads_and_counts():
     batch = collate_pairs(items()[:3])
     assert batch["motion"].shape == (3, 8, F_DIM) and batch["motion"].dtype == torch.float32

@@ -6,7 +6,6 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -16,6 +15,8 @@ from motionlang.cli.main import main
 from motionlang.errors import MotionlangError
 from motionlang.models.seq2seq.l2m import LanguageToMotion
 from motionlang.models.seq2seq.m2l import MotionToLanguage
+
+from helpers.scripts import PROBES
 
 torch.set_num_threads(1)
 TINY = ["--epochs", "2", "--batch-size", "8", "--offsets", "2", "--enc-hidden", "8",
@@ -83,14 +84,14 @@ def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
         ["root_vx", "root_vz", "root_dyaw"] and set(l2m.config.input_mask) == {0.0, 1.0}
     assert l2m.config.energy_weight == 2.5 and l2m.config.rollout_input == "mean"
     assert "energy" in json.loads((l2m_dir / "history.json").read_text())[-1]["train"]
-    # scripts/l2m_word_use.py on a word of the held-out sentences, and on an absent one
+    # experiments/probes/l2m_word_use.py on a word of the held-out sentences, and on an absent one
     import re
     one = build_pairs(corpus, offsets=1)           # the script's pairs: one offset
     held_out = [one.vocab.decode(it["tokens"]) for split in ("val", "test")
                 for it in one.items.get(split, [])]
     word = max(held_out[0].split(), key=len)
     n = sum(bool(re.search(rf"\b{re.escape(word)}\b", s)) for s in held_out)
-    script = Path(__file__).resolve().parents[1] / "scripts" / "l2m_word_use.py"
+    script = PROBES / "l2m_word_use.py"
     run = [sys.executable, str(script), "--data", str(corpus), "--model",
            str(l2m_dir / "model.pt"), "--samples", "1", "--feature", "root_vx"]
     res = subprocess.run(run + ["--word", word], capture_output=True, text=True)
@@ -100,8 +101,8 @@ def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
     assert len([l for l in lines if "NLL/frame teacher-forced" in l]) == 2
     res = subprocess.run(run + ["--word", "zzzz"], capture_output=True, text=True)
     assert res.returncode != 0 and "no validation or test sentence holds 'zzzz'" in res.stderr
-    # scripts/l2m_feature_fit.py: the data's lag-1 correlation as computed here
-    script = Path(__file__).resolve().parents[1] / "scripts" / "l2m_feature_fit.py"
+    # experiments/probes/l2m_feature_fit.py: the data's lag-1 correlation as computed here
+    script = PROBES / "l2m_feature_fit.py"
     res = subprocess.run([sys.executable, str(script), "--data", str(corpus), "--model",
                           str(l2m_dir / "model.pt"), "--split", "train", "--features",
                           "root_vz"], capture_output=True, text=True)
@@ -144,8 +145,9 @@ def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
     printed = capsys.readouterr().out
     assert "log L" in printed and str(out) in printed
     report = tmp_path / "report.json"
-    assert main(["evaluate", "--m2l", str(m2l_dir / "model.pt"), "--l2m",
-                 str(l2m_dir / "model.pt"), "--data", str(corpus), "--split", "train", "-w", "2",
+    # run folders stand for their model.pt
+    assert main(["evaluate", "--m2l", str(m2l_dir), "--l2m",
+                 str(l2m_dir), "--data", str(corpus), "--split", "train", "-w", "2",
                  "-o", str(report), "--tsne", str(tmp_path / "tsne.png")]) == 0
     rep = json.loads(report.read_text())
     # a procedural corpus carries ground truth: parameter accuracy of both directions
@@ -160,7 +162,7 @@ def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
     assert len(rep["m2l_actions_by_rank"]) == 2
     md = report.with_suffix(".md").read_text()
     assert "| nearest training sentence, round trip |" in md and "naming exactly" in md
-    # the round trip's actions named by place, also from the saved report by the script
+    # the round trip's actions named by place
     from motionlang.datasets.synth import ground_truth
     from motionlang.evaluation.seq2seq import actions_named
     descr = rep["l2m_round_trip"]["descriptions"]
@@ -168,12 +170,6 @@ def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
               for i, _, _ in descr}
     assert rep["l2m_parameters"]["named"] == actions_named(descr, truths)
     assert "L2M round trip, true actions named: first" in md
-    script = Path(__file__).resolve().parents[1] / "scripts" / "round_trip_actions.py"
-    res = subprocess.run([sys.executable, str(script), str(report), "--data", str(corpus)],
-                         capture_output=True, text=True)
-    assert res.returncode == 0, res.stderr
-    assert [l for l in md.splitlines() if "L2M round trip, true actions named" in l][0] \
-        == res.stdout.splitlines()[0]
     assert (tmp_path / "tsne.png").stat().st_size > 1000
     assert len(rep["m2l"]["bleu_by_rank"]) == 2 and rep["m2l"]["n"] >= 1
     assert {"bleu", "rouge_l"} <= set(rep["nearest_neighbour"])
@@ -269,7 +265,7 @@ def test_custom_bvh_folder_with_position_features(corpus, tmp_path, capsys):
     assert main(["train", "m2l", "--data", str(folder), "--out", str(out), "--features",
                  "positions", *TINY]) == 0
     capsys.readouterr()
-    assert main(["describe", str(folder / "00001.bvh"), "--model", str(out / "model.pt"),
+    assert main(["describe", str(folder / "00001.bvh"), "--model", str(out),   # the run folder
                  "-w", "2"]) == 0
     lines = capsys.readouterr().out.strip().splitlines()
     assert len(lines) == 2 and lines[0].startswith("1. log P =")

@@ -207,7 +207,7 @@ def test_samples_are_smooth_and_within_joint_limits(index):
 
 
 def test_mirror_augmentation_on_real_kitml_motion():
-    from tests.conftest import shared_file
+    from helpers.data import shared_file
 
     m = read_mmm(shared_file("kitml/00001_mmm.xml"))
     m1, t1, _ = mirror_sample(m, ["A person turns left and walks forwards."])

@@ -123,7 +123,7 @@ def test_mirror_text_agrees_with_tmr_mirrored_kitml_annotations():
     agree except on TMR's own slips ("upright" -> "upleft") and misspellings."""
     import json
 
-    from tests.conftest import shared_file
+    from helpers.data import shared_file
 
     data = json.loads(shared_file("kitml/annotations_tmr.json").read_text())
     pairs = [(a["text"], b["text"]) for k, v in data.items()

@@ -5,8 +5,6 @@ from __future__ import annotations
 
 import json
 import math
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -18,8 +16,7 @@ from motionlang.evaluation.t2m.compare import (GROUND_TRUTH, NEAREST, compare, e
                                                evaluate_model, fit_prototypes,
                                                markdown_table, positions_to_features)
 
-sys.path.insert(0, str(Path(__file__).parent))
-from test_twostream import HashTokens  # noqa: E402
+from helpers.twostream import HashTokens
 
 torch.set_num_threads(1)
 
@@ -239,8 +236,10 @@ def test_compare_writes_table_report_and_figures(data, tmp_path):
     # the two-stream model's own length model: fitted on one sentence, it always says 7
     assert report["length_model"]["two-stream"]["mae_frames"] == pytest.approx(
         np.mean([abs(7 - len(it.target)) for it in items4]))
-    # not the L2M's: it counts frames at 10 Hz
-    assert set(report["length_model"]) == {"refit on the whole training motions", "two-stream"}
+    # and the L2M's: on positions features it counts frames at 12.5 Hz too (an angles
+    # L2M's, at 10 Hz, would be left out)
+    assert set(report["length_model"]) == {"refit on the whole training motions", "two-stream",
+                                           "L2M"}
     for name, r in report["results"].items():
         assert r["n_items"] == 4
         assert math.isclose(r["ape_local"], results[name]["ape_local"])
@@ -249,15 +248,17 @@ def test_compare_writes_table_report_and_figures(data, tmp_path):
 
 
 def test_evaluate_command(corpus, data, tmp_path, monkeypatch, capsys):
-    import motionlang.decoding.t2m as t2m
+    import motionlang.models.registry as registry
     from motionlang.cli.main import main
     from motionlang.models.twostream import TwoStreamConfig, TwoStreamModel
     torch.manual_seed(0)
     TwoStreamModel(TwoStreamConfig(h1=4, h2=8, h=16, disc_hidden=8, text_dim=8),
                    data.features.normalizer).save(tmp_path / "ts.pt")
     _tiny_l2m(data).save(tmp_path / "l2m.pt")
-    real = t2m.load_any_t2m
-    monkeypatch.setattr(t2m, "load_any_t2m", lambda p: real(p, text_encoder=HashTokens()))
+    real = registry.load_model
+    monkeypatch.setattr(registry, "load_model", lambda p, kind=None: real(
+        p, kind, **({"text_encoder": HashTokens()} if registry.checkpoint_kind(p) == "twostream"
+                    else {})))
     rc = main(["evaluate-t2m", "--data", str(corpus), "--model", f"ts={tmp_path / 'ts.pt'}",
                "--model", str(tmp_path / "l2m.pt"), "--split", "train", "--limit", "3",
                "--figures", "0", "-o", str(tmp_path / "eval")])

@@ -5,10 +5,11 @@ import json
 
 import pytest
 
-from conftest import shared_file
 from motionlang.datasets.text import (Vocabulary, normalize, parse_corrections,
                                       spelling_corrections, tokenize)
 from motionlang.errors import DatasetError
+
+from helpers.data import shared_file
 
 
 def test_normalize_basic_rules():

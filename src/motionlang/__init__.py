@@ -1,8 +1,8 @@
 """motionlang: human whole-body motion and natural language.
 
-Layers (data flows downwards only): ``kinematics`` and ``formats`` -> ``datasets`` and
-``features`` -> ``models`` -> ``decoding`` -> ``training`` -> ``evaluation`` ->
-``render`` -> ``api`` -> ``cli``.
+Layers (a module imports from its own layer and those before it; ``tests/test_architecture``
+checks the README's statement of it): utils, errors -> kinematics -> formats -> features ->
+rendering -> datasets -> models -> decoding -> training -> evaluation -> api -> cli.
 """
 from motionlang.errors import DatasetError, MotionFormatError, MotionlangError, SkeletonError
 from motionlang.kinematics import Joint, Motion, Skeleton
@@ -11,8 +11,8 @@ __version__ = "0.1.0"
 
 #: the Python API (:mod:`motionlang.api`), imported on first use so that ``import
 #: motionlang`` stays light (no torch until a model is needed)
-_API = ("read_motion", "write_motion", "load_model", "describe", "generate", "body21",
-        "retarget", "render_motion")
+_API = ("read_motion", "write_motion", "load_model", "describe", "generate", "encode",
+        "fill_in", "body21", "retarget", "render")
 
 
 def __getattr__(name: str):

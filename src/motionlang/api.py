@@ -1,14 +1,24 @@
 """The Python API under the command line: one call per job, the same defaults as the CLI.
 
     >>> import motionlang as ml
-    >>> m = ml.read_motion("walk.bvh")            # any rig a built-in map (or yours) fits
-    >>> ml.describe(m)[0]                         # (sentence, log P), packaged M2L, width 5
-    >>> w = ml.generate("a person waves with the right hand")    # Motion, packaged L2M
-    >>> ml.write_motion(w, "wave.bvh")            # the 21-joint body, for Blender
-    >>> ml.write_motion(ml.generate("a person walks", rig="my_character.bvh"), "walk.bvh")
+    >>> walk = ml.generate("a person walks forward")   # a Motion, packaged L2M (expected frames)
+    >>> walk
+    Motion('generated': 54 frames at 12.5 Hz (4.3 s), 21 joints, from positions)
+    >>> text, log_p = ml.describe(walk)[0]             # packaged M2L, beam width 5
+    >>> "walks" in text
+    True
+    >>> path = ml.write_motion(walk, tmp / "walk.bvh")  # the 21-joint body, for Blender
+    >>> ml.read_motion(path).n_frames
+    54
+    >>> ml.encode("a person walks").shape              # the L2M's summary of a sentence
+    (128,)
 
-(``render_motion`` draws a motion; ``motionlang.render`` is the drawing package.)
-Packaged models are named ``"m2l"`` and ``"l2m"``; anything else is a checkpoint path.
+Any motion file whose rig maps onto the 21-joint body works in place of ``walk``
+(``ml.describe("walk.bvh")``; ``joint_map=`` for rigs no built-in map fits), and
+``ml.generate(text, rig="my_character.bvh")`` returns the motion on your own skeleton.
+(``render`` draws a motion; ``motionlang.rendering`` is the drawing package.)
+Packaged models are named ``"m2l"`` and ``"l2m"`` (``motionlang.models.registry.PACKAGED``,
+each with a model card); anything else is a checkpoint file or a training run folder.
 Generated motions come back as :class:`Motion` objects: on the 21-joint body (joint angles
 fitted to the generated positions) or, with ``rig=``, retargeted onto the user's skeleton.
 """
@@ -23,32 +33,25 @@ from motionlang.errors import MotionlangError
 from motionlang.formats import read_motion, write_motion
 from motionlang.kinematics.motion import Motion
 
-PACKAGED = Path(__file__).resolve().parent / "data" / "models"
-_KINDS = {"m2l": "m2l", "l2m": "t2m"}
 
 
-def model_path(name_or_path: str | Path) -> Path:
-    """A packaged model's file (``"m2l"``, ``"l2m"``) or the given checkpoint path.
-
-    Raises:
-        MotionlangError: no such file.
+def load_model(name_or_path: str | Path, kind: str | tuple[str, ...] | None = None):
+    """A model in eval mode from a packaged name (``"m2l"``, ``"l2m"``), a checkpoint file
+    or a training run folder, whatever its kind (``kind=`` insists on one);
+    ``motionlang.models.registry`` lists the kinds and the packaged models with their cards.
     """
-    path = PACKAGED / f"{name_or_path}.pt" if str(name_or_path) in _KINDS else Path(name_or_path)
-    if not path.is_file():
-        raise MotionlangError(f"{path}: no such model file")
-    return path
+    from motionlang.models.registry import load_model as _load
+    return _load(name_or_path, kind)
 
 
-def load_model(name_or_path: str | Path, kind: str | None = None):
-    """A model in eval mode: the motion-to-language model for ``"m2l"`` (or ``kind="m2l"``),
-    a text-to-motion model (L2M or two-stream, by the checkpoint's kind) otherwise."""
-    path = model_path(name_or_path)
-    kind = kind or _KINDS.get(str(name_or_path), "t2m")
-    if kind == "m2l":
-        from motionlang.models.seq2seq.m2l import MotionToLanguage
-        return MotionToLanguage.load(path)
-    from motionlang.decoding.t2m import load_any_t2m
-    return load_any_t2m(path)
+def _t2m(model):
+    """A text-to-motion model (loaded, a path, a packaged name or None: the packaged L2M)
+    behind the one interface (``decoding.t2m.TextToMotion``)."""
+    from motionlang.decoding.t2m import text_to_motion
+    from motionlang.models.registry import TEXT_TO_MOTION
+    if model is None or isinstance(model, (str, Path)):
+        model = load_model(model or "l2m", kind=TEXT_TO_MOTION)
+    return text_to_motion(model)
 
 
 def read_mapped(path: str | Path, joint_map: dict | str | Path | None = None,
@@ -107,9 +110,10 @@ def first_frame(model, start: Motion | str | Path,
     """(F,) model features of the first pose of ``start`` (a Motion or file), for L2M models
     to begin their motions with."""
     from motionlang.features.frames import motion_frames
-    if getattr(model, "kind", None) != "l2m":
-        raise MotionlangError("a start pose applies to L2M models")
-    return motion_frames(model.features, _motion(start, joint_map), 1)[0][0]
+    t2m = _t2m(model)
+    if not t2m.takes_start_pose:
+        raise MotionlangError(f"a start pose applies to L2M models, not {t2m.model.kind}")
+    return motion_frames(t2m.model.features, _motion(start, joint_map), 1)[0][0]
 
 
 def describe(motion: Motion | str | Path, model: Any = None, width: int = 5, *,
@@ -173,16 +177,19 @@ def generate(text: str, model: Any = None, *, width: int = 5, method: str | None
     joint_map / rig_joint_map: how ``start_from`` / ``rig`` map onto the 21-joint body,
     if no built-in map fits them.
     """
-    from motionlang.decoding.t2m import default_method, generate_any, output_fps
-    if model is None or isinstance(model, (str, Path)):
-        model = load_model(model or "l2m")
+    model = _t2m(model)
+    unknown = model.unknown_words(text)
+    if unknown:   # a warning, not an error: the rest of the sentence still steers
+        import warnings
+        warnings.warn(f"the model does not know {', '.join(repr(w) for w in unknown)}; each "
+                      "is read as an unknown word", UserWarning, stacklevel=2)
     rig_motion = None if rig is None else load_rig(rig, rig_joint_map)
     kw: dict[str, Any] = {}
     if start_from is not None:
         kw["first_frame"] = first_frame(model, start_from, joint_map)
-    hyps = generate_any(model, text, width=width, method=method or default_method(model),
-                        seed=seed, max_frames=max_frames, min_frames=5, **kw)
-    return body_motion(hyps[0][0], output_fps(model), rig_motion)[0]
+    hyps = model.hypotheses(text, width=width, method=method or model.default_method(),
+                            seed=seed, max_frames=max_frames, min_frames=5, **kw)
+    return body_motion(hyps[0][0], model.fps, rig_motion)[0]
 
 
 def body21(motion: Motion | str | Path, *, joint_map: dict | str | Path | None = None,
@@ -203,16 +210,97 @@ def retarget(motion: Motion | str | Path, rig: Motion | str | Path, *,
                        name=src.name)[0]
 
 
-def render_motion(motion: Motion | str | Path, path: str | Path, *, title: str | None = None,
-                  joint_map: dict | str | Path | None = None) -> Path:
-    """Draw a motion: ``.gif`` / ``.mp4`` animation or ``.png`` pose strip."""
-    from motionlang.render import render_animation, render_strip
+def render(motion: Motion | str | Path, path: str | Path, *, title: str | None = None,
+           joint_map: dict | str | Path | None = None) -> Path:
+    """Draw a motion (a Motion or a file): ``.gif`` / ``.mp4`` animation or ``.png`` pose
+    strip, as ``motionlang render``. Returns the path written."""
+    from motionlang.rendering import render_animation, render_strip
     m = _motion(motion, joint_map)
     if Path(path).suffix.lower() == ".png":
         return render_strip(m, path, title=title or m.name)
     return render_animation(m, path, title=title or m.name)
 
 
+def encode(x: Motion | str | Path, model: Any = None, *,
+           joint_map: dict | str | Path | None = None) -> np.ndarray:
+    """A sentence or a motion -> one vector (D,) float32, the model's summary of it.
+
+    A ``str`` that names no file is a sentence: the L2M's text encoder (packaged L2M by
+    default), or a two-stream model's sentence embedding; a Motion or motion file: the M2L's
+    motion encoder (packaged M2L by default), or a two-stream model's pose embedding. A
+    two-stream model puts both in one space (its embeddings are trained to meet); the
+    seq2seq encoders do not, so compare sentences with sentences, motions with motions.
+    """
+    is_text = isinstance(x, str) and not Path(x).is_file()
+    side = "text" if is_text else "motion"
+    kinds = tuple(k for s, k in _ENCODERS if s == side)
+    if model is None or isinstance(model, (str, Path)):
+        model = load_model(model or ("l2m" if is_text else "m2l"), kind=kinds)
+    encoder = _ENCODERS.get((side, getattr(model, "kind", None)))
+    if encoder is None:
+        raise MotionlangError(f"a {getattr(model, 'kind', type(model).__name__)} model does "
+                              f"not encode {side}s (models that do: {', '.join(kinds)})")
+    return encoder(model, x if is_text else _motion(x, joint_map))
+
+
+def _twostream_text(model, sentence: str) -> np.ndarray:
+    import torch
+    with torch.no_grad():
+        return model.joint(model.encode_text([sentence]))[0].numpy()
+
+
+def _twostream_motion(model, motion: Motion) -> np.ndarray:
+    import torch
+
+    from motionlang.decoding.t2m import FPS, text_to_motion
+    from motionlang.features.base import downsample
+    from motionlang.features.body21 import body21 as _body21
+    p = _body21(downsample(motion, FPS) if motion.fps > FPS else motion)
+    feats = torch.as_tensor(text_to_motion(model)._features(p), dtype=torch.float32)[None]
+    with torch.no_grad():
+        return model.joint(model.encode_motion(feats))[0].numpy()
+
+
+def _seq2seq_text(model, sentence: str) -> np.ndarray:
+    from motionlang.decoding.seq2seq import embed_sentence
+    return embed_sentence(model, sentence)
+
+
+def _seq2seq_motion(model, motion: Motion) -> np.ndarray:
+    from motionlang.decoding.seq2seq import embed_motion
+    return embed_motion(model, motion)
+
+
+#: (what is encoded, model kind) -> how; the first kind of each side is the default's
+_ENCODERS = {("text", "l2m"): _seq2seq_text, ("text", "twostream"): _twostream_text,
+             ("motion", "m2l"): _seq2seq_motion, ("motion", "twostream"): _twostream_motion}
+
+
+def fill_in(frames: np.ndarray, known: np.ndarray, model: Any, *, n_gibbs: int = 30,
+            seed: int = 0) -> np.ndarray:
+    """Fill in lost values of a motion with a CRBM (Taylor et al. 2006, sec. 5).
+
+    frames: (T, D) in the model's own frame space (the channels it was trained on, e.g.
+    ``evaluation.crbm.reproduce.model_frames`` of CMU subject 35's AMC channels); entries
+    where ``known`` is False are ignored and filled. known: (T, D) bool; the first
+    ``order`` frames must be complete. model: a CRBM, its ``.npz`` or a run folder.
+    Returns (T, D): the known values kept, the rest filled frame by frame by Gibbs sampling
+    given the past and the known values of each frame.
+    """
+    if model is None or isinstance(model, (str, Path)):
+        if model is None:
+            raise MotionlangError("fill_in needs a CRBM (train one: motionlang train crbm)")
+        model = load_model(model, kind="crbm")
+    frames, known = np.asarray(frames, dtype=np.float64), np.asarray(known, dtype=bool)
+    if frames.ndim != 2 or frames.shape != known.shape:
+        raise MotionlangError(f"frames {frames.shape} and known {known.shape} must be the "
+                              "same (T, D) shape")
+    if frames.shape[1] != model.n_visible:
+        raise MotionlangError(f"frames have {frames.shape[1]} values a frame; this CRBM "
+                              f"models {model.n_visible}")
+    return model.fill_in(frames, known, n_gibbs=n_gibbs, seed=seed)[0]   # one sample
+
+
 __all__ = ["read_motion", "write_motion", "read_mapped", "load_model", "describe",
-           "generate", "body21", "retarget", "render_motion", "body_motion", "load_rig",
-           "first_frame", "check_map", "model_path"]
+           "generate", "encode", "fill_in", "body21", "retarget", "render", "body_motion",
+           "load_rig", "first_frame", "check_map"]

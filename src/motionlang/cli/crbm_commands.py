@@ -17,8 +17,12 @@ import numpy as np
 from motionlang.cli.options import (
     frames_int, nonneg_float, order_int, output_dir, output_file, positive_float, positive_int,
     probability, seed_int, size_int)
+from motionlang.cli.run_log import log_command
+from motionlang.cli.train_commands import MODEL_FILES, add_out_arg
 from motionlang.errors import MotionlangError
 
+#: the two-level model of ``train crbm --level2``, beside the run folder's model.npz
+STACK_FILE = "stack.npz"
 MOTION_EXTENSIONS = (".bvh", ".amc")
 RENDER_EXTENSIONS = (".gif", ".mp4")
 
@@ -29,29 +33,33 @@ def _add_data(p: argparse.ArgumentParser) -> None:
 
 
 def _add_crbm_options(p: argparse.ArgumentParser) -> None:
-    from motionlang.models.crbm.model import CRBMConfig
+    from motionlang.models.crbm.config import CRBMConfig
     d = CRBMConfig()
     p.add_argument("--hidden", type=size_int, default=d.n_hidden,
-                   help=f"hidden units (default {d.n_hidden})")
+                   help="hidden units")
     p.add_argument("--order", type=order_int, default=d.order,
-                   help=f"frames of past (default {d.order})")
+                   help="frames of past that condition each frame")
     p.add_argument("--epochs", type=positive_int, default=d.epochs,
-                   help=f"passes over the data (default {d.epochs})")
-    p.add_argument("--batch-size", type=positive_int, default=d.batch_size)
-    p.add_argument("--lr", type=positive_float, default=d.lr)
-    p.add_argument("--momentum", type=probability, default=d.momentum)
-    p.add_argument("--weight-decay", type=nonneg_float, default=d.weight_decay)
+                   help="passes over the data")
+    p.add_argument("--batch-size", type=positive_int, default=d.batch_size,
+                   help="frames per contrastive-divergence update")
+    p.add_argument("--lr", type=positive_float, default=d.lr,
+                   help="learning rate (of the autoregressive weights too)")
+    p.add_argument("--momentum", type=probability, default=d.momentum,
+                   help="momentum of the weight updates")
+    p.add_argument("--weight-decay", type=nonneg_float, default=d.weight_decay,
+                   help="L2 weight decay of W and B")
     p.add_argument("--ar-weight-decay", type=nonneg_float, default=d.weight_decay_autoregressive,
-                   help="weight decay of the autoregressive weights A (train crbm / crbm reproduce: "
-                        "the selected 2e-2; elsewhere --weight-decay's)")
+                   help="weight decay of the autoregressive weights A")
     p.add_argument("--history-noise", type=nonneg_float, default=d.history_noise, metavar="STD",
                    help="noise on the past frames while training (normalised units; not in "
-                        "the paper; train crbm / crbm reproduce: the selected 0.3)")
-    p.add_argument("--seed", type=seed_int, default=0)
+                        "the paper)")
+    p.add_argument("--seed", type=seed_int, default=d.seed,
+                   help="seed of the initial weights and the batch order")
 
 
 def _crbm_config(args: argparse.Namespace):
-    from motionlang.models.crbm.model import CRBMConfig
+    from motionlang.models.crbm.config import CRBMConfig
     return CRBMConfig(n_hidden=args.hidden, order=args.order, epochs=args.epochs,
                       batch_size=args.batch_size, lr=args.lr, lr_autoregressive=args.lr,
                       momentum=args.momentum, weight_decay=args.weight_decay,
@@ -63,8 +71,8 @@ def _load_model(path: str, allow_stack: bool = False):
     """A CRBM checkpoint (or, where allowed, a two-level one written by --level2)."""
     from motionlang.models.crbm.model import CRBM
     from motionlang.models.crbm.stack import CRBMStack
-    if not Path(path).is_file():
-        raise MotionlangError(f"{path}: no such model file")
+    from motionlang.models.registry import resolve
+    path = resolve(path)   # a run folder -> its model.npz
     if allow_stack:
         try:
             with np.load(path, allow_pickle=False) as z:
@@ -95,7 +103,7 @@ def _write_frames(frames: np.ndarray, out: Path, data, data_dir: str, *, name: s
         from motionlang.formats import write_motion
         write_motion(motion, out)
         return
-    from motionlang.render import render_animation
+    from motionlang.rendering import render_animation
     if compare is None:
         render_animation(motion, out, title=title)
     else:
@@ -108,11 +116,14 @@ def cmd_train(args: argparse.Namespace) -> int:
     from motionlang.evaluation.crbm.fill import load_cmu35
     from motionlang.evaluation.crbm.reproduce import model_frames
     from motionlang.models.crbm.model import CRBM
+    config = _crbm_config(args)   # checked before the data is read
+    out = Path(args.out)
     data = load_cmu35(args.data)
     seqs = [model_frames(c) for c in data.train]
-    model = CRBM(_crbm_config(args), 59).fit(seqs, show_progress=not args.quiet)
-    model.save(args.output)
-    print(f"{args.output}: {model.describe()}")
+    log_command(out / "commands.jsonl", args)
+    model = CRBM(config, 59).fit(seqs, show_progress=not args.quiet)
+    model.save(out / MODEL_FILES["crbm"])
+    print(f"{out / MODEL_FILES['crbm']}: {model.describe()}")
     if args.level2:
         from motionlang.models.crbm.stack import CRBMStack
         # level 2's visibles are hidden probabilities in [0, 1]: level 1's noise (normalised
@@ -120,8 +131,8 @@ def cmd_train(args: argparse.Namespace) -> int:
         cfg2 = dataclasses.replace(model.config, visible="binary", n_hidden=args.level2_hidden,
                                    order=args.level2_order, history_noise=0.0)
         stack = CRBMStack.fit(model, seqs, cfg2, show_progress=not args.quiet)
-        stack.save(args.level2)
-        print(f"{args.level2}: two-level model, level 2 {stack.level2.describe()}")
+        stack.save(out / STACK_FILE)
+        print(f"{out / STACK_FILE}: two-level model, level 2 {stack.level2.describe()}")
     return 0
 
 
@@ -130,8 +141,6 @@ def cmd_generate(args: argparse.Namespace) -> int:
     from motionlang.evaluation.crbm.fill import load_cmu35
     from motionlang.evaluation.crbm.generation import StyleLabeller, forward_speed
     from motionlang.evaluation.crbm.reproduce import model_frames
-    if not (args.noise >= 0 and np.isfinite(args.noise)) or args.frames < 1 or args.gibbs < 1:
-        raise MotionlangError("--noise must be a finite number >= 0, --frames and --gibbs >= 1")
     model = _load_model(args.model, allow_stack=True)
     base = getattr(model, "level1", model)       # a two-level model generates through both
     data = load_cmu35(args.data)
@@ -229,17 +238,21 @@ def _gif_of_fill(trial: str, res: dict, crbm59: np.ndarray, path: Path, args) ->
 
 # ------------------------------------------------------------------ registration
 def register_train(train_sub: argparse._SubParsersAction) -> None:
+    from motionlang.models.crbm.config import CRBMConfig
+    d = CRBMConfig()
     p = train_sub.add_parser("crbm", help="train a conditional RBM on CMU subject 35 walk/jog",
                              description="Train a CRBM (Taylor et al. 2006) on the 31 training trials.")
     _add_data(p)
-    p.add_argument("output", metavar="OUT.npz", type=output_file,
-                   help="checkpoint (config + weights + normaliser)")
+    add_out_arg(p, "crbm", f"{STACK_FILE} (with --level2), ")
     _add_crbm_options(p)
-    p.add_argument("--level2", metavar="OUT2.npz", default=None, type=output_file,
-                   help="also train a second level on the hidden activations; save both here")
-    p.add_argument("--level2-hidden", type=size_int, default=200)
-    p.add_argument("--level2-order", type=order_int, default=3)
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--level2", action="store_true",
+                   help=f"also train a second level on the hidden activations; the two-level "
+                        f"model is OUT/{STACK_FILE}")
+    p.add_argument("--level2-hidden", type=size_int, default=d.n_hidden,
+                   help="hidden units of the second level")
+    p.add_argument("--level2-order", type=order_int, default=d.order,
+                   help="frames of past of the second level")
+    p.add_argument("--quiet", action="store_true", help="no progress")
     from motionlang.evaluation.crbm.reproduce import SELECTED
     # defaults: the paper's sizes with the settings selected on held-out training trials
     p.set_defaults(func=cmd_train, epochs=SELECTED["epochs"], lr=SELECTED["lr"],
@@ -255,49 +268,54 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(func=lambda args: (parser.print_help(), 1)[1])
 
     g = sub.add_parser("generate", help="generate motion on-line from real starting frames")
-    g.add_argument("model", metavar="MODEL.npz", help="a CRBM, or a two-level model (train --level2)")
+    g.add_argument("model", metavar="MODEL", help="a CRBM (model.npz, or its run folder), or "
+                   f"a two-level model ({STACK_FILE} of train crbm --level2)")
     g.add_argument("output", metavar="OUT", type=output_file,
                    help=".npy (features), .bvh/.amc, or .gif/.mp4")
     _add_data(g)
     g.add_argument("--start", choices=["walk", "jog"], default="walk",
                    help="start from the walking (35_29) or jogging (35_18) test trial")
-    g.add_argument("--frames", type=frames_int, default=1000)
+    g.add_argument("--frames", type=frames_int, default=1000, help="frames to generate")
     g.add_argument("--noise", type=nonneg_float, default=0.0,
                    help="std of noise on the hidden biases")
     g.add_argument("--gibbs", type=positive_int, default=30, help="Gibbs updates per frame")
-    g.add_argument("--seed", type=seed_int, default=0)
-    g.add_argument("--json", action="store_true")
+    g.add_argument("--seed", type=seed_int, default=0, help="seed of the Gibbs sampling")
+    g.add_argument("--json", action="store_true", help="print the report as one JSON line")
     g.set_defaults(func=cmd_generate)
 
     f = sub.add_parser("fill", help="fill in an erased leg or upper body of a test trial")
-    f.add_argument("model", metavar="MODEL.npz")
+    f.add_argument("model", metavar="MODEL", help="a CRBM: model.npz or its run folder")
     f.add_argument("output", metavar="OUT", type=output_file,
                    help=".png (angles plot), .npy, .bvh/.amc, or .gif/.mp4")
     _add_data(f)
-    f.add_argument("--trial", choices=["35_29", "35_18"], default="35_29")
-    f.add_argument("--part", choices=["leg", "upper-body"], default="leg")
-    f.add_argument("--repeats", type=positive_int, default=100)
-    f.add_argument("--gibbs", type=positive_int, default=30)
-    f.add_argument("--seed", type=seed_int, default=0)
+    f.add_argument("--trial", choices=["35_29", "35_18"], default="35_29",
+                   help="the test trial: walking (35_29) or jogging (35_18)")
+    f.add_argument("--part", choices=["leg", "upper-body"], default="leg",
+                   help="what is erased and filled in")
+    f.add_argument("--repeats", type=positive_int, default=100,
+                   help="stochastic fill-ins averaged for the errors")
+    f.add_argument("--gibbs", type=positive_int, default=30, help="Gibbs updates per frame")
+    f.add_argument("--seed", type=seed_int, default=0, help="seed of the Gibbs sampling")
     f.add_argument("--sampled", dest="mean_field", action="store_false",
                    help="write/plot a fill-in with sampled hiddens (default: mean-field, the "
                         "selected setting; the sampled one is scored beside it either way)")
-    f.add_argument("--json", action="store_true")
+    f.add_argument("--json", action="store_true", help="print the errors as one JSON line")
     f.set_defaults(func=cmd_fill)
 
     r = sub.add_parser("reproduce", help="the paper's missing-data table (trains unless --model)")
     _add_data(r)
-    r.add_argument("--model", metavar="MODEL.npz", default=None, help="use this CRBM instead of training")
+    r.add_argument("--model", metavar="MODEL", default=None,
+                   help="use this CRBM (model.npz or its run folder) instead of training")
     _add_crbm_options(r)
     r.add_argument("--repeats", type=positive_int, default=100,
                    help="stochastic fill-ins averaged per cell")
-    r.add_argument("--gibbs", type=positive_int, default=30)
+    r.add_argument("--gibbs", type=positive_int, default=30, help="Gibbs updates per frame")
     r.add_argument("--plots", metavar="DIR", default=None, type=output_dir,
                    help="write Figure-4 plots and GIFs here")
     r.add_argument("--sampled", dest="mean_field", action="store_false",
                    help="report sampled-hidden fill-ins as \"CRBM\" (default: mean-field, as selected)")
-    r.add_argument("--json", action="store_true")
-    r.add_argument("--quiet", action="store_true")
+    r.add_argument("--json", action="store_true", help="print the results as JSON")
+    r.add_argument("--quiet", action="store_true", help="no progress")
     from motionlang.evaluation.crbm.reproduce import SELECTED
     # the experiment's defaults are the settings selected on held-out training trials
     r.set_defaults(func=cmd_reproduce, epochs=SELECTED["epochs"], lr=SELECTED["lr"],

@@ -99,17 +99,19 @@ def cmd_export_h3d(args: argparse.Namespace) -> int:
     records = load_records(args.data, args.max_seconds, args.joint_map)
     print(f"export-h3d: {len(records)} motions from {args.data} "
           f"({time.perf_counter() - t0:.1f} s to list)", flush=True)
-    t0 = time.perf_counter()
+    from motionlang.utils.progress import progress
+
+    # a bar on a terminal, else a line every 30 s
+    bar = progress(total=len(records), desc="export-h3d", unit="motions")
 
     def report(done: int, total: int, _id: str) -> None:
-        if done % max(1, total // 20) == 0 or done == total:
-            spent = time.perf_counter() - t0
-            print(f"export-h3d: {done}/{total} motions, {spent:.1f} s, "
-                  f"{spent / done * (total - done):.0f} s to go", flush=True)
+        bar.update(done - bar.n)
 
     workers = args.workers or max(1, min(2, os.cpu_count() or 1))
-    info = export_h3d(records, args.out, args.body, mirror=args.mirror, heading=args.heading,
-                      seed=args.seed, workers=workers, on_progress=report)
+    with bar:
+        info = export_h3d(records, args.out, args.body, mirror=args.mirror,
+                          heading=args.heading, seed=args.seed, workers=workers,
+                          on_progress=report)
     mirrored = f" (+{info['motions']} mirrored)" if info["mirrored"] else ""
     skipped = f"; skipped {len(info['skipped'])} too short" if info["skipped"] else ""
     print(f"wrote {info['motions']} motions{mirrored} to {args.out}: {info['body']} body, "
@@ -150,7 +152,7 @@ def register(subparsers) -> None:
     p.set_defaults(func=lambda args: (p.print_help(), 1)[1])
 
     d = sub.add_parser("download", help="download and extract a dataset release")
-    d.add_argument("dataset", choices=["kitml"])
+    d.add_argument("dataset", choices=["kitml"], help="the dataset to fetch")
     d.add_argument("--dest", required=True, help="folder for the archive and extracted data")
     d.add_argument("--url", help="override the release URL (default: KIT's 2016-10-10 zip)")
     d.add_argument("--sha256", help="expected sha256 of the archive (KIT publishes none)")
@@ -160,17 +162,17 @@ def register(subparsers) -> None:
     d.set_defaults(func=cmd_download)
 
     i = sub.add_parser("info", help="counts and durations of a dataset folder")
-    i.add_argument("dir")
+    i.add_argument("dir", help="a KIT-ML-format or custom dataset folder")
     i.add_argument("--max-seconds", type=positive_float, default=30.0,
-                   help="duration filter for the 'kept' counts (default 30)")
+                   help="duration filter for the 'kept' counts")
     i.add_argument("--json", action="store_true", help="print JSON")
     i.set_defaults(func=cmd_info)
 
     s = sub.add_parser("split", help="write a seeded random train/val/test split")
-    s.add_argument("dir")
+    s.add_argument("dir", help="a KIT-ML-format or custom dataset folder")
     s.add_argument("--fractions", type=nonneg_float, nargs="+", default=[0.8, 0.1, 0.1],
                    help="2 (train test) or 3 (train val test) fractions summing to 1")
-    s.add_argument("--seed", type=seed_int, default=0)
+    s.add_argument("--seed", type=seed_int, default=0, help="seed of the random split")
     s.add_argument("--max-seconds", type=positive_float, default=30.0,
                    help="KIT-ML: split only motions shorter than this")
     s.add_argument("--out", required=True, type=output_dir,

@@ -73,7 +73,7 @@ def run_demo(input_path: str | Path | None, out_dir: str | Path, *, asf: str | N
         MotionlangError: no input given and no shared data found, or an unreadable input.
     """
     from motionlang.formats import read_motion
-    from motionlang.render import plot_trajectory, render_animation, render_strip
+    from motionlang.rendering import plot_trajectory, render_animation, render_strip
 
     if input_path is None:
         input_path = find_demo_motion()
@@ -106,13 +106,6 @@ DEMO_MAX_FRAMES = 100
 SYNTH_SEED = 2026
 
 
-def packaged_model(kind: str) -> Path:
-    """Path of the packaged ``m2l`` or ``l2m`` model (MotionlangError if missing)."""
-    from motionlang.cli.text_commands import _model_path
-
-    return _model_path(None, kind)
-
-
 def _print_hyps(echo, hyps, label: str) -> None:
     for i, (text, score) in enumerate(hyps, 1):
         echo(f"  {i}. {label} = {score:9.2f}  {text}")
@@ -129,10 +122,10 @@ def generate_part(out_dir: Path, sentence: str, *, width: int = 5, seed: int = 0
     from motionlang.decoding.seq2seq import generate
     from motionlang.decoding.t2m import default_method
     from motionlang.formats import write_motion
-    from motionlang.models.seq2seq.l2m import LanguageToMotion
-    from motionlang.render import render_animation, render_strip
+    from motionlang.models.registry import load_model
+    from motionlang.rendering import render_animation, render_strip
 
-    model = LanguageToMotion.load(model_path or packaged_model("l2m"))
+    model = load_model(model_path or "l2m", kind="l2m")
     # as `motionlang generate` does: expected frames for joint-position models (a draw
     # stretches bones), ancestral samples otherwise (the sampled beam keeps the likeliest
     # frames, and standing still is always likelier than moving)
@@ -160,9 +153,9 @@ def describe_part(motions: list[tuple[str, object]], *, width: int = 5,
     """M2L: each (label, Motion) -> W sentences with log P, printed; returns the lists
     (empty for a motion the model's feature set cannot read, e.g. a non-MMM skeleton)."""
     from motionlang.decoding.seq2seq import describe
-    from motionlang.models.seq2seq.m2l import MotionToLanguage
+    from motionlang.models.registry import load_model
 
-    model = MotionToLanguage.load(model_path or packaged_model("m2l"))
+    model = load_model(model_path or "m2l", kind="m2l")
     out = []
     for label, motion in motions:
         echo(f"describe {label} (M2L, beam search, W={width}):")

@@ -3,14 +3,25 @@
 Each subcommand lives in its own module exposing ``register(subparsers)``, which adds a
 parser whose ``func`` attribute takes the parsed arguments and returns an exit code.
 Errors of motionlang's own types become one line on stderr and exit code 2.
+
+Added here to every command, so that no module repeats them: ``--threads N`` (see
+:mod:`motionlang.cli.threads`), help that shows each option's default
+(:class:`DefaultsHelpFormatter`), and, under ``torchrun``, one output stream: only rank 0
+prints to stdout and logs below warnings.
 """
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
+import logging
+import os
 import sys
 
 from motionlang import __version__
+from motionlang.cli.options import threads_int
+from motionlang.cli.run_log import lead_process
+from motionlang.cli.threads import MAX_DEFAULT, default_threads, limit_threads
 from motionlang.errors import MotionlangError
 
 # Modules that register subcommands; one line each, order = order in --help.
@@ -19,20 +30,64 @@ COMMAND_MODULES = [
     "motionlang.cli.rig_commands",      # rig show | template
     "motionlang.cli.data_commands",     # data ...
     "motionlang.cli.demo",              # demo (the main job)
-    "motionlang.cli.train_commands",    # train crbm | seq2seq | twostream
+    "motionlang.cli.train_commands",    # train m2l | l2m | twostream | crbm
     "motionlang.cli.crbm_commands",     # crbm generate | fill | reproduce
     "motionlang.cli.text_commands",     # describe, generate
-    "motionlang.cli.seq2seq_commands",  # evaluate (train m2l | l2m via train)
+    "motionlang.cli.model_commands",    # models [NAME|FILE]
+    "motionlang.cli.evaluate_commands",  # evaluate (train m2l | l2m via train)
     "motionlang.cli.twostream_commands",  # evaluate-t2m (train twostream via train)
 ]
 
 
+class DefaultsHelpFormatter(argparse.HelpFormatter):
+    """Appends "(default: X)" to an option's help unless the help already states its
+    default; not for flags, required options, or options whose default is None."""
+
+    def _get_help_string(self, action: argparse.Action) -> str:
+        text = action.help or ""
+        if shows_default(action) and "default" not in text.lower():
+            text = f"{text} (default: %(default)s)".lstrip()
+        return text
+
+
+def shows_default(action: argparse.Action) -> bool:
+    """Whether an option's help must state its default: it has one worth stating."""
+    return not (action.required or action.default is None or action.default is False
+                or action.default == argparse.SUPPRESS
+                or isinstance(action, (argparse._StoreTrueAction, argparse._StoreFalseAction,
+                                       argparse._HelpAction, argparse._VersionAction,
+                                       argparse._SubParsersAction)))
+
+
 class OneLineParser(argparse.ArgumentParser):
     """A bad option is one line (``motionlang render: error: argument --fps: ...``) and exit
-    code 2, as every other bad input; ``-h`` shows the usage. Subparsers inherit the class."""
+    code 2, as every other bad input; ``-h`` shows the usage and every option's default.
+    Subparsers inherit the class (and so its formatter)."""
+
+    def __init__(self, *args, **kwargs):
+        kwargs.setdefault("formatter_class", DefaultsHelpFormatter)
+        super().__init__(*args, **kwargs)
 
     def error(self, message: str):
         self.exit(2, f"{self.prog}: error: {message}\n")
+
+
+def leaf_parsers(parser: argparse.ArgumentParser) -> list[argparse.ArgumentParser]:
+    """The parsers that run a command: those without subcommands of their own."""
+    subs = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+    if not subs:
+        return [parser]
+    return [leaf for a in subs for p in dict.fromkeys(a.choices.values())
+            for leaf in leaf_parsers(p)]
+
+
+def add_common_options(parser: argparse.ArgumentParser) -> None:
+    """``--threads`` on every command (one definition, applied by :func:`main`)."""
+    parser.add_argument(
+        "--threads", type=threads_int, default=None, metavar="N",
+        help="threads for torch and numpy's BLAS (default: OMP_NUM_THREADS if set; else 1 "
+             "when the CPU is already busy, its load average near the CPU count; else "
+             f"min(CPUs, {MAX_DEFAULT}))")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -49,6 +104,9 @@ def build_parser() -> argparse.ArgumentParser:
                 continue
             raise
         module.register(sub)
+    for leaf in leaf_parsers(parser):
+        if leaf is not parser:
+            add_common_options(leaf)
     return parser
 
 
@@ -61,11 +119,13 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "func", None):
         parser.print_help()
         return 1
+    threads = getattr(args, "threads", None) or default_threads()
     try:
-        code = int(args.func(args) or 0)
-        trainer = sys.modules.get("motionlang.training.trainer")
-        if trainer is not None:  # only the trainer joins a process group (under torchrun)
-            trainer.finish_distributed()
+        with limit_threads(threads), lead_output():
+            code = int(args.func(args) or 0)
+            distributed = sys.modules.get("motionlang.training.distributed")
+            if distributed is not None:  # only the trainer joins a process group (torchrun)
+                distributed.finish_distributed()
         return code
     except MotionlangError as exc:
         print(f"motionlang {args.command}: error: {exc}", file=sys.stderr)
@@ -76,6 +136,24 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130
+
+
+@contextlib.contextmanager
+def lead_output():
+    """Under torchrun, ranks other than 0 print nothing to stdout and log only warnings and
+    errors (each line would otherwise come once per process); rank 0 and single processes
+    are untouched."""
+    if lead_process():
+        yield
+        return
+    package = logging.getLogger("motionlang")   # the level basicConfig leaves alone
+    level = package.level
+    package.setLevel(logging.WARNING)
+    try:
+        with open(os.devnull, "w") as devnull, contextlib.redirect_stdout(devnull):
+            yield
+    finally:
+        package.setLevel(level)
 
 
 if __name__ == "__main__":

@@ -1,6 +1,6 @@
 """``motionlang info | render | convert``: look at, draw and convert one motion file.
 
-Thin wrappers over :mod:`motionlang.formats` and :mod:`motionlang.render`; every problem
+Thin wrappers over :mod:`motionlang.formats` and :mod:`motionlang.rendering`; every problem
 is a :class:`MotionlangError`, which the main entry turns into one line and exit code 2.
 """
 from __future__ import annotations
@@ -104,7 +104,7 @@ def cmd_info(args: argparse.Namespace) -> int:
 
 # ------------------------------------------------------------------ render
 def cmd_render(args: argparse.Namespace) -> int:
-    from motionlang.render import plot_trajectory, render_animation, render_strip
+    from motionlang.rendering import plot_trajectory, render_animation, render_strip
 
     out = Path(args.output)
     ext = out.suffix.lower()

@@ -19,6 +19,7 @@ MAX_SIZE = 4096        # layer sizes, mixture components (an LSTM of 4096: 256 M
 MAX_LAYERS = 16
 MAX_ORDER = 1000       # CRBM history frames
 MAX_FRAMES = 100_000
+MAX_THREADS = 256
 
 
 def _number(text: str, kind: type):
@@ -68,6 +69,7 @@ order_int = int_range(1, MAX_ORDER)
 frames_int = int_range(1, MAX_FRAMES)
 width_int = int_range(1, MAX_WIDTH)
 seed_int = int_range(0, SEED_MAX)
+threads_int = int_range(1, MAX_THREADS)
 finite_float = float_range()
 nonneg_float = float_range(0.0)
 positive_float = float_range(0.0, open_lo=True)

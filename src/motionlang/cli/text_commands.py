@@ -9,11 +9,11 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import sys
 from pathlib import Path
 
 import numpy as np
 
-from motionlang.api import PACKAGED
 from motionlang.cli.options import (
     frames_int, nonneg_float, nonneg_int, output_file, positive_float, seed_int, width_int)
 from motionlang.errors import MotionlangError
@@ -27,21 +27,13 @@ def check_length_penalty(alpha: float) -> None:
         raise MotionlangError(f"--length-penalty must be a finite number >= 0, got {alpha}")
 
 
-def _model_path(arg: str | None, kind: str) -> Path:
-    path = Path(arg) if arg else PACKAGED / f"{kind}.pt"
-    if not path.is_file():
-        hint = "" if arg else f" (no packaged {kind} model; pass --model)"
-        raise MotionlangError(f"{path}: no such model file{hint}")
-    return path
-
-
 def cmd_describe(args: argparse.Namespace) -> int:
     from motionlang.cli.motion_commands import load_input
     from motionlang.decoding.seq2seq import describe
-    from motionlang.models.seq2seq.m2l import MotionToLanguage
+    from motionlang.models.registry import load_model
 
     check_length_penalty(args.length_penalty)
-    model = MotionToLanguage.load(_model_path(args.model, "m2l"))
+    model = load_model(args.model, kind="m2l")
     hyps = describe(model, load_input(args), width=args.width,
                     length_penalty=args.length_penalty)
     if args.json:
@@ -112,56 +104,60 @@ def _write(result, path: Path, title: str, fps: float, rig=None) -> str:
                     f"at most {err.max():.0f} mm: bone lengths held at their medians, "
                     "pelvis and neck turned by least squares)")
         else:
-            from motionlang.render.scene import kit21_scene
+            from motionlang.rendering.scene import kit21_scene
             result = kit21_scene(result, fps)
     if ext in MOTION_OUT:
         from motionlang.formats import write_motion
         write_motion(result, path)
     elif ext == ".png":
-        from motionlang.render import render_strip
+        from motionlang.rendering import render_strip
         render_strip(result, path, title=title)
     else:
-        from motionlang.render import render_animation
+        from motionlang.rendering import render_animation
         render_animation(result, path, title=title)
     return note
 
 
 def cmd_generate(args: argparse.Namespace) -> int:
     # any text-to-motion checkpoint: L2M (seq2seq) or the two-stream model
-    from motionlang.decoding.t2m import default_method, generate_any, load_any_t2m, output_fps
+    from motionlang.decoding.t2m import text_to_motion
+    from motionlang.models.registry import TEXT_TO_MOTION, load_model
 
     if args.temperature != 1.0 and args.method == "mean":
         raise MotionlangError("--temperature applies to 'sample' and 'beam'; mean decoding "
                               "draws nothing")
-    model = load_any_t2m(_model_path(args.model, "l2m"))
-    if args.temperature != 1.0 and getattr(model, "kind", None) == "twostream":
-        raise MotionlangError("--temperature applies to L2M models; the two-stream model is "
-                              "deterministic")
+    model = text_to_motion(load_model(args.model, kind=TEXT_TO_MOTION))
+    if args.temperature != 1.0 and model.deterministic:
+        raise MotionlangError("--temperature applies to models that sample; this "
+                              f"{model.model.kind} model is deterministic")
+    unknown = model.unknown_words(args.text)
+    if unknown:
+        print(f"motionlang generate: warning: the model does not know "
+              f"{', '.join(repr(w) for w in unknown)}; each is read as an unknown word "
+              f"(its vocabulary: {len(model.model.vocab)} words)", file=sys.stderr)
     if args.method is None:   # how the model was trained to continue its own frames
-        args.method = default_method(model)
+        args.method = model.default_method()
         if args.method == "mean" and args.temperature != 1.0:
             raise MotionlangError("--temperature: this model generates with mean decoding "
                                   "(trained on its expected frames); add --method sample")
     extra = {}
     if args.rerank:
-        if getattr(model, "kind", None) == "twostream" or args.method == "mean" \
-                or args.width < 2:
+        if model.deterministic or args.method == "mean" or args.width < 2:
             raise MotionlangError("--rerank ranks several L2M motions: an L2M model with "
                                   "--method sample or beam and -w 2 or more")
         from motionlang.decoding.rerank import check_same_features
-        from motionlang.models.seq2seq.m2l import MotionToLanguage
-        extra["reranker"] = MotionToLanguage.load(args.rerank)
-        check_same_features(model, extra["reranker"], f"--rerank {args.rerank}")
+        extra["reranker"] = load_model(args.rerank, kind="m2l")
+        check_same_features(model.model, extra["reranker"], f"--rerank {args.rerank}")
     out = Path(args.output)
     rig = _read_rig(args, out)
     if args.start_from:
         from motionlang.api import first_frame
         extra["first_frame"] = first_frame(model, args.start_from, args.joint_map)
-    hyps = generate_any(model, args.text, width=args.width, method=args.method, seed=args.seed,
+    hyps = model.hypotheses(args.text, width=args.width, method=args.method, seed=args.seed,
                         max_frames=args.max_frames, min_frames=args.min_frames,
                         length_norm=args.length_norm, temperature=args.temperature, **extra)
     # rate of position outputs: the two-stream model's 12.5 Hz, else the model's features'
-    fps = output_fps(model)
+    fps = model.fps
     for i, (result, score) in enumerate(hyps, 1):
         n = len(result.joint_angles) if hasattr(result, "joint_angles") else len(result)
         # the two-stream model is deterministic: it has no likelihood to rank by
@@ -181,13 +177,14 @@ def register(subparsers) -> None:
     from motionlang.cli.motion_commands import add_input_args, add_joint_map_arg
     p = subparsers.add_parser("describe", help="describe a motion in English (M2L, beam search)")
     add_input_args(p)
-    p.add_argument("--model", help="M2L model file (default: the packaged one)")
+    p.add_argument("--model", default="m2l", metavar="MODEL",
+                   help="a packaged model's name, an M2L model file or a training run folder")
     p.add_argument("-w", "--width", type=width_int, default=5,
                    help="beam width = hypotheses shown")
     p.add_argument("--length-penalty", type=nonneg_float, default=0.0, metavar="ALPHA",
                    help="rank by log P / length**ALPHA (default 0: total log P, the paper's; "
                         "no effect with -w 1)")
-    p.add_argument("--json", action="store_true")
+    p.add_argument("--json", action="store_true", help="print the hypotheses as JSON")
     p.set_defaults(func=cmd_describe)
     p = subparsers.add_parser("generate", help="generate a motion from English (L2M)")
     p.add_argument("text", help="sentence, e.g. \"a person waves with the left hand\"")
@@ -195,7 +192,9 @@ def register(subparsers) -> None:
                    help="out.gif, .mp4 (animation), .png (pose strip), .bvh (joint angles; "
                         "for position models such as two-stream fitted on a 21-joint "
                         "skeleton) or .npz (joint positions and fps)")
-    p.add_argument("--model", help="L2M or two-stream model file (default: the packaged L2M)")
+    p.add_argument("--model", default="l2m", metavar="MODEL",
+                   help="a packaged model's name, an L2M or two-stream model file or a "
+                        "training run folder")
     p.add_argument("-w", "--width", type=width_int, default=5,
                    help="hypotheses (samples or beam width)")
     p.add_argument("--method", choices=("sample", "beam", "mean"), default=None,
@@ -203,7 +202,8 @@ def register(subparsers) -> None:
                         "heaviest-component means (the beam, ranked by likelihood, favours "
                         "standing still); default for a model trained on its expected "
                         "frames (--rollout-input mean): mean")
-    p.add_argument("--seed", type=seed_int, default=0)
+    p.add_argument("--seed", type=seed_int, default=0,
+                   help="seed of the sampling (sample and beam decoding)")
     p.add_argument("--max-frames", type=frames_int, default=None,
                    help="length cap in model frames (default: the model's); a two-stream "
                         "model, or an L2M trained with --progress-input, generates exactly "

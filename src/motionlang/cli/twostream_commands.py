@@ -12,19 +12,14 @@ import argparse
 from pathlib import Path
 
 from motionlang.cli.options import (
-    frames_int, layers_int, nonneg_float, nonneg_int, output_dir, output_file, positive_float,
-    positive_int, seed_int, size_int, width_int)
+    frames_int, layers_int, nonneg_int, output_dir, positive_float, seed_int, size_int,
+    width_int)
 from motionlang.cli.run_log import lead_process, log_command
-from motionlang.cli.train_commands import add_schedule_args, schedule_options
+from motionlang.cli.train_commands import MODEL_FILES, add_out_arg, add_trainer_args, \
+    train_config
 from motionlang.errors import MotionlangError
 
 ABLATION_NAMES = ("full", "no-joint-training", "one-stream", "no-extra-losses", "word-vectors")
-
-
-def _threads(n: int) -> None:
-    import torch
-    if n > 0:
-        torch.set_num_threads(n)
 
 
 def cmd_train(args: argparse.Namespace) -> int:
@@ -35,27 +30,24 @@ def cmd_train(args: argparse.Namespace) -> int:
     from motionlang.datasets.splits import save_splits
     from motionlang.models.length import SentenceLength
     from motionlang.models.twostream import TwoStreamModel
-    from motionlang.training.trainer import TrainConfig, check_resume
+    from motionlang.training.run_files import check_resume
     from motionlang.datasets.twostream_items import build_twostream_data
     from motionlang.training.twostream_train import ForcingSchedule, make_config, train_twostream
 
     logging.basicConfig(level=logging.INFO, format="%(message)s")
-    _threads(args.threads)
-    out = Path(args.out)
-    if out.suffix != ".pt":
-        raise MotionlangError(f"{out}: the model file must end in .pt")
-    run = Path(args.run_dir) if args.run_dir else out.parent / f"{out.stem}_run"
+    run = Path(args.out)
     if args.resume:   # before anything is written: the run's first (or only) stage's
         check_resume(run if (run / "last.pt").is_file() else run / "pose")
     lambdas = parse_lambdas(args.weight)
-    schedule = schedule_options(args)
+    cfg = train_config(args, run, length_buckets=args.length_buckets)   # checked at once
     lead = lead_process()  # under torchrun only rank 0 writes files and prints
     data = build_twostream_data(args.data, seed=args.seed, max_seconds=args.max_seconds,
                                 max_frames=args.max_frames, mirror=args.mirror)
     if lead:
         save_splits(data.splits, run / "splits")
     log_command(run / "commands.jsonl", args)
-    fields = dict(h1=args.h1, h2=args.h2, h=args.h, lstm_layers=args.lstm_layers,
+    sizes = dict(h1=args.h1, h2=args.h2, h=args.h, lstm_layers=args.lstm_layers)
+    fields = dict({k: v for k, v in sizes.items() if v is not None},   # else the config's
                   z_every_step=args.z_every_step, time_input=args.time_input,
                   progress_input=args.progress_input, lambdas=lambdas)
     if args.text_layers:
@@ -63,10 +55,6 @@ def cmd_train(args: argparse.Namespace) -> int:
     torch.manual_seed(args.seed)
     model = TwoStreamModel(make_config(args.ablation, **fields), data.features.normalizer)
     model.length_model = SentenceLength.from_items(data.items["train"])
-    cfg = TrainConfig(epochs=args.epochs, batch_size=args.batch_size, lr=args.lr,
-                      grad_clip=args.grad_clip, seed=args.seed, out_dir=str(run),
-                      checkpoint_every=args.checkpoint_every,
-                      length_buckets=args.length_buckets, **schedule)
     if lead:
         print(f"twostream ({args.ablation}): {len(data.items['train'])} training pairs "
               f"({len(data.splits['train'])} motions), "
@@ -77,6 +65,7 @@ def cmd_train(args: argparse.Namespace) -> int:
         schedule=ForcingSchedule(1.0, 0.0, args.forcing_steps))
     if not lead:
         return 0
+    out = run / MODEL_FILES["twostream"]
     model.save(out)
     print(run_summary(out, history))
     return 0
@@ -128,15 +117,20 @@ def register_train(train_sub) -> None:
     h = "train the two-stream text-to-motion model (Ghosh et al. 2021)"
     p = train_sub.add_parser("twostream", help=h, description=h)
     p.add_argument("--data", required=True, metavar="DIR", help="KIT-ML-format or custom folder")
-    p.add_argument("--out", required=True, metavar="MODEL.pt", type=output_file,
-                   help="the trained model file")
-    p.add_argument("--run-dir", metavar="DIR",
-                   help="checkpoints, history, splits (default: MODEL_run beside MODEL.pt)")
-    p.add_argument("--ablation", choices=ABLATION_NAMES, default="full")
-    p.add_argument("--h", type=size_int, default=512, help="stream embedding size (paper 512)")
-    p.add_argument("--h1", type=size_int, default=32, help="per-part layer size (paper 32)")
-    p.add_argument("--h2", type=size_int, default=128, help="trunk+limb layer size (paper 128)")
-    p.add_argument("--lstm-layers", type=layers_int, default=2)
+    add_out_arg(p, "twostream", "best.pt and last.pt (checkpoints; in pose/ and text/ for "
+                                "the two-stage ablation), history.json, splits/, ")
+    p.add_argument("--ablation", choices=ABLATION_NAMES, default="full",
+                   help="the full model or one of the paper's ablations")
+    # defaults None: TwoStreamConfig's (the paper's sizes). models.twostream imports torch on
+    # import, which building the parser must not
+    p.add_argument("--h", type=size_int, default=None,
+                   help="stream embedding size (default: the config's, the paper's 512)")
+    p.add_argument("--h1", type=size_int, default=None,
+                   help="per-part layer size (default: the config's, the paper's 32)")
+    p.add_argument("--h2", type=size_int, default=None,
+                   help="trunk+limb layer size (default: the config's, the paper's 128)")
+    p.add_argument("--lstm-layers", type=layers_int, default=None,
+                   help="layers of the sentence LSTM (default: the config's, the paper's 2)")
     p.add_argument("--z-every-step", action="store_true",
                    help="beyond the paper: every decoder step reads its stream's embedding")
     p.add_argument("--time-input", action="store_true",
@@ -149,12 +143,9 @@ def register_train(train_sub) -> None:
                         "embedding, adversarial, discriminator, energy); terms not given keep the "
                         "paper's weights (energy: 0, beyond the paper)")
     p.add_argument("--text-layers", metavar="I,J,..",
-                   help="hidden states of the text model to concatenate (default 3,4,5,6)")
-    p.add_argument("--epochs", type=positive_int, default=20)
-    p.add_argument("--batch-size", type=positive_int, default=32)
-    p.add_argument("--lr", type=positive_float, default=1e-3)
-    add_schedule_args(p)
-    p.add_argument("--grad-clip", type=nonneg_float, default=5.0)
+                   help="hidden states of the text model to concatenate (default: the "
+                        "config's, 3,4,5,6)")
+    add_trainer_args(p, epochs=20, batch_size=32, grad_clip=5.0)
     p.add_argument("--forcing-steps", type=nonneg_int, default=200,
                    help="optimiser steps over which teacher forcing anneals 1 -> 0")
     p.add_argument("--max-frames", type=frames_int, default=None,
@@ -166,32 +157,22 @@ def register_train(train_sub) -> None:
     p.add_argument("--mirror", action="store_true",
                    help="also train on every training motion mirrored left/right, its "
                         "sentences' sides swapped (beyond the paper)")
-    p.add_argument("--seed", type=seed_int, default=0)
-    p.add_argument("--threads", type=nonneg_int, default=0,
-                   help="torch threads (0: torch's default)")
-    p.add_argument("--resume", action="store_true", help="continue from the run's last.pt")
-    p.add_argument("--checkpoint-every", type=nonneg_int, default=0, metavar="STEPS")
     p.set_defaults(func=cmd_train)
 
 
 def cmd_evaluate(args: argparse.Namespace) -> int:
-    from motionlang.decoding.t2m import load_any_t2m
+    from motionlang.decoding.t2m import text_to_motion
+    from motionlang.models.registry import TEXT_TO_MOTION, load_model
     from motionlang.evaluation.t2m.compare import compare
     from motionlang.datasets.twostream_items import build_twostream_data
 
-    _threads(args.threads)
-    if args.oracle < 0:
-        raise MotionlangError(f"--oracle must be >= 0, got {args.oracle}")
     models = {}
     for spec in args.model:
         name, path = model_spec(spec)
-        models[name] = load_any_t2m(path)
-    if args.autoencode and not any(getattr(m, "kind", None) == "twostream"
-                                   for m in models.values()):
+        models[name] = load_model(path, kind=TEXT_TO_MOTION)
+    if args.autoencode and not any(text_to_motion(m).autoencodes for m in models.values()):
         raise MotionlangError("--autoencode needs a two-stream model among --model")
     reranker = None
-    if args.l2m_width < 1:
-        raise MotionlangError(f"--l2m-width must be >= 1, got {args.l2m_width}")
     if args.l2m_width > 1 and args.l2m_method != "sample":
         raise MotionlangError("--l2m-width applies to --l2m-method sample; mean decoding "
                               "gives one motion")
@@ -203,10 +184,10 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         from motionlang.models.seq2seq.m2l import MotionToLanguage
         reranker = MotionToLanguage.load(args.l2m_rerank)
         for model in models.values():
-            if getattr(model, "kind", None) == "l2m":
+            if not text_to_motion(model).deterministic:   # the models that sample
                 check_same_features(model, reranker, f"--l2m-rerank {args.l2m_rerank}")
-    if (args.l2m_rerank or args.l2m_width > 1) and not any(
-            getattr(m, "kind", None) == "l2m" for m in models.values()):
+    if (args.l2m_rerank or args.l2m_width > 1) and all(
+            text_to_motion(m).deterministic for m in models.values()):
         raise MotionlangError("--l2m-width and --l2m-rerank apply to L2M models: none among "
                               "--model")
     data = build_twostream_data(args.data, seed=args.seed, max_seconds=args.max_seconds)
@@ -224,10 +205,13 @@ def register(subparsers) -> None:
         "evaluate-t2m", help="APE/AVE and action order of text-to-motion models (one table)")
     p.add_argument("--data", required=True, metavar="DIR", help="the dataset trained on")
     p.add_argument("--model", required=True, action="append", metavar="[NAME=]PATH",
-                   help="an L2M or two-stream checkpoint; repeat for each model")
-    p.add_argument("--split", default="test")
+                   help="an L2M or two-stream model file or run folder (train ... --out); "
+                        "repeat for each model")
+    p.add_argument("--split", default="test", help="the split to evaluate (in the dataset's "
+                   "splits, as training made them with --seed)")
     p.add_argument("--seed", type=seed_int, default=0, help="the split seed used in training")
-    p.add_argument("--max-seconds", type=positive_float, default=30.0)
+    p.add_argument("--max-seconds", type=positive_float, default=30.0,
+                   help="drop longer motions (as in training)")
     p.add_argument("--limit", type=nonneg_int, default=0, help="evaluate at most N motions")
     p.add_argument("--autoencode", action="store_true",
                    help="also score each two-stream model decoding the test motions from their "
@@ -243,7 +227,6 @@ def register(subparsers) -> None:
                    help="procedural corpus: a second table on the test motions whose exact "
                         "parameters K or more training motions share, with the APE of those "
                         "motions (how much of APE no sentence can explain)")
-    p.add_argument("--threads", type=nonneg_int, default=0)
     p.add_argument("-o", "--output", metavar="DIR", type=output_dir,
                    help="write t2m_table.md, t2m_report.json and trajectory PNGs here")
     p.add_argument("--l2m-method", choices=("mean", "sample"), default="mean",

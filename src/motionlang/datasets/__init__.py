@@ -5,6 +5,9 @@
   ``load_annotations_tmr``; splits (``random_split``, ``load_split``) from ``splits``
 * ``named``: ``cmu35_walkjog`` (Taylor et al. 2006 data), ``mit_walk``
 * ``custom``: ``load_custom`` — a folder of BVH / ASF-AMC files plus captions
+* ``bandai``: the Bandai Namco Research Motion Datasets (``load_bandai``; with English for
+  the labels, ``load_bandai_text``; CC BY-NC 4.0); ``bandai_text``: that English grammar and
+  the style synonyms
 * ``cache``: ``cached`` — an ``.npz`` cache of computed arrays
 * ``download``: resumable, checksummed HTTP downloads and safe zip extraction
 

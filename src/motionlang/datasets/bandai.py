@@ -10,7 +10,10 @@ Layout (the public repository's ``dataset/`` folder, and each release archive)::
 
 :func:`bandai_folders` finds the dataset folders under a clone of the repository, a folder
 of the two ``.tar.xz`` archives (extracted once into the cache, outside the source folder)
-or one dataset folder; :func:`load_bandai` lists the takes with their labels and split.
+or one dataset folder; :func:`load_bandai` lists the takes with their labels and split;
+:func:`load_bandai_text` adds English sentences for the labels (``bandai_text``) and,
+optionally, mirrored copies: records as the other datasets' (``id``, ``annotations``,
+``load_motion``), which ``seq2seq_pairs.load_records("bandai:PATH")`` returns.
 Splits are deterministic: in dataset 2, takes numbered 0 mod 5 are test, 4 mod 5
 validation, the rest training; dataset 1 (one take per label) is all training.
 """
@@ -18,7 +21,7 @@ from __future__ import annotations
 
 import json
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from motionlang.datasets.cache import cache_dir
@@ -43,6 +46,9 @@ class BandaiRecord:
         style: style label, e.g. ``"elderly"``.
         take: take number (1-based, per content x style).
         split: ``"train"``, ``"val"`` or ``"test"``.
+        sentences: English for the labels (``bandai_text.Sentence``; see
+            :func:`load_bandai_text`), none from :func:`load_bandai`.
+        mirrored: the take mirrored left/right (id ``"M" + id``; content label mirrored).
     """
     id: str
     path: Path
@@ -52,11 +58,30 @@ class BandaiRecord:
     take: int
     split: str
     meta: dict = field(default_factory=dict)
+    sentences: list = field(default_factory=list)
+    mirrored: bool = False
+
+    @property
+    def annotations(self) -> list[str]:
+        """The sentences' text, as ``KitMLRecord.annotations``."""
+        return [s.text for s in self.sentences]
+
+    @property
+    def has_annotations(self) -> bool:
+        return bool(self.sentences)
+
+    @property
+    def labels(self) -> dict[str, str]:
+        return {"content": self.content, "style": self.style}
 
     def load_motion(self):
-        """Read the take (``formats.read_motion``); labels in ``meta``."""
+        """Read the take (``formats.read_motion``; mirrored by
+        ``kinematics.from_positions.mirror_motion`` if ``mirrored``); labels in ``meta``."""
         from motionlang.formats import read_motion  # lower layer, loaded lazily
         motion = read_motion(self.path)
+        if self.mirrored:
+            from motionlang.kinematics.from_positions import mirror_motion
+            motion = mirror_motion(motion)
         motion.meta.update(dataset="bandai", content=self.content, style=self.style,
                            take=self.take, licence=LICENSE)
         return motion
@@ -143,6 +168,44 @@ def load_bandai(source: str | Path, split: str | None = None) -> list[BandaiReco
             if split is None or rec.split == split:
                 records.append(rec)
     return sorted(records, key=lambda r: r.id)
+
+
+def bvh_seconds(path: Path) -> float:
+    """A BVH file's duration from its header (``Frames:`` x ``Frame Time:``), unparsed."""
+    head = {}
+    with open(path, encoding="utf-8", errors="replace") as fh:
+        for line in fh:
+            key, _, value = line.partition(":")
+            if key.strip() in ("Frames", "Frame Time"):
+                head[key.strip()] = float(value)
+                if len(head) == 2:
+                    return head["Frames"] * head["Frame Time"]
+    raise DatasetError(f"{path}: no 'Frames:' / 'Frame Time:' lines (not a BVH file)")
+
+
+def load_bandai_text(source: str | Path, split: str | None = None, *, per_take: int = 3,
+                     seed: int = 0, mirror: bool = False, max_seconds: float | None = None
+                     ) -> list[BandaiRecord]:
+    """:func:`load_bandai`'s takes with ``per_take`` English sentences each
+    (``bandai_text.describe``, seeded by ``seed`` and the take's id, so the same on every
+    run); with ``mirror``, each take also mirrored (left/right swapped in motion, text and
+    label; same split). ``max_seconds``: leave out longer takes (header read only).
+    """
+    import zlib
+
+    from motionlang.datasets.bandai_text import describe, mirror_sentence
+    out = []
+    for rec in load_bandai(source, split):
+        if max_seconds is not None and bvh_seconds(rec.path) > max_seconds:
+            continue
+        rec.sentences = describe(rec.content, rec.style, per_take,
+                                 seed=zlib.crc32(f"{seed}/{rec.id}".encode()))
+        out.append(rec)
+        if mirror:
+            m = [mirror_sentence(s) for s in rec.sentences]
+            out.append(replace(rec, id=f"M{rec.id}", content=m[0].content, sentences=m,
+                               mirrored=True, meta=dict(rec.meta)))
+    return out
 
 
 def _split_name(middle: str, contents: list[str], styles: list[str], path: Path

@@ -84,23 +84,29 @@ def download_file(url: str, target: str | Path, *, sha256: str | None = None,
     target.parent.mkdir(parents=True, exist_ok=True)
     expected = sha256.lower().strip() if sha256 else None
     if target.exists():
-        ok = sha256_file(target) == expected if expected else \
-            _archive_problem(target, target.name) is None
-        if ok:
+        if _still_good(target, expected):
             return target
         target.unlink()  # stale, corrupt, or a web page saved as the archive: fetch again
     part = target.with_name(target.name + ".part")
+    total = _fetch(url, part, timeout, desc or target.name)
+    _check_part(url, part, target.name, total, expected)
+    os.replace(part, target)
+    return target
+
+
+def _still_good(target: Path, expected: str | None) -> bool:
+    """Whether an existing ``target`` can be reused: its checksum matches, or (without
+    one) it is the archive its name promises."""
+    return sha256_file(target) == expected if expected else \
+        _archive_problem(target, target.name) is None
+
+
+def _fetch(url: str, part: Path, timeout: float, desc: str) -> int | None:
+    """Append the rest of ``url`` to ``part`` (or write it afresh when the server cannot
+    resume); the file's full size when the server told it, else None."""
     offset = part.stat().st_size if part.exists() else 0
     try:
-        try:
-            resp = _open(url, offset, timeout)
-        except urllib.error.HTTPError as exc:
-            if exc.code == 416 and offset:  # our .part is no prefix of the file: start over
-                part.unlink()
-                offset = 0
-                resp = _open(url, 0, timeout)
-            else:
-                raise
+        resp, offset = _open_resuming(url, part, offset, timeout)
         with resp:
             status = getattr(resp, "status", 200)
             content_range = resp.headers.get("Content-Range", "")
@@ -109,7 +115,7 @@ def download_file(url: str, target: str | Path, *, sha256: str | None = None,
             length = resp.headers.get("Content-Length")
             total = offset + int(length) if length and length.isdigit() else None
             with open(part, "ab" if offset else "wb") as fh, \
-                    progress(desc=desc or target.name, total=total, unit="B", unit_scale=True,
+                    progress(desc=desc, total=total, unit="B", unit_scale=True,
                              unit_divisor=1024, initial=offset) as bar:
                 for block in iter(lambda: resp.read(CHUNK), b""):
                     fh.write(block)
@@ -122,6 +128,25 @@ def download_file(url: str, target: str | Path, *, sha256: str | None = None,
         kept = part.stat().st_size if part.exists() else 0
         raise DatasetError(f"{url}: transfer interrupted ({exc!r}); {kept} bytes kept in "
                            f"{part}, run again to resume") from None
+    return total
+
+
+def _open_resuming(url: str, part: Path, offset: int, timeout: float):
+    """(response, offset) of a request for ``url`` from byte ``offset``; from 0 when the
+    server says the range cannot be satisfied (the ``.part`` is deleted)."""
+    try:
+        return _open(url, offset, timeout), offset
+    except urllib.error.HTTPError as exc:
+        if exc.code == 416 and offset:  # our .part is no prefix of the file: start over
+            part.unlink()
+            return _open(url, 0, timeout), 0
+        raise
+
+
+def _check_part(url: str, part: Path, name: str, total: int | None,
+                expected: str | None) -> None:
+    """Refuse a ``.part`` that is short, fails the checksum, or (without one) is not the
+    archive ``name`` promises; the last two are deleted."""
     size = part.stat().st_size
     if total is not None and size != total:
         raise DatasetError(f"{url}: incomplete download ({size} of {total} bytes); "
@@ -131,12 +156,10 @@ def download_file(url: str, target: str | Path, *, sha256: str | None = None,
         if got != expected:
             part.unlink()
             raise DatasetError(f"{url}: sha256 mismatch: expected {expected}, got {got}")
-    elif (problem := _archive_problem(part, target.name)) is not None:
+    elif (problem := _archive_problem(part, name)) is not None:
         part.unlink()
         raise DatasetError(f"{url}: {problem}; nothing was kept: check the URL, or run again "
                            "later")
-    os.replace(part, target)
-    return target
 
 
 def _archive_problem(path: Path, name: str) -> str | None:

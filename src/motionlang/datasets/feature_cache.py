@@ -22,6 +22,7 @@ import numpy as np
 from motionlang.datasets.cache import cached, file_identity
 from motionlang.errors import MotionlangError
 from motionlang.features.base import FeatureSet, features_from_dict, make_features
+from motionlang.kinematics.from_positions import mirror_motion
 from motionlang.utils.progress import progress
 
 #: bump when any feature encoding changes, so that older cache entries are not reused
@@ -77,7 +78,7 @@ def dataset_features(records: Sequence, kind: str, options: dict[str, Any] | Non
             training split so validation and test data stay unseen).
         directory: cache folder (default ``$MOTIONLANG_CACHE`` or ``~/.cache/motionlang``).
         refresh: recompute even if cached.
-        mirror: encode each record's motion mirrored left/right (``Motion.mirror``), for
+        mirror: encode each record's motion mirrored left/right (``mirror_motion``), for
             augmentation; the features are still fitted on the unmirrored ``fit_records``
             (the same cache entry as without it).
 
@@ -109,14 +110,15 @@ def dataset_features(records: Sequence, kind: str, options: dict[str, Any] | Non
         out = {}
         for i, r in enumerate(progress(records, desc=f"encode {kind}", unit="motion")):
             motion = r.load_motion()
-            for k, seq in enumerate(_encode_record(fs, motion.mirror() if mirror else motion)):
+            motion = mirror_motion(motion) if mirror else motion
+            for k, seq in enumerate(_encode_record(fs, motion)):
                 out[f"{i}_{k}"] = seq
         return out
 
     key = {"v": CACHE_VERSION, "stage": "encode", "features": fs.to_dict(),
            "records": _identity(records)}
-    if mirror:   # keys without it stay those of earlier caches
-        key["mirror"] = True
+    if mirror:   # keys without it stay those of earlier caches; "mirror_motion": not the
+        key["mirror"] = "mirror_motion"   # Motion.mirror of before, wrong on some rigs
     arrays = cached(key, encode, name=f"encode-{kind}{'-mirrored' * mirror}",
                     directory=directory, refresh=refresh)
     sequences: dict[str, list[np.ndarray]] = {i: [] for i in ids}

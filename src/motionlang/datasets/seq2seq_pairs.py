@@ -28,10 +28,12 @@ from motionlang.datasets.splits import random_split
 from motionlang.datasets.text import Vocabulary
 from motionlang.features.frames import motion_frames
 from motionlang.errors import DatasetError, MotionlangError
+from motionlang.kinematics.from_positions import mirror_motion
 from motionlang.features.base import FeatureSet, features_from_dict
 from motionlang.utils.progress import progress
 
 CACHE_VERSION = "seq2seq-pairs-1"
+BANDAI_PREFIX = "bandai:"
 log = logging.getLogger(__name__)
 
 
@@ -39,7 +41,12 @@ def load_records(data: str | Path, max_seconds: float | None = 30.0,
                  joint_map: str | Path | dict | None = None) -> list:
     """KIT-ML-format records if ``data`` holds ``*_mmm.xml`` files, else a custom dataset
     (whose rig maps onto the 21-joint body by ``joint_map``, see ``load_custom``);
-    ``humanml3d:DIR`` / ``kitml-h3d:DIR``: a HumanML3D-layout folder (``load_h3d``)."""
+    ``humanml3d:DIR`` / ``kitml-h3d:DIR``: a HumanML3D-layout folder (``load_h3d``);
+    ``bandai:DIR``: the Bandai Namco datasets' takes with sentences written from their labels
+    and their own split (``load_bandai_text``; non-commercial licence)."""
+    if str(data).startswith(BANDAI_PREFIX):
+        from motionlang.datasets.bandai import load_bandai_text
+        return load_bandai_text(str(data)[len(BANDAI_PREFIX):], max_seconds=max_seconds)
     from motionlang.datasets.humanml3d import load_prefixed
     h3d = load_prefixed(data, max_seconds)
     if h3d is not None:
@@ -49,6 +56,19 @@ def load_records(data: str | Path, max_seconds: float | None = 30.0,
     except DatasetError:
         return load_custom(data, joint_map=joint_map)
     return load_kitml(data, max_seconds=max_seconds)
+
+
+def record_splits(records: Sequence, fractions: Sequence[float] = (0.8, 0.1, 0.1),
+                  seed: int = 0) -> dict[str, list[str]]:
+    """Ids per split: the records' own (``split`` attribute: the Bandai takes' numbers, a
+    HumanML3D folder's split files) when every record names one, else ``random_split``."""
+    own = [getattr(r, "split", None) for r in records]
+    if records and all(s in ("train", "val", "test") for s in own):
+        out: dict[str, list[str]] = {"train": [], "val": [], "test": []}
+        for r, s in zip(records, own):
+            out[s].append(r.id)
+        return {k: sorted(v) for k, v in out.items()}
+    return random_split([r.id for r in records], fractions, seed=seed)
 
 
 def record_path(rec: Any) -> Path:
@@ -135,14 +155,14 @@ def _encode(fs: FeatureSet, records: Sequence, offsets: int, mirror: bool = Fals
         arrays: dict[str, np.ndarray] = {}
         for i, rec in enumerate(progress(records, desc="encode", unit="motion")):
             motion = rec.load_motion()
-            for k, s in enumerate(motion_frames(fs, motion.mirror() if mirror else motion,
+            for k, s in enumerate(motion_frames(fs, mirror_motion(motion) if mirror else motion,
                                                 offsets)):
                 arrays[f"{i}_{k}"] = s
         return arrays
     key = {"v": CACHE_VERSION, "stage": "encode", "features": fs.to_dict(), "offsets": offsets,
            "files": [file_identity(record_path(r)) for r in records]}
-    if mirror:   # keys without it stay those of earlier caches
-        key["mirror"] = True
+    if mirror:   # keys without it stay those of earlier caches; "mirror_motion": not the
+        key["mirror"] = "mirror_motion"   # Motion.mirror of before, wrong on some rigs
     _add_joint_maps(key, records)
     out = cached(key, compute, name="seq2seq-encode")
     seqs: dict[str, list[np.ndarray]] = {r.id: [] for r in records}
@@ -160,7 +180,10 @@ def build_pairs(data: str | Path, *, features: str = "angles", offsets: int = 10
 
     joint_map: for a custom folder whose rig no built-in map recognises (``load_custom``).
 
-    mirror: the training items also hold every training motion mirrored left/right with
+    Splits: the records' own where they all name one (``record_splits``), else random.
+
+    mirror: the training items also hold every training motion mirrored left/right
+    (``kinematics.from_positions.mirror_motion``, right on any rig) with
     its sentences' sides swapped (``datasets.synth.augment.mirror_text``; items marked
     ``"mirrored": True``, same ``id``), which doubles them and balances the sides. The
     features are fitted on the unmirrored motions; references, sequences and the other
@@ -169,7 +192,7 @@ def build_pairs(data: str | Path, *, features: str = "angles", offsets: int = 10
     records = [r for r in load_records(data, max_seconds, joint_map) if r.annotations]
     if len(records) < 2:
         raise DatasetError(f"{data}: need at least 2 described motions, found {len(records)}")
-    splits = random_split([r.id for r in records], fractions, seed=seed)
+    splits = record_splits(records, fractions, seed)
     by_id = {r.id: r for r in records}
     train = [by_id[i] for i in splits["train"]]
     if not train:

@@ -2,7 +2,8 @@
 
 Reads a KIT-ML-format folder (the release or a procedural corpus) or a custom folder
 (``datasets.seq2seq_pairs.load_records``), drops motions without descriptions, splits by
-motion (``datasets.splits.random_split``), fits the *positions* features (21 joints + root
+motion (the records' own split where they name one, else ``datasets.splits.random_split``),
+fits the *positions* features (21 joints + root
 trajectory, 12.5 Hz, ``features.positions.PositionFeatures``) on the training motions only
 and encodes every motion once through the on-disk feature cache
 (``datasets.feature_cache.dataset_features``). Each motion is paired with each of its
@@ -18,7 +19,6 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from motionlang.datasets.splits import random_split
 from motionlang.errors import DatasetError
 from motionlang.datasets.feature_cache import dataset_features
 
@@ -57,24 +57,25 @@ def build_twostream_data(data: str | Path, *, fractions: Sequence[float] = (0.8,
     """Read ``data``, split by motion, fit + encode positions features (cached), make items.
 
     Args:
-        fractions, seed: the split (``random_split``).
+        fractions, seed: the split (``random_split``), unless every record names its own
+            (``seq2seq_pairs.record_splits``: the Bandai takes).
         max_seconds: drop motions this long or longer.
         max_frames: crop every training/validation/test sequence to its first
             ``max_frames`` frames (12.5 Hz) to bound the unrolled decoder's cost; None keeps all.
         cache_dir: feature cache folder (default ``$MOTIONLANG_CACHE`` or ~/.cache/motionlang).
-        mirror: add each training motion mirrored (``Motion.mirror``) with each of its
+        mirror: add each training motion mirrored (``mirror_motion``) with each of its
             sentences' sides swapped (``datasets.synth.augment.mirror_text``) to the training
             items (marked ``"mirrored": True``, same ``id``): twice the items, both sides
             equally often. Features are fitted on the unmirrored motions; ``sequences`` and
             the other splits stay unmirrored.
     """
-    from motionlang.datasets.seq2seq_pairs import load_records
+    from motionlang.datasets.seq2seq_pairs import load_records, record_splits
 
     records = [r for r in load_records(data, max_seconds) if r.annotations]
     if len(records) < 2:
         raise DatasetError(f"{data}: need at least 2 described motions, found {len(records)}")
     by_id = {str(r.id): r for r in records}
-    splits = random_split(list(by_id), fractions, seed=seed)
+    splits = record_splits(records, fractions, seed)
     train = [by_id[i] for i in splits["train"]]
     if not train:
         raise DatasetError(f"{data}: the training split is empty")

@@ -82,13 +82,8 @@ def beam_search(step: Step, state: Any, *, batch_size: int, width: int, sos: int
     finished hypotheses.
     """
     B, W = batch_size, width
-    if W < 1 or max_len < 1:
-        raise ValueError("beam width and max_len must be >= 1")
-    if length_penalty < 0:
-        raise ValueError("length_penalty must be >= 0")
-
-    def rank(h: Hypothesis) -> float:
-        return -h.score / (len(h.tokens) ** length_penalty if length_penalty else 1.0)
+    _check_beam_args(W, max_len, length_penalty)
+    rank = _ranker(length_penalty)
     state = reorder(state, torch.arange(B).repeat_interleave(W))
     prev = torch.full((B * W,), sos, dtype=torch.long)
     # Only beam 0 is live at the start so the W copies of the empty prefix don't repeat.
@@ -102,29 +97,66 @@ def beam_search(step: Step, state: Any, *, batch_size: int, width: int, sos: int
         V = log_probs.shape[-1]
         ban = tuple(banned) + ((eos,) if t < min_len and t < max_len - 1 else ())
         total = scores.unsqueeze(-1) + _ban(log_probs.float(), ban).view(B, W, V)
-        eos_total = total[..., eos]
-        for b, w in (torch.isfinite(eos_total) & ~done.unsqueeze(1)).nonzero().tolist():
-            finished[b].append(Hypothesis(tuple(tokens[b, w].tolist()) + (eos,),
-                                          float(eos_total[b, w])))
-        for b in range(B):
-            finished[b] = sorted(finished[b], key=rank)[:W]
+        _finish(finished, total[..., eos], tokens, done, eos, rank, W)
         if t == max_len - 1:
             break
         total[..., eos] = float("-inf")
-        scores, flat = total.view(B, W * V).topk(W, dim=1)
-        beam, tok = flat // V, flat % V
-        tokens = torch.cat([tokens.gather(1, beam.unsqueeze(-1).expand(B, W, t)),
-                            tok.unsqueeze(-1)], dim=-1)
-        for b in range(B):
-            if (not length_penalty and len(finished[b]) >= W
-                    and not scores[b, 0] > finished[b][-1].score):
-                done[b] = True
+        scores, beam, tok, tokens = _extend(total, tokens, W)
+        if not length_penalty:  # with a penalty a longer hypothesis can still overtake
+            _mark_settled(done, scores, finished, W)
         scores[done] = float("-inf")
         if bool(done.all()) or not bool(torch.isfinite(scores).any()):
             break
         state = reorder(state, (beam + torch.arange(B).unsqueeze(1) * W).view(-1))
         prev = tok.view(-1)
     return finished
+
+
+def _extend(total: torch.Tensor, tokens: torch.Tensor, W: int):
+    """The W best extensions per input of the prefixes ``tokens`` (B, W, t) by the totals
+    ``total`` (B, W, V): their scores (B, W), source beams, new tokens and prefixes
+    (B, W, t + 1)."""
+    B, _, V = total.shape
+    scores, flat = total.view(B, W * V).topk(W, dim=1)
+    beam, tok = flat // V, flat % V
+    tokens = torch.cat([tokens.gather(1, beam.unsqueeze(-1).expand(B, W, tokens.shape[-1])),
+                        tok.unsqueeze(-1)], dim=-1)
+    return scores, beam, tok, tokens
+
+
+def _check_beam_args(W: int, max_len: int, length_penalty: float) -> None:
+    """ValueError unless the width and cap are >= 1 and the length penalty >= 0."""
+    if W < 1 or max_len < 1:
+        raise ValueError("beam width and max_len must be >= 1")
+    if length_penalty < 0:
+        raise ValueError("length_penalty must be >= 0")
+
+
+def _ranker(length_penalty: float) -> Callable[[Hypothesis], float]:
+    """Sort key of finished hypotheses: minus total log probability / tokens ** alpha."""
+    def rank(h: Hypothesis) -> float:
+        return -h.score / (len(h.tokens) ** length_penalty if length_penalty else 1.0)
+    return rank
+
+
+def _finish(finished: list[list[Hypothesis]], eos_total: torch.Tensor, tokens: torch.Tensor,
+            done: torch.Tensor, eos: int, rank, W: int) -> None:
+    """Add each live prefix closed by EOS (total (B, W), prefixes (B, W, t)) to its input's
+    pool, inputs already done excepted, and keep each pool's W best."""
+    for b, w in (torch.isfinite(eos_total) & ~done.unsqueeze(1)).nonzero().tolist():
+        finished[b].append(Hypothesis(tuple(tokens[b, w].tolist()) + (eos,),
+                                      float(eos_total[b, w])))
+    for b in range(len(finished)):
+        finished[b] = sorted(finished[b], key=rank)[:W]
+
+
+def _mark_settled(done: torch.Tensor, scores: torch.Tensor,
+                  finished: list[list[Hypothesis]], W: int) -> None:
+    """Mark done each input whose W finished hypotheses all beat its best live prefix
+    (scores (B, W), best first): log probabilities <= 0, so no prefix can catch up."""
+    for b in range(len(finished)):
+        if len(finished[b]) >= W and not scores[b, 0] > finished[b][-1].score:
+            done[b] = True
 
 
 @torch.no_grad()

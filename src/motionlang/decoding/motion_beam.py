@@ -89,32 +89,11 @@ def sampled_beam(step: MotionStep, state: Any, *, batch_size: int, width: int,
 
     for t in range(max_frames):
         params, state = step(state, prev)
-        N = len(owner)
-        x, a = sample(params, S, generator, temperature)          # (N, S, D), (N, S)
-        rep = MixtureParams(*(p.repeat_interleave(S, 0) for p in
-                              (params.logit_pi, params.mu, params.log_sigma,
-                               params.active_logit)))
-        xf, af = x.reshape(N * S, D), a.reshape(N * S)
-        if t == max_frames - 1:
-            af = torch.zeros_like(af)                               # close everything at the cap
-        elif t < min_frames - 1:
-            af = torch.ones_like(af)
-        ll = mixture_log_prob(rep, xf) + active_log_prob(rep, af)
-        cand = scores.repeat_interleave(S) + ll                     # (N*S,)
-        row = torch.arange(N).repeat_interleave(S)
-        keep_rows: list[int] = []
-        for b in range(B):
-            mine = (owner[row] == b)
-            ended = (mine & (af == 0)).nonzero().flatten()
-            for i in ended.tolist():
-                r = int(row[i])
-                seq = torch.cat([frames[r], xf[i:i + 1]]).numpy().astype(np.float32)
-                finished[b].append(MotionHypothesis(seq, float(cand[i])))
-            finished[b] = sorted(finished[b], key=rank)[:W]
-            going = (mine & (af == 1)).nonzero().flatten()
-            if len(going):
-                best = cand[going].topk(min(W, len(going))).indices
-                keep_rows.extend(going[best].tolist())
+        xf, af, cand = _candidates(params, scores, S, D, generator, temperature,
+                                   close=t == max_frames - 1, hold=t < min_frames - 1)
+        row = torch.arange(len(owner)).repeat_interleave(S)
+        keep_rows = _settle(finished, owner[row], af, cand, W, rank,
+                            lambda i: torch.cat([frames[int(row[i])], xf[i:i + 1]]))
         if not keep_rows:
             break
         keep = torch.tensor(keep_rows)
@@ -123,6 +102,45 @@ def sampled_beam(step: MotionStep, state: Any, *, batch_size: int, width: int,
         scores, owner, prev = cand[keep], owner[parent], xf[keep]
         state = reorder(state, parent)
     return finished
+
+
+def _candidates(params: MixtureParams, scores: torch.Tensor, S: int, D: int,
+                generator: torch.Generator | None, temperature: float, *, close: bool,
+                hold: bool) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+    """S sampled (frame, flag) candidates per live row (N rows of ``params``, running log
+    likelihoods ``scores`` (N,)): frames (N*S, D), flags (N*S,) (all 0 when ``close``, all
+    1 when ``hold``) and the candidates' total log likelihoods (N*S,), rows in order."""
+    N = len(scores)
+    x, a = sample(params, S, generator, temperature)          # (N, S, D), (N, S)
+    rep = MixtureParams(*(p.repeat_interleave(S, 0) for p in
+                          (params.logit_pi, params.mu, params.log_sigma,
+                           params.active_logit)))
+    xf, af = x.reshape(N * S, D), a.reshape(N * S)
+    if close:
+        af = torch.zeros_like(af)                               # close everything at the cap
+    elif hold:
+        af = torch.ones_like(af)
+    ll = mixture_log_prob(rep, xf) + active_log_prob(rep, af)
+    return xf, af, scores.repeat_interleave(S) + ll
+
+
+def _settle(finished: list[list[MotionHypothesis]], owner: torch.Tensor, af: torch.Tensor,
+            cand: torch.Tensor, W: int, rank, motion_of) -> list[int]:
+    """Per input: its candidates (``owner`` (N*S,) names the input) whose flag ``af`` is 0
+    join its finished pool, which keeps its W best; the indices of its W most likely other
+    candidates are returned, to stay live. ``motion_of(i)``: candidate i's frames (t+1, D)."""
+    keep_rows: list[int] = []
+    for b in range(len(finished)):
+        mine = (owner == b)
+        for i in (mine & (af == 0)).nonzero().flatten().tolist():
+            seq = motion_of(i).numpy().astype(np.float32)
+            finished[b].append(MotionHypothesis(seq, float(cand[i])))
+        finished[b] = sorted(finished[b], key=rank)[:W]
+        going = (mine & (af == 1)).nonzero().flatten()
+        if len(going):
+            best = cand[going].topk(min(W, len(going))).indices
+            keep_rows.extend(going[best].tolist())
+    return keep_rows
 
 
 @torch.no_grad()

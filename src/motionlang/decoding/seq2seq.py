@@ -186,6 +186,24 @@ def describe(model: MotionToLanguage, motion, *, width: int = 5,
                              length_penalty=length_penalty)
 
 
+@torch.no_grad()
+def embed_motion(model: MotionToLanguage, motion) -> np.ndarray:
+    """A :class:`Motion` -> the M2L encoder's summary of it, its context (C,) float32 (the
+    vector its decoder starts from; similar motions lie close)."""
+    frames = motion_frames(_features_of(model), motion, 1)[0]
+    x = torch.as_tensor(_normalize(model.normalizer, frames), dtype=torch.float32)[None]
+    return model.eval().encode(x, torch.tensor([len(frames)]))["context"][0].numpy()
+
+
+@torch.no_grad()
+def embed_sentence(model: LanguageToMotion, sentence: str | Sequence[int]) -> np.ndarray:
+    """A sentence -> the L2M encoder's summary of it, its context (C,) float32 (words the
+    model does not know count as one unknown word)."""
+    ids = encode_sentence(model.vocab, sentence)
+    state = model.eval().encode(torch.tensor([ids]), torch.tensor([len(ids)]))
+    return state["context"][0].numpy()
+
+
 def generate(model: LanguageToMotion, sentence: str | Sequence[int], *, width: int = 5,
              max_frames: int | None = None, method: str = "beam", samples: int = 5,
              seed: int = 0, min_frames: int = 1, length_norm: bool = False,

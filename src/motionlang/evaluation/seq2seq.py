@@ -234,3 +234,9 @@ def parameter_accuracy(texts: Mapping[str, str], truths: Mapping[str, Sequence])
         out[f] = right[f] / stated[f] if stated[f] else float("nan")
         out[f + "_stated"] = stated[f]
     return out
+
+
+def named_line(named: dict) -> str:
+    """``evaluation.seq2seq.actions_named``'s result as one line of text."""
+    return ", ".join(f"{place} {named[place]:.1%} of {named['n_' + place]}"
+                     for place in ("first", "later", "only"))

@@ -128,8 +128,8 @@ def read_motion(path: str | Path, *, skeleton: Skeleton | str | Path | None = No
     return motion
 
 
-def write_motion(motion: Motion, path: str | Path) -> None:
-    """Write ``motion``, choosing the writer from the extension.
+def write_motion(motion: Motion, path: str | Path) -> Path:
+    """Write ``motion``, choosing the writer from the extension; returns the path.
 
     ``.bvh`` accepts any motion; ``.xml`` needs an MMM skeleton and ``.amc`` an ASF one.
 
@@ -156,6 +156,7 @@ def write_motion(motion: Motion, path: str | Path) -> None:
                                           f"expected one of {', '.join(WRITE_EXTENSIONS)}")
     except SkeletonError as exc:
         raise MotionFormatError(path, str(exc)) from None
+    return path
 
 
 def motion_info(motion: Motion) -> dict:

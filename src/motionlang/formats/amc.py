@@ -143,89 +143,23 @@ def read_amc(path: str | Path, skeleton: Skeleton, fps: float = 120.0) -> Motion
             beyond the limits (``utils.limits``).
     """
     path = Path(path)
-    try:
-        fps = float(fps)
-    except (TypeError, ValueError):
-        fps = float("nan")
-    if not (math.isfinite(fps) and fps > 0):
-        raise MotionFormatError(path, f"frame rate must be positive, got {fps}")
+    fps = _positive_fps(path, fps)
     lines = read_lines(path)
     try:
         _, root_map, cols = _layout(skeleton)
     except SkeletonError as exc:
         raise MotionFormatError(path, str(exc)) from None
-    slots: dict[str, tuple[int, int]] = {"root": (0, 6)}
-    for name, c, _ in cols:
-        s, n = slots.get(name, (c, 0))
-        slots[name] = (s, n + 1)
-    for j in skeleton.joints:
-        if j.ndof == 0 and j.parent >= 0 and not j.name.endswith("_end"):
-            slots.setdefault(j.name, (0, 0))
-    C = 6 + len(cols)
-    max_frames = limits.current().max_frames
     info = getattr(skeleton, "asf_layout", None)
-    degrees = info["degrees"] if info else True
-    frames: list[np.ndarray] = []
-    numbers: list[int] = []
-    seen: set[str] = set()
-    row = None
-
-    def close(ln):
-        missing = [n for n, (_, k) in slots.items() if k and n not in seen]
-        if missing:
-            raise MotionFormatError(path, f"frame {numbers[-1]} lacks bone(s) {missing[:5]}",
-                                    line=ln)
-        frames.append(row)
-
-    for ln, text in enumerate(lines, start=1):
-        tok = text.split("#", 1)[0].split()
-        if not tok:
-            continue
-        if tok[0].startswith(":"):
-            if row is not None:
-                raise MotionFormatError(path, f"header {tok[0]!r} after the first frame", line=ln)
-            key = tok[0].upper()
-            if key == ":DEGREES":
-                degrees = True
-            elif key == ":RADIANS":
-                degrees = False
-            continue
-        if len(tok) == 1 and _INTEGER.fullmatch(tok[0]):
-            if len(tok[0].lstrip("-")) > 15:  # int() of 4,300+ digits raises; none is real
-                raise MotionFormatError(path, f"frame number {tok[0][:20]}... out of range",
-                                        line=ln)
-            if row is not None:
-                close(ln)
-                if len(frames) >= max_frames:
-                    limits.check(path, "max_frames", len(frames) + 1, "frame count", line=ln)
-            numbers.append(int(tok[0]))
-            row, seen = np.zeros(C), set()
-            continue
-        if row is None:
-            raise MotionFormatError(path, f"expected a frame number, got {text.strip()[:40]!r}",
-                                    line=ln)
-        name = tok[0]
-        if name not in slots:
-            raise MotionFormatError(path, f"unknown bone {name[:40]!r}", line=ln)
-        if name in seen:
-            raise MotionFormatError(path, f"bone {name!r} given twice in one frame", line=ln)
-        start, n = slots[name]
-        if len(tok) - 1 != n:
-            raise MotionFormatError(path, f"bone {name!r} needs {n} values, got {len(tok) - 1}",
-                                    line=ln)
-        for i, t in enumerate(tok[1:]):
-            row[start + i] = parse_float(t, path, ln, f"bone {name!r}")
-        seen.add(name)
-    if row is None:
-        raise MotionFormatError(path, "no frames", line=len(lines))
-    close(len(lines))
-    limits.check_motion(path, len(frames), len(skeleton), C)
-    ch = np.stack(frames)
-    if not degrees:
-        rot_ch = [i for i, (k, _) in enumerate(root_map) if k == "r"] + list(range(6, C))
+    amc = _AmcFrames(path, _bone_slots(skeleton, cols), 6 + len(cols),
+                     degrees=info["degrees"] if info else True)
+    amc.feed(lines)
+    limits.check_motion(path, len(amc.frames), len(skeleton), amc.width)
+    ch = np.stack(amc.frames)
+    if not amc.degrees:
+        rot_ch = [i for i, (k, _) in enumerate(root_map) if k == "r"] + list(range(6, amc.width))
         ch[:, rot_ch] = np.rad2deg(ch[:, rot_ch])
     motion = motion_from_channels(skeleton, ch, fps, name=path.stem)
-    motion.meta.update(path=str(path), first_frame=numbers[0])
+    motion.meta.update(path=str(path), first_frame=amc.numbers[0])
     try:
         motion.validate(str(path))
     except MotionFormatError as exc:
@@ -233,6 +167,109 @@ def read_amc(path: str | Path, skeleton: Skeleton, fps: float = 120.0) -> Motion
             raise
         raise MotionFormatError(path, exc.reason, frame=exc.frame) from None
     return motion
+
+
+def _positive_fps(path: Path, fps) -> float:
+    """``fps`` as a float, or MotionFormatError unless finite and positive."""
+    try:
+        fps = float(fps)
+    except (TypeError, ValueError):
+        fps = float("nan")
+    if not (math.isfinite(fps) and fps > 0):
+        raise MotionFormatError(path, f"frame rate must be positive, got {fps}")
+    return fps
+
+
+def _bone_slots(skeleton: Skeleton, cols) -> dict[str, tuple[int, int]]:
+    """Bone name -> (first channel, channel count) in a frame row; DOF-less bones get
+    ``(0, 0)`` because AMC files may list them with no values."""
+    slots: dict[str, tuple[int, int]] = {"root": (0, 6)}
+    for name, c, _ in cols:
+        s, n = slots.get(name, (c, 0))
+        slots[name] = (s, n + 1)
+    for j in skeleton.joints:
+        if j.ndof == 0 and j.parent >= 0 and not j.name.endswith("_end"):
+            slots.setdefault(j.name, (0, 0))
+    return slots
+
+
+class _AmcFrames:
+    """The frames of one AMC file, gathered line by line into rows of ``width`` channels."""
+
+    def __init__(self, path: Path, slots: dict[str, tuple[int, int]], width: int,
+                 degrees: bool):
+        self.path, self.slots, self.width, self.degrees = path, slots, width, degrees
+        self.max_frames = limits.current().max_frames
+        self.frames: list[np.ndarray] = []
+        self.numbers: list[int] = []
+        self.seen: set[str] = set()
+        self.row: np.ndarray | None = None
+
+    def feed(self, lines: list[str]) -> None:
+        """Parse every line: headers, frame numbers and bone values."""
+        for ln, text in enumerate(lines, start=1):
+            tok = text.split("#", 1)[0].split()
+            if not tok:
+                continue
+            if tok[0].startswith(":"):
+                self._header(tok, ln)
+            elif len(tok) == 1 and _INTEGER.fullmatch(tok[0]):
+                self._start_frame(tok[0], ln)
+            elif self.row is None:
+                raise MotionFormatError(self.path, "expected a frame number, got "
+                                                   f"{text.strip()[:40]!r}", line=ln)
+            else:
+                self._bone_values(tok, ln)
+        if self.row is None:
+            raise MotionFormatError(self.path, "no frames", line=len(lines))
+        self._close(len(lines))
+
+    def _header(self, tok: list[str], ln: int) -> None:
+        """A ``:KEYWORD`` line; only the angle unit matters."""
+        if self.row is not None:
+            raise MotionFormatError(self.path, f"header {tok[0]!r} after the first frame",
+                                    line=ln)
+        key = tok[0].upper()
+        if key == ":DEGREES":
+            self.degrees = True
+        elif key == ":RADIANS":
+            self.degrees = False
+
+    def _start_frame(self, number: str, ln: int) -> None:
+        """A frame number: close the frame before and open a new row."""
+        if len(number.lstrip("-")) > 15:  # int() of 4,300+ digits raises; none is real
+            raise MotionFormatError(self.path, f"frame number {number[:20]}... out of range",
+                                    line=ln)
+        if self.row is not None:
+            self._close(ln)
+            if len(self.frames) >= self.max_frames:
+                limits.check(self.path, "max_frames", len(self.frames) + 1, "frame count",
+                             line=ln)
+        self.numbers.append(int(number))
+        self.row, self.seen = np.zeros(self.width), set()
+
+    def _bone_values(self, tok: list[str], ln: int) -> None:
+        """A bone's name and values, stored in the open row."""
+        path, name = self.path, tok[0]
+        if name not in self.slots:
+            raise MotionFormatError(path, f"unknown bone {name[:40]!r}", line=ln)
+        if name in self.seen:
+            raise MotionFormatError(path, f"bone {name!r} given twice in one frame", line=ln)
+        start, n = self.slots[name]
+        if len(tok) - 1 != n:
+            raise MotionFormatError(path, f"bone {name!r} needs {n} values, got {len(tok) - 1}",
+                                    line=ln)
+        for i, t in enumerate(tok[1:]):
+            self.row[start + i] = parse_float(t, path, ln, f"bone {name!r}")
+        self.seen.add(name)
+
+    def _close(self, ln: int) -> None:
+        """Keep the open row once every bone with DOFs has been given."""
+        missing = [n for n, (_, k) in self.slots.items() if k and n not in self.seen]
+        if missing:
+            raise MotionFormatError(self.path, f"frame {self.numbers[-1]} lacks bone(s) "
+                                               f"{missing[:5]}", line=ln)
+        self.frames.append(self.row)
 
 
 def read_asf_amc(asf_path: str | Path, amc_path: str | Path, fps: float = 120.0) -> Motion:

@@ -157,6 +157,58 @@ def _dropped_values(node: dict, i: int, ch: _Channels, data: np.ndarray, scale: 
     return out
 
 
+class _Rooted:
+    """The parsed file rooted at ``nodes[r]`` (``_choose_root``): offsets, root motion and
+    joint angles in file units and radians, ready to become a Motion at any unit."""
+
+    def __init__(self, path: Path, nodes: list[dict], data: np.ndarray, fps: float):
+        self.path, self.nodes, self.fps = path, nodes, fps
+        self.names = _joint_names(path, nodes)
+        kids: list[list[int]] = [[] for _ in nodes]
+        for i, n in enumerate(nodes[1:], start=1):
+            kids[n["parent"]].append(i)
+        self.ch = ch = _Channels(nodes)
+        self.offsets, animated, self.spread, self.scale = _position_offsets(nodes, ch, data)
+        self.r = r = _choose_root(nodes, kids, ch, data, animated)
+        if r > 0:
+            self.trans, self.root_axes, self.root_rot = _compose_root(nodes, ch, data, r)
+            self.offsets[r] = np.zeros(3)
+        else:
+            self.trans = np.zeros((len(data), 3))
+            for axis, c in ch.pos[0].items():
+                self.trans[:, "xyz".index(axis)] = data[:, c]
+            self.root_axes, self.root_rot = ch.axes(0), ch.angles(0, data)
+        angle_cols = [c for i in range(r + 1, len(nodes)) for _, c in ch.rot[i]]
+        self.angles = data[:, angle_cols]  # a copy: converted in place, no third (T, D) array
+        np.deg2rad(self.angles, out=self.angles)
+
+    def skeleton(self, u: float) -> Skeleton:
+        """The skeleton of nodes ``r..``, ``u`` metres per file unit."""
+        nodes, names, r = self.nodes, self.names, self.r
+        index = {i: i - r for i in range(r, len(nodes))}  # dropped ancestors are nodes 0..r-1
+        joints = [Joint(names[i], -1 if i == r else index[nodes[i]["parent"]],
+                        self.offsets[i] * u,
+                        axes=np.zeros((0, 3)) if i == r else self.ch.axes(i),
+                        dof_names=() if i == r else tuple(f"{names[i]}_{c}"
+                                                           for c in nodes[i]["channels"]
+                                                           if c.endswith("rotation")))
+                  for i in range(r, len(nodes))]
+        try:
+            return Skeleton(joints, world=np.eye(3), root_axes=self.root_axes, file_unit=u,
+                            name=f"bvh:{self.path.stem}")
+        except SkeletonError as exc:
+            raise MotionFormatError(self.path, str(exc)) from None
+
+    def motion(self, u: float, rows, meta=None) -> Motion:
+        """The Motion of frames ``rows``, ``u`` metres per file unit."""
+        try:
+            return Motion(self.skeleton(u), self.fps, self.trans[rows] * u, self.root_rot[rows],
+                          self.angles[rows], name=self.path.stem, source_format="bvh",
+                          meta=meta or {})
+        except MotionFormatError as exc:
+            raise MotionFormatError(self.path, exc.reason, frame=exc.frame) from None
+
+
 def build_motion(path: Path, nodes: list[dict], data: np.ndarray, fps: float,
                  given: tuple[str, float] | None) -> Motion:
     """A Motion from the parsed ``nodes`` (see ``bvh_read._parse_hierarchy``) and the
@@ -166,50 +218,22 @@ def build_motion(path: Path, nodes: list[dict], data: np.ndarray, fps: float,
         given: (unit name, metres per file unit) chosen by the caller, or None to decide
             the unit from the body.
     """
-    T = len(data)
-    names = _joint_names(path, nodes)
-    kids: list[list[int]] = [[] for _ in nodes]
-    for i, n in enumerate(nodes[1:], start=1):
-        kids[n["parent"]].append(i)
-    ch = _Channels(nodes)
-    offsets, animated, spread, scale = _position_offsets(nodes, ch, data)
-    r = _choose_root(nodes, kids, ch, data, animated)
-    if r > 0:
-        trans, root_axes, root_rot = _compose_root(nodes, ch, data, r)
-        offsets[r] = np.zeros(3)
-    else:
-        trans = np.zeros((T, 3))
-        for axis, c in ch.pos[0].items():
-            trans[:, "xyz".index(axis)] = data[:, c]
-        root_axes, root_rot = ch.axes(0), ch.angles(0, data)
-    index = {i: i - r for i in range(r, len(nodes))}  # dropped ancestors are nodes 0..r-1
-    angle_cols = [c for i in range(r + 1, len(nodes)) for _, c in ch.rot[i]]
-    angles = data[:, angle_cols]       # a copy: converted in place, no third (T, D) array
-    np.deg2rad(angles, out=angles)
-
-    def skeleton(u: float) -> Skeleton:
-        joints = [Joint(names[i], -1 if i == r else index[nodes[i]["parent"]], offsets[i] * u,
-                        axes=np.zeros((0, 3)) if i == r else ch.axes(i),
-                        dof_names=() if i == r else tuple(f"{names[i]}_{c}"
-                                                           for c in nodes[i]["channels"]
-                                                           if c.endswith("rotation")))
-                  for i in range(r, len(nodes))]
-        try:
-            return Skeleton(joints, world=np.eye(3), root_axes=root_axes, file_unit=u,
-                            name=f"bvh:{path.stem}")
-        except SkeletonError as exc:
-            raise MotionFormatError(path, str(exc)) from None
-
-    def motion(u: float, rows, meta=None) -> Motion:
-        try:
-            return Motion(skeleton(u), fps, trans[rows] * u, root_rot[rows], angles[rows],
-                          name=path.stem, source_format="bvh", meta=meta or {})
-        except MotionFormatError as exc:
-            raise MotionFormatError(path, exc.reason, frame=exc.frame) from None
-
-    sample = motion(1.0, sample_frames(T))
+    body = _Rooted(path, nodes, data, fps)
+    r, names = body.r, body.names
+    sample = body.motion(1.0, sample_frames(len(data)))
     stature = estimate_stature(sample.positions(), sample.skeleton.parents)
     meta: dict = {"path": str(path)}
+    u = _choose_unit(meta, given, stature)
+    meta["stature_m"] = stature * u
+    meta["bvh_root_channels"] = list(nodes[r]["channels"])
+    meta["bvh_hierarchy"] = _hierarchy_meta(body, data, u)
+    meta["bvh_position_spread_m"] = {names[i]: d * u for i, d in body.spread.items() if i > r}
+    return body.motion(u, slice(None), meta)
+
+
+def _choose_unit(meta: dict, given: tuple[str, float] | None, stature: float) -> float:
+    """Metres per file unit: the caller's, else the one that makes the body human-sized;
+    records ``unit`` (and ``unit_note``) in ``meta``."""
     if given is not None:
         (meta["unit"], u), meta["unit_note"] = given, "given by the caller"
     else:
@@ -219,16 +243,20 @@ def build_motion(path: Path, nodes: list[dict], data: np.ndarray, fps: float,
                 f"no length unit makes the body human-sized (it measures {stature:.4g} "
                 f"file units); scaled so that it is {SCALED_STATURE_M} m tall" if stature > 0
                 else "the body has no size; 1 file unit taken as 1 m")
-    meta["stature_m"] = stature * u
-    meta["bvh_root_channels"] = list(nodes[r]["channels"])
-    meta["bvh_hierarchy"] = {
+    return u
+
+
+def _hierarchy_meta(body: _Rooted, data: np.ndarray, u: float) -> dict:
+    """``meta["bvh_hierarchy"]``: every node of the file as a writer needs it to restore
+    the layout, the dropped ancestors with the channel values to re-emit."""
+    r, names = body.r, body.names
+    return {
         "file_unit": u,
-        "dropped": [nodes[a]["name"] for a in range(r)],
+        "dropped": [body.nodes[a]["name"] for a in range(r)],
         "nodes": [{"name": n["site_name"] if n["end"] else n["name"],
                    "joint": names[i] if i >= r else None, "parent": n["parent"],
                    "offset": [float(v) for v in n["offset"]], "channels": list(n["channels"]),
                    "end_site": n["end"],
-                   **({"values": _dropped_values(n, i, ch, data, scale)} if i < r else {})}
-                  for i, n in enumerate(nodes)]}
-    meta["bvh_position_spread_m"] = {names[i]: d * u for i, d in spread.items() if i > r}
-    return motion(u, slice(None), meta)
+                   **({"values": _dropped_values(n, i, body.ch, data, body.scale)}
+                      if i < r else {})}
+                  for i, n in enumerate(body.nodes)]}

@@ -82,60 +82,79 @@ def _parse_hierarchy(tk: _Tokens) -> list[dict]:
     tk.expect("HIERARCHY")
     max_joints = limits.current().max_joints
     nodes: list[dict] = []
-    stack: list[int] = []
+    stack: list[int] = []   # the open nodes, outermost first
     tok, ln = tk.next("ROOT")
     if tok.upper() != "ROOT":
         raise MotionFormatError(tk.path, f"expected 'ROOT', got {tok[:40]!r}", line=ln)
     while True:
-        site_name = None
-        if tok.upper() in ("ROOT", "JOINT"):
-            if (tok.upper() == "ROOT") != (not stack):
-                raise MotionFormatError(tk.path, f"unexpected {tok!r}", line=ln)
-            if stack and nodes[stack[-1]]["end"]:
-                raise MotionFormatError(tk.path, "an End Site cannot have children", line=ln)
-            name, _ = tk.next("a joint name")
-            kind = "joint"
-        elif tok.upper() == "END":
-            tk.expect("Site")
-            if not stack or nodes[stack[-1]]["end"]:
-                raise MotionFormatError(tk.path, "misplaced End Site", line=ln)
-            if tk.peek("'{'") != "{":  # some exporters name their End Sites
-                site_name = tk.next("an End Site name")[0]
-            name, kind = site_name or f"{nodes[stack[-1]]['name']}_end", "end"
-        else:
-            raise MotionFormatError(tk.path, f"unexpected {tok[:40]!r} in HIERARCHY", line=ln)
-        tk.expect("{")
-        nodes.append({"name": name, "parent": stack[-1] if stack else -1, "offset": None,
-                      "channels": [], "line": ln, "end": kind == "end",
-                      "site_name": site_name})
-        stack.append(len(nodes) - 1)
-        while True:
-            tok, ln = tk.next("'}'")
-            up = tok.upper()
-            node = nodes[stack[-1]]
-            if up == "OFFSET":
-                node["offset"] = np.array([tk.number("OFFSET") for _ in range(3)])
-            elif up == "CHANNELS":
-                if node["end"]:
-                    raise MotionFormatError(tk.path, "End Site cannot have CHANNELS", line=ln)
-                n = int(tk.number("the channel count", integer=True))
-                if not 0 <= n <= 6:
-                    raise MotionFormatError(tk.path, f"bad channel count {n}", line=ln)
-                raw = [tk.next("a channel name")[0] for _ in range(n)]
-                chans = [_channel(c) for c in raw]
-                if None in chans or len(set(chans)) != n:
-                    raise MotionFormatError(tk.path, f"bad channel list {raw}", line=ln)
-                node["channels"] = chans
-            elif tok == "}":
-                if node["offset"] is None:
-                    raise MotionFormatError(tk.path, f"{node['name']!r} has no OFFSET", line=ln)
-                stack.pop()
-                if not stack:
-                    return nodes
-            else:
-                break  # a child node starts
+        _open_node(tk, tok, ln, nodes, stack)
+        child = _node_body(tk, nodes, stack)
+        if child is None:
+            return nodes
+        tok, ln = child
         if len(nodes) > max_joints:
             limits.check(tk.path, "max_joints", len(nodes), "joint count", line=ln)
+
+
+def _open_node(tk: _Tokens, tok: str, ln: int, nodes: list[dict], stack: list[int]) -> None:
+    """Read a node's head (``ROOT``/``JOINT`` name, or ``End Site``) up to its ``{``, and
+    append it to ``nodes`` as the innermost open node."""
+    site_name = None
+    if tok.upper() in ("ROOT", "JOINT"):
+        if (tok.upper() == "ROOT") != (not stack):
+            raise MotionFormatError(tk.path, f"unexpected {tok!r}", line=ln)
+        if stack and nodes[stack[-1]]["end"]:
+            raise MotionFormatError(tk.path, "an End Site cannot have children", line=ln)
+        name, _ = tk.next("a joint name")
+        kind = "joint"
+    elif tok.upper() == "END":
+        tk.expect("Site")
+        if not stack or nodes[stack[-1]]["end"]:
+            raise MotionFormatError(tk.path, "misplaced End Site", line=ln)
+        if tk.peek("'{'") != "{":  # some exporters name their End Sites
+            site_name = tk.next("an End Site name")[0]
+        name, kind = site_name or f"{nodes[stack[-1]]['name']}_end", "end"
+    else:
+        raise MotionFormatError(tk.path, f"unexpected {tok[:40]!r} in HIERARCHY", line=ln)
+    tk.expect("{")
+    nodes.append({"name": name, "parent": stack[-1] if stack else -1, "offset": None,
+                  "channels": [], "line": ln, "end": kind == "end", "site_name": site_name})
+    stack.append(len(nodes) - 1)
+
+
+def _node_body(tk: _Tokens, nodes: list[dict], stack: list[int]) -> tuple[str, int] | None:
+    """Read OFFSETs, CHANNELS and closing braces until a child node starts (its first token
+    and line are returned) or the root closes (None)."""
+    while True:
+        tok, ln = tk.next("'}'")
+        up = tok.upper()
+        node = nodes[stack[-1]]
+        if up == "OFFSET":
+            node["offset"] = np.array([tk.number("OFFSET") for _ in range(3)])
+        elif up == "CHANNELS":
+            if node["end"]:
+                raise MotionFormatError(tk.path, "End Site cannot have CHANNELS", line=ln)
+            node["channels"] = _channel_list(tk, ln)
+        elif tok == "}":
+            if node["offset"] is None:
+                raise MotionFormatError(tk.path, f"{node['name']!r} has no OFFSET", line=ln)
+            stack.pop()
+            if not stack:
+                return None
+        else:
+            return tok, ln
+
+
+def _channel_list(tk: _Tokens, ln: int) -> list[str]:
+    """The count and canonical names after ``CHANNELS`` (at most 6, none twice)."""
+    n = int(tk.number("the channel count", integer=True))
+    if not 0 <= n <= 6:
+        raise MotionFormatError(tk.path, f"bad channel count {n}", line=ln)
+    raw = [tk.next("a channel name")[0] for _ in range(n)]
+    chans = [_channel(c) for c in raw]
+    if None in chans or len(set(chans)) != n:
+        raise MotionFormatError(tk.path, f"bad channel list {raw}", line=ln)
+    return chans
 
 
 # ------------------------------------------------------------------------------ frames

@@ -151,6 +151,38 @@ def read_mmm(path: str | Path) -> Motion:
             motion beyond the limits (``utils.limits``).
     """
     path = Path(path)
+    text, root = _parse_xml(path)
+    motion = _human_motion(root, path)
+    order = [j.get("name") for j in motion.find("JointOrder").findall("Joint")]
+    height = _config_value(motion, "Height", DEFAULT_HEIGHT_M, path)
+    mass_el = motion.find("ModelProcessorConfig/Mass")
+    mass = _config_value(motion, "Mass", 0.0, path) if mass_el is not None else None
+    skeleton = mmm_skeleton(height)
+    names = skeleton.dof_names
+    col = {n: i for i, n in enumerate(names)}
+    _check_joint_order(order, col, path)
+    frames = motion.findall("MotionFrames/MotionFrame")
+    if not frames:
+        raise MotionFormatError(path, "motion has no frames")
+    T = len(frames)
+    limits.check_motion(path, T, len(skeleton), 7 + len(order))
+
+    def fail(frame: int, msg: str):
+        raise MotionFormatError(path, msg, line=_frame_line(text, frame), frame=frame)
+
+    arr = _frame_values(frames, len(order), fail)
+    times, trans, rpy, values = arr[:, 0], arr[:, 1:4], arr[:, 4:7], arr[:, 7:]
+    fps = _frame_rate(times, path)
+    angles = np.zeros((T, len(names)))
+    angles[:, [col[n] for n in order]] = values
+    return Motion(skeleton, fps, trans * skeleton.file_unit, rpy[:, ::-1].copy(), angles,
+                  name=path.stem, source_format="mmm",
+                  meta={"height": height, "mass": mass, "path": str(path),
+                        "subject": motion.get("name")})
+
+
+def _parse_xml(path: Path) -> tuple[bytes, ET.Element]:
+    """The file's bytes and its element tree, refusing DTDs and unreadable encodings."""
     limits.check_file(path, PARSE_FACTOR)
     try:
         text = path.read_bytes()  # bytes: expat then honours the file's declared encoding
@@ -164,51 +196,41 @@ def read_mmm(path: str | Path) -> Motion:
         raise MotionFormatError(path, f"invalid XML: {exc}", line=line) from None
     except (ValueError, LookupError) as exc:  # in case the prolog check let one through
         raise MotionFormatError(path, f"cannot read the declared encoding ({exc})") from None
-    # A file may also animate objects; the human is the Motion on the model "mmm.xml".
+    return text, root
+
+
+def _human_motion(root: ET.Element, path) -> ET.Element:
+    """The ``<Motion>`` of the human: the one on the model "mmm.xml", else the first with a
+    ``<JointOrder>`` (a file may also animate objects)."""
     candidates = [m for m in root.iter("Motion") if m.find("JointOrder") is not None]
     if not candidates:
         raise MotionFormatError(path, "no <Motion> with a <JointOrder> found")
-    motion = next((m for m in candidates
-                   if (m.findtext("Model/File") or "").strip().lower().endswith("mmm.xml")),
-                  candidates[0])
-    order = [j.get("name") for j in motion.find("JointOrder").findall("Joint")]
-    height = _config_value(motion, "Height", DEFAULT_HEIGHT_M, path)
-    mass_el = motion.find("ModelProcessorConfig/Mass")
-    mass = _config_value(motion, "Mass", 0.0, path) if mass_el is not None else None
-    skeleton = mmm_skeleton(height)
-    names = skeleton.dof_names
-    col = {n: i for i, n in enumerate(names)}
+    return next((m for m in candidates
+                 if (m.findtext("Model/File") or "").strip().lower().endswith("mmm.xml")),
+                candidates[0])
+
+
+def _check_joint_order(order: list, col: dict[str, int], path) -> None:
+    """Every ``<JointOrder>`` name a DOF of the model, none twice."""
     unknown = [n for n in order if n not in col]
     if unknown:
         raise MotionFormatError(path, f"unknown joint name {unknown[0]!r} in <JointOrder> "
-                                      f"(the MMM model has {len(names)} DOFs)")
+                                      f"(the MMM model has {len(col)} DOFs)")
     if len(set(order)) != len(order):
         raise MotionFormatError(path, "a joint appears twice in <JointOrder>")
-    frames = motion.findall("MotionFrames/MotionFrame")
-    if not frames:
-        raise MotionFormatError(path, "motion has no frames")
-    T = len(frames)
-    limits.check_motion(path, T, len(skeleton), 7 + len(order))
 
-    def fail(frame: int, msg: str):
-        raise MotionFormatError(path, msg, line=_frame_line(text, frame), frame=frame)
 
-    arr = _frame_values(frames, len(order), fail)
-    times, trans, rpy, values = arr[:, 0], arr[:, 1:4], arr[:, 4:7], arr[:, 7:]
-    fps = DEFAULT_FPS
-    if T > 1:
-        dt = float(np.median(np.diff(times)))
-        if not dt > 0:
-            raise MotionFormatError(path, "timesteps do not increase")
-        fps = 1.0 / dt
-        if abs(fps - round(fps)) < 1e-3 * fps:  # 0.01 s steps printed as 0.01 -> 100 Hz
-            fps = float(round(fps))
-    angles = np.zeros((T, len(names)))
-    angles[:, [col[n] for n in order]] = values
-    return Motion(skeleton, fps, trans * skeleton.file_unit, rpy[:, ::-1].copy(), angles,
-                  name=path.stem, source_format="mmm",
-                  meta={"height": height, "mass": mass, "path": str(path),
-                        "subject": motion.get("name")})
+def _frame_rate(times: np.ndarray, path) -> float:
+    """Frames per second from the timesteps (T,) s; ``DEFAULT_FPS`` for a single frame."""
+    if len(times) <= 1:
+        return DEFAULT_FPS
+    dt = float(np.median(np.diff(times)))
+    if not dt > 0:
+        raise MotionFormatError(path, "timesteps do not increase")
+    fps = 1.0 / dt
+    if abs(fps - round(fps)) < 1e-3 * fps:  # 0.01 s steps printed as 0.01 -> 100 Hz
+        fps = float(round(fps))
+    return fps
 
 
 _HEAD = """<?xml version='1.0'?>

@@ -187,3 +187,54 @@ def motion_from_positions(positions: np.ndarray, fps: float, names: Sequence[str
 def position_error(motion: Motion, positions: np.ndarray) -> np.ndarray:
     """(T, J) metres between ``motion``'s joints and the ``positions`` it was made from."""
     return np.linalg.norm(motion.positions() - np.asarray(positions, dtype=float), axis=-1)
+
+
+def _partners(skeleton: Skeleton) -> list[int]:
+    """Each joint's left/right partner (itself on the midline): ``skeleton.pairs``, and
+    joints named after a paired one (``Hand_L_end`` goes with ``Hand_R_end``)."""
+    names = skeleton.names
+    index = {n: i for i, n in enumerate(names)}
+    out = list(range(len(names)))
+    for a, b in skeleton.pairs:
+        for n in names:
+            for x, y in ((a, b), (b, a)):
+                if n.startswith(x) and n.replace(x, y, 1) in index:
+                    out[index[n]] = index[n.replace(x, y, 1)]
+    return out
+
+
+def mirror_motion(motion: Motion, tol: float = 0.05) -> Motion:
+    """``motion`` with left and right swapped, on any rig.
+
+    ``Motion.mirror`` (same skeleton) where it holds on this rig: on frame 0 the median
+    joint must land within ``tol`` metres of its reflected partner (the median, since real
+    rigs are not quite symmetric: CMU subject 35's median joint is 2 cm off, MMM's 0). Rigs
+    whose rest pose is not mirror-symmetric in the parent frames (Bandai Namco's lays every
+    bone along its local x axis, so ``R' = S R S`` folds the spine down) fail that, and get
+    the mirror by positions instead: the reflected, partner-swapped joint positions fitted
+    by :func:`motion_from_positions` on the same joint names (bone lengths kept, so exact
+    to rounding; joints at zero distance from their parent dropped).
+    """
+    sk = motion.skeleton
+    S = sk.world @ sk.mirror @ sk.world.T   # the source frame's reflection, canonical frame
+    partner = _partners(sk)
+    first = motion[:1]
+    try:
+        miss = first.mirror().positions() - first.positions()[:, partner] @ S
+        if np.median(np.linalg.norm(miss[0], axis=-1)) <= tol:
+            return motion.mirror()
+    except MotionlangError:   # SkeletonError: not symmetric in Motion.mirror's sense
+        pass
+    keep = [0] + [j for j in range(1, len(sk.joints))
+                  if np.linalg.norm(sk.joints[j].offset) > _EPS]
+    new = {j: i for i, j in enumerate(keep)}
+
+    def kept_parent(j: int) -> int:   # a dropped joint's children hang from its parent
+        q = sk.joints[j].parent
+        return new[q] if q in new else kept_parent(q)
+    parents = [-1] + [kept_parent(j) for j in keep[1:]]
+    p = (motion.positions()[:, partner] @ S)[:, keep]
+    out = motion_from_positions(p, motion.fps, [sk.names[j] for j in keep], parents,
+                                name=sk.name)
+    out.meta = {**motion.meta, "mirrored": not motion.meta.get("mirrored", False)}
+    return out

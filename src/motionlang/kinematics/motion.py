@@ -47,6 +47,12 @@ class Motion:
         self.joint_angles = np.asarray(self.joint_angles, dtype=float)
         self.validate()
 
+    def __repr__(self) -> str:
+        # the arrays would print thousands of numbers: a summary, as a user reads it
+        return (f"Motion({self.name!r}: {self.n_frames} frames at {self.fps:g} Hz "
+                f"({self.n_frames / self.fps:.1f} s), {len(self.skeleton.joints)} joints, "
+                f"from {self.source_format})")
+
     # ---------------------------------------------------------------- checks
     def validate(self, path: str | None = None) -> None:
         """Raise :class:`MotionFormatError` on wrong shapes, non-finite values or no frames."""

@@ -154,14 +154,15 @@ def detect_pairs(names: list[str]) -> list[tuple[str, str]]:
 
     Recognised: ``Left*``/``Right*``, ``left*``/``right*``, ``l*``/``r*`` (CMU: ``lfemur``),
     ``L*``/``R*`` followed by an upper-case letter (MMM: ``LKx_joint``), ``*_l``/``*_r``,
-    ``*.L``/``*.R``.
+    ``*_L``/``*_R`` (Bandai Namco: ``UpperArm_L``), ``*.L``/``*.R``.
     """
     present = set(names)
     pairs = []
     rules = [
         (r"^Left(.*)$", "Left{}", "Right{}"), (r"^left(.*)$", "left{}", "right{}"),
         (r"^L([A-Z].*)$", "L{}", "R{}"), (r"^l([a-z].*)$", "l{}", "r{}"),
-        (r"^(.*)_l$", "{}_l", "{}_r"), (r"^(.*)\.L$", "{}.L", "{}.R"),
+        (r"^(.*)_l$", "{}_l", "{}_r"), (r"^(.*)_L$", "{}_L", "{}_R"),
+        (r"^(.*)\.L$", "{}.L", "{}.R"),
     ]
     seen = set()
     for n in names:

@@ -1,7 +1,9 @@
 """Self-describing model checkpoints: config, vocabulary, normaliser and weights in one file.
 
 A checkpoint is a plain dict that ``torch.load(..., weights_only=True)`` accepts (no
-pickled classes): ``{"kind", "config", "vocab", "normalizer", "features", "state_dict"}``;
+pickled classes): ``{"kind", "format", "config", "vocab", "normalizer", "features",
+"state_dict"}``; ``format`` is :data:`FORMAT_VERSION` (files without one are format 0, read
+as before; a newer format is refused by name, since its fields may mean something else);
 the fitted feature set (whose own normaliser the data went through) rides along as its
 ``to_dict``. The trainer wraps it as ``{"model": <that dict>, "optimizer": ...}``;
 :func:`read_model_dict` accepts both, so ``best.pt`` of a training run loads directly.
@@ -16,6 +18,9 @@ import torch
 
 from motionlang.errors import MotionlangError
 from motionlang.utils.atomic import atomic_path
+
+#: the checkpoint layout this version writes and the newest it reads
+FORMAT_VERSION = 1
 
 
 def _plain(x: Any) -> Any:
@@ -110,14 +115,32 @@ def load_checkpoint(path: str | Path) -> Any:
                               f"or another kind of file)") from exc
 
 
-def read_model_dict(path: str | Path, kind: str) -> dict:
-    """Load a model checkpoint (or a trainer checkpoint holding one) and check its kind."""
+def check_format(path: str | Path, version: Any) -> None:
+    """Refuse a checkpoint written in a newer layout than this motionlang reads."""
+    if not isinstance(version, int) or version < 0:
+        raise MotionlangError(f"{path}: checkpoint format {version!r} is not a version number")
+    if version > FORMAT_VERSION:
+        raise MotionlangError(f"{path}: checkpoint format {version} is newer than this "
+                              f"motionlang reads ({FORMAT_VERSION}); upgrade motionlang")
+
+
+def model_dict(path: str | Path) -> dict:
+    """The model dict of a checkpoint (a model file or a trainer checkpoint holding one),
+    its format checked; its ``kind`` is not."""
     d = load_checkpoint(path)
     if isinstance(d, dict) and "model" in d and isinstance(d["model"], dict):
         d = d["model"]
-    if not isinstance(d, dict) or d.get("kind") != kind:
-        found = d.get("kind") if isinstance(d, dict) else type(d).__name__
-        raise MotionlangError(f"{path}: not a {kind} checkpoint (found {found!r})")
+    if not isinstance(d, dict) or "kind" not in d:
+        raise MotionlangError(f"{path}: not a motionlang model checkpoint")
+    check_format(path, d.get("format", 0))
+    return d
+
+
+def read_model_dict(path: str | Path, kind: str) -> dict:
+    """Load a model checkpoint (or a trainer checkpoint holding one), check format and kind."""
+    d = model_dict(path)
+    if d.get("kind") != kind:
+        raise MotionlangError(f"{path}: not a {kind} checkpoint (found {d.get('kind')!r})")
     return d
 
 
@@ -133,7 +156,7 @@ class Seq2SeqCheckpoint:
 
     def to_checkpoint(self) -> dict:
         from dataclasses import asdict
-        return {"kind": self.kind, "config": asdict(self.config),
+        return {"kind": self.kind, "format": FORMAT_VERSION, "config": asdict(self.config),
                 "vocab": pack_vocab(self.vocab), "normalizer": pack_normalizer(self.normalizer),
                 "features": pack_features(self.features), "state_dict": self.state_dict()}
 

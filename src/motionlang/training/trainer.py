@@ -15,6 +15,9 @@ Data parallel: launched with ``torchrun --nproc_per_node N`` the trainer joins t
 process group, gives each rank an interleaved share of every global batch, and all-reduces
 the gradients weighted by share size, so N processes follow the same trajectory as one
 process on the same global batches (up to float summation order). Only rank 0 writes files.
+The pieces live beside it: :mod:`~motionlang.training.schedule` (learning rate),
+:mod:`~motionlang.training.distributed` (process group), :mod:`~motionlang.training.run_files`
+(checkpoints, RNG states, loss curve).
 """
 from __future__ import annotations
 
@@ -22,107 +25,27 @@ import dataclasses
 import json
 import logging
 import math
-import os
-import random
 import time
-from dataclasses import asdict, dataclass
+from dataclasses import asdict
 from pathlib import Path
 from typing import Any, Callable, Sequence
 
-import numpy as np
 import torch
 import torch.distributed as dist
 
 from motionlang.errors import MotionlangError
-from motionlang.models.checkpoint import load_checkpoint, write_checkpoint
-from motionlang.utils.atomic import atomic_path, atomic_write
+from motionlang.models.checkpoint import write_checkpoint
+from motionlang.training.config import OPTIMIZER_NAMES, TrainConfig
+from motionlang.training.distributed import init_distributed
+from motionlang.training.run_files import (check_resume, plot_loss_curve, read_training_checkpoint,
+                                           rng_state, set_rng_state)
+from motionlang.training.schedule import learning_rate
+from motionlang.utils.atomic import atomic_write
 from motionlang.utils.progress import progress
 
 log = logging.getLogger(__name__)
-OPTIMIZERS = {"nadam": torch.optim.NAdam, "adam": torch.optim.Adam,
-              "adamw": torch.optim.AdamW, "sgd": torch.optim.SGD}
-
-
-@dataclass
-class TrainConfig:
-    """Options of :class:`Trainer`.
-
-    batch_size is the GLOBAL batch (split across ranks under torchrun). grad_clip is a max
-    global L2 norm (None: no clipping). checkpoint_every: also write ``last.pt`` every this
-    many steps (0: at epoch ends only). progress: None shows the bar on a terminal only.
-    length_buckets: 0 = batches of a plain shuffle; N > 0 = the shuffled order is cut into
-    pools of N batches, each pool sorted by sequence length before it is cut into batches,
-    and the batches are shuffled again: batches of similar lengths, so that padding (and an
-    unrolled decoder's wasted steps) stays small. Still a function of (seed, epoch) only.
-    decay_epochs: the last this many epochs lower the learning rate along a half cosine to
-    ``lr * decay_to`` (:func:`learning_rate`); 0 keeps it constant. The rate is set before
-    every step from ``lr`` and the step's place in the run, so ``lr`` and the decay given to a
-    resumed run win over the checkpoint's optimiser state.
-    """
-
-    epochs: int = 10
-    batch_size: int = 128
-    lr: float = 1e-3
-    optimizer: str = "nadam"
-    weight_decay: float = 0.0
-    grad_clip: float | None = None
-    seed: int = 0
-    out_dir: str = "runs/train"
-    checkpoint_every: int = 0
-    plot: bool = True
-    progress: bool | None = None
-    length_buckets: int = 0
-    decay_epochs: float = 0.0
-    decay_to: float = 0.01
-
-
-def learning_rate(lr: float, position: float, total: float, decay: float,
-                  decay_to: float) -> float:
-    """The learning rate of one optimiser step: ``lr`` until the last ``decay`` steps, then
-    a half cosine from ``lr`` down to ``lr * decay_to``, reached at the last step (every one
-    of the ``decay`` steps is lowered).
-
-    Args:
-        position: the step's index in the whole run, counted from 0 (``epoch * B + batch``
-            for B batches per epoch), so a resumed run gets the same rates.
-        total: the run's number of steps; decay: the length of the decay in steps (0: none).
-
-    The decay lets a run trained at a constant rate be resumed with a decay added at its end
-    (a warm-up-stable-decay schedule without the warm-up).
-    """
-    start = total - decay
-    if decay <= 0 or position < start:
-        return lr
-    frac = min((position - start + 1) / decay, 1.0)
-    return lr * (decay_to + (1.0 - decay_to) * 0.5 * (1.0 + math.cos(math.pi * frac)))
-
-
-def check_schedule(decay_epochs: float, decay_to: float, epochs: int) -> None:
-    """MotionlangError unless 0 <= decay_epochs <= epochs and 0 <= decay_to <= 1."""
-    if not 0.0 <= decay_epochs <= epochs:
-        raise MotionlangError(f"decay_epochs must be in [0, epochs={epochs}], got {decay_epochs}")
-    if not 0.0 <= decay_to <= 1.0:
-        raise MotionlangError(f"decay_to must be in [0, 1], got {decay_to}")
-
-
-def check_resume(out_dir: str | Path, *, read: bool = True) -> Path:
-    """``out_dir/last.pt``, which a resumed run continues from; an error if there is none
-    (a resume that silently started afresh would overwrite the run) or, with ``read``, if
-    it is not a readable training checkpoint. Commands call it before anything is written."""
-    last = Path(out_dir) / "last.pt"
-    if not last.is_file():
-        raise MotionlangError(f"--resume: no checkpoint {last} to continue from")
-    if read:
-        read_training_checkpoint(last)
-    return last
-
-
-def read_training_checkpoint(path: Path) -> dict:
-    """A ``last.pt`` / ``best.pt`` written by :class:`Trainer` (one-line error otherwise)."""
-    ck = load_checkpoint(path)
-    if not (isinstance(ck, dict) and {"model", "optimizer", "rng", "step"} <= set(ck)):
-        raise MotionlangError(f"{path}: not a training checkpoint (last.pt) to resume")
-    return ck
+OPTIMIZERS = dict(zip(OPTIMIZER_NAMES, (torch.optim.NAdam, torch.optim.Adam,
+                                         torch.optim.AdamW, torch.optim.SGD)))
 
 
 def check_finite(terms: dict[str, float], model: torch.nn.Module, step: int) -> None:
@@ -137,44 +60,8 @@ def check_finite(terms: dict[str, float], model: torch.nn.Module, step: int) -> 
                           f"or check the data); the last good checkpoint is kept")
 
 
-def init_distributed() -> tuple[int, int]:
-    """Join the gloo process group when started by torchrun; returns (rank, world_size)."""
-    if int(os.environ.get("WORLD_SIZE", "1")) > 1 and not dist.is_initialized():
-        dist.init_process_group("gloo")
-    if dist.is_initialized():
-        return dist.get_rank(), dist.get_world_size()
-    return 0, 1
-
-
-def finish_distributed() -> None:
-    """Leave the process group together: every rank waits at a barrier, then tears it down.
-
-    Without the barrier a rank that finishes first (the others still writing checkpoints or
-    plots) can tear down its gloo connections under them, and the process aborts at exit.
-    No-op outside torchrun.
-    """
-    if dist.is_initialized():
-        dist.barrier()
-        dist.destroy_process_group()
-
-
 def _fmt(terms: dict[str, float]) -> str:
     return " ".join(f"{k} {v:.4g}" for k, v in terms.items())
-
-
-def _rng_state() -> dict:
-    np_state = np.random.get_state()
-    py_state = random.getstate()
-    return {"torch": torch.get_rng_state(),
-            "numpy": [np_state[0], np_state[1].tolist(), *map(float, np_state[2:])],
-            "python": [py_state[0], list(py_state[1]), py_state[2]]}
-
-
-def _set_rng_state(s: dict) -> None:
-    torch.set_rng_state(s["torch"])
-    n = s["numpy"]
-    np.random.set_state((n[0], np.array(n[1], dtype=np.uint32), int(n[2]), int(n[3]), n[4]))
-    random.setstate((s["python"][0], tuple(s["python"][1]), s["python"][2]))
 
 
 class Trainer:
@@ -193,15 +80,9 @@ class Trainer:
                  length_of: Callable[[Any], int] | None = None):
         if len(train_set) == 0:
             raise MotionlangError("training set is empty")
-        check_schedule(config.decay_epochs, config.decay_to, config.epochs)
-        if config.optimizer not in OPTIMIZERS:
-            raise MotionlangError(f"unknown optimizer {config.optimizer!r}; "
-                                  f"choose from {sorted(OPTIMIZERS)}")
         self.model, self.train_set, self.val_set = model, train_set, val_set
         self.collate, self.config = collate, config
         self._lengths = None
-        if config.length_buckets < 0:
-            raise MotionlangError(f"length_buckets must be >= 0, got {config.length_buckets}")
         if config.length_buckets > 0:
             length_of = length_of or (lambda item: len(item["motion"]))
             self._lengths = [int(length_of(item)) for item in train_set]
@@ -310,7 +191,7 @@ class Trainer:
         return {"kind": type(self.model).__name__, "state_dict": self.model.state_dict()}
 
     def _save(self, name: str, pos: dict) -> None:
-        rng = [_rng_state()]
+        rng = [rng_state()]
         if self.world > 1:
             gathered: list = [None] * self.world
             dist.all_gather_object(gathered, rng[0])
@@ -332,7 +213,7 @@ class Trainer:
                                   f"{str(exc).splitlines()[0]}") from exc
         self.optimizer.load_state_dict(ck["optimizer"])
         if ck["world_size"] == self.world:
-            _set_rng_state(ck["rng"][self.rank])
+            set_rng_state(ck["rng"][self.rank])
         else:
             log.warning("%s was written by %d processes, now %d: RNG streams restart",
                         path, ck["world_size"], self.world)
@@ -442,25 +323,3 @@ class Trainer:
             json.dump(self.history, fh, indent=1)
         if self.config.plot:
             plot_loss_curve(self.history, self.out_dir / "loss_curve.png")
-
-
-def plot_loss_curve(history: list[dict], path: str | Path) -> None:
-    """Train and validation loss per epoch as a PNG (atomic write)."""
-    # A bare Figure with the Agg canvas: no pyplot, so no global backend switch.
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    epochs = [h["epoch"] for h in history]
-    fig = Figure(figsize=(5, 3.2), dpi=100)
-    FigureCanvasAgg(fig)
-    ax = fig.add_subplot()
-    ax.plot(epochs, [h["train"].get("loss", np.nan) for h in history], "o-", label="train")
-    if any(h["val"] for h in history):
-        ax.plot(epochs, [h["val"].get("loss", np.nan) for h in history], "s-", label="validation")
-    ax.set_xlabel("epoch")
-    ax.set_ylabel("loss")
-    ax.grid(alpha=0.3)
-    ax.legend()
-    fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp)

@@ -11,7 +11,7 @@ ground-plane position (x, z) replaced by its frame-to-frame step in the root's f
 folded back (:func:`to_protocol59`) and scored in the protocol space.
 
 Hyper-parameters (:data:`SELECTED`) were chosen on training trials only
-(``scripts/crbm_select.py`` / ``evaluation/crbm/select.py``: train on 27 trials, fill in
+(``experiments/probes/crbm_select.py`` / ``evaluation/crbm/select.py``: train on 27 trials, fill in
 35_15, 35_16 (walks) and 35_25, 35_26 (jogs) with the same erase protocol, score = mean CRBM /
 nearest-neighbour error ratio over the 8 cells, 20 repeats; eligible only if generation from
 each held-out trial keeps its walk/jog label on >= 90 % of 1000 frames). Grid (2026-11-22,
@@ -44,7 +44,9 @@ from motionlang.evaluation.crbm.fill import (
     ERASED, JOINT_CHANNELS, Cmu35, fill_error, frame_mask, hold_last_fill, load_cmu35, nearest_neighbour_fill,
     per_frame_dims, score_space, taylor59)
 from motionlang.models.crbm.ar import ARConfig, ARModel
-from motionlang.models.crbm.model import CRBM, CRBMConfig
+from motionlang.models.crbm.config import CRBMConfig
+from motionlang.models.crbm.model import CRBM
+from motionlang.utils.progress import progress
 
 PAPER = {  # Taylor et al. 2006, walking test sequence; the paper reports no jogging numbers
     "35_29": {"nearest neighbour": {"leg": 11.68, "upper body": 22.20},
@@ -240,15 +242,15 @@ def reproduce(data_dir: str | Path, cfg: ReproduceConfig | None = None, *,
         crbm, _ = train_models(data, cfg, show_progress=show_progress)
     if ar is None:
         ar = ARModel(ARConfig(order=cfg.ar_order), 59).fit([model_frames(c) for c in data.train])
-    table, fills = {}, {}
-    for trial in ("35_29", "35_18"):
-        table[trial] = {}
-        for part in ERASED:
-            res = fill_trial(data, trial, part, crbm, ar, cfg)
-            table[trial][part] = {**{m: round(res["errors"][m], 4) for m in METHODS},
-                                  "CRBM (sampled hiddens) std over repeats": round(res["crbm_std"], 4),
-                                  "erased frames": len(res["true59"]) - res["gap_start"]}
-            fills[(trial, part)] = res
+    table, fills = {"35_29": {}, "35_18": {}}, {}
+    cells = [(trial, part) for trial in table for part in ERASED]
+    for trial, part in progress(cells, desc="fill-in", unit="cells",
+                                disable=None if show_progress else True):
+        res = fill_trial(data, trial, part, crbm, ar, cfg)   # fill-ins averaged over repeats
+        table[trial][part] = {**{m: round(res["errors"][m], 4) for m in METHODS},
+                              "CRBM (sampled hiddens) std over repeats": round(res["crbm_std"], 4),
+                              "erased frames": len(res["true59"]) - res["gap_start"]}
+        fills[(trial, part)] = res
     out = {"table": table, "paper": PAPER,
            "config": {**dataclasses.asdict(cfg), "crbm": dataclasses.asdict(crbm.config)},
            "crbm_final_reconstruction_mse": crbm.history[-1] if crbm.history else None}

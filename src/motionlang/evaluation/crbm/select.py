@@ -31,7 +31,8 @@ import numpy as np
 from motionlang.evaluation.crbm.fill import ERASED, Cmu35, load_cmu35
 from motionlang.evaluation.crbm.reproduce import ReproduceConfig, fill_trial, model_frames
 from motionlang.models.crbm.ar import ARConfig, ARModel
-from motionlang.models.crbm.model import CRBM, CRBMConfig
+from motionlang.models.crbm.config import CRBMConfig
+from motionlang.models.crbm.model import CRBM
 
 VALIDATION_TRIALS = ("35_15", "35_16", "35_25", "35_26")   # 2 walks, 2 jogs, all training trials
 

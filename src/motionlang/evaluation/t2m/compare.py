@@ -23,7 +23,6 @@ from pathlib import Path
 from typing import Callable, Sequence
 
 import numpy as np
-import torch
 
 from motionlang.errors import MotionlangError
 from motionlang.evaluation.action_order import (Prototypes, merge_repeats, order_accuracy,
@@ -32,6 +31,7 @@ from motionlang.evaluation.action_order import (Prototypes, merge_repeats, order
 from motionlang.evaluation.metrics.motion import position_metrics_mm
 from motionlang.evaluation.t2m.baselines import (
     GROUND_TRUTH, NEAREST, length_errors, retrieval_baseline, still_baseline)
+from motionlang.utils.progress import progress
 
 
 @dataclass
@@ -123,7 +123,8 @@ def evaluate_model(generate: Callable[[str, int], np.ndarray], items: Sequence[T
     """
     if not items:
         raise MotionlangError("no test items to evaluate")
-    gen = {it.id: np.asarray(generate(it.sentence, len(it.target))) for it in items}
+    gen = {it.id: np.asarray(generate(it.sentence, len(it.target)))
+           for it in progress(items, desc="generate", unit="sentences")}
     return score_generated(gen, items, features, prototypes)
 
 
@@ -169,7 +170,7 @@ def trajectory_figures(results: dict[str, dict], items: Sequence[T2MItem], out_d
                        n: int = 3) -> list[Path]:
     """One top-view PNG per compositional item (the first ``n``): ground truth and every
     model's root path with footsteps (``render.plot_trajectory``)."""
-    from motionlang.render import plot_trajectory
+    from motionlang.rendering import plot_trajectory
     chosen = [it for it in items if it.compositional][:n] or list(items)[:n]
     paths = []
     for it in chosen:
@@ -248,8 +249,6 @@ def compare(models: dict[str, object], data, *, split: str = "test", limit: int 
     motions of the same parameters, beside the oracles; its rows go into the results with
     names prefixed "same-parameter subset: ". With ``out_dir`` also write ``t2m_table.md``,
     ``t2m_report.json`` and the trajectory figures. Returns (results, table)."""
-    import json
-
     from motionlang.decoding.t2m import generate_positions21
     items = eval_items(data, split, limit)
     protos = fit_prototypes(data)
@@ -262,64 +261,92 @@ def compare(models: dict[str, object], data, *, split: str = "test", limit: int 
                                     items, data.features, protos)
                for name, model in models.items()}
     for name, model in models.items():
-        if getattr(model, "kind", None) == "l2m" and true_start:
-            _l2m_on_subjects(results, name, model, data, items, protos, l2m_method,
-                             l2m_width, l2m_reranker)
-        if getattr(model, "kind", None) != "twostream":
-            continue
-        # the model's normaliser maps positions to its own features
-        if autoencode:
-            gen = {it.id: model.positions(model.reconstruct(
-                positions_to_features(model, it.target))) for it in items}
-            results[f"{name}, from the motion's own embedding"] = score_generated(
-                gen, items, data.features, protos)
-        if true_start:
-            with torch.no_grad():
-                gen = {it.id: model.positions(model.generate(
-                    it.sentence, len(it.target),
-                    start=positions_to_features(model, it.target)[0])) for it in items}
-            results[f"{name}, from the test motion's first pose"] = score_generated(
-                gen, items, data.features, protos)
+        _extra_model_rows(results, name, model, data, items, protos, autoencode=autoencode,
+                          true_start=true_start, method=l2m_method, width=l2m_width,
+                          reranker=l2m_reranker)
     if baseline:
-        results["no motion (mean first pose)"] = evaluate_model(still_baseline(data), items,
-                                                                data.features, protos)
-        if true_start:
-            results["no motion (the test motion's first pose)"] = score_generated(
-                {it.id: np.repeat(it.target[:1], len(it.target), axis=0) for it in items},
-                items, data.features, protos)
-        results[NEAREST] = evaluate_model(retrieval_baseline(data), items, data.features,
-                                          protos)
-        # the test motions themselves: APE 0, and the order check's ceiling (how often
-        # the labeller gets true motions right)
-        results[GROUND_TRUTH] = score_generated({it.id: it.target for it in items}, items,
-                                                data.features, protos)
+        _baseline_rows(results, data, items, protos, true_start)
     table = markdown_table(results)
-    lengths = {"refit on the whole training motions": length_errors(data, items)}
-    # two-stream models only: an L2M's length model counts frames at its own rate
-    lengths.update({name: length_errors(data, items, m.length_model)
-                    for name, m in models.items()
-                    if getattr(m, "kind", None) == "twostream" and m.length_model})
-    table += "\nSentence -> length (what `generate` uses without --max-frames), mean absolute " \
-        "error in frames at 12.5 Hz: " + "; ".join(
-            f"{k} {v['mae_frames']:.1f}" for k, v in lengths.items()) + \
-        f"; always the training mean {lengths[next(iter(lengths))]['constant_mae_frames']:.1f}.\n"
+    lengths, length_line = _length_rows(models, data, items)
+    table += length_line
     if oracle:
         rows, sub_table = oracle_table(results, data, kept, oracle_gens, len(items), protos)
         results.update({f"same-parameter subset: {k}": r for k, r in rows.items()})
         table += "\n" + sub_table
     if out_dir is not None:
-        from motionlang.utils.atomic import atomic_write
-        out = Path(out_dir)
-        with atomic_write(out / "t2m_table.md") as fh:
-            fh.write(table)
-        report = {k: {kk: (None if isinstance(vv, float) and math.isnan(vv) else vv)
-                      for kk, vv in r.items() if kk != "generated"}
-                  for k, r in results.items()}
-        with atomic_write(out / "t2m_report.json") as fh:
-            json.dump({"split": split, "results": report, "length_model": lengths,
-                       "l2m_decoding": {"method": l2m_method, "width": l2m_width,
-                                        "reranked": l2m_reranker is not None}}, fh, indent=1)
+        _write_report(Path(out_dir), table, results, lengths, split, l2m_method, l2m_width,
+                      l2m_reranker)
         if figures:
             # models only: the no-motion baseline is a dot at the origin
-            trajectory_figures({k: results[k] for k in models}, items, out, figures)
+            trajectory_figures({k: results[k] for k in models}, items, Path(out_dir), figures)
     return results, table
+
+
+def _extra_model_rows(results: dict, name: str, model, data, items, protos, *,
+                      autoencode: bool, true_start: bool, method: str, width: int,
+                      reranker) -> None:
+    """The rows of :func:`compare`'s ``autoencode`` and ``true_start``, for the models that
+    can do them (``TextToMotion.autoencodes``, ``takes_start_pose``,
+    ``starts_from_positions``)."""
+    from motionlang.decoding.t2m import text_to_motion
+    t2m = text_to_motion(model)
+    if true_start and t2m.takes_start_pose:
+        _l2m_on_subjects(results, name, model, data, items, protos, method, width, reranker)
+    if autoencode and t2m.autoencodes:
+        gen = {it.id: t2m.reconstruct21(it.target) for it in items}
+        results[f"{name}, from the motion's own embedding"] = score_generated(
+            gen, items, data.features, protos)
+    if true_start and t2m.starts_from_positions:
+        gen = {it.id: t2m.start_from21(it.sentence, it.target) for it in items}
+        results[f"{name}, from the test motion's first pose"] = score_generated(
+            gen, items, data.features, protos)
+
+
+def _baseline_rows(results: dict, data, items, protos, true_start: bool) -> None:
+    """No motion, the nearest training motion, and the test motions themselves."""
+    results["no motion (mean first pose)"] = evaluate_model(still_baseline(data), items,
+                                                            data.features, protos)
+    if true_start:
+        results["no motion (the test motion's first pose)"] = score_generated(
+            {it.id: np.repeat(it.target[:1], len(it.target), axis=0) for it in items},
+            items, data.features, protos)
+    results[NEAREST] = evaluate_model(retrieval_baseline(data), items, data.features, protos)
+    # the test motions themselves: APE 0, and the order check's ceiling (how often the
+    # labeller gets true motions right)
+    results[GROUND_TRUTH] = score_generated({it.id: it.target for it in items}, items,
+                                            data.features, protos)
+
+
+def _length_rows(models: dict, data, items) -> tuple[dict, str]:
+    """Sentence -> length errors of each model's length model (and of one refit on the
+    training motions), and the table's line about them."""
+    from motionlang.decoding.t2m import FPS, text_to_motion
+    lengths = {"refit on the whole training motions": length_errors(data, items)}
+    # models whose length model counts frames at 12.5 Hz (an angles L2M's counts at 10 Hz)
+    lengths.update({name: length_errors(data, items, m.length_model)
+                    for name, m in models.items()
+                    if getattr(m, "length_model", None) is not None
+                    and abs(text_to_motion(m).fps - FPS) < 1e-9})
+    line = ("\nSentence -> length (what `generate` uses without --max-frames), mean absolute "
+            "error in frames at 12.5 Hz: "
+            + "; ".join(f"{k} {v['mae_frames']:.1f}" for k, v in lengths.items())
+            + f"; always the training mean "
+              f"{lengths[next(iter(lengths))]['constant_mae_frames']:.1f}.\n")
+    return lengths, line
+
+
+def _write_report(out: Path, table: str, results: dict, lengths: dict, split: str,
+                  method: str, width: int, reranker) -> None:
+    """``t2m_table.md`` and ``t2m_report.json`` (NaN as null) in ``out``."""
+    import json
+
+    from motionlang.utils.atomic import atomic_write
+    with atomic_write(out / "t2m_table.md") as fh:
+        fh.write(table)
+    report = {k: {kk: (None if isinstance(vv, float) and math.isnan(vv) else vv)
+                  for kk, vv in r.items() if kk != "generated"}
+              for k, r in results.items()}
+    with atomic_write(out / "t2m_report.json") as fh:
+        json.dump({"split": split, "results": report, "length_model": lengths,
+                   "l2m_decoding": {"method": method, "width": width,
+                                    "reranked": reranker is not None}}, fh, indent=1)

@@ -16,7 +16,7 @@ from typing import Sequence
 import numpy as np
 
 from motionlang.errors import MotionFormatError, MotionlangError
-from motionlang.models.crbm.model import check_sequences, chunk_index, gather_past
+from motionlang.models.crbm.sequences import check_sequences, chunk_index, gather_past
 from motionlang.utils.atomic import atomic_write
 
 

@@ -15,7 +15,9 @@ from typing import Sequence
 import numpy as np
 
 from motionlang.errors import MotionFormatError
-from motionlang.models.crbm.model import CRBM, CRBMConfig, check_sequences, config_from_dict
+from motionlang.models.crbm.config import CRBMConfig, config_from_dict
+from motionlang.models.crbm.model import CRBM
+from motionlang.models.crbm.sequences import check_sequences
 from motionlang.utils.atomic import atomic_path
 
 

@@ -1,10 +1,10 @@
 """A coarse plan of a motion: what it does in each of K equal parts of its duration.
 
 The L2M's decoder drops the sentence once a motion is under way (it follows its previous
-frames; ``scripts/l2m_word_use.py``), although its context holds the direction
-(``scripts/l2m_context_probe.py``). A plan moves the sentence's say into every frame: per
-part k of K (by the fraction of the motion done), the mean of each feature and the mean
-absolute frame-to-frame change of each feature (how much it moves there). The root's mean
+frames; ``experiments/probes/l2m_word_use.py``), although its context holds the direction
+(``experiments/probes/l2m_context_probe.py``). A plan moves the sentence's say into every
+frame: per part k of K (by the fraction of the motion done), the mean of each feature and
+the mean absolute frame-to-frame change of each feature (how much it moves there). The root's mean
 ground velocity per part is the path; a limb's change per part says when it acts.
 
 While training, the decoder is fed the plan of the motion it is learning (so that it learns

@@ -23,7 +23,8 @@ from torch import nn
 from torch.func import functional_call
 
 from motionlang.errors import MotionlangError
-from motionlang.models.checkpoint import (pack_normalizer, read_model_dict, unpack_normalizer,
+from motionlang.models.checkpoint import (FORMAT_VERSION, pack_normalizer, read_model_dict,
+                                          unpack_normalizer,
                                           write_checkpoint)
 from motionlang.models.length import SentenceLength
 from motionlang.models.twostream import losses as L
@@ -275,7 +276,8 @@ class TwoStreamModel(nn.Module):
 
     # ------------------------------------------------------------------ persistence
     def to_checkpoint(self) -> dict:
-        return {"kind": self.kind, "config": self.config.to_dict(), "stage": self.stage,
+        return {"kind": self.kind, "format": FORMAT_VERSION, "config": self.config.to_dict(),
+                "stage": self.stage,
                 "normalizer": pack_normalizer(self.normalizer), "state_dict": self.state_dict(),
                 "length_model": (None if self.length_model is None
                                  else self.length_model.to_dict())}

@@ -1,0 +1,206 @@
+"""``motionlang evaluate``: BLEU / ROUGE / CIDEr of an M2L model against the nearest-neighbour
+baseline, and optionally an L2M model's round trip (sentence -> motion -> M2L description).
+
+A thin wrapper over :mod:`motionlang.evaluation.seq2seq`; ``--m2l`` is a model file or its
+run folder (``train m2l --out DIR``), whose ``splits/`` says which motions are the test set.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from motionlang.cli.options import (
+    nonneg_float, nonneg_int, output_file, positive_float, width_int)
+from motionlang.cli.text_commands import check_length_penalty
+from motionlang.errors import MotionlangError
+
+
+def cmd_evaluate(args: argparse.Namespace) -> int:
+    from motionlang.datasets.splits import load_splits
+    from motionlang.features.frames import motion_frames
+    from motionlang.evaluation import seq2seq as ev
+    from motionlang.models.seq2seq.m2l import MotionToLanguage
+    from motionlang.datasets.seq2seq_pairs import load_records
+    from motionlang.utils.atomic import atomic_write
+    from motionlang.utils.progress import progress
+
+    check_length_penalty(args.length_penalty)
+    if args.l2m_method == "mean" and args.l2m_width != 1:
+        raise MotionlangError("--l2m-width applies to 'sample' and 'beam'; mean decoding gives "
+                              "one motion")
+    if args.l2m_method == "mean" and args.l2m_temperature != 1.0:
+        raise MotionlangError("--l2m-temperature applies to 'sample' and 'beam'; mean decoding "
+                              "draws nothing")
+    from motionlang.models.registry import resolve   # a run folder -> its model file
+    m2l_path = resolve(args.m2l)
+    if args.l2m_rerank:
+        if not args.l2m:
+            raise MotionlangError("--l2m-rerank ranks the round trip's motions: give --l2m")
+        if args.l2m_method == "mean" or args.l2m_width < 2:
+            raise MotionlangError("--l2m-rerank needs several motions per sentence: "
+                                  "--l2m-method sample or beam with --l2m-width > 1")
+        if resolve(args.l2m_rerank).resolve() == m2l_path.resolve():
+            raise MotionlangError(f"--l2m-rerank {args.l2m_rerank}: the reranker must not be "
+                                  "the describer (--m2l), which would grade its own choice")
+    l2m = reranker = None
+    if args.l2m:
+        from motionlang.models.seq2seq.l2m import LanguageToMotion
+        l2m = LanguageToMotion.load(resolve(args.l2m))
+    if args.l2m_rerank:   # before the long M2L evaluation
+        from motionlang.decoding.rerank import check_same_features
+        reranker = MotionToLanguage.load(resolve(args.l2m_rerank))
+        check_same_features(l2m, reranker, f"--l2m-rerank {args.l2m_rerank}")
+    m2l = MotionToLanguage.load(m2l_path)
+    splits = load_splits(args.splits or m2l_path.parent / "splits")
+    for name in ("train", args.split):
+        if name not in splits:
+            raise MotionlangError(f"no {name!r} split (have {sorted(splits)})")
+    records = {r.id: r for r in load_records(args.data, args.max_seconds) if r.annotations}
+
+    def frames(ids, limit=None):
+        ids = [i for i in ids if i in records][:limit]
+        return {i: motion_frames(m2l.features, records[i].load_motion(), 1)[0]
+                for i in progress(ids, desc="encode", unit="motion")}
+    # --limit caps the evaluated split only: the baseline searches the whole training set
+    n_eval = len([i for i in splits[args.split] if i in records][:args.limit or None])
+    if args.tsne and n_eval < 4:
+        raise MotionlangError(f"--tsne needs at least 4 motions in the {args.split!r} split, "
+                              f"it has {n_eval}")
+    test, train = frames(splits[args.split], args.limit or None), frames(splits["train"])
+    refs = {i: records[i].annotations for i in {**test, **train}}
+    report = {"split": args.split, "length_penalty": args.length_penalty,
+              "m2l": ev.evaluate_m2l(m2l, test, refs, args.width, args.length_penalty),
+              "nearest_neighbour": ev.evaluate_nn_baseline(train, refs, test, refs)}
+    if l2m is not None:
+        report["l2m_round_trip"] = ev.evaluate_round_trip(
+            l2m, m2l, {i: refs[i] for i in test}, report["m2l"]["bleu"],
+            method=args.l2m_method, width=args.l2m_width, temperature=args.l2m_temperature,
+            reranker=reranker)
+        report["l2m_round_trip"].update(method=args.l2m_method, width=args.l2m_width,
+                                        temperature=args.l2m_temperature,
+                                        rerank=args.l2m_rerank)
+        from motionlang.evaluation.retrieval import SentenceIndex
+        index = SentenceIndex((i, s) for i in sorted(train) for s in refs[i])
+        report["nn_round_trip"] = ev.evaluate_round_trip_nn(
+            index, train, m2l, {i: refs[i] for i in test}, report["m2l"]["bleu"])
+    truths = _ground_truths(records, test)
+    if truths:   # a procedural corpus: the parameters each description states, checked
+        ranked = {e["id"]: e["hypotheses"] for e in report["m2l"].pop("all")}
+        report["m2l_parameters"] = ev.parameter_accuracy(
+            {i: h[0] for i, h in ranked.items()}, truths)
+        # BLEU cannot tell a worse description from an equally valid paraphrase; the
+        # parameters can: how often the k-th hypothesis names exactly the true actions
+        # (evaluate_m2l pads a short beam with its last hypothesis, so all have W)
+        report["m2l_actions_by_rank"] = [
+            ev.parameter_accuracy({i: h[k] for i, h in ranked.items()}, truths)["actions_match"]
+            for k in range(args.width)]
+        for run in ("l2m", "nn"):
+            if f"{run}_round_trip" in report:
+                descriptions = report[f"{run}_round_trip"]["descriptions"]
+                report[f"{run}_parameters"] = ev.round_trip_parameter_accuracy(
+                    descriptions, truths)
+                report[f"{run}_parameters"]["named"] = ev.actions_named(descriptions, truths)
+    else:
+        report["m2l"].pop("all")
+    if args.tsne:
+        _context_tsne(Path(args.tsne), m2l, l2m if args.l2m else None, test, records)
+        report["tsne"] = str(args.tsne)
+    table = ev.markdown_table({"M2L (top hypothesis)": report["m2l"],
+                               "nearest neighbour": report["nearest_neighbour"],
+                               **({f"L2M round trip ({args.l2m_method}"
+                                   + (f", best of {args.l2m_width} by reranker" if args.l2m_rerank
+                                      else "") + ")":
+                                   report["l2m_round_trip"],
+                                   "nearest training sentence, round trip":
+                                   report["nn_round_trip"]}
+                                  if "l2m_round_trip" in report else {})})
+    by_rank = " ".join(f"{b:.3f}" for b in report["m2l"]["bleu_by_rank"])
+    table += f"\nM2L BLEU of hypotheses 1..{args.width}: {by_rank}\n"
+    if "m2l_actions_by_rank" in report:
+        table += (f"M2L hypotheses 1..{args.width} naming exactly the true actions: " +
+                  " ".join(f"{a:.1%}" for a in report["m2l_actions_by_rank"]) + "\n")
+    for key, name in (("m2l_parameters", "M2L top description"),
+                      ("l2m_parameters", "L2M round trip"),
+                      ("nn_parameters", "Nearest training sentence, round trip")):
+        if key in report:
+            acc = report[key]
+            table += (f"{name}, parameters right (procedural ground truth): " + ", ".join(
+                f"{f} {acc[f]:.1%} of {acc[f + '_stated']}" for f in
+                ("side", "count", "direction", "speed")) +
+                f"; actions exactly right {acc['actions_match']:.1%}\n")
+            if "named" in acc:
+                table += f"{name}, true actions named: " + ev.named_line(acc["named"]) + "\n"
+    if args.output:
+        out = Path(args.output)
+        with atomic_write(out) as fh:
+            json.dump(report, fh, indent=1)
+        with atomic_write(out.with_suffix(".md")) as fh:
+            fh.write(table)
+    print(table, end="")
+    return 0
+
+
+def _ground_truths(records: dict, ids) -> dict:
+    """{id: ground-truth primitives} when every record carries them (procedural corpus)."""
+    from motionlang.datasets.synth import ground_truth
+    metas = {i: records[i].meta for i in ids}
+    if not metas or not all(m.get("primitives") for m in metas.values()):
+        return {}
+    return {i: ground_truth(m) for i, m in metas.items()}
+
+
+def _context_tsne(path: Path, m2l, l2m, test: dict, records: dict) -> None:
+    """The paper's Fig. 9: t-SNE of both encoders' context vectors, coloured by motion type
+    (the first action of a procedural sample, else the first word after "a person")."""
+    from motionlang.evaluation.context_tsne import l2m_contexts, m2l_contexts, plot_context_tsne
+
+    def label(i):
+        prims = records[i].meta.get("primitives")
+        if prims:
+            return prims[0]["action"]
+        words = records[i].annotations[0].lower().split()
+        return words[2] if len(words) > 2 and words[:2] == ["a", "person"] else words[0]
+    ids = sorted(test)
+    panels = {"M2L encoder (motions)": (m2l_contexts(m2l, [test[i] for i in ids]),
+                                        [label(i) for i in ids])}
+    if l2m is not None:
+        panels["L2M encoder (sentences)"] = (
+            l2m_contexts(l2m, [records[i].annotations[0] for i in ids]), [label(i) for i in ids])
+    plot_context_tsne(panels, path)
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser("evaluate", help="BLEU/ROUGE/CIDEr of M2L, baseline, L2M round trip")
+    p.add_argument("--m2l", required=True, metavar="MODEL",
+                   help="M2L model file or its run folder (train m2l --out), which holds "
+                        "splits/")
+    p.add_argument("--l2m", metavar="MODEL", help="L2M model file or run folder: also run "
+                   "the round trip, and its baseline "
+                   "(the motion of the closest training sentence in bag of words)")
+    p.add_argument("--data", required=True, metavar="DIR", help="the dataset trained on")
+    p.add_argument("--splits", metavar="DIR", help="split files (default: M2L_DIR/splits)")
+    p.add_argument("--split", default="test", help="the split to evaluate (of --splits)")
+    p.add_argument("-w", "--width", type=width_int, default=5,
+                   help="M2L beam width: hypotheses per motion")
+    p.add_argument("--limit", type=nonneg_int, default=0, help="evaluate at most N motions")
+    p.add_argument("--max-seconds", type=positive_float, default=30.0,
+                   help="drop longer motions (as in training)")
+    p.add_argument("-o", "--output", type=output_file, help="report.json (+ report.md beside it)")
+    p.add_argument("--tsne", metavar="PNG", type=output_file,
+                   help="also plot the context vectors' t-SNE map")
+    p.add_argument("--length-penalty", type=nonneg_float, default=0.0, metavar="ALPHA",
+                   help="rank M2L hypotheses by log P / length**ALPHA (default 0: total, the paper's)")
+    p.add_argument("--l2m-method", choices=("mean", "sample", "beam"), default="mean",
+                   help="round trip: how each motion is generated (default: heaviest-component "
+                        "means); the likeliest of --l2m-width hypotheses is described (with "
+                        "--l2m-rerank: the one that M2L ranks first)")
+    p.add_argument("--l2m-width", type=width_int, default=1, metavar="W",
+                   help="hypotheses per sentence for 'sample' / 'beam' (default 1)")
+    p.add_argument("--l2m-temperature", type=positive_float, default=1.0, metavar="TAU",
+                   help="sampling temperature for 'sample' / 'beam' (see generate --temperature)")
+    p.add_argument("--l2m-rerank", metavar="MODEL", help="round trip: describe the hypothesis "
+                   "under which this other M2L model finds the sentence likeliest, not the "
+                   "L2M's likeliest (not the --m2l file)")
+    p.set_defaults(func=cmd_evaluate)
+

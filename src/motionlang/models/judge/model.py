@@ -1,0 +1,159 @@
+"""The motion judge: dilated temporal convolutions over 21-joint position features, pooled
+over time, with two heads (content, style) on a shared penultimate embedding.
+
+Input is what every model and reader can give: global 21-joint positions (T, 21, 3),
+metres, Y up (``features.joint_map.positions21``; a ``Motion`` goes through
+``PositionFeatures.body``). :func:`position_rows` turns them into the position features'
+layout (``features.positions``: local joints in the body frame + root steps and heading
+change, 66 numbers a frame at 12.5 Hz), invariant to where the body stands and faces; the
+judge's own normaliser (fitted on its training takes) rides in its checkpoint, so a judge
+never depends on the features of the model it judges.
+"""
+from __future__ import annotations
+
+from dataclasses import asdict
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+import torch
+from torch import nn
+from torch.nn import functional as F
+
+from motionlang.errors import MotionlangError
+from motionlang.features.positions import floor_height, split_global
+from motionlang.models.checkpoint import (FORMAT_VERSION, pack_normalizer, read_model_dict,
+                                          unpack_normalizer, write_checkpoint)
+from motionlang.models.judge.config import JudgeConfig
+
+
+def resample_positions(p21: np.ndarray, fps: float, to: float) -> np.ndarray:
+    """(T, J, 3) at ``fps`` -> (T', J, 3) at ``to`` Hz, linear in time, same start and
+    span (T' = floor((T - 1) to / fps) + 1)."""
+    p = np.asarray(p21, dtype=float)
+    if abs(fps - to) < 1e-9 or len(p) < 2:
+        return p
+    t_src = np.arange(len(p)) / fps
+    t_dst = np.arange(int(np.floor((len(p) - 1) * to / fps + 1e-9)) + 1) / to
+    flat = p.reshape(len(p), -1)
+    return np.stack([np.interp(t_dst, t_src, flat[:, k]) for k in range(flat.shape[1])],
+                    axis=1).reshape(len(t_dst), *p.shape[1:])
+
+
+def position_rows(p21: np.ndarray) -> np.ndarray:
+    """Global (T, 21, 3) metres -> (T, 66) un-normalised rows in ``PositionFeatures``'
+    layout: the feet put on y = 0 (``floor_height``), then local joints (63), root step
+    (sideways, forward; metres/frame) and heading change (rad/frame)."""
+    p = np.asarray(p21, dtype=float)
+    if p.ndim != 3 or p.shape[1:] != (21, 3) or not len(p) or not np.isfinite(p).all():
+        raise MotionlangError(f"the judge reads finite (T >= 1, 21, 3) positions, got "
+                              f"{p.shape}")
+    p = p - np.array([0.0, floor_height(p), 0.0])
+    local, v, dyaw, _ = split_global(p)
+    return np.concatenate([local.reshape(len(p), -1), v, dyaw[:, None]], axis=1)
+
+
+class MotionJudge(nn.Module):
+    """Features (B, T, F) with lengths (B,) -> content logits (B, C), style logits (B, S)
+    and the penultimate embedding (B, E)."""
+
+    kind = "judge"
+
+    def __init__(self, config: JudgeConfig, normalizer=None):
+        super().__init__()
+        c = self.config = config
+        self.normalizer = normalizer
+        chans = [c.n_features] + [c.hidden] * c.layers
+        self.convs = nn.ModuleList(
+            nn.Conv1d(a, b, c.kernel, dilation=2 ** i, padding=(c.kernel // 2) * 2 ** i)
+            for i, (a, b) in enumerate(zip(chans[:-1], chans[1:])))
+        self.drop = nn.Dropout(c.dropout)
+        self.embedding = nn.Linear(2 * c.hidden, c.embed)
+        self.content_head = nn.Linear(c.embed, len(c.contents))
+        self.style_head = nn.Linear(c.embed, len(c.styles))
+
+    def forward(self, x: torch.Tensor, lengths: torch.Tensor) -> dict[str, torch.Tensor]:
+        """x (B, T, F) normalised features, zero-padded after ``lengths`` (B,) frames."""
+        mask = (torch.arange(x.shape[1], device=x.device)[None] < lengths[:, None])
+        h = x.transpose(1, 2)
+        for conv in self.convs:
+            h = self.drop(F.relu(conv(h))) * mask[:, None]   # padding stays zero
+        m = mask[:, None].float()
+        mean = h.sum(-1) / m.sum(-1).clamp(min=1.0)
+        peak = h.masked_fill(~mask[:, None], -1e4).amax(-1)
+        e = self.drop(F.relu(self.embedding(torch.cat([mean, peak], dim=-1))))
+        return {"content": self.content_head(e), "style": self.style_head(e), "embedding": e}
+
+    def loss(self, batch: dict) -> dict[str, torch.Tensor]:
+        """batch: ``x`` (B, T, F), ``lengths`` (B,), ``content`` (B,), ``style`` (B,) long
+        label ids (-1: unknown, not counted). Loss = content CE + style CE."""
+        out = self(batch["x"], batch["lengths"])
+        terms = {}
+        for head in ("content", "style"):
+            y = batch[head]
+            known = y >= 0
+            terms[f"{head}_loss"] = (F.cross_entropy(out[head][known], y[known])
+                                     if known.any() else out[head].sum() * 0.0)
+            terms[f"{head}_acc"] = ((out[head].argmax(-1) == y)[known].float().mean().detach()
+                                    if known.any() else torch.tensor(float("nan")))
+        terms["loss"] = terms["content_loss"] + terms["style_loss"]
+        return terms
+
+    # -- motions in, labels and embeddings out -----------------------------------------
+    def rows(self, p21: np.ndarray, fps: float) -> np.ndarray:
+        """(T, 21, 3) metres at ``fps`` -> (T', F) normalised rows at ``config.fps``."""
+        raw = position_rows(resample_positions(p21, fps, self.config.fps))
+        return self.normalizer.transform(raw).astype(np.float32)
+
+    @torch.no_grad()
+    def judge(self, motions: Sequence[np.ndarray], fps: float, batch_size: int = 64
+              ) -> dict[str, np.ndarray]:
+        """Motions (each (T, 21, 3) metres at ``fps``) -> ``content`` (N, C) and ``style``
+        (N, S) probabilities and ``embedding`` (N, E), whole motions, eval mode."""
+        was = self.training
+        self.eval()
+        out: dict[str, list] = {"content": [], "style": [], "embedding": []}
+        for s in range(0, len(motions), batch_size):
+            rows = [torch.from_numpy(self.rows(p, fps)) for p in motions[s:s + batch_size]]
+            x = nn.utils.rnn.pad_sequence(rows, batch_first=True)
+            got = self(x, torch.tensor([len(r) for r in rows]))
+            out["content"].append(got["content"].softmax(-1).numpy())
+            out["style"].append(got["style"].softmax(-1).numpy())
+            out["embedding"].append(got["embedding"].numpy())
+        self.train(was)
+        n = self.config
+        empty = {"content": (0, len(n.contents)), "style": (0, len(n.styles)),
+                 "embedding": (0, n.embed)}
+        return {k: np.concatenate(v) if v else np.zeros(empty[k]) for k, v in out.items()}
+
+    def predict(self, motions: Sequence[np.ndarray], fps: float) -> list[tuple[str, str]]:
+        """The most likely (content, style) of each motion."""
+        got = self.judge(motions, fps)
+        return [(self.config.contents[c], self.config.styles[s]) for c, s in
+                zip(got["content"].argmax(-1), got["style"].argmax(-1))]
+
+    # -- checkpoint ----------------------------------------------------------------------
+    def to_checkpoint(self) -> dict:
+        return {"kind": self.kind, "format": FORMAT_VERSION, "config": asdict(self.config),
+                "normalizer": pack_normalizer(self.normalizer),
+                "state_dict": self.state_dict()}
+
+    @classmethod
+    def from_checkpoint(cls, d: dict) -> "MotionJudge":
+        model = cls(JudgeConfig(**d["config"]), unpack_normalizer(d.get("normalizer")))
+        model.load_state_dict(d["state_dict"])
+        return model.eval()
+
+    def save(self, path: str | Path) -> None:
+        """One self-describing file (atomic write): config, labels, normaliser, weights."""
+        write_checkpoint(self.to_checkpoint(), path)
+
+    @classmethod
+    def load(cls, path: str | Path) -> "MotionJudge":
+        """Rebuild from :meth:`save`'s file; in eval mode."""
+        d = read_model_dict(path, cls.kind)
+        try:
+            return cls.from_checkpoint(d)
+        except (KeyError, TypeError, ValueError, RuntimeError) as exc:
+            raise MotionlangError(f"{path}: a damaged judge checkpoint "
+                                  f"({type(exc).__name__}: {str(exc).splitlines()[0]})") from exc

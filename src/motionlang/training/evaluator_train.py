@@ -1,0 +1,128 @@
+"""Training the text-motion evaluator (``models.evaluator``) on any motionlang dataset with
+the shared trainer.
+
+Items: ``{"motion": (T-1, D) float32 HumanML3D vectors in the body's file unit, "caption",
+"tokens": [word/POS] or None, "id"}``, one per caption of each motion. The rows are those
+``motionlang data export-h3d`` writes (``features.h3d_vectors``): a HumanML3D-layout folder
+of the same body gives its stored rows and tagged captions; any other dataset (KIT-ML, the
+procedural corpus, a custom folder) has each motion taken to the body's joints
+(``datasets.humanml3d_export.body_joints``: ``kit`` = the 21-joint body at 12.5 fps in
+millimetres, any rig; ``smpl`` = 22 SMPL joints at 20 fps) and turned into rows, and its
+captions tagged by ``models.evaluator.text.tag``. The model's ``collate`` normalises the
+rows with the evaluator's mean/std, which :func:`fit_normalizer` sets from the training
+motions as the public ``Mean.npy``/``Std.npy`` are made (each part of the row shares one
+std).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+
+from motionlang.errors import DatasetError
+from motionlang.training.trainer import TrainConfig, Trainer
+
+
+def motion_rows(motion, body: str = "kit") -> np.ndarray:
+    """A ``Motion`` -> (T-1, D) float32 HumanML3D rows of ``body`` (``"kit"``: D = 251,
+    millimetres; ``"smpl"``: D = 263, metres); T is the frame count at the body's rate."""
+    from motionlang.datasets.humanml3d_export import body_joints
+    from motionlang.features.h3d_vectors import H3D_BODIES, joints_to_vectors
+    spec = H3D_BODIES[body]
+    joints = body_joints(motion, spec)
+    if len(joints) < 2:
+        raise DatasetError(f"{motion.name}: too short for motion rows ({len(joints)} frame)")
+    return joints_to_vectors(joints / spec.unit, spec)[0].astype(np.float32)
+
+
+def record_items(record, body: str = "kit") -> list[dict]:
+    """One item per caption of a record (``id``, ``annotations``, ``load_motion()``; a
+    HumanML3D-layout record of ``body`` also ``load_vectors()`` and tagged captions)."""
+    spec = getattr(record, "body", None)
+    if hasattr(record, "load_vectors") and getattr(spec, "name", None) == body:
+        rows = np.asarray(record.load_vectors(), dtype=np.float32)
+        tokens = list((getattr(record, "meta", None) or {}).get("tokens") or [])
+    else:
+        rows, tokens = motion_rows(record.load_motion(), body), []
+    tokens += [None] * (len(record.annotations) - len(tokens))
+    return [{"motion": rows, "caption": c, "tokens": t or None, "id": str(record.id)}
+            for c, t in zip(record.annotations, tokens)]
+
+
+def fit_normalizer(items: Sequence[dict], body: str | None = "kit"
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """Mean and std (D,) of the rows of the items' motions (each id counted once); with a
+    ``body`` the std of each part of the HumanML3D row is its mean (``group_std``)."""
+    seen, rows = set(), []
+    for it in items:
+        if it["id"] not in seen:
+            seen.add(it["id"])
+            rows.append(np.asarray(it["motion"], dtype=np.float64))
+    if not rows:
+        raise DatasetError("no motions to fit the evaluator's mean/std on")
+    x = np.concatenate(rows)
+    mean, std = x.mean(axis=0), x.std(axis=0)
+    if body is not None:
+        from motionlang.features.h3d_vectors import H3D_BODIES, group_std
+        std = group_std(std, H3D_BODIES[body].n_joints)
+    return mean, np.where(std > 0, std, 1.0)
+
+
+@dataclass
+class EvaluatorData:
+    """Items per split (``{"train"|"val"|"test": [item]}``) and the body of their rows."""
+
+    items: dict[str, list[dict]]
+    body: str
+
+    @property
+    def motion_dim(self) -> int:
+        from motionlang.features.h3d_vectors import H3D_BODIES
+        return H3D_BODIES[self.body].dim
+
+
+def build_evaluator_data(data: str | Path | Sequence[Any], body: str = "kit", *,
+                         fractions: Sequence[float] = (0.8, 0.1, 0.1), seed: int = 0,
+                         max_seconds: float | None = 30.0) -> EvaluatorData:
+    """Read ``data`` (anything ``datasets.seq2seq_pairs.load_records`` reads, or a list of
+    records), split by motion — the folder's own split files when every record has a
+    split, else a seeded ``random_split`` — and make the items of every split."""
+    from motionlang.datasets.splits import random_split
+    if isinstance(data, (str, Path)):
+        from motionlang.datasets.seq2seq_pairs import load_records
+        records = load_records(data, max_seconds)
+    else:
+        records = list(data)
+    records = [r for r in records if r.annotations]
+    if len(records) < 2:
+        raise DatasetError(f"{data}: need at least 2 described motions, found {len(records)}")
+    by_id = {str(r.id): r for r in records}
+    if all(getattr(r, "split", None) for r in records):
+        splits = {s: [i for i, r in by_id.items() if r.split == s]
+                  for s in ("train", "val", "test")}
+    else:
+        splits = random_split(list(by_id), fractions, seed=seed)
+    return EvaluatorData({s: [it for i in ids for it in record_items(by_id[i], body)]
+                          for s, ids in splits.items()}, body)
+
+
+def train_evaluator(model, train_items: Sequence[dict], config: TrainConfig, *,
+                    val_items: Sequence[dict] | None = None, body: str | None = "kit",
+                    fit_stats: bool = True, resume: bool = False):
+    """Train a ``TextMotionEvaluator`` with the shared trainer (``config.out_dir`` gets
+    ``last.pt``/``best.pt``, the model's own checkpoints). ``fit_stats``: first set its
+    mean/std from the training items (:func:`fit_normalizer` with ``body``).
+
+    Returns:
+        (model in eval mode, history)
+    """
+    if not train_items:
+        raise DatasetError("no training items for the evaluator")
+    if fit_stats:
+        model.set_normalizer(*fit_normalizer(train_items, body))
+    trainer = Trainer(model, list(train_items), model.collate, config,
+                      val_set=list(val_items) if val_items else None)
+    history = trainer.fit(resume=resume)
+    return model.eval(), history

@@ -1,0 +1,141 @@
+"""The public API and the model registry: the module's example runs as written, packaged
+models are found by name with their cards, checkpoints say what they are."""
+from __future__ import annotations
+
+import doctest
+import warnings
+
+import numpy as np
+import pytest
+import torch
+
+import motionlang as ml
+from motionlang.errors import MotionlangError
+from motionlang.models import registry
+
+
+def test_the_api_example_runs(tmp_path):
+    import motionlang.api as api
+    torch.manual_seed(0)
+    result = doctest.testmod(api, extraglobs={"tmp": tmp_path}, optionflags=doctest.ELLIPSIS)
+    assert result.attempted >= 7 and result.failed == 0
+
+
+def test_every_api_name_is_exported():
+    for name in ("read_motion", "write_motion", "load_model", "describe", "generate",
+                 "encode", "fill_in", "render", "body21", "retarget"):
+        assert callable(getattr(ml, name)), name
+    assert callable(ml.render)   # the drawing package is motionlang.rendering, not a clash
+
+
+def test_packaged_models_have_cards():
+    for name, p in registry.PACKAGED.items():
+        assert p.path.is_file(), name
+        card = p.card
+        for heading in ("**Data.**", "**Licence.**", "**Recipe.**", "**Measured**"):
+            assert heading in card, (name, heading)
+        assert registry.checkpoint_kind(p.path) == p.kind
+
+
+def test_registry_resolves_names_files_and_run_folders(tmp_path):
+    assert registry.resolve("m2l") == registry.PACKAGED["m2l"].path
+    run = tmp_path / "run"
+    run.mkdir()
+    with pytest.raises(MotionlangError, match="run: a folder without a model file"):
+        registry.resolve(run)
+    m = registry.load_model("m2l")
+    m.save(run / "model.pt")
+    assert registry.resolve(run) == run / "model.pt"
+    back = registry.load_model(run, kind="m2l")
+    for k, v in m.state_dict().items():
+        assert torch.equal(v, back.state_dict()[k])
+    with pytest.raises(MotionlangError, match="model.pt: a model of kind m2l, not l2m"):
+        registry.load_model(run, kind="l2m")
+    with pytest.raises(MotionlangError, match="nothing.pt: no such model file"):
+        registry.load_model(tmp_path / "nothing.pt")
+    with pytest.raises(MotionlangError, match="unknown model kind 'gan'"):
+        registry.model_class("gan")
+
+
+def test_newer_checkpoint_formats_are_refused(tmp_path):
+    from motionlang.models.checkpoint import FORMAT_VERSION
+    d = registry.load_model("m2l").to_checkpoint()
+    assert d["format"] == FORMAT_VERSION
+    torch.save({**d, "format": FORMAT_VERSION + 1}, tmp_path / "future.pt")
+    with pytest.raises(MotionlangError, match=f"future.pt: checkpoint format "
+                                              f"{FORMAT_VERSION + 1} is newer"):
+        registry.load_model(tmp_path / "future.pt")
+    old = {k: v for k, v in d.items() if k != "format"}   # files before the field: format 0
+    torch.save(old, tmp_path / "old.pt")
+    assert registry.load_model(tmp_path / "old.pt").kind == "m2l"
+
+
+def test_text_to_motion_interface_and_wrong_kinds():
+    from motionlang.decoding.t2m import text_to_motion
+    l2m = text_to_motion(registry.load_model("l2m"))
+    assert l2m.fps == 12.5 and l2m.default_method() == "mean" and not l2m.deterministic
+    with pytest.raises(MotionlangError, match="m2l model does not generate motion"):
+        text_to_motion(registry.load_model("m2l"))
+    with pytest.raises(MotionlangError, match="has no words"):
+        ml.generate("!!!")
+
+
+def test_unknown_words_are_named():
+    with pytest.warns(UserWarning, match="does not know 'dances', 'tango'"):
+        m = ml.generate("a person dances a tango", max_frames=10)
+    assert m.n_frames <= 10
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        ml.generate("a person walks forward", max_frames=10)   # every word known: silent
+
+
+def test_encode_motions_and_sentences():
+    walk = ml.generate("a person walks forward")
+    wave = ml.generate("a person waves with the right hand")
+    zw, zv = ml.encode(walk), ml.encode(wave)
+    assert zw.shape == zv.shape and np.isfinite(zw).all()
+    assert np.allclose(ml.encode(walk), zw)              # deterministic
+    assert not np.allclose(zw, zv)
+    s1, s2 = ml.encode("a person walks forward"), ml.encode("a person walks ahead")
+    s3 = ml.encode("a person waves with the right hand")
+    cos = lambda a, b: float(a @ b / np.linalg.norm(a) / np.linalg.norm(b))  # noqa: E731
+    assert cos(s1, s2) > cos(s1, s3)
+
+
+def test_fill_in_with_a_crbm(tmp_path):
+    from motionlang.models.crbm.model import CRBM, CRBMConfig
+    rng = np.random.default_rng(0)
+    t = np.arange(200)[:, None] / 10.0
+    seq = np.concatenate([np.sin(t + k) for k in range(4)], axis=1) + 0.01 * rng.normal(size=(200, 4))
+    crbm = CRBM(CRBMConfig(n_hidden=8, order=2, epochs=5, batch_size=20), 4).fit([seq])
+    crbm.save(tmp_path / "c.npz")
+    known = np.ones_like(seq, dtype=bool)
+    known[100:, 1] = False
+    filled = ml.fill_in(np.where(known, seq, np.nan), known, tmp_path / "c.npz")
+    assert filled.shape == seq.shape and np.isfinite(filled).all()
+    assert np.array_equal(filled[known], seq[known])
+    with pytest.raises(MotionlangError, match="this CRBM models 4"):
+        ml.fill_in(seq[:, :3], known[:, :3], crbm)
+    with pytest.raises(MotionlangError, match="a model of kind crbm, not l2m"):
+        registry.load_model(tmp_path / "c.npz", kind="l2m")
+
+
+def test_models_command_lists_and_shows_cards(capsys, tmp_path):
+    from motionlang.cli.main import main
+    assert main(["models"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("m2l ") and "\nl2m " in out
+    assert main(["models", "l2m"]) == 0
+    assert "**Licence.**" in capsys.readouterr().out
+    assert main(["models", str(registry.PACKAGED["m2l"].path)]) == 0
+    assert "a model of kind m2l" in capsys.readouterr().out
+    assert main(["models", str(tmp_path / "none.pt")]) == 2
+    assert "none.pt: no such model file" in capsys.readouterr().err
+
+
+def test_generate_command_names_unknown_words(tmp_path, capsys):
+    from motionlang.cli.main import main
+    assert main(["generate", "a person dances", "-o", str(tmp_path / "d.npz"),
+                 "--max-frames", "8"]) == 0
+    err = capsys.readouterr().err
+    assert "warning: the model does not know 'dances'" in err and "152 words" in err

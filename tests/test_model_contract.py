@@ -1,0 +1,213 @@
+"""One contract for every model kind, each built tiny: ``save`` -> ``load`` gives bit-identical
+parameters and identical outputs, through the class and through the registry; a checkpoint
+of any other kind is refused with a MotionlangError naming the file; outputs in eval mode
+are deterministic (two calls, the same result)."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+import pytest
+import torch
+
+from motionlang.errors import MotionlangError
+from motionlang.models import registry
+from motionlang.models.crbm.ar import ARConfig, ARModel
+from motionlang.models.crbm.config import PARAMS, CRBMConfig
+from motionlang.models.crbm.model import CRBM
+from motionlang.models.crbm.stack import CRBMStack
+from motionlang.models.evaluator.config import EvaluatorConfig
+from motionlang.models.evaluator.model import TextMotionEvaluator
+from motionlang.models.judge.config import JudgeConfig
+from motionlang.models.judge.model import MotionJudge
+from motionlang.models.seq2seq.l2m import LanguageToMotion
+from motionlang.models.seq2seq.m2l import MotionToLanguage
+from motionlang.models.twostream import TwoStreamModel
+
+from helpers.seq2seq import make_batch, outputs
+from helpers.seq2seq import tiny as tiny_seq2seq
+from helpers.twostream import HashTokens
+from helpers.twostream import tiny as tiny_twostream
+
+torch.set_num_threads(1)
+D = 4   # features per frame of the CRBM family's tiny sequences
+
+
+def _sequences() -> list[np.ndarray]:
+    rng = np.random.default_rng(0)
+    t = np.arange(30)[:, None] / 5.0
+    return [np.sin(t + k + np.arange(D)) + 0.05 * rng.normal(size=(30, D)) for k in range(3)]
+
+
+def _crbm() -> CRBM:
+    return CRBM(CRBMConfig(n_hidden=6, order=2, epochs=3, batch_size=16), D).fit(_sequences())
+
+
+def _stack() -> CRBMStack:
+    return CRBMStack.fit(_crbm(), _sequences(),
+                         CRBMConfig(n_hidden=5, order=2, epochs=3, batch_size=16, seed=1))
+
+
+def _ar() -> ARModel:
+    return ARModel(ARConfig(order=2), D).fit(_sequences())
+
+
+class HashVectors:
+    """Deterministic fake word vectors (4 per word), so the evaluator needs no GloVe."""
+
+    dim = 4
+
+    def __contains__(self, word: str) -> bool:
+        return True
+
+    def __getitem__(self, word: str) -> np.ndarray:
+        return np.random.default_rng(sum(map(ord, word))).normal(size=4).astype(np.float32)
+
+
+def _evaluator() -> TextMotionEvaluator:
+    torch.manual_seed(0)
+    cfg = EvaluatorConfig(motion_dim=6, drop_last=2, word_dim=4, text_hidden=4, motion_hidden=4,
+                          movement_hidden=4, movement_latent=4, embed_dim=4)
+    return TextMotionEvaluator(cfg, mean=np.arange(6.0), std=np.full(6, 2.0),
+                               vectors=HashVectors()).eval()
+
+
+def _evaluator_out(model: TextMotionEvaluator) -> np.ndarray:
+    motions = [np.random.default_rng(k).normal(size=(9 + k, 6)) for k in range(2)]
+    texts = model.embed_texts(["a person walks", "jump"],
+                              tokens=[["a/DET", "person/NOUN", "walks/VERB"], ["jump/VERB"]])
+    return np.concatenate([model.embed_motions(motions), texts])
+
+
+def _judge() -> MotionJudge:
+    torch.manual_seed(0)
+    return MotionJudge(JudgeConfig(contents=["walk", "jog"], styles=["calm", "angry"],
+                                   n_features=6, hidden=4, embed=4, layers=2, kernel=3))
+
+
+def _judge_out(model: MotionJudge) -> torch.Tensor:
+    x = torch.randn(2, 7, 6, generator=torch.Generator().manual_seed(0))
+    with torch.no_grad():
+        out = model(x, torch.tensor([7, 5]))
+    return torch.cat([out[k].flatten() for k in ("content", "style", "embedding")])
+
+
+def _torch_params(model) -> dict[str, Any]:
+    return dict(model.state_dict())
+
+
+def _crbm_params(model: CRBM, prefix: str = "") -> dict[str, Any]:
+    return {prefix + k: getattr(model, k) for k in (*PARAMS, "mean", "std")}
+
+
+def _init() -> np.ndarray:
+    return _sequences()[0][:5]
+
+
+@dataclass(frozen=True)
+class Kind:
+    """How the contract builds, saves, reads and runs one model kind."""
+
+    name: str                                  # the checkpoint's kind (registry key)
+    cls: type
+    suffix: str                                # file suffix its save expects
+    build: Callable[[], Any]
+    params: Callable[[Any], dict[str, Any]]    # every learnt array (and normaliser)
+    run: Callable[[Any], Any]                  # an output in eval mode (array or tensor)
+    load_kw: Callable[[], dict] = dict         # extra arguments of ``load``
+
+
+KINDS = [
+    Kind("crbm", CRBM, ".npz", _crbm, _crbm_params,
+         lambda m: m.generate(_init(), 4, n_gibbs=3, seed=0)),
+    Kind("crbm_stack", CRBMStack, ".npz", _stack,
+         lambda m: {**_crbm_params(m.level1, "l1_"), **_crbm_params(m.level2, "l2_")},
+         lambda m: m.generate(_init(), 4, n_gibbs=3, seed=0)),
+    Kind("ar", ARModel, ".npz", _ar,
+         lambda m: {"A": m.A, "a": m.a, "mean": m.mean, "std": m.std},
+         lambda m: m.generate(_init(), 4)),
+    Kind("m2l", MotionToLanguage, ".pt", lambda: tiny_seq2seq("m2l", True), _torch_params,
+         lambda m: outputs(m, make_batch())),
+    Kind("l2m", LanguageToMotion, ".pt", lambda: tiny_seq2seq("l2m", True), _torch_params,
+         lambda m: outputs(m, make_batch())),
+    Kind("twostream", TwoStreamModel, ".pt", tiny_twostream, _torch_params,
+         lambda m: m.generate(["a person walks forward", "jump"], 6),
+         lambda: {"text_encoder": HashTokens()}),
+    Kind("evaluator", TextMotionEvaluator, ".pt", _evaluator,
+         lambda m: {**m.state_dict(), "mean": m.mean, "std": m.std}, _evaluator_out,
+         lambda: {"vectors": HashVectors()}),
+    Kind("judge", MotionJudge, ".pt", _judge, _torch_params, _judge_out),
+]
+BY_NAME = {k.name: k for k in KINDS}
+IDS = [k.name for k in KINDS]
+PAIRS = [(k, other) for k in KINDS for other in IDS if other != k.name]
+
+
+def assert_identical(a: dict[str, Any], b: dict[str, Any]) -> None:
+    assert a.keys() == b.keys()
+    for key in a:
+        x, y = np.asarray(a[key]), np.asarray(b[key])
+        assert x.dtype == y.dtype and x.shape == y.shape, key
+        assert x.tobytes() == y.tobytes(), f"{key} differs after save -> load"
+
+
+def same_output(a, b) -> bool:
+    a, b = np.asarray(a), np.asarray(b)
+    return a.shape == b.shape and a.tobytes() == b.tobytes()
+
+
+@pytest.fixture(scope="module")
+def saved(tmp_path_factory) -> dict[str, tuple[Any, Path]]:
+    """Every kind built tiny and saved: name -> (model in eval mode, checkpoint path)."""
+    folder = tmp_path_factory.mktemp("contract")
+    out = {}
+    for kind in KINDS:
+        model = kind.build()
+        if isinstance(model, torch.nn.Module):
+            model.eval()
+        path = folder / f"{kind.name}{kind.suffix}"
+        model.save(path)
+        out[kind.name] = (model, path)
+    return out
+
+
+def test_every_registry_kind_is_under_contract():
+    assert set(registry.KINDS) == set(BY_NAME)
+    for kind in KINDS:
+        assert registry.model_class(kind.name) is kind.cls
+
+
+@pytest.mark.parametrize("kind", KINDS, ids=IDS)
+@pytest.mark.parametrize("via", ["class", "registry"])
+def test_save_load_is_bit_identical(kind, via, saved):
+    model, path = saved[kind.name]
+    if via == "class":
+        loaded = kind.cls.load(path, **kind.load_kw())
+    else:
+        assert registry.checkpoint_kind(path) == kind.name
+        loaded = registry.load_model(path, **kind.load_kw())
+    assert type(loaded) is kind.cls
+    if isinstance(loaded, torch.nn.Module):
+        assert not loaded.training               # loaded models are in eval mode
+    assert_identical(kind.params(model), kind.params(loaded))
+    assert same_output(kind.run(model), kind.run(loaded))
+
+
+@pytest.mark.parametrize("kind", KINDS, ids=IDS)
+def test_outputs_are_deterministic_in_eval_mode(kind, saved):
+    model = kind.cls.load(saved[kind.name][1], **kind.load_kw())
+    first, second = kind.run(model), kind.run(model)
+    assert same_output(first, second)
+
+
+@pytest.mark.parametrize("kind,other", PAIRS, ids=[f"{k.name}-reads-{o}" for k, o in PAIRS])
+def test_a_checkpoint_of_another_kind_is_refused_naming_the_file(kind, other, saved):
+    path = saved[other][1]
+    with pytest.raises(MotionlangError) as err:
+        kind.cls.load(path, **kind.load_kw())
+    assert str(path) in str(err.value)
+    with pytest.raises(MotionlangError) as err:
+        registry.load_model(path, kind=kind.name, **kind.load_kw())
+    assert str(path) in str(err.value)
