@@ -139,3 +139,17 @@ def test_generate_command_names_unknown_words(tmp_path, capsys):
                  "--max-frames", "8"]) == 0
     err = capsys.readouterr().err
     assert "warning: the model does not know 'dances'" in err and "152 words" in err
+
+
+def test_newer_crbm_formats_are_refused(tmp_path):
+    import json
+    from motionlang.models.crbm.model import CRBM, CRBMConfig
+    crbm = CRBM(CRBMConfig(n_hidden=4, order=2), 3)
+    crbm.save(tmp_path / "c.npz")
+    with np.load(tmp_path / "c.npz") as z:
+        arrays = {k: z[k] for k in z.files}
+    meta = json.loads(str(arrays["meta"]))
+    arrays["meta"] = np.array(json.dumps({**meta, "version": 7}))
+    np.savez(tmp_path / "future.npz", **arrays)
+    with pytest.raises(MotionlangError, match="future.npz: checkpoint format 7 is newer"):
+        registry.load_model(tmp_path / "future.npz")

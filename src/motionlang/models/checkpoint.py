@@ -17,10 +17,8 @@ import numpy as np
 import torch
 
 from motionlang.errors import MotionlangError
+from motionlang.models.versions import FORMAT_VERSION, check_format
 from motionlang.utils.atomic import atomic_path
-
-#: the checkpoint layout this version writes and the newest it reads
-FORMAT_VERSION = 1
 
 
 def _plain(x: Any) -> Any:
@@ -113,15 +111,6 @@ def load_checkpoint(path: str | Path) -> Any:
     except Exception as exc:   # UnpicklingError, RuntimeError (zip), EOFError, ...
         raise MotionlangError(f"{path}: not a readable motionlang checkpoint (truncated, "
                               f"or another kind of file)") from exc
-
-
-def check_format(path: str | Path, version: Any) -> None:
-    """Refuse a checkpoint written in a newer layout than this motionlang reads."""
-    if not isinstance(version, int) or version < 0:
-        raise MotionlangError(f"{path}: checkpoint format {version!r} is not a version number")
-    if version > FORMAT_VERSION:
-        raise MotionlangError(f"{path}: checkpoint format {version} is newer than this "
-                              f"motionlang reads ({FORMAT_VERSION}); upgrade motionlang")
 
 
 def model_dict(path: str | Path) -> dict:

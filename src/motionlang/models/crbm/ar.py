@@ -17,6 +17,7 @@ import numpy as np
 
 from motionlang.errors import MotionFormatError, MotionlangError
 from motionlang.models.crbm.sequences import check_sequences, chunk_index, gather_past
+from motionlang.models.versions import FORMAT_VERSION, check_format
 from motionlang.utils.atomic import atomic_write
 
 
@@ -104,7 +105,7 @@ class ARModel:
         return out
 
     def save(self, path: str | Path) -> None:
-        meta = {"kind": "ar", "version": 1, "config": dataclasses.asdict(self.config),
+        meta = {"kind": "ar", "version": FORMAT_VERSION, "config": dataclasses.asdict(self.config),
                 "n_visible": self.n_visible}
         with atomic_write(path, "wb") as fh:
             np.savez(fh, meta=np.array(json.dumps(meta)), A=self.A, a=self.a,
@@ -117,6 +118,7 @@ class ARModel:
                 meta = json.loads(str(z["meta"]))
                 if meta.get("kind") != "ar":
                     raise MotionFormatError(path, f"not an AR checkpoint (kind={meta.get('kind')!r})")
+                check_format(path, meta.get("version", 0))
                 model = cls(ARConfig(**meta["config"]), meta["n_visible"])
                 for k in ("A", "a", "mean", "std"):
                     setattr(model, k, z[k].astype(np.float64))

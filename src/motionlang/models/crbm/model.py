@@ -32,6 +32,7 @@ from motionlang.errors import MotionFormatError
 from motionlang.models.crbm.config import PARAMS, CRBMConfig, config_from_dict
 from motionlang.models.crbm.generation import CRBMGeneration
 from motionlang.models.crbm.training import CRBMTraining
+from motionlang.models.versions import FORMAT_VERSION, check_format
 from motionlang.utils.atomic import atomic_write
 
 
@@ -91,7 +92,7 @@ class CRBM(CRBMTraining, CRBMGeneration):
     # ----------------------------------------------------------------- save / load
     def save(self, path: str | Path) -> None:
         """One self-describing .npz: config (JSON), parameters, normaliser, training curve."""
-        meta = {"kind": "crbm", "version": 1, "config": dataclasses.asdict(self.config),
+        meta = {"kind": "crbm", "version": FORMAT_VERSION, "config": dataclasses.asdict(self.config),
                 "n_visible": self.n_visible}
         arrays = {k: getattr(self, k) for k in PARAMS}
         with atomic_write(path, "wb") as fh:
@@ -105,6 +106,7 @@ class CRBM(CRBMTraining, CRBMGeneration):
                 meta = json.loads(str(z["meta"]))
                 if meta.get("kind") != "crbm":
                     raise MotionFormatError(path, f"not a CRBM checkpoint (kind={meta.get('kind')!r})")
+                check_format(path, meta.get("version", 0))
                 model = cls(config_from_dict(meta["config"]), meta["n_visible"])
                 for k in PARAMS:
                     setattr(model, k, z[k].astype(model.config.dtype))

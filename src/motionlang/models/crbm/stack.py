@@ -18,6 +18,7 @@ from motionlang.errors import MotionFormatError
 from motionlang.models.crbm.config import CRBMConfig, config_from_dict
 from motionlang.models.crbm.model import CRBM
 from motionlang.models.crbm.sequences import check_sequences
+from motionlang.models.versions import FORMAT_VERSION, check_format
 from motionlang.utils.atomic import atomic_path
 
 
@@ -77,7 +78,7 @@ class CRBMStack:
                     parts[f"{name}_{k}"] = getattr(m, k)
                 parts[f"{name}_meta"] = np.array(json.dumps(
                     {"config": dataclasses.asdict(m.config), "n_visible": m.n_visible}))
-            np.savez(tmp1, kind=np.array("crbm_stack"), **parts)
+            np.savez(tmp1, kind=np.array("crbm_stack"), format=np.array(FORMAT_VERSION), **parts)
 
     @classmethod
     def load(cls, path: str | Path) -> "CRBMStack":
@@ -85,6 +86,7 @@ class CRBMStack:
             with np.load(path, allow_pickle=False) as z:
                 if str(z["kind"]) != "crbm_stack":
                     raise MotionFormatError(path, "not a two-level CRBM checkpoint")
+                check_format(path, int(z["format"]) if "format" in z.files else 0)
                 levels = []
                 for name in ("l1", "l2"):
                     meta = json.loads(str(z[f"{name}_meta"]))
