@@ -170,7 +170,9 @@ def _patch_zip(data: bytes, local: int, central: int, value: int) -> bytes:
     (_patch_zip(_zip_bytes({"a.txt": b"1"}), 6, 8, 0x1), "encrypted member 'a.txt'"),
     (_patch_zip(_zip_bytes({"a.txt": b"1"}), 8, 10, 99), "compression method 99"),
     (_zip_bytes({"a.txt": b"1"})[:-30], "not a valid zip archive"),
-])
+], ids=["name-clash", "file-and-folder", "encrypted", "compression", "truncated"])
+# (named ids: the archives hold the time they were built, and pytest-xdist workers must
+# collect the same test names)
 def test_bad_zip_members_are_one_line_errors(tmp_path, data, words):
     (tmp_path / "x.zip").write_bytes(data)
     with pytest.raises(DatasetError, match=words) as info:
