@@ -3,8 +3,10 @@
 
 Thin wrappers over :mod:`motionlang.datasets.seq2seq_pairs` (dataset -> pairs),
 :class:`motionlang.training.trainer.Trainer` and :mod:`motionlang.decoding.seq2seq`.
-``--data`` is a KIT-ML-format folder (the release, or a procedural corpus) or a custom
-folder of motion files with ``captions.csv``/``captions.jsonl``.
+``--data`` is a KIT-ML-format folder (the release, or a procedural corpus), a custom
+folder of motion files with ``captions.csv``/``captions.jsonl``, or a prefixed folder
+(``bandai:``, ``humanml3d:``, ``kitml-h3d:``); given several times, with optional
+``@WEIGHT`` shares of each epoch (``datasets.mixing``).
 """
 from __future__ import annotations
 
@@ -25,7 +27,15 @@ def _add_train(sub, name: str, help_: str) -> None:
     from motionlang.models.seq2seq.config import L2MConfig, M2LConfig
     d = M2LConfig(1, 1) if name == "m2l" else L2MConfig(1, 1)
     p = sub.add_parser(name, help=help_, description=help_)
-    p.add_argument("--data", required=True, metavar="DIR", help="KIT-ML-format or custom folder")
+    p.add_argument("--data", required=True, action="append", type=data_source,
+                   metavar="DIR[@W]",
+                   help="KIT-ML-format or custom folder, or bandai:DIR / humanml3d:DIR / "
+                        "kitml-h3d:DIR; repeat it to train on several datasets at once (one "
+                        "vocabulary, --features positions, each dataset's own split). DIR@W "
+                        "weights a dataset: it fills W / (sum of the weights) of every epoch, "
+                        "its pairs repeated or a seeded subset of them left out (epoch size: "
+                        "all datasets' training pairs); weight every dataset or none (none: "
+                        "every pair once). E.g. --data corpus@1 --data bandai:DIR@1")
     add_out_arg(p, name, "best.pt and last.pt (checkpoints), history.json, "
                          "loss_curve.png, splits/, ")
     p.add_argument("--features", choices=("angles", "positions"), default="angles",
@@ -126,6 +136,23 @@ def root_loss_weights(features, weight: float, option: str = "--root-weight") ->
     return [weight if n in ROOT_MOTION else 1.0 for n in names]
 
 
+def data_source(text: str):
+    """argparse type of ``--data``: ``DIR`` or ``DIR@WEIGHT`` (``mixing.parse_source``)."""
+    from motionlang.datasets.mixing import parse_source
+    try:
+        return parse_source(text)
+    except MotionlangError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def check_mixed_features(sources, features: str) -> None:
+    """Several datasets meet only on the 21-joint body: angle features are MMM's alone."""
+    if len(sources) > 1 and features == "angles":
+        raise MotionlangError("--features angles are KIT MMM joint angles, which mixed "
+                              "datasets do not share: use --features positions with several "
+                              "--data")
+
+
 def cmd_train(args: argparse.Namespace) -> int:
     import logging
 
@@ -134,12 +161,15 @@ def cmd_train(args: argparse.Namespace) -> int:
     from motionlang.datasets.splits import save_splits
     from motionlang.features.frames import model_dim
     from motionlang.training.collate import collate_pairs
+    from motionlang.datasets.mixing import mix_items, source_counts, source_weights
     from motionlang.datasets.seq2seq_pairs import (balance_repeats, build_pairs, oversample,
                                                   sentence_lengths)
     from motionlang.training.run_files import check_resume
     from motionlang.training.trainer import Trainer
 
     out = Path(args.out)
+    check_mixed_features(args.data, args.features)
+    weights = source_weights(args.data)
     if args.resume:   # before the (long) data preparation and before anything is written
         check_resume(out)
     cfg = train_config(args, out)   # checks the trainer's options before the data preparation
@@ -149,7 +179,8 @@ def cmd_train(args: argparse.Namespace) -> int:
             raise MotionlangError("--plan-parts needs --progress-input")
     # one line per epoch from the trainer (the progress bar only shows on a terminal)
     logging.basicConfig(level=logging.INFO, format="%(message)s")
-    data = build_pairs(args.data, features=args.features, offsets=args.offsets, seed=args.seed,
+    data = build_pairs([s.path for s in args.data], features=args.features,
+                       offsets=args.offsets, seed=args.seed,
                        min_count=args.min_count, max_seconds=args.max_seconds,
                        mirror=args.mirror, joint_map=args.joint_map)
     train_items = data.items["train"]
@@ -158,6 +189,15 @@ def cmd_train(args: argparse.Namespace) -> int:
         train_items = oversample(train_items, repeats)
         print(f"balanced: {len(data.items['train'])} -> {len(train_items)} training pairs "
               f"(motions repeated up to {args.balance} times)")
+    if len(args.data) > 1:
+        n = len(args.data)
+        before = source_counts(train_items, data.sources, n)
+        if weights:
+            train_items = mix_items(train_items, data.sources, weights, seed=args.seed)
+        after = source_counts(train_items, data.sources, n)
+        for s, b, a in zip(args.data, before, after):
+            print(f"{s}: {a} training pairs per epoch ({a / len(train_items):.0%}; "
+                  f"{b} before weighting)")
     loss_weights = None
     if args.model_kind == "l2m" and args.root_weight != 1.0:   # before anything is written
         loss_weights = root_loss_weights(data.features, args.root_weight)

@@ -178,7 +178,9 @@ def register(subparsers) -> None:
     p = subparsers.add_parser("describe", help="describe a motion in English (M2L, beam search)")
     add_input_args(p)
     p.add_argument("--model", default="m2l", metavar="MODEL",
-                   help="a packaged model's name, an M2L model file or a training run folder")
+                   help="a packaged model's name, an M2L model file or a training run folder "
+                        "('motionlang models' lists the packaged ones; a model trained on "
+                        "Bandai Namco data is for non-commercial use only, CC BY-NC 4.0)")
     p.add_argument("-w", "--width", type=width_int, default=5,
                    help="beam width = hypotheses shown")
     p.add_argument("--length-penalty", type=nonneg_float, default=0.0, metavar="ALPHA",
@@ -194,14 +196,17 @@ def register(subparsers) -> None:
                         "skeleton) or .npz (joint positions and fps)")
     p.add_argument("--model", default="l2m", metavar="MODEL",
                    help="a packaged model's name, an L2M or two-stream model file or a "
-                        "training run folder")
+                        "training run folder ('motionlang models' lists the packaged ones; a "
+                        "model trained on Bandai Namco data is for non-commercial use only, "
+                        "CC BY-NC 4.0)")
     p.add_argument("-w", "--width", type=width_int, default=5,
                    help="hypotheses (samples or beam width)")
     p.add_argument("--method", choices=("sample", "beam", "mean"), default=None,
-                   help="W ancestral samples (default), the paper's sampled beam, or "
-                        "heaviest-component means (the beam, ranked by likelihood, favours "
-                        "standing still); default for a model trained on its expected "
-                        "frames (--rollout-input mean): mean")
+                   help="W ancestral samples, the paper's sampled beam (ranked by likelihood, "
+                        "it favours standing still), or the mixture's expected frames "
+                        "(default: the model's own way: mean for models trained on their "
+                        "expected frames or on joint positions, such as the packaged L2M; "
+                        "sample for joint-angle models)")
     p.add_argument("--seed", type=seed_int, default=0,
                    help="seed of the sampling (sample and beam decoding)")
     p.add_argument("--max-frames", type=frames_int, default=None,

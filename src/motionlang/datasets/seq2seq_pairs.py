@@ -24,6 +24,7 @@ import numpy as np
 from motionlang.datasets.cache import cached, file_identity
 from motionlang.datasets.custom import load_custom
 from motionlang.datasets.kitml import find_kitml_root, load_kitml
+from motionlang.datasets.mixing import check_distinct_ids
 from motionlang.datasets.splits import random_split
 from motionlang.datasets.text import Vocabulary
 from motionlang.features.frames import motion_frames
@@ -71,6 +72,36 @@ def record_splits(records: Sequence, fractions: Sequence[float] = (0.8, 0.1, 0.1
     return random_split([r.id for r in records], fractions, seed=seed)
 
 
+def load_sources(data: str | Path | Sequence[str | Path], max_seconds: float | None = 30.0,
+                 joint_map: str | Path | dict | None = None,
+                 fractions: Sequence[float] = (0.8, 0.1, 0.1), seed: int = 0
+                 ) -> tuple[list, dict[str, list[str]], dict[str, int]]:
+    """The described records of one dataset or several (``datasets.mixing``), each split on
+    its own (``record_splits``), and ``{id: index of its dataset}``.
+
+    Raises:
+        DatasetError: fewer than 2 described motions (one dataset) or none (one of several);
+            an id in two datasets.
+    """
+    sources = [data] if isinstance(data, (str, Path)) else list(data)
+    records: list = []
+    splits: dict[str, list[str]] = {}
+    source_of: dict[str, int] = {}
+    ids: dict[str, list[str]] = {}
+    for k, src in enumerate(sources):
+        recs = [r for r in load_records(src, max_seconds, joint_map) if r.annotations]
+        if len(recs) < (2 if len(sources) == 1 else 1):
+            raise DatasetError(f"{src}: need at least {2 if len(sources) == 1 else 1} "
+                               f"described motions, found {len(recs)}")
+        ids[f"{src} (--data {k + 1})"] = [r.id for r in recs]
+        check_distinct_ids(ids)
+        for name, part in record_splits(recs, fractions, seed).items():
+            splits.setdefault(name, []).extend(part)
+        records += recs
+        source_of.update((r.id, k) for r in recs)
+    return records, splits, source_of
+
+
 def record_path(rec: Any) -> Path:
     return Path(getattr(rec, "mmm_path", None) or rec.path)
 
@@ -97,6 +128,7 @@ class PairData:
         sequences: per split, ``{id: [(T, F) arrays, one per offset]}``.
         labels: ``{id: ["walk/backward", "wave", ...]}``, the ground-truth primitives of
             every motion whose meta carries them (procedural corpus), else empty.
+        sources: ``{id: index of its dataset in build_pairs' data}`` (all 0 for one).
     """
 
     features: FeatureSet
@@ -106,6 +138,7 @@ class PairData:
     references: dict[str, dict[str, list[str]]]
     sequences: dict[str, dict[str, list[np.ndarray]]]
     labels: dict[str, list[str]] = field(default_factory=dict)
+    sources: dict[str, int] = field(default_factory=dict)
 
 
 def _thin(motion, fps: float):
@@ -172,11 +205,16 @@ def _encode(fs: FeatureSet, records: Sequence, offsets: int, mirror: bool = Fals
     return seqs
 
 
-def build_pairs(data: str | Path, *, features: str = "angles", offsets: int = 10,
+def build_pairs(data: str | Path | Sequence[str | Path], *, features: str = "angles", offsets: int = 10,
                 fractions: Sequence[float] = (0.8, 0.1, 0.1), seed: int = 0,
                 min_count: int = 1, max_seconds: float | None = 30.0,
                 mirror: bool = False, joint_map: str | Path | dict | None = None) -> PairData:
     """Read ``data``, split by motion, fit features and vocabulary on train, make pairs.
+
+    data: one dataset (``load_records``) or several: their records share the vocabulary
+    and the features (fitted on all their training motions), each keeps its own split
+    (``load_sources``); ``PairData.sources`` says which dataset a motion is from (for
+    ``mixing.mix_items``).
 
     joint_map: for a custom folder whose rig no built-in map recognises (``load_custom``).
 
@@ -189,10 +227,7 @@ def build_pairs(data: str | Path, *, features: str = "angles", offsets: int = 10
     features are fitted on the unmirrored motions; references, sequences and the other
     splits stay unmirrored.
     """
-    records = [r for r in load_records(data, max_seconds, joint_map) if r.annotations]
-    if len(records) < 2:
-        raise DatasetError(f"{data}: need at least 2 described motions, found {len(records)}")
-    splits = record_splits(records, fractions, seed)
+    records, splits, sources = load_sources(data, max_seconds, joint_map, fractions, seed)
     by_id = {r.id: r for r in records}
     train = [by_id[i] for i in splits["train"]]
     if not train:
@@ -222,7 +257,7 @@ def build_pairs(data: str | Path, *, features: str = "angles", offsets: int = 10
                            for r in train for s in mirrored[r.id] for text in r.annotations]
     labels = {r.id: primitive_labels(r.meta) for r in records
               if (getattr(r, "meta", None) or {}).get("primitives")}
-    return PairData(fs, vocab, splits, items, refs, seqs, labels)
+    return PairData(fs, vocab, splits, items, refs, seqs, labels, sources)
 
 
 def sentence_lengths(data: PairData, split: str) -> tuple[list[str], list[int]]:

@@ -101,3 +101,141 @@ def format_table(result: dict) -> str:
     lines = [f"{k}: {m:.4f} +- {h:.4f}" for k, (m, h) in result["guo"].items()]
     lines += [f"{k}: {v:.2f}" for k, v in result.get("retrieval", {}).items()]
     return "\n".join(lines)
+
+
+# -- the table of ``motionlang evaluate-t2m --protocol guo`` --------------------------------
+#: the retrieval measures the table shows (text -> motion, among all test pairs)
+TABLE_RETRIEVAL = ("t2m/R01", "t2m/R05", "t2m/R10", "t2m/MedR")
+GROUND_TRUTH, NEAREST, STILL = "ground truth", "nearest neighbour", "standing still"
+
+
+def evaluator_body(evaluator) -> str:
+    """The HumanML3D body (``"kit"``: 251 values a row, ``"smpl"``: 263) an evaluator reads."""
+    from motionlang.features.h3d_vectors import H3D_BODIES
+    for name, spec in H3D_BODIES.items():
+        if spec.dim == evaluator.config.motion_dim:
+            return name
+    raise MotionlangError(f"an evaluator of {evaluator.config.motion_dim} values a frame reads "
+                          "no HumanML3D body (251: kit, 263: smpl)")
+
+
+def positions_rows(p21: np.ndarray) -> np.ndarray:
+    """Global 21-joint positions (T >= 2, 21, 3) metres at 12.5 Hz (what every text-to-motion
+    model gives, ``decoding.t2m``) -> (T-1, 251) float32 rows of the ``kit`` body (mm)."""
+    from motionlang.features.h3d_vectors import KIT_H3D, joints_to_vectors
+    p = np.asarray(p21, dtype=float)
+    if len(p) < 2:
+        p = np.repeat(p[:1], 2, axis=0)
+    return joints_to_vectors(p / KIT_H3D.unit, KIT_H3D)[0].astype(np.float32)
+
+
+def still_rows(rows: np.ndarray, body: str) -> np.ndarray:
+    """The rows of a motion's first pose held for as many frames (``body``'s layout)."""
+    from motionlang.features.h3d_vectors import H3D_BODIES, joints_to_vectors, vectors_to_joints
+    spec = H3D_BODIES[body]
+    pose = vectors_to_joints(np.asarray(rows)[:1], spec)[0]
+    return joints_to_vectors(np.repeat(pose[None], len(rows) + 1, axis=0),
+                             spec)[0].astype(np.float32)
+
+
+def test_pairs(items: Sequence[dict], seed: int = 0) -> list[dict]:
+    """One item per motion (items: ``training.evaluator_train`` items, several captions per
+    motion id), its caption drawn with ``seed``, in the items' order of motions."""
+    by_id: dict[str, list[dict]] = {}
+    for it in items:
+        by_id.setdefault(it["id"], []).append(it)
+    rng = np.random.default_rng(seed)
+    return [group[rng.integers(len(group))] for group in by_id.values()]
+
+
+def nearest_rows(train_items: Sequence[dict], captions: Sequence[str]) -> list[np.ndarray]:
+    """The nearest-neighbour baseline: for each caption the training motion whose caption
+    is nearest in bag of words (``evaluation.retrieval.SentenceIndex``)."""
+    from motionlang.evaluation.retrieval import SentenceIndex
+    motion = {it["id"]: it["motion"] for it in train_items}
+    index = SentenceIndex((it["id"], it["caption"]) for it in train_items)
+    return [motion[index.nearest(c)[0]] for c in captions]
+
+
+def guo_table(evaluator, pairs: Sequence[dict], train_items: Sequence[dict],
+              generated: dict[str, Sequence] | None = None, *,
+              samples: dict[str, Sequence[Sequence]] | None = None, repeats: int = 20,
+              seed: int = 0, batch_size: int = 32, diversity_times: int = 300,
+              mm_times: int = 10) -> dict[str, dict]:
+    """The yardstick's rows for test ``pairs`` (items ``{"motion", "caption", "tokens"}``,
+    one per test motion, :func:`test_pairs`) -> ``{row: {measure: (mean, interval) or
+    value}}``.
+
+    Rows: the ground truth (its FID between the test and the ``train_items`` motions: real
+    against real), the nearest-neighbour baseline (:func:`nearest_rows`), standing still in
+    the first pose (:func:`still_rows`), then ``generated`` (name -> motion rows for the
+    pairs, in the evaluator's layout). Every row's FID but the ground truth's is against
+    the test motions. ``samples`` (name -> per pair, S motions generated for its caption)
+    adds MultiModality (``mm_times`` pairs of the S) to that row. Each row also has TMR's
+    :data:`TABLE_RETRIEVAL` measures (first shuffle, all pairs).
+    """
+    if not pairs:
+        raise MotionlangError("no test pairs to evaluate")
+    body = evaluator_body(evaluator)
+    captions = [p["caption"] for p in pairs]
+    tokens = [p.get("tokens") for p in pairs]
+    truth = [p["motion"] for p in pairs]
+    rows = {GROUND_TRUTH: truth, NEAREST: nearest_rows(train_items, captions),
+            STILL: [still_rows(m, body) for m in truth], **(generated or {})}
+    text = evaluator.embed_texts(captions, tokens)
+    test_emb = evaluator.embed_motions(truth)
+    seen, train_motions = set(), []
+    for it in train_items:
+        if it["id"] not in seen:
+            seen.add(it["id"])
+            train_motions.append(it["motion"])
+    table = {}
+    for name, motions in rows.items():
+        if len(motions) != len(pairs):
+            raise MotionlangError(f"{name}: {len(motions)} motions for {len(pairs)} captions")
+        emb = test_emb if name == GROUND_TRUTH else evaluator.embed_motions(list(motions))
+        row = guo_metrics(text, emb, test_emb, repeats=repeats, seed=seed,
+                          batch_size=batch_size, diversity_times=diversity_times)
+        if name == GROUND_TRUTH:   # real against real: never a set against itself
+            row["FID"] = ((fid(test_emb, evaluator.embed_motions(train_motions)), 0.0)
+                          if len(train_motions) > 1 else (float("nan"), 0.0))
+        if samples and name in samples:
+            row["MultiModality"] = multimodality_score(evaluator, samples[name],
+                                                       times=mm_times, repeats=repeats,
+                                                       seed=seed)
+        got = retrieval_metrics(text, emb)
+        row.update({k: got[k] for k in TABLE_RETRIEVAL})
+        table[name] = row
+    return table
+
+
+def markdown_table(table: dict[str, dict], title: str = "") -> str:
+    """:func:`guo_table`'s rows as a Markdown table: ``mean ± interval`` (3 decimals) for
+    the repeated measures, one value for the retrieval ones; "–" where a row has none."""
+    columns = list(dict.fromkeys(k for row in table.values() for k in row))
+    lines = [f"{title}\n" if title else "",
+             "| | " + " | ".join(columns) + " |", "|---" * (len(columns) + 1) + "|"]
+
+    def cell(v) -> str:
+        if v is None:
+            return "–"
+        if isinstance(v, (tuple, list)):
+            return f"{v[0]:.3f} ± {v[1]:.3f}"
+        return f"{v:.1f}" if isinstance(v, float) else str(v)
+    for name, row in table.items():
+        lines.append(f"| {name} | " + " | ".join(cell(row.get(c)) for c in columns) + " |")
+    return "\n".join(x for x in lines if x) + "\n"
+
+
+def generated_rows(model, captions: Sequence[str], n_frames: Sequence[int], *,
+                   desc: str = "generate", **kw) -> list[np.ndarray]:
+    """A text-to-motion model's motions for ``captions``, each ``n_frames[i]`` frames at
+    12.5 Hz (``decoding.t2m.TextToMotion.positions21``; ``kw`` go to it, e.g. ``method``,
+    ``seed``), as ``kit`` rows (:func:`positions_rows`)."""
+    from motionlang.decoding.t2m import text_to_motion
+    from motionlang.utils.progress import progress
+    t2m = text_to_motion(model)
+    if t2m.deterministic:   # no sampling options
+        kw = {k: v for k, v in kw.items() if k not in ("method", "seed")}
+    return [positions_rows(t2m.positions21(c, max(2, int(n)), **kw))
+            for c, n in progress(list(zip(captions, n_frames)), desc=desc, unit="motions")]

@@ -165,6 +165,45 @@ def glove_50d() -> GloveVectors:
     return GloveVectors()
 
 
+class TextFileVectors:
+    """Word vectors from a GloVe text file (``word v1 .. vD`` a line; e.g. ``glove.6B.300d.txt``,
+    which the public evaluator's 300-d weights need): ``dim``, ``word in v``, ``v[word]``.
+    Only the first ``dim`` + 1 fields of a line are read; ``unk`` / ``sos`` / ``eos``, when
+    the file lacks them, are zero vectors."""
+
+    def __init__(self, path: str | Path):
+        vectors: dict[str, np.ndarray] = {}
+        dim = None
+        try:
+            with open(path, encoding="utf-8", errors="replace") as fh:
+                for n, line in enumerate(fh, 1):
+                    parts = line.rstrip().split(" ")
+                    if len(parts) < 2:
+                        continue
+                    dim = dim or len(parts) - 1
+                    try:
+                        v = np.asarray(parts[1:dim + 1], dtype=np.float32)
+                    except ValueError:
+                        v = np.zeros(0)
+                    if v.shape != (dim,):
+                        raise MotionlangError(f"{path}:{n}: not a word and {dim} numbers")
+                    vectors.setdefault(parts[0], v)
+        except OSError as exc:
+            raise MotionlangError(f"{path}: cannot read word vectors: "
+                                  f"{exc.strerror or exc}") from None
+        if not vectors:
+            raise MotionlangError(f"{path}: no word vectors in it")
+        for w in ("unk", "sos", "eos"):
+            vectors.setdefault(w, np.zeros(dim, dtype=np.float32))
+        self.dim, self._v = dim, vectors
+
+    def __contains__(self, word: str) -> bool:
+        return word in self._v
+
+    def __getitem__(self, word: str) -> np.ndarray:
+        return self._v[word]
+
+
 def caption_tokens(caption: str, tokens: Sequence[str] | None = None) -> list[str]:
     """The ``word/POS`` tokens of a caption: ``tokens`` when the data gives them (those
     without a ``/`` are tagged OTHER), else :func:`tag`. Tokens tagged ``X`` (what
