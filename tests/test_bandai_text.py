@@ -5,8 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from motionlang.datasets.bandai_text import (CONTENTS, STYLES, describe, mirror_sentence,
-                                             names_style, styles_named)
+from motionlang.datasets.bandai_text import (CONTENTS, STYLES, contents_named, describe,
+                                             mirror_sentence, names_content, names_style,
+                                             styles_named)
 from motionlang.datasets.seq2seq_pairs import build_pairs, load_records
 from motionlang.features.joint_map import KIT21_MIRROR, positions21
 from motionlang.kinematics.from_positions import mirror_motion
@@ -150,3 +151,38 @@ def test_mirror_motion_by_positions_on_an_along_x_rig(tmp_path):
     p, q = positions21(m), positions21(got)
     assert np.abs(p[:, list(KIT21_MIRROR)] * [-1, 1, 1] - q).max() < 1e-6
     assert np.abs(positions21(mirror_motion(got)) - p).max() < 1e-6
+
+
+def test_every_grammar_sentence_names_its_content_and_no_other():
+    for c in CONTENTS:
+        for s in STYLES:
+            for x in describe(c, s, n=6) + [mirror_sentence(x) for x in describe(c, s, n=3)]:
+                got = contents_named(x.text)
+                assert names_content(x.text, x.content), x.text
+                assert got == {x.content} or got == {"dance-short", "dance-long"}, (x.text, got)
+
+
+@pytest.mark.parametrize("text,content", [
+    ("a person walks 4 steps forward slowly", "walk"),
+    ("someone jogs", "run"), ("a man is running in place", "run"),
+    ("a person sprints", "dash"), ("the person steps back", "walk-back"),
+    ("a person waves", None), ("a person waves the right arm", "wave-right-hand"),
+    ("someone waves goodbye with both hands", "byebye"), ("he waves bye", "bye"),
+    ("a person lifts both arms", "raise-up-both-hands"),
+    ("a person raises a hand to respond", "respond"),
+    ("a person walks to the right and turns", "walk-turn-right"),
+    ("a person walks to the right", "walk-right"), ("a person bows", "bow"),
+    ("a person kicks twice", "kick"), ("someone dances for a while", "dance-long"),
+    ("a person jumps", None)])
+def test_content_synonyms(text, content):
+    assert contents_named(text) == ({content} if content else set())
+
+
+def test_sides_must_match():
+    assert names_content("waves the left hand", "wave-left-hand")
+    assert not names_content("waves the left hand", "wave-right-hand")
+    assert not names_content("waves the left hand", "wave-both-hands")
+    assert not names_content("walks and turns to the left", "walk-turn-right")
+    assert not names_content("walks and turns to the left", "walk")
+    assert not names_content("raises the left and the right hand", "raise-up-left-hand")
+    assert not names_content("walks forward", "walk-left")

@@ -21,7 +21,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     from motionlang.features.frames import motion_frames
     from motionlang.evaluation import seq2seq as ev
     from motionlang.models.seq2seq.m2l import MotionToLanguage
-    from motionlang.datasets.seq2seq_pairs import load_records
+    from motionlang.datasets.mixing import parse_source
+    from motionlang.datasets.seq2seq_pairs import load_sources
     from motionlang.utils.atomic import atomic_write
     from motionlang.utils.progress import progress
 
@@ -56,7 +57,11 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     for name in ("train", args.split):
         if name not in splits:
             raise MotionlangError(f"no {name!r} split (have {sorted(splits)})")
-    records = {r.id: r for r in load_records(args.data, args.max_seconds) if r.annotations}
+    weighted = [d for d in args.data if parse_source(d).weight is not None]
+    if weighted:
+        raise MotionlangError(f"--data {weighted[0]}: weights (@W) are for training; "
+                              f"evaluate reads each motion once")
+    records = {r.id: r for r in load_sources(args.data, args.max_seconds)[0]}
 
     def frames(ids, limit=None):
         ids = [i for i in ids if i in records][:limit]
@@ -84,6 +89,12 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         index = SentenceIndex((i, s) for i in sorted(train) for s in refs[i])
         report["nn_round_trip"] = ev.evaluate_round_trip_nn(
             index, train, m2l, {i: refs[i] for i in test}, report["m2l"]["bleu"])
+    labelled = _labels(records, test)
+    if labelled:   # Bandai takes: is the action named, and the style?
+        top = {e["id"]: e["hypotheses"][0] for e in report["m2l"]["all"] if e["id"] in labelled}
+        nn = ev.nearest_neighbour_descriptions(train, refs, {i: test[i] for i in labelled})
+        report["m2l_labels"] = ev.label_accuracy(top, labelled)
+        report["nn_labels"] = ev.label_accuracy(nn, labelled)
     truths = _ground_truths(records, test)
     if truths:   # a procedural corpus: the parameters each description states, checked
         ranked = {e["id"]: e["hypotheses"] for e in report["m2l"].pop("all")}
@@ -131,6 +142,12 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
                 f"; actions exactly right {acc['actions_match']:.1%}\n")
             if "named" in acc:
                 table += f"{name}, true actions named: " + ev.named_line(acc["named"]) + "\n"
+    for key, name in (("m2l_labels", "M2L top description"),
+                      ("nn_labels", "Nearest neighbour")):
+        if key in report:
+            acc = report[key]
+            table += (f"{name}, labelled takes ({acc['n']}): action named {acc['content']:.1%}, "
+                      f"style named {acc['style']:.1%}, both {acc['both']:.1%}\n")
     if args.output:
         out = Path(args.output)
         with atomic_write(out) as fh:
@@ -139,6 +156,17 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
             fh.write(table)
     print(table, end="")
     return 0
+
+
+def _labels(records: dict, ids) -> dict:
+    """{id: {"content", "style"}} of the motions among ``ids`` that carry those labels
+    (Bandai takes)."""
+    out = {}
+    for i in ids:
+        lab = getattr(records[i], "labels", None)
+        if isinstance(lab, dict) and "content" in lab and "style" in lab:
+            out[i] = lab
+    return out
 
 
 def _ground_truths(records: dict, ids) -> dict:
@@ -178,7 +206,12 @@ def register(subparsers) -> None:
     p.add_argument("--l2m", metavar="MODEL", help="L2M model file or run folder: also run "
                    "the round trip, and its baseline "
                    "(the motion of the closest training sentence in bag of words)")
-    p.add_argument("--data", required=True, metavar="DIR", help="the dataset trained on")
+    p.add_argument("--data", required=True, action="append", metavar="DIR",
+                   help="the dataset trained on (KIT-ML-format or custom folder, bandai:DIR, "
+                        "...); repeat it for several (no @W weights here). The test motions "
+                        "are those of --splits found in these datasets; on Bandai takes also "
+                        "the share of top descriptions naming the take's action and style, "
+                        "beside the nearest neighbour's")
     p.add_argument("--splits", metavar="DIR", help="split files (default: M2L_DIR/splits)")
     p.add_argument("--split", default="test", help="the split to evaluate (of --splits)")
     p.add_argument("-w", "--width", type=width_int, default=5,

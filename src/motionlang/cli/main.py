@@ -36,6 +36,7 @@ COMMAND_MODULES = [
     "motionlang.cli.model_commands",    # models [NAME|FILE]
     "motionlang.cli.evaluate_commands",  # evaluate (train m2l | l2m via train)
     "motionlang.cli.twostream_commands",  # evaluate-t2m (train twostream via train)
+    "motionlang.cli.judge_commands",      # evaluate-judge (train judge via train)
 ]
 
 

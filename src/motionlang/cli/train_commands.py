@@ -22,10 +22,12 @@ TRAIN_MODULES = [
     "motionlang.cli.crbm_commands",       # train crbm
     "motionlang.cli.seq2seq_commands",    # train m2l | l2m
     "motionlang.cli.twostream_commands",  # train twostream
+    "motionlang.cli.evaluator_commands",  # train evaluator
+    "motionlang.cli.judge_commands",      # train judge
 ]
 #: the final model's file name inside a run folder, per ``train`` command
 MODEL_FILES = {"m2l": "model.pt", "l2m": "model.pt", "twostream": "model.pt",
-               "crbm": "model.npz"}
+               "crbm": "model.npz", "evaluator": "model.pt", "judge": "model.pt"}
 
 
 def add_out_arg(p: argparse.ArgumentParser, model: str, extra: str = "") -> None:

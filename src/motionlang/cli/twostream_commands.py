@@ -161,6 +161,10 @@ def register_train(train_sub) -> None:
 
 
 def cmd_evaluate(args: argparse.Namespace) -> int:
+    from motionlang.cli.evaluator_commands import check_protocol, cmd_evaluate_guo
+    if args.protocol == "guo":
+        return cmd_evaluate_guo(args)
+    check_protocol(args)
     from motionlang.decoding.t2m import text_to_motion
     from motionlang.models.registry import TEXT_TO_MOTION, load_model
     from motionlang.evaluation.t2m.compare import compare
@@ -201,12 +205,20 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
 
 
 def register(subparsers) -> None:
+    from motionlang.cli.evaluator_commands import add_guo_args
     p = subparsers.add_parser(
-        "evaluate-t2m", help="APE/AVE and action order of text-to-motion models (one table)")
+        "evaluate-t2m", help="one table for text-to-motion models: APE/AVE and action order "
+                             "(--protocol ape) or the papers' R-precision, FID, MM-Dist, "
+                             "Diversity (--protocol guo)")
+    p.add_argument("--protocol", choices=("ape", "guo"), default="ape",
+                   help="ape: positions, velocities and action order against the test "
+                        "motions; guo: the yardstick of Guo et al. 2022 under a text-motion "
+                        "evaluator (--evaluator)")
     p.add_argument("--data", required=True, metavar="DIR", help="the dataset trained on")
-    p.add_argument("--model", required=True, action="append", metavar="[NAME=]PATH",
-                   help="an L2M or two-stream model file or run folder (train ... --out); "
-                        "repeat for each model")
+    p.add_argument("--model", action="append", metavar="[NAME=]PATH",
+                   help="an L2M or two-stream model file, run folder or packaged name; "
+                        "repeat for each model (ape: at least one; guo: default the "
+                        "packaged l2m)")
     p.add_argument("--split", default="test", help="the split to evaluate (in the dataset's "
                    "splits, as training made them with --seed)")
     p.add_argument("--seed", type=seed_int, default=0, help="the split seed used in training")
@@ -237,4 +249,5 @@ def register(subparsers) -> None:
                    help="sample: draw W and keep the likeliest (default 1)")
     p.add_argument("--l2m-rerank", metavar="M2L", help="sample: keep the one of the W under "
                    "which this M2L model finds the sentence likeliest")
+    add_guo_args(p)
     p.set_defaults(func=cmd_evaluate)

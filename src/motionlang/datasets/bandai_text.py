@@ -228,3 +228,84 @@ def names_style(text: str, style: str) -> bool:
     when it names no style at all."""
     found = styles_named(text)
     return style in found or (style == "normal" and not found)
+
+
+_WALK = "walk|walks|walking|steps|step|stepping"
+_RUN = "run|runs|running|jog|jogs|jogging"
+_SPRINT = "sprint|sprints|sprinting|dash|dashes|dashing|very fast"
+_WAVE = "wave|waves|waving"
+_BYE = "goodbye|bye|good bye"
+_RAISE = "raise|raises|raising|lift|lifts|lifting|lifted|raised"
+_ANSWER = "answer|answers|answering|respond|responds|responding"
+_BOTH = "both|two"
+
+
+def _any(low: str, words: str) -> bool:
+    return any(_has(low, w) for w in words.split("|"))
+
+
+def contents_named(text: str) -> set[str]:
+    """The content labels that ``text`` names, by the grammar's words and their synonyms
+    ("walks", "runs"/"jogs", "sprints", "waves goodbye", "bows", ...; whole words, any case).
+
+    Contents with a side ("wave-left-hand", "walk-turn-right", ...) need that side's word
+    and not the other's; "both" for the two-handed ones. Walks: "backward(s)" makes
+    walk-back, "turn(s)" walk-turn-*, a side word alone walk-left/-right (diagonal), none of
+    these walk. "dances" names both dance contents unless "short"/"briefly" or "long"/"for a
+    while" says which.
+    """
+    low = " ".join(text.lower().split())
+    left, right = _has(low, "left"), _has(low, "right")
+    side = "left" if left and not right else "right" if right and not left else ""
+    both = _any(low, _BOTH)
+    found: set[str] = set()
+    if _any(low, _WALK):
+        if _any(low, "back|backward|backwards"):
+            found.add("walk-back")
+        elif _any(low, "turn|turns|turning") and side:
+            found.add(f"walk-turn-{side}")
+        elif side:
+            found.add(f"walk-{side}")
+        elif not (left or right):
+            found.add("walk")
+    running = _any(low, _RUN)
+    if _any(low, _SPRINT):
+        found.add("dash")
+    elif running:
+        found.add("run")
+    if _any(low, "bow|bows|bowing|bowed"):
+        found.add("bow")
+    bye = _any(low, _BYE)
+    if bye:
+        found.add("byebye" if both else "bye")
+    elif _any(low, _WAVE):
+        if both:
+            found.add("wave-both-hands")
+        elif side:
+            found.add(f"wave-{side}-hand")
+    if _has(low, "the way"):
+        found.add("guide")
+    if _any(low, _ANSWER):
+        found.add("respond")
+    elif _any(low, _RAISE):
+        if both:
+            found.add("raise-up-both-hands")
+        elif side:
+            found.add(f"raise-up-{side}-hand")
+    if _any(low, "call|calls|calling|shout|shouts|shouting"):
+        found.add("call")
+    for verb in ("punch", "kick", "slash"):
+        if _any(low, f"{verb}|{verb}s|{verb}es|{verb}ing"):
+            found.add(verb)
+    if _any(low, "sword"):
+        found.add("slash")
+    if _any(low, "dance|dances|dancing"):
+        short, long_ = _any(low, "short|briefly"), _any(low, "long|for a while")
+        found |= ({"dance-short"} if short and not long_ else {"dance-long"} if long_
+                  and not short else {"dance-short", "dance-long"})
+    return found
+
+
+def names_content(text: str, content: str) -> bool:
+    """Whether ``text`` names the action ``content`` (:func:`contents_named`)."""
+    return content in contents_named(text)

@@ -205,7 +205,8 @@ def _encode(fs: FeatureSet, records: Sequence, offsets: int, mirror: bool = Fals
     return seqs
 
 
-def build_pairs(data: str | Path | Sequence[str | Path], *, features: str = "angles", offsets: int = 10,
+def build_pairs(data: str | Path | Sequence[str | Path], *, features: str = "angles",
+                offsets: int = 10,
                 fractions: Sequence[float] = (0.8, 0.1, 0.1), seed: int = 0,
                 min_count: int = 1, max_seconds: float | None = 30.0,
                 mirror: bool = False, joint_map: str | Path | dict | None = None) -> PairData:

@@ -50,13 +50,15 @@ class TwoStreamData:
         return np.stack([self.sequences[i][0] for i in self.splits[split]])
 
 
-def build_twostream_data(data: str | Path, *, fractions: Sequence[float] = (0.8, 0.1, 0.1),
+def build_twostream_data(data: str | Path | Sequence[str | Path], *, fractions: Sequence[float] = (0.8, 0.1, 0.1),
                          seed: int = 0, max_seconds: float | None = 30.0,
                          max_frames: int | None = None, cache_dir: str | Path | None = None,
                          mirror: bool = False) -> TwoStreamData:
     """Read ``data``, split by motion, fit + encode positions features (cached), make items.
 
     Args:
+        data: one dataset or several (``seq2seq_pairs.load_sources``: one feature set,
+            each dataset's own split).
         fractions, seed: the split (``random_split``), unless every record names its own
             (``seq2seq_pairs.record_splits``: the Bandai takes).
         max_seconds: drop motions this long or longer.
@@ -69,13 +71,10 @@ def build_twostream_data(data: str | Path, *, fractions: Sequence[float] = (0.8,
             equally often. Features are fitted on the unmirrored motions; ``sequences`` and
             the other splits stay unmirrored.
     """
-    from motionlang.datasets.seq2seq_pairs import load_records, record_splits
+    from motionlang.datasets.seq2seq_pairs import load_sources
 
-    records = [r for r in load_records(data, max_seconds) if r.annotations]
-    if len(records) < 2:
-        raise DatasetError(f"{data}: need at least 2 described motions, found {len(records)}")
+    records, splits, _ = load_sources(data, max_seconds, fractions=fractions, seed=seed)
     by_id = {str(r.id): r for r in records}
-    splits = record_splits(records, fractions, seed)
     train = [by_id[i] for i in splits["train"]]
     if not train:
         raise DatasetError(f"{data}: the training split is empty")

@@ -86,3 +86,50 @@ def judge_report(judge, generated: Sequence[np.ndarray], asked, fps: float,
         half = len(ref) // 2
         truth["fid"] = fid(ref[order[:half]], ref[order[half:]])
     return {"generated": gen, "ground_truth": truth}
+
+
+# -- the table of ``motionlang evaluate-judge`` ---------------------------------------------
+#: the columns of :func:`markdown_judge_table`: measure -> (header, scale)
+JUDGE_COLUMNS = {"content_acc": ("content %", 100), "style_acc": ("style %", 100),
+                 "fid": ("FID", 1), "diversity": ("diversity", 1),
+                 "skating": ("skating m/s", 1), "penetration": ("penetration cm", 100),
+                 "penetration_max": ("max penetration cm", 100),
+                 "root_jump": ("max root jump cm", 100)}
+
+
+def asked_labels(sentences: Sequence) -> list[tuple[str, str | None]]:
+    """(content, style) a sentence asks for (``bandai_text.Sentence``); the style None where
+    its words do not state it (some "normal" sentences)."""
+    return [(s.content, s.style if getattr(s, "states_style", True) else None)
+            for s in sentences]
+
+
+def judge_table(judge, real: Sequence[np.ndarray], real_labels, real_fps: float,
+                generated: dict[str, Sequence[np.ndarray]], asked, fps: float, *,
+                rng: int = 0) -> dict[str, dict[str, float]]:
+    """``{"ground truth": ..., name: ...}``: :func:`judge_report` of each model's motions
+    (``generated[name]``, asked ``asked``) beside the real motions with their own labels
+    (whose recognition rates are the judge's own accuracy)."""
+    ref = judge.judge(list(real), real_fps)["embedding"]
+    truth = judge_motions(judge, list(real), real_fps, real_labels, None, rng=rng)
+    if len(ref) >= 4:
+        order = np.random.default_rng(rng).permutation(len(ref))
+        half = len(ref) // 2
+        truth["fid"] = fid(ref[order[:half]], ref[order[half:]])
+    table = {"ground truth": truth}
+    for name, motions in generated.items():
+        table[name] = judge_motions(judge, list(motions), fps, asked, ref, rng=rng)
+    return table
+
+
+def markdown_judge_table(table: dict[str, dict[str, float]], title: str = "") -> str:
+    """:func:`judge_table` as a Markdown table (:data:`JUDGE_COLUMNS`; "–" for NaN)."""
+    head = "| | " + " | ".join(h for h, _ in JUDGE_COLUMNS.values()) + " |"
+    lines = ([title, ""] if title else []) + [head, "|---" * (len(JUDGE_COLUMNS) + 1) + "|"]
+    for name, row in table.items():
+        cells = []
+        for key, (_, scale) in JUDGE_COLUMNS.items():
+            v = row.get(key, float("nan"))
+            cells.append("–" if not np.isfinite(v) else f"{v * scale:.{1 if scale == 100 else 3}f}")
+        lines.append(f"| {name} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"

@@ -240,3 +240,29 @@ def named_line(named: dict) -> str:
     """``evaluation.seq2seq.actions_named``'s result as one line of text."""
     return ", ".join(f"{place} {named[place]:.1%} of {named['n_' + place]}"
                      for place in ("first", "later", "only"))
+
+
+def label_accuracy(texts: Mapping[str, str], labels: Mapping[str, Mapping[str, str]]) -> dict:
+    """Labelled takes (Bandai): does a description name the take's action and its style?
+
+    texts: id -> one description; labels: id -> ``{"content", "style"}``. Content by
+    ``bandai_text.names_content``, style by ``bandai_text.names_style`` (the grammar's
+    synonyms; "normal" also when no style is named). Returns ``{"n", "content", "style",
+    "both"}`` (fractions) and ``"by_content"`` / ``"by_style"``: ``{label: [right, of]}``.
+    """
+    from motionlang.datasets.bandai_text import names_content, names_style
+    right = {"content": 0, "style": 0, "both": 0}
+    by: dict[str, dict[str, list[int]]] = {"by_content": {}, "by_style": {}}
+    for i, text in texts.items():
+        c, s = labels[i]["content"], labels[i]["style"]
+        ok_c, ok_s = names_content(text, c), names_style(text, s)
+        right["content"] += ok_c
+        right["style"] += ok_s
+        right["both"] += ok_c and ok_s
+        for key, lab, ok in (("by_content", c, ok_c), ("by_style", s, ok_s)):
+            cell = by[key].setdefault(lab, [0, 0])
+            cell[0] += ok
+            cell[1] += 1
+    n = len(texts)
+    return {"n": n, **{k: v / n if n else float("nan") for k, v in right.items()},
+            **{k: dict(sorted(v.items())) for k, v in by.items()}}

@@ -18,6 +18,9 @@ repetition, generates anew, as the papers do); every figure is the mean and 95 %
   of 32, R@1/2/3/5/10 (percent) and median rank, both directions, on the first repetition.
 
 ``multimodality_score`` gives MultiModality from several generations per text.
+:func:`guo_table` makes the rows of ``motionlang evaluate-t2m --protocol guo`` (ground truth,
+nearest neighbour, standing still, each model's :func:`generated_rows`) and
+:func:`markdown_table` prints them.
 """
 from __future__ import annotations
 
@@ -104,8 +107,10 @@ def format_table(result: dict) -> str:
 
 
 # -- the table of ``motionlang evaluate-t2m --protocol guo`` --------------------------------
-#: the retrieval measures the table shows (text -> motion, among all test pairs)
-TABLE_RETRIEVAL = ("t2m/R01", "t2m/R05", "t2m/R10", "t2m/MedR")
+#: the retrieval measures the table shows (text -> motion, among all test pairs): name in
+#: ``metrics.t2m.retrieval_metrics`` -> column
+TABLE_RETRIEVAL = {"t2m/R01": "TMR R@1 %", "t2m/R05": "TMR R@5 %", "t2m/R10": "TMR R@10 %",
+                   "t2m/MedR": "TMR MedR"}
 GROUND_TRUTH, NEAREST, STILL = "ground truth", "nearest neighbour", "standing still"
 
 
@@ -167,7 +172,9 @@ def guo_table(evaluator, pairs: Sequence[dict], train_items: Sequence[dict],
     value}}``.
 
     Rows: the ground truth (its FID between the test and the ``train_items`` motions: real
-    against real), the nearest-neighbour baseline (:func:`nearest_rows`), standing still in
+    against real), the nearest-neighbour baseline (:func:`nearest_rows`; training motions
+    that are also test pairs are left out of both, so that a split evaluated against itself
+    never finds its own motions), standing still in
     the first pose (:func:`still_rows`), then ``generated`` (name -> motion rows for the
     pairs, in the evaluator's layout). Every row's FID but the ground truth's is against
     the test motions. ``samples`` (name -> per pair, S motions generated for its caption)
@@ -177,6 +184,11 @@ def guo_table(evaluator, pairs: Sequence[dict], train_items: Sequence[dict],
     if not pairs:
         raise MotionlangError("no test pairs to evaluate")
     body = evaluator_body(evaluator)
+    own = {p.get("id") for p in pairs}
+    train_items = [it for it in train_items if it["id"] not in own]
+    if not train_items:
+        raise MotionlangError("no training motions apart from the evaluated ones (the "
+                              "nearest-neighbour baseline and the ground truth's FID need them)")
     captions = [p["caption"] for p in pairs]
     tokens = [p.get("tokens") for p in pairs]
     truth = [p["motion"] for p in pairs]
@@ -204,7 +216,7 @@ def guo_table(evaluator, pairs: Sequence[dict], train_items: Sequence[dict],
                                                        times=mm_times, repeats=repeats,
                                                        seed=seed)
         got = retrieval_metrics(text, emb)
-        row.update({k: got[k] for k in TABLE_RETRIEVAL})
+        row.update({col: got[k] for k, col in TABLE_RETRIEVAL.items()})
         table[name] = row
     return table
 

@@ -196,3 +196,11 @@ def fit_judge(train: Sequence[JudgeItem], val: Sequence[JudgeItem] = (), *,
     if best is not None:
         judge.load_state_dict(best)
     return judge.eval(), history
+
+
+def bandai_sentences(source: str | Path, split: str | None = "test", seed: int = 0) -> list:
+    """One English sentence per Bandai take of ``split`` (``bandai_text.Sentence``: ``text``,
+    ``content``, ``style``, ``states_style``), in :func:`bandai_items`' order (by id): what a
+    text-to-motion model is asked for to be judged beside that take."""
+    from motionlang.datasets.bandai import load_bandai_text
+    return [r.sentences[0] for r in load_bandai_text(source, split, per_take=1, seed=seed)]

@@ -1,0 +1,262 @@
+"""``motionlang train evaluator`` and ``evaluate-t2m --protocol guo``: the text-motion
+evaluator of Guo et al. 2022 and the yardstick of the text-to-motion papers.
+
+Thin wrappers over :mod:`motionlang.training.evaluator_train` (dataset -> HumanML3D rows
+and tagged captions, the shared trainer) and :mod:`motionlang.evaluation.t2m.yardstick`
+(R-precision, FID, MM-Dist, Diversity, MultiModality, TMR's retrieval; one table). The
+``evaluate-t2m`` parser itself is ``cli/twostream_commands.py``'s; this module adds the
+options of the ``guo`` protocol to it (:func:`add_guo_args`) and runs it
+(:func:`cmd_evaluate_guo`). torch is imported inside the commands only.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from motionlang.cli.options import (dropout_float, int_range, nonneg_int, positive_float,
+                                    positive_int, size_int)
+from motionlang.cli.run_log import lead_process, log_command
+from motionlang.cli.train_commands import MODEL_FILES, add_out_arg, add_trainer_args, \
+    train_config
+from motionlang.errors import MotionlangError
+
+BODIES = ("kit", "smpl")
+#: options of the default (``ape``) protocol that mean nothing under ``guo``: name -> unset
+APE_ONLY = {"autoencode": False, "true_start": False, "oracle": 0, "l2m_rerank": None,
+            "l2m_width": 1}
+GUO_ONLY = ("evaluator", "evaluator_official", "mean", "std", "word_vectors")
+
+
+# -- train evaluator -------------------------------------------------------------------------
+def evaluator_config(args: argparse.Namespace):
+    """The :class:`EvaluatorConfig` of the options (checked by the config itself)."""
+    from motionlang.features.h3d_vectors import H3D_BODIES
+    from motionlang.models.evaluator.config import EvaluatorConfig
+    return EvaluatorConfig(
+        motion_dim=H3D_BODIES[args.body].dim, drop_last=4, text_hidden=args.text_hidden,
+        motion_hidden=args.motion_hidden, movement_hidden=args.movement_hidden,
+        movement_latent=args.movement_latent, embed_dim=args.embed_dim,
+        max_words=args.max_words, loss=args.loss, margin=args.margin,
+        temperature=args.temperature, dropout=args.dropout)
+
+
+def cmd_train(args: argparse.Namespace) -> int:
+    import logging
+
+    import torch
+
+    from motionlang.datasets.splits import save_splits
+    from motionlang.models.evaluator import TextMotionEvaluator
+    from motionlang.training.evaluator_train import build_evaluator_data, train_evaluator
+    from motionlang.training.run_files import check_resume
+
+    logging.basicConfig(level=logging.INFO, format="%(message)s")
+    run = Path(args.out)
+    if args.resume:
+        check_resume(run)
+    cfg = train_config(args, run, optimizer="adam")     # checked at once
+    config = evaluator_config(args)
+    lead = lead_process()
+    data = build_evaluator_data(args.data, args.body, seed=args.seed,
+                                max_seconds=args.max_seconds)
+    if lead:
+        save_splits({s: list(dict.fromkeys(it["id"] for it in items))
+                     for s, items in data.items.items()}, run / "splits")
+    log_command(run / "commands.jsonl", args)
+    if lead and str(args.data).startswith("bandai:"):
+        from motionlang.cli.judge_commands import write_license
+        write_license(run, "evaluator")
+    torch.manual_seed(args.seed)
+    model = TextMotionEvaluator(config)
+    if lead:
+        print(f"evaluator ({args.body} body, {config.motion_dim} values a frame): "
+              f"{len(data.items['train'])} training captions, "
+              f"{sum(p.numel() for p in model.parameters()):,} parameters")
+    val = data.items.get("val") or None
+    model, history = train_evaluator(model, data.items["train"], cfg, val_items=val,
+                                     body=args.body, resume=args.resume)
+    if not lead:
+        return 0
+    if val and (run / "best.pt").is_file():   # the epoch of the lowest validation loss
+        model = TextMotionEvaluator.load(run / "best.pt")
+    out = run / MODEL_FILES["evaluator"]
+    model.save(out)
+    last = history[-1] if history else {}
+    print(f"{out}: epoch {last.get('epoch')}, train loss "
+          f"{last.get('train', {}).get('loss', float('nan')):.4g}, val loss "
+          f"{last.get('val', {}).get('loss', float('nan')):.4g}")
+    return 0
+
+
+def register_train(train_sub) -> None:
+    """Hook of ``cli/train_commands.py``: adds ``train evaluator``."""
+    h = "train the text-motion evaluator of Guo et al. 2022 (the yardstick's encoders)"
+    p = train_sub.add_parser(
+        "evaluator", help=h, description=h + ". Motions become HumanML3D rows of --body; "
+        "captions are tagged offline (or use the tags a HumanML3D folder gives); words are "
+        "GloVe 6B 50d. Trained on bandai:DIR the evaluator is for non-commercial use only "
+        "(CC BY-NC 4.0).")
+    p.add_argument("--data", required=True, metavar="DIR",
+                   help="any dataset motionlang reads: KIT-ML, a procedural corpus, a "
+                        "custom folder, humanml3d:DIR / kitml-h3d:DIR, bandai:DIR")
+    p.add_argument("--body", "--data-body", choices=BODIES, default="kit",
+                   help="the rows' body: kit = 21 joints at 12.5 fps, 251 values (any rig); "
+                        "smpl = 22 SMPL joints at 20 fps, 263 values (rigs with SMPL joints)")
+    add_out_arg(p, "evaluator", "best.pt and last.pt (checkpoints), history.json, splits/, ")
+    from motionlang.models.evaluator.config import EvaluatorConfig   # torch-free
+    d = EvaluatorConfig()
+    for name, what in (("embed_dim", "size of the shared text/motion embedding"),
+                       ("text_hidden", "GRU size of the text encoder"),
+                       ("motion_hidden", "GRU size of the motion encoder"),
+                       ("movement_hidden", "channels of the movement encoder's convolutions"),
+                       ("movement_latent", "size of the movement codes (4 frames each)")):
+        p.add_argument("--" + name.replace("_", "-"), type=size_int, default=getattr(d, name),
+                       help=what)
+    p.add_argument("--max-words", type=positive_int, default=d.max_words,
+                   help="words kept of a caption")
+    p.add_argument("--loss", choices=("hinge", "infonce"), default=d.loss,
+                   help="hinge: the public contrastive loss (matched pairs near, shifted "
+                        "pairs beyond --margin); infonce: cross-entropy over the batch")
+    p.add_argument("--margin", type=positive_float, default=d.margin, help="the hinge's margin")
+    p.add_argument("--temperature", type=positive_float, default=d.temperature,
+                   help="InfoNCE's temperature")
+    p.add_argument("--dropout", type=dropout_float, default=d.dropout,
+                   help="dropout of the movement encoder")
+    add_trainer_args(p, epochs=30, batch_size=32, grad_clip=0.5)
+    p.add_argument("--max-seconds", type=positive_float, default=30.0,
+                   help="drop longer motions")
+    p.set_defaults(func=cmd_train)
+
+
+# -- evaluate-t2m --protocol guo -------------------------------------------------------------
+def add_guo_args(p: argparse.ArgumentParser) -> None:
+    """The ``guo`` protocol's options of ``evaluate-t2m``."""
+    g = p.add_argument_group(
+        "--protocol guo", "the papers' yardstick under a text-motion evaluator; rows: ground "
+        "truth, nearest neighbour, standing still, each --model (default: the packaged l2m)")
+    g.add_argument("--evaluator", metavar="E",
+                   help="an evaluator file or run folder (train evaluator --out)")
+    g.add_argument("--evaluator-official", metavar="TAR",
+                   help="instead: the public evaluator's weights (finest.tar of "
+                        "EricGuo5513/text-to-motion), with --mean, --std and --word-vectors")
+    g.add_argument("--mean", metavar="NPY", help="the public evaluator's mean.npy")
+    g.add_argument("--std", metavar="NPY", help="the public evaluator's std.npy")
+    g.add_argument("--word-vectors", metavar="TXT",
+                   help="word vectors in GloVe's text format, of the evaluator's size (the "
+                        "public weights: glove.6B.300d.txt; default: the built-in GloVe 50d)")
+    g.add_argument("--repeats", type=positive_int, default=20,
+                   help="shuffles of the test pairs; each figure is their mean ± 95 %% "
+                        "interval")
+    g.add_argument("--rp-batch", type=int_range(2), default=32, metavar="B",
+                   help="R-precision and MM-Dist among batches of B pairs")
+    g.add_argument("--multimodality", type=nonneg_int, default=0, metavar="S",
+                   help="also MultiModality of the models that sample: S > 10 samples for "
+                        "each of --mm-texts captions (the papers: 30 and 100; 0: not measured)")
+    g.add_argument("--mm-texts", type=positive_int, default=100,
+                   help="captions MultiModality samples for")
+
+
+def check_protocol(args: argparse.Namespace) -> None:
+    """Options of one protocol given to the other: one line naming them."""
+    if args.protocol == "guo":
+        wrong = [k for k, unset in APE_ONLY.items() if getattr(args, k) != unset]
+        if wrong:
+            raise MotionlangError(f"--{wrong[0].replace('_', '-')} applies to --protocol ape")
+        if bool(args.evaluator) == bool(args.evaluator_official):
+            raise MotionlangError("--protocol guo needs --evaluator E or --evaluator-official "
+                                  "TAR (one of them)")
+        if bool(args.evaluator_official) != bool(args.mean and args.std) or (
+                args.evaluator and (args.mean or args.std)):
+            raise MotionlangError("--mean and --std go with --evaluator-official (both)")
+        if args.multimodality and args.multimodality <= 10:
+            raise MotionlangError(f"--multimodality {args.multimodality}: need more than 10 "
+                                  "samples a caption (10 pairs are drawn among them)")
+    else:
+        wrong = [k for k in GUO_ONLY if getattr(args, k)]
+        if wrong:
+            raise MotionlangError(f"--{wrong[0].replace('_', '-')} applies to --protocol guo")
+        if not args.model:
+            raise MotionlangError("--protocol ape needs at least one --model")
+
+
+def load_evaluator(args: argparse.Namespace):
+    """The evaluator of ``--evaluator`` or ``--evaluator-official`` (+ ``--mean/--std``)."""
+    from motionlang.models.evaluator import TextMotionEvaluator
+    from motionlang.models.registry import load_model
+    vectors = None
+    if args.word_vectors:
+        from motionlang.models.evaluator.text import TextFileVectors
+        vectors = TextFileVectors(args.word_vectors)
+    if args.evaluator_official:
+        model = TextMotionEvaluator.load_official(args.evaluator_official, args.mean, args.std,
+                                                  vectors=vectors)
+    else:
+        model = load_model(args.evaluator, kind="evaluator", vectors=vectors)
+    if vectors is not None and vectors.dim != model.config.word_dim:
+        raise MotionlangError(f"--word-vectors {args.word_vectors}: {vectors.dim}-d words, the "
+                              f"evaluator reads {model.config.word_dim}-d ones")
+    return model
+
+
+def cmd_evaluate_guo(args: argparse.Namespace) -> int:
+    from motionlang.cli.twostream_commands import model_spec
+    from motionlang.decoding.t2m import text_to_motion
+    from motionlang.evaluation.t2m.yardstick import (evaluator_body, generated_rows, guo_table,
+                                                     markdown_table, test_pairs)
+    from motionlang.models.registry import TEXT_TO_MOTION, load_model
+    from motionlang.training.evaluator_train import build_evaluator_data
+
+    check_protocol(args)
+    evaluator = load_evaluator(args)
+    body = evaluator_body(evaluator)
+    specs = args.model or (["l2m"] if body == "kit" else [])
+    if specs and body != "kit":
+        raise MotionlangError("the models' 21-joint motions cannot be scored by an SMPL-body "
+                              "(263-value) evaluator; use a kit-body (251) one")
+    models = {}
+    for spec in specs:
+        name, path = model_spec(spec)
+        models[name] = load_model(path, kind=TEXT_TO_MOTION)
+    data = build_evaluator_data(args.data, body, seed=args.seed, max_seconds=args.max_seconds)
+    items = data.items.get(args.split) or []
+    pairs = test_pairs(items, args.seed)[:args.limit or None]
+    if len(pairs) < args.rp_batch:
+        raise MotionlangError(f"{args.data}: {len(pairs)} {args.split} motions, R-precision "
+                              f"needs at least --rp-batch {args.rp_batch}")
+    captions = [p["caption"] for p in pairs]
+    frames = [len(p["motion"]) + 1 for p in pairs]    # rows are steps between 12.5 Hz frames
+    gen = {name: generated_rows(m, captions, frames, method=args.l2m_method, seed=args.seed,
+                                desc=name) for name, m in models.items()}
+    samples = {}
+    if args.multimodality:
+        n = min(args.mm_texts, len(pairs))
+        for name, m in models.items():
+            if text_to_motion(m).deterministic:   # one motion a caption: nothing to measure
+                continue
+            samples[name] = [[generated_rows(m, [c], [f], method="sample", seed=k,
+                                             desc=f"{name} sample")[0]
+                              for k in range(args.multimodality)]
+                             for c, f in zip(captions[:n], frames[:n])]
+    table = guo_table(evaluator, pairs, data.items.get("train") or [], gen, samples=samples,
+                      repeats=args.repeats, seed=args.seed, batch_size=args.rp_batch)
+    title = (f"{len(pairs)} {args.split} pairs of {args.data}, evaluator "
+             f"{args.evaluator or args.evaluator_official} ({body} body); mean ± 95 % "
+             f"interval over {args.repeats} shuffles, R-precision in batches of "
+             f"{args.rp_batch}; FID against the test motions (ground truth: test against "
+             "training motions); retrieval (t2m R@k %, MedR) among all pairs")
+    text = markdown_table(table, title)
+    print(text, end="")
+    if args.output:
+        out = Path(args.output)
+        out.mkdir(parents=True, exist_ok=True)
+        from motionlang.utils.atomic import atomic_write
+        with atomic_write(out / "t2m_guo.md") as fh:
+            fh.write(text)
+        report = {"protocol": "guo", "data": str(args.data), "split": args.split,
+                  "evaluator": str(args.evaluator or args.evaluator_official), "body": body,
+                  "pairs": len(pairs), "repeats": args.repeats, "rp_batch": args.rp_batch,
+                  "models": {n: s for n, s in zip(models, specs)}, "rows": table}
+        with atomic_write(out / "t2m_guo.json") as fh:
+            fh.write(json.dumps(report, indent=1, default=list) + "\n")
+    return 0

@@ -1,0 +1,122 @@
+"""Training on several datasets at once: ``--data PATH[@WEIGHT]`` given more than once.
+
+Each dataset keeps its own split (a procedural corpus its random split by seed, Bandai its
+take numbers), so a mixed run's test motions are those each dataset alone would test on.
+Records of all datasets share one vocabulary and one feature set (fitted on all training
+motions: ``seq2seq_pairs.build_pairs``). Weights set each dataset's share of a training
+epoch (:func:`mix_items`); without weights every training pair goes in once, so larger
+datasets dominate.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+
+from motionlang.errors import DatasetError, MotionlangError
+
+
+@dataclass(frozen=True)
+class DataSource:
+    """One ``--data`` value: a dataset (folder or ``prefix:FOLDER``) and its sampling weight
+    (None: not given)."""
+
+    path: str
+    weight: float | None = None
+
+    def __str__(self) -> str:
+        return self.path if self.weight is None else f"{self.path}@{self.weight:g}"
+
+
+def parse_source(text: str) -> DataSource:
+    """``"PATH"`` or ``"PATH@WEIGHT"`` (a positive number after the last ``@``; a path whose
+    last ``@`` is not followed by a number is taken whole).
+
+    Raises:
+        MotionlangError: an empty path, or a weight that is not positive and finite.
+    """
+    head, at, tail = str(text).rpartition("@")
+    weight = None
+    if at:
+        try:
+            weight = float(tail)
+        except ValueError:
+            head = str(text)
+        else:
+            if not (math.isfinite(weight) and weight > 0):
+                raise MotionlangError(f"{text}: the weight after '@' must be a positive number")
+    else:
+        head = str(text)
+    if not head:
+        raise MotionlangError(f"{text!r}: no dataset before the weight")
+    return DataSource(head, weight)
+
+
+def source_weights(sources: Sequence[DataSource]) -> list[float] | None:
+    """The sources' weights, or None when none has one.
+
+    Raises:
+        MotionlangError: some have a weight and others not.
+    """
+    given = [s.weight is not None for s in sources]
+    if not any(given):
+        return None
+    if not all(given):
+        bare = ", ".join(s.path for s, g in zip(sources, given) if not g)
+        raise MotionlangError(f"--data: give a weight (PATH@W) to every dataset or to none; "
+                              f"{bare} has none")
+    return [float(s.weight) for s in sources]
+
+
+def check_distinct_ids(ids_by_source: dict[str, Sequence[str]]) -> None:
+    """Record ids must not repeat across datasets (the split files list ids only).
+
+    Raises:
+        DatasetError: naming an id and both datasets.
+    """
+    seen: dict[str, str] = {}
+    for name, ids in ids_by_source.items():
+        for i in ids:
+            if i in seen:
+                raise DatasetError(f"motion id {i!r} is in both {seen[i]} and {name}: these "
+                                   f"datasets cannot be mixed (their split files would clash)")
+            seen[i] = name
+
+
+def mix_items(items: Sequence[dict], source_of: dict[str, int], weights: Sequence[float],
+              seed: int = 0) -> list[dict]:
+    """Training pairs resampled so that dataset k fills ``weights[k] / sum(weights)`` of an
+    epoch of ``len(items)`` pairs.
+
+    A dataset with fewer pairs than its share has every pair repeated ``q`` times plus a
+    seeded choice of ``r`` more (``share = q * n + r``); one with more has a seeded subset
+    of its pairs (the same for the whole run: a run does not see the rest). Deterministic
+    given ``seed``. ``source_of`` maps an item's ``"id"`` to its dataset's index.
+
+    Raises:
+        DatasetError: a weighted dataset has no training pairs.
+    """
+    by_source: list[list[int]] = [[] for _ in weights]
+    for n, it in enumerate(items):
+        by_source[source_of[it["id"]]].append(n)
+    total, wsum = len(items), float(sum(weights))
+    out: list[dict] = []
+    for k, (idx, w) in enumerate(zip(by_source, weights)):
+        if not idx:
+            raise DatasetError(f"dataset {k + 1} of --data has no training pairs to weight")
+        want = int(round(total * w / wsum))
+        q, r = divmod(want, len(idx))
+        rng = np.random.default_rng([seed, k])
+        extra = sorted(rng.choice(len(idx), size=r, replace=False).tolist())
+        out += [items[n] for n in idx for _ in range(q)] + [items[idx[j]] for j in extra]
+    return out
+
+
+def source_counts(items: Sequence[dict], source_of: dict[str, int], n: int) -> list[int]:
+    """How many of ``items`` come from each of the ``n`` datasets."""
+    counts = [0] * n
+    for it in items:
+        counts[source_of[it["id"]]] += 1
+    return counts

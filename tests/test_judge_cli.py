@@ -1,0 +1,108 @@
+"""``motionlang train judge`` and ``motionlang evaluate-judge`` on a tiny Bandai folder: real
+dataset-1 takes renamed as dataset-2 takes so that every split has some (the commands, not
+the labels' truth, are under test)."""
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from helpers.data import bandai_takes
+from motionlang.cli.main import main
+
+TAKES = ("walk_normal_001", "walk-back_normal_001", "bye_happy_001")
+TINY = ["--hidden", "8", "--embed", "8", "--layers", "2", "--kernel", "3", "--window", "12"]
+
+
+@pytest.fixture(scope="module")
+def bandai(tmp_path_factory):
+    """Dataset 2 with contents walk / wave-left-hand, styles normal / elderly, takes 1..5 of
+    each pair (take 5: test, 4: validation)."""
+    tmp = tmp_path_factory.mktemp("bandai")
+    src = bandai_takes(TAKES, tmp)
+    top = tmp / "bandai" / "Bandai-Namco-Research-Motiondataset-2"
+    (top / "data").mkdir(parents=True)
+    (top / "cfg").mkdir()
+    (top / "cfg" / "content_label.txt").write_text("dataset-2_walk\ndataset-2_wave-left-hand\n")
+    (top / "cfg" / "style_label.txt").write_text("dataset-2_normal\ndataset-2_elderly\n")
+    for k, (content, style) in enumerate([("walk", "normal"), ("walk", "elderly"),
+                                          ("wave-left-hand", "normal"),
+                                          ("wave-left-hand", "elderly")]):
+        for t in range(1, 6):
+            take = TAKES[(k + t) % len(TAKES)]
+            (top / "data" / f"dataset-2_{content}_{style}_{t:03d}.bvh").write_bytes(
+                (src / f"{take}.bvh").read_bytes())
+    return tmp / "bandai"
+
+
+@pytest.fixture(scope="module")
+def judge_run(bandai, tmp_path_factory):
+    mp = pytest.MonkeyPatch()
+    mp.setenv("MOTIONLANG_CACHE", str(tmp_path_factory.mktemp("cache")))
+    run = tmp_path_factory.mktemp("runs") / "judge"
+    assert main(["train", "judge", "--data", f"bandai:{bandai}", "--out", str(run),
+                 "--epochs", "2", *TINY]) == 0
+    yield run
+    mp.undo()
+
+
+def test_train_judge_writes_a_run_folder_with_its_licence(judge_run, capsys):
+    assert {"model.pt", "history.json", "commands.jsonl", "LICENSE.txt"} <= {
+        p.name for p in judge_run.iterdir()}
+    assert "non-commercial" in (judge_run / "LICENSE.txt").read_text()
+    assert len(json.loads((judge_run / "history.json").read_text())) == 2
+    from motionlang.models.registry import load_model
+    judge = load_model(judge_run, kind="judge")
+    # mirrored copies of the takes teach the mirrored content too
+    assert judge.config.contents == ["walk", "wave-left-hand", "wave-right-hand"]
+    assert judge.config.styles == ["elderly", "normal"]
+
+
+def test_evaluate_judge_table_with_a_model(judge_run, bandai, tmp_path, capsys):
+    out = tmp_path / "report"
+    assert main(["evaluate-judge", "--judge", str(judge_run), "--data", f"bandai:{bandai}",
+                 "--model", "l2m", "-o", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "| ground truth |" in text and "| l2m |" in text and "non-commercial" in text
+    report = json.loads((out / "judge_report.json").read_text())
+    assert report["takes"] == 4 and set(report["rows"]) == {"ground truth", "l2m"}
+    row = report["rows"]["l2m"]
+    assert row["n"] == 4 and 0 <= row["content_acc"] <= 1 and row["root_jump"] >= 0
+    assert (out / "judge_table.md").read_text() in text
+
+
+def test_help_says_non_commercial(capsys):
+    for argv in (["train", "judge", "-h"], ["evaluate-judge", "-h"]):
+        assert main(argv) == 0
+        assert "non-commercialuseonly" in "".join(capsys.readouterr().out.split())
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["train", "judge", "--data", "bandai:/nonexistent/bandai"], "not found"),
+    (["train", "judge", "--data", "bandai:x", "--window", "0"], "--window"),
+    (["evaluate-judge", "--judge", "/nonexistent/j.pt", "--data", "bandai:x"], "no such model"),
+])
+def test_bad_inputs_are_one_line(argv, message, tmp_path, capsys):
+    if argv[1] == "judge" and "--window" not in argv:
+        argv = argv + ["--out", str(tmp_path / "run")]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and message in err
+
+
+def test_evaluate_judge_refuses_a_model_of_another_kind(judge_run, bandai, capsys):
+    assert main(["evaluate-judge", "--judge", str(judge_run), "--data", f"bandai:{bandai}",
+                 "--model", str(judge_run)]) == 2
+    assert "not l2m or twostream" in capsys.readouterr().err
+
+
+def test_an_evaluator_trained_on_bandai_carries_the_licence(bandai, tmp_path, monkeypatch):
+    monkeypatch.setenv("MOTIONLANG_CACHE", str(tmp_path / "cache"))
+    run = tmp_path / "evaluator"
+    assert main(["train", "evaluator", "--data", f"bandai:{bandai}", "--out", str(run),
+                 "--epochs", "1", "--batch-size", "8", "--embed-dim", "8", "--text-hidden", "8",
+                 "--motion-hidden", "8", "--movement-hidden", "8",
+                 "--movement-latent", "8"]) == 0
+    note = (run / "LICENSE.txt").read_text()
+    assert "the evaluator and the figures made with it are for non-commercial use" in note
+    assert (run / "model.pt").is_file()

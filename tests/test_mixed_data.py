@@ -1,0 +1,163 @@
+"""Training on several datasets at once (``--data A --data B@W``): the syntax, each dataset's
+own split, one vocabulary and feature set, epoch shares by weight, cache keys."""
+from __future__ import annotations
+
+import json
+
+import pytest
+import torch
+
+from motionlang.cli.main import main
+from motionlang.datasets.mixing import (DataSource, mix_items, parse_source, source_counts,
+                                        source_weights)
+from motionlang.datasets.seq2seq_pairs import build_pairs, load_records, record_splits
+from motionlang.errors import DatasetError, MotionlangError
+
+from helpers.data import bandai_takes
+
+torch.set_num_threads(1)
+TINY = ["--epochs", "1", "--batch-size", "8", "--offsets", "1", "--enc-hidden", "8",
+        "--dec-hidden", "8", "--embed-dim", "8", "--features", "positions"]
+
+
+@pytest.fixture(scope="module")
+def corpus(tmp_path_factory):
+    from motionlang.datasets.synth.corpus import write_corpus
+    root = tmp_path_factory.mktemp("corpus")
+    write_corpus(root, 12, seed=1, workers=1, show_progress=False)
+    return root
+
+
+@pytest.fixture(scope="module")
+def bandai(tmp_path_factory):
+    """A dataset-2 folder of five takes (numbers 1-5: train x3, val, test) made of real
+    dataset-1 takes renamed: the labels, not the motion, are under test."""
+    tmp = tmp_path_factory.mktemp("bandai")
+    src = bandai_takes(["walk-back_normal_001", "bow_old_001"], tmp)
+    top = tmp / "bandai" / "Bandai-Namco-Research-Motiondataset-2"
+    (top / "data").mkdir(parents=True)
+    (top / "cfg").mkdir()
+    (top / "cfg" / "content_label.txt").write_text("dataset-2_walk\ndataset-2_wave-left-hand\n")
+    (top / "cfg" / "style_label.txt").write_text("dataset-2_normal\ndataset-2_elderly\n")
+    for t in range(1, 6):
+        for take, name in (("walk-back_normal_001", "walk_normal"),
+                           ("bow_old_001", "wave-left-hand_elderly")):
+            (top / "data" / f"dataset-2_{name}_{t:03d}.bvh").write_bytes(
+                (src / f"{take}.bvh").read_bytes())
+    return tmp / "bandai"
+
+
+@pytest.fixture(autouse=True)
+def private_cache(tmp_path, monkeypatch):
+    monkeypatch.setenv("MOTIONLANG_CACHE", str(tmp_path / "cache"))
+
+
+def test_parse_source_and_weights():
+    assert parse_source("corpus") == DataSource("corpus")
+    assert parse_source("bandai:/x/y@0.5") == DataSource("bandai:/x/y", 0.5)
+    assert parse_source("/data/me@home") == DataSource("/data/me@home")   # not a number
+    assert str(parse_source("a@2")) == "a@2"
+    for bad in ("a@0", "a@-1", "a@nan", "a@inf", "@1"):
+        with pytest.raises(MotionlangError):
+            parse_source(bad)
+    assert source_weights([DataSource("a"), DataSource("b")]) is None
+    assert source_weights([DataSource("a", 1), DataSource("b", 3)]) == [1.0, 3.0]
+    with pytest.raises(MotionlangError, match="every dataset or to none; b has none"):
+        source_weights([DataSource("a", 1), DataSource("b")])
+
+
+def test_mix_items_shares_deterministic():
+    items = [{"id": f"a{i}"} for i in range(30)] + [{"id": f"b{i}"} for i in range(6)]
+    src = {it["id"]: 0 if it["id"][0] == "a" else 1 for it in items}
+    got = mix_items(items, src, [1, 1], seed=3)
+    assert len(got) == 36 and source_counts(got, src, 2) == [18, 18]
+    assert got == mix_items(items, src, [1, 1], seed=3)
+    assert got != mix_items(items, src, [1, 1], seed=4)
+    a = [it["id"] for it in got if it["id"][0] == "a"]
+    assert len(set(a)) == 18                             # undersampled: distinct pairs
+    b = [it["id"] for it in got if it["id"][0] == "b"]
+    assert {b.count(i) for i in set(b)} == {3}           # 18 = 3 x 6: each thrice
+    assert source_counts(mix_items(items, src, [1, 3]), src, 2) == [9, 27]
+    with pytest.raises(DatasetError, match="dataset 2"):
+        mix_items(items[:30], src, [1, 1])
+
+
+def test_mixed_pairs_keep_each_split_and_share_vocabulary(corpus, bandai):
+    spec = f"bandai:{bandai}"
+    both = build_pairs([corpus, spec], features="positions", offsets=1)
+    alone = {s: record_splits(load_records(s)) for s in (corpus, spec)}
+    for name in ("train", "val", "test"):
+        assert both.splits[name] == alone[corpus][name] + alone[spec][name]
+    assert alone[spec]["test"] == ["dataset-2_walk_normal_005",
+                                   "dataset-2_wave-left-hand_elderly_005"]
+    assert set(both.sources.values()) == {0, 1}
+    assert all(both.sources[i] == 1 for i in alone[spec]["train"])
+    words = set(both.vocab.itos)
+    assert {"walks", "waves"} <= words                  # Bandai's words ...
+    corpus_words = {w for r in load_records(corpus) for s in r.annotations
+                    for w in s.lower().replace(".", " ").split()}
+    assert len(words & corpus_words) > 10               # ... and the corpus's, one vocabulary
+    # the fitted features are those of all training motions: not either dataset's alone
+    one = build_pairs(corpus, features="positions", offsets=1)
+    assert one.features.to_dict() != both.features.to_dict()
+    assert [it["id"] for it in one.items["train"]] == [
+        it["id"] for it in both.items["train"] if both.sources[it["id"]] == 0]
+
+
+def test_ids_must_not_clash(corpus):
+    with pytest.raises(DatasetError, match="in both"):
+        build_pairs([corpus, corpus], features="positions", offsets=1)
+
+
+def test_train_m2l_on_two_datasets(corpus, bandai, tmp_path, capsys):
+    out = tmp_path / "m2l"
+    args = ["train", "m2l", "--data", f"{corpus}@1", "--data", f"bandai:{bandai}@1",
+            "--out", str(out), *TINY]
+    assert main(args) == 0
+    text = capsys.readouterr().out
+    lines = [l for l in text.splitlines() if "training pairs per epoch" in l]
+    assert len(lines) == 2 and all("(50%;" in l for l in lines), lines
+    splits = {p.stem: p.read_text().split() for p in (out / "splits").iterdir()}
+    assert "dataset-2_walk_normal_005" in splits["test"] and "00001" in (
+        splits["train"] + splits["val"] + splits["test"])
+    logged = json.loads((out / "commands.jsonl").read_text().splitlines()[0])
+    assert logged["data"] == [f"{corpus}@1", f"bandai:{bandai}@1"]
+    # evaluated on one of them: its test takes, action and style shares beside the baseline
+    report = tmp_path / "report.json"
+    assert main(["evaluate", "--m2l", str(out), "--data", f"bandai:{bandai}", "-w", "2",
+                 "-o", str(report)]) == 0
+    text = capsys.readouterr().out
+    assert "M2L top description, labelled takes (2): action named" in text
+    assert "Nearest neighbour, labelled takes (2)" in text
+    got = json.loads(report.read_text())
+    assert got["m2l"]["n"] == 2 and got["m2l_labels"]["by_content"].keys() == {
+        "walk", "wave-left-hand"}
+    assert main(["evaluate", "--m2l", str(out), "--data", f"{corpus}@1"]) != 0
+    assert "weights (@W) are for training" in capsys.readouterr().err
+    # angles are MMM's alone: refused in one line before any data is read
+    assert main(["train", "m2l", "--data", str(corpus), "--data", f"bandai:{bandai}",
+                 "--out", str(tmp_path / "x"), "--features", "angles"]) != 0
+    assert "use --features positions" in capsys.readouterr().err
+    assert not (tmp_path / "x").exists()
+
+
+def test_label_accuracy_by_hand():
+    from motionlang.evaluation.seq2seq import label_accuracy
+    labels = {"a": {"content": "walk", "style": "old"},
+              "b": {"content": "wave-left-hand", "style": "normal"},
+              "c": {"content": "run", "style": "happy"}}
+    texts = {"a": "an elderly man walks forward", "b": "a person waves the right hand",
+             "c": "a person jogs sadly"}
+    got = label_accuracy(texts, labels)
+    assert got["n"] == 3 and got["content"] == pytest.approx(2 / 3)
+    assert got["style"] == pytest.approx(2 / 3) and got["both"] == pytest.approx(1 / 3)
+    assert got["by_content"] == {"run": [1, 1], "walk": [1, 1], "wave-left-hand": [0, 1]}
+    assert got["by_style"] == {"happy": [0, 1], "normal": [1, 1], "old": [1, 1]}
+
+
+def test_twostream_items_from_two_datasets(corpus, bandai, tmp_path):
+    from motionlang.datasets.twostream_items import build_twostream_data
+    spec = f"bandai:{bandai}"
+    got = build_twostream_data([corpus, spec], cache_dir=tmp_path / "fc")
+    assert got.splits == build_pairs([corpus, spec], features="positions", offsets=1).splits
+    assert {it["id"] for it in got.items["test"]} >= {"dataset-2_walk_normal_005"}
