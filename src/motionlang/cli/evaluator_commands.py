@@ -82,10 +82,13 @@ def cmd_train(args: argparse.Namespace) -> int:
         model = TextMotionEvaluator.load(run / "best.pt")
     out = run / MODEL_FILES["evaluator"]
     model.save(out)
-    last = history[-1] if history else {}
-    print(f"{out}: epoch {last.get('epoch')}, train loss "
-          f"{last.get('train', {}).get('loss', float('nan')):.4g}, val loss "
-          f"{last.get('val', {}).get('loss', float('nan')):.4g}")
+    # the epoch saved: the lowest validation loss when there is a validation split
+    with_val = [h for h in history if "val" in h]
+    kept = min(with_val, key=lambda h: h["val"]["loss"]) if val and with_val else \
+        (history[-1] if history else {})
+    print(f"{out}: epoch {kept.get('epoch')}, train loss "
+          f"{kept.get('train', {}).get('loss', float('nan')):.4g}, val loss "
+          f"{kept.get('val', {}).get('loss', float('nan')):.4g}")
     return 0
 
 
