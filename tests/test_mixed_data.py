@@ -122,6 +122,8 @@ def test_train_m2l_on_two_datasets(corpus, bandai, tmp_path, capsys):
         splits["train"] + splits["val"] + splits["test"])
     logged = json.loads((out / "commands.jsonl").read_text().splitlines()[0])
     assert logged["data"] == [f"{corpus}@1", f"bandai:{bandai}@1"]
+    # trained on Bandai: the run folder says the model is for non-commercial use
+    assert "non-commercial" in (out / "LICENSE.txt").read_text()
     # evaluated on one of them: its test takes, action and style shares beside the baseline
     report = tmp_path / "report.json"
     assert main(["evaluate", "--m2l", str(out), "--data", f"bandai:{bandai}", "-w", "2",

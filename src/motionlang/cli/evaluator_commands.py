@@ -65,7 +65,7 @@ def cmd_train(args: argparse.Namespace) -> int:
                      for s, items in data.items.items()}, run / "splits")
     log_command(run / "commands.jsonl", args)
     if lead and str(args.data).startswith("bandai:"):
-        from motionlang.cli.judge_commands import write_license
+        from motionlang.cli.run_log import write_license
         write_license(run, "evaluator")
     torch.manual_seed(args.seed)
     model = TextMotionEvaluator(config)

@@ -16,14 +16,13 @@ from pathlib import Path
 from motionlang.cli.options import (dropout_float, frames_int, layers_int, nonneg_float,
                                     nonneg_int, output_dir, positive_float, positive_int,
                                     seed_int, size_int)
-from motionlang.cli.run_log import log_command
+from motionlang.cli.run_log import LICENSE_FILE, log_command, write_license
 from motionlang.cli.train_commands import MODEL_FILES, add_out_arg
 from motionlang.errors import MotionlangError
 
 BANDAI = "bandai:"
 NON_COMMERCIAL = ("Trained on the Bandai Namco Research Motion Datasets (CC BY-NC 4.0): the "
                   "judge and the figures made with it are for non-commercial use only.")
-LICENSE_FILE = "LICENSE.txt"
 
 
 def bandai_path(data: str) -> str:
@@ -32,16 +31,6 @@ def bandai_path(data: str) -> str:
     if not path.strip():
         raise MotionlangError(f"--data {data!r}: expected bandai:DIR")
     return path
-
-
-def write_license(run: Path, what: str = "judge") -> None:
-    """The licence note (:data:`LICENSE_FILE`) of a run trained on Bandai data."""
-    from motionlang.datasets.bandai import LICENSE
-    from motionlang.utils.atomic import atomic_write
-    run.mkdir(parents=True, exist_ok=True)
-    with atomic_write(run / LICENSE_FILE) as fh:
-        fh.write(NON_COMMERCIAL.replace("the judge", f"the {what}") + f"\n\nData: {LICENSE}\n"
-                 "Licence text: https://creativecommons.org/licenses/by-nc/4.0/\n")
 
 
 # -- train judge -----------------------------------------------------------------------------
@@ -61,7 +50,7 @@ def cmd_train(args: argparse.Namespace) -> int:
         raise MotionlangError(f"{source}: no Bandai training takes")
     run.mkdir(parents=True, exist_ok=True)
     log_command(run / "commands.jsonl", args)
-    write_license(run)
+    write_license(run, "judge")
     print(f"judge: {len(train)} training takes, {len(val)} validation, {len(test)} test"
           + (f"; {len(extra)} procedural primitives" if args.primitives else ""))
     judge, history = fit_judge(train + extra, val, epochs=args.epochs,

@@ -24,3 +24,19 @@ def log_command(path: Path, args: argparse.Namespace) -> None:
     old = path.read_text() if path.exists() else ""
     with atomic_write(path) as fh:
         fh.write(old + json.dumps(opts, sort_keys=True, default=str) + "\n")
+
+
+#: the licence note of a run trained on Bandai Namco data
+LICENSE_FILE = "LICENSE.txt"
+
+
+def write_license(run: Path, what: str) -> None:
+    """:data:`LICENSE_FILE` in ``run``: ``what`` (e.g. "M2L", "judge") was trained on the
+    Bandai Namco data (CC BY-NC 4.0), so it and the figures made with it are non-commercial."""
+    from motionlang.datasets.bandai import LICENSE
+    from motionlang.utils.atomic import atomic_write
+    run.mkdir(parents=True, exist_ok=True)
+    with atomic_write(run / LICENSE_FILE) as fh:
+        fh.write(f"Trained on the Bandai Namco Research Motion Datasets (CC BY-NC 4.0): the "
+                 f"{what} and the figures made with it are for non-commercial use only.\n\n"
+                 f"Data: {LICENSE}\nLicence text: https://creativecommons.org/licenses/by-nc/4.0/\n")

@@ -16,7 +16,7 @@ from pathlib import Path
 from motionlang.cli.options import (
     dropout_float, layers_int, nonneg_float, nonneg_int, positive_float, positive_int,
     probability, size_int)
-from motionlang.cli.run_log import log_command
+from motionlang.cli.run_log import lead_process, log_command
 from motionlang.cli.train_commands import (MODEL_FILES, add_out_arg, add_trainer_args,
                                            train_config)
 from motionlang.errors import MotionlangError
@@ -183,6 +183,9 @@ def cmd_train(args: argparse.Namespace) -> int:
                        offsets=args.offsets, seed=args.seed,
                        min_count=args.min_count, max_seconds=args.max_seconds,
                        mirror=args.mirror, joint_map=args.joint_map)
+    if any(str(s.path).startswith("bandai:") for s in args.data) and lead_process():
+        from motionlang.cli.run_log import write_license   # CC BY-NC 4.0 data
+        write_license(out, args.model_kind.upper())
     train_items = data.items["train"]
     if args.balance > 1:   # before anything is written
         repeats = balance_repeats(data.labels, data.splits["train"], args.balance)
