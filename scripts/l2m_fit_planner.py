@@ -20,7 +20,11 @@ import sys
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("model", help="L2M model file trained with --plan-parts")
-    ap.add_argument("--data", required=True, help="the corpus the model was trained on")
+    ap.add_argument("--data", required=True, action="append",
+                    help="the dataset(s) the model was trained on, as its --data (repeat it "
+                         "for a mixed run, in the same order)")
+    ap.add_argument("--mirror", action="store_true",
+                    help="also fit on mirrored training motions (as a run with --mirror)")
     ap.add_argument("--out", required=True, help="where to write the model with its planner")
     ap.add_argument("--epochs", type=int, default=30)
     ap.add_argument("--batch-size", type=int, default=128)
@@ -55,7 +59,9 @@ def main(argv=None) -> int:
                     if not k.startswith(("planner.", "plan_head."))}
             d = {**d, "state_dict": {**kept, **{f"planner.{k}": v for k, v in new.items()}}}
         model = LanguageToMotion.from_checkpoint(d)
-        data = build_pairs(args.data, features=model.features.kind, offsets=1, seed=args.seed)
+        data = build_pairs(args.data if len(args.data) > 1 else args.data[0],
+                           features=model.features.kind, offsets=1, seed=args.seed,
+                           mirror=args.mirror)
         if model.features.to_dict() != data.features.to_dict():
             raise MotionlangError(f"--data {args.data}: its features (fitted on its training "
                                   f"split, seed {args.seed}) differ from {args.model}'s")

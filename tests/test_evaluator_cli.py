@@ -62,6 +62,18 @@ def test_guo_table_rows_and_files(run, corpus, tmp_path, capsys):
     mean, half = truth["R-precision top-3"]
     assert 0 <= mean <= 1 and half >= 0
     assert truth["FID"][0] > 1e-6   # test against training motions, not a set against itself
+    # the motion-to-text half: the packaged M2L by default, beside ground truth and NN
+    assert set(report["m2t_rows"]) == {"ground truth", "nearest neighbour", "m2l"}
+    m2l = report["m2t_rows"]["m2l"]
+    assert 0 <= m2l["BLEU@4"] <= 1 and 0 <= m2l["R-precision top-3"][0] <= 1
+    assert "Motion to text" in text and (out / "t2m_guo.png").stat().st_size > 1000
+    assert not [p.name for p in out.iterdir() if p.name.startswith(".")]   # no temp files
+
+
+def test_guo_without_motion_to_text(run, corpus, capsys):
+    assert main(["evaluate-t2m", *GUO, "--evaluator", str(run), "--data", str(corpus),
+                 "--m2l", "none"]) == 0
+    assert "Motion to text" not in capsys.readouterr().out
 
 
 def test_official_weights_give_the_table_of_the_same_weights(run, corpus, tmp_path, capsys):
@@ -120,6 +132,10 @@ def test_bad_inputs_against_a_trained_evaluator(run, corpus, tmp_path, capsys):
           str(run)], "not l2m or twostream"),
         (["evaluate-t2m", *GUO, "--data", str(corpus), "--model", "l2m", "--evaluator", "l2m"],
          "kind l2m, not evaluator"),
+        (["evaluate-t2m", *GUO, "--data", str(corpus), "--evaluator", str(run), "--m2l", "l2m"],
+         "kind l2m, not m2l"),
+        (["evaluate-t2m", "--data", str(corpus), "--model", "l2m", "--m2l", "m2l"],
+         "--m2l applies to --protocol guo"),
         (["train", "evaluator", "--data", str(corpus), "--body", "mixamo"], "--body"),
         (["train", "evaluator", "--data", str(tmp_path / "none"), "--out", str(tmp_path / "r")],
          str(tmp_path / "none")),

@@ -9,8 +9,7 @@ import numpy as np
 import pytest
 
 from motionlang.cli.main import main
-from motionlang.datasets.humanml3d import (format_caption_line, load_h3d, parse_caption_line,
-                                           tag_caption)
+from motionlang.datasets.humanml3d import format_caption_line, load_h3d, parse_caption_line
 from motionlang.datasets.humanml3d_export import body_joints, export_h3d
 from motionlang.datasets.synth.corpus import write_corpus
 from motionlang.errors import DatasetError, MotionlangError, SkeletonError
@@ -72,8 +71,15 @@ def test_caption_lines_with_and_without_spans():
     assert parse_caption_line("just a caption") == ("just a caption", [], 0.0, 0.0)
     with pytest.raises(DatasetError, match="x.txt:3: time 'soon'"):
         parse_caption_line("c#t#soon#2", "x.txt:3")
-    assert tag_caption("A man walks up, then turns twice.") == [
-        "a/DET", "man/X", "walks/X", "up/ADP", "then/X", "turns/X", "twice/NUM"]
+
+def test_export_tags_captions_with_lemmas_and_universal_tags(export):
+    """The writer's default tagger (``datasets.pos_tags``): no ``X`` for open-class words."""
+    out, _ = export
+    line = next((out / "texts").glob("*.txt")).read_text().splitlines()[0]
+    tokens = line.split("#")[1].split()
+    assert tokens and all("/" in t for t in tokens)
+    assert not [t for t in tokens if t.endswith("/X")]
+    assert any(t.endswith("/VERB") for t in tokens)
 
 
 def test_export_layout(corpus, export):

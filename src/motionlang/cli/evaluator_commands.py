@@ -25,7 +25,7 @@ BODIES = ("kit", "smpl")
 #: options of the default (``ape``) protocol that mean nothing under ``guo``: name -> unset
 APE_ONLY = {"autoencode": False, "true_start": False, "oracle": 0, "l2m_rerank": None,
             "l2m_width": 1}
-GUO_ONLY = ("evaluator", "evaluator_official", "mean", "std", "word_vectors")
+GUO_ONLY = ("evaluator", "evaluator_official", "mean", "std", "word_vectors", "m2l")
 
 
 # -- train evaluator -------------------------------------------------------------------------
@@ -158,6 +158,13 @@ def add_guo_args(p: argparse.ArgumentParser) -> None:
                         "each of --mm-texts captions (the papers: 30 and 100; 0: not measured)")
     g.add_argument("--mm-texts", type=positive_int, default=100,
                    help="captions MultiModality samples for")
+    g.add_argument("--m2l", action="append", metavar="[NAME=]PATH",
+                   help="motion to text: an M2L model (file, run folder or packaged name) "
+                        "whose descriptions of the test motions are scored (BLEU@1/4, "
+                        "ROUGE-L, CIDEr, their R-precision under the evaluator); repeat for "
+                        "each; default the packaged m2l; 'none': no motion-to-text table")
+    g.add_argument("--m2l-width", type=positive_int, default=5, metavar="W",
+                   help="the M2L's beam width (its best hypothesis is scored)")
 
 
 def check_protocol(args: argparse.Namespace) -> None:
@@ -221,6 +228,10 @@ def cmd_evaluate_guo(args: argparse.Namespace) -> int:
     for spec in specs:
         name, path = model_spec(spec)
         models[name] = load_model(path, kind=TEXT_TO_MOTION)
+    m2l_specs, m2l_models = m2l_specs_of(args), {}
+    for spec in m2l_specs:   # loaded before the data is read: a bad --m2l fails at once
+        name, path = model_spec(spec)
+        m2l_models[name] = load_model(path, kind="m2l")
     data = build_evaluator_data(args.data, body, seed=args.seed, max_seconds=args.max_seconds)
     items = data.items.get(args.split) or []
     pairs = test_pairs(items, args.seed)[:args.limit or None]
@@ -250,16 +261,58 @@ def cmd_evaluate_guo(args: argparse.Namespace) -> int:
              "training motions); retrieval (t2m R@k %, MedR) among all pairs")
     text = markdown_table(table, title)
     print(text, end="")
+    m2t, m2t_text = motion_to_text(args, evaluator, data, pairs, m2l_models)
+    if m2t_text:
+        print("\n" + m2t_text, end="")
     if args.output:
-        out = Path(args.output)
-        out.mkdir(parents=True, exist_ok=True)
-        from motionlang.utils.atomic import atomic_write
-        with atomic_write(out / "t2m_guo.md") as fh:
-            fh.write(text)
-        report = {"protocol": "guo", "data": str(args.data), "split": args.split,
-                  "evaluator": str(args.evaluator or args.evaluator_official), "body": body,
-                  "pairs": len(pairs), "repeats": args.repeats, "rp_batch": args.rp_batch,
-                  "models": {n: s for n, s in zip(models, specs)}, "rows": table}
-        with atomic_write(out / "t2m_guo.json") as fh:
-            fh.write(json.dumps(report, indent=1, default=list) + "\n")
+        write_guo_files(args, Path(args.output), text + ("\n" + m2t_text if m2t_text else ""),
+                        {"protocol": "guo", "data": str(args.data), "split": args.split,
+                         "evaluator": str(args.evaluator or args.evaluator_official),
+                         "body": body, "pairs": len(pairs), "repeats": args.repeats,
+                         "rp_batch": args.rp_batch,
+                         "models": {n: s for n, s in zip(models, specs)}, "rows": table,
+                         "m2l": {n: s for n, s in zip(m2l_models, m2l_specs)},
+                         "m2t_rows": m2t})
     return 0
+
+
+def m2l_specs_of(args: argparse.Namespace) -> list[str]:
+    """The ``--m2l`` values (default the packaged m2l; ``none`` alone: none)."""
+    specs = args.m2l or ["m2l"]
+    return [] if specs == ["none"] else specs
+
+
+def motion_to_text(args: argparse.Namespace, evaluator, data, pairs, m2l_models: dict
+                   ) -> tuple[dict, str]:
+    """The motion-to-text table (``evaluation.t2m.m2t``) of the ``--m2l`` models on the test
+    pairs, and its Markdown ("" when there are no M2L models)."""
+    if not m2l_models:
+        return {}, ""
+    from motionlang.evaluation.t2m.m2t import describe_motions, m2t_table
+    from motionlang.evaluation.t2m.yardstick import markdown_table
+    records = [data.records[p["id"]] for p in pairs]
+    motions = [r.load_motion() for r in records]
+    described = {name: describe_motions(m, motions, width=args.m2l_width, desc=name)
+                 for name, m in m2l_models.items()}
+    table, counted = m2t_table(evaluator, pairs, [r.annotations for r in records],
+                               data.items.get("train") or [], described,
+                               repeats=args.repeats, seed=args.seed, batch_size=args.rp_batch)
+    title = (f"Motion to text, the same {len(pairs)} test motions: each row's description "
+             f"(M2L: best of a beam of {args.m2l_width}) against the motion's other captions "
+             f"(BLEU, ROUGE-L, CIDEr; {counted} motions have one) and ranked by the "
+             f"evaluator among batches of {args.rp_batch} motions (mean ± 95 % interval "
+             f"over {args.repeats} shuffles); ground truth: the pair's own caption")
+    return table, markdown_table(table, title)
+
+
+def write_guo_files(args: argparse.Namespace, out: Path, text: str, report: dict) -> None:
+    """``t2m_guo.md``, ``t2m_guo.json`` and ``t2m_guo.png`` in ``out`` (atomic writes)."""
+    from motionlang.evaluation.t2m.plots import plot_yardstick
+    from motionlang.utils.atomic import atomic_write
+    out.mkdir(parents=True, exist_ok=True)
+    with atomic_write(out / "t2m_guo.md") as fh:
+        fh.write(text)
+    with atomic_write(out / "t2m_guo.json") as fh:
+        fh.write(json.dumps(report, indent=1, default=list) + "\n")
+    plot_yardstick(report["rows"], out / "t2m_guo.png", report.get("m2t_rows") or None,
+                   title=f"{report['pairs']} {report['split']} pairs of {report['data']}")

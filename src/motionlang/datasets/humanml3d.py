@@ -41,29 +41,6 @@ PREFIXES = {"humanml3d:": "smpl", "kitml-h3d:": "kit"}
 #: joint positions farther than this from the origin (metres) are refused as corrupt
 MAX_METRES = 1e6
 
-# Closed-class English words and their universal POS tags; other words get "X" (see
-# ``tag_caption``). The public release tags with spaCy, which this package does not need.
-_POS = {tag: set(words.split()) for tag, words in {
-    "DET": "a an the this that these those each every some any another both all no",
-    "ADP": "in on at to from with by of for into onto over under around across through "
-           "towards toward up down off out about behind above below along after before "
-           "like between near against upon",
-    "PRON": "he she it they them his her their its him himself herself themselves itself "
-            "someone something somebody i you we us our",
-    "AUX": "is are was were be been being has have had does do did will would can could "
-           "should may might must",
-    "CCONJ": "and or but nor", "SCONJ": "while as if until because when whilst",
-    "PART": "not", "NUM": "one two three four five six seven eight nine ten twice"}.items()}
-
-
-def tag_caption(caption: str) -> list[str]:
-    """``"A man walks."`` -> ``["a/DET", "man/X", "walks/X"]``: lower-case alphabetic words
-    with a universal POS tag for closed-class words and ``X`` for all others (no lemmas).
-    The public release has spaCy's tags and lemmas; pass a tagger to the writer for those."""
-    words = "".join(c.lower() if c.isalpha() else " " for c in caption).split()
-    return [f"{w}/{next((t for t, ws in _POS.items() if w in ws), 'X')}" for w in words]
-
-
 def format_caption_line(caption: str, tokens: list[str], start: float = 0.0,
                         end: float = 0.0) -> str:
     """One ``texts/ID.txt`` line (no newline); '#' and line breaks in the caption become

@@ -31,7 +31,8 @@ from typing import Callable, Iterable, Iterator, Sequence
 
 import numpy as np
 
-from motionlang.datasets.humanml3d import JOINTS, TEXTS, VECS, format_caption_line, tag_caption
+from motionlang.datasets.humanml3d import JOINTS, TEXTS, VECS, format_caption_line
+from motionlang.datasets.pos_tags import tag
 from motionlang.datasets.splits import random_split
 from motionlang.errors import DatasetError, MotionFormatError, SkeletonError
 from motionlang.features.base import downsample
@@ -207,7 +208,8 @@ def export_h3d(records: Iterable, out: str | Path, body: str = "kit", *, mirror:
         mirror: also write ``M<ID>``, the mirror image with left/right swapped in captions.
         heading: ``"public"`` or ``"body"`` (``features.h3d_vectors.heading_yaw``).
         fractions, seed: the random split by motion (``datasets.splits.random_split``).
-        tagger: caption -> ``["word/POS", ...]`` (default :func:`tag_caption`; with
+        tagger: caption -> ``["word/POS", ...]`` (default ``datasets.pos_tags.tag``: lemmas and
+            universal tags, offline; with
             ``workers > 1`` it must be picklable, a module-level function).
         workers: processes reading and converting motions (the files are the same for any
             number).
@@ -227,7 +229,7 @@ def export_h3d(records: Iterable, out: str | Path, body: str = "kit", *, mirror:
         raise DatasetError(f"unknown heading {heading!r} ({' or '.join(HEADINGS)})")
     spec, records = H3D_BODIES[body], list(records)
     fids = _file_ids(records, mirror)
-    jobs = [(r, f, body, heading, mirror, tagger or tag_caption) for r, f in zip(records, fids)]
+    jobs = [(r, f, body, heading, mirror, tagger or tag) for r, f in zip(records, fids)]
     ids, skipped, moments = [], [], _Moments()
     with _staging(Path(out)) as tmp, contextlib.closing(_prepared(jobs, workers)) as results:
         for k, (rec, fid, written) in enumerate(zip(records, fids, results), 1):

@@ -15,7 +15,7 @@ std).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Sequence
 
@@ -72,10 +72,13 @@ def fit_normalizer(items: Sequence[dict], body: str | None = "kit"
 
 @dataclass
 class EvaluatorData:
-    """Items per split (``{"train"|"val"|"test": [item]}``) and the body of their rows."""
+    """Items per split (``{"train"|"val"|"test": [item]}``), the body of their rows and the
+    records they came from (``{id: record}``: the motions and every caption, e.g. for the
+    motion-to-text half of the yardstick)."""
 
     items: dict[str, list[dict]]
     body: str
+    records: dict[str, Any] = field(default_factory=dict)
 
     @property
     def motion_dim(self) -> int:
@@ -105,7 +108,7 @@ def build_evaluator_data(data: str | Path | Sequence[Any], body: str = "kit", *,
     else:
         splits = random_split(list(by_id), fractions, seed=seed)
     return EvaluatorData({s: [it for i in ids for it in record_items(by_id[i], body)]
-                          for s, ids in splits.items()}, body)
+                          for s, ids in splits.items()}, body, by_id)
 
 
 def train_evaluator(model, train_items: Sequence[dict], config: TrainConfig, *,
