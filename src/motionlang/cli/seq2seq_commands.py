@@ -22,20 +22,25 @@ from motionlang.cli.train_commands import (MODEL_FILES, add_out_arg, add_trainer
 from motionlang.errors import MotionlangError
 
 # ------------------------------------------------------------------ train m2l | l2m
+def add_data_arg(p: argparse.ArgumentParser, shared: str = "") -> None:
+    """The repeatable ``--data DIR[@W]`` of the trainers that mix datasets."""
+    p.add_argument("--data", required=True, action="append", type=data_source,
+                   metavar="DIR[@W]",
+                   help="KIT-ML-format or custom folder, or bandai:DIR / humanml3d:DIR / "
+                        "kitml-h3d:DIR; repeat it to train on several datasets at once (one "
+                        f"vocabulary, {shared}each dataset's own split). DIR@W "
+                        "weights a dataset: it fills W / (sum of the weights) of every epoch, "
+                        "its pairs repeated or a seeded subset of them left out (epoch size: "
+                        "all datasets' training pairs); weight every dataset or none (none: "
+                        "every pair once). E.g. --data corpus@1 --data bandai:DIR@1")
+
+
 def _add_train(sub, name: str, help_: str) -> None:
     # torch-free config module: building the parser must not import torch
     from motionlang.models.seq2seq.config import L2MConfig, M2LConfig
     d = M2LConfig(1, 1) if name == "m2l" else L2MConfig(1, 1)
     p = sub.add_parser(name, help=help_, description=help_)
-    p.add_argument("--data", required=True, action="append", type=data_source,
-                   metavar="DIR[@W]",
-                   help="KIT-ML-format or custom folder, or bandai:DIR / humanml3d:DIR / "
-                        "kitml-h3d:DIR; repeat it to train on several datasets at once (one "
-                        "vocabulary, --features positions, each dataset's own split). DIR@W "
-                        "weights a dataset: it fills W / (sum of the weights) of every epoch, "
-                        "its pairs repeated or a seeded subset of them left out (epoch size: "
-                        "all datasets' training pairs); weight every dataset or none (none: "
-                        "every pair once). E.g. --data corpus@1 --data bandai:DIR@1")
+    add_data_arg(p, "--features positions, ")
     add_out_arg(p, name, "best.pt and last.pt (checkpoints), history.json, "
                          "loss_curve.png, splits/, ")
     p.add_argument("--features", choices=("angles", "positions"), default="angles",
@@ -153,6 +158,24 @@ def check_mixed_features(sources, features: str) -> None:
                               "--data")
 
 
+def mix_training(sources, train_items: list[dict], source_of: dict[str, int], seed: int
+                 ) -> list[dict]:
+    """Several ``--data``: the training items weighted by their ``@W`` (``mixing.mix_items``;
+    unchanged without weights), with a line per dataset of its share of an epoch."""
+    from motionlang.datasets.mixing import mix_items, source_counts, source_weights
+    if len(sources) < 2:
+        return train_items
+    n, weights = len(sources), source_weights(sources)
+    before = source_counts(train_items, source_of, n)
+    if weights:
+        train_items = mix_items(train_items, source_of, weights, seed=seed)
+    after = source_counts(train_items, source_of, n)
+    for s, b, a in zip(sources, before, after):
+        print(f"{s}: {a} training pairs per epoch ({a / len(train_items):.0%}; "
+              f"{b} before weighting)")
+    return train_items
+
+
 def cmd_train(args: argparse.Namespace) -> int:
     import logging
 
@@ -161,7 +184,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     from motionlang.datasets.splits import save_splits
     from motionlang.features.frames import model_dim
     from motionlang.training.collate import collate_pairs
-    from motionlang.datasets.mixing import mix_items, source_counts, source_weights
+    from motionlang.datasets.mixing import source_weights
     from motionlang.datasets.seq2seq_pairs import (balance_repeats, build_pairs, oversample,
                                                   sentence_lengths)
     from motionlang.training.run_files import check_resume
@@ -169,7 +192,7 @@ def cmd_train(args: argparse.Namespace) -> int:
 
     out = Path(args.out)
     check_mixed_features(args.data, args.features)
-    weights = source_weights(args.data)
+    source_weights(args.data)   # all weighted or none: checked before the data preparation
     if args.resume:   # before the (long) data preparation and before anything is written
         check_resume(out)
     cfg = train_config(args, out)   # checks the trainer's options before the data preparation
@@ -192,15 +215,7 @@ def cmd_train(args: argparse.Namespace) -> int:
         train_items = oversample(train_items, repeats)
         print(f"balanced: {len(data.items['train'])} -> {len(train_items)} training pairs "
               f"(motions repeated up to {args.balance} times)")
-    if len(args.data) > 1:
-        n = len(args.data)
-        before = source_counts(train_items, data.sources, n)
-        if weights:
-            train_items = mix_items(train_items, data.sources, weights, seed=args.seed)
-        after = source_counts(train_items, data.sources, n)
-        for s, b, a in zip(args.data, before, after):
-            print(f"{s}: {a} training pairs per epoch ({a / len(train_items):.0%}; "
-                  f"{b} before weighting)")
+    train_items = mix_training(args.data, train_items, data.sources, args.seed)
     loss_weights = None
     if args.model_kind == "l2m" and args.root_weight != 1.0:   # before anything is written
         loss_weights = root_loss_weights(data.features, args.root_weight)

@@ -27,6 +27,9 @@ def cmd_train(args: argparse.Namespace) -> int:
 
     import torch
 
+    from motionlang.cli.run_log import write_license
+    from motionlang.cli.seq2seq_commands import mix_training
+    from motionlang.datasets.mixing import source_weights
     from motionlang.datasets.splits import save_splits
     from motionlang.models.length import SentenceLength
     from motionlang.models.twostream import TwoStreamModel
@@ -41,10 +44,16 @@ def cmd_train(args: argparse.Namespace) -> int:
     lambdas = parse_lambdas(args.weight)
     cfg = train_config(args, run, length_buckets=args.length_buckets)   # checked at once
     lead = lead_process()  # under torchrun only rank 0 writes files and prints
-    data = build_twostream_data(args.data, seed=args.seed, max_seconds=args.max_seconds,
-                                max_frames=args.max_frames, mirror=args.mirror)
+    source_weights(args.data)   # all weighted or none: checked before the data preparation
+    paths = [s.path for s in args.data]
+    data = build_twostream_data(paths if len(paths) > 1 else paths[0], seed=args.seed,
+                                max_seconds=args.max_seconds, max_frames=args.max_frames,
+                                mirror=args.mirror)
+    train_items = mix_training(args.data, data.items["train"], data.sources, args.seed)
     if lead:
         save_splits(data.splits, run / "splits")
+        if any(p.startswith("bandai:") for p in paths):
+            write_license(run, "two-stream model")   # CC BY-NC 4.0 data
     log_command(run / "commands.jsonl", args)
     sizes = dict(h1=args.h1, h2=args.h2, h=args.h, lstm_layers=args.lstm_layers)
     fields = dict({k: v for k, v in sizes.items() if v is not None},   # else the config's
@@ -60,7 +69,7 @@ def cmd_train(args: argparse.Namespace) -> int:
               f"({len(data.splits['train'])} motions), "
               f"{sum(p.numel() for p in model.parameters()):,} parameters")
     model, history = train_twostream(
-        model, data.items["train"], cfg, val_items=data.items.get("val") or None,
+        model, train_items, cfg, val_items=data.items.get("val") or None,
         first_frames=data.first_frames(), resume=args.resume,
         schedule=ForcingSchedule(1.0, 0.0, args.forcing_steps))
     if not lead:
@@ -116,7 +125,8 @@ def register_train(train_sub) -> None:
     """Hook of ``cli/train_commands.py``: adds ``train twostream``."""
     h = "train the two-stream text-to-motion model (Ghosh et al. 2021)"
     p = train_sub.add_parser("twostream", help=h, description=h)
-    p.add_argument("--data", required=True, metavar="DIR", help="KIT-ML-format or custom folder")
+    from motionlang.cli.seq2seq_commands import add_data_arg
+    add_data_arg(p)
     add_out_arg(p, "twostream", "best.pt and last.pt (checkpoints; in pose/ and text/ for "
                                 "the two-stage ablation), history.json, splits/, ")
     p.add_argument("--ablation", choices=ABLATION_NAMES, default="full",

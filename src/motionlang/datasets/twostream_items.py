@@ -13,7 +13,7 @@ every training motion mirrored left/right with its sentences' sides swapped.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Sequence
 
@@ -37,6 +37,7 @@ class TwoStreamData:
         sequences: ``{id: (T, 66) float32}`` normalised features at 12.5 Hz.
         items: per split, ``[{"motion", "sentence", "id"}]`` (one per description; with
             ``mirror`` the mirrored training items also carry ``"mirrored": True``).
+        sources: ``{id: index of its dataset}`` (several datasets: ``datasets.mixing``).
     """
 
     features: Any
@@ -44,6 +45,7 @@ class TwoStreamData:
     records: dict[str, Any]
     sequences: dict[str, np.ndarray]
     items: dict[str, list[dict]]
+    sources: dict[str, int] = field(default_factory=dict)
 
     def first_frames(self, split: str = "train") -> np.ndarray:
         """(N, 66) first frames of the split's motions (for ``TwoStreamModel.set_rest_pose``)."""
@@ -73,7 +75,7 @@ def build_twostream_data(data: str | Path | Sequence[str | Path], *, fractions: 
     """
     from motionlang.datasets.seq2seq_pairs import load_sources
 
-    records, splits, _ = load_sources(data, max_seconds, fractions=fractions, seed=seed)
+    records, splits, sources = load_sources(data, max_seconds, fractions=fractions, seed=seed)
     by_id = {str(r.id): r for r in records}
     train = [by_id[i] for i in splits["train"]]
     if not train:
@@ -92,7 +94,7 @@ def build_twostream_data(data: str | Path | Sequence[str | Path], *, fractions: 
         items["train"] += [{"motion": flipped[i], "sentence": mirror_text(s), "id": i,
                             "mirrored": True}
                            for i in splits["train"] for s in by_id[i].annotations]
-    return TwoStreamData(df.features, splits, by_id, seqs, items)
+    return TwoStreamData(df.features, splits, by_id, seqs, items, sources)
 
 
 def _first_sequences(df, max_frames: int | None) -> dict[str, np.ndarray]:
