@@ -1,58 +1,90 @@
 #!/usr/bin/env bash
-# Rebuild the M2L and L2M models shipped in src/motionlang/data/models/.
+# Rebuild every model shipped in src/motionlang/data/models/ from scratch.
 # Usage: scripts/train_shipped_models.sh [WORKDIR]   (default /tmp/motionlang_shipped)
-# Needs ~4 GB of disk in WORKDIR. On this project's 2-core machine (one core per model):
-# corpus ~2 min, features ~15 min (both runs fit and encode the corpus), M2L ~30 min alone
-# (12 epochs at ~110 seq/s), L2M ~60 min (3 teacher-forced epochs at ~40 seq/s, then 3 on
-# its own frames at ~25 seq/s, then a few minutes for its planner). On 2026-11-24, with
-# other work sharing the two cores, the whole rebuild took about 1 h 45 min.
-# RESUME=--resume continues interrupted runs from their last checkpoint (stage 1 of the L2M
-# and the M2L); M2L_EPOCHS overrides the M2L's 12 epochs.
+#   MODELS=all (default)   m2l, l2m and judge (procedural corpus + Bandai Namco: CC BY-NC 4.0,
+#                          non-commercial), then m2l-procedural and l2m-procedural (MIT)
+#   MODELS=bandai          only the first three;   MODELS=procedural   only the MIT ones:
+#                          the recipe for models free of the Bandai licence
+#   BANDAI=DIR             the Bandai Namco datasets (default ../shared/data/bandai)
+#   RESUME=--resume        continue interrupted runs from their last checkpoint
+# Needs ~6 GB of disk in WORKDIR. Times on this project's 2-core machine, one core per model,
+# two models side by side: corpus ~2 min; procedural + Bandai: data preparation ~25 min per
+# run (fitting and encoding 6,750 training motions and their mirror images; cached by
+# MOTIONLANG_CACHE), M2L ~7 min an epoch (8 epochs), L2M ~20 min a teacher-forced epoch and
+# ~30 min an epoch on its own frames (2 + 1), judge ~10 min; procedural alone: M2L ~30 min
+# (12 epochs), L2M ~60 min (3 + 3 epochs).
 # Every --out is a run folder: the final model is its model.pt (beside best.pt, last.pt,
-# history.json, loss_curve.png, splits/ and commands.jsonl); OMP_NUM_THREADS=1 below is also
-# every command's --threads default, one thread per model as the two run side by side.
+# history.json, loss_curve.png, splits/ and commands.jsonl; LICENSE.txt for Bandai runs).
+# OMP_NUM_THREADS=1: one thread per model as the two run side by side.
 set -euo pipefail
 WORK=${1:-/tmp/motionlang_shipped}
 RESUME=${RESUME:-}
+MODELS=${MODELS:-all}
 HERE=$(cd "$(dirname "$0")/.." && pwd)
 ML="${ML:-$HERE/.venv/bin/motionlang}"
 PY="${PY:-$HERE/.venv/bin/python}"
+BANDAI=${BANDAI:-$HERE/../shared/data/bandai}
+SHIP="$HERE/src/motionlang/data/models"
 export OMP_NUM_THREADS=1 MOTIONLANG_CACHE="$WORK/cache"
-mkdir -p "$WORK"
+mkdir -p "$WORK" "$SHIP"
 # 1. the procedural corpus (deterministic for a given seed): 6,000 motions (4,800 train),
-#    the same split for both models
-for n in 6000; do
-  [ -f "$WORK/corpus$n/.done" ] || { "$ML" data synth --out "$WORK/corpus$n" --n $n --seed 0 --workers 1 \
-      && touch "$WORK/corpus$n/.done"; }
-done
-# 2. the two models, in parallel, both on the 21-joint position features (rig-independent:
-#    any motion that maps onto the 21-joint body can be described, and generated motions
-#    can be retargeted onto any such rig; since 2026-11-24, the angle-feature models before
-#    them read MMM motions only). The M2L runs 12 epochs at a constant rate (the shipped one
-#    was a 20-epoch run stopped after its 12th, the same thing; its validation loss still
-#    fell by ~0.005 an epoch there): paper-size M2L with additive attention (the paper's
-#    proposed next step; test BLEU 0.403 vs 0.386 without); L2M with a 2 x 256 decoder,
-#    5 components, a clock, the fraction of the motion done and a plan of 8 parts (the
-#    planner predicts it from the sentence): 3 teacher-forced epochs with noisy inputs, then
-#    3 epochs with scheduled sampling (90 % own frames after the first of them), the last 2
-#    with the learning rate decayed; each model.pt is the epoch with the best validation
-#    loss (the L2M's: among the epochs of its second stage, on its own frames); then the
-#    L2M's planner alone 20 epochs more (minutes; validation MSE ~0.172 -> ~0.158)
-"$ML" train m2l --data "$WORK/corpus6000" --out "$WORK/m2l" --epochs ${M2L_EPOCHS:-12} --batch-size 64 \
-    --offsets 1 --attention --features positions --checkpoint-every 200 $RESUME &
-M2L=$!
-L2M_OPTS=(--data "$WORK/corpus6000" --out "$WORK/l2m" --batch-size 64 --offsets 1 --features positions
-          --checkpoint-every 200 --dec-hidden 256
-          --dec-layers 2 --components 5 --end-weight 10 --time-input --progress-input
-          --plan-parts 8 --plan-noise 0.1)
-{ "$ML" train l2m "${L2M_OPTS[@]}" --epochs 3 --input-noise 0.5 $RESUME \
-  && "$ML" train l2m "${L2M_OPTS[@]}" --epochs 6 --decay-epochs 2 --rollout 0.9 \
-         --rollout-warmup 225 --resume \
-  && "$PY" "$HERE/scripts/l2m_fit_planner.py" "$WORK/l2m/model.pt" --data "$WORK/corpus6000" \
-         --out "$WORK/l2m/planned.pt" --epochs 20; } &
-L2M=$!
-wait $M2L; wait $L2M   # (set -e) a failed run stops the script before anything is shipped
-# 3. ship the final checkpoints (self-describing: config, vocabulary, normaliser, weights)
-mkdir -p "$HERE/src/motionlang/data/models"
-cp "$WORK/m2l/model.pt" "$HERE/src/motionlang/data/models/m2l.pt"
-cp "$WORK/l2m/planned.pt" "$HERE/src/motionlang/data/models/l2m.pt"
+#    the same split for every model
+[ -f "$WORK/corpus6000/.done" ] || { "$ML" data synth --out "$WORK/corpus6000" --n 6000 \
+    --seed 0 --workers 1 && touch "$WORK/corpus6000/.done"; }
+C="$WORK/corpus6000"
+
+# 2. both seq2seq models on the 21-joint position features (rig-independent: any motion that
+#    maps onto the 21-joint body can be described; generated motions retarget onto any such
+#    rig). M2L: paper size with additive attention (test BLEU 0.403 vs 0.386 without). L2M:
+#    a 2 x 256 decoder, 5 components, a clock, the fraction of the motion done and a plan of
+#    8 parts (its planner predicts it from the sentence), first teacher-forced epochs with
+#    noisy inputs, then epochs with scheduled sampling (90 % own frames after 225 steps),
+#    the last with the learning rate decayed; each model.pt is the epoch with the best
+#    validation loss; then the planner alone 20 epochs more (minutes).
+L2M_COMMON=(--batch-size 64 --offsets 1 --features positions --checkpoint-every 200
+            --dec-hidden 256 --dec-layers 2 --components 5 --end-weight 10 --time-input
+            --progress-input --plan-parts 8 --plan-noise 0.1)
+# l2m_run OUT EPOCHS1 EPOCHS_TOTAL DECAY DATA_ARGS... : the two stages and the planner
+l2m_run() {
+  local out=$1 e1=$2 e2=$3 decay=$4; shift 4
+  local data=("$@") plan_mirror=()
+  [[ " ${data[*]} " == *" --mirror "* ]] && plan_mirror=(--mirror)
+  local plan_data=()
+  for ((i = 0; i < ${#data[@]}; i++)); do
+    [ "${data[$i]}" = --data ] && plan_data+=(--data "${data[$((i + 1))]}")
+  done
+  [ -f "$out/.stage1" ] || { "$ML" train l2m "${data[@]}" --out "$out" "${L2M_COMMON[@]}" \
+      --epochs "$e1" --input-noise 0.5 $RESUME && touch "$out/.stage1"; }
+  "$ML" train l2m "${data[@]}" --out "$out" "${L2M_COMMON[@]}" --epochs "$e2" \
+      --decay-epochs "$decay" --rollout 0.9 --rollout-warmup 225 --resume
+  "$PY" "$HERE/scripts/l2m_fit_planner.py" "$out/model.pt" "${plan_data[@]}" "${plan_mirror[@]}" \
+      --out "$out/planned.pt" --epochs 20
+}
+
+if [ "$MODELS" = all ] || [ "$MODELS" = bandai ]; then
+  # procedural corpus and Bandai Namco takes, half of every epoch each, mirrored copies too
+  MIX=(--data "$C@1" --data "bandai:$BANDAI@1" --mirror)
+  "$ML" train m2l "${MIX[@]}" --out "$WORK/m2l" --epochs 8 --batch-size 64 --offsets 1 \
+      --attention --features positions --checkpoint-every 200 $RESUME &
+  M2L=$!
+  l2m_run "$WORK/l2m" 2 3 1 "${MIX[@]}" &
+  L2M=$!
+  wait $M2L
+  "$ML" train judge --data "bandai:$BANDAI" --out "$WORK/judge" --epochs 30
+  wait $L2M   # (set -e) a failed run stops the script before anything is shipped
+  cp "$WORK/m2l/model.pt" "$SHIP/m2l.pt"
+  cp "$WORK/l2m/planned.pt" "$SHIP/l2m.pt"
+  cp "$WORK/judge/model.pt" "$SHIP/judge.pt"
+fi
+
+if [ "$MODELS" = all ] || [ "$MODELS" = procedural ]; then
+  # the procedural corpus alone (MIT): M2L 12 epochs, L2M 3 + 3 epochs
+  "$ML" train m2l --data "$C" --out "$WORK/m2l-procedural" --epochs 12 --batch-size 64 \
+      --offsets 1 --attention --features positions --checkpoint-every 200 $RESUME &
+  M2L=$!
+  l2m_run "$WORK/l2m-procedural" 3 6 2 --data "$C" &
+  L2M=$!
+  wait $M2L; wait $L2M
+  cp "$WORK/m2l-procedural/model.pt" "$SHIP/m2l-procedural.pt"
+  cp "$WORK/l2m-procedural/planned.pt" "$SHIP/l2m-procedural.pt"
+fi

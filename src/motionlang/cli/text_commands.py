@@ -177,10 +177,12 @@ def register(subparsers) -> None:
     from motionlang.cli.motion_commands import add_input_args, add_joint_map_arg
     p = subparsers.add_parser("describe", help="describe a motion in English (M2L, beam search)")
     add_input_args(p)
+    from motionlang.models.registry import licence_note
     p.add_argument("--model", default="m2l", metavar="MODEL",
                    help="a packaged model's name, an M2L model file or a training run folder "
-                        "('motionlang models' lists the packaged ones; a model trained on "
-                        "Bandai Namco data is for non-commercial use only, CC BY-NC 4.0)")
+                        "('motionlang models' lists the packaged ones; "
+                        f"{licence_note('m2l')}; any model trained on Bandai Namco data is "
+                        "for non-commercial use only, CC BY-NC 4.0)")
     p.add_argument("-w", "--width", type=width_int, default=5,
                    help="beam width = hypotheses shown")
     p.add_argument("--length-penalty", type=nonneg_float, default=0.0, metavar="ALPHA",
@@ -196,9 +198,9 @@ def register(subparsers) -> None:
                         "skeleton) or .npz (joint positions and fps)")
     p.add_argument("--model", default="l2m", metavar="MODEL",
                    help="a packaged model's name, an L2M or two-stream model file or a "
-                        "training run folder ('motionlang models' lists the packaged ones; a "
-                        "model trained on Bandai Namco data is for non-commercial use only, "
-                        "CC BY-NC 4.0)")
+                        "training run folder ('motionlang models' lists the packaged ones; "
+                        f"{licence_note('l2m')}; any model trained on Bandai Namco data is "
+                        "for non-commercial use only, CC BY-NC 4.0)")
     p.add_argument("-w", "--width", type=width_int, default=5,
                    help="hypotheses (samples or beam width)")
     p.add_argument("--method", choices=("sample", "beam", "mean"), default=None,

@@ -40,13 +40,24 @@ TEXT_TO_MOTION = ("l2m", "twostream")
 RUN_MODEL_FILES = ("model.pt", "model.npz", "best.pt")
 
 
+#: the licences of packaged models: the project's own, or that of the Bandai Namco data
+MIT = "MIT"
+NON_COMMERCIAL = ("CC BY-NC 4.0: trained on the Bandai Namco Research Motion Datasets, "
+                  "non-commercial use only")
+
+
 @dataclass(frozen=True)
 class Packaged:
-    """A model shipped in the package: its file, kind and model card (Markdown)."""
+    """A model shipped in the package: its file, kind, licence and model card (Markdown)."""
 
     name: str
     kind: str
     summary: str
+    licence: str = MIT
+
+    @property
+    def commercial(self) -> bool:
+        return self.licence == MIT
 
     @property
     def path(self) -> Path:
@@ -144,6 +155,20 @@ def load_model(name_or_path: str | Path, kind: str | tuple[str, ...] | None = No
 
 
 def describe_packaged() -> str:
-    """One line per packaged model: name, file state, summary."""
-    return "\n".join(f"{p.name:5s} {'' if p.path.is_file() else '(missing) '}{p.summary}"
+    """One line per packaged model: name, file state, summary, and a licence note where the
+    model is not under the project's licence."""
+    width = max(len(n) for n in PACKAGED)
+    return "\n".join(f"{p.name:{width}s} {'' if p.path.is_file() else '(missing) '}{p.summary}"
+                     + ("" if p.commercial else " [non-commercial]")
                      for p in PACKAGED.values())
+
+
+def licence_note(name: str) -> str:
+    """For ``--help``: what licence the packaged model ``name`` is under, and the
+    commercial-use alternative of the same kind when it is non-commercial."""
+    p = PACKAGED[name]
+    if p.commercial:
+        return f"the packaged {name} is {p.licence}-licensed"
+    free = [q.name for q in PACKAGED.values() if q.kind == p.kind and q.commercial]
+    return (f"the packaged {name} is {p.licence}" +
+            (f"; {free[0]} is trained on the procedural corpus alone (MIT)" if free else ""))
