@@ -25,7 +25,8 @@ BODIES = ("kit", "smpl")
 #: options of the default (``ape``) protocol that mean nothing under ``guo``: name -> unset
 APE_ONLY = {"autoencode": False, "true_start": False, "oracle": 0, "l2m_rerank": None,
             "l2m_width": 1}
-GUO_ONLY = ("evaluator", "evaluator_official", "mean", "std", "word_vectors", "m2l")
+GUO_ONLY = ("evaluator", "evaluator_official", "mean", "std", "word_vectors", "m2l",
+            "regenerate")
 
 
 # -- train evaluator -------------------------------------------------------------------------
@@ -158,6 +159,10 @@ def add_guo_args(p: argparse.ArgumentParser) -> None:
                         "each of --mm-texts captions (the papers: 30 and 100; 0: not measured)")
     g.add_argument("--mm-texts", type=positive_int, default=100,
                    help="captions MultiModality samples for")
+    g.add_argument("--regenerate", action="store_true",
+                   help="with --l2m-method sample: L2M models generate anew for each of the "
+                        "--repeats, as the papers do (that many times the generation time); "
+                        "default: one generation, its pairs reshuffled")
     g.add_argument("--m2l", action="append", metavar="[NAME=]PATH",
                    help="motion to text: an M2L model (file, run folder or packaged name) "
                         "whose descriptions of the test motions are scored (BLEU@1/4, "
@@ -179,6 +184,9 @@ def check_protocol(args: argparse.Namespace) -> None:
         if bool(args.evaluator_official) != bool(args.mean and args.std) or (
                 args.evaluator and (args.mean or args.std)):
             raise MotionlangError("--mean and --std go with --evaluator-official (both)")
+        if args.regenerate and args.l2m_method != "sample":
+            raise MotionlangError("--regenerate needs --l2m-method sample (the models' other "
+                                  "ways of generating give the same motions every time)")
         if args.multimodality and args.multimodality <= 10:
             raise MotionlangError(f"--multimodality {args.multimodality}: need more than 10 "
                                   "samples a caption (10 pairs are drawn among them)")
@@ -240,8 +248,16 @@ def cmd_evaluate_guo(args: argparse.Namespace) -> int:
                               f"needs at least --rp-batch {args.rp_batch}")
     captions = [p["caption"] for p in pairs]
     frames = [len(p["motion"]) + 1 for p in pairs]    # rows are steps between 12.5 Hz frames
-    gen = {name: generated_rows(m, captions, frames, method=args.l2m_method, seed=args.seed,
-                                desc=name) for name, m in models.items()}
+    gen = {}
+    for name, m in models.items():
+        if args.regenerate and not text_to_motion(m).deterministic:
+            # a new generation for each repetition, seeds seed, seed + 1, ... (the papers')
+            gen[name] = (lambda i, m=m, name=name: generated_rows(
+                m, captions, frames, method=args.l2m_method, seed=args.seed + i,
+                desc=f"{name} #{i + 1}"))
+        else:
+            gen[name] = generated_rows(m, captions, frames, method=args.l2m_method,
+                                       seed=args.seed, desc=name)
     samples = {}
     if args.multimodality:
         n = min(args.mm_texts, len(pairs))

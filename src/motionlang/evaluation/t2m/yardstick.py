@@ -176,7 +176,8 @@ def guo_table(evaluator, pairs: Sequence[dict], train_items: Sequence[dict],
     that are also test pairs are left out of both, so that a split evaluated against itself
     never finds its own motions), standing still in
     the first pose (:func:`still_rows`), then ``generated`` (name -> motion rows for the
-    pairs, in the evaluator's layout). Every row's FID but the ground truth's is against
+    pairs, in the evaluator's layout; or a function ``i -> rows``, a new generation for
+    each repetition i, the first also giving the retrieval measures). Every row's FID but the ground truth's is against
     the test motions. ``samples`` (name -> per pair, S motions generated for its caption)
     adds MultiModality (``mm_times`` pairs of the S) to that row. Each row also has TMR's
     :data:`TABLE_RETRIEVAL` measures (first shuffle, all pairs).
@@ -203,10 +204,14 @@ def guo_table(evaluator, pairs: Sequence[dict], train_items: Sequence[dict],
             train_motions.append(it["motion"])
     table = {}
     for name, motions in rows.items():
-        if len(motions) != len(pairs):
-            raise MotionlangError(f"{name}: {len(motions)} motions for {len(pairs)} captions")
-        emb = test_emb if name == GROUND_TRUTH else evaluator.embed_motions(list(motions))
-        row = guo_metrics(text, emb, test_emb, repeats=repeats, seed=seed,
+        first = motions(0) if callable(motions) else motions
+        if len(first) != len(pairs):
+            raise MotionlangError(f"{name}: {len(first)} motions for {len(pairs)} captions")
+        emb = test_emb if name == GROUND_TRUTH else evaluator.embed_motions(list(first))
+        # a function of the repetition: a new generation for each (as the papers measure)
+        per_repeat = (lambda i, m=motions, e=emb: e if i == 0 else
+                      evaluator.embed_motions(list(m(i)))) if callable(motions) else emb
+        row = guo_metrics(text, per_repeat, test_emb, repeats=repeats, seed=seed,
                           batch_size=batch_size, diversity_times=diversity_times)
         if name == GROUND_TRUTH:   # real against real: never a set against itself
             row["FID"] = ((fid(test_emb, evaluator.embed_motions(train_motions)), 0.0)
