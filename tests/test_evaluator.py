@@ -121,6 +121,21 @@ def test_hinge_loss_by_hand():
     model.eval()                      # every mismatched pair: the same two here
     assert float(model.loss(dict.fromkeys(("words", "pos", "word_lengths", "motion",
                                             "motion_lengths")))["neg"]) == float(out["neg"])
+    # the same caption twice: the two are not negatives of each other, in either mode
+    same = {**dict.fromkeys(("words", "pos", "word_lengths", "motion", "motion_lengths")),
+            "same_caption": torch.ones(2, 2, dtype=torch.bool)}
+    for train in (False, True):
+        model.train(train)
+        assert float(model.loss(same)["neg"]) == 0.0
+
+
+def test_collate_marks_pairs_of_the_same_caption():
+    model = TextMotionEvaluator(EvaluatorConfig(**TINY), np.zeros(8), np.ones(8))
+    rows = np.zeros((8, 8), dtype=np.float32)
+    batch = model.collate([{"motion": rows, "caption": c} for c in (
+        "A person walks.", "a person walks", "a person runs")])
+    assert batch["same_caption"].tolist() == [[True, True, False], [True, True, False],
+                                              [False, False, True]]
 
 
 def test_public_names_and_shapes_load(tmp_path):

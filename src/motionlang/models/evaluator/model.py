@@ -118,10 +118,14 @@ class TextMotionEvaluator(nn.Module):
         absent}`` -> the batch of :meth:`loss`; in training mode each motion's crop starts
         at a random offset."""
         motion, m_len = self._motion_tensor([it["motion"] for it in items], self.training)
-        words, pos, w_len = self._text_tensor(
-            [caption_tokens(it.get("caption", ""), it.get("tokens")) for it in items])
+        tokens = [caption_tokens(it.get("caption", ""), it.get("tokens")) for it in items]
+        words, pos, w_len = self._text_tensor(tokens)
+        # pairs whose captions are the same words: not negatives of each other (templated
+        # data such as Bandai's repeats a caption across many motions)
+        key = [" ".join(t.rpartition("/")[0] for t in toks) for toks in tokens]
+        same = torch.tensor([[a == b for b in key] for a in key])
         return {"motion": motion, "motion_lengths": m_len, "words": words, "pos": pos,
-                "word_lengths": w_len}
+                "word_lengths": w_len, "same_caption": same}
 
     # -- encoders -----------------------------------------------------------------------
     def encode_motion(self, motion: torch.Tensor, lengths: torch.Tensor) -> torch.Tensor:
@@ -137,7 +141,8 @@ class TextMotionEvaluator(nn.Module):
     def loss(self, batch: dict) -> dict[str, torch.Tensor]:
         """``{"loss", ...}`` of a batch (:meth:`collate`): hinge (``"pos"``, ``"neg"``:
         mean squared distance of the matched pairs and mean squared hinge of the pairs
-        shifted by a random 1..B-1 in training, of all mismatched pairs in eval mode) or
+        shifted by a random 1..B-1 in training, of all mismatched pairs in eval mode; pairs
+        whose captions are the same words, ``batch["same_caption"]``, are not negatives) or
         InfoNCE (``"nce"``)."""
         t = self.encode_text(batch["words"], batch["pos"], batch["word_lengths"])
         m = self.encode_motion(batch["motion"], batch["motion_lengths"])
@@ -153,12 +158,16 @@ class TextMotionEvaluator(nn.Module):
             # training: one random shift, as the public code; evaluation: every mismatched
             # pair, so that validation losses do not depend on a draw
             d = (t[:, None] - m[None]).pow(2).sum(-1).clamp_min(1e-12).sqrt()   # (B, B)
+            rows = torch.arange(len(t))
+            negative = ~batch.get("same_caption", torch.eye(len(t), dtype=torch.bool))
+            negative &= ~torch.eye(len(t), dtype=torch.bool)
             if self.training:
-                shift = int(torch.randint(1, len(t), ()))
-                d = d[torch.arange(len(t)), (torch.arange(len(t)) + shift) % len(t)]
+                cols = (rows + int(torch.randint(1, len(t), ()))) % len(t)
+                d, keep = d[rows, cols], negative[rows, cols]
             else:
-                d = d[~torch.eye(len(t), dtype=torch.bool)]
-            neg = (c.margin - d).clamp_min(0).pow(2).mean()
+                keep = negative
+            if keep.any():
+                neg = (c.margin - d[keep]).clamp_min(0).pow(2).mean()
         return {"loss": pos + neg, "pos": pos.detach(), "neg": neg.detach()}
 
     @torch.no_grad()
