@@ -87,6 +87,19 @@ def test_guo_regenerates_sampling_models_for_each_repeat(run, corpus, capsys):
     assert "--regenerate needs --l2m-method sample" in capsys.readouterr().err
 
 
+def test_guo_ground_truth_fid_against_the_validation_motions(run, corpus, tmp_path, capsys):
+    common = ["evaluate-t2m", *GUO, "--evaluator", str(run), "--data", str(corpus),
+              "--m2l", "none"]
+    fids = {}
+    for ref in ("train", "val"):
+        assert main([*common, "--fid-reference", ref, "-o", str(tmp_path / ref)]) == 0
+        assert f"test against {'training' if ref == 'train' else 'val'} motions" in \
+            capsys.readouterr().out
+        rows = json.loads((tmp_path / ref / "t2m_guo.json").read_text())["rows"]
+        fids[ref] = rows["ground truth"]["FID"][0]
+    assert fids["val"] > 0 and fids["val"] != fids["train"]
+
+
 def test_guo_without_motion_to_text(run, corpus, capsys):
     assert main(["evaluate-t2m", *GUO, "--evaluator", str(run), "--data", str(corpus),
                  "--m2l", "none"]) == 0

@@ -26,7 +26,7 @@ BODIES = ("kit", "smpl")
 APE_ONLY = {"autoencode": False, "true_start": False, "oracle": 0, "l2m_rerank": None,
             "l2m_width": 1}
 GUO_ONLY = ("evaluator", "evaluator_official", "mean", "std", "word_vectors", "m2l",
-            "regenerate")
+            "regenerate")   # (--fid-reference has a default: not checked)
 
 
 # -- train evaluator -------------------------------------------------------------------------
@@ -159,6 +159,10 @@ def add_guo_args(p: argparse.ArgumentParser) -> None:
                         "each of --mm-texts captions (the papers: 30 and 100; 0: not measured)")
     g.add_argument("--mm-texts", type=positive_int, default=100,
                    help="captions MultiModality samples for")
+    g.add_argument("--fid-reference", choices=("train", "val"), default="train",
+                   help="the real motions the ground truth's FID compares the test motions "
+                        "with (val: held out like them, when the training split holds data "
+                        "the test split has not, e.g. Bandai's dataset 1)")
     g.add_argument("--regenerate", action="store_true",
                    help="with --l2m-method sample: L2M models generate anew for each of the "
                         "--repeats, as the papers do (that many times the generation time); "
@@ -268,13 +272,21 @@ def cmd_evaluate_guo(args: argparse.Namespace) -> int:
                                              desc=f"{name} sample")[0]
                               for k in range(args.multimodality)]
                              for c, f in zip(captions[:n], frames[:n])]
+    reference = None
+    if args.fid_reference != "train":
+        reference = data.items.get(args.fid_reference) or []
+        if len({it["id"] for it in reference}) < 2:
+            raise MotionlangError(f"--fid-reference {args.fid_reference}: {args.data} has "
+                                  f"fewer than 2 {args.fid_reference} motions")
     table = guo_table(evaluator, pairs, data.items.get("train") or [], gen, samples=samples,
-                      repeats=args.repeats, seed=args.seed, batch_size=args.rp_batch)
+                      reference_items=reference, repeats=args.repeats, seed=args.seed,
+                      batch_size=args.rp_batch)
     title = (f"{len(pairs)} {args.split} pairs of {args.data}, evaluator "
              f"{args.evaluator or args.evaluator_official} ({body} body); mean ± 95 % "
              f"interval over {args.repeats} shuffles, R-precision in batches of "
              f"{args.rp_batch}; FID against the test motions (ground truth: test against "
-             "training motions); retrieval (t2m R@k %, MedR) among all pairs")
+             f"{'training' if args.fid_reference == 'train' else args.fid_reference} "
+             "motions); retrieval (t2m R@k %, MedR) among all pairs")
     text = markdown_table(table, title)
     print(text, end="")
     m2t, m2t_text = motion_to_text(args, evaluator, data, pairs, m2l_models)

@@ -164,20 +164,22 @@ def nearest_rows(train_items: Sequence[dict], captions: Sequence[str]) -> list[n
 
 def guo_table(evaluator, pairs: Sequence[dict], train_items: Sequence[dict],
               generated: dict[str, Sequence] | None = None, *,
-              samples: dict[str, Sequence[Sequence]] | None = None, repeats: int = 20,
+              samples: dict[str, Sequence[Sequence]] | None = None,
+              reference_items: Sequence[dict] | None = None, repeats: int = 20,
               seed: int = 0, batch_size: int = 32, diversity_times: int = 300,
               mm_times: int = 10) -> dict[str, dict]:
     """The yardstick's rows for test ``pairs`` (items ``{"motion", "caption", "tokens"}``,
     one per test motion, :func:`test_pairs`) -> ``{row: {measure: (mean, interval) or
     value}}``.
 
-    Rows: the ground truth (its FID between the test and the ``train_items`` motions: real
-    against real), the nearest-neighbour baseline (:func:`nearest_rows`; training motions
-    that are also test pairs are left out of both, so that a split evaluated against itself
-    never finds its own motions), standing still in
-    the first pose (:func:`still_rows`), then ``generated`` (name -> motion rows for the
-    pairs, in the evaluator's layout; or a function ``i -> rows``, a new generation for
-    each repetition i, the first also giving the retrieval measures). Every row's FID but the ground truth's is against
+    Rows: the ground truth (its FID between the test and the ``train_items`` motions, or
+    the ``reference_items``' when given, e.g. the validation split: real against real),
+    the nearest-neighbour baseline (:func:`nearest_rows`; training motions that are also
+    test pairs are left out of both, so that a split evaluated against itself never finds
+    its own motions), standing still in the first pose (:func:`still_rows`), then
+    ``generated`` (name -> motion rows for the pairs, in the evaluator's layout; or a
+    function ``i -> rows``, a new generation for each repetition i, the first also giving
+    the retrieval measures). Every row's FID but the ground truth's is against
     the test motions. ``samples`` (name -> per pair, S motions generated for its caption)
     adds MultiModality (``mm_times`` pairs of the S) to that row. Each row also has TMR's
     :data:`TABLE_RETRIEVAL` measures (first shuffle, all pairs).
@@ -198,7 +200,9 @@ def guo_table(evaluator, pairs: Sequence[dict], train_items: Sequence[dict],
     text = evaluator.embed_texts(captions, tokens)
     test_emb = evaluator.embed_motions(truth)
     seen, train_motions = set(), []
-    for it in train_items:
+    reference = train_items if reference_items is None else \
+        [it for it in reference_items if it["id"] not in own]
+    for it in reference:
         if it["id"] not in seen:
             seen.add(it["id"])
             train_motions.append(it["motion"])
