@@ -93,3 +93,12 @@ def test_plot_yardstick_writes_one_png(tmp_path):
     plot_yardstick(t2m, out, m2t, title="test")
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert [p.name for p in tmp_path.iterdir()] == ["t.png"]
+
+
+def test_r_precision_miss_scores_an_evaluator_on_one_caption_per_motion():
+    from motionlang.evaluation.t2m.yardstick import r_precision_miss
+    items = [pair(i, i) for i in range(4)]
+    items += [{**p, "caption": p["caption"] + " again"} for p in items]   # 2 captions each
+    miss = r_precision_miss(items, batch_size=4, top=1)
+    assert miss(KeywordEvaluator()) == 0.0   # every caption finds its own motion first
+    assert r_precision_miss(items, batch_size=32) is None   # fewer motions than a batch

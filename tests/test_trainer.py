@@ -263,3 +263,25 @@ def test_resume_takes_the_new_learning_rate(tmp_path):
 def test_bad_decay_is_refused(tmp_path, kw):
     with pytest.raises(MotionlangError, match="decay"):
         run(tmp_path, 4, **kw)
+
+
+def test_select_score_picks_best_pt_instead_of_the_validation_loss(tmp_path):
+    """A ``select`` score that is best at epoch 2 of 4 (whatever the loss does) keeps epoch
+    2's weights in best.pt and is recorded in the history."""
+    scores = iter([0.5, 0.1, 0.3, 0.4])
+    kept = {}
+
+    def select(model):
+        s = next(scores)
+        kept[s] = {k: v.clone() for k, v in model.state_dict().items()}
+        return s
+
+    torch.manual_seed(0)
+    model = TinyReg()
+    hist = Trainer(model, make_data(), collate, config(tmp_path, 4), val_set=make_data(12, 1),
+                   select=select).fit()
+    assert [h["val"]["select"] for h in hist] == [0.5, 0.1, 0.3, 0.4]
+    best = torch.load(tmp_path / "best.pt", weights_only=True)
+    assert best["epoch"] == 2 and best["best"] == 0.1
+    for k, v in best["model"]["state_dict"].items():
+        assert torch.equal(v, kept[0.1][k]), k

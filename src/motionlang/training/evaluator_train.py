@@ -113,10 +113,12 @@ def build_evaluator_data(data: str | Path | Sequence[Any], body: str = "kit", *,
 
 def train_evaluator(model, train_items: Sequence[dict], config: TrainConfig, *,
                     val_items: Sequence[dict] | None = None, body: str | None = "kit",
-                    fit_stats: bool = True, resume: bool = False):
+                    fit_stats: bool = True, resume: bool = False, select=None):
     """Train a ``TextMotionEvaluator`` with the shared trainer (``config.out_dir`` gets
     ``last.pt``/``best.pt``, the model's own checkpoints). ``fit_stats``: first set its
-    mean/std from the training items (:func:`fit_normalizer` with ``body``).
+    mean/std from the training items (:func:`fit_normalizer` with ``body``). ``select``:
+    model -> validation score picking ``best.pt`` (lower is better; default the validation
+    loss), e.g. ``evaluation.t2m.yardstick.r_precision_miss``.
 
     Returns:
         (model in eval mode, history)
@@ -126,6 +128,6 @@ def train_evaluator(model, train_items: Sequence[dict], config: TrainConfig, *,
     if fit_stats:
         model.set_normalizer(*fit_normalizer(train_items, body))
     trainer = Trainer(model, list(train_items), model.collate, config,
-                      val_set=list(val_items) if val_items else None)
+                      val_set=list(val_items) if val_items else None, select=select)
     history = trainer.fit(resume=resume)
     return model.eval(), history

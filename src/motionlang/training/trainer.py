@@ -77,11 +77,15 @@ class Trainer:
 
     def __init__(self, model: torch.nn.Module, train_set: Sequence, collate: Callable[[list], Any],
                  config: TrainConfig, val_set: Sequence | None = None,
-                 length_of: Callable[[Any], int] | None = None):
+                 length_of: Callable[[Any], int] | None = None,
+                 select: Callable[[torch.nn.Module], float] | None = None):
+        """``select``: model -> a validation score, lower is better, that picks ``best.pt``
+        instead of the validation loss (recorded as ``val["select"]``; e.g. the evaluator's
+        R-precision, which its contrastive loss follows badly on templated captions)."""
         if len(train_set) == 0:
             raise MotionlangError("training set is empty")
         self.model, self.train_set, self.val_set = model, train_set, val_set
-        self.collate, self.config = collate, config
+        self.collate, self.config, self.select = collate, config, select
         self._lengths = None
         if config.length_buckets > 0:
             length_of = length_of or (lambda item: len(item["motion"]))
@@ -303,12 +307,16 @@ class Trainer:
             bar.close()
             rate = seen / max(time.perf_counter() - t0, 1e-9)
             train, val = self._reduce(sums, count), self.validate()
+            if val and self.select is not None:   # every rank: the same weights, same score
+                with torch.no_grad():
+                    val["select"] = float(self.select(self.model.eval()))
             self.history.append({"epoch": epoch + 1, "step": step, "train": train, "val": val,
                                  "seq_per_s": rate, "lr": lr})
             log.info("epoch %d/%d: train %s | val %s | %.0f seq/s | lr %.3g", epoch + 1,
                      c.epochs, _fmt(train), _fmt(val) or "-", rate, lr)
             epoch, start_batch, sums, count = epoch + 1, 0, {}, 0
-            score = (val or train).get("loss", math.inf)
+            score = (val or train).get("select" if "select" in (val or {}) else "loss",
+                                       math.inf)
             pos = {"epoch": epoch, "batch": 0, "step": step, "epoch_sums": {}, "epoch_count": 0}
             if score < best:
                 best = score

@@ -153,6 +153,26 @@ def test_pairs(items: Sequence[dict], seed: int = 0) -> list[dict]:
     return [group[rng.integers(len(group))] for group in by_id.values()]
 
 
+def r_precision_miss(items: Sequence[dict], *, seed: int = 0, batch_size: int = 32,
+                     top: int = 3) -> Callable | None:
+    """A validation score for training an evaluator (``training.trainer.Trainer``'s
+    ``select``): evaluator -> 1 - R-precision top-``top`` of one caption per motion of
+    ``items`` (:func:`test_pairs`), one seeded shuffle in batches of ``batch_size``; None
+    when there are fewer motions than a batch."""
+    pairs = test_pairs(items, seed)
+    if len(pairs) < batch_size:
+        return None
+    captions = [p["caption"] for p in pairs]
+    tokens = [p.get("tokens") for p in pairs]
+    motions = [p["motion"] for p in pairs]
+
+    def miss(evaluator) -> float:
+        rp = r_precision(evaluator.embed_texts(captions, tokens),
+                         evaluator.embed_motions(motions), top, batch_size, rng=seed)
+        return 1.0 - float(rp[top - 1])
+    return miss
+
+
 def nearest_rows(train_items: Sequence[dict], captions: Sequence[str]) -> list[np.ndarray]:
     """The nearest-neighbour baseline: for each caption the training motion whose caption
     is nearest in bag of words (``evaluation.retrieval.SentenceIndex``)."""
