@@ -10,8 +10,8 @@
 # Needs ~6 GB of disk in WORKDIR. Times on this project's 2-core machine, one core per model,
 # two models side by side: corpus ~2 min; procedural + Bandai: data preparation ~25 min per
 # run (fitting and encoding 6,750 training motions and their mirror images; cached by
-# MOTIONLANG_CACHE), M2L ~7 min an epoch (8 epochs), L2M ~20 min a teacher-forced epoch and
-# ~30 min an epoch on its own frames (2 + 1), judge ~10 min; procedural alone: M2L ~30 min
+# MOTIONLANG_CACHE), M2L ~7-10 min an epoch (8 epochs), L2M ~28 min a teacher-forced epoch and
+# ~35 min an epoch on its own frames (1 + 1), judge ~10 min; procedural alone: M2L ~30 min
 # (12 epochs), L2M ~60 min (3 + 3 epochs).
 # Every --out is a run folder: the final model is its model.pt (beside best.pt, last.pt,
 # history.json, loss_curve.png, splits/ and commands.jsonl; LICENSE.txt for Bandai runs).
@@ -67,7 +67,7 @@ if [ "$MODELS" = all ] || [ "$MODELS" = bandai ]; then
   "$ML" train m2l "${MIX[@]}" --out "$WORK/m2l" --epochs 8 --batch-size 64 --offsets 1 \
       --attention --features positions --checkpoint-every 200 $RESUME &
   M2L=$!
-  l2m_run "$WORK/l2m" 2 3 1 "${MIX[@]}" &
+  l2m_run "$WORK/l2m" 1 2 1 "${MIX[@]}" &
   L2M=$!
   wait $M2L
   "$ML" train judge --data "bandai:$BANDAI" --out "$WORK/judge" --epochs 30
