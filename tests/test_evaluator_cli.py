@@ -67,6 +67,8 @@ def test_guo_table_rows_and_files(run, corpus, tmp_path, capsys):
     m2l = report["m2t_rows"]["m2l"]
     assert 0 <= m2l["BLEU@4"] <= 1 and 0 <= m2l["R-precision top-3"][0] <= 1
     assert "Motion to text" in text and (out / "t2m_guo.png").stat().st_size > 1000
+    m2t_line = [l for l in text.splitlines() if l.startswith("| m2l |")][-1]
+    assert m2t_line.split(" | ")[2] == f"{m2l['BLEU@4']:.3f}"   # text scores: 3 decimals
     assert not [p.name for p in out.iterdir() if p.name.startswith(".")]   # no temp files
 
 

@@ -252,19 +252,22 @@ def guo_table(evaluator, pairs: Sequence[dict], train_items: Sequence[dict],
 
 def markdown_table(table: dict[str, dict], title: str = "") -> str:
     """:func:`guo_table`'s rows as a Markdown table: ``mean ± interval`` (3 decimals) for
-    the repeated measures, one value for the retrieval ones; "–" where a row has none."""
+    the repeated measures, one value for the others (retrieval: 1 decimal; text scores such
+    as BLEU: 3); "–" where a row has none."""
     columns = list(dict.fromkeys(k for row in table.values() for k in row))
     lines = [f"{title}\n" if title else "",
              "| | " + " | ".join(columns) + " |", "|---" * (len(columns) + 1) + "|"]
 
-    def cell(v) -> str:
+    def cell(v, column: str) -> str:
         if v is None:
             return "–"
         if isinstance(v, (tuple, list)):
             return f"{v[0]:.3f} ± {v[1]:.3f}"
-        return f"{v:.1f}" if isinstance(v, float) else str(v)
+        if isinstance(v, float):   # retrieval: percentages and ranks; text scores: 0-1 (10)
+            return f"{v:.1f}" if column in TABLE_RETRIEVAL.values() else f"{v:.3f}"
+        return str(v)
     for name, row in table.items():
-        lines.append(f"| {name} | " + " | ".join(cell(row.get(c)) for c in columns) + " |")
+        lines.append(f"| {name} | " + " | ".join(cell(row.get(c), c) for c in columns) + " |")
     return "\n".join(x for x in lines if x) + "\n"
 
 
