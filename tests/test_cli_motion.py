@@ -129,6 +129,8 @@ def test_demo_main_job_offline_with_packaged_models(tmp_path, capsys, monkeypatc
     written = out.split("written:")[1].split()
     assert [p.rsplit("/", 1)[1] for p in written] == ["generated.gif", "generated_strip.png",
                                                       "generated.bvh"]
+    # the packaged M2L learnt from Bandai Namco data: the demo says it is non-commercial
+    assert "note: the packaged m2l is CC BY-NC 4.0" in out
     assert iio.imread(written[0], index=0).size > 0
     motion = read_motion(written[2])
     assert 5 <= motion.n_frames * 10 / motion.fps <= 12 + 1e-6  # min 5, cap 12 model frames

@@ -212,6 +212,11 @@ def cmd_demo(args: argparse.Namespace) -> int:
     written = run_main_job(args.out, sentence=args.sentence, width=args.width, seed=args.seed,
                            max_frames=args.max_frames, input_path=args.input, asf=args.asf,
                            render_real=not args.no_render, joint_map=args.joint_map)
+    from motionlang.models.registry import PACKAGED
+    for name in ("l2m", "m2l"):   # what the results above may be used for
+        if not PACKAGED[name].commercial:
+            print(f"note: the packaged {name} is {PACKAGED[name].licence}; "
+                  f"'motionlang models {name}' shows its card")
     print("written:")
     for path in written:
         print(f"  {path}")
