@@ -232,9 +232,8 @@ def load_evaluator(args: argparse.Namespace):
 
 def cmd_evaluate_guo(args: argparse.Namespace) -> int:
     from motionlang.cli.twostream_commands import model_spec
-    from motionlang.decoding.t2m import text_to_motion
-    from motionlang.evaluation.t2m.yardstick import (evaluator_body, generated_rows, guo_table,
-                                                     markdown_table, test_pairs)
+    from motionlang.evaluation.t2m.yardstick import (evaluator_body, guo_table, markdown_table,
+                                                     test_pairs)
     from motionlang.models.registry import TEXT_TO_MOTION, load_model
     from motionlang.training.evaluator_train import build_evaluator_data
 
@@ -261,26 +260,7 @@ def cmd_evaluate_guo(args: argparse.Namespace) -> int:
                               f"needs at least --rp-batch {args.rp_batch}")
     captions = [p["caption"] for p in pairs]
     frames = [len(p["motion"]) + 1 for p in pairs]    # rows are steps between 12.5 Hz frames
-    gen = {}
-    for name, m in models.items():
-        if args.regenerate and not text_to_motion(m).deterministic:
-            # a new generation for each repetition, seeds seed, seed + 1, ... (the papers')
-            gen[name] = (lambda i, m=m, name=name: generated_rows(
-                m, captions, frames, method=args.l2m_method, seed=args.seed + i,
-                desc=f"{name} #{i + 1}"))
-        else:
-            gen[name] = generated_rows(m, captions, frames, method=args.l2m_method,
-                                       seed=args.seed, desc=name)
-    samples = {}
-    if args.multimodality:
-        n = min(args.mm_texts, len(pairs))
-        for name, m in models.items():
-            if text_to_motion(m).deterministic:   # one motion a caption: nothing to measure
-                continue
-            samples[name] = [[generated_rows(m, [c], [f], method="sample", seed=k,
-                                             desc=f"{name} sample")[0]
-                              for k in range(args.multimodality)]
-                             for c, f in zip(captions[:n], frames[:n])]
+    gen, samples = model_rows(args, models, captions, frames)
     reference = None
     if args.fid_reference != "train":
         reference = data.items.get(args.fid_reference) or []
@@ -311,6 +291,35 @@ def cmd_evaluate_guo(args: argparse.Namespace) -> int:
                          "m2l": {n: s for n, s in zip(m2l_models, m2l_specs)},
                          "m2t_rows": m2t})
     return 0
+
+
+def model_rows(args: argparse.Namespace, models: dict, captions: list[str], frames: list[int]
+               ) -> tuple[dict, dict]:
+    """Each text-to-motion model's rows for the captions (a function of the repetition with
+    ``--regenerate``), and with ``--multimodality`` S samples for the first captions."""
+    from motionlang.decoding.t2m import text_to_motion
+    from motionlang.evaluation.t2m.yardstick import generated_rows
+    gen = {}
+    for name, m in models.items():
+        if args.regenerate and not text_to_motion(m).deterministic:
+            # a new generation for each repetition, seeds seed, seed + 1, ... (the papers')
+            gen[name] = (lambda i, m=m, name=name: generated_rows(
+                m, captions, frames, method=args.l2m_method, seed=args.seed + i,
+                desc=f"{name} #{i + 1}"))
+        else:
+            gen[name] = generated_rows(m, captions, frames, method=args.l2m_method,
+                                       seed=args.seed, desc=name)
+    samples = {}
+    if args.multimodality:
+        n = min(args.mm_texts, len(captions))
+        for name, m in models.items():
+            if text_to_motion(m).deterministic:   # one motion a caption: nothing to measure
+                continue
+            samples[name] = [[generated_rows(m, [c], [f], method="sample", seed=k,
+                                             desc=f"{name} sample")[0]
+                              for k in range(args.multimodality)]
+                             for c, f in zip(captions[:n], frames[:n])]
+    return gen, samples
 
 
 def m2l_specs_of(args: argparse.Namespace) -> list[str]:
