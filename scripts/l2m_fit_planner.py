@@ -59,7 +59,9 @@ def main(argv=None) -> int:
                     if not k.startswith(("planner.", "plan_head."))}
             d = {**d, "state_dict": {**kept, **{f"planner.{k}": v for k, v in new.items()}}}
         model = LanguageToMotion.from_checkpoint(d)
-        data = build_pairs(args.data if len(args.data) > 1 else args.data[0],
+        from motionlang.datasets.mixing import parse_source
+        paths = [parse_source(d).path for d in args.data]   # DIR@W: the weights do not matter
+        data = build_pairs(paths if len(paths) > 1 else paths[0],
                            features=model.features.kind, offsets=1, seed=args.seed,
                            mirror=args.mirror)
         if model.features.to_dict() != data.features.to_dict():

@@ -193,6 +193,9 @@ def test_fit_planner_script_on_a_tiny_trained_model(tmp_path, capsys):
                if not torch.equal(v, trained.state_dict()[k])]
     assert changed and all(k.startswith("planner.") for k in changed) and any(same)
     assert refit.length_model == trained.length_model
+    # --data as the training run took it (DIR@W: the weight is irrelevant to the planner)
+    assert script.main([str(run / "model.pt"), "--data", f"{corpus}@1", "--out",
+                        str(tmp_path / "weighted.pt"), "--epochs", "1"]) == 0
     # a model without a plan is refused, and nothing is written
     plain = tmp_path / "plain.pt"
     tiny("l2m", False).save(plain)
