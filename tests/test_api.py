@@ -138,7 +138,7 @@ def test_generate_command_names_unknown_words(tmp_path, capsys):
     assert main(["generate", "a person dances", "-o", str(tmp_path / "d.npz"),
                  "--max-frames", "8"]) == 0
     err = capsys.readouterr().err
-    assert "warning: the model does not know 'dances'" in err and "152 words" in err
+    assert "warning: the model does not know 'dances'" in err and "276 words" in err
 
 
 def test_newer_crbm_formats_are_refused(tmp_path):

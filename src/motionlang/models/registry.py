@@ -73,9 +73,12 @@ PACKAGED: dict[str, Packaged] = {
     "m2l": Packaged("m2l", "m2l", "motion -> English (seq2seq, Plappert et al. 2018), "
                     "21-joint body, procedural corpus + Bandai Namco takes", NON_COMMERCIAL),
     "l2m": Packaged("l2m", "l2m", "English -> motion (seq2seq with a mixture density output, "
-                    "Plappert et al. 2018), 21-joint body, procedural corpus"),
+                    "Plappert et al. 2018), 21-joint body, procedural corpus + Bandai Namco "
+                    "takes", NON_COMMERCIAL),
     "m2l-procedural": Packaged("m2l-procedural", "m2l", "the M2L of the procedural corpus "
                                "alone (the packaged m2l until 2026-11-24)"),
+    "l2m-procedural": Packaged("l2m-procedural", "l2m", "the L2M of the procedural corpus "
+                               "alone (the packaged l2m until 2026-11-24)"),
     "judge": Packaged("judge", "judge", "action and style classifier of real motion "
                       "(evaluate-judge), Bandai Namco takes", NON_COMMERCIAL),
 }
