@@ -127,6 +127,12 @@ def test_hinge_loss_by_hand():
     for train in (False, True):
         model.train(train)
         assert float(model.loss(same)["neg"]) == 0.0
+    # InfoNCE: the other pair of the same caption leaves the softmax; only the own pair is left
+    nce = TextMotionEvaluator(EvaluatorConfig(**{**TINY, "loss": "infonce"}))
+    nce.encode_text = lambda *a: t
+    nce.encode_motion = lambda *a: m
+    assert float(nce.loss(same)["nce"]) == pytest.approx(0.0, abs=1e-6)
+    assert float(nce.loss({**same, "same_caption": torch.eye(2, dtype=torch.bool)})["nce"]) > 0
 
 
 def test_collate_marks_pairs_of_the_same_caption():

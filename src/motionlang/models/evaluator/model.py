@@ -143,13 +143,16 @@ class TextMotionEvaluator(nn.Module):
         mean squared distance of the matched pairs and mean squared hinge of the pairs
         shifted by a random 1..B-1 in training, of all mismatched pairs in eval mode; pairs
         whose captions are the same words, ``batch["same_caption"]``, are not negatives) or
-        InfoNCE (``"nce"``)."""
+        InfoNCE (``"nce"``; the same pairs left out of its softmax)."""
         t = self.encode_text(batch["words"], batch["pos"], batch["word_lengths"])
         m = self.encode_motion(batch["motion"], batch["motion_lengths"])
         c = self.config
         if c.loss == "infonce":
             logits = -torch.cdist(t, m) / c.temperature
             target = torch.arange(len(t))
+            eye = torch.eye(len(t), dtype=torch.bool)
+            same = batch.get("same_caption", eye) & ~eye   # same caption: not a negative
+            logits = logits.masked_fill(same, float("-inf"))
             nce = (F.cross_entropy(logits, target) + F.cross_entropy(logits.T, target)) / 2
             return {"loss": nce, "nce": nce.detach()}
         pos = (t - m).pow(2).sum(-1).mean()
