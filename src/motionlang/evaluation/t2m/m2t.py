@@ -26,7 +26,7 @@ import numpy as np
 
 from motionlang.datasets.text import normalize
 from motionlang.errors import MotionlangError
-from motionlang.evaluation.metrics import text as tm
+from motionlang.evaluation.seq2seq import summary, text_scores
 from motionlang.evaluation.metrics.t2m import mm_dist, r_precision, repeat
 
 GROUND_TRUTH, NEAREST = "ground truth", "nearest neighbour"
@@ -44,11 +44,6 @@ def other_references(references: Sequence[Sequence[str]], captions: Sequence[str
     return out
 
 
-def _summary(rows) -> np.ndarray:
-    x = np.asarray(rows, dtype=float)
-    return np.concatenate([x.mean(0), x.std(0)])
-
-
 def nearest_captions(train_items: Sequence[dict], pairs: Sequence[dict]) -> list[str]:
     """The nearest-neighbour row: for each test pair, the first caption of the training motion
     (items ``{"id", "motion": (T, D) rows, "caption"}``) whose summary (mean and std of its
@@ -58,14 +53,14 @@ def nearest_captions(train_items: Sequence[dict], pairs: Sequence[dict]) -> list
         first.setdefault(it["id"], it)
     if not first:
         raise MotionlangError("no training motions for the nearest-neighbour descriptions")
-    bank = np.stack([_summary(it["motion"]) for it in first.values()])
+    bank = np.stack([summary(np.asarray(it["motion"], dtype=float)) for it in first.values()])
     scale = bank.std(axis=0)
     scale = np.where(scale > 0, scale, 1.0)
     bank = bank / scale
     captions = [it["caption"] for it in first.values()]
     out = []
     for p in pairs:
-        d = ((bank - _summary(p["motion"]) / scale) ** 2).sum(1)
+        d = ((bank - summary(np.asarray(p["motion"], dtype=float)) / scale) ** 2).sum(1)
         out.append(captions[int(d.argmin())])
     return out
 
@@ -82,20 +77,16 @@ def describe_motions(model, motions: Sequence, *, width: int = 5, desc: str = "d
 
 def text_measures(references: Sequence[Sequence[str]], hypotheses: Sequence[str]
                   ) -> dict[str, float]:
-    """BLEU@1, BLEU@4, ROUGE-L and CIDEr of one hypothesis per item (normalised first)
-    against its references; items without references are skipped."""
+    """BLEU@1, BLEU@4, ROUGE-L and CIDEr (``evaluation.seq2seq.text_scores``) of one
+    hypothesis per item (normalised first) against its references; items without references
+    are skipped."""
     keep = [i for i, r in enumerate(references) if r]
     if not keep:
         return {}
-    refs = [list(references[i]) for i in keep]
-    hyps = [normalize(hypotheses[i]) for i in keep]
-    out = {"BLEU@1": tm.bleu1(refs, hyps), "BLEU@4": tm.corpus_bleu(refs, hyps),
-           "ROUGE-L": tm.rouge_l(refs, hyps)}
-    try:
-        out["CIDEr"] = tm.cider(refs, hyps)
-    except Exception:   # pycocoevalcap is optional: report the others
-        pass
-    return out
+    got = text_scores([list(references[i]) for i in keep],
+                      [normalize(hypotheses[i]) for i in keep])
+    names = {"bleu1": "BLEU@1", "bleu": "BLEU@4", "rouge_l": "ROUGE-L", "cider": "CIDEr"}
+    return {names[k]: got[k] for k in names if k in got}
 
 
 def description_precision(evaluator, descriptions: Sequence[str], motion_emb, *,
