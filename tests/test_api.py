@@ -80,6 +80,28 @@ def test_text_to_motion_interface_and_wrong_kinds():
         ml.generate("!!!")
 
 
+def test_generation_locks_feet_unless_told_not_to(tmp_path):
+    """The packaged L2M's walk slides its feet as decoded; generate holds them (the lock is
+    features.foot_lock's, applied to the decoded frames), --no-foot-lock keeps the frames."""
+    from motionlang.cli.main import main
+    from motionlang.decoding.t2m import text_to_motion
+    from motionlang.evaluation.metrics.physics import foot_skating
+    from motionlang.features.foot_lock import lock_feet
+    t2m = text_to_motion(registry.load_model("l2m"))
+    (raw, _), = t2m.hypotheses("a person walks forward", width=1, max_frames=40)
+    (held, _), = t2m.hypotheses("a person walks forward", width=1, max_frames=40,
+                                foot_lock=True)
+    assert np.allclose(held, lock_feet(raw, t2m.fps))
+    assert foot_skating(held, t2m.fps) < 0.5 * foot_skating(raw, t2m.fps)
+    got = {}
+    for flag in ([], ["--no-foot-lock"]):
+        out = tmp_path / f"w{len(flag)}.npz"
+        assert main(["generate", "a person walks forward", "-w", "1", "--max-frames", "40",
+                     "-o", str(out)] + flag) == 0
+        got[bool(flag)] = np.load(out)["positions"]
+    assert np.allclose(got[True], raw) and np.allclose(got[False], held)
+
+
 def test_unknown_words_are_named():
     with pytest.warns(UserWarning, match="does not know 'dances', 'tango'"):
         m = ml.generate("a person dances a tango", max_frames=10)

@@ -71,6 +71,17 @@ def test_evaluate_judge_table_with_a_model(judge_run, bandai, tmp_path, capsys):
     assert (out / "judge_table.md").read_text() in text
 
 
+def test_evaluate_judge_raw_and_locked_rows(judge_run, bandai, tmp_path, capsys):
+    out = tmp_path / "both"
+    assert main(["evaluate-judge", "--judge", str(judge_run), "--data", f"bandai:{bandai}",
+                 "--model", "l2m", "--foot-lock", "both", "-o", str(out)]) == 0
+    rows = json.loads((out / "judge_report.json").read_text())["rows"]
+    assert set(rows) == {"ground truth", "l2m", "l2m (raw)"}
+    # the lock moves feet only: the root path, hence the root jump, is the decoded one
+    assert rows["l2m"]["root_jump"] == pytest.approx(rows["l2m (raw)"]["root_jump"])
+    assert rows["l2m"]["skating"] <= rows["l2m (raw)"]["skating"] + 1e-9
+
+
 def test_help_says_non_commercial(capsys):
     for argv in (["train", "judge", "-h"], ["evaluate-judge", "-h"]):
         assert main(argv) == 0

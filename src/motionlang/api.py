@@ -166,7 +166,8 @@ def generate(text: str, model: Any = None, *, width: int = 5, method: str | None
              rig: Motion | str | Path | None = None,
              start_from: Motion | str | Path | None = None,
              joint_map: dict | str | Path | None = None,
-             rig_joint_map: dict | str | Path | None = None) -> Motion:
+             rig_joint_map: dict | str | Path | None = None,
+             foot_lock: bool = True) -> Motion:
     """A motion for ``text`` (the best of ``width`` hypotheses), as a :class:`Motion`.
 
     model: a loaded text-to-motion model, a checkpoint path, or None for the packaged L2M.
@@ -175,7 +176,8 @@ def generate(text: str, model: Any = None, *, width: int = 5, method: str | None
     or "mean". rig: a Motion or motion file whose skeleton the result is retargeted onto.
     start_from: a Motion or file whose first pose begins the motion (L2M models).
     joint_map / rig_joint_map: how ``start_from`` / ``rig`` map onto the 21-joint body,
-    if no built-in map fits them.
+    if no built-in map fits them. foot_lock: hold the feet that are down in place
+    (``features.foot_lock``; joint-position models); False keeps the decoded frames.
     """
     model = _t2m(model)
     unknown = model.unknown_words(text)
@@ -188,7 +190,8 @@ def generate(text: str, model: Any = None, *, width: int = 5, method: str | None
     if start_from is not None:
         kw["first_frame"] = first_frame(model, start_from, joint_map)
     hyps = model.hypotheses(text, width=width, method=method or model.default_method(),
-                            seed=seed, max_frames=max_frames, min_frames=5, **kw)
+                            seed=seed, max_frames=max_frames, min_frames=5,
+                            foot_lock=foot_lock, **kw)
     return body_motion(hyps[0][0], model.fps, rig_motion)[0]
 
 

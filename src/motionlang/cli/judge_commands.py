@@ -116,6 +116,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     from motionlang.decoding.t2m import FPS, text_to_motion
     from motionlang.evaluation.judge import (asked_labels, judge_table,
                                              markdown_judge_table)
+    from motionlang.features.foot_lock import lock_feet
     from motionlang.models.judge.fit import bandai_items, bandai_sentences
     from motionlang.models.registry import TEXT_TO_MOTION, load_model
     from motionlang.utils.progress import progress
@@ -136,9 +137,13 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     for name, model in models.items():
         t2m = text_to_motion(model)
         kw = {} if t2m.deterministic else {"method": args.l2m_method, "seed": args.seed}
-        generated[name] = [t2m.positions21(s.text, max(2, len(it.positions)), **kw)
-                           for s, it in progress(list(zip(sentences, real)), desc=name,
-                                                 unit="motions")]
+        raw = [t2m.positions21(s.text, max(2, len(it.positions)), **kw)
+               for s, it in progress(list(zip(sentences, real)), desc=name, unit="motions")]
+        # the lock is a post-process of the decoded frames: both rows from one decoding
+        if args.foot_lock in ("off", "both"):
+            generated[name + (" (raw)" if args.foot_lock == "both" else "")] = raw
+        if args.foot_lock in ("on", "both"):
+            generated[name] = [lock_feet(p, FPS) for p in raw]
     table = judge_table(judge, [it.positions for it in real],
                         [(it.content, it.style) for it in real], FPS, generated, asked, FPS,
                         rng=args.seed)
@@ -184,6 +189,10 @@ def register(subparsers) -> None:
                    help="judge at most N takes (0: all)")
     p.add_argument("--seed", type=seed_int, default=0,
                    help="seed of the sentences, L2M sampling and the FID halves")
+    p.add_argument("--foot-lock", choices=("on", "off", "both"), default="on",
+                   help="judge the motions as 'motionlang generate' writes them, feet that "
+                        "are down held in place (on), as decoded (off), or both (rows NAME "
+                        "and 'NAME (raw)')")
     p.add_argument("--l2m-method", choices=("mean", "sample"), default="mean",
                    help="how L2M models generate (mean: heaviest-component means)")
     p.add_argument("-o", "--output", metavar="DIR", type=output_dir,

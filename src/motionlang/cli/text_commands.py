@@ -155,7 +155,8 @@ def cmd_generate(args: argparse.Namespace) -> int:
         extra["first_frame"] = first_frame(model, args.start_from, args.joint_map)
     hyps = model.hypotheses(args.text, width=args.width, method=args.method, seed=args.seed,
                         max_frames=args.max_frames, min_frames=args.min_frames,
-                        length_norm=args.length_norm, temperature=args.temperature, **extra)
+                        length_norm=args.length_norm, temperature=args.temperature,
+                        foot_lock=not args.no_foot_lock, **extra)
     # rate of position outputs: the two-stream model's 12.5 Hz, else the model's features'
     fps = model.fps
     for i, (result, score) in enumerate(hyps, 1):
@@ -225,6 +226,10 @@ def register(subparsers) -> None:
                         "softmax(logits / TAU), deviations x TAU (default 1: as trained)")
     p.add_argument("--rerank", metavar="M2L", help="rank the W motions by this M2L model's "
                    "log P(text | motion) instead of their own likelihood (L2M, sample or beam)")
+    p.add_argument("--no-foot-lock", action="store_true",
+                   help="keep the model's frames as decoded (default: feet that are down "
+                        "are held in place and the knees follow, which removes most foot "
+                        "sliding; joint-position models such as the packaged ones)")
     p.add_argument("--all", action="store_true", help="write every hypothesis (OUT_2, ...)")
     p.add_argument("--rig", metavar="FILE.bvh", default=None,
                    help="write the .bvh on this rig (a BVH file of yours: its skeleton, "

@@ -70,15 +70,35 @@ class TextToMotion:
         from motionlang.datasets.text import tokenize
         return list(dict.fromkeys(w for w in tokenize(sentence) if w not in vocab))
 
-    def hypotheses(self, sentence: str, *, max_frames: int | None = None, **kw
-                   ) -> list[tuple[Any, float]]:
+    def hypotheses(self, sentence: str, *, max_frames: int | None = None,
+                   foot_lock: bool = False, **kw) -> list[tuple[Any, float]]:
         """``[(result, score), ...]`` best first; a result is a Motion (joint angles) or
-        global positions (T, 21, 3) metres at :attr:`fps`; score NaN when deterministic."""
+        global positions (T, 21, 3) metres at :attr:`fps`; score NaN when deterministic.
+        ``foot_lock``: hold planted feet in place (``features.foot_lock.lock_feet``; position
+        results only: a joint-angle Motion is returned as decoded)."""
+        hyps = self._hypotheses(sentence, max_frames=max_frames, **kw)
+        if not foot_lock:
+            return hyps
+        from motionlang.features.foot_lock import lock_feet
+        return [(lock_feet(r, self.fps) if isinstance(r, np.ndarray) else r, s)
+                for r, s in hyps]
+
+    def positions21(self, sentence: str, n_frames: int, *, foot_lock: bool = False, **kw
+                    ) -> np.ndarray:
+        """Global 21-joint positions (n_frames, 21, 3) metres at 12.5 Hz, anchored at the
+        origin facing +Z (:func:`generate_positions21`); ``foot_lock`` as for
+        :meth:`hypotheses`."""
+        p = self._positions21(sentence, n_frames, **kw)
+        if not foot_lock:
+            return p
+        from motionlang.features.foot_lock import lock_feet
+        return lock_feet(p, FPS)
+
+    def _hypotheses(self, sentence: str, *, max_frames: int | None = None, **kw
+                    ) -> list[tuple[Any, float]]:
         raise NotImplementedError
 
-    def positions21(self, sentence: str, n_frames: int, **kw) -> np.ndarray:
-        """Global 21-joint positions (n_frames, 21, 3) metres at 12.5 Hz, anchored at the
-        origin facing +Z (:func:`generate_positions21`)."""
+    def _positions21(self, sentence: str, n_frames: int, **kw) -> np.ndarray:
         raise NotImplementedError
 
     def reconstruct21(self, p21: np.ndarray) -> np.ndarray:
@@ -112,8 +132,8 @@ class L2MText2Motion(TextToMotion):
         kind = getattr(getattr(self.model, "features", None), "kind", None)
         return "mean" if kind == "positions" else "sample"
 
-    def hypotheses(self, sentence: str, *, max_frames: int | None = None, **kw
-                   ) -> list[tuple[Any, float]]:
+    def _hypotheses(self, sentence: str, *, max_frames: int | None = None, **kw
+                    ) -> list[tuple[Any, float]]:
         from motionlang.decoding.seq2seq import generate
         _check_words(sentence)
         kw.setdefault("method", self.default_method())
@@ -122,9 +142,9 @@ class L2MText2Motion(TextToMotion):
         return generate(self.model, sentence, max_frames=max_frames, **kw)
 
     @torch.no_grad()
-    def positions21(self, sentence: str, n_frames: int, *, seed: int = 0, method: str = "mean",
-                    skeleton=None, width: int = 1, reranker=None,
-                    first_frame: np.ndarray | None = None) -> np.ndarray:
+    def _positions21(self, sentence: str, n_frames: int, *, seed: int = 0,
+                     method: str = "mean", skeleton=None, width: int = 1, reranker=None,
+                     first_frame: np.ndarray | None = None) -> np.ndarray:
         from motionlang.decoding.seq2seq import generate
         from motionlang.features.base import downsample
         from motionlang.features.joint_map import positions21
@@ -175,8 +195,8 @@ class TwoStreamText2Motion(TextToMotion):
     def default_method(self) -> str:
         return "mean"
 
-    def hypotheses(self, sentence: str, *, max_frames: int | None = None, **kw
-                   ) -> list[tuple[Any, float]]:
+    def _hypotheses(self, sentence: str, *, max_frames: int | None = None, **kw
+                    ) -> list[tuple[Any, float]]:
         _check_words(sentence)
         if kw.get("first_frame") is not None:
             raise MotionlangError("a start pose applies to L2M models")
@@ -184,8 +204,8 @@ class TwoStreamText2Motion(TextToMotion):
         return [(self.model.generate_positions(sentence, n), float("nan"))]
 
     @torch.no_grad()
-    def positions21(self, sentence: str, n_frames: int, *, first_frame=None, **kw
-                    ) -> np.ndarray:
+    def _positions21(self, sentence: str, n_frames: int, *, first_frame=None, **kw
+                     ) -> np.ndarray:
         if first_frame is not None:
             raise MotionlangError("first_frame is for L2M models; a two-stream model takes "
                                   "its start pose in generate(start=...)")
@@ -277,6 +297,7 @@ def generate_positions21(model, sentence: str, n_frames: int, **kw) -> np.ndarra
     build). ``width`` > 1 with "sample": the likeliest of that many samples, or with
     ``reranker`` (an M2L model) the one under which it finds the sentence likeliest
     (``decoding.rerank``). ``first_frame`` (L2M only): its motion starts with this frame of
-    its own features (``decoding.seq2seq.generate_features``).
+    its own features (``decoding.seq2seq.generate_features``). ``foot_lock`` (default off:
+    the model's own frames): planted feet held in place (``features.foot_lock``).
     """
     return text_to_motion(model).positions21(sentence, n_frames, **kw)

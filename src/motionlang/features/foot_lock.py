@@ -1,0 +1,131 @@
+"""Foot contact clean-up for generated 21-joint motion: planted feet stay where they land.
+
+A text-to-motion model predicts every frame's pose and the root's velocity separately, so a
+foot that should stand on the floor drifts with the root's small errors (the packaged
+L2M's toes slide at 0.155 m/s while down, real Bandai takes at 0.046 m/s). :func:`lock_feet`
+is the usual post-process of animation pipelines, done on positions:
+
+1. **contact**: a foot is down at frame t when its toe is below ``height`` m above the floor
+   and moves slower than ``speed`` m/s (central difference); runs of at least ``min_frames``
+   such frames are the contacts (the thresholds are those of
+   ``evaluation.metrics.physics.foot_skating``, so what the metric counts as a slide is
+   what gets locked).
+2. **lock**: during a contact the whole foot (ankle, mid-foot, toe) is moved horizontally so
+   that its toe stays at the contact's mean toe position; over ``blend`` frames either side
+   the shift fades linearly to zero (or to the next contact's), so the foot does not pop.
+3. **leg**: the knee is placed again by two-bone IK from the unchanged hip to the moved
+   ankle, keeping the frame's own thigh and shank lengths and bending in the plane of the
+   original knee; an ankle out of the leg's reach is pulled back to 99.9 % of it (the foot
+   with it: that contact slides by what is left).
+
+The hips, trunk and arms are untouched: the root path, and with it the largest one-frame
+root move, is the model's own.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from motionlang.errors import MotionlangError
+from motionlang.features.joint_map import KIT21_NAMES
+
+_I = KIT21_NAMES.index
+#: (hip, knee, ankle, mid-foot, toe) of each leg, left then right
+LEGS = tuple(tuple(_I(side + j) for j in ("H", "K", "A", "Mrot", "F")) for side in "LR")
+
+
+def contacts(toe: np.ndarray, fps: float, *, height: float = 0.05, speed: float = 1.0,
+             floor: float = 0.0, min_frames: int = 2) -> list[tuple[int, int]]:
+    """``[(first, last), ...]`` frame runs (inclusive) where the toe ``(T, 3)`` (metres, Y
+    up) is down: below ``height`` above ``floor`` and slower than ``speed`` m/s, for at
+    least ``min_frames`` frames."""
+    toe = np.asarray(toe, dtype=np.float64)
+    xz = toe[:, [0, 2]]
+    if len(toe) < 2:
+        return []
+    v = np.linalg.norm(np.gradient(xz, axis=0), axis=-1) * fps          # (T,) m/s
+    down = (toe[:, 1] - floor < height) & (v < speed)
+    runs, start = [], None
+    for t, d in enumerate(np.append(down, False)):
+        if d and start is None:
+            start = t
+        elif not d and start is not None:
+            if t - start >= min_frames:
+                runs.append((start, t - 1))
+            start = None
+    return runs
+
+
+def _shifts(toe_xz: np.ndarray, runs: list[tuple[int, int]], blend: int) -> np.ndarray:
+    """(T, 2) horizontal shift of the foot: inside a run the shift that holds the toe at the
+    run's mean, zero farther than ``blend`` frames from every run, linear in between."""
+    T = len(toe_xz)
+    shift = np.zeros((T, 2))
+    if not runs:
+        return shift
+    known = np.zeros(T, dtype=bool)
+    for a, b in runs:
+        shift[a:b + 1] = toe_xz[a:b + 1].mean(axis=0) - toe_xz[a:b + 1]
+        known[a:b + 1] = True
+    idx = np.arange(T)
+    near = np.full(T, np.inf)
+    for a, b in runs:
+        near = np.minimum(near, np.maximum(0, np.maximum(a - idx, idx - b)))
+    known |= near > blend            # far from every contact: shift 0 (already)
+    for k in range(2):
+        shift[~known, k] = np.interp(idx[~known], idx[known], shift[known, k])
+    return shift
+
+
+def _two_bone(hip: np.ndarray, knee: np.ndarray, ankle: np.ndarray, target: np.ndarray
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """Knee and ankle (T, 3) for ankle ``target``: thigh and shank keep their per-frame
+    lengths, the knee bends toward the original knee's side; unreachable targets are
+    pulled toward the hip to 99.9 % of the leg's length."""
+    l1 = np.linalg.norm(knee - hip, axis=-1)
+    l2 = np.linalg.norm(ankle - knee, axis=-1)
+    d = target - hip
+    dist = np.linalg.norm(d, axis=-1)
+    reach = 0.999 * (l1 + l2)
+    lo = np.abs(l1 - l2) + 1e-6
+    clamped = np.clip(dist, lo, reach)
+    u = d / np.maximum(dist, 1e-9)[:, None]
+    target = hip + u * clamped[:, None]
+    along = (l1 ** 2 - l2 ** 2 + clamped ** 2) / (2 * clamped)
+    r = np.sqrt(np.maximum(l1 ** 2 - along ** 2, 0.0))
+    k = knee - hip
+    pole = k - (k * u).sum(-1, keepdims=True) * u
+    n = np.linalg.norm(pole, axis=-1, keepdims=True)
+    # a straight original leg gives no bend side: bend forward (+Z of the body is not known
+    # here; the original knee direction projected is zero only for a fully straight leg,
+    # where r is ~0 anyway)
+    pole = np.where(n > 1e-9, pole / np.maximum(n, 1e-9), 0.0)
+    return hip + along[:, None] * u + r[:, None] * pole, target
+
+
+def lock_feet(p21, fps: float, *, height: float = 0.05, speed: float = 1.0, floor: float = 0.0,
+              blend: int = 2, min_frames: int = 2) -> np.ndarray:
+    """Global 21-joint positions (T, 21, 3) metres, Y up, at ``fps`` Hz -> the same motion
+    with every foot contact held in place (module docstring); a new array.
+
+    ``height`` / ``speed`` / ``floor``: what counts as a foot down (:func:`contacts`);
+    ``blend``: frames over which a lock fades in and out; ``min_frames``: shortest contact.
+    """
+    p = np.array(p21, dtype=np.float64)
+    if p.ndim != 3 or p.shape[1:] != (21, 3):
+        raise MotionlangError(f"lock_feet: positions must be (T, 21, 3), got {p.shape}")
+    if not fps > 0:
+        raise MotionlangError(f"lock_feet: fps must be positive, got {fps}")
+    for hip, knee, ankle, mid, toe in LEGS:
+        runs = contacts(p[:, toe], fps, height=height, speed=speed, floor=floor,
+                        min_frames=min_frames)
+        if not runs:
+            continue
+        s = _shifts(p[:, toe, [0, 2]], runs, blend)
+        shift = np.zeros((len(p), 3))
+        shift[:, [0, 2]] = s
+        new_knee, new_ankle = _two_bone(p[:, hip], p[:, knee], p[:, ankle], p[:, ankle] + shift)
+        foot = new_ankle - p[:, ankle]                      # the shift, less what was out of reach
+        for j in (mid, toe):
+            p[:, j] += foot
+        p[:, knee], p[:, ankle] = new_knee, new_ankle
+    return p

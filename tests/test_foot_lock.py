@@ -1,0 +1,90 @@
+"""Foot contact clean-up (features.foot_lock) on hand-made 21-joint bodies."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from motionlang.errors import MotionlangError
+from motionlang.evaluation.metrics.physics import foot_skating
+from motionlang.features.foot_lock import LEGS, contacts, lock_feet
+from motionlang.features.joint_map import KIT21_NAMES, bone_lengths21
+
+
+def standing(T: int) -> np.ndarray:
+    """(T, 21, 3): a body standing with slightly bent knees, toes on the floor."""
+    p = np.zeros((T, 21, 3))
+    p[:, :, 1] = 1.2                                   # trunk and arms: high up
+    p[:, 0] = (0.0, 0.95, 0.0)                         # root
+    for (hip, knee, ankle, mid, toe), x in zip(LEGS, (0.1, -0.1)):
+        p[:, hip] = (x, 0.9, 0.0)
+        p[:, knee] = (x, 0.5, 0.06)
+        p[:, ankle] = (x, 0.1, 0.0)
+        p[:, mid] = (x, 0.03, 0.08)
+        p[:, toe] = (x, 0.01, 0.15)
+    return p
+
+
+def test_contacts_by_hand():
+    toe = np.zeros((8, 3))
+    toe[:, 1] = [0.0, 0.0, 0.0, 0.3, 0.3, 0.0, 0.0, 0.0]    # lifted at frames 3-4
+    assert contacts(toe, 10.0) == [(0, 2), (5, 7)]
+    assert contacts(toe, 10.0, min_frames=4) == []
+    toe[5:, 0] = 0.5 * np.arange(3)                          # 5 m/s: a swing, not a contact
+    assert contacts(toe, 10.0) == [(0, 2)]
+    assert contacts(toe, 10.0, speed=10.0) == [(0, 2), (5, 7)]
+
+
+def test_sliding_body_gets_planted_feet_and_keeps_its_bones():
+    T = 20
+    p = standing(T)
+    p[:, :, 0] += 0.01 * np.arange(T)[:, None]               # everything drifts 0.1 m/s
+    assert foot_skating(p, 10.0) == pytest.approx(0.1)
+    q = lock_feet(p, 10.0)
+    assert foot_skating(q, 10.0) == pytest.approx(0.0, abs=1e-9)
+    # the toes stay at their mean position over the contact (the whole motion)
+    for *_, toe in LEGS:
+        assert np.allclose(q[:, toe, [0, 2]], p[:, toe, [0, 2]].mean(axis=0))
+    # hips, root, trunk and arms untouched; the legs keep every bone's length
+    legs = {j for leg in LEGS for j in leg[1:]}
+    rest = [j for j in range(21) if j not in legs]
+    assert np.array_equal(q[:, rest], p[:, rest])
+    assert np.allclose(bone_lengths21(q), bone_lengths21(p))
+    # the knee still bends forward (+Z), as in the original pose
+    knee = KIT21_NAMES.index("LK")
+    assert (q[:, knee, 2] > 0).all()
+    assert p.shape == q.shape and not np.shares_memory(p, q)
+
+
+def test_lock_fades_out_where_the_foot_is_lifted():
+    T = 16
+    p = standing(T)
+    p[:, :, 0] += 0.01 * np.arange(T)[:, None]
+    hip, knee, ankle, mid, toe = LEGS[0]
+    p[8:, [ankle, mid, toe], 1] += 0.3                     # left foot lifted from frame 8
+    p[8:, knee, 1] += 0.15
+    q = lock_feet(p, 10.0, blend=2)
+    # frames 0-7 held at their mean toe position; 8-9 fade; 10 on as decoded
+    left = q[:, toe, 0] - p[:, toe, 0]
+    mean = p[:8, toe, 0].mean()
+    assert np.allclose(q[:8, toe, 0], mean)
+    assert np.allclose(left[10:], 0.0)
+    last = mean - p[7, toe, 0]
+    assert left[8] == pytest.approx(last * 2 / 3) and left[9] == pytest.approx(last / 3)
+
+
+def test_out_of_reach_ankle_is_pulled_back_not_stretched():
+    T = 30
+    p = standing(T)
+    p[:, :, 0] += 0.05 * np.arange(T)[:, None]             # 0.5 m/s: 1.45 m over the run
+    q = lock_feet(p, 10.0)
+    assert np.allclose(bone_lengths21(q), bone_lengths21(p))
+    hip, knee, ankle, *_ = LEGS[0]
+    leg = np.linalg.norm(q[:, ankle] - q[:, hip], axis=-1)
+    full = (np.linalg.norm(p[0, knee] - p[0, hip]) + np.linalg.norm(p[0, ankle] - p[0, knee]))
+    assert (leg <= full + 1e-9).all() and leg.max() > 0.99 * full
+
+
+@pytest.mark.parametrize("bad, fps", [(np.zeros((4, 20, 3)), 10.0), (np.zeros((4, 21, 3)), 0.0)])
+def test_bad_input_is_an_error(bad, fps):
+    with pytest.raises(MotionlangError, match="lock_feet"):
+        lock_feet(bad, fps)
