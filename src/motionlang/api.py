@@ -118,18 +118,20 @@ def first_frame(model, start: Motion | str | Path,
 
 def describe(motion: Motion | str | Path, model: Any = None, width: int = 5, *,
              joint_map: dict | str | Path | None = None,
-             length_penalty: float = 0.0) -> list[tuple[str, float]]:
+             length_penalty: float = 0.0, rank: str = "mbr") -> list[tuple[str, float]]:
     """Sentences for a motion (a Motion or a file), best first: ``[(text, log P), ...]``.
 
     model: a loaded M2L, a checkpoint path, or None for the packaged one. width: beam width
-    and number of sentences (as ``motionlang describe -w``)."""
+    and number of sentences (as ``motionlang describe -w``). rank: "mbr" (as ``describe``)
+    puts first the sentence the beam agrees on most (``decoding.mbr``), "logp" the
+    likeliest (the paper's)."""
     from motionlang.decoding.seq2seq import describe as beam_describe
     if width < 1:
         raise MotionlangError(f"width must be >= 1, got {width}")
     if model is None or isinstance(model, (str, Path)):
         model = load_model(model or "m2l", kind="m2l")
     return beam_describe(model, _motion(motion, joint_map), width=width,
-                         length_penalty=length_penalty)
+                         length_penalty=length_penalty, rank=rank)
 
 
 def body_motion(result, fps: float, rig: Motion | None = None, name: str = "generated"

@@ -158,9 +158,10 @@ def describe_part(motions: list[tuple[str, object]], *, width: int = 5,
     model = load_model(model_path or "m2l", kind="m2l")
     out = []
     for label, motion in motions:
-        echo(f"describe {label} (M2L, beam search, W={width}):")
+        echo(f"describe {label} (M2L, beam search, W={width}, as 'motionlang describe' "
+             "orders it):")
         try:
-            hyps = describe(model, motion, width=width)
+            hyps = describe(model, motion, width=width, rank="mbr")
         except MotionlangError as exc:  # e.g. a rig no joint map fits
             echo(f"  (not described: {exc})")
             hyps = []

@@ -12,7 +12,7 @@ from pathlib import Path
 
 from motionlang.cli.options import (
     nonneg_float, nonneg_int, output_file, positive_float, width_int)
-from motionlang.cli.text_commands import check_length_penalty
+from motionlang.cli.text_commands import add_rank_arg, check_length_penalty
 from motionlang.errors import MotionlangError
 
 
@@ -74,8 +74,9 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
                               f"it has {n_eval}")
     test, train = frames(splits[args.split], args.limit or None), frames(splits["train"])
     refs = {i: records[i].annotations for i in {**test, **train}}
-    report = {"split": args.split, "length_penalty": args.length_penalty,
-              "m2l": ev.evaluate_m2l(m2l, test, refs, args.width, args.length_penalty),
+    report = {"split": args.split, "length_penalty": args.length_penalty, "rank": args.rank,
+              "m2l": ev.evaluate_m2l(m2l, test, refs, args.width, args.length_penalty,
+                                     rank=args.rank),
               "nearest_neighbour": ev.evaluate_nn_baseline(train, refs, test, refs)}
     if l2m is not None:
         report["l2m_round_trip"] = ev.evaluate_round_trip(
@@ -224,6 +225,7 @@ def register(subparsers) -> None:
                    help="also plot the context vectors' t-SNE map")
     p.add_argument("--length-penalty", type=nonneg_float, default=0.0, metavar="ALPHA",
                    help="rank M2L hypotheses by log P / length**ALPHA (default 0: total, the paper's)")
+    add_rank_arg(p, "logp")   # the paper's protocol; --rank mbr scores what describe shows
     p.add_argument("--l2m-method", choices=("mean", "sample", "beam"), default="mean",
                    help="round trip: how each motion is generated (default: heaviest-component "
                         "means); the likeliest of --l2m-width hypotheses is described (with "

@@ -22,6 +22,15 @@ MOTION_OUT = (".bvh", ".xml", ".amc")
 RENDER_OUT = (".gif", ".mp4")
 
 
+def add_rank_arg(p: argparse.ArgumentParser, default: str) -> None:
+    """``--rank``: how a description beam is ordered (``decoding.seq2seq.RANKS``)."""
+    p.add_argument("--rank", choices=("mbr", "logp"), default=default,
+                   help="order of the beam's sentences: mbr puts first the one the beam "
+                        "agrees on most (expected BLEU against the others, weighted by their "
+                        "probabilities), logp the likeliest (the paper's; it favours the "
+                        f"shortest phrasing) (default: {default})")
+
+
 def check_length_penalty(alpha: float) -> None:
     if not (math.isfinite(alpha) and alpha >= 0):
         raise MotionlangError(f"--length-penalty must be a finite number >= 0, got {alpha}")
@@ -35,7 +44,7 @@ def cmd_describe(args: argparse.Namespace) -> int:
     check_length_penalty(args.length_penalty)
     model = load_model(args.model, kind="m2l")
     hyps = describe(model, load_input(args), width=args.width,
-                    length_penalty=args.length_penalty)
+                    length_penalty=args.length_penalty, rank=args.rank)
     if args.json:
         print(json.dumps([{"rank": i + 1, "text": t, "log_p": s} for i, (t, s) in
                           enumerate(hyps)], indent=1))
@@ -189,6 +198,7 @@ def register(subparsers) -> None:
     p.add_argument("--length-penalty", type=nonneg_float, default=0.0, metavar="ALPHA",
                    help="rank by log P / length**ALPHA (default 0: total log P, the paper's; "
                         "no effect with -w 1)")
+    add_rank_arg(p, "mbr")
     p.add_argument("--json", action="store_true", help="print the hypotheses as JSON")
     p.set_defaults(func=cmd_describe)
     p = subparsers.add_parser("generate", help="generate a motion from English (L2M)")

@@ -16,6 +16,7 @@ import numpy as np
 import torch
 
 from motionlang.decoding.beam import beam_search, greedy_search
+from motionlang.decoding.mbr import mbr_rank
 from motionlang.decoding.motion_beam import mean_decode, sample_decode, sampled_beam
 from motionlang.errors import MotionlangError
 from motionlang.features.frames import frames_to_features, model_dim, motion_frames
@@ -24,6 +25,8 @@ from motionlang.models.seq2seq.m2l import MotionToLanguage
 
 #: motion decoding methods of :func:`generate_features`
 METHODS = ("beam", "mean", "sample")
+#: how :func:`describe_features` orders a beam: total log P (the paper's), or minimum Bayes risk
+RANKS = ("logp", "mbr")
 
 UNK_ID = 3
 
@@ -66,13 +69,16 @@ def encode_sentence(vocab: Any, sentence: str | Sequence[int]) -> list[int]:
 
 @torch.no_grad()
 def describe_features(model: MotionToLanguage, features: np.ndarray, *, width: int = 5,
-                      max_len: int | None = None, length_penalty: float = 0.0
-                      ) -> list[tuple[str, float]]:
-    """features (T, F) raw -> W sentences with their total log probability, best first
-    (ranked by the total, or by total / length ** ``length_penalty``; see ``beam_search``).
+                      max_len: int | None = None, length_penalty: float = 0.0,
+                      rank: str = "logp") -> list[tuple[str, float]]:
+    """features (T, F) raw -> W sentences with their total log probability, best first:
+    ``rank`` "logp" (the paper's) by the total, or by total / length ** ``length_penalty``
+    (see ``beam_search``); "mbr" by expected agreement with the beam (``decoding.mbr``).
 
     width=1 uses greedy decoding.
     """
+    if rank not in RANKS:
+        raise MotionlangError(f"rank must be one of {', '.join(RANKS)}, got {rank!r}")
     if features.ndim != 2 or features.shape[1] != model.config.n_features:
         raise MotionlangError(f"expected features of shape (T, {model.config.n_features}), "
                               f"got {features.shape}")
@@ -86,7 +92,8 @@ def describe_features(model: MotionToLanguage, features: np.ndarray, *, width: i
         hyps = greedy_search(model.step, state, **kw)
     else:
         hyps = beam_search(model.step, state, width=width, length_penalty=length_penalty, **kw)[0]
-    return [(_words(model.vocab, h.tokens), h.score) for h in hyps]
+    out = [(_words(model.vocab, h.tokens), h.score) for h in hyps]
+    return mbr_rank(out) if rank == "mbr" else out
 
 
 def _planned_length(model: LanguageToMotion, sentence, n_frames: int | None,
@@ -179,11 +186,13 @@ def _features_of(model) -> Any:
 
 
 def describe(model: MotionToLanguage, motion, *, width: int = 5,
-             max_len: int | None = None, length_penalty: float = 0.0) -> list[tuple[str, float]]:
-    """A :class:`Motion` -> W sentences with their total log probability, best first."""
+             max_len: int | None = None, length_penalty: float = 0.0,
+             rank: str = "logp") -> list[tuple[str, float]]:
+    """A :class:`Motion` -> W sentences with their total log probability, best first
+    (``rank`` as for :func:`describe_features`)."""
     frames = motion_frames(_features_of(model), motion, 1)[0]
     return describe_features(model, frames, width=width, max_len=max_len,
-                             length_penalty=length_penalty)
+                             length_penalty=length_penalty, rank=rank)
 
 
 @torch.no_grad()

@@ -46,8 +46,9 @@ def text_scores(refs: list[list[str]], hyps: list[str]) -> dict[str, float]:
 
 
 def evaluate_m2l(model, frames: Mapping[str, np.ndarray], references: Mapping[str, Sequence[str]],
-                 width: int = 5, length_penalty: float = 0.0) -> dict:
-    """Describe every motion with beam width W and score the hypotheses.
+                 width: int = 5, length_penalty: float = 0.0, *, rank: str = "logp") -> dict:
+    """Describe every motion with beam width W (its sentences ordered by ``rank``,
+    ``decoding.seq2seq.describe_features``) and score the hypotheses.
 
     Returns ``{"n", "width", "bleu_by_rank" [W], "rank_bleu_spearman", "bleu", "bleu1",
     "rouge_l", ("cider"), "examples"}`` (scores of the top hypothesis).
@@ -56,7 +57,8 @@ def evaluate_m2l(model, frames: Mapping[str, np.ndarray], references: Mapping[st
     ranked = []
     for i in progress(ids, desc="describe", unit="motion"):
         hyps = [normalize(t) for t, _ in describe_features(model, frames[i], width=width,
-                                                           length_penalty=length_penalty)]
+                                                           length_penalty=length_penalty,
+                                                           rank=rank)]
         ranked.append((hyps + [hyps[-1]] * width)[:width])  # pad rare short beams
     refs = _refs(references, ids)
     top = [r[0] for r in ranked]

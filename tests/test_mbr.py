@@ -1,0 +1,36 @@
+"""Minimum Bayes risk ordering of description beams (decoding.mbr), worked by hand."""
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from motionlang.decoding.mbr import bleu_plus_one, mbr_rank
+
+
+def test_bleu_plus_one_by_hand():
+    # matches 2, 1, 0, 0 of 3, 2, 1, 0 n-grams; add one from 2-grams on
+    assert bleu_plus_one("a b c", "a b d") == pytest.approx(
+        ((2 / 3) * (2 / 3) * (1 / 2) * (1 / 1)) ** 0.25)
+    assert bleu_plus_one("a b c d", "a b c d") == pytest.approx(1.0)
+    # a hypothesis shorter than the reference pays the brevity penalty
+    short = bleu_plus_one("a b", "a b c d")
+    assert short == pytest.approx(math.exp(1 - 4 / 2) * ((3 / 3) * (2 / 2) * 1 * 1) ** 0.25)
+    assert bleu_plus_one("", "a b") == 0.0
+    assert bleu_plus_one("x y", "a b") == 0.0              # no shared word
+    assert bleu_plus_one("a x", "a b") == pytest.approx((1 / 2 * 1 / 2) ** 0.25)
+
+
+def test_mbr_puts_the_consensus_first():
+    beam = [("a person waves", -1.0),                      # likeliest, shares least
+            ("a person waves the left hand", -1.5),
+            ("someone waves the left hand", -1.6),
+            ("a person waves with the left hand", -1.7)]
+    ranked = mbr_rank(beam)
+    assert sorted(ranked) == sorted(beam)                  # same pairs, scores kept
+    assert ranked[0] == ("a person waves the left hand", -1.5)
+    assert ranked[-1] == ("a person waves", -1.0)
+    # the beam's probabilities weigh the agreement: make the short one overwhelming
+    heavy = [("a person waves", 0.0), ("someone jumps high", -30.0), ("someone jumps", -30.0)]
+    assert mbr_rank(heavy)[0][0] in ("someone jumps high", "someone jumps")
+    assert mbr_rank(beam[:1]) == beam[:1] and mbr_rank([]) == []
