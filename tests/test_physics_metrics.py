@@ -8,7 +8,7 @@ import pytest
 
 from motionlang.errors import MotionlangError
 from motionlang.evaluation.metrics.physics import (TOES, floor_penetration, foot_skating,
-                                                   physics, root_jitter)
+                                                   physics, root_jitter, root_kick)
 
 
 def still(T: int = 5) -> np.ndarray:
@@ -53,7 +53,18 @@ def test_root_jitter_by_hand():
     assert root_jitter(p) == pytest.approx(0.5)
     got = physics(p, 30.0)
     assert got["root_jump"] == pytest.approx(0.5) and got["penetration"] == 0.0
-    assert set(got) == {"skating", "penetration", "penetration_max", "root_jump"}
+    assert set(got) == {"skating", "penetration", "penetration_max", "root_jump", "root_kick"}
+    # steps of 5, 5 and 50 cm: the moves change by 0 and sqrt(0.25^2 + 0.4^2) m
+    assert got["root_kick"] == pytest.approx(np.hypot(0.25, 0.4))
+
+
+def test_root_kick_ignores_steady_speed():
+    p = still(6)
+    p[:, 0, 2] = 0.3 * np.arange(6)            # 30 cm a frame, steadily: a fast run
+    assert root_jitter(p) == pytest.approx(0.3) and root_kick(p) == pytest.approx(0.0)
+    p[3, 0, 2] += 0.1                          # one frame 10 cm ahead of the path
+    assert root_kick(p) == pytest.approx(0.2)  # move +10 then -10 cm: kicks of 0.1, 0.2, 0.1
+    assert root_kick(p[:2]) == 0.0
 
 
 def test_bad_shapes_refused():

@@ -11,8 +11,8 @@ Given motions generated for asked (content, style) labels, :func:`judge_motions`
 * ``diversity``: mean distance between random pairs of those features
   (``metrics.t2m.diversity``, at most 300 pairs);
 * physical plausibility (``metrics.physics``): ``skating`` (m/s, mean over the motions with
-  any foot contact), ``penetration`` (m, mean), ``penetration_max`` and ``root_jump`` (m,
-  max over motions; ``root_jump_mean`` their mean).
+  any foot contact), ``penetration`` (m, mean), ``penetration_max``, ``root_jump`` and
+  ``root_kick`` (m, max over motions; ``root_jump_mean`` the mean of ``root_jump``).
 
 :func:`judge_report` scores generated motions and the ground truth the same way; the
 ground truth's ``fid`` is between two random halves of the real set, the value FID takes
@@ -69,6 +69,7 @@ def judge_motions(judge, motions: Sequence[np.ndarray], fps: float,
     out["penetration_max"] = float(np.max([m["penetration_max"] for m in phys]))
     out["root_jump"] = float(np.max([m["root_jump"] for m in phys]))
     out["root_jump_mean"] = float(np.mean([m["root_jump"] for m in phys]))
+    out["root_kick"] = float(np.max([m["root_kick"] for m in phys]))
     return out
 
 
@@ -94,7 +95,8 @@ JUDGE_COLUMNS = {"content_acc": ("content %", 100), "style_acc": ("style %", 100
                  "fid": ("FID", 1), "diversity": ("diversity", 1),
                  "skating": ("skating m/s", 1), "penetration": ("penetration cm", 100),
                  "penetration_max": ("max penetration cm", 100),
-                 "root_jump": ("max root jump cm", 100)}
+                 "root_jump": ("max root jump cm", 100),
+                 "root_kick": ("max root kick cm", 100)}
 
 
 def asked_labels(sentences: Sequence) -> list[tuple[str, str | None]]:

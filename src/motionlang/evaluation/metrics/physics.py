@@ -12,6 +12,10 @@ their frame rate ``fps`` in Hz where time matters.
   frames of the lowest joint's depth (0 for a frame above the floor).
 * :func:`root_jitter`: the largest one-frame move of the root (m). It grows with speed as
   well as with glitches: compare against ground truth at the same frame rate.
+* :func:`root_kick`: the largest change of the root's one-frame move between two frame
+  steps (m), the second difference: steady fast motion scores 0 there, a glitch (a jump
+  out of a steady path) does not. At 12.5 Hz a real walk moves its root over 10 cm a
+  frame; real Bandai takes change that move by at most 14 cm.
 """
 from __future__ import annotations
 
@@ -65,10 +69,20 @@ def root_jitter(p21) -> float:
     return float(np.linalg.norm(np.diff(p[:, 0], axis=0), axis=-1).max())
 
 
+def root_kick(p21) -> float:
+    """The largest distance (m) between two consecutive one-frame moves of the root
+    (``|r[t+1] - 2 r[t] + r[t-1]|``); 0 for fewer than 3 frames."""
+    p = _check(p21, "root_kick")
+    if len(p) < 3:
+        return 0.0
+    return float(np.linalg.norm(np.diff(p[:, 0], n=2, axis=0), axis=-1).max())
+
+
 def physics(p21, fps: float, **skating) -> dict[str, float]:
-    """All three for one motion: ``skating`` (m/s, NaN without contact), ``penetration``
-    and ``penetration_max`` (m), ``root_jump`` (m). ``skating``: options of
-    :func:`foot_skating`."""
+    """The measures of one motion: ``skating`` (m/s, NaN without contact), ``penetration``
+    and ``penetration_max`` (m), ``root_jump`` and ``root_kick`` (m). ``skating``: options
+    of :func:`foot_skating`."""
     mean, peak = floor_penetration(p21, floor=skating.get("floor", 0.0))
     return {"skating": foot_skating(p21, fps, **skating), "penetration": mean,
-            "penetration_max": peak, "root_jump": root_jitter(p21)}
+            "penetration_max": peak, "root_jump": root_jitter(p21),
+            "root_kick": root_kick(p21)}
