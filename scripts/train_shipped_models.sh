@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Rebuild every model shipped in src/motionlang/data/models/ from scratch.
 # Usage: scripts/train_shipped_models.sh [WORKDIR]   (default /tmp/motionlang_shipped)
-#   MODELS=all (default)   m2l, l2m and judge (procedural corpus + Bandai Namco: CC BY-NC 4.0,
-#                          non-commercial), then m2l-procedural and l2m-procedural (MIT)
-#   MODELS=bandai          only the first three;   MODELS=procedural   only the MIT ones:
+#   MODELS=all (default)   m2l, l2m, judge and twostream (procedural corpus + Bandai Namco:
+#                          CC BY-NC 4.0, non-commercial), then m2l-procedural and
+#                          l2m-procedural (MIT)
+#   MODELS=bandai          only the first four;   MODELS=procedural   only the MIT ones:
 #                          the recipe for models free of the Bandai licence
 #   BANDAI=DIR             the Bandai Namco datasets (default ../shared/data/bandai)
 #   RESUME=--resume        continue interrupted runs from their last checkpoint
@@ -11,8 +12,8 @@
 # two models side by side: corpus ~2 min; procedural + Bandai: data preparation ~25 min per
 # run (fitting and encoding 6,750 training motions and their mirror images; cached by
 # MOTIONLANG_CACHE), M2L ~7-10 min an epoch (8 epochs), L2M ~28 min a teacher-forced epoch and
-# ~35 min an epoch on its own frames (1 + 1), judge ~10 min; procedural alone: M2L ~30 min
-# (12 epochs), L2M ~60 min (3 + 3 epochs).
+# ~35 min an epoch on its own frames (1 + 1), judge ~10 min, two-stream ~20 min an epoch
+# (4 epochs, after the M2L); procedural alone: M2L ~30 min (12 epochs), L2M ~60 min (3 + 3).
 # Every --out is a run folder: the final model is its model.pt (beside best.pt, last.pt,
 # history.json, loss_curve.png, splits/ and commands.jsonl; LICENSE.txt for Bandai runs).
 # OMP_NUM_THREADS=1: one thread per model as the two run side by side.
@@ -71,10 +72,16 @@ if [ "$MODELS" = all ] || [ "$MODELS" = bandai ]; then
   L2M=$!
   wait $M2L
   "$ML" train judge --data "bandai:$BANDAI" --out "$WORK/judge" --epochs 30
+  # the two-stream model (Ghosh et al. 2021 with the recipe's additions, docs/results/
+  # twostream.md): 4 epochs, the last with the learning rate decayed
+  "$ML" train twostream "${MIX[@]}" --out "$WORK/twostream" --h 128 --batch-size 32 \
+      --length-buckets 20 --z-every-step --progress-input --weight energy=10 --threads 1 \
+      --epochs 4 --decay-epochs 1 --checkpoint-every 100 $RESUME
   wait $L2M   # (set -e) a failed run stops the script before anything is shipped
   cp "$WORK/m2l/model.pt" "$SHIP/m2l.pt"
   cp "$WORK/l2m/planned.pt" "$SHIP/l2m.pt"
   cp "$WORK/judge/model.pt" "$SHIP/judge.pt"
+  cp "$WORK/twostream/model.pt" "$SHIP/twostream.pt"
 fi
 
 if [ "$MODELS" = all ] || [ "$MODELS" = procedural ]; then

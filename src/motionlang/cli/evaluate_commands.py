@@ -16,16 +16,10 @@ from motionlang.cli.text_commands import add_rank_arg, check_length_penalty
 from motionlang.errors import MotionlangError
 
 
-def cmd_evaluate(args: argparse.Namespace) -> int:
-    from motionlang.datasets.splits import load_splits
-    from motionlang.features.frames import motion_frames
-    from motionlang.evaluation import seq2seq as ev
+def _evaluate_models(args: argparse.Namespace):
+    """The options about models checked, and (M2L file, L2M or None, reranker or None)
+    loaded: the round trip's models first, as their errors come before the long M2L run."""
     from motionlang.models.seq2seq.m2l import MotionToLanguage
-    from motionlang.datasets.mixing import parse_source
-    from motionlang.datasets.seq2seq_pairs import load_sources
-    from motionlang.utils.atomic import atomic_write
-    from motionlang.utils.progress import progress
-
     check_length_penalty(args.length_penalty)
     if args.l2m_method == "mean" and args.l2m_width != 1:
         raise MotionlangError("--l2m-width applies to 'sample' and 'beam'; mean decoding gives "
@@ -52,6 +46,91 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         from motionlang.decoding.rerank import check_same_features
         reranker = MotionToLanguage.load(resolve(args.l2m_rerank))
         check_same_features(l2m, reranker, f"--l2m-rerank {args.l2m_rerank}")
+    return m2l_path, l2m, reranker
+
+
+def _report_text(report: dict, args: argparse.Namespace) -> str:
+    """The printed (and report.md) form of ``evaluate``'s report: the score table, BLEU
+    by rank, parameters and labels named where the data has them."""
+    from motionlang.evaluation import seq2seq as ev
+    table = ev.markdown_table({"M2L (top hypothesis)": report["m2l"],
+                               "nearest neighbour": report["nearest_neighbour"],
+                               **({f"L2M round trip ({args.l2m_method}"
+                                   + (f", best of {args.l2m_width} by reranker" if args.l2m_rerank
+                                      else "") + ")":
+                                   report["l2m_round_trip"],
+                                   "nearest training sentence, round trip":
+                                   report["nn_round_trip"]}
+                                  if "l2m_round_trip" in report else {})})
+    by_rank = " ".join(f"{b:.3f}" for b in report["m2l"]["bleu_by_rank"])
+    table += f"\nM2L BLEU of hypotheses 1..{args.width}: {by_rank}\n"
+    if "m2l_actions_by_rank" in report:
+        table += (f"M2L hypotheses 1..{args.width} naming exactly the true actions: " +
+                  " ".join(f"{a:.1%}" for a in report["m2l_actions_by_rank"]) + "\n")
+    for key, name in (("m2l_parameters", "M2L top description"),
+                      ("l2m_parameters", "L2M round trip"),
+                      ("nn_parameters", "Nearest training sentence, round trip")):
+        if key in report:
+            acc = report[key]
+            table += (f"{name}, parameters right (procedural ground truth): " + ", ".join(
+                f"{f} {acc[f]:.1%} of {acc[f + '_stated']}" for f in
+                ("side", "count", "direction", "speed")) +
+                f"; actions exactly right {acc['actions_match']:.1%}\n")
+            if "named" in acc:
+                table += f"{name}, true actions named: " + ev.named_line(acc["named"]) + "\n"
+    for key, name in (("m2l_labels", "M2L top description"),
+                      ("nn_labels", "Nearest neighbour")):
+        if key in report:
+            acc = report[key]
+            table += (f"{name}, labelled takes ({acc['n']}): action named {acc['content']:.1%}, "
+                      f"style named {acc['style']:.1%}, both {acc['both']:.1%}\n")
+    return table
+
+
+def _add_checks(report: dict, records: dict, test: dict, train: dict, refs: dict,
+                width: int) -> None:
+    """Beyond BLEU, into ``report``: on labelled takes (Bandai) whether the action and
+    style are named (M2L and nearest neighbour); on a procedural corpus the parameters
+    each description states, checked against the generator's ground truth."""
+    from motionlang.evaluation import seq2seq as ev
+    labelled = _labels(records, test)
+    if labelled:   # Bandai takes: is the action named, and the style?
+        top = {e["id"]: e["hypotheses"][0] for e in report["m2l"]["all"] if e["id"] in labelled}
+        nn = ev.nearest_neighbour_descriptions(train, refs, {i: test[i] for i in labelled})
+        report["m2l_labels"] = ev.label_accuracy(top, labelled)
+        report["nn_labels"] = ev.label_accuracy(nn, labelled)
+    truths = _ground_truths(records, test)
+    if truths:   # a procedural corpus: the parameters each description states, checked
+        ranked = {e["id"]: e["hypotheses"] for e in report["m2l"].pop("all")}
+        report["m2l_parameters"] = ev.parameter_accuracy(
+            {i: h[0] for i, h in ranked.items()}, truths)
+        # BLEU cannot tell a worse description from an equally valid paraphrase; the
+        # parameters can: how often the k-th hypothesis names exactly the true actions
+        # (evaluate_m2l pads a short beam with its last hypothesis, so all have W)
+        report["m2l_actions_by_rank"] = [
+            ev.parameter_accuracy({i: h[k] for i, h in ranked.items()}, truths)["actions_match"]
+            for k in range(width)]
+        for run in ("l2m", "nn"):
+            if f"{run}_round_trip" in report:
+                descriptions = report[f"{run}_round_trip"]["descriptions"]
+                report[f"{run}_parameters"] = ev.round_trip_parameter_accuracy(
+                    descriptions, truths)
+                report[f"{run}_parameters"]["named"] = ev.actions_named(descriptions, truths)
+    else:
+        report["m2l"].pop("all")
+
+
+def cmd_evaluate(args: argparse.Namespace) -> int:
+    from motionlang.datasets.splits import load_splits
+    from motionlang.features.frames import motion_frames
+    from motionlang.evaluation import seq2seq as ev
+    from motionlang.models.seq2seq.m2l import MotionToLanguage
+    from motionlang.datasets.mixing import parse_source
+    from motionlang.datasets.seq2seq_pairs import load_sources
+    from motionlang.utils.atomic import atomic_write
+    from motionlang.utils.progress import progress
+
+    m2l_path, l2m, reranker = _evaluate_models(args)
     m2l = MotionToLanguage.load(m2l_path)
     splits = load_splits(args.splits or m2l_path.parent / "splits")
     for name in ("train", args.split):
@@ -90,65 +169,11 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         index = SentenceIndex((i, s) for i in sorted(train) for s in refs[i])
         report["nn_round_trip"] = ev.evaluate_round_trip_nn(
             index, train, m2l, {i: refs[i] for i in test}, report["m2l"]["bleu"])
-    labelled = _labels(records, test)
-    if labelled:   # Bandai takes: is the action named, and the style?
-        top = {e["id"]: e["hypotheses"][0] for e in report["m2l"]["all"] if e["id"] in labelled}
-        nn = ev.nearest_neighbour_descriptions(train, refs, {i: test[i] for i in labelled})
-        report["m2l_labels"] = ev.label_accuracy(top, labelled)
-        report["nn_labels"] = ev.label_accuracy(nn, labelled)
-    truths = _ground_truths(records, test)
-    if truths:   # a procedural corpus: the parameters each description states, checked
-        ranked = {e["id"]: e["hypotheses"] for e in report["m2l"].pop("all")}
-        report["m2l_parameters"] = ev.parameter_accuracy(
-            {i: h[0] for i, h in ranked.items()}, truths)
-        # BLEU cannot tell a worse description from an equally valid paraphrase; the
-        # parameters can: how often the k-th hypothesis names exactly the true actions
-        # (evaluate_m2l pads a short beam with its last hypothesis, so all have W)
-        report["m2l_actions_by_rank"] = [
-            ev.parameter_accuracy({i: h[k] for i, h in ranked.items()}, truths)["actions_match"]
-            for k in range(args.width)]
-        for run in ("l2m", "nn"):
-            if f"{run}_round_trip" in report:
-                descriptions = report[f"{run}_round_trip"]["descriptions"]
-                report[f"{run}_parameters"] = ev.round_trip_parameter_accuracy(
-                    descriptions, truths)
-                report[f"{run}_parameters"]["named"] = ev.actions_named(descriptions, truths)
-    else:
-        report["m2l"].pop("all")
+    _add_checks(report, records, test, train, refs, args.width)
     if args.tsne:
         _context_tsne(Path(args.tsne), m2l, l2m if args.l2m else None, test, records)
         report["tsne"] = str(args.tsne)
-    table = ev.markdown_table({"M2L (top hypothesis)": report["m2l"],
-                               "nearest neighbour": report["nearest_neighbour"],
-                               **({f"L2M round trip ({args.l2m_method}"
-                                   + (f", best of {args.l2m_width} by reranker" if args.l2m_rerank
-                                      else "") + ")":
-                                   report["l2m_round_trip"],
-                                   "nearest training sentence, round trip":
-                                   report["nn_round_trip"]}
-                                  if "l2m_round_trip" in report else {})})
-    by_rank = " ".join(f"{b:.3f}" for b in report["m2l"]["bleu_by_rank"])
-    table += f"\nM2L BLEU of hypotheses 1..{args.width}: {by_rank}\n"
-    if "m2l_actions_by_rank" in report:
-        table += (f"M2L hypotheses 1..{args.width} naming exactly the true actions: " +
-                  " ".join(f"{a:.1%}" for a in report["m2l_actions_by_rank"]) + "\n")
-    for key, name in (("m2l_parameters", "M2L top description"),
-                      ("l2m_parameters", "L2M round trip"),
-                      ("nn_parameters", "Nearest training sentence, round trip")):
-        if key in report:
-            acc = report[key]
-            table += (f"{name}, parameters right (procedural ground truth): " + ", ".join(
-                f"{f} {acc[f]:.1%} of {acc[f + '_stated']}" for f in
-                ("side", "count", "direction", "speed")) +
-                f"; actions exactly right {acc['actions_match']:.1%}\n")
-            if "named" in acc:
-                table += f"{name}, true actions named: " + ev.named_line(acc["named"]) + "\n"
-    for key, name in (("m2l_labels", "M2L top description"),
-                      ("nn_labels", "Nearest neighbour")):
-        if key in report:
-            acc = report[key]
-            table += (f"{name}, labelled takes ({acc['n']}): action named {acc['content']:.1%}, "
-                      f"style named {acc['style']:.1%}, both {acc['both']:.1%}\n")
+    table = _report_text(report, args)
     if args.output:
         out = Path(args.output)
         with atomic_write(out) as fh:
