@@ -176,46 +176,14 @@ def mix_training(sources, train_items: list[dict], source_of: dict[str, int], se
     return train_items
 
 
-def cmd_train(args: argparse.Namespace) -> int:
-    import logging
-
+def _new_model(args: argparse.Namespace, data):
+    """A fresh M2L or L2M for ``data`` (``datasets.seq2seq_pairs.build_pairs``) as the
+    options say, seeded by ``--seed``; an L2M with ``--progress-input`` gets its length
+    model fitted on the training pairs."""
     import torch
 
-    from motionlang.datasets.splits import save_splits
+    from motionlang.datasets.seq2seq_pairs import sentence_lengths
     from motionlang.features.frames import model_dim
-    from motionlang.training.collate import collate_pairs
-    from motionlang.datasets.mixing import source_weights
-    from motionlang.datasets.seq2seq_pairs import (balance_repeats, build_pairs, oversample,
-                                                  sentence_lengths)
-    from motionlang.training.run_files import check_resume
-    from motionlang.training.trainer import Trainer
-
-    out = Path(args.out)
-    check_mixed_features(args.data, args.features)
-    source_weights(args.data)   # all weighted or none: checked before the data preparation
-    if args.resume:   # before the (long) data preparation and before anything is written
-        check_resume(out)
-    cfg = train_config(args, out)   # checks the trainer's options before the data preparation
-    if args.model_kind == "l2m":
-        # numbers are checked by their argparse types (cli/options.py)
-        if args.plan_parts and not args.progress_input:
-            raise MotionlangError("--plan-parts needs --progress-input")
-    # one line per epoch from the trainer (the progress bar only shows on a terminal)
-    logging.basicConfig(level=logging.INFO, format="%(message)s")
-    data = build_pairs([s.path for s in args.data], features=args.features,
-                       offsets=args.offsets, seed=args.seed,
-                       min_count=args.min_count, max_seconds=args.max_seconds,
-                       mirror=args.mirror, joint_map=args.joint_map)
-    if any(str(s.path).startswith("bandai:") for s in args.data) and lead_process():
-        from motionlang.cli.run_log import write_license   # CC BY-NC 4.0 data
-        write_license(out, args.model_kind.upper())
-    train_items = data.items["train"]
-    if args.balance > 1:   # before anything is written
-        repeats = balance_repeats(data.labels, data.splits["train"], args.balance)
-        train_items = oversample(train_items, repeats)
-        print(f"balanced: {len(data.items['train'])} -> {len(train_items)} training pairs "
-              f"(motions repeated up to {args.balance} times)")
-    train_items = mix_training(args.data, train_items, data.sources, args.seed)
     loss_weights = None
     if args.model_kind == "l2m" and args.root_weight != 1.0:   # before anything is written
         loss_weights = root_loss_weights(data.features, args.root_weight)
@@ -226,8 +194,6 @@ def cmd_train(args: argparse.Namespace) -> int:
     if args.model_kind == "l2m" and args.plan_parts and args.plan_means == "root":
         plan_mean_mask = [1.0 - w for w in root_loss_weights(data.features, 0.0,
                                                               "--plan-means root")]
-    save_splits(data.splits, out / "splits")
-    log_command(out / "commands.jsonl", args)
     sizes = dict(enc_hidden=args.enc_hidden, enc_layers=args.enc_layers,
                  dec_hidden=args.dec_hidden, dec_layers=args.dec_layers,
                  embed_dim=args.embed_dim, dropout=args.dropout, attention=args.attention)
@@ -261,8 +227,52 @@ def cmd_train(args: argparse.Namespace) -> int:
         if args.progress_input:   # it plans its length from the sentence
             from motionlang.models.length import SentenceLength
             model.length_model = SentenceLength.fit(*sentence_lengths(data, "train"))
+    return model
+
+
+def cmd_train(args: argparse.Namespace) -> int:
+    import logging
+
+    from motionlang.datasets.splits import save_splits
+    from motionlang.features.frames import model_dim
+    from motionlang.training.collate import collate_pairs
+    from motionlang.datasets.mixing import source_weights
+    from motionlang.datasets.seq2seq_pairs import balance_repeats, build_pairs, oversample
+    from motionlang.training.run_files import check_resume
+    from motionlang.training.trainer import Trainer
+
+    out = Path(args.out)
+    check_mixed_features(args.data, args.features)
+    source_weights(args.data)   # all weighted or none: checked before the data preparation
+    if args.resume:   # before the (long) data preparation and before anything is written
+        check_resume(out)
+    cfg = train_config(args, out)   # checks the trainer's options before the data preparation
+    if args.model_kind == "l2m":
+        # numbers are checked by their argparse types (cli/options.py)
+        if args.plan_parts and not args.progress_input:
+            raise MotionlangError("--plan-parts needs --progress-input")
+    # one line per epoch from the trainer (the progress bar only shows on a terminal)
+    logging.basicConfig(level=logging.INFO, format="%(message)s")
+    data = build_pairs([s.path for s in args.data], features=args.features,
+                       offsets=args.offsets, seed=args.seed,
+                       min_count=args.min_count, max_seconds=args.max_seconds,
+                       mirror=args.mirror, joint_map=args.joint_map)
+    if any(str(s.path).startswith("bandai:") for s in args.data) and lead_process():
+        from motionlang.cli.run_log import write_license   # CC BY-NC 4.0 data
+        write_license(out, args.model_kind.upper())
+    train_items = data.items["train"]
+    if args.balance > 1:   # before anything is written
+        repeats = balance_repeats(data.labels, data.splits["train"], args.balance)
+        train_items = oversample(train_items, repeats)
+        print(f"balanced: {len(data.items['train'])} -> {len(train_items)} training pairs "
+              f"(motions repeated up to {args.balance} times)")
+    train_items = mix_training(args.data, train_items, data.sources, args.seed)
+    model = _new_model(args, data)   # checks the root options before anything is written
+    save_splits(data.splits, out / "splits")
+    log_command(out / "commands.jsonl", args)
     print(f"{args.model_kind}: {len(train_items)} training pairs "
-          f"({len(data.splits['train'])} motions), vocabulary {V}, {F} features/frame, "
+          f"({len(data.splits['train'])} motions), vocabulary {len(data.vocab)}, "
+          f"{model_dim(data.features)} features/frame, "
           f"{sum(p.numel() for p in model.parameters()):,} parameters")
     trainer = Trainer(model, train_items, collate_pairs, cfg,
                       val_set=data.items.get("val") or None)
