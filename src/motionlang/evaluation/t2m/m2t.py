@@ -67,7 +67,8 @@ def nearest_captions(train_items: Sequence[dict], pairs: Sequence[dict]) -> list
 
 def describe_motions(model, motions: Sequence, *, width: int = 5, desc: str = "describe"
                      ) -> list[str]:
-    """An M2L's best beam hypothesis (``decoding.seq2seq.describe``, beam ``width``) for each
+    """An M2L's likeliest beam hypothesis (``decoding.seq2seq.describe``, beam ``width``,
+    the paper's order; ``describe`` shows its minimum-Bayes-risk choice first) for each
     ``Motion``."""
     from motionlang.decoding.seq2seq import describe
     from motionlang.utils.progress import progress
