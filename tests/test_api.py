@@ -102,6 +102,21 @@ def test_generation_locks_feet_unless_told_not_to(tmp_path):
     assert np.allclose(got[True], raw) and np.allclose(got[False], held)
 
 
+def test_packaged_twostream_generates_out_of_the_box(tmp_path):
+    """generate --model twostream: MiniLM reads every word (no unknown-word warning), the
+    motion has the asked length, its feet are held (the lock applies to it too)."""
+    from motionlang.cli.main import main
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        m = ml.generate("a person strolls forward", model="twostream", max_frames=20)
+    assert m.n_frames == 20
+    out = tmp_path / "ts.npz"
+    assert main(["generate", "a person waves", "--model", "twostream", "--max-frames", "16",
+                 "-o", str(out)]) == 0
+    p = np.load(out)["positions"]
+    assert p.shape == (16, 21, 3) and np.isfinite(p).all()
+
+
 def test_unknown_words_are_named():
     with pytest.warns(UserWarning, match="does not know 'dances', 'tango'"):
         m = ml.generate("a person dances a tango", max_frames=10)

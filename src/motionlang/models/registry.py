@@ -75,6 +75,10 @@ PACKAGED: dict[str, Packaged] = {
     "l2m": Packaged("l2m", "l2m", "English -> motion (seq2seq with a mixture density output, "
                     "Plappert et al. 2018), 21-joint body, procedural corpus + Bandai Namco "
                     "takes", NON_COMMERCIAL),
+    "twostream": Packaged("twostream", "twostream", "English -> motion (hierarchical two-stream "
+                          "model, Ghosh et al. 2021; MiniLM sentence encoder), 21-joint body, "
+                          "procedural corpus + Bandai Namco takes; 4 epochs: weak on Bandai "
+                          "sentences (see its card)", NON_COMMERCIAL),
     "m2l-procedural": Packaged("m2l-procedural", "m2l", "the M2L of the procedural corpus "
                                "alone (the packaged m2l until 2026-11-24)"),
     "l2m-procedural": Packaged("l2m-procedural", "l2m", "the L2M of the procedural corpus "
