@@ -88,3 +88,31 @@ def test_out_of_reach_ankle_is_pulled_back_not_stretched():
 def test_bad_input_is_an_error(bad, fps):
     with pytest.raises(MotionlangError, match="lock_feet"):
         lock_feet(bad, fps)
+
+
+def test_frames_without_a_shift_and_collapsed_legs_are_left_alone():
+    T = 16
+    p = standing(T)
+    p[:, :, 0] += 0.01 * np.arange(T)[:, None]
+    hip, knee, ankle, mid, toe = LEGS[0]
+    p[8:, [ankle, mid, toe], 1] += 0.3                     # lifted from frame 8: no shift
+    p[8:, knee, 1] += 0.15                                 # from frame 10 on
+    q = lock_feet(p, 10.0, blend=2)
+    assert np.array_equal(q[10:, [knee, ankle, mid, toe]], p[10:, [knee, ankle, mid, toe]])
+    flat = np.zeros((5, 21, 3))                            # every joint at one point
+    assert np.array_equal(lock_feet(flat, 12.5), flat)
+
+
+def test_a_straight_leg_bends_forward_when_its_foot_is_held_back():
+    T = 12
+    p = standing(T)
+    for hip, knee, ankle, *_ in LEGS:                      # straight legs
+        p[:, knee, 2] = 0.0
+    p[:, :, 2] += 0.01 * np.arange(T)[:, None]             # drifting forward (+Z, the facing)
+    q = lock_feet(p, 10.0)
+    for hip, knee, ankle, *_ in LEGS:
+        # the knee ends up in front of the hip-ankle line, never behind it
+        d, k = q[:, ankle] - q[:, hip], q[:, knee] - q[:, hip]
+        cross = d[:, 1] * k[:, 2] - d[:, 2] * k[:, 1]      # sign of the bend about the x axis
+        assert (cross <= 1e-9).all()
+    assert np.allclose(bone_lengths21(q), bone_lengths21(p))

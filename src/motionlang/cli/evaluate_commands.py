@@ -63,7 +63,8 @@ def _report_text(report: dict, args: argparse.Namespace) -> str:
                                    report["nn_round_trip"]}
                                   if "l2m_round_trip" in report else {})})
     by_rank = " ".join(f"{b:.3f}" for b in report["m2l"]["bleu_by_rank"])
-    table += f"\nM2L BLEU of hypotheses 1..{args.width}: {by_rank}\n"
+    table += (f"\nM2L BLEU of hypotheses 1..{args.width} (ordered by --rank {args.rank}): "
+              f"{by_rank}\n")
     if "m2l_actions_by_rank" in report:
         table += (f"M2L hypotheses 1..{args.width} naming exactly the true actions: " +
                   " ".join(f"{a:.1%}" for a in report["m2l_actions_by_rank"]) + "\n")

@@ -190,9 +190,9 @@ def register(subparsers) -> None:
     p.add_argument("--seed", type=seed_int, default=0,
                    help="seed of the sentences, L2M sampling and the FID halves")
     p.add_argument("--foot-lock", choices=("on", "off", "both"), default="on",
-                   help="judge the motions as 'motionlang generate' writes them, feet that "
-                        "are down held in place (on), as decoded (off), or both (rows NAME "
-                        "and 'NAME (raw)')")
+                   help="judge the motions with feet that are down held in place, as "
+                        "'motionlang generate' writes joint-position models' motions (on), "
+                        "as decoded (off), or both (rows NAME and 'NAME (raw)')")
     p.add_argument("--l2m-method", choices=("mean", "sample"), default="mean",
                    help="how L2M models generate (mean: heaviest-component means)")
     p.add_argument("-o", "--output", metavar="DIR", type=output_dir,

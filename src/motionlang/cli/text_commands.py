@@ -23,11 +23,12 @@ RENDER_OUT = (".gif", ".mp4")
 
 
 def add_rank_arg(p: argparse.ArgumentParser, default: str) -> None:
-    """``--rank``: how a description beam is ordered (``decoding.seq2seq.RANKS``)."""
-    p.add_argument("--rank", choices=("mbr", "logp"), default=default,
+    """``--rank``: how a description beam is ordered (the names of
+    ``decoding.seq2seq.RANKS``, not imported here: that would load torch for every command)."""
+    p.add_argument("--rank", choices=("logp", "mbr"), default=default,
                    help="order of the beam's sentences: mbr puts first the one the beam "
-                        "agrees on most (expected BLEU against the others, weighted by their "
-                        "probabilities), logp the likeliest (the paper's; it favours the "
+                        "agrees on most (mean sentence BLEU against the beam, "
+                        "decoding/mbr.py), logp the likeliest (the paper's; it favours the "
                         f"shortest phrasing) (default: {default})")
 
 
@@ -196,8 +197,9 @@ def register(subparsers) -> None:
     p.add_argument("-w", "--width", type=width_int, default=5,
                    help="beam width = hypotheses shown")
     p.add_argument("--length-penalty", type=nonneg_float, default=0.0, metavar="ALPHA",
-                   help="rank by log P / length**ALPHA (default 0: total log P, the paper's; "
-                        "no effect with -w 1)")
+                   help="beam search ranks by log P / length**ALPHA (default 0: total log P, "
+                        "the paper's; no effect with -w 1); with --rank mbr it only changes "
+                        "which sentences the beam keeps")
     add_rank_arg(p, "mbr")
     p.add_argument("--json", action="store_true", help="print the hypotheses as JSON")
     p.set_defaults(func=cmd_describe)

@@ -7,16 +7,18 @@ is the usual post-process of animation pipelines, done on positions:
 
 1. **contact**: a foot is down at frame t when its toe is below ``height`` m above the floor
    and moves slower than ``speed`` m/s (central difference); runs of at least ``min_frames``
-   such frames are the contacts (the thresholds are those of
-   ``evaluation.metrics.physics.foot_skating``, so what the metric counts as a slide is
-   what gets locked).
+   such frames are the contacts (the thresholds of
+   ``evaluation.metrics.physics.foot_skating``; it measures frame steps, this looks at
+   frames, so a step into a contact can still count as a slide there).
 2. **lock**: during a contact the whole foot (ankle, mid-foot, toe) is moved horizontally so
    that its toe stays at the contact's mean toe position; over ``blend`` frames either side
-   the shift fades linearly to zero (or to the next contact's), so the foot does not pop.
-3. **leg**: the knee is placed again by two-bone IK from the unchanged hip to the moved
-   ankle, keeping the frame's own thigh and shank lengths and bending in the plane of the
-   original knee; an ankle out of the leg's reach is pulled back to 99.9 % of it (the foot
-   with it: that contact slides by what is left).
+   the shift fades linearly to zero (or to the next contact's), so the foot does not pop; a
+   contact within ``blend`` frames of either end of the motion holds to that end.
+3. **leg**: on the frames whose foot moved, the knee is placed again by two-bone IK from the
+   unchanged hip to the moved ankle, keeping the frame's own thigh and shank lengths and
+   bending on the original knee's side (forward, from the hips' facing, where the leg was
+   straight); an ankle out of the leg's reach is pulled back to 99.9 % of it (the foot with
+   it: that contact slides by what is left). Frames without a shift are left as they are.
 
 The hips, trunk and arms are untouched: the root path, and with it the largest one-frame
 root move, is the model's own.
@@ -76,11 +78,12 @@ def _shifts(toe_xz: np.ndarray, runs: list[tuple[int, int]], blend: int) -> np.n
     return shift
 
 
-def _two_bone(hip: np.ndarray, knee: np.ndarray, ankle: np.ndarray, target: np.ndarray
-              ) -> tuple[np.ndarray, np.ndarray]:
+def _two_bone(hip: np.ndarray, knee: np.ndarray, ankle: np.ndarray, target: np.ndarray,
+              forward: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Knee and ankle (T, 3) for ankle ``target``: thigh and shank keep their per-frame
-    lengths, the knee bends toward the original knee's side; unreachable targets are
-    pulled toward the hip to 99.9 % of the leg's length."""
+    lengths, the knee bends toward the original knee's side (toward ``forward`` (T, 3)
+    where the original leg is straight within 1 cm); unreachable targets are pulled toward
+    the hip to 99.9 % of the leg's length."""
     l1 = np.linalg.norm(knee - hip, axis=-1)
     l2 = np.linalg.norm(ankle - knee, axis=-1)
     d = target - hip
@@ -92,13 +95,15 @@ def _two_bone(hip: np.ndarray, knee: np.ndarray, ankle: np.ndarray, target: np.n
     target = hip + u * clamped[:, None]
     along = (l1 ** 2 - l2 ** 2 + clamped ** 2) / (2 * clamped)
     r = np.sqrt(np.maximum(l1 ** 2 - along ** 2, 0.0))
+    # the bend side: the original knee's offset from the original hip-ankle line; a straight
+    # original leg (within 1 cm) says nothing of it: knees bend forward
+    u0 = ankle - hip
+    u0 = u0 / np.maximum(np.linalg.norm(u0, axis=-1, keepdims=True), 1e-9)
     k = knee - hip
-    pole = k - (k * u).sum(-1, keepdims=True) * u
-    n = np.linalg.norm(pole, axis=-1, keepdims=True)
-    # a straight original leg gives no bend side: bend forward (+Z of the body is not known
-    # here; the original knee direction projected is zero only for a fully straight leg,
-    # where r is ~0 anyway)
-    pole = np.where(n > 1e-9, pole / np.maximum(n, 1e-9), 0.0)
+    side = k - (k * u0).sum(-1, keepdims=True) * u0
+    side = np.where(np.linalg.norm(side, axis=-1, keepdims=True) < 0.01, forward, side)
+    pole = side - (side * u).sum(-1, keepdims=True) * u
+    pole = pole / np.maximum(np.linalg.norm(pole, axis=-1, keepdims=True), 1e-9)
     return hip + along[:, None] * u + r[:, None] * pole, target
 
 
@@ -115,17 +120,27 @@ def lock_feet(p21, fps: float, *, height: float = 0.05, speed: float = 1.0, floo
         raise MotionlangError(f"lock_feet: positions must be (T, 21, 3), got {p.shape}")
     if not fps > 0:
         raise MotionlangError(f"lock_feet: fps must be positive, got {fps}")
+    # the body's forward direction: the hips' left-right axis turned about the vertical
+    (lh, *_), (rh, *_) = LEGS
+    across = p[:, lh] - p[:, rh]
+    forward = np.stack([-across[:, 2], np.zeros(len(p)), across[:, 0]], axis=-1)
     for hip, knee, ankle, mid, toe in LEGS:
         runs = contacts(p[:, toe], fps, height=height, speed=speed, floor=floor,
                         min_frames=min_frames)
         if not runs:
             continue
         s = _shifts(p[:, toe, [0, 2]], runs, blend)
-        shift = np.zeros((len(p), 3))
-        shift[:, [0, 2]] = s
-        new_knee, new_ankle = _two_bone(p[:, hip], p[:, knee], p[:, ankle], p[:, ankle] + shift)
-        foot = new_ankle - p[:, ankle]                      # the shift, less what was out of reach
+        leg = (np.linalg.norm(p[:, knee] - p[:, hip], axis=-1) > 1e-6) & \
+              (np.linalg.norm(p[:, ankle] - p[:, knee], axis=-1) > 1e-6)
+        moved = np.flatnonzero((np.abs(s) > 0).any(axis=1) & leg)   # a collapsed leg: left
+        if not len(moved):
+            continue
+        shift = np.zeros((len(moved), 3))
+        shift[:, [0, 2]] = s[moved]
+        new_knee, new_ankle = _two_bone(p[moved, hip], p[moved, knee], p[moved, ankle],
+                                        p[moved, ankle] + shift, forward[moved])
+        foot = new_ankle - p[moved, ankle]                  # the shift, less what was out of reach
         for j in (mid, toe):
-            p[:, j] += foot
-        p[:, knee], p[:, ankle] = new_knee, new_ankle
+            p[moved, j] += foot
+        p[moved, knee], p[moved, ankle] = new_knee, new_ankle
     return p
