@@ -54,6 +54,7 @@ def main() -> None:
     from motionlang.evaluation.judge import asked_labels, judge_table, markdown_judge_table
     from motionlang.models.judge.fit import bandai_items, bandai_sentences
     from motionlang.models.registry import TEXT_TO_MOTION, load_model
+    from motionlang.utils.progress import progress
 
     judge = load_model(args.judge, kind="judge")
     real = bandai_items(args.data, "test", fps=FPS)[:args.limit or None]
@@ -72,7 +73,8 @@ def main() -> None:
         for tag, batch in (("", sentences), (" (synonyms)", swapped)):
             generated[name + tag] = [t2m.positions21(s.text, max(2, len(it.positions)),
                                                      foot_lock=True)
-                                     for s, it in zip(batch, real)]
+                                     for s, it in progress(list(zip(batch, real)),
+                                                           desc=name + tag, unit="motions")]
     table = judge_table(judge, [it.positions for it in real],
                         [(it.content, it.style) for it in real], FPS, generated,
                         asked_labels(sentences), FPS)

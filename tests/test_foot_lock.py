@@ -76,7 +76,7 @@ def test_out_of_reach_ankle_is_pulled_back_not_stretched():
     T = 30
     p = standing(T)
     p[:, :, 0] += 0.05 * np.arange(T)[:, None]             # 0.5 m/s: 1.45 m over the run
-    q = lock_feet(p, 10.0)
+    q = lock_feet(p, 10.0, max_shift=1.0)                  # held although it is a glide
     assert np.allclose(bone_lengths21(q), bone_lengths21(p))
     hip, knee, ankle, *_ = LEGS[0]
     leg = np.linalg.norm(q[:, ankle] - q[:, hip], axis=-1)
@@ -116,3 +116,13 @@ def test_a_straight_leg_bends_forward_when_its_foot_is_held_back():
         cross = d[:, 1] * k[:, 2] - d[:, 2] * k[:, 1]      # sign of the bend about the x axis
         assert (cross <= 1e-9).all()
     assert np.allclose(bone_lengths21(q), bone_lengths21(p))
+
+
+def test_a_glide_is_left_alone():
+    """A toe dragged 1.5 m along the floor is not a plant: holding it would stretch the leg
+    out behind the body."""
+    T = 30
+    p = standing(T)
+    p[:, :, 2] += 0.05 * np.arange(T)[:, None]             # 0.5 m/s, toes down throughout
+    assert np.array_equal(lock_feet(p, 10.0), p)
+    assert not np.array_equal(lock_feet(p, 10.0, max_shift=1.0), p)

@@ -9,7 +9,10 @@ is the usual post-process of animation pipelines, done on positions:
    and moves slower than ``speed`` m/s (central difference); runs of at least ``min_frames``
    such frames are the contacts (the thresholds of
    ``evaluation.metrics.physics.foot_skating``; it measures frame steps, this looks at
-   frames, so a step into a contact can still count as a slide there).
+   frames, so a step into a contact can still count as a slide there). A contact whose toe
+   would have to be pulled more than ``max_shift`` m to its mean is a glide, not a plant
+   (a foot dragged along while the body travels): it is left as decoded, since holding it
+   would stretch the leg out behind the body.
 2. **lock**: during a contact the whole foot (ankle, mid-foot, toe) is moved horizontally so
    that its toe stays at the contact's mean toe position; over ``blend`` frames either side
    the shift fades linearly to zero (or to the next contact's), so the foot does not pop; a
@@ -108,12 +111,14 @@ def _two_bone(hip: np.ndarray, knee: np.ndarray, ankle: np.ndarray, target: np.n
 
 
 def lock_feet(p21, fps: float, *, height: float = 0.05, speed: float = 1.0, floor: float = 0.0,
-              blend: int = 2, min_frames: int = 2) -> np.ndarray:
+              blend: int = 2, min_frames: int = 2, max_shift: float = 0.15) -> np.ndarray:
     """Global 21-joint positions (T, 21, 3) metres, Y up, at ``fps`` Hz -> the same motion
     with every foot contact held in place (module docstring); a new array.
 
     ``height`` / ``speed`` / ``floor``: what counts as a foot down (:func:`contacts`);
-    ``blend``: frames over which a lock fades in and out; ``min_frames``: shortest contact.
+    ``blend``: frames over which a lock fades in and out; ``min_frames``: shortest contact;
+    ``max_shift``: longest pull (m) of a toe to its contact's mean, beyond which the contact
+    is a glide and left alone.
     """
     p = np.array(p21, dtype=np.float64)
     if p.ndim != 3 or p.shape[1:] != (21, 3):
@@ -127,6 +132,9 @@ def lock_feet(p21, fps: float, *, height: float = 0.05, speed: float = 1.0, floo
     for hip, knee, ankle, mid, toe in LEGS:
         runs = contacts(p[:, toe], fps, height=height, speed=speed, floor=floor,
                         min_frames=min_frames)
+        xz = p[:, toe, [0, 2]]
+        runs = [(a, b) for a, b in runs if np.linalg.norm(
+            xz[a:b + 1] - xz[a:b + 1].mean(axis=0), axis=-1).max() <= max_shift]
         if not runs:
             continue
         s = _shifts(p[:, toe, [0, 2]], runs, blend)
