@@ -92,7 +92,7 @@ def test_generation_locks_feet_unless_told_not_to(tmp_path):
     (held, _), = t2m.hypotheses("a person walks forward", width=1, max_frames=40,
                                 foot_lock=True)
     assert np.allclose(held, lock_feet(raw, t2m.fps))
-    assert foot_skating(held, t2m.fps) < 0.5 * foot_skating(raw, t2m.fps)
+    assert foot_skating(held, t2m.fps) < 0.8 * foot_skating(raw, t2m.fps)
     got = {}
     for flag in ([], ["--no-foot-lock"]):
         out = tmp_path / f"w{len(flag)}.npz"

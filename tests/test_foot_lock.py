@@ -76,7 +76,7 @@ def test_out_of_reach_ankle_is_pulled_back_not_stretched():
     T = 30
     p = standing(T)
     p[:, :, 0] += 0.05 * np.arange(T)[:, None]             # 0.5 m/s: 1.45 m over the run
-    q = lock_feet(p, 10.0, max_shift=1.0)                  # held although it is a glide
+    q = lock_feet(p, 10.0, max_shift=1.0, reach=10.0)     # held although it is a glide
     assert np.allclose(bone_lengths21(q), bone_lengths21(p))
     hip, knee, ankle, *_ = LEGS[0]
     leg = np.linalg.norm(q[:, ankle] - q[:, hip], axis=-1)
@@ -125,4 +125,13 @@ def test_a_glide_is_left_alone():
     p = standing(T)
     p[:, :, 2] += 0.05 * np.arange(T)[:, None]             # 0.5 m/s, toes down throughout
     assert np.array_equal(lock_feet(p, 10.0), p)
-    assert not np.array_equal(lock_feet(p, 10.0, max_shift=1.0), p)
+    assert not np.array_equal(lock_feet(p, 10.0, max_shift=1.0, reach=10.0), p)
+
+
+def test_a_hold_the_leg_cannot_reach_is_left_alone():
+    T = 12
+    p = standing(T)
+    p[:, :, 2] += 0.02 * np.arange(T)[:, None]             # 11 cm either side of the mean
+    q = lock_feet(p, 10.0)                                 # bent knees reach that: held
+    assert foot_skating(q, 10.0) == pytest.approx(0.0, abs=1e-9)
+    assert np.array_equal(lock_feet(p, 10.0, reach=0.5), p)   # a leg reaching half as far

@@ -10,9 +10,11 @@ is the usual post-process of animation pipelines, done on positions:
    such frames are the contacts (the thresholds of
    ``evaluation.metrics.physics.foot_skating``; it measures frame steps, this looks at
    frames, so a step into a contact can still count as a slide there). A contact whose toe
-   would have to be pulled more than ``max_shift`` m to its mean is a glide, not a plant
-   (a foot dragged along while the body travels): it is left as decoded, since holding it
-   would stretch the leg out behind the body.
+   would have to be pulled more than ``max_shift`` m to its mean, or whose held ankle the
+   leg could not reach, is a glide, not a plant (a foot dragged along while the body
+   travels): it is left as decoded, since holding it would stretch the leg out behind the
+   body. (Holding every contact, leg or not, got the packaged L2M's Bandai skating down to
+   0.049 m/s, but stretched legs out straight, e.g. for "a person kicks" from a Bandai pose.)
 2. **lock**: during a contact the whole foot (ankle, mid-foot, toe) is moved horizontally so
    that its toe stays at the contact's mean toe position; over ``blend`` frames either side
    the shift fades linearly to zero (or to the next contact's), so the foot does not pop; a
@@ -110,15 +112,33 @@ def _two_bone(hip: np.ndarray, knee: np.ndarray, ankle: np.ndarray, target: np.n
     return hip + along[:, None] * u + r[:, None] * pole, target
 
 
+def _holdable(p: np.ndarray, run: tuple[int, int], leg: tuple[int, int, int, int],
+              max_shift: float, reach: float) -> bool:
+    """Whether a contact is a plant that can be held: no toe pulled more than ``max_shift``
+    m to the contact's mean, and the held ankle within ``reach`` of the leg's length."""
+    (a, b), (hip, knee, ankle, toe) = run, leg
+    xz = p[a:b + 1, toe, [0, 2]]
+    pull = xz.mean(axis=0) - xz                                   # (n, 2)
+    if np.linalg.norm(pull, axis=-1).max() > max_shift:
+        return False
+    held = p[a:b + 1, ankle].copy()
+    held[:, [0, 2]] += pull
+    length = (np.linalg.norm(p[a:b + 1, knee] - p[a:b + 1, hip], axis=-1)
+              + np.linalg.norm(p[a:b + 1, ankle] - p[a:b + 1, knee], axis=-1))
+    return bool((np.linalg.norm(held - p[a:b + 1, hip], axis=-1) <= reach * length).all())
+
+
 def lock_feet(p21, fps: float, *, height: float = 0.05, speed: float = 1.0, floor: float = 0.0,
-              blend: int = 2, min_frames: int = 2, max_shift: float = 0.15) -> np.ndarray:
+              blend: int = 2, min_frames: int = 2, max_shift: float = 0.15,
+              reach: float = 1.0) -> np.ndarray:
     """Global 21-joint positions (T, 21, 3) metres, Y up, at ``fps`` Hz -> the same motion
     with every foot contact held in place (module docstring); a new array.
 
     ``height`` / ``speed`` / ``floor``: what counts as a foot down (:func:`contacts`);
     ``blend``: frames over which a lock fades in and out; ``min_frames``: shortest contact;
     ``max_shift``: longest pull (m) of a toe to its contact's mean, beyond which the contact
-    is a glide and left alone.
+    is a glide and left alone; ``reach``: the same where a held ankle would be farther from
+    the hip than this fraction of the leg's length (thigh + shank).
     """
     p = np.array(p21, dtype=np.float64)
     if p.ndim != 3 or p.shape[1:] != (21, 3):
@@ -132,9 +152,7 @@ def lock_feet(p21, fps: float, *, height: float = 0.05, speed: float = 1.0, floo
     for hip, knee, ankle, mid, toe in LEGS:
         runs = contacts(p[:, toe], fps, height=height, speed=speed, floor=floor,
                         min_frames=min_frames)
-        xz = p[:, toe, [0, 2]]
-        runs = [(a, b) for a, b in runs if np.linalg.norm(
-            xz[a:b + 1] - xz[a:b + 1].mean(axis=0), axis=-1).max() <= max_shift]
+        runs = [r for r in runs if _holdable(p, r, (hip, knee, ankle, toe), max_shift, reach)]
         if not runs:
             continue
         s = _shifts(p[:, toe, [0, 2]], runs, blend)
