@@ -240,8 +240,9 @@ def register(subparsers) -> None:
                    "log P(text | motion) instead of their own likelihood (L2M, sample or beam)")
     p.add_argument("--no-foot-lock", action="store_true",
                    help="keep the model's frames as decoded (default: feet that are down "
-                        "are held in place and the knees follow, which removes most foot "
-                        "sliding; joint-position models such as the packaged ones)")
+                        "are held in place where the leg can reach and the knees follow, "
+                        "which halves the packaged L2M's foot sliding; joint-position models "
+                        "such as the packaged ones)")
     p.add_argument("--all", action="store_true", help="write every hypothesis (OUT_2, ...)")
     p.add_argument("--rig", metavar="FILE.bvh", default=None,
                    help="write the .bvh on this rig (a BVH file of yours: its skeleton, "
