@@ -3,7 +3,7 @@ import itertools
 import numpy as np
 import pytest
 
-from motionlang.errors import SkeletonError
+from motionlang.errors import MotionlangError, SkeletonError
 from motionlang.features.joint_map import (KIT21_NAMES, KIT21_PARENTS, bone_lengths21,
                                            kit21_weights, positions21)
 from motionlang.formats.asf_amc import read_asf_amc
@@ -148,3 +148,28 @@ def test_cmu_through_bvh_maps_to_the_same_points(tmp_path):
     write_bvh(cmu, tmp_path / "35_01.bvh")
     back = read_bvh(tmp_path / "35_01.bvh")
     assert np.abs(positions21(back) - positions21(cmu)).max() < 1e-5
+
+
+def test_uniform_bones_keeps_directions_and_scales_strides():
+    from motionlang.features.body21 import leg_length21, uniform_bones21
+    rng = np.random.default_rng(0)
+    # a random posed body that walks 0.5 m along +z over 10 frames
+    base = np.array(KIT21_PARENTS)
+    p = np.zeros((10, 21, 3))
+    offs = rng.normal(0, 0.2, (21, 3))
+    for t in range(10):
+        p[t, 0] = (0.0, 1.0, 0.05 * t)
+        for j in range(1, 21):
+            p[t, j] = p[t, base[j]] + offs[j] + rng.normal(0, 0.02, 3)
+    want = rng.uniform(0.05, 0.5, 20)
+    q = uniform_bones21(p, want)
+    assert np.allclose(bone_lengths21(q), want)
+    for j in range(1, 21):
+        d0, d1 = p[:, j] - p[:, base[j]], q[:, j] - q[:, base[j]]
+        cos = (d0 * d1).sum(-1) / np.linalg.norm(d0, axis=-1) / np.linalg.norm(d1, axis=-1)
+        assert np.allclose(cos, 1.0)
+    ratio = leg_length21(want) / leg_length21(bone_lengths21(p))
+    assert np.allclose(q[:, 0] - q[0, 0], (p[:, 0] - p[0, 0]) * ratio)
+    assert np.allclose(uniform_bones21(p, np.median(bone_lengths21(p), axis=0))[:, 0], p[:, 0])
+    with pytest.raises(MotionlangError, match="20 finite lengths"):
+        uniform_bones21(p, want[:19])

@@ -11,7 +11,9 @@ from motionlang.evaluation.judge import judge_motions, judge_report
 from motionlang.features.joint_map import KIT21_NAMES
 from motionlang.features.normalizer import Normalizer
 from motionlang.models.judge.config import JudgeConfig
-from motionlang.models.judge.fit import JudgeItem, accuracy, fit_judge, mirror_item
+from motionlang.features.joint_map import bone_lengths21
+from motionlang.models.judge.fit import (JudgeItem, accuracy, fit_judge, median_bones,
+                                         mirror_item)
 from motionlang.models.judge.model import MotionJudge, resample_positions
 from motionlang.models.registry import load_model
 
@@ -125,3 +127,27 @@ def test_procedural_primitives_as_items(tmp_path):
     it = got[0]
     assert it.style is None and it.fps == 12.5 and it.positions.shape[1:] == (21, 3)
     assert len(it.positions) == pytest.approx((500 - 31) / 100 * 12.5, abs=1)
+
+
+def test_a_judge_with_bones_reads_the_motion_not_the_body():
+    """Laid on the config's bones, a walk on a body 1.3 times as big (strides too) reads
+    the same rows and gets the same outputs; read as given, it does not."""
+    it = items(1)[0]
+    big = it.positions * 1.3 + np.array([0.5, 0.0, -2.0])
+    judge = tiny_judge()
+    assert not np.allclose(judge.rows(big, 12.5), judge.rows(it.positions, 12.5), atol=1e-3)
+    judge.config.bones = median_bones([it])
+    assert np.allclose(judge.rows(big, 12.5), judge.rows(it.positions, 12.5), atol=1e-9)
+    a, b = judge.judge([big], 12.5), judge.judge([it.positions], 12.5)
+    assert np.allclose(a["embedding"], b["embedding"], atol=1e-5)
+
+
+def test_fit_judge_sets_the_training_bodies_median_bones():
+    train = items(1)
+    judge, _ = fit_judge(train, epochs=1, **TINY)
+    want = np.median(np.concatenate([bone_lengths21(it.positions) for it in train]), axis=0)
+    assert judge.config.bones == pytest.approx(want)
+    plain, _ = fit_judge(train, epochs=1, uniform=False, **TINY)
+    assert plain.config.bones is None
+    with pytest.raises(MotionlangError, match="20 lengths"):
+        JudgeConfig(contents=["walk"], styles=["happy"], bones=[0.3] * 19)

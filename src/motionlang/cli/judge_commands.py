@@ -35,7 +35,8 @@ def bandai_path(data: str) -> str:
 
 # -- train judge -----------------------------------------------------------------------------
 def cmd_train(args: argparse.Namespace) -> int:
-    from motionlang.models.judge.fit import accuracy, bandai_items, fit_judge, primitive_items
+    from motionlang.models.judge.fit import (accuracy, bandai_items, fit_judge, median_bones,
+                                             primitive_items)
     from motionlang.utils.atomic import atomic_write
 
     run = Path(args.out)
@@ -53,7 +54,9 @@ def cmd_train(args: argparse.Namespace) -> int:
     write_license(run, "judge")
     print(f"judge: {len(train)} training takes, {len(val)} validation, {len(test)} test"
           + (f"; {len(extra)} procedural primitives" if args.primitives else ""))
-    judge, history = fit_judge(train + extra, val, epochs=args.epochs,
+    if args.uniform:    # the real actors' body, not a mean with the procedural one's
+        config["bones"] = median_bones(train or extra)
+    judge, history = fit_judge(train + extra, val, epochs=args.epochs, uniform=args.uniform,
                                batch_size=args.batch_size, lr=args.lr,
                                weight_decay=args.weight_decay, mirror=args.mirror,
                                seed=args.seed, log=print if args.verbose else None, **config)
@@ -85,6 +88,10 @@ def register_train(train_sub) -> None:
     p.add_argument("--primitives", metavar="CORPUS",
                    help="also train on a procedural corpus' primitives that show a Bandai "
                         "action (content only)")
+    p.add_argument("--as-given", dest="uniform", action="store_false",
+                   help="read motions on their own bodies (default: every motion laid on "
+                        "the training takes' median bone lengths, directions and gait kept, "
+                        "so a body's proportions do not pass for an action)")
     from motionlang.models.judge.config import JudgeConfig   # torch-free
     d = JudgeConfig(contents=["x"], styles=["x"])
     p.add_argument("--hidden", type=size_int, default=d.hidden,

@@ -13,6 +13,11 @@ reference model (thigh 0.245, shank 0.246, trunk 0.040 + 0.060 + 0.210 + 0.030),
 KIT motion 00001 comes back at its subject's 1.82 m. Other rigs place their spine and head
 nodes differently, which moves the estimate by a few per cent: CMU subject 35 comes out at
 1.83 m, where its legs alone (86 cm, 0.491 of stature in MMM) would say 1.76 m.
+
+:func:`uniform_bones21` lays a motion's bones again at given lengths, keeping every bone's
+direction, and scales its root path by the ratio of the legs: the same motion on another
+body (HumanML3D's "uniform skeleton" step does the same with joint angles). A classifier
+that reads motions this way reads what the body does, not whose body it is.
 """
 from __future__ import annotations
 
@@ -21,7 +26,8 @@ from pathlib import Path
 import numpy as np
 
 from motionlang.errors import MotionlangError
-from motionlang.features.joint_map import KIT21_NAMES, bone_lengths21, positions21
+from motionlang.features.joint_map import (KIT21_NAMES, KIT21_PARENTS, bone_lengths21,
+                                           positions21)
 from motionlang.features.positions import facing_yaw, floor_height
 from motionlang.features.root import to_heading
 from motionlang.kinematics.motion import Motion
@@ -60,6 +66,39 @@ def normalise21(p21, *, stature: float | None = None) -> np.ndarray:
             raise MotionlangError(f"stature must be a positive number, got {stature}")
         p = p * (stature / stature21(p))
     return p
+
+
+def leg_length21(lengths) -> float:
+    """Mean hip-knee-ankle length of the two legs, from bone lengths (..., 20) (median over
+    any leading axes)."""
+    lengths = np.asarray(lengths, dtype=float).reshape(-1, len(KIT21_NAMES) - 1)
+    med = np.median(lengths, axis=0)
+    return float(np.mean([med[list(leg)].sum() for leg in _LEGS]))
+
+
+def uniform_bones21(p21, lengths) -> np.ndarray:
+    """(T, 21, 3) positions -> the same motion with bone i (child i + 1 to its parent,
+    ``bone_lengths21``' order) ``lengths[i]`` long in every frame, its direction kept (a bone
+    of zero length stays at its parent). The root keeps frame 0's position; its path from
+    there is scaled by ``leg_length21(lengths)`` over the motion's own median legs, so
+    strides fit the new legs. Same unit as ``lengths`` (20,)."""
+    p = _check(p21)
+    lengths = np.asarray(lengths, dtype=float)
+    if lengths.shape != (len(KIT21_NAMES) - 1,) or not (np.isfinite(lengths).all()
+                                                        and (lengths >= 0).all()):
+        raise MotionlangError(f"uniform_bones21 needs 20 finite lengths >= 0, got "
+                              f"{lengths.shape}")
+    own_legs = leg_length21(bone_lengths21(p))
+    scale = leg_length21(lengths) / own_legs if own_legs > 0 else 1.0
+    out = np.empty_like(p)
+    out[:, 0] = p[0, 0] + (p[:, 0] - p[0, 0]) * scale
+    for j in range(1, len(KIT21_NAMES)):      # parents come before children
+        par = KIT21_PARENTS[j]
+        d = p[:, j] - p[:, par]
+        n = np.linalg.norm(d, axis=-1, keepdims=True)
+        unit = np.divide(d, n, out=np.zeros_like(d), where=n > 1e-12)
+        out[:, j] = out[:, par] + unit * lengths[j - 1]
+    return out
 
 
 def body21(motion: Motion, *, map_name: str | None = None,

@@ -22,6 +22,12 @@ class JudgeConfig:
             ``1 + (kernel - 1) (2^layers - 1)`` frames, 61 = 4.9 s by default).
         dropout: on the convolutions' outputs and the embedding, in training.
         window: frames of the random crops trained on (whole motions are judged).
+        bones: 20 bone lengths (m, ``joint_map.bone_lengths21`` order) every motion is laid
+            on before it is read (``features.body21.uniform_bones21``: bone directions
+            kept, root path scaled by the legs), so the judge reads the motion and not the
+            body (a generated body's hips 2 cm wider than the training actors' otherwise
+            read as "run", whatever it does). ``fit_judge`` sets them to the training
+            takes' median; None (judges trained before 2026-11-25): read as given.
     """
 
     contents: list[str] = field(default_factory=list)
@@ -34,9 +40,15 @@ class JudgeConfig:
     kernel: int = 5
     dropout: float = 0.2
     window: int = 48
+    bones: list[float] | None = None
 
     def __post_init__(self):
         check_numbers("JudgeConfig", self, unit=("dropout",), positive=("fps",), positive_ints=(
             "n_features", "hidden", "embed", "layers", "kernel", "window"))
+        if self.bones is not None:
+            self.bones = [float(b) for b in self.bones]
+            if len(self.bones) != 20 or not all(b >= 0 and b < 10 for b in self.bones):
+                raise MotionlangError(f"JudgeConfig.bones: 20 lengths in metres, got "
+                                      f"{self.bones}")
         if not self.contents or not self.styles:
             raise MotionlangError("JudgeConfig needs its content and style label lists")

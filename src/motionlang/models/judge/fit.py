@@ -21,10 +21,10 @@ import torch
 from torch import nn
 
 from motionlang.errors import MotionlangError
-from motionlang.features.joint_map import KIT21_MIRROR
+from motionlang.features.joint_map import KIT21_MIRROR, bone_lengths21
 from motionlang.features.normalizer import Normalizer
 from motionlang.models.judge.config import JudgeConfig
-from motionlang.models.judge.model import MotionJudge, position_rows, resample_positions
+from motionlang.models.judge.model import MotionJudge, judge_rows
 
 CACHE_VERSION = "judge-items-1"
 
@@ -139,13 +139,23 @@ def accuracy(judge: MotionJudge, items: Sequence[JudgeItem]) -> dict[str, float]
             else float("nan"), "n": len(got)}
 
 
+def median_bones(items: Sequence[JudgeItem]) -> list[float]:
+    """The 20 median bone lengths (m) over every frame of ``items``: the body a judge
+    reads motions on (``JudgeConfig.bones``)."""
+    return np.median(np.concatenate([bone_lengths21(it.positions) for it in items]),
+                     axis=0).tolist()
+
+
 def fit_judge(train: Sequence[JudgeItem], val: Sequence[JudgeItem] = (), *,
               epochs: int = 30, batch_size: int = 32, lr: float = 1e-3,
               weight_decay: float = 1e-4, mirror: bool = True, seed: int = 0,
-              log: Callable[[str], None] | None = None, **config) -> tuple[MotionJudge, list]:
+              uniform: bool = True, log: Callable[[str], None] | None = None, **config
+              ) -> tuple[MotionJudge, list]:
     """Train a judge on ``train`` (labels: every content, every known style there); keep the
     epoch whose ``val`` accuracy (mean of content and style) is best, else the last.
 
+    uniform: read every motion on one body, the training motions' median bone lengths
+    (``JudgeConfig.bones``), unless ``config`` gives ``bones``.
     config: :class:`JudgeConfig` fields (sizes, window). Returns the judge (eval mode) and
     one dict per epoch (``loss``, ``content_acc``, ``style_acc`` on the training crops,
     ``val_content``, ``val_style``, ``seconds``).
@@ -155,10 +165,12 @@ def fit_judge(train: Sequence[JudgeItem], val: Sequence[JudgeItem] = (), *,
     torch.manual_seed(seed)
     rng = np.random.default_rng(seed)
     items = list(train) + ([mirror_item(it) for it in train] if mirror else [])
+    if uniform and config.get("bones") is None:
+        config["bones"] = median_bones(train)
     cfg = JudgeConfig(contents=sorted({it.content for it in items}),
                       styles=sorted({it.style for it in items if it.style is not None}),
                       **config)
-    raw = [position_rows(resample_positions(it.positions, it.fps, cfg.fps)) for it in items]
+    raw = [judge_rows(it.positions, it.fps, cfg) for it in items]
     norm = Normalizer().fit(raw)
     rows = [norm.transform(r).astype(np.float32) for r in raw]
     c_id = np.array([cfg.contents.index(it.content) for it in items])

@@ -5,7 +5,8 @@ Input is what every model and reader can give: global 21-joint positions (T, 21,
 metres, Y up (``features.joint_map.positions21``; a ``Motion`` goes through
 ``PositionFeatures.body``). :func:`position_rows` turns them into the position features'
 layout (``features.positions``: local joints in the body frame + root steps and heading
-change, 66 numbers a frame at 12.5 Hz), invariant to where the body stands and faces; the
+change, 66 numbers a frame at 12.5 Hz), invariant to where the body stands and faces, and
+(:func:`judge_rows`, with ``config.bones``) to its proportions; the
 judge's own normaliser (fitted on its training takes) rides in its checkpoint, so a judge
 never depends on the features of the model it judges.
 """
@@ -21,6 +22,7 @@ from torch import nn
 from torch.nn import functional as F
 
 from motionlang.errors import MotionlangError
+from motionlang.features.body21 import uniform_bones21
 from motionlang.features.positions import floor_height, split_global
 from motionlang.models.checkpoint import (FORMAT_VERSION, pack_normalizer, read_model_dict,
                                           unpack_normalizer, write_checkpoint)
@@ -51,6 +53,15 @@ def position_rows(p21: np.ndarray) -> np.ndarray:
     p = p - np.array([0.0, floor_height(p), 0.0])
     local, v, dyaw, _ = split_global(p)
     return np.concatenate([local.reshape(len(p), -1), v, dyaw[:, None]], axis=1)
+
+
+def judge_rows(p21: np.ndarray, fps: float, config: JudgeConfig) -> np.ndarray:
+    """(T, 21, 3) metres at ``fps`` -> (T', 66) un-normalised rows as ``config`` reads them:
+    resampled to ``config.fps``, laid on ``config.bones`` if set, :func:`position_rows`."""
+    p = resample_positions(p21, fps, config.fps)
+    if config.bones is not None:
+        p = uniform_bones21(p, config.bones)
+    return position_rows(p)
 
 
 class MotionJudge(nn.Module):
@@ -102,7 +113,7 @@ class MotionJudge(nn.Module):
     # -- motions in, labels and embeddings out -----------------------------------------
     def rows(self, p21: np.ndarray, fps: float) -> np.ndarray:
         """(T, 21, 3) metres at ``fps`` -> (T', F) normalised rows at ``config.fps``."""
-        raw = position_rows(resample_positions(p21, fps, self.config.fps))
+        raw = judge_rows(p21, fps, self.config)
         return self.normalizer.transform(raw).astype(np.float32)
 
     @torch.no_grad()
