@@ -9,7 +9,7 @@ import pytest
 import torch
 import torch.nn.functional as F
 
-from motionlang.errors import MotionlangError
+from motionlang.errors import DatasetError, MotionlangError
 from motionlang.evaluation.metrics.t2m import r_precision
 from motionlang.evaluation.t2m.yardstick import format_table, guo_metrics, score_t2m
 from motionlang.models.evaluator import EvaluatorConfig, TextMotionEvaluator, official_config
@@ -300,3 +300,34 @@ def test_tokens_from_the_data_win_unless_untagged():
     assert caption_tokens("whatever", given) == given
     assert caption_tokens("a man walks", ["a/DET", "man/X", "walks/X"]) == tag("a man walks")
     assert caption_tokens("a man walks", None) == tag("a man walks")
+
+
+def test_items_laid_on_the_training_motions_median_bones(tmp_path):
+    """bones="median": the training motions' median bone lengths, every split's rows made
+    on them (a row's bones are the joints' distances, back from the rows); the rows of a
+    generated motion on a body 1.2 times as big are those of the motion itself."""
+    from motionlang.datasets.synth import write_corpus
+    from motionlang.evaluation.t2m.yardstick import positions_rows
+    from motionlang.features.h3d_vectors import KIT_H3D, vectors_to_joints
+    from motionlang.features.joint_map import bone_lengths21
+    from motionlang.training.evaluator_train import body_joints_of
+    write_corpus(tmp_path / "c", n=4, seed=3, workers=1, show_progress=False)
+    plain = build_evaluator_data(tmp_path / "c", fractions=(0.5, 0.25, 0.25))
+    data = build_evaluator_data(tmp_path / "c", fractions=(0.5, 0.25, 0.25), bones="median")
+    assert plain.bones is None and len(data.bones) == 20
+    train_ids = dict.fromkeys(it["id"] for it in data.items["train"])
+    want = np.median(np.concatenate(
+        [bone_lengths21(body_joints_of(data.records[i].load_motion())) for i in train_ids]),
+        axis=0)
+    assert data.bones == pytest.approx(want)
+    for it in data.items["test"][:1]:
+        joints = vectors_to_joints(it["motion"], KIT_H3D) * KIT_H3D.unit
+        assert np.allclose(bone_lengths21(joints), want, atol=1e-3)
+    p = body_joints_of(data.records[next(iter(train_ids))].load_motion())
+    assert np.allclose(positions_rows(p * 1.2, data.bones), positions_rows(p, data.bones),
+                       atol=1e-3)
+    assert not np.allclose(positions_rows(p * 1.2), positions_rows(p), atol=1e-3)
+    with pytest.raises(DatasetError, match="median"):
+        build_evaluator_data(tmp_path / "c", "smpl", bones="median")
+    with pytest.raises(MotionlangError, match="20 lengths"):
+        EvaluatorConfig(bones=[0.1] * 3)

@@ -59,8 +59,12 @@ def cmd_train(args: argparse.Namespace) -> int:
     cfg = train_config(args, run, optimizer="adam")     # checked at once
     config = evaluator_config(args)
     lead = lead_process()
+    # every motion on one body (the training motions' median bones) unless --as-given
+    uniform = args.uniform and args.body == "kit"
     data = build_evaluator_data(args.data, args.body, seed=args.seed,
-                                max_seconds=args.max_seconds)
+                                max_seconds=args.max_seconds,
+                                bones="median" if uniform else None)
+    config.bones = data.bones
     if lead:
         save_splits({s: list(dict.fromkeys(it["id"] for it in items))
                      for s, items in data.items.items()}, run / "splits")
@@ -117,6 +121,11 @@ def register_train(train_sub) -> None:
                    help="the rows' body: kit = 21 joints at 12.5 fps, 251 values (any rig); "
                         "smpl = 22 SMPL joints at 20 fps, 263 values (rigs with SMPL joints)")
     add_out_arg(p, "evaluator", "best.pt and last.pt (checkpoints), history.json, splits/, ")
+    p.add_argument("--as-given", dest="uniform", action="store_false",
+                   help="kit body: make each motion's rows on its own bones (default: every "
+                        "motion laid on the training motions' median bone lengths, as the "
+                        "public pipeline retargets to one subject, so that a body's "
+                        "proportions do not pass for what it does)")
     from motionlang.models.evaluator.config import EvaluatorConfig   # torch-free
     d = EvaluatorConfig()
     for name, what in (("embed_dim", "size of the shared text/motion embedding"),
@@ -252,7 +261,9 @@ def cmd_evaluate_guo(args: argparse.Namespace) -> int:
     for spec in m2l_specs:   # loaded before the data is read: a bad --m2l fails at once
         name, path = model_spec(spec)
         m2l_models[name] = load_model(path, kind="m2l")
-    data = build_evaluator_data(args.data, body, seed=args.seed, max_seconds=args.max_seconds)
+    bones = evaluator.config.bones
+    data = build_evaluator_data(args.data, body, seed=args.seed, max_seconds=args.max_seconds,
+                                bones=bones)
     items = data.items.get(args.split) or []
     pairs = test_pairs(items, args.seed)[:args.limit or None]
     if len(pairs) < args.rp_batch:
@@ -260,7 +271,7 @@ def cmd_evaluate_guo(args: argparse.Namespace) -> int:
                               f"needs at least --rp-batch {args.rp_batch}")
     captions = [p["caption"] for p in pairs]
     frames = [len(p["motion"]) + 1 for p in pairs]    # rows are steps between 12.5 Hz frames
-    gen, samples = model_rows(args, models, captions, frames)
+    gen, samples = model_rows(args, models, captions, frames, bones)
     reference = None
     if args.fid_reference != "train":
         reference = data.items.get(args.fid_reference) or []
@@ -293,10 +304,11 @@ def cmd_evaluate_guo(args: argparse.Namespace) -> int:
     return 0
 
 
-def model_rows(args: argparse.Namespace, models: dict, captions: list[str], frames: list[int]
-               ) -> tuple[dict, dict]:
+def model_rows(args: argparse.Namespace, models: dict, captions: list[str], frames: list[int],
+               bones=None) -> tuple[dict, dict]:
     """Each text-to-motion model's rows for the captions (a function of the repetition with
-    ``--regenerate``), and with ``--multimodality`` S samples for the first captions."""
+    ``--regenerate``), and with ``--multimodality`` S samples for the first captions; laid
+    on ``bones`` (the evaluator's) if given."""
     from motionlang.decoding.t2m import text_to_motion
     from motionlang.evaluation.t2m.yardstick import generated_rows
     gen = {}
@@ -305,10 +317,10 @@ def model_rows(args: argparse.Namespace, models: dict, captions: list[str], fram
             # a new generation for each repetition, seeds seed, seed + 1, ... (the papers')
             gen[name] = (lambda i, m=m, name=name: generated_rows(
                 m, captions, frames, method=args.l2m_method, seed=args.seed + i,
-                desc=f"{name} #{i + 1}"))
+                desc=f"{name} #{i + 1}", bones=bones))
         else:
             gen[name] = generated_rows(m, captions, frames, method=args.l2m_method,
-                                       seed=args.seed, desc=name)
+                                       seed=args.seed, desc=name, bones=bones)
     samples = {}
     if args.multimodality:
         n = min(args.mm_texts, len(captions))
@@ -316,7 +328,7 @@ def model_rows(args: argparse.Namespace, models: dict, captions: list[str], fram
             if text_to_motion(m).deterministic:   # one motion a caption: nothing to measure
                 continue
             samples[name] = [[generated_rows(m, [c], [f], method="sample", seed=k,
-                                             desc=f"{name} sample")[0]
+                                             desc=f"{name} sample", bones=bones)[0]
                               for k in range(args.multimodality)]
                              for c, f in zip(captions[:n], frames[:n])]
     return gen, samples

@@ -25,27 +25,51 @@ from motionlang.errors import DatasetError
 from motionlang.training.trainer import TrainConfig, Trainer
 
 
-def motion_rows(motion, body: str = "kit") -> np.ndarray:
-    """A ``Motion`` -> (T-1, D) float32 HumanML3D rows of ``body`` (``"kit"``: D = 251,
-    millimetres; ``"smpl"``: D = 263, metres); T is the frame count at the body's rate."""
+def body_joints_of(motion, body: str = "kit") -> np.ndarray:
+    """A ``Motion`` -> (T, J, 3) metres of ``body`` at its rate (at least 2 frames)."""
     from motionlang.datasets.humanml3d_export import body_joints
-    from motionlang.features.h3d_vectors import H3D_BODIES, joints_to_vectors
-    spec = H3D_BODIES[body]
-    joints = body_joints(motion, spec)
+    from motionlang.features.h3d_vectors import H3D_BODIES
+    joints = body_joints(motion, H3D_BODIES[body])
     if len(joints) < 2:
         raise DatasetError(f"{motion.name}: too short for motion rows ({len(joints)} frame)")
+    return joints
+
+
+def joints_rows(joints: np.ndarray, body: str = "kit", bones=None) -> np.ndarray:
+    """(T, J, 3) metres of ``body`` -> (T-1, D) float32 HumanML3D rows in its file unit;
+    ``bones`` (20 lengths, m; ``kit`` only): laid on them first (``uniform_bones21``)."""
+    from motionlang.features.h3d_vectors import H3D_BODIES, joints_to_vectors
+    spec = H3D_BODIES[body]
+    if bones is not None:
+        if body != "kit":
+            raise DatasetError(f"uniform bones are for the kit body (21 joints), not {body}")
+        from motionlang.features.body21 import uniform_bones21
+        joints = uniform_bones21(joints, bones)
     return joints_to_vectors(joints / spec.unit, spec)[0].astype(np.float32)
 
 
-def record_items(record, body: str = "kit") -> list[dict]:
+def motion_rows(motion, body: str = "kit", bones=None) -> np.ndarray:
+    """A ``Motion`` -> (T-1, D) float32 HumanML3D rows of ``body`` (``"kit"``: D = 251,
+    millimetres; ``"smpl"``: D = 263, metres); T is the frame count at the body's rate;
+    ``bones``: see :func:`joints_rows`."""
+    return joints_rows(body_joints_of(motion, body), body, bones)
+
+
+def record_items(record, body: str = "kit", bones=None, joints: np.ndarray | None = None
+                 ) -> list[dict]:
     """One item per caption of a record (``id``, ``annotations``, ``load_motion()``; a
-    HumanML3D-layout record of ``body`` also ``load_vectors()`` and tagged captions)."""
+    HumanML3D-layout record of ``body`` also ``load_vectors()`` and tagged captions, whose
+    stored rows are used unless ``bones`` are given). ``joints``: the record's
+    :func:`body_joints_of`, if already made."""
     spec = getattr(record, "body", None)
-    if hasattr(record, "load_vectors") and getattr(spec, "name", None) == body:
+    stored = hasattr(record, "load_vectors") and getattr(spec, "name", None) == body
+    tokens = list((getattr(record, "meta", None) or {}).get("tokens") or []) if stored else []
+    if stored and bones is None:
         rows = np.asarray(record.load_vectors(), dtype=np.float32)
-        tokens = list((getattr(record, "meta", None) or {}).get("tokens") or [])
     else:
-        rows, tokens = motion_rows(record.load_motion(), body), []
+        if joints is None:
+            joints = body_joints_of(record.load_motion(), body)
+        rows = joints_rows(joints, body, bones)
     tokens += [None] * (len(record.annotations) - len(tokens))
     return [{"motion": rows, "caption": c, "tokens": t or None, "id": str(record.id)}
             for c, t in zip(record.annotations, tokens)]
@@ -79,6 +103,7 @@ class EvaluatorData:
     items: dict[str, list[dict]]
     body: str
     records: dict[str, Any] = field(default_factory=dict)
+    bones: list[float] | None = None   # the body every motion was laid on, if one
 
     @property
     def motion_dim(self) -> int:
@@ -88,10 +113,14 @@ class EvaluatorData:
 
 def build_evaluator_data(data: str | Path | Sequence[Any], body: str = "kit", *,
                          fractions: Sequence[float] = (0.8, 0.1, 0.1), seed: int = 0,
-                         max_seconds: float | None = 30.0) -> EvaluatorData:
+                         max_seconds: float | None = 30.0, bones=None) -> EvaluatorData:
     """Read ``data`` (anything ``datasets.seq2seq_pairs.load_records`` reads, or a list of
     records), split by motion — the folder's own split files when every record has a
-    split, else a seeded ``random_split`` — and make the items of every split."""
+    split, else a seeded ``random_split`` — and make the items of every split.
+
+    ``bones``: None (each motion on its own bones), 20 lengths (m) to lay every motion on
+    (``kit`` body), or ``"median"``: the training motions' median bone lengths (set in the
+    result's ``bones``)."""
     from motionlang.datasets.splits import random_split
     if isinstance(data, (str, Path)):
         from motionlang.datasets.seq2seq_pairs import load_records
@@ -107,8 +136,19 @@ def build_evaluator_data(data: str | Path | Sequence[Any], body: str = "kit", *,
                   for s in ("train", "val", "test")}
     else:
         splits = random_split(list(by_id), fractions, seed=seed)
-    return EvaluatorData({s: [it for i in ids for it in record_items(by_id[i], body)]
-                          for s, ids in splits.items()}, body, by_id)
+    joints: dict[str, np.ndarray] = {}
+    if isinstance(bones, str):
+        if bones != "median" or body != "kit":
+            raise DatasetError(f"bones={bones!r}: 'median' (kit body), a list of 20 lengths "
+                               "or None")
+        from motionlang.features.joint_map import bone_lengths21
+        joints = {i: body_joints_of(by_id[i].load_motion(), body)
+                  for i in splits.get("train") or list(by_id)}
+        bones = np.median(np.concatenate([bone_lengths21(j) for j in joints.values()]),
+                          axis=0).tolist()
+    items = {s: [it for i in ids for it in record_items(by_id[i], body, bones, joints.get(i))]
+             for s, ids in splits.items()}
+    return EvaluatorData(items, body, by_id, None if bones is None else list(bones))
 
 
 def train_evaluator(model, train_items: Sequence[dict], config: TrainConfig, *,

@@ -124,14 +124,15 @@ def evaluator_body(evaluator) -> str:
                           "no HumanML3D body (251: kit, 263: smpl)")
 
 
-def positions_rows(p21: np.ndarray) -> np.ndarray:
+def positions_rows(p21: np.ndarray, bones=None) -> np.ndarray:
     """Global 21-joint positions (T >= 2, 21, 3) metres at 12.5 Hz (what every text-to-motion
-    model gives, ``decoding.t2m``) -> (T-1, 251) float32 rows of the ``kit`` body (mm)."""
-    from motionlang.features.h3d_vectors import KIT_H3D, joints_to_vectors
+    model gives, ``decoding.t2m``) -> (T-1, 251) float32 rows of the ``kit`` body (mm), laid
+    on ``bones`` (20 lengths, m: an evaluator's ``config.bones``) if given."""
+    from motionlang.training.evaluator_train import joints_rows
     p = np.asarray(p21, dtype=float)
     if len(p) < 2:
         p = np.repeat(p[:1], 2, axis=0)
-    return joints_to_vectors(p / KIT_H3D.unit, KIT_H3D)[0].astype(np.float32)
+    return joints_rows(p, "kit", bones)
 
 
 def still_rows(rows: np.ndarray, body: str) -> np.ndarray:
@@ -272,14 +273,14 @@ def markdown_table(table: dict[str, dict], title: str = "") -> str:
 
 
 def generated_rows(model, captions: Sequence[str], n_frames: Sequence[int], *,
-                   desc: str = "generate", **kw) -> list[np.ndarray]:
+                   desc: str = "generate", bones=None, **kw) -> list[np.ndarray]:
     """A text-to-motion model's motions for ``captions``, each ``n_frames[i]`` frames at
     12.5 Hz (``decoding.t2m.TextToMotion.positions21``; ``kw`` go to it, e.g. ``method``,
-    ``seed``), as ``kit`` rows (:func:`positions_rows`)."""
+    ``seed``), as ``kit`` rows (:func:`positions_rows`, on ``bones`` if given)."""
     from motionlang.decoding.t2m import text_to_motion
     from motionlang.utils.progress import progress
     t2m = text_to_motion(model)
     if t2m.deterministic:   # no sampling options
         kw = {k: v for k, v in kw.items() if k not in ("method", "seed")}
-    return [positions_rows(t2m.positions21(c, max(2, int(n)), **kw))
+    return [positions_rows(t2m.positions21(c, max(2, int(n)), **kw), bones)
             for c, n in progress(list(zip(captions, n_frames)), desc=desc, unit="motions")]

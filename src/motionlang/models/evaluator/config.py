@@ -41,6 +41,12 @@ class EvaluatorConfig:
             cross-entropy over ``-distance / temperature`` of all pairs of the batch).
         margin: the hinge's margin (public: 10). temperature: InfoNCE's.
         dropout: of the movement encoder (public: 0.2).
+        bones: ``kit`` body only: 20 bone lengths (m, ``joint_map.bone_lengths21`` order)
+            every motion is laid on before its rows are made (``features.body21.
+            uniform_bones21``), as the public pipeline retargets every motion to one
+            subject's bones; ``train evaluator`` sets them to the training motions' median.
+            None (evaluators trained before 2026-11-25, and official weights, whose
+            HumanML3D rows are already on one body): each motion on its own bones.
     """
 
     motion_dim: int = 251
@@ -58,6 +64,7 @@ class EvaluatorConfig:
     margin: float = 10.0
     temperature: float = 0.1
     dropout: float = 0.2
+    bones: list[float] | None = None
 
     def __post_init__(self):
         check_numbers("EvaluatorConfig", self,
@@ -75,6 +82,11 @@ class EvaluatorConfig:
         if self.n_pos != 15:
             raise MotionlangError(f"EvaluatorConfig.n_pos must be 15 (the public POS "
                                   f"categories), got {self.n_pos!r}")
+        if self.bones is not None:
+            self.bones = [float(b) for b in self.bones]
+            if len(self.bones) != 20 or not all(0 <= b < 10 for b in self.bones):
+                raise MotionlangError(f"EvaluatorConfig.bones: 20 lengths in metres, got "
+                                      f"{self.bones}")
         if self.loss not in LOSSES:
             raise MotionlangError(f"EvaluatorConfig.loss must be one of {LOSSES}, got "
                                   f"{self.loss!r}")
