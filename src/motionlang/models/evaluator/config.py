@@ -45,8 +45,8 @@ class EvaluatorConfig:
             every motion is laid on before its rows are made (``features.body21.
             uniform_bones21``), as the public pipeline retargets every motion to one
             subject's bones; ``train evaluator`` sets them to the training motions' median.
-            None (evaluators trained before 2026-11-25, and official weights, whose
-            HumanML3D rows are already on one body): each motion on its own bones.
+            None (evaluators from before 2026-11-24's fifth session, and official
+            weights, whose HumanML3D rows are on one body already): each on its own.
     """
 
     motion_dim: int = 251

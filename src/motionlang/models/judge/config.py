@@ -27,7 +27,7 @@ class JudgeConfig:
             kept, root path scaled by the legs), so the judge reads the motion and not the
             body (a generated body's hips 2 cm wider than the training actors' otherwise
             read as "run", whatever it does). ``fit_judge`` sets them to the training
-            takes' median; None (judges trained before 2026-11-25): read as given.
+            takes' median; None (judges from before 2026-11-24's fifth session): as given.
     """
 
     contents: list[str] = field(default_factory=list)
