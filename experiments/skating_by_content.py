@@ -1,0 +1,75 @@
+"""Where a text-to-motion model's foot skating comes from, and how far the foot lock can take
+it (docs/results/real-motion.md, fifth session).
+
+    OMP_NUM_THREADS=1 .venv/bin/python experiments/skating_by_content.py [--model l2m]
+        [--data ../shared/data/bandai] [--shifts 0.15 0.2 0.25 0.3 10]
+
+One motion per Bandai test take from its sentence (expected frames, the take's length, as
+``motionlang evaluate-judge`` makes them). Prints the foot skating (``metrics.physics``) of
+the real takes, of the decoded motions and of the locked ones per asked content, then the
+mean over all motions for each ``max_shift`` of ``features.foot_lock.lock_feet`` (the
+farthest a held toe may be pulled; 0.15 m is the default, 10 m means no limit: only the leg's
+reach then stops a hold). Non-commercial: Bandai data and models trained on it (CC BY-NC 4.0).
+"""
+from __future__ import annotations
+
+import argparse
+from collections import defaultdict
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    p.add_argument("--model", default="l2m")
+    p.add_argument("--data", default=str(ROOT.parent / "shared" / "data" / "bandai"))
+    p.add_argument("--shifts", type=float, nargs="+", default=[0.15, 0.2, 0.25, 0.3, 10.0])
+    args = p.parse_args()
+
+    import numpy as np
+    import torch
+    torch.set_num_threads(1)
+    from motionlang.decoding.t2m import FPS, text_to_motion
+    from motionlang.evaluation.metrics.physics import foot_skating
+    from motionlang.features.foot_lock import lock_feet
+    from motionlang.models.judge.fit import bandai_items, bandai_sentences
+    from motionlang.models.registry import TEXT_TO_MOTION, load_model
+
+    real = bandai_items(args.data, "test", fps=FPS)
+    sentences = bandai_sentences(args.data, "test", seed=0)
+    t2m = text_to_motion(load_model(args.model, kind=TEXT_TO_MOTION))
+    kw = {} if t2m.deterministic else {"method": "mean", "seed": 0}
+    gen = [t2m.positions21(s.text, max(2, len(it.positions)), **kw)
+           for s, it in zip(sentences, real)]
+
+    def skating(motions) -> list[float]:
+        return [foot_skating(m, FPS) for m in motions]
+
+    columns = {"real": skating([it.positions for it in real]), "decoded": skating(gen),
+               "locked": skating([lock_feet(m, FPS) for m in gen])}
+    by: dict[str, dict[str, list[float]]] = defaultdict(lambda: defaultdict(list))
+    for i, it in enumerate(real):
+        for name, values in columns.items():
+            if np.isfinite(values[i]):
+                by[it.content][name].append(values[i])
+    print(f"{len(real)} Bandai test takes, model {args.model}: foot skating (m/s), mean over "
+          "the motions with a contact\n")
+    print("| asked content | motions | real takes | decoded | locked |")
+    print("|---|---|---|---|---|")
+    for content in sorted(by):
+        row = by[content]
+        print(f"| {content} | {len(row['real'])} | " + " | ".join(
+            f"{np.mean(row[k]):.3f}" for k in ("real", "decoded", "locked")) + " |")
+    print(f"| all | {len(real)} | " + " | ".join(
+        f"{np.nanmean(columns[k]):.3f}" for k in ("real", "decoded", "locked")) + " |\n")
+    print("| lock's max_shift (m) | foot skating (m/s) | times the real takes' |")
+    print("|---|---|---|")
+    truth = np.nanmean(columns["real"])
+    for shift in args.shifts:
+        v = np.nanmean(skating([lock_feet(m, FPS, max_shift=shift) for m in gen]))
+        print(f"| {shift:g} | {v:.4f} | {v / truth:.2f} |")
+
+
+if __name__ == "__main__":
+    main()
