@@ -56,7 +56,8 @@ def main() -> None:
     import torch
 
     from motionlang.evaluation.judge import judge_motions
-    from motionlang.models.judge.fit import accuracy, bandai_items, fit_judge, primitive_items
+    from motionlang.models.judge.fit import (accuracy, bandai_items, fit_judge, median_bones,
+                                             primitive_items)
     torch.set_num_threads(1)
     t0 = time.time()
     train, val, test = (bandai_items(args.data, s) for s in ("train", "val", "test"))
@@ -64,8 +65,9 @@ def main() -> None:
     print(f"takes: train {len(train)}, val {len(val)}, test {len(test)}; procedural "
           f"primitives {len(extra)} (read in {time.time() - t0:.0f} s)", flush=True)
     t1 = time.time()
+    # the real actors' body, not a median with the procedural primitives' (as train judge)
     judge, _ = fit_judge(train + extra, val, epochs=args.epochs, seed=args.seed,
-                         mirror=args.mirror,
+                         mirror=args.mirror, bones=median_bones(train or extra),
                          log=lambda s: print(s, flush=True))
     fit_s = time.time() - t1
     if args.out:

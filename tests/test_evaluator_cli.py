@@ -44,6 +44,19 @@ def test_train_evaluator_writes_a_run_folder(run):
     model = load_model(run, kind="evaluator")
     assert model.config.motion_dim == 251 and model.config.embed_dim == 8
     assert json.loads((run / "commands.jsonl").read_text().splitlines()[0])["grad_clip"] == 0.5
+    assert len(model.config.bones) == 20     # every motion laid on one body by default
+
+
+def test_a_resumed_evaluator_keeps_the_body_it_started_on(corpus, tmp_path, monkeypatch):
+    from motionlang.models.registry import load_model
+    monkeypatch.setenv("MOTIONLANG_CACHE", str(tmp_path / "cache"))
+    out = tmp_path / "ev"
+    args = ["train", "evaluator", "--data", str(corpus), "--out", str(out),
+            "--batch-size", "16", *TINY]
+    assert main([*args, "--epochs", "1", "--as-given"]) == 0
+    assert load_model(out, kind="evaluator").config.bones is None
+    assert main([*args, "--epochs", "2", "--resume"]) == 0     # no --as-given: kept anyway
+    assert load_model(out / "last.pt", kind="evaluator").config.bones is None
 
 
 def test_guo_table_rows_and_files(run, corpus, tmp_path, capsys):

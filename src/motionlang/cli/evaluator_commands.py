@@ -54,16 +54,18 @@ def cmd_train(args: argparse.Namespace) -> int:
 
     logging.basicConfig(level=logging.INFO, format="%(message)s")
     run = Path(args.out)
+    # every motion on one body (the training motions' median bones) unless --as-given; a
+    # resumed run keeps the body it started on (its normaliser and weights were fitted there)
+    bones = "median" if args.uniform and args.body == "kit" else None
     if args.resume:
-        check_resume(run)
+        from motionlang.training.run_files import read_training_checkpoint
+        bones = read_training_checkpoint(check_resume(run, read=False))["model"]["config"].get(
+            "bones")
     cfg = train_config(args, run, optimizer="adam")     # checked at once
     config = evaluator_config(args)
     lead = lead_process()
-    # every motion on one body (the training motions' median bones) unless --as-given
-    uniform = args.uniform and args.body == "kit"
     data = build_evaluator_data(args.data, args.body, seed=args.seed,
-                                max_seconds=args.max_seconds,
-                                bones="median" if uniform else None)
+                                max_seconds=args.max_seconds, bones=bones)
     config.bones = data.bones
     if lead:
         save_splits({s: list(dict.fromkeys(it["id"] for it in items))

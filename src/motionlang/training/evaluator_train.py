@@ -55,6 +55,15 @@ def motion_rows(motion, body: str = "kit", bones=None) -> np.ndarray:
     return joints_rows(body_joints_of(motion, body), body, bones)
 
 
+def _record_joints(record, body: str) -> np.ndarray:
+    """A record's (T, J, 3) metres of ``body``: a HumanML3D-layout record's own joints (exact
+    and cheaper) when it is of that body, else its motion's (:func:`body_joints_of`)."""
+    if getattr(getattr(record, "body", None), "name", None) == body and \
+            hasattr(record, "load_joints"):
+        return np.asarray(record.load_joints(), dtype=float)
+    return body_joints_of(record.load_motion(), body)
+
+
 def record_items(record, body: str = "kit", bones=None, joints: np.ndarray | None = None
                  ) -> list[dict]:
     """One item per caption of a record (``id``, ``annotations``, ``load_motion()``; a
@@ -68,7 +77,7 @@ def record_items(record, body: str = "kit", bones=None, joints: np.ndarray | Non
         rows = np.asarray(record.load_vectors(), dtype=np.float32)
     else:
         if joints is None:
-            joints = body_joints_of(record.load_motion(), body)
+            joints = _record_joints(record, body)
         rows = joints_rows(joints, body, bones)
     tokens += [None] * (len(record.annotations) - len(tokens))
     return [{"motion": rows, "caption": c, "tokens": t or None, "id": str(record.id)}
@@ -142,8 +151,7 @@ def build_evaluator_data(data: str | Path | Sequence[Any], body: str = "kit", *,
             raise DatasetError(f"bones={bones!r}: 'median' (kit body), a list of 20 lengths "
                                "or None")
         from motionlang.features.joint_map import bone_lengths21
-        joints = {i: body_joints_of(by_id[i].load_motion(), body)
-                  for i in splits.get("train") or list(by_id)}
+        joints = {i: _record_joints(by_id[i], body) for i in splits.get("train") or list(by_id)}
         bones = np.median(np.concatenate([bone_lengths21(j) for j in joints.values()]),
                           axis=0).tolist()
     items = {s: [it for i in ids for it in record_items(by_id[i], body, bones, joints.get(i))]
