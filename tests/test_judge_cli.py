@@ -56,6 +56,7 @@ def test_train_judge_writes_a_run_folder_with_its_licence(judge_run, capsys):
     # mirrored copies of the takes teach the mirrored content too
     assert judge.config.contents == ["walk", "wave-left-hand", "wave-right-hand"]
     assert judge.config.styles == ["elderly", "normal"]
+    assert len(judge.config.bones) == 20     # every motion read on the takes' median body
 
 
 def test_evaluate_judge_table_with_a_model(judge_run, bandai, tmp_path, capsys):
@@ -64,6 +65,7 @@ def test_evaluate_judge_table_with_a_model(judge_run, bandai, tmp_path, capsys):
                  "--model", "l2m", "-o", str(out)]) == 0
     text = capsys.readouterr().out
     assert "| ground truth |" in text and "| l2m |" in text and "non-commercial" in text
+    assert "motions read on one body" in text
     report = json.loads((out / "judge_report.json").read_text())
     assert report["takes"] == 4 and set(report["rows"]) == {"ground truth", "l2m"}
     row = report["rows"]["l2m"]

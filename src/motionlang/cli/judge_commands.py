@@ -155,7 +155,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
                         [(it.content, it.style) for it in real], FPS, generated, asked, FPS,
                         rng=args.seed)
     title = (f"{len(real)} Bandai {args.split} takes of {source}, judge {args.judge} "
-             f"({len(judge.config.contents)} contents, {len(judge.config.styles)} styles); "
+             f"({len(judge.config.contents)} contents, {len(judge.config.styles)} styles, "
+             f"motions read {'on one body' if judge.config.bones else 'on their own bones'}); "
              "models asked one sentence per take. Ground truth: the judge's own accuracy, "
              "FID between two halves of the takes. " + NON_COMMERCIAL)
     text = markdown_judge_table(table, title)
