@@ -66,6 +66,7 @@ def test_guo_table_rows_and_files(run, corpus, tmp_path, capsys):
     text = capsys.readouterr().out
     for row in ("ground truth", "nearest neighbour", "standing still", "l2m"):
         assert f"| {row} |" in text
+    assert "(kit body, every motion laid on one body)" in text
     assert (out / "t2m_guo.md").read_text() == text
     report = json.loads((out / "t2m_guo.json").read_text())
     assert report["protocol"] == "guo" and report["pairs"] == 5 and report["body"] == "kit"

@@ -284,7 +284,8 @@ def cmd_evaluate_guo(args: argparse.Namespace) -> int:
                       reference_items=reference, repeats=args.repeats, seed=args.seed,
                       batch_size=args.rp_batch)
     title = (f"{len(pairs)} {args.split} pairs of {args.data}, evaluator "
-             f"{args.evaluator or args.evaluator_official} ({body} body); mean ± 95 % "
+             f"{args.evaluator or args.evaluator_official} ({body} body"
+             f"{', every motion laid on one body' if bones else ''}); mean ± 95 % "
              f"interval over {args.repeats} shuffles, R-precision in batches of "
              f"{args.rp_batch}; FID against the test motions (ground truth: test against "
              f"{'training' if args.fid_reference == 'train' else args.fid_reference} "
