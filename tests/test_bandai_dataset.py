@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import io
+import os
 import tarfile
 from pathlib import Path
 
@@ -72,6 +73,10 @@ def test_archives_extracted_once_into_the_cache(tmp_path, monkeypatch):
     assert m.meta["content"] == "walk-turn-left" and "non-commercial" in m.meta["licence"]
     # a second call reuses the extraction; nothing but the dataset folder in the cache
     before = r.path.stat().st_mtime_ns
+    assert load_bandai(src)[-1].path.stat().st_mtime_ns == before
+    # ... and so does a copy of the same archive with a new time (a fresh checkout)
+    archive = src / "Bandai-Namco-Research-Motiondataset-2.tar.xz"
+    os.utime(archive, ns=(archive.stat().st_atime_ns, archive.stat().st_mtime_ns + 10**9))
     assert load_bandai(src)[-1].path.stat().st_mtime_ns == before
     assert sorted(p.name for p in (tmp_path / "cache" / "bandai").iterdir()) == [
         "Bandai-Namco-Research-Motiondataset-1", "Bandai-Namco-Research-Motiondataset-2"]
