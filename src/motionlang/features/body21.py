@@ -76,6 +76,13 @@ def leg_length21(lengths) -> float:
     return float(np.mean([med[list(leg)].sum() for leg in _LEGS]))
 
 
+def median_bones21(motions) -> list[float]:
+    """The 20 median bone lengths (``bone_lengths21`` order, the motions' unit) over every
+    frame of ``motions`` (each (T, 21, 3)): one body to lay them all on."""
+    return np.median(np.concatenate([bone_lengths21(_check(p)) for p in motions]),
+                     axis=0).tolist()
+
+
 def uniform_bones21(p21, lengths) -> np.ndarray:
     """(T, 21, 3) positions -> the same motion with bone i (child i + 1 to its parent,
     ``bone_lengths21``' order) ``lengths[i]`` long in every frame, its direction kept (a bone

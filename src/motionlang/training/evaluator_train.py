@@ -150,10 +150,9 @@ def build_evaluator_data(data: str | Path | Sequence[Any], body: str = "kit", *,
         if bones != "median" or body != "kit":
             raise DatasetError(f"bones={bones!r}: 'median' (kit body), a list of 20 lengths "
                                "or None")
-        from motionlang.features.joint_map import bone_lengths21
+        from motionlang.features.body21 import median_bones21
         joints = {i: _record_joints(by_id[i], body) for i in splits.get("train") or list(by_id)}
-        bones = np.median(np.concatenate([bone_lengths21(j) for j in joints.values()]),
-                          axis=0).tolist()
+        bones = median_bones21(joints.values())
     items = {s: [it for i in ids for it in record_items(by_id[i], body, bones, joints.get(i))]
              for s, ids in splits.items()}
     return EvaluatorData(items, body, by_id, None if bones is None else list(bones))

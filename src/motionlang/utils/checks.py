@@ -30,6 +30,20 @@ def check_numbers(owner: str, cfg: Any, *, positive_ints: Iterable[str] = (),
                 raise MotionlangError(f"{owner}.{name} must be {what}, got {v!r}")
 
 
+def check_bones(owner: str, bones: Any) -> list[float] | None:
+    """A config's ``bones`` field (None, or 20 bone lengths in metres, 0 <= b < 10) as a
+    list of floats; raise naming ``owner`` otherwise."""
+    if bones is None:
+        return None
+    try:
+        out = [float(b) for b in bones]
+    except (TypeError, ValueError):
+        out = []
+    if len(out) != 20 or not all(0 <= b < 10 for b in out):
+        raise MotionlangError(f"{owner}.bones: 20 lengths in metres, got {bones!r}")
+    return out
+
+
 def _is_int(v: Any) -> bool:
     return isinstance(v, int) and not isinstance(v, bool)
 

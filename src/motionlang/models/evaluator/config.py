@@ -14,7 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from motionlang.errors import MotionlangError
-from motionlang.utils.checks import check_numbers
+from motionlang.utils.checks import check_bones, check_numbers
 
 #: the motion feature size of each public dataset (``dataset_name`` "t2m" / "kit")
 OFFICIAL_POSE_DIMS = {"humanml3d": 263, "kit": 251}
@@ -82,11 +82,7 @@ class EvaluatorConfig:
         if self.n_pos != 15:
             raise MotionlangError(f"EvaluatorConfig.n_pos must be 15 (the public POS "
                                   f"categories), got {self.n_pos!r}")
-        if self.bones is not None:
-            self.bones = [float(b) for b in self.bones]
-            if len(self.bones) != 20 or not all(0 <= b < 10 for b in self.bones):
-                raise MotionlangError(f"EvaluatorConfig.bones: 20 lengths in metres, got "
-                                      f"{self.bones}")
+        self.bones = check_bones("EvaluatorConfig", self.bones)
         if self.loss not in LOSSES:
             raise MotionlangError(f"EvaluatorConfig.loss must be one of {LOSSES}, got "
                                   f"{self.loss!r}")

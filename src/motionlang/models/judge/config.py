@@ -4,7 +4,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from motionlang.errors import MotionlangError
-from motionlang.utils.checks import check_numbers
+from motionlang.utils.checks import check_bones, check_numbers
 
 
 @dataclass
@@ -45,10 +45,6 @@ class JudgeConfig:
     def __post_init__(self):
         check_numbers("JudgeConfig", self, unit=("dropout",), positive=("fps",), positive_ints=(
             "n_features", "hidden", "embed", "layers", "kernel", "window"))
-        if self.bones is not None:
-            self.bones = [float(b) for b in self.bones]
-            if len(self.bones) != 20 or not all(b >= 0 and b < 10 for b in self.bones):
-                raise MotionlangError(f"JudgeConfig.bones: 20 lengths in metres, got "
-                                      f"{self.bones}")
+        self.bones = check_bones("JudgeConfig", self.bones)
         if not self.contents or not self.styles:
             raise MotionlangError("JudgeConfig needs its content and style label lists")

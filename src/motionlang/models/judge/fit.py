@@ -21,7 +21,8 @@ import torch
 from torch import nn
 
 from motionlang.errors import MotionlangError
-from motionlang.features.joint_map import KIT21_MIRROR, bone_lengths21
+from motionlang.features.body21 import median_bones21
+from motionlang.features.joint_map import KIT21_MIRROR
 from motionlang.features.normalizer import Normalizer
 from motionlang.models.judge.config import JudgeConfig
 from motionlang.models.judge.model import MotionJudge, judge_rows
@@ -142,8 +143,7 @@ def accuracy(judge: MotionJudge, items: Sequence[JudgeItem]) -> dict[str, float]
 def median_bones(items: Sequence[JudgeItem]) -> list[float]:
     """The 20 median bone lengths (m) over every frame of ``items``: the body a judge
     reads motions on (``JudgeConfig.bones``)."""
-    return np.median(np.concatenate([bone_lengths21(it.positions) for it in items]),
-                     axis=0).tolist()
+    return median_bones21([it.positions for it in items])
 
 
 def fit_judge(train: Sequence[JudgeItem], val: Sequence[JudgeItem] = (), *,
