@@ -59,6 +59,15 @@ def test_train_judge_writes_a_run_folder_with_its_licence(judge_run, capsys):
     assert len(judge.config.bones) == 20     # every motion read on the takes' median body
 
 
+def test_train_judge_prints_a_line_per_epoch(bandai, tmp_path, monkeypatch, capsys):
+    monkeypatch.setenv("MOTIONLANG_CACHE", str(tmp_path / "cache"))
+    assert main(["train", "judge", "--data", f"bandai:{bandai}", "--out",
+                 str(tmp_path / "run"), "--epochs", "2", *TINY]) == 0
+    lines = [l for l in capsys.readouterr().out.splitlines() if l.startswith("epoch ")]
+    assert [l.split(":")[0] for l in lines] == ["epoch 1/2", "epoch 2/2"]
+    assert all("validation content" in l for l in lines)
+
+
 def test_evaluate_judge_table_with_a_model(judge_run, bandai, tmp_path, capsys):
     out = tmp_path / "report"
     assert main(["evaluate-judge", "--judge", str(judge_run), "--data", f"bandai:{bandai}",

@@ -56,10 +56,18 @@ def cmd_train(args: argparse.Namespace) -> int:
           + (f"; {len(extra)} procedural primitives" if args.primitives else ""))
     if args.uniform:    # the real actors' body, not a mean with the procedural one's
         config["bones"] = median_bones(train or extra)
+    def epoch_line(text: str) -> None:   # progress a log file shows too (not a bar)
+        if not args.verbose:
+            rec = dict(zip(text.split()[::2], text.split()[1::2]))
+            text = (f"epoch {rec.get('epoch')}/{args.epochs}: validation content "
+                    f"{rec.get('val_content', '-')}, style {rec.get('val_style', '-')}, "
+                    f"{rec.get('seconds', '?')} s")
+        print(text, flush=True)
+
     judge, history = fit_judge(train + extra, val, epochs=args.epochs, uniform=args.uniform,
                                batch_size=args.batch_size, lr=args.lr,
                                weight_decay=args.weight_decay, mirror=args.mirror,
-                               seed=args.seed, log=print if args.verbose else None, **config)
+                               seed=args.seed, log=epoch_line, **config)
     out = run / MODEL_FILES["judge"]
     judge.save(out)
     with atomic_write(run / "history.json") as fh:
@@ -113,7 +121,8 @@ def register_train(train_sub) -> None:
                    help="train without left/right mirrored copies of the takes")
     p.add_argument("--seed", type=seed_int, default=0,
                    help="seed of the initial weights, crops and batch order")
-    p.add_argument("--verbose", action="store_true", help="print a line per epoch")
+    p.add_argument("--verbose", action="store_true",
+                   help="the training measures of every epoch (default: a short line each)")
     p.set_defaults(func=cmd_train)
 
 

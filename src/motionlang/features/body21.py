@@ -88,7 +88,8 @@ def uniform_bones21(p21, lengths) -> np.ndarray:
     ``bone_lengths21``' order) ``lengths[i]`` long in every frame, its direction kept (a bone
     of zero length stays at its parent). The root keeps frame 0's position; its path from
     there is scaled by ``leg_length21(lengths)`` over the motion's own median legs, so
-    strides fit the new legs. Same unit as ``lengths`` (20,)."""
+    strides fit the new legs; the feet may then leave the floor (readers put them back,
+    ``positions.floor_height``). Same unit as ``lengths`` (20,)."""
     p = _check(p21)
     lengths = np.asarray(lengths, dtype=float)
     if lengths.shape != (len(KIT21_NAMES) - 1,) or not (np.isfinite(lengths).all()
