@@ -191,6 +191,37 @@ def test_energy_loss_on_hand_worked_values():
     assert out["energy"] > 0 and "energy" not in tiny().loss(batch())
 
 
+def test_foot_term_in_metres_with_its_weight_and_only_with_a_normaliser():
+    from motionlang.features.joint_map import TOES
+    from motionlang.models.twostream.losses import foot_contact_loss
+    b = batch()
+    b["motion"] = 0.1 * b["motion"]                      # a calm motion: ~1 cm a frame
+    b["motion"][..., [3 * t + 1 for t in TOES]] = -3.0   # toes down (y = 0.1 * -3 + 0.3 = 0)
+    m = tiny(lambdas={"foot": 2.0})
+    with pytest.raises(MotionlangError, match="normaliser"):
+        m.loss(b)
+    mean = np.full(66, 0.3)
+    mean[63:] = 0.0                                      # the root steps ~1 mm a frame
+    m.normalizer = Normalizer(mean=mean, std=np.full(66, 0.1))
+    m.eval()   # no dropout: the same decoded frames twice
+    torch.manual_seed(1)
+    out = m.loss(b)
+    lam = TwoStreamConfig(lambdas={"foot": 2.0}).lambdas
+    torch.testing.assert_close(out["loss"].detach(),
+                               sum(lam[k] * out[k] for k in out if k != "loss"))
+    assert out["foot"] > 0 and "foot" not in tiny().loss(batch())
+    # the term is the seq2seq loss of both decoded paths, read through the normaliser
+    with torch.no_grad():
+        torch.manual_seed(1)
+        q = m._unroll({"pose": m.pose_encoder(b["motion"], b["lengths"]),
+                       "sentence": m.sentence_encoder(*m._tokens(b))}, b["motion"], b["lengths"])
+    mask = (torch.arange(9)[None] < b["lengths"][:, None]).float()
+    mean = torch.as_tensor(mean, dtype=torch.float32)
+    want = sum(foot_contact_loss(q[k] * 0.1 + mean, b["motion"] * 0.1 + mean, mask, TOES, 12.5)
+               for k in ("pose", "sentence"))
+    torch.testing.assert_close(out["foot"], want)
+
+
 def _grads(module) -> float:
     return sum(float(p.grad.abs().sum()) for p in module.parameters() if p.grad is not None)
 

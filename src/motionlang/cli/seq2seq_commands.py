@@ -108,6 +108,12 @@ def _add_train(sub, name: str, help_: str) -> None:
         p.add_argument("--energy", type=nonneg_float, default=d.energy_weight, metavar="W",
                        help="weight of a loss on the local speeds of the expected frames "
                             "against the reference's, over ~1 s windows (paper: 0)")
+        p.add_argument("--foot-contact", type=nonneg_float, default=d.foot_weight,
+                       metavar="W",
+                       help="weight of a loss on the expected frames' toe speed (m/s) where "
+                            "the reference's toe is down (below 5 cm, slower than 1 m/s): "
+                            "planted feet that do not slide; --features positions only "
+                            "(paper: 0)")
         p.add_argument("--plan-parts", type=nonneg_int, default=d.plan_parts, metavar="K",
                        help="feed every decoder step a coarse plan of the motion (per part of "
                             "K of its duration: mean features and mean change), the true one "
@@ -218,6 +224,7 @@ def _new_model(args: argparse.Namespace, data):
                                            loss_weights=loss_weights,
                                            input_mask=input_mask,
                                            energy_weight=args.energy,
+                                           foot_weight=args.foot_contact,
                                            plan_parts=args.plan_parts,
                                            plan_weight=args.plan_weight,
                                            plan_noise=args.plan_noise,

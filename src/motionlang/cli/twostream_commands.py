@@ -150,8 +150,9 @@ def register_train(train_sub) -> None:
                         "motion it is, (t - 1) / (T - 1) for the frame it reads")
     p.add_argument("--weight", action="append", metavar="TERM=W",
                    help="a loss term's weight, repeatable (terms: pose, manifold, velocity, "
-                        "embedding, adversarial, discriminator, energy); terms not given keep the "
-                        "paper's weights (energy: 0, beyond the paper)")
+                        "embedding, adversarial, discriminator, energy, foot); terms not given keep "
+                        "the paper's weights (energy, foot: 0, beyond the paper; foot: the decoded "
+                        "toes' speed in m/s where the reference's toe is down)")
     p.add_argument("--text-layers", metavar="I,J,..",
                    help="hidden states of the text model to concatenate (default: the "
                         "config's, 3,4,5,6)")

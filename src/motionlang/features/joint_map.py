@@ -54,6 +54,8 @@ KIT21_PARENTS: tuple[int, ...] = (
 KIT21_MIRROR: tuple[int, ...] = tuple(
     KIT21_NAMES.index(("R" + n[1:]) if n[0] == "L" else ("L" + n[1:]) if n[0] == "R" else n)
     for n in KIT21_NAMES)
+#: the toe joints (LF, RF): the part of a foot that is down longest; foot contact is read there
+TOES: tuple[int, ...] = (KIT21_NAMES.index("LF"), KIT21_NAMES.index("RF"))
 
 #: named maps (``rig_maps.RIG_MAPS``), tried in this order, most specific first.
 JOINT_MAPS: dict[str, dict[str, Spec]] = {m.name: m.joints for m in RIG_MAPS}

@@ -22,10 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from motionlang.errors import MotionlangError
-from motionlang.features.joint_map import KIT21_NAMES
-
-#: the toe joints (LF, RF) of ``KIT21_NAMES``: the part of a foot that is down longest
-TOES = (KIT21_NAMES.index("LF"), KIT21_NAMES.index("RF"))
+from motionlang.features.joint_map import TOES  # noqa: F401 (re-exported: the feet measured)
 
 
 def _check(p21, name: str) -> np.ndarray:

@@ -96,6 +96,10 @@ class L2MConfig:
     plan_mean_mask: list[float] | None = None
     plan_weight: float = 1.0
     plan_noise: float = 0.0
+    # weight of a term on the expected frames' toe speed (m/s) over the frame steps where the
+    # reference's toe is down (``losses.foot_contact_loss``; position features only); 0 =
+    # off (the paper's loss). Beyond the paper: planted feet that do not slide.
+    foot_weight: float = 0.0
     pad_id: int = 0
     max_frames: int = 300       # decoding cap (frames)
 
@@ -104,7 +108,8 @@ class L2MConfig:
             "vocab_size", "n_features", "embed_dim", "enc_hidden", "enc_layers", "dec_hidden",
             "dec_layers", "n_components", "attn_dim", "max_frames", "energy_window",
             "plan_hidden"), nonneg_ints=("rollout_warmup", "plan_parts"),
-            nonneg=("end_weight", "input_noise", "energy_weight", "plan_weight", "plan_noise"))
+            nonneg=("end_weight", "input_noise", "energy_weight", "plan_weight", "plan_noise",
+                    "foot_weight"))
         if not 0 <= self.rollout <= 1:
             raise MotionlangError(f"L2MConfig.rollout must be in [0, 1], got {self.rollout!r}")
 

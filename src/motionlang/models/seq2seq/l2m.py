@@ -59,12 +59,13 @@ import torch
 from torch import nn
 
 from motionlang.errors import MotionlangError
+from motionlang.features.joint_map import TOES
 from motionlang.models.seq2seq import mdn
 from motionlang.models.checkpoint import Seq2SeqCheckpoint
 from motionlang.models.length import SentenceLength
 from motionlang.models.seq2seq.plan import Planner, motion_plan, plan_at
 from motionlang.models.seq2seq.layers import AdditiveAttention, BiGRUEncoder, StackedDecoder
-from motionlang.models.seq2seq.losses import energy_loss
+from motionlang.models.seq2seq.losses import energy_loss, foot_contact_loss
 from motionlang.models.seq2seq.config import L2MConfig  # noqa: F401 (re-exported)
 
 
@@ -102,6 +103,11 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
             raise MotionlangError("L2MConfig.plan_parts, plan_weight and plan_noise must be "
                                   f">= 0, got {c.plan_parts!r}, {c.plan_weight!r}, "
                                   f"{c.plan_noise!r}")
+        if c.foot_weight > 0 and features is not None and (
+                getattr(features, "kind", None) != "positions" or c.n_features != 66):
+            raise MotionlangError("L2MConfig.foot_weight needs position features (train l2m "
+                                  "--features positions): the foot's step is read from "
+                                  "joint positions")
         self.vocab, self.normalizer, self.features = vocab, normalizer, features
         self.embed = nn.Embedding(c.vocab_size, c.embed_dim, padding_idx=c.pad_id)
         self.embed_norm = nn.LayerNorm(c.embed_dim)
@@ -316,6 +322,10 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
                                  self.config.energy_window)
             out["loss"] = out["loss"] + self.config.energy_weight * energy
             out["energy"] = energy.detach()
+        if self.config.foot_weight > 0:
+            foot = self._foot_term(params, motion, valid.reshape(B, T))
+            out["loss"] = out["loss"] + self.config.foot_weight * foot
+            out["foot"] = foot.detach()
         if self.planner is not None:
             # the planner that plans from the sentence at generation time (the decoder above
             # was fed the true plan); its parameters are its own
@@ -324,6 +334,21 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
             out["loss"] = out["loss"] + self.config.plan_weight * plan_mse
             out["plan"] = plan_mse.detach()
         return out
+
+    def _foot_term(self, params: mdn.MixtureParams, motion: torch.Tensor,
+                   valid: torch.Tensor) -> torch.Tensor:
+        """``foot_contact_loss`` of the expected frames (B, T, F) against ``motion``, both
+        un-normalised with the features' normaliser; valid (B, T) bool."""
+        norm = getattr(self.features, "normalizer", None)
+        if norm is None or getattr(self.features, "kind", None) != "positions":
+            raise MotionlangError("L2MConfig.foot_weight needs the model's position features "
+                                  "and their normaliser")
+        mean = torch.as_tensor(norm.mean, dtype=motion.dtype)
+        std = torch.as_tensor(norm.std, dtype=motion.dtype)
+        B, T, F = motion.shape
+        pred = mdn.mixture_mean(params).reshape(B, T, F) * std + mean
+        return foot_contact_loss(pred, motion * std + mean, valid.to(motion.dtype), TOES,
+                                 self.features.fps)
 
     def to_checkpoint(self) -> dict:
         d = super().to_checkpoint()

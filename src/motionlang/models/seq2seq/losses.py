@@ -52,3 +52,49 @@ def energy_loss(pred: torch.Tensor, target: torch.Tensor, mask: torch.Tensor,
         return (num / den.clamp(min=1e-6)).transpose(1, 2)         # (B, T-1, F)
 
     return masked_smooth_l1(local_speed(pred), local_speed(target), m[:, 0])
+
+
+def foot_steps(raw: torch.Tensor, feet: tuple[int, ...]) -> torch.Tensor:
+    """Horizontal steps of foot joints between consecutive frames of position features.
+
+    raw: (B, T, 66) *un-normalised* features of ``features.positions`` (21 local joints in
+    the body's heading frame, then the root's ground step (sideways, forward; m/frame) in
+    the previous frame's heading frame and its heading change (rad/frame)). feet: indices
+    into the 21 joints. Returns (B, T-1, k, 2): each joint's move from frame t-1 to t, in
+    metres, in the heading frame of t-1 (the frame that ``root.increments`` steps from):
+    ``v_t + Ry(dyaw_t) local_t - local_{t-1}``, the same step the decoded global positions take.
+    """
+    B, T, _ = raw.shape
+    local = raw[..., :63].reshape(B, T, 21, 3)[:, :, list(feet)]
+    x, z = local[..., 0], local[..., 2]                       # (B, T, k)
+    a = raw[:, 1:, 65].unsqueeze(-1)
+    c, s = torch.cos(a), torch.sin(a)
+    dx = raw[:, 1:, 63:64] + c * x[:, 1:] + s * z[:, 1:] - x[:, :-1]
+    dz = raw[:, 1:, 64:65] - s * x[:, 1:] + c * z[:, 1:] - z[:, :-1]
+    return torch.stack([dx, dz], dim=-1)
+
+
+def foot_contact_loss(pred_raw: torch.Tensor, target_raw: torch.Tensor, mask: torch.Tensor,
+                      feet: tuple[int, ...], fps: float, height: float = 0.05,
+                      speed: float = 1.0) -> torch.Tensor:
+    """Mean horizontal speed (m/s) of the predicted ``feet`` over the frame steps where the
+    *reference's* foot is down: below ``height`` m (its local y, the floor being y = 0) at
+    both frames and slower than ``speed`` m/s, the contact test of
+    ``evaluation.metrics.physics.foot_skating``. Zero when no reference foot is down.
+
+    pred_raw, target_raw: (B, T, 66) un-normalised position features; mask: (B, T), 1 on
+    valid frames. A planted foot should not move: this asks the model's frames to keep
+    it where it was, which the frame NLL alone does not (small errors of the root's step and
+    of the local foot position each look likely but add up to a slide).
+    """
+    if pred_raw.shape[1] < 2:
+        return pred_raw.new_zeros(())
+    with torch.no_grad():
+        ref = foot_steps(target_raw, feet).norm(dim=-1) * fps             # (B, T-1, k)
+        y = target_raw[..., :63].reshape(*target_raw.shape[:2], 21, 3)[:, :, list(feet), 1]
+        low = y < height
+        pair = (mask[:, 1:] * mask[:, :-1]).bool().unsqueeze(-1)
+        down = (low[:, 1:] & low[:, :-1] & (ref < speed) & pair).to(pred_raw.dtype)
+    # sqrt(. + eps), not norm(): a finite gradient where a foot does not move at all
+    moved = (foot_steps(pred_raw, feet).pow(2).sum(dim=-1) + 1e-10).sqrt() * fps
+    return (moved * down).sum() / down.sum().clamp(min=1.0)

@@ -1,5 +1,5 @@
 """Loss terms of the two-stream model: the embedding and discriminator terms here; the
-masked frame terms (pose, velocity, energy) are :mod:`motionlang.models.seq2seq.losses`',
+masked frame terms (pose, velocity, energy, foot contact) are :mod:`motionlang.models.seq2seq.losses`',
 re-exported.
 """
 from __future__ import annotations
@@ -8,7 +8,7 @@ import torch
 import torch.nn.functional as F
 
 from motionlang.models.seq2seq.losses import (  # noqa: F401 (the model's terms, re-exported)
-    energy_loss, frame_mask, masked_smooth_l1, velocity_loss)
+    energy_loss, foot_contact_loss, frame_mask, masked_smooth_l1, velocity_loss)
 
 
 def embedding_loss(a: dict[str, torch.Tensor], b: dict[str, torch.Tensor]) -> torch.Tensor:

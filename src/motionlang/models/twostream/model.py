@@ -23,6 +23,7 @@ from torch import nn
 from torch.func import functional_call
 
 from motionlang.errors import MotionlangError
+from motionlang.features.joint_map import TOES
 from motionlang.models.checkpoint import (FORMAT_VERSION, pack_normalizer, read_model_dict,
                                           unpack_normalizer,
                                           write_checkpoint)
@@ -37,6 +38,8 @@ from motionlang.models.twostream.text import build_text_encoder
 STAGES = ("joint", "pose", "text")
 #: the length of a generation without a length model (frames at 12.5 Hz: 10 s)
 DEFAULT_FRAMES = 125
+#: frame rate of the model's position features (Ghosh et al. 2021: KIT-ML at 12.5 Hz)
+FPS = 12.5
 
 
 class TwoStreamModel(nn.Module):
@@ -152,7 +155,8 @@ class TwoStreamModel(nn.Module):
         Terms: ``pose`` (smooth-L1 of the poses decoded from the pose and from the sentence
         embedding), ``manifold`` (re-encoded decoded poses vs their embedding), ``velocity``,
         ``embedding`` (sentence vs pose embedding), ``adversarial`` (generator),
-        ``discriminator``, and ``energy`` (local speeds, only with a weight > 0). Which
+        ``discriminator``, ``energy`` (local speeds) and ``foot`` (toe speed where the
+        reference's toe is down, m/s), the last two only with a weight > 0. Which
         terms exist depends on the stage and ``extra_losses``; the text stage with pose and
         energy weights 0 has the embedding term only (nothing is decoded).
         """
@@ -166,6 +170,7 @@ class TwoStreamModel(nn.Module):
         mask = L.frame_mask(lengths, B, T).to(x)
         extra = c.extra_losses
         energy = c.lambdas["energy"] > 0
+        foot = c.lambdas["foot"] > 0
         terms: dict[str, torch.Tensor] = {}
         with torch.set_grad_enabled(stage != "text" and torch.is_grad_enabled()):
             zp = self.pose_encoder(x, lengths)
@@ -189,6 +194,8 @@ class TwoStreamModel(nn.Module):
                 terms["velocity"] = L.velocity_loss(qp, x, mask)
             if energy:
                 terms["energy"] = L.energy_loss(qp, x, mask)
+            if foot:
+                terms["foot"] = self._foot_term(qp, x, mask)
         if "sentence" in q:
             qs = fake = q["sentence"]   # what generation produces
             terms["pose"] = terms.get("pose", 0.0) + L.masked_smooth_l1(qs, x, mask)
@@ -196,6 +203,8 @@ class TwoStreamModel(nn.Module):
                 terms["velocity"] = terms.get("velocity", 0.0) + L.velocity_loss(qs, x, mask)
             if energy:
                 terms["energy"] = terms.get("energy", 0.0) + L.energy_loss(qs, x, mask)
+            if foot:
+                terms["foot"] = terms.get("foot", 0.0) + self._foot_term(qs, x, mask)
         if extra and stage != "text":
             terms["adversarial"] = L.bce_logits(self._disc(fake, lengths, frozen=True), True)
             terms["discriminator"] = (
@@ -203,6 +212,19 @@ class TwoStreamModel(nn.Module):
                 + L.bce_logits(self._disc(fake.detach(), lengths, frozen=False), False))
         total = sum(c.lambdas[k] * v for k, v in terms.items())
         return {"loss": total, **{k: v.detach() for k, v in terms.items()}}
+
+    def _foot_term(self, q: torch.Tensor, x: torch.Tensor, mask: torch.Tensor) -> torch.Tensor:
+        """``foot_contact_loss`` of decoded frames q against x (both (B, T, 66), normalised),
+        read in metres through the model's normaliser; mask (B, T)."""
+        norm = self.normalizer
+        mean = norm.get("mean") if isinstance(norm, dict) else getattr(norm, "mean", None)
+        std = norm.get("std") if isinstance(norm, dict) else getattr(norm, "std", None)
+        if mean is None or std is None or self.config.n_features != 66:
+            raise MotionlangError("the foot loss needs the 66 position features and their "
+                                  "normaliser (mean and std)")
+        mean = torch.as_tensor(np.asarray(mean), dtype=x.dtype)
+        std = torch.as_tensor(np.asarray(std), dtype=x.dtype)
+        return L.foot_contact_loss(q * std + mean, x * std + mean, mask, TOES, FPS)
 
     # ------------------------------------------------------------------ generation
     def set_rest_pose(self, first_frames) -> None:
