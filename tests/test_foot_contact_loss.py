@@ -150,3 +150,35 @@ def test_the_term_needs_position_features():
              "tokens": torch.tensor([[1, 4, 2]]), "token_lengths": torch.tensor([3])}
     with pytest.raises(MotionlangError, match="position features"):
         bare.loss(batch)
+
+
+def test_input_steps_go_from_the_frame_fed_to_the_expected_frame():
+    from motionlang.models.seq2seq import mdn
+    target = raw_features(planted_walk()).float() / 0.5
+    T = target.shape[1]
+    batch = {"motion": target, "motion_lengths": torch.tensor([T]),
+             "tokens": torch.tensor([[1, 4, 5, 2]]), "token_lengths": torch.tensor([4])}
+    model = _tiny_positions_l2m(foot_weight=1.0, foot_step="input")
+    model.eval()   # teacher forced: the frame fed at step t is the true frame t-1
+    with torch.no_grad():
+        got = model.loss(batch)["foot"]
+        mean = mdn.mixture_mean(model(batch["tokens"], batch["token_lengths"],
+                                      target).flatten()).reshape(target.shape) * 0.5
+    true = target * 0.5
+    pairs = torch.stack([true[0, :-1], mean[0, 1:]], dim=1)        # (T-1, 2, 66)
+    want = foot_contact_loss(pairs, torch.stack([true[0, :-1], true[0, 1:]], dim=1),
+                             torch.ones(T - 1, 2), TOES, FPS)
+    torch.testing.assert_close(got, want)
+    expected = _tiny_positions_l2m(foot_weight=1.0)
+    expected.eval()
+    with torch.no_grad():
+        assert float(expected.loss(batch)["foot"]) != pytest.approx(float(got))
+    # a scheduled-sampling model measures from its own fed frames, and trains through it
+    rolled = _tiny_positions_l2m(foot_weight=1.0, foot_step="input", rollout=1.0)
+    rolled.train()
+    out = rolled.loss(batch)
+    out["loss"].backward()
+    assert float(out["foot"]) > 0
+    assert all(torch.isfinite(q.grad).all() for q in rolled.parameters() if q.grad is not None)
+    with pytest.raises(MotionlangError, match="foot_step"):
+        _tiny_positions_l2m(foot_step="sideways")

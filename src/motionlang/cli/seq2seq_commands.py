@@ -114,6 +114,10 @@ def _add_train(sub, name: str, help_: str) -> None:
                             "the reference's toe is down (below 5 cm, slower than 1 m/s): "
                             "planted feet that do not slide; --features positions only "
                             "(paper: 0)")
+        p.add_argument("--foot-step", choices=("expected", "input"), default=d.foot_step,
+                       help="the toe step --foot-contact measures: between consecutive "
+                            "expected frames, or from the frame fed to the decoder to the "
+                            "expected frame it gives (the step generation takes)")
         p.add_argument("--plan-parts", type=nonneg_int, default=d.plan_parts, metavar="K",
                        help="feed every decoder step a coarse plan of the motion (per part of "
                             "K of its duration: mean features and mean change), the true one "
@@ -225,6 +229,7 @@ def _new_model(args: argparse.Namespace, data):
                                            input_mask=input_mask,
                                            energy_weight=args.energy,
                                            foot_weight=args.foot_contact,
+                                           foot_step=args.foot_step,
                                            plan_parts=args.plan_parts,
                                            plan_weight=args.plan_weight,
                                            plan_noise=args.plan_noise,

@@ -100,6 +100,10 @@ class L2MConfig:
     # reference's toe is down (``losses.foot_contact_loss``; position features only); 0 =
     # off (the paper's loss). Beyond the paper: planted feet that do not slide.
     foot_weight: float = 0.0
+    # which step of a toe that term measures: between consecutive expected frames
+    # ("expected"), or from the frame fed to the decoder to the expected frame it gives
+    # ("input": the step generation takes, which feeds the model its expected frames)
+    foot_step: str = "expected"
     pad_id: int = 0
     max_frames: int = 300       # decoding cap (frames)
 

@@ -103,6 +103,9 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
             raise MotionlangError("L2MConfig.plan_parts, plan_weight and plan_noise must be "
                                   f">= 0, got {c.plan_parts!r}, {c.plan_weight!r}, "
                                   f"{c.plan_noise!r}")
+        if c.foot_step not in ("expected", "input"):
+            raise MotionlangError(f"L2MConfig.foot_step must be 'expected' or 'input', not "
+                                  f"{c.foot_step!r}")
         if c.foot_weight > 0 and features is not None and (
                 getattr(features, "kind", None) != "positions" or c.n_features != 66):
             raise MotionlangError("L2MConfig.foot_weight needs position features (train l2m "
@@ -204,11 +207,12 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
         return self.head(outs), h
 
     def forward(self, tokens: torch.Tensor, token_lengths: torch.Tensor,
-                motion: torch.Tensor, motion_lengths: torch.Tensor | None = None
-                ) -> mdn.MixtureParams:
+                motion: torch.Tensor, motion_lengths: torch.Tensor | None = None,
+                return_fed: bool = False):
         """Params of frames 0..T-1 (B, T, ...) given the target motion (B, T, F) (valid
         lengths ``motion_lengths`` (B,), default all T): teacher forced, or while training
-        with ``rollout`` on, partly fed the model's own frames."""
+        with ``rollout`` on, partly fed the model's own frames. With ``return_fed`` also
+        the previous frames the decoder was fed (B, T, F), before ``input_mask``."""
         prev = _previous_frames(motion)
         if self.training and self.config.input_noise > 0:
             prev = prev + self.config.input_noise * torch.randn_like(prev)
@@ -219,22 +223,25 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
             self.rollout_steps += 1
         if p <= 0:
             params, _ = self._decode(state, prev)
-            return params
-        return self._rollout(state, prev, p)
+            fed = prev
+        else:
+            params, fed = self._rollout(state, prev, p)
+        return (params, fed) if return_fed else params
 
     def rollout_forward(self, tokens: torch.Tensor, token_lengths: torch.Tensor,
                         motion: torch.Tensor, p: float, seed: int = 0,
                         motion_lengths: torch.Tensor | None = None,
-                        sentence_plan: bool = False) -> mdn.MixtureParams:
+                        sentence_plan: bool = False, return_fed: bool = False):
         """Params (B, T, ...) with own-frame probability ``p`` in [0, 1], reproducible (its own
         RNG seeded with ``seed``); no input noise, whatever the mode. A ``plan_parts`` model
         follows the motion's own plan, or with ``sentence_plan`` the one it predicts from
-        the sentence (as when generating)."""
+        the sentence (as when generating). ``return_fed`` as for :meth:`forward`."""
         prev = _previous_frames(motion)
         lengths = _lengths(motion, motion_lengths)
         plan = None if sentence_plan else self._true_plan(motion, lengths)
         state = self.encode(tokens, token_lengths, lengths, plan)
-        return self._rollout(state, prev, p, torch.Generator().manual_seed(seed))
+        params, fed = self._rollout(state, prev, p, torch.Generator().manual_seed(seed))
+        return (params, fed) if return_fed else params
 
     def plan_target(self, motion: torch.Tensor, lengths: torch.Tensor) -> torch.Tensor:
         """The plan (B, parts, 2F) of motions (B, T, F) with valid ``lengths`` (B,), as this
@@ -255,12 +262,15 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
         return plan
 
     def _rollout(self, state: dict, prev: torch.Tensor, p: float,
-                 generator: torch.Generator | None = None) -> mdn.MixtureParams:
-        """Scheduled sampling over prev (B, T, F): params with leading (B, T)."""
+                 generator: torch.Generator | None = None
+                 ) -> tuple[mdn.MixtureParams, torch.Tensor]:
+        """Scheduled sampling over prev (B, T, F): params with leading (B, T), and the
+        frames fed (B, T, F)."""
         B, T, _ = prev.shape
-        steps = []
+        steps, fed = [], []
         x = prev[:, 0]
         for t in range(T):
+            fed.append(x)
             params, h = self._decode(state, x.unsqueeze(1), t)
             state = {**state, "h": h}
             steps.append(params)
@@ -272,7 +282,8 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
                 use_own = torch.rand(B, 1, generator=generator) < p
                 x = torch.where(use_own, own, prev[:, t + 1])
         return mdn.MixtureParams(*(torch.cat([getattr(s, f) for s in steps], dim=1)
-                                   for f in ("logit_pi", "mu", "log_sigma", "active_logit")))
+                                   for f in ("logit_pi", "mu", "log_sigma", "active_logit"))
+                                 ), torch.stack(fed, dim=1)
 
     def step(self, state: dict, prev_frames: torch.Tensor) -> tuple[mdn.MixtureParams, dict]:
         """One decoding step: prev_frames (N, F) -> params over N rows, new state."""
@@ -295,11 +306,13 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
             # validation of a scheduled-sampling model: as trained at full ramp (a fraction
             # ``rollout`` of its inputs its own frames), with a fixed RNG so that epochs
             # compare; picks best.pt
-            params = self.rollout_forward(batch["tokens"], batch["token_lengths"], motion,
-                                          self.config.rollout,
-                                          motion_lengths=lengths).flatten()
+            params, fed = self.rollout_forward(batch["tokens"], batch["token_lengths"],
+                                               motion, self.config.rollout,
+                                               motion_lengths=lengths, return_fed=True)
         else:
-            params = self(batch["tokens"], batch["token_lengths"], motion, lengths).flatten()
+            params, fed = self(batch["tokens"], batch["token_lengths"], motion, lengths,
+                               return_fed=True)
+        params = params.flatten()
         t = torch.arange(T).unsqueeze(0)
         valid = (t < lengths.unsqueeze(1)).reshape(-1)
         active = (t < (lengths.unsqueeze(1) - 1)).reshape(-1).float()
@@ -323,7 +336,7 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
             out["loss"] = out["loss"] + self.config.energy_weight * energy
             out["energy"] = energy.detach()
         if self.config.foot_weight > 0:
-            foot = self._foot_term(params, motion, valid.reshape(B, T))
+            foot = self._foot_term(params, motion, valid.reshape(B, T), fed)
             out["loss"] = out["loss"] + self.config.foot_weight * foot
             out["foot"] = foot.detach()
         if self.planner is not None:
@@ -336,9 +349,12 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
         return out
 
     def _foot_term(self, params: mdn.MixtureParams, motion: torch.Tensor,
-                   valid: torch.Tensor) -> torch.Tensor:
+                   valid: torch.Tensor, fed: torch.Tensor | None = None) -> torch.Tensor:
         """``foot_contact_loss`` of the expected frames (B, T, F) against ``motion``, both
-        un-normalised with the features' normaliser; valid (B, T) bool."""
+        un-normalised with the features' normaliser; valid (B, T) bool. With
+        ``config.foot_step == "input"`` each step is from the frame fed (B, T, F) to the
+        expected frame read from it, as in generation, where the frame fed is the expected
+        frame of the step before; else between consecutive expected frames."""
         norm = getattr(self.features, "normalizer", None)
         if norm is None or getattr(self.features, "kind", None) != "positions":
             raise MotionlangError("L2MConfig.foot_weight needs the model's position features "
@@ -347,8 +363,20 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
         std = torch.as_tensor(norm.std, dtype=motion.dtype)
         B, T, F = motion.shape
         pred = mdn.mixture_mean(params).reshape(B, T, F) * std + mean
-        return foot_contact_loss(pred, motion * std + mean, valid.to(motion.dtype), TOES,
-                                 self.features.fps)
+        target, mask = motion * std + mean, valid.to(motion.dtype)
+        if self.config.foot_step == "input":
+            if fed is None:
+                raise MotionlangError("foot_step 'input' needs the frames fed")
+            # (B*T, 2, F) pairs: (frame fed at step t, expected frame t); the true pairs
+            # (frame t-1, frame t) say where the foot is down. Step 0 is fed a zero frame.
+            pairs = torch.stack([fed * std + mean, pred], dim=2).reshape(B * T, 2, F)
+            true = torch.stack([_previous_frames(motion) * std + mean, target],
+                               dim=2).reshape(B * T, 2, F)
+            m = mask.clone()
+            m[:, 0] = 0.0
+            m = m.reshape(B * T, 1).expand(-1, 2)
+            return foot_contact_loss(pairs, true, m, TOES, self.features.fps)
+        return foot_contact_loss(pred, target, mask, TOES, self.features.fps)
 
     def to_checkpoint(self) -> dict:
         d = super().to_checkpoint()
