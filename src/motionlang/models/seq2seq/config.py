@@ -116,4 +116,7 @@ class L2MConfig:
                     "foot_weight"))
         if not 0 <= self.rollout <= 1:
             raise MotionlangError(f"L2MConfig.rollout must be in [0, 1], got {self.rollout!r}")
+        if self.foot_step not in ("expected", "input"):
+            raise MotionlangError(f"L2MConfig.foot_step must be 'expected' or 'input', not "
+                                  f"{self.foot_step!r}")
 

@@ -65,7 +65,8 @@ from motionlang.models.checkpoint import Seq2SeqCheckpoint
 from motionlang.models.length import SentenceLength
 from motionlang.models.seq2seq.plan import Planner, motion_plan, plan_at
 from motionlang.models.seq2seq.layers import AdditiveAttention, BiGRUEncoder, StackedDecoder
-from motionlang.models.seq2seq.losses import energy_loss, foot_contact_loss
+from motionlang.models.seq2seq.losses import (energy_loss, fed_foot_contact_loss,
+                                               foot_contact_loss)
 from motionlang.models.seq2seq.config import L2MConfig  # noqa: F401 (re-exported)
 
 
@@ -103,9 +104,6 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
             raise MotionlangError("L2MConfig.plan_parts, plan_weight and plan_noise must be "
                                   f">= 0, got {c.plan_parts!r}, {c.plan_weight!r}, "
                                   f"{c.plan_noise!r}")
-        if c.foot_step not in ("expected", "input"):
-            raise MotionlangError(f"L2MConfig.foot_step must be 'expected' or 'input', not "
-                                  f"{c.foot_step!r}")
         if c.foot_weight > 0 and features is not None and (
                 getattr(features, "kind", None) != "positions" or c.n_features != 66):
             raise MotionlangError("L2MConfig.foot_weight needs position features (train l2m "
@@ -367,15 +365,8 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
         if self.config.foot_step == "input":
             if fed is None:
                 raise MotionlangError("foot_step 'input' needs the frames fed")
-            # (B*T, 2, F) pairs: (frame fed at step t, expected frame t); the true pairs
-            # (frame t-1, frame t) say where the foot is down. Step 0 is fed a zero frame.
-            pairs = torch.stack([fed * std + mean, pred], dim=2).reshape(B * T, 2, F)
-            true = torch.stack([_previous_frames(motion) * std + mean, target],
-                               dim=2).reshape(B * T, 2, F)
-            m = mask.clone()
-            m[:, 0] = 0.0
-            m = m.reshape(B * T, 1).expand(-1, 2)
-            return foot_contact_loss(pairs, true, m, TOES, self.features.fps)
+            return fed_foot_contact_loss(fed * std + mean, pred, target, mask, TOES,
+                                         self.features.fps)
         return foot_contact_loss(pred, target, mask, TOES, self.features.fps)
 
     def to_checkpoint(self) -> dict:

@@ -98,3 +98,21 @@ def foot_contact_loss(pred_raw: torch.Tensor, target_raw: torch.Tensor, mask: to
     # sqrt(. + eps), not norm(): a finite gradient where a foot does not move at all
     moved = (foot_steps(pred_raw, feet).pow(2).sum(dim=-1) + 1e-10).sqrt() * fps
     return (moved * down).sum() / down.sum().clamp(min=1.0)
+
+
+def fed_foot_contact_loss(fed_raw: torch.Tensor, pred_raw: torch.Tensor,
+                          target_raw: torch.Tensor, mask: torch.Tensor,
+                          feet: tuple[int, ...], fps: float, **contact) -> torch.Tensor:
+    """:func:`foot_contact_loss` of the one-frame steps a decoder takes: from the frame it was
+    fed at step t (``fed_raw`` (B, T, 66); step 0's is a zero frame, left out) to the frame it
+    gave (``pred_raw`` (B, T, 66)), where the reference's toe is down over its own step from
+    frame t-1 to t (``target_raw`` (B, T, 66)); mask (B, T). ``contact``: ``height``, ``speed``.
+    """
+    B, T, F = pred_raw.shape
+    prev = torch.cat([target_raw[:, :1], target_raw[:, :-1]], dim=1)
+    pairs = torch.stack([fed_raw, pred_raw], dim=2).reshape(B * T, 2, F)
+    true = torch.stack([prev, target_raw], dim=2).reshape(B * T, 2, F)
+    m = mask.clone()
+    m[:, 0] = 0.0
+    return foot_contact_loss(pairs, true, m.reshape(B * T, 1).expand(-1, 2), feet, fps,
+                             **contact)
