@@ -15,7 +15,8 @@ from motionlang.features.normalizer import Normalizer
 from motionlang.features.positions import PositionFeatures, split_global
 from motionlang.features import root as rootlib
 from motionlang.models.seq2seq.l2m import L2MConfig, LanguageToMotion
-from motionlang.models.seq2seq.losses import foot_contact_loss, foot_steps
+from motionlang.models.seq2seq.losses import (fed_foot_contact_loss, foot_contact_loss,
+                                               foot_steps)
 
 FPS = 12.5
 
@@ -175,6 +176,15 @@ def test_input_steps_go_from_the_frame_fed_to_the_expected_frame():
         assert float(expected.loss(batch)["foot"]) != pytest.approx(float(got))
     # a scheduled-sampling model measures from its own fed frames, and trains through it
     rolled = _tiny_positions_l2m(foot_weight=1.0, foot_step="input", rollout=1.0)
+    rolled.eval()   # validated as trained: its own frames, a fixed RNG
+    with torch.no_grad():
+        got = rolled.loss(batch)["foot"]
+        params, fed = rolled.rollout_forward(batch["tokens"], batch["token_lengths"], target,
+                                             1.0, return_fed=True)
+    assert not torch.allclose(fed[:, 1:], target[:, :-1])      # not the true frames
+    pred = mdn.mixture_mean(params.flatten()).reshape(target.shape) * 0.5
+    want = fed_foot_contact_loss(fed * 0.5, pred, true, torch.ones(1, T), TOES, FPS)
+    torch.testing.assert_close(got, want)
     rolled.train()
     out = rolled.loss(batch)
     out["loss"].backward()

@@ -93,7 +93,7 @@ def test_evaluate_judge_raw_and_locked_rows(judge_run, bandai, tmp_path, capsys)
     assert rows["l2m"]["skating"] <= rows["l2m (raw)"]["skating"] + 1e-9
     # the table shows the mean one-frame root move beside the skating it puts in context
     table = (out / "judge_table.md").read_text()
-    assert "mean root move cm" in table
+    assert "mean max root jump cm" in table
     line = next(ln for ln in table.splitlines() if ln.startswith("| l2m (raw) |"))
     cells = [c.strip() for c in line.split("|")]
     assert f"{100 * rows['l2m (raw)']['root_jump_mean']:.1f}" in cells

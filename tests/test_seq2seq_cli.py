@@ -296,6 +296,13 @@ def test_errors_are_one_line(tmp_path, capsys):
     assert "argument --balance: must be an integer >= 1" in capsys.readouterr().err
     assert main(["train", "l2m", "--data", str(tmp_path), "--energy", "-1"]) == 2
     assert "argument --energy: must be a finite number >= 0" in capsys.readouterr().err
+    assert main(["train", "l2m", "--data", str(tmp_path), "--foot-contact", "-1"]) == 2
+    assert "argument --foot-contact: must be a finite number >= 0" in capsys.readouterr().err
+    assert main(["train", "l2m", "--data", str(tmp_path), "--out", str(tmp_path / "f"),
+                 "--foot-step", "input"]) == 2
+    err = capsys.readouterr().err
+    assert "--foot-contact W > 0" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "f").exists()
     # sampling options are checked before any model is read (no model file here)
     for opts, msg in ((["--temperature", "0"], "argument --temperature: must be a finite"),
                       (["--temperature", "0.5", "--method", "mean"], "mean decoding draws")):

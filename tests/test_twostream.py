@@ -220,6 +220,11 @@ def test_foot_term_in_metres_with_its_weight_and_only_with_a_normaliser():
     want = sum(foot_contact_loss(q[k] * 0.1 + mean, b["motion"] * 0.1 + mean, mask, TOES, 12.5)
                for k in ("pose", "sentence"))
     torch.testing.assert_close(out["foot"], want)
+    # a text stage with pose weight 0 still decodes for the foot term (not the embedding alone)
+    t = tiny(joint_training=False, lambdas={"pose": 0.0, "foot": 2.0})
+    t.normalizer = m.normalizer
+    t.set_stage("text")
+    assert set(t.loss(b)) == {"loss", "pose", "embedding", "foot"}
 
 
 def _grads(module) -> float:

@@ -263,6 +263,9 @@ def cmd_train(args: argparse.Namespace) -> int:
         # numbers are checked by their argparse types (cli/options.py)
         if args.plan_parts and not args.progress_input:
             raise MotionlangError("--plan-parts needs --progress-input")
+        if args.foot_step != "expected" and not args.foot_contact > 0:
+            raise MotionlangError("--foot-step says which step --foot-contact measures: give "
+                                  "--foot-contact W > 0 with it")
     # one line per epoch from the trainer (the progress bar only shows on a terminal)
     logging.basicConfig(level=logging.INFO, format="%(message)s")
     data = build_pairs([s.path for s in args.data], features=args.features,

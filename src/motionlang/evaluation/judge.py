@@ -96,7 +96,7 @@ JUDGE_COLUMNS = {"content_acc": ("content %", 100), "style_acc": ("style %", 100
                  "skating": ("skating m/s", 1), "penetration": ("penetration cm", 100),
                  "penetration_max": ("max penetration cm", 100),
                  # the control for skating: a model that moves less also slides less
-                 "root_jump_mean": ("mean root move cm", 100),
+                 "root_jump_mean": ("mean max root jump cm", 100),
                  "root_jump": ("max root jump cm", 100),
                  "root_kick": ("max root kick cm", 100)}
 

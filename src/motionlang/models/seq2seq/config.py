@@ -102,7 +102,8 @@ class L2MConfig:
     foot_weight: float = 0.0
     # which step of a toe that term measures: between consecutive expected frames
     # ("expected"), or from the frame fed to the decoder to the expected frame it gives
-    # ("input": the step generation takes, which feeds the model its expected frames)
+    # ("input"). Generation continues from expected frames only for rollout_input "mean"
+    # models; the others write the heaviest component's mean (``mdn.mode_frame``)
     foot_step: str = "expected"
     pad_id: int = 0
     max_frames: int = 300       # decoding cap (frames)

@@ -351,14 +351,15 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
         """``foot_contact_loss`` of the expected frames (B, T, F) against ``motion``, both
         un-normalised with the features' normaliser; valid (B, T) bool. With
         ``config.foot_step == "input"`` each step is from the frame fed (B, T, F) to the
-        expected frame read from it, as in generation, where the frame fed is the expected
-        frame of the step before; else between consecutive expected frames."""
+        expected frame read from it (the step generation takes for a ``rollout_input
+        "mean"`` model, fed its expected frames); else between consecutive expected
+        frames."""
         norm = getattr(self.features, "normalizer", None)
         if norm is None or getattr(self.features, "kind", None) != "positions":
             raise MotionlangError("L2MConfig.foot_weight needs the model's position features "
                                   "and their normaliser")
-        mean = torch.as_tensor(norm.mean, dtype=motion.dtype)
-        std = torch.as_tensor(norm.std, dtype=motion.dtype)
+        mean = torch.as_tensor(norm.mean, dtype=motion.dtype, device=motion.device)
+        std = torch.as_tensor(norm.std, dtype=motion.dtype, device=motion.device)
         B, T, F = motion.shape
         pred = mdn.mixture_mean(params).reshape(B, T, F) * std + mean
         target, mask = motion * std + mean, valid.to(motion.dtype)

@@ -178,9 +178,10 @@ class TwoStreamModel(nn.Module):
         if stage in ("joint", "text"):
             zs = self.sentence_encoder(*self._tokens(batch))
             terms["embedding"] = L.embedding_loss(zs, zp)
-        # the text stage with neither pose nor energy weight fits the embedding alone: no
+        # the text stage with neither pose, energy nor foot weight fits the embedding alone: no
         # decoding (a refit of the sentence encoder onto the pose embeddings: no unroll)
-        decode_s = zs is not None and (stage == "joint" or c.lambdas["pose"] > 0 or energy)
+        decode_s = zs is not None and (stage == "joint" or c.lambdas["pose"] > 0 or energy
+                                       or foot)
         todo = {"pose": zp} if stage != "text" else {}
         if decode_s:
             todo["sentence"] = zs
@@ -222,8 +223,8 @@ class TwoStreamModel(nn.Module):
         if mean is None or std is None or self.config.n_features != 66:
             raise MotionlangError("the foot loss needs the 66 position features and their "
                                   "normaliser (mean and std)")
-        mean = torch.as_tensor(np.asarray(mean), dtype=x.dtype)
-        std = torch.as_tensor(np.asarray(std), dtype=x.dtype)
+        mean = torch.as_tensor(np.asarray(mean), dtype=x.dtype, device=x.device)
+        std = torch.as_tensor(np.asarray(std), dtype=x.dtype, device=x.device)
         return L.foot_contact_loss(q * std + mean, x * std + mean, mask, TOES, FPS)
 
     # ------------------------------------------------------------------ generation
