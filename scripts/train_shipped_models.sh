@@ -12,7 +12,7 @@
 # two models side by side: corpus ~2 min; procedural + Bandai: data preparation ~25 min per
 # run (fitting and encoding 6,750 training motions and their mirror images; cached by
 # MOTIONLANG_CACHE), M2L ~7-10 min an epoch (8 epochs), L2M ~28 min a teacher-forced epoch and
-# ~35 min an epoch on its own frames (1 + 1), judge ~10 min, two-stream ~20 min an epoch
+# ~35 min an epoch on its own frames (1 + 1 + 1), judge ~10 min, two-stream ~20 min an epoch
 # (4 epochs, after the M2L); procedural alone: M2L ~30 min (12 epochs), L2M ~60 min (3 + 3).
 # Every --out is a run folder: the final model is its model.pt (beside best.pt, last.pt,
 # history.json, loss_curve.png, splits/ and commands.jsonl; LICENSE.txt for Bandai runs).
@@ -40,14 +40,17 @@ C="$WORK/corpus6000"
 #    a 2 x 256 decoder, 5 components, a clock, the fraction of the motion done and a plan of
 #    8 parts (its planner predicts it from the sentence), first teacher-forced epochs with
 #    noisy inputs, then epochs with scheduled sampling (90 % own frames after 225 steps),
-#    the last with the learning rate decayed; each model.pt is the epoch with the best
-#    validation loss; then the planner alone 20 epochs more (minutes).
+#    the last with the learning rate decayed; for the mixed L2M a third stage, one epoch fed
+#    its own *expected* frames (--rollout-input mean, learning rate 3e-4 decayed), so that
+#    generation continues from the frames it was trained on (docs/results/real-motion.md,
+#    seventh session: less skating, better recognised); each model.pt is the epoch with the
+#    best validation loss; then the planner alone 20 epochs more (minutes).
 L2M_COMMON=(--batch-size 64 --offsets 1 --features positions --checkpoint-every 200
             --dec-hidden 256 --dec-layers 2 --components 5 --end-weight 10 --time-input
             --progress-input --plan-parts 8 --plan-noise 0.1)
-# l2m_run OUT EPOCHS1 EPOCHS_TOTAL DECAY DATA_ARGS... : the two stages and the planner
+# l2m_run OUT EPOCHS1 EPOCHS_TOTAL DECAY MEAN_EPOCHS DATA_ARGS... : the stages and the planner
 l2m_run() {
-  local out=$1 e1=$2 e2=$3 decay=$4; shift 4
+  local out=$1 e1=$2 e2=$3 decay=$4 e3=$5; shift 5
   local data=("$@") plan_mirror=()
   [[ " ${data[*]} " == *" --mirror "* ]] && plan_mirror=(--mirror)
   local plan_data=()
@@ -56,8 +59,15 @@ l2m_run() {
   done
   [ -f "$out/.stage1" ] || { "$ML" train l2m "${data[@]}" --out "$out" "${L2M_COMMON[@]}" \
       --epochs "$e1" --input-noise 0.5 $RESUME && touch "$out/.stage1"; }
-  "$ML" train l2m "${data[@]}" --out "$out" "${L2M_COMMON[@]}" --epochs "$e2" \
-      --decay-epochs "$decay" --rollout 0.9 --rollout-warmup 225 --resume
+  # (each finished stage leaves a mark, so that RESUME=--resume does not run it again)
+  [ -f "$out/.stage2" ] || { "$ML" train l2m "${data[@]}" --out "$out" "${L2M_COMMON[@]}" \
+      --epochs "$e2" --decay-epochs "$decay" --rollout 0.9 --rollout-warmup 225 --resume \
+      && touch "$out/.stage2"; }
+  if [ "$e3" -gt 0 ]; then
+    "$ML" train l2m "${data[@]}" --out "$out" "${L2M_COMMON[@]}" --epochs $((e2 + e3)) \
+        --decay-epochs "$e3" --lr 0.0003 --rollout 0.9 --rollout-warmup 225 \
+        --rollout-input mean --resume
+  fi
   "$PY" "$HERE/scripts/l2m_fit_planner.py" "$out/model.pt" "${plan_data[@]}" "${plan_mirror[@]}" \
       --out "$out/planned.pt" --epochs 20
 }
@@ -68,7 +78,7 @@ if [ "$MODELS" = all ] || [ "$MODELS" = bandai ]; then
   "$ML" train m2l "${MIX[@]}" --out "$WORK/m2l" --epochs 8 --batch-size 64 --offsets 1 \
       --attention --features positions --checkpoint-every 200 $RESUME &
   M2L=$!
-  l2m_run "$WORK/l2m" 1 2 1 "${MIX[@]}" &
+  l2m_run "$WORK/l2m" 1 2 1 1 "${MIX[@]}" &
   L2M=$!
   wait $M2L
   "$ML" train judge --data "bandai:$BANDAI" --out "$WORK/judge" --epochs 30
@@ -89,7 +99,7 @@ if [ "$MODELS" = all ] || [ "$MODELS" = procedural ]; then
   "$ML" train m2l --data "$C" --out "$WORK/m2l-procedural" --epochs 12 --batch-size 64 \
       --offsets 1 --attention --features positions --checkpoint-every 200 $RESUME &
   M2L=$!
-  l2m_run "$WORK/l2m-procedural" 3 6 2 --data "$C" &
+  l2m_run "$WORK/l2m-procedural" 3 6 2 0 --data "$C" &
   L2M=$!
   wait $M2L; wait $L2M
   cp "$WORK/m2l-procedural/model.pt" "$SHIP/m2l-procedural.pt"
