@@ -88,6 +88,61 @@ def test_a_planted_foot_that_slides_costs_its_speed_and_a_lifted_one_nothing():
     assert float(foot_contact_loss(slid, fast, mask, TOES, FPS)) == 0.0
 
 
+def test_own_contacts_are_read_from_the_prediction_not_the_reference():
+    """down="own": the contact test runs on the predicted frames; the reference only sets
+    the shapes. A slide of the prediction's own low toe costs its speed even where the
+    reference's toes are up, and a prediction whose toes are up costs nothing."""
+    target = raw_features(planted_walk())
+    mask = torch.ones(1, target.shape[1])
+    slid = target.clone()
+    slid[..., 64] += 0.02                        # 0.25 m/s; its left toe low, the right up
+    lifted = target.clone()
+    lifted[..., 3 * TOES[0] + 1] = 0.3           # the reference with both toes up
+    assert float(foot_contact_loss(slid, lifted, mask, TOES, FPS)) == 0.0
+    got = float(foot_contact_loss(slid, lifted, mask, TOES, FPS, down="own"))
+    assert got == pytest.approx(0.02 * FPS, rel=1e-4)
+    slid_up = slid.clone()
+    slid_up[..., 3 * TOES[0] + 1] = 0.3          # the prediction's toes up: no contact
+    assert float(foot_contact_loss(slid_up, target, mask, TOES, FPS, down="own")) == 0.0
+    # the test itself carries no gradient: only the speed of a toe that is down does
+    pred = slid.clone().requires_grad_(True)
+    foot_contact_loss(pred, lifted, mask, TOES, FPS, down="own").backward()
+    assert float(pred.grad[..., 3 * TOES[0] + 1].abs().sum()) == 0.0     # toe height
+    assert float(pred.grad[..., 64].abs().sum()) > 0                     # root step
+    with pytest.raises(ValueError, match="down"):
+        foot_contact_loss(slid, target, mask, TOES, FPS, down="both")
+
+
+def test_the_l2m_reads_its_own_contacts_when_asked():
+    from motionlang.models.seq2seq import mdn
+    still = raw_features(planted_walk()).float()           # its left toe down, right up
+    lifted = still.clone()
+    lifted[..., 3 * TOES[0] + 1] = 0.3                     # the reference: both toes up
+    model = _tiny_positions_l2m(foot_weight=1.0, foot_down="own")
+    # a normaliser centred on the standing pose with a small spread: the untrained model's
+    # frames stay near it, the left toe low and slow
+    mu = still[0, 0].double().numpy()
+    model.features.normalizer = Normalizer(mean=mu, std=np.full(66, 0.02))
+    target = (lifted - torch.tensor(mu, dtype=torch.float32)) / 0.02
+    batch = {"motion": target, "motion_lengths": torch.tensor([target.shape[1]]),
+             "tokens": torch.tensor([[1, 4, 5, 2]]), "token_lengths": torch.tensor([4])}
+    model.eval()
+    with torch.no_grad():
+        out = model.loss(batch)
+        p = model(batch["tokens"], batch["token_lengths"], batch["motion"])
+        mean = mdn.mixture_mean(p.flatten()).reshape(target.shape) * 0.02 + torch.tensor(
+            mu, dtype=torch.float32)
+        mask = torch.ones(1, target.shape[1])
+        want = foot_contact_loss(mean, lifted, mask, TOES, FPS, down="own")
+        other = foot_contact_loss(mean, lifted, mask, TOES, FPS)
+    assert float(want) > 0 and float(other) == 0.0        # its own toe is down, not the ref's
+    torch.testing.assert_close(out["foot"], want)
+    with pytest.raises(MotionlangError, match="foot_down"):
+        L2MConfig(vocab_size=9, n_features=66, foot_down="theirs")
+    with pytest.raises(MotionlangError, match="foot_step 'expected'"):
+        L2MConfig(vocab_size=9, n_features=66, foot_down="own", foot_step="input")
+
+
 def test_its_gradient_is_finite_where_the_foot_does_not_move():
     target = raw_features(planted_walk())
     pred = target.clone().requires_grad_(True)

@@ -303,6 +303,15 @@ def test_errors_are_one_line(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "--foot-contact W > 0" in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "f").exists()
+    assert main(["train", "l2m", "--data", str(tmp_path), "--out", str(tmp_path / "f"),
+                 "--foot-down", "own"]) == 2
+    err = capsys.readouterr().err
+    assert "--foot-contact W > 0" in err and len(err.strip().splitlines()) == 1
+    assert main(["train", "l2m", "--data", str(tmp_path), "--out", str(tmp_path / "f"),
+                 "--foot-contact", "1", "--foot-down", "own", "--foot-step", "input"]) == 2
+    err = capsys.readouterr().err
+    assert "--foot-step input" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "f").exists()
     # sampling options are checked before any model is read (no model file here)
     for opts, msg in ((["--temperature", "0"], "argument --temperature: must be a finite"),
                       (["--temperature", "0.5", "--method", "mean"], "mean decoding draws")):

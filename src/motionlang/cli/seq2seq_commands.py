@@ -118,6 +118,11 @@ def _add_train(sub, name: str, help_: str) -> None:
                        help="the toe step --foot-contact measures: between consecutive "
                             "expected frames, or from the frame fed to the decoder to the "
                             "expected frame it gives (the step generation takes)")
+        p.add_argument("--foot-down", choices=("reference", "own"), default=d.foot_down,
+                       help="whose toe says a foot is down for --foot-contact: the "
+                            "reference's, or the expected frames' own (for a model fed its "
+                            "own frames, whose steps fall at other times than the "
+                            "reference's)")
         p.add_argument("--plan-parts", type=nonneg_int, default=d.plan_parts, metavar="K",
                        help="feed every decoder step a coarse plan of the motion (per part of "
                             "K of its duration: mean features and mean change), the true one "
@@ -230,6 +235,7 @@ def _new_model(args: argparse.Namespace, data):
                                            energy_weight=args.energy,
                                            foot_weight=args.foot_contact,
                                            foot_step=args.foot_step,
+                                           foot_down=args.foot_down,
                                            plan_parts=args.plan_parts,
                                            plan_weight=args.plan_weight,
                                            plan_noise=args.plan_noise,
@@ -266,6 +272,12 @@ def cmd_train(args: argparse.Namespace) -> int:
         if args.foot_step != "expected" and not args.foot_contact > 0:
             raise MotionlangError("--foot-step says which step --foot-contact measures: give "
                                   "--foot-contact W > 0 with it")
+        if args.foot_down != "reference" and not args.foot_contact > 0:
+            raise MotionlangError("--foot-down says whose foot --foot-contact reads: give "
+                                  "--foot-contact W > 0 with it")
+        if args.foot_down == "own" and args.foot_step == "input":
+            raise MotionlangError("--foot-down own measures consecutive expected frames: it "
+                                  "cannot be used with --foot-step input")
     # one line per epoch from the trainer (the progress bar only shows on a terminal)
     logging.basicConfig(level=logging.INFO, format="%(message)s")
     data = build_pairs([s.path for s in args.data], features=args.features,

@@ -105,6 +105,10 @@ class L2MConfig:
     # ("input"). Generation continues from expected frames only for rollout_input "mean"
     # models; the others write the heaviest component's mean (``mdn.mode_frame``)
     foot_step: str = "expected"
+    # whose toe says it is down for that term: the reference's, or the expected frames' own
+    # (below 5 cm and slower than 1 m/s in them), for a model fed its own frames, whose steps
+    # drift out of step with the reference's
+    foot_down: str = "reference"
     pad_id: int = 0
     max_frames: int = 300       # decoding cap (frames)
 
@@ -120,4 +124,10 @@ class L2MConfig:
         if self.foot_step not in ("expected", "input"):
             raise MotionlangError(f"L2MConfig.foot_step must be 'expected' or 'input', not "
                                   f"{self.foot_step!r}")
+        if self.foot_down not in ("reference", "own"):
+            raise MotionlangError(f"L2MConfig.foot_down must be 'reference' or 'own', not "
+                                  f"{self.foot_down!r}")
+        if self.foot_down == "own" and self.foot_step == "input":
+            raise MotionlangError("L2MConfig.foot_down 'own' measures consecutive expected "
+                                  "frames: it needs foot_step 'expected'")
 

@@ -368,7 +368,8 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
                 raise MotionlangError("foot_step 'input' needs the frames fed")
             return fed_foot_contact_loss(fed * std + mean, pred, target, mask, TOES,
                                          self.features.fps)
-        return foot_contact_loss(pred, target, mask, TOES, self.features.fps)
+        return foot_contact_loss(pred, target, mask, TOES, self.features.fps,
+                                 down=self.config.foot_down)
 
     def to_checkpoint(self) -> dict:
         d = super().to_checkpoint()

@@ -76,22 +76,27 @@ def foot_steps(raw: torch.Tensor, feet: tuple[int, ...]) -> torch.Tensor:
 
 def foot_contact_loss(pred_raw: torch.Tensor, target_raw: torch.Tensor, mask: torch.Tensor,
                       feet: tuple[int, ...], fps: float, height: float = 0.05,
-                      speed: float = 1.0) -> torch.Tensor:
-    """Mean horizontal speed (m/s) of the predicted ``feet`` over the frame steps where the
-    *reference's* foot is down: below ``height`` m (its local y, the floor being y = 0) at
-    both frames and slower than ``speed`` m/s, the contact test of
-    ``evaluation.metrics.physics.foot_skating``. Zero when no reference foot is down.
+                      speed: float = 1.0, down: str = "reference") -> torch.Tensor:
+    """Mean horizontal speed (m/s) of the predicted ``feet`` over the frame steps where a foot
+    is down: below ``height`` m (its local y, the floor being y = 0) at both frames and slower
+    than ``speed`` m/s, the contact test of ``evaluation.metrics.physics.foot_skating``. Whose
+    foot: the *reference's* (``down="reference"``), or the prediction's own (``"own"``, the
+    test read from ``pred_raw`` without a gradient: the model's own steps need not fall
+    when the reference's do once it runs on its own frames). Zero when no foot is down.
 
     pred_raw, target_raw: (B, T, 66) un-normalised position features; mask: (B, T), 1 on
     valid frames. A planted foot should not move: this asks the model's frames to keep
     it where it was, which the frame NLL alone does not (small errors of the root's step and
     of the local foot position each look likely but add up to a slide).
     """
+    if down not in ("reference", "own"):
+        raise ValueError(f"down must be 'reference' or 'own', not {down!r}")
     if pred_raw.shape[1] < 2:
         return pred_raw.new_zeros(())
     with torch.no_grad():
-        ref = foot_steps(target_raw, feet).norm(dim=-1) * fps             # (B, T-1, k)
-        y = target_raw[..., :63].reshape(*target_raw.shape[:2], 21, 3)[:, :, list(feet), 1]
+        test = target_raw if down == "reference" else pred_raw.detach()
+        ref = foot_steps(test, feet).norm(dim=-1) * fps                   # (B, T-1, k)
+        y = test[..., :63].reshape(*test.shape[:2], 21, 3)[:, :, list(feet), 1]
         low = y < height
         pair = (mask[:, 1:] * mask[:, :-1]).bool().unsqueeze(-1)
         down = (low[:, 1:] & low[:, :-1] & (ref < speed) & pair).to(pred_raw.dtype)
