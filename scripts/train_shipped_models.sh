@@ -30,8 +30,12 @@ export OMP_NUM_THREADS=1 MOTIONLANG_CACHE="$WORK/cache"
 mkdir -p "$WORK" "$SHIP"
 # 1. the procedural corpus (deterministic for a given seed): 6,000 motions (4,800 train),
 #    the same split for every model
-[ -f "$WORK/corpus6000/.done" ] || { "$ML" data synth --out "$WORK/corpus6000" --n 6000 \
-    --seed 0 --workers 1 && touch "$WORK/corpus6000/.done"; }
+# (each finished step leaves a mark, so that RESUME=--resume does not run it again; `if`
+#  blocks, not `[ ] || { a && touch; }`, so that set -e stops the script when a step fails)
+if [ ! -f "$WORK/corpus6000/.done" ]; then
+  "$ML" data synth --out "$WORK/corpus6000" --n 6000 --seed 0 --workers 1
+  touch "$WORK/corpus6000/.done"
+fi
 C="$WORK/corpus6000"
 
 # 2. both seq2seq models on the 21-joint position features (rig-independent: any motion that
@@ -57,16 +61,21 @@ l2m_run() {
   for ((i = 0; i < ${#data[@]}; i++)); do
     [ "${data[$i]}" = --data ] && plan_data+=(--data "${data[$((i + 1))]}")
   done
-  [ -f "$out/.stage1" ] || { "$ML" train l2m "${data[@]}" --out "$out" "${L2M_COMMON[@]}" \
-      --epochs "$e1" --input-noise 0.5 $RESUME && touch "$out/.stage1"; }
-  # (each finished stage leaves a mark, so that RESUME=--resume does not run it again)
-  [ -f "$out/.stage2" ] || { "$ML" train l2m "${data[@]}" --out "$out" "${L2M_COMMON[@]}" \
-      --epochs "$e2" --decay-epochs "$decay" --rollout 0.9 --rollout-warmup 225 --resume \
-      && touch "$out/.stage2"; }
-  if [ "$e3" -gt 0 ]; then
+  if [ ! -f "$out/.stage1" ]; then
+    "$ML" train l2m "${data[@]}" --out "$out" "${L2M_COMMON[@]}" --epochs "$e1" \
+        --input-noise 0.5 $RESUME
+    touch "$out/.stage1"
+  fi
+  if [ ! -f "$out/.stage2" ]; then
+    "$ML" train l2m "${data[@]}" --out "$out" "${L2M_COMMON[@]}" --epochs "$e2" \
+        --decay-epochs "$decay" --rollout 0.9 --rollout-warmup 225 --resume
+    touch "$out/.stage2"
+  fi
+  if [ "$e3" -gt 0 ] && [ ! -f "$out/.stage3" ]; then
     "$ML" train l2m "${data[@]}" --out "$out" "${L2M_COMMON[@]}" --epochs $((e2 + e3)) \
         --decay-epochs "$e3" --lr 0.0003 --rollout 0.9 --rollout-warmup 225 \
         --rollout-input mean --resume
+    touch "$out/.stage3"
   fi
   "$PY" "$HERE/scripts/l2m_fit_planner.py" "$out/model.pt" "${plan_data[@]}" "${plan_mirror[@]}" \
       --out "$out/planned.pt" --epochs 20

@@ -96,8 +96,8 @@ class L2MConfig:
     plan_mean_mask: list[float] | None = None
     plan_weight: float = 1.0
     plan_noise: float = 0.0
-    # weight of a term on the expected frames' toe speed (m/s) over the frame steps where the
-    # reference's toe is down (``losses.foot_contact_loss``; position features only); 0 =
+    # weight of a term on the expected frames' toe speed (m/s) over the frame steps where a
+    # toe is down (the reference's or their own: foot_down) (``losses.foot_contact_loss``; position features only); 0 =
     # off (the paper's loss). Beyond the paper: planted feet that do not slide.
     foot_weight: float = 0.0
     # which step of a toe that term measures: between consecutive expected frames

@@ -99,10 +99,10 @@ def foot_contact_loss(pred_raw: torch.Tensor, target_raw: torch.Tensor, mask: to
         y = test[..., :63].reshape(*test.shape[:2], 21, 3)[:, :, list(feet), 1]
         low = y < height
         pair = (mask[:, 1:] * mask[:, :-1]).bool().unsqueeze(-1)
-        down = (low[:, 1:] & low[:, :-1] & (ref < speed) & pair).to(pred_raw.dtype)
+        contact = (low[:, 1:] & low[:, :-1] & (ref < speed) & pair).to(pred_raw.dtype)
     # sqrt(. + eps), not norm(): a finite gradient where a foot does not move at all
     moved = (foot_steps(pred_raw, feet).pow(2).sum(dim=-1) + 1e-10).sqrt() * fps
-    return (moved * down).sum() / down.sum().clamp(min=1.0)
+    return (moved * contact).sum() / contact.sum().clamp(min=1.0)
 
 
 def fed_foot_contact_loss(fed_raw: torch.Tensor, pred_raw: torch.Tensor,
