@@ -211,3 +211,19 @@ def test_a_checkpoint_of_another_kind_is_refused_naming_the_file(kind, other, sa
     with pytest.raises(MotionlangError) as err:
         registry.load_model(path, kind=kind.name, **kind.load_kw())
     assert str(path) in str(err.value)
+
+
+@pytest.mark.parametrize("name", ["m2l", "l2m", "evaluator", "judge"])
+def test_a_checkpoint_from_a_newer_version_names_the_unknown_fields(name, saved, tmp_path):
+    """A config field this version lacks (a newer release's option) is one clear line naming
+    the file and the field, not 'a damaged checkpoint'."""
+    kind = BY_NAME[name]
+    d = torch.load(saved[name][1], map_location="cpu", weights_only=False)
+    d["config"]["option_from_the_future"] = 1
+    path = tmp_path / f"newer{kind.suffix}"
+    torch.save(d, path)
+    with pytest.raises(MotionlangError) as err:
+        kind.cls.load(path, **kind.load_kw())
+    msg = str(err.value)
+    assert str(path) in msg and "option_from_the_future" in msg and "newer" in msg
+    assert "damaged" not in msg and len(msg.splitlines()) == 1

@@ -125,6 +125,21 @@ def model_dict(path: str | Path) -> dict:
     return d
 
 
+def check_config_fields(config_cls: type, d: dict, path: str | Path, kind: str) -> None:
+    """One clear line when a checkpoint's config sets fields ``config_cls`` (a dataclass) does
+    not have: a file written by a newer motionlang, whose options this one cannot honour
+    (without this the constructor's TypeError reads as a damaged file)."""
+    from dataclasses import fields
+    config = d.get("config")
+    if not isinstance(config, dict):
+        return
+    unknown = sorted(set(config) - {f.name for f in fields(config_cls)})
+    if unknown:
+        raise MotionlangError(f"{path}: this {kind} checkpoint sets {', '.join(unknown)}, which "
+                              f"this version of motionlang does not know: it was written by a "
+                              f"newer one (upgrade motionlang to read it)")
+
+
 def read_model_dict(path: str | Path, kind: str) -> dict:
     """Load a model checkpoint (or a trainer checkpoint holding one), check format and kind."""
     d = model_dict(path)
@@ -164,6 +179,7 @@ class Seq2SeqCheckpoint:
     def load(cls, path: str | Path):
         """Rebuild from a file written by :meth:`save` or by the trainer; in eval mode."""
         d = read_model_dict(path, cls.kind)
+        check_config_fields(cls.config_cls, d, path, cls.kind)
         try:
             return cls.from_checkpoint(d)
         except (KeyError, TypeError, ValueError, RuntimeError) as exc:

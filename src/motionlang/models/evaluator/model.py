@@ -28,8 +28,8 @@ import torch.nn.functional as F
 from torch import nn
 
 from motionlang.errors import MotionlangError
-from motionlang.models.checkpoint import (FORMAT_VERSION, load_checkpoint, read_model_dict,
-                                          unpack_normalizer, write_checkpoint)
+from motionlang.models.checkpoint import (FORMAT_VERSION, check_config_fields, load_checkpoint,
+                                          read_model_dict, unpack_normalizer, write_checkpoint)
 from motionlang.models.evaluator.config import EvaluatorConfig
 from motionlang.models.evaluator.layers import MotionEncoder, MovementEncoder, TextEncoder
 from motionlang.models.evaluator.text import caption_tokens, glove_50d, text_inputs
@@ -214,6 +214,7 @@ class TextMotionEvaluator(nn.Module):
     def load(cls, path: str | Path, vectors=None) -> "TextMotionEvaluator":
         """From :meth:`save` or a trainer checkpoint; in eval mode."""
         d = read_model_dict(path, cls.kind)
+        check_config_fields(EvaluatorConfig, d, path, cls.kind)
         try:
             return cls.from_checkpoint(d, vectors)
         except (KeyError, TypeError, ValueError, RuntimeError) as exc:

@@ -24,8 +24,8 @@ from torch.nn import functional as F
 from motionlang.errors import MotionlangError
 from motionlang.features.body21 import uniform_bones21
 from motionlang.features.positions import floor_height, split_global
-from motionlang.models.checkpoint import (FORMAT_VERSION, pack_normalizer, read_model_dict,
-                                          unpack_normalizer, write_checkpoint)
+from motionlang.models.checkpoint import (FORMAT_VERSION, check_config_fields, pack_normalizer,
+                                          read_model_dict, unpack_normalizer, write_checkpoint)
 from motionlang.models.judge.config import JudgeConfig
 
 
@@ -163,6 +163,7 @@ class MotionJudge(nn.Module):
     def load(cls, path: str | Path) -> "MotionJudge":
         """Rebuild from :meth:`save`'s file; in eval mode."""
         d = read_model_dict(path, cls.kind)
+        check_config_fields(JudgeConfig, d, path, cls.kind)
         try:
             return cls.from_checkpoint(d)
         except (KeyError, TypeError, ValueError, RuntimeError) as exc:
