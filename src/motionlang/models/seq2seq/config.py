@@ -97,8 +97,8 @@ class L2MConfig:
     plan_weight: float = 1.0
     plan_noise: float = 0.0
     # weight of a term on the expected frames' toe speed (m/s) over the frame steps where a
-    # toe is down (the reference's or their own: foot_down) (``losses.foot_contact_loss``; position features only); 0 =
-    # off (the paper's loss). Beyond the paper: planted feet that do not slide.
+    # toe is down, the reference's or their own (foot_down; ``losses.foot_contact_loss``;
+    # position features only); 0 = off (the paper's loss). Beyond the paper: planted feet.
     foot_weight: float = 0.0
     # which step of a toe that term measures: between consecutive expected frames
     # ("expected"), or from the frame fed to the decoder to the expected frame it gives
