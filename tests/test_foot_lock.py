@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from motionlang.errors import MotionlangError
-from motionlang.evaluation.metrics.physics import foot_skating
+from motionlang.evaluation.metrics.physics import floor_penetration, foot_skating
 from motionlang.features.foot_lock import LEGS, contacts, lock_feet
 from motionlang.features.joint_map import KIT21_NAMES, bone_lengths21
 
@@ -135,3 +135,26 @@ def test_a_hold_the_leg_cannot_reach_is_left_alone():
     q = lock_feet(p, 10.0)                                 # bent knees reach that: held
     assert foot_skating(q, 10.0) == pytest.approx(0.0, abs=1e-9)
     assert np.array_equal(lock_feet(p, 10.0, reach=0.5), p)   # a leg reaching half as far
+
+
+def test_a_foot_under_the_floor_is_raised_onto_it_and_the_lift_fades():
+    T = 16
+    p = standing(T)
+    hip, knee, ankle, mid, toe = LEGS[0]
+    p[6:10, [ankle, mid, toe], 1] -= 0.02                  # toe 1 cm under the floor, frames 6-9
+    q = lock_feet(p, 10.0, blend=2)
+    assert floor_penetration(p)[1] == pytest.approx(0.01)
+    assert floor_penetration(q)[1] < 1e-12                 # on the floor (to rounding)
+    lift = q[:, toe, 1] - p[:, toe, 1]
+    # exactly the depth where it sank, a third less per frame either side, nothing beyond
+    expect = np.zeros(T)
+    expect[6:10] = 0.01
+    expect[[5, 10]], expect[[4, 11]] = 0.01 * 2 / 3, 0.01 / 3
+    assert np.allclose(lift, expect)
+    # the whole foot rises with the ankle, the hip stays, the bones keep their lengths
+    assert np.allclose(q[:, [ankle, mid], 1] - p[:, [ankle, mid], 1], expect[:, None])
+    assert np.allclose(q[:, [ankle, mid, toe]][..., [0, 2]], p[:, [ankle, mid, toe]][..., [0, 2]])
+    assert np.array_equal(q[:, hip], p[:, hip])
+    assert np.allclose(bone_lengths21(q), bone_lengths21(p))
+    # the other leg, above the floor, is untouched
+    assert np.array_equal(q[:, list(LEGS[1])], p[:, list(LEGS[1])])

@@ -241,8 +241,9 @@ def register(subparsers) -> None:
     p.add_argument("--no-foot-lock", action="store_true",
                    help="keep the model's frames as decoded (default: feet that are down "
                         "are held in place where the leg can reach and the knees follow, "
-                        "which halves the packaged L2M's foot sliding; joint-position models "
-                        "such as the packaged ones)")
+                        "which halves the packaged L2M's foot sliding, and a foot under the "
+                        "floor is raised onto it; joint-position models such as the packaged "
+                        "ones)")
     p.add_argument("--all", action="store_true", help="write every hypothesis (OUT_2, ...)")
     p.add_argument("--rig", metavar="FILE.bvh", default=None,
                    help="write the .bvh on this rig (a BVH file of yours: its skeleton, "

@@ -24,6 +24,12 @@ is the usual post-process of animation pipelines, done on positions:
    bending on the original knee's side (forward, from the hips' facing, where the leg was
    straight); an ankle out of the leg's reach is pulled back to 99.9 % of it (the foot with
    it: that contact slides by what is left). Frames without a shift are left as they are.
+4. **floor**: a foot whose lowest joint (ankle, mid-foot or toe) is below the floor is
+   raised until it is on it, by the same IK (the hip stays, the knee bends a little more);
+   the lift fades in and out linearly over ``blend`` frames either side, so the foot does
+   not pop. (The packaged two-stream model stands with its toes about 5 mm under the floor in
+   most frames of its standing gestures; the real takes' joints are under it by 0.01 mm on
+   average.) Other joints below the floor (a hand on the ground) are left as they are.
 
 The hips, trunk and arms are untouched: the root path, and with it the largest one-frame
 root move, is the model's own.
@@ -128,11 +134,38 @@ def _holdable(p: np.ndarray, run: tuple[int, int], leg: tuple[int, int, int, int
     return bool((np.linalg.norm(held - p[a:b + 1, hip], axis=-1) <= reach * length).all())
 
 
+def _floor_lift(depth: np.ndarray, blend: int) -> np.ndarray:
+    """(T,) lift (m) for a foot ``depth`` (T,) m under the floor (0 where above): at least
+    the depth at every frame, fading linearly to zero over ``blend`` frames either side of
+    each sunk frame (the largest of the fades where they overlap)."""
+    lift = depth.copy()
+    for k in range(1, blend + 1):
+        fade = depth * (1.0 - k / (blend + 1))
+        lift[k:] = np.maximum(lift[k:], fade[:-k])
+        lift[:-k] = np.maximum(lift[:-k], fade[k:])
+    return lift
+
+
+def _move_leg(p: np.ndarray, frames: np.ndarray, leg: tuple[int, ...], shift: np.ndarray,
+              forward: np.ndarray) -> None:
+    """Move the ankle of ``leg`` (hip, knee, ankle, mid, toe) by ``shift`` (n, 3) m on
+    ``frames`` (n,), in place: the knee by two-bone IK from the unchanged hip, the mid-foot
+    and toe with the ankle (by what the leg's reach allowed)."""
+    hip, knee, ankle, mid, toe = leg
+    new_knee, new_ankle = _two_bone(p[frames, hip], p[frames, knee], p[frames, ankle],
+                                    p[frames, ankle] + shift, forward[frames])
+    foot = new_ankle - p[frames, ankle]                 # the shift, less what was out of reach
+    for j in (mid, toe):
+        p[frames, j] += foot
+    p[frames, knee], p[frames, ankle] = new_knee, new_ankle
+
+
 def lock_feet(p21, fps: float, *, height: float = 0.05, speed: float = 1.0, floor: float = 0.0,
               blend: int = 2, min_frames: int = 2, max_shift: float = 0.15,
               reach: float = 1.0) -> np.ndarray:
     """Global 21-joint positions (T, 21, 3) metres, Y up, at ``fps`` Hz -> the same motion
-    with every foot contact held in place (module docstring); a new array.
+    with every foot contact held in place and no foot under the floor (module docstring); a
+    new array.
 
     ``height`` / ``speed`` / ``floor``: what counts as a foot down (:func:`contacts`);
     ``blend``: frames over which a lock fades in and out; ``min_frames``: shortest contact;
@@ -150,23 +183,21 @@ def lock_feet(p21, fps: float, *, height: float = 0.05, speed: float = 1.0, floo
     across = p[:, lh] - p[:, rh]
     forward = np.stack([-across[:, 2], np.zeros(len(p)), across[:, 0]], axis=-1)
     for hip, knee, ankle, mid, toe in LEGS:
+        leg = (np.linalg.norm(p[:, knee] - p[:, hip], axis=-1) > 1e-6) & \
+              (np.linalg.norm(p[:, ankle] - p[:, knee], axis=-1) > 1e-6)   # a collapsed leg: left
         runs = contacts(p[:, toe], fps, height=height, speed=speed, floor=floor,
                         min_frames=min_frames)
         runs = [r for r in runs if _holdable(p, r, (hip, knee, ankle, toe), max_shift, reach)]
-        if not runs:
-            continue
-        s = _shifts(p[:, toe, [0, 2]], runs, blend)
-        leg = (np.linalg.norm(p[:, knee] - p[:, hip], axis=-1) > 1e-6) & \
-              (np.linalg.norm(p[:, ankle] - p[:, knee], axis=-1) > 1e-6)
-        moved = np.flatnonzero((np.abs(s) > 0).any(axis=1) & leg)   # a collapsed leg: left
-        if not len(moved):
-            continue
+        if runs:
+            s = _shifts(p[:, toe, [0, 2]], runs, blend)
+            moved = np.flatnonzero((np.abs(s) > 0).any(axis=1) & leg)
+            shift = np.zeros((len(moved), 3))
+            shift[:, [0, 2]] = s[moved]
+            _move_leg(p, moved, (hip, knee, ankle, mid, toe), shift, forward)
+        depth = np.maximum(0.0, floor - p[:, [ankle, mid, toe], 1].min(axis=1))
+        lift = _floor_lift(depth, blend)
+        moved = np.flatnonzero((lift > 0) & leg)
         shift = np.zeros((len(moved), 3))
-        shift[:, [0, 2]] = s[moved]
-        new_knee, new_ankle = _two_bone(p[moved, hip], p[moved, knee], p[moved, ankle],
-                                        p[moved, ankle] + shift, forward[moved])
-        foot = new_ankle - p[moved, ankle]                  # the shift, less what was out of reach
-        for j in (mid, toe):
-            p[moved, j] += foot
-        p[moved, knee], p[moved, ankle] = new_knee, new_ankle
+        shift[:, 1] = lift[moved]
+        _move_leg(p, moved, (hip, knee, ankle, mid, toe), shift, forward)
     return p
