@@ -434,3 +434,32 @@ def test_l2m_rollout_ramps_up_and_resumes_with_the_weights():
     tiny("l2m", False).load_state_dict(old)          # checkpoints from before the option load
     with pytest.raises(MotionlangError, match="rollout"):
         tiny("l2m", False, rollout=1.5)
+
+
+def test_l2m_mean_frames_term_is_the_expected_frames_squared_error():
+    batch = make_batch()
+    model = tiny("l2m", False, mean_weight=0.5)
+    model.eval()
+    with torch.no_grad():
+        out = model.loss(batch)
+        params = model(batch["tokens"], batch["token_lengths"], batch["motion"])
+        expected = (torch.softmax(params.logit_pi, -1).unsqueeze(-1) * params.mu).sum(-2)
+        B, T, _ = batch["motion"].shape
+        valid = torch.arange(T).unsqueeze(0) < batch["motion_lengths"].unsqueeze(1)
+        by_hand = ((expected - batch["motion"]) ** 2).sum(-1)[valid].mean()
+        plain = tiny("l2m", False).eval().loss(batch)       # same weights (seeded), no term
+    torch.testing.assert_close(out["mean_sq"], by_hand)
+    torch.testing.assert_close(out["loss"], plain["loss"] + 0.5 * by_hand)
+    assert "mean_sq" not in plain
+    # it trains: the head's gradients differ from those of the same model without it
+    model = tiny("l2m", False, mean_weight=1.0)
+    model.train()
+    model.loss(batch)["loss"].backward()
+    g_term = torch.cat([q.grad.flatten() for q in model.head.parameters()])
+    model0 = tiny("l2m", False)
+    model0.train()
+    model0.loss(batch)["loss"].backward()
+    g_plain = torch.cat([q.grad.flatten() for q in model0.head.parameters()])
+    assert not torch.allclose(g_term, g_plain)
+    with pytest.raises(MotionlangError, match="mean_weight"):
+        LanguageToMotion(replace(model.config, mean_weight=-1.0))

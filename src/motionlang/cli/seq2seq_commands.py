@@ -108,6 +108,10 @@ def _add_train(sub, name: str, help_: str) -> None:
         p.add_argument("--energy", type=nonneg_float, default=d.energy_weight, metavar="W",
                        help="weight of a loss on the local speeds of the expected frames "
                             "against the reference's, over ~1 s windows (paper: 0)")
+        p.add_argument("--mean-frames", type=nonneg_float, default=d.mean_weight, metavar="W",
+                       help="weight of a squared error of the expected frames against the "
+                            "reference (normalised features): what --method mean writes "
+                            "(paper: 0)")
         p.add_argument("--foot-contact", type=nonneg_float, default=d.foot_weight,
                        metavar="W",
                        help="weight of a loss on the expected frames' toe speed (m/s) where "
@@ -234,6 +238,7 @@ def _new_model(args: argparse.Namespace, data):
                                            input_mask=input_mask,
                                            energy_weight=args.energy,
                                            foot_weight=args.foot_contact,
+                                           mean_weight=args.mean_frames,
                                            foot_step=args.foot_step,
                                            foot_down=args.foot_down,
                                            plan_parts=args.plan_parts,

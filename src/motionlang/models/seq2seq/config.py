@@ -109,6 +109,13 @@ class L2MConfig:
     # (below 5 cm and slower than 1 m/s in them), for a model fed its own frames, whose steps
     # drift out of step with the reference's
     foot_down: str = "reference"
+    # weight of a squared error of the expected frames (sum_k pi_k mu_k) against the
+    # reference, summed over the normalised features, mean over frames; 0 = off (the paper's
+    # loss). Beyond the paper: the surrogate NLL moves a component's mean by pi_k (x -
+    # mu_k) / sigma_k^2, so where a broad component has taken a feature (sigma of 3-5 std on
+    # the raised arm of a procedural wave) its mean stays at rest and mean decoding never
+    # starts the gesture; this term's gradient does not shrink with sigma
+    mean_weight: float = 0.0
     pad_id: int = 0
     max_frames: int = 300       # decoding cap (frames)
 
@@ -118,7 +125,7 @@ class L2MConfig:
             "dec_layers", "n_components", "attn_dim", "max_frames", "energy_window",
             "plan_hidden"), nonneg_ints=("rollout_warmup", "plan_parts"),
             nonneg=("end_weight", "input_noise", "energy_weight", "plan_weight", "plan_noise",
-                    "foot_weight"))
+                    "foot_weight", "mean_weight"))
         if not 0 <= self.rollout <= 1:
             raise MotionlangError(f"L2MConfig.rollout must be in [0, 1], got {self.rollout!r}")
         if self.foot_step not in ("expected", "input"):

@@ -295,7 +295,8 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
         pairs); ``nll`` is the
         frame's negative log density (surrogate or exact; per-feature weighted by
         ``config.loss_weights`` when set), ``active_bce`` the flag's; ``energy`` (with
-        ``config.energy_weight`` > 0) the local-speed term of the expected frames, ``plan``
+        ``config.energy_weight`` > 0) the local-speed term of the expected frames, ``mean_sq``
+        (with ``config.mean_weight`` > 0) their squared error against the reference, ``plan``
         (with ``config.plan_parts``) the mean squared error of the plan predicted from the
         sentence."""
         motion, lengths = batch["motion"], batch["motion_lengths"]
@@ -333,6 +334,12 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
                                  self.config.energy_window)
             out["loss"] = out["loss"] + self.config.energy_weight * energy
             out["energy"] = energy.detach()
+        if self.config.mean_weight > 0:
+            # the frames mean decoding writes must be the reference's (config.mean_weight)
+            sq = ((mdn.mixture_mean(params) - x) ** 2).sum(-1)
+            mean_sq = sq[valid].mean()
+            out["loss"] = out["loss"] + self.config.mean_weight * mean_sq
+            out["mean_sq"] = mean_sq.detach()
         if self.config.foot_weight > 0:
             foot = self._foot_term(params, motion, valid.reshape(B, T), fed)
             out["loss"] = out["loss"] + self.config.foot_weight * foot
