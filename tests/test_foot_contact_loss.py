@@ -15,8 +15,9 @@ from motionlang.features.normalizer import Normalizer
 from motionlang.features.positions import PositionFeatures, split_global
 from motionlang.features import root as rootlib
 from motionlang.models.seq2seq.l2m import L2MConfig, LanguageToMotion
-from motionlang.models.seq2seq.losses import (fed_foot_contact_loss, foot_contact_loss,
-                                               foot_steps)
+from motionlang.models.seq2seq.losses import (expected_foot_loss, fed_foot_contact_loss,
+                                              foot_contact_loss, foot_steps)
+from motionlang.models.seq2seq.mdn import mixture_mean
 
 FPS = 12.5
 
@@ -184,7 +185,8 @@ def test_the_l2m_adds_the_term_with_its_weight_and_learns_through_it():
 
     def term():
         p = model(batch["tokens"], batch["token_lengths"], batch["motion"]).flatten()
-        return model._foot_term(p, batch["motion"], valid)
+        expected = mixture_mean(p).reshape(batch["motion"].shape)
+        return expected_foot_loss(expected, batch["motion"], valid, None, model.features)
     first = float(term())
     for _ in range(60):
         opt.zero_grad()

@@ -59,14 +59,12 @@ import torch
 from torch import nn
 
 from motionlang.errors import MotionlangError
-from motionlang.features.joint_map import TOES
 from motionlang.models.seq2seq import mdn
 from motionlang.models.checkpoint import Seq2SeqCheckpoint
 from motionlang.models.length import SentenceLength
 from motionlang.models.seq2seq.plan import Planner, motion_plan, plan_at
 from motionlang.models.seq2seq.layers import AdditiveAttention, BiGRUEncoder, StackedDecoder
-from motionlang.models.seq2seq.losses import (energy_loss, fed_foot_contact_loss,
-                                               foot_contact_loss)
+from motionlang.models.seq2seq.losses import energy_loss, expected_foot_loss
 from motionlang.models.seq2seq.config import L2MConfig  # noqa: F401 (re-exported)
 
 
@@ -341,7 +339,9 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
             out["loss"] = out["loss"] + self.config.mean_weight * mean_sq
             out["mean_sq"] = mean_sq.detach()
         if self.config.foot_weight > 0:
-            foot = self._foot_term(params, motion, valid.reshape(B, T), fed)
+            foot = expected_foot_loss(mdn.mixture_mean(params).reshape(B, T, -1), motion,
+                                      valid.reshape(B, T), fed, self.features,
+                                      step=self.config.foot_step, down=self.config.foot_down)
             out["loss"] = out["loss"] + self.config.foot_weight * foot
             out["foot"] = foot.detach()
         if self.planner is not None:
@@ -352,31 +352,6 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
             out["loss"] = out["loss"] + self.config.plan_weight * plan_mse
             out["plan"] = plan_mse.detach()
         return out
-
-    def _foot_term(self, params: mdn.MixtureParams, motion: torch.Tensor,
-                   valid: torch.Tensor, fed: torch.Tensor | None = None) -> torch.Tensor:
-        """``foot_contact_loss`` of the expected frames (B, T, F) against ``motion``, both
-        un-normalised with the features' normaliser; valid (B, T) bool. With
-        ``config.foot_step == "input"`` each step is from the frame fed (B, T, F) to the
-        expected frame read from it (the step generation takes for a ``rollout_input
-        "mean"`` model, fed its expected frames); else between consecutive expected
-        frames."""
-        norm = getattr(self.features, "normalizer", None)
-        if norm is None or getattr(self.features, "kind", None) != "positions":
-            raise MotionlangError("L2MConfig.foot_weight needs the model's position features "
-                                  "and their normaliser")
-        mean = torch.as_tensor(norm.mean, dtype=motion.dtype, device=motion.device)
-        std = torch.as_tensor(norm.std, dtype=motion.dtype, device=motion.device)
-        B, T, F = motion.shape
-        pred = mdn.mixture_mean(params).reshape(B, T, F) * std + mean
-        target, mask = motion * std + mean, valid.to(motion.dtype)
-        if self.config.foot_step == "input":
-            if fed is None:
-                raise MotionlangError("foot_step 'input' needs the frames fed")
-            return fed_foot_contact_loss(fed * std + mean, pred, target, mask, TOES,
-                                         self.features.fps)
-        return foot_contact_loss(pred, target, mask, TOES, self.features.fps,
-                                 down=self.config.foot_down)
 
     def to_checkpoint(self) -> dict:
         d = super().to_checkpoint()

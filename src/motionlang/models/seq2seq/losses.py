@@ -121,3 +121,30 @@ def fed_foot_contact_loss(fed_raw: torch.Tensor, pred_raw: torch.Tensor,
     m[:, 0] = 0.0
     return foot_contact_loss(pairs, true, m.reshape(B * T, 1).expand(-1, 2), feet, fps,
                              **contact)
+
+
+def expected_foot_loss(expected: torch.Tensor, motion: torch.Tensor, valid: torch.Tensor,
+                       fed: torch.Tensor | None, features, *, step: str = "expected",
+                       down: str = "reference") -> torch.Tensor:
+    """The L2M's foot term: :func:`foot_contact_loss` of its expected frames (B, T, F)
+    against ``motion`` (B, T, F), both normalised model features, un-normalised with the
+    position ``features``' normaliser; valid (B, T) bool. With ``step == "input"`` each step
+    is from the frame fed (B, T, F) to the expected frame read from it (the step generation
+    takes for a ``rollout_input "mean"`` model, fed its expected frames; with
+    :func:`fed_foot_contact_loss`); else between consecutive expected frames, the toe down
+    where ``down`` says (the reference's or the expected frames' own)."""
+    from motionlang.errors import MotionlangError
+    from motionlang.features.joint_map import TOES
+    norm = getattr(features, "normalizer", None)
+    if norm is None or getattr(features, "kind", None) != "positions":
+        raise MotionlangError("L2MConfig.foot_weight needs the model's position features "
+                              "and their normaliser")
+    mean = torch.as_tensor(norm.mean, dtype=motion.dtype, device=motion.device)
+    std = torch.as_tensor(norm.std, dtype=motion.dtype, device=motion.device)
+    pred = expected * std + mean
+    target, mask = motion * std + mean, valid.to(motion.dtype)
+    if step == "input":
+        if fed is None:
+            raise MotionlangError("foot_step 'input' needs the frames fed")
+        return fed_foot_contact_loss(fed * std + mean, pred, target, mask, TOES, features.fps)
+    return foot_contact_loss(pred, target, mask, TOES, features.fps, down=down)
