@@ -158,3 +158,22 @@ def test_a_foot_under_the_floor_is_raised_onto_it_and_the_lift_fades():
     assert np.allclose(bone_lengths21(q), bone_lengths21(p))
     # the other leg, above the floor, is untouched
     assert np.array_equal(q[:, list(LEGS[1])], p[:, list(LEGS[1])])
+
+
+def test_a_sunk_foot_lands_on_the_floor_not_above_it_and_the_lock_still_holds():
+    """Depths that differ frame to frame: each sunk frame is raised by its own depth (a
+    deeper neighbour's fade does not lift it off the floor); on a drifting body the planted
+    toe is both held and raised."""
+    T = 12
+    p = standing(T)
+    p[:, :, 0] += 0.01 * np.arange(T)[:, None]              # drifting: the lock holds the toes
+    hip, knee, ankle, mid, toe = LEGS[1]
+    p[4:7, [ankle, mid, toe], 1] -= np.array([0.02, 0.04, 0.02])[:, None]   # toe 1, 3, 1 cm under
+    q = lock_feet(p, 10.0, blend=2)
+    assert np.allclose(q[4:7, toe, 1], 0.0)                 # on the floor, not above it
+    assert np.allclose(q[[2, 3, 7, 8], toe, 1] - p[[2, 3, 7, 8], toe, 1],
+                       [0.01 / 3, 0.01, 0.01, 0.01 / 3])   # fades, 2 frames out (3 cm, 1 cm)
+    assert np.allclose(q[[0, 1, 9, 10, 11], toe, 1], p[[0, 1, 9, 10, 11], toe, 1])
+    assert foot_skating(q, 10.0) == pytest.approx(0.0, abs=1e-9)
+    assert floor_penetration(q)[1] < 1e-12
+    assert np.allclose(bone_lengths21(q), bone_lengths21(p))

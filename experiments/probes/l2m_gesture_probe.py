@@ -41,7 +41,8 @@ def teacher_forced(m, path: str, text: str, j: int, frame: int) -> None:
     print(f"{path} ({T} frames), {text!r}: feature {m.features.names[j]}, normalised, "
           "every 4th frame")
     cases = (("true plan, true frames", plan, prev),
-             ("true plan, first frame fed", plan, prev[:, :1].expand_as(prev)),
+             # the motion's first frame at every step (prev[:, 0] is the zero start frame)
+             ("true plan, first frame fed", plan, x[:, :1].expand_as(prev)),
              ("zero plan, true frames", torch.zeros_like(plan), prev),
              ("sentence's plan, true frames", None, prev))
     with torch.no_grad():

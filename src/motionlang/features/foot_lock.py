@@ -29,7 +29,8 @@ is the usual post-process of animation pipelines, done on positions:
    the lift fades in and out linearly over ``blend`` frames either side, so the foot does
    not pop. (The packaged two-stream model stands with its toes about 5 mm under the floor in
    most frames of its standing gestures; the real takes' joints are under it by 0.01 mm on
-   average.) Other joints below the floor (a hand on the ground) are left as they are.
+   average.) Other joints below the floor (a hand on the ground), a collapsed leg and an
+   ankle the leg cannot reach stay where they are.
 
 The hips, trunk and arms are untouched: the root path, and with it the largest one-frame
 root move, is the model's own.
@@ -135,15 +136,16 @@ def _holdable(p: np.ndarray, run: tuple[int, int], leg: tuple[int, int, int, int
 
 
 def _floor_lift(depth: np.ndarray, blend: int) -> np.ndarray:
-    """(T,) lift (m) for a foot ``depth`` (T,) m under the floor (0 where above): at least
-    the depth at every frame, fading linearly to zero over ``blend`` frames either side of
-    each sunk frame (the largest of the fades where they overlap)."""
-    lift = depth.copy()
+    """(T,) lift (m) for a foot ``depth`` (T,) m under the floor (0 where above): the depth
+    itself on every sunk frame (the foot lands on the floor, not above it), and on the
+    frames above the floor a linear fade to zero over ``blend`` frames from the nearby sunk
+    frames (the largest where fades overlap), so the foot does not pop."""
+    fade = np.zeros_like(depth)
     for k in range(1, blend + 1):
-        fade = depth * (1.0 - k / (blend + 1))
-        lift[k:] = np.maximum(lift[k:], fade[:-k])
-        lift[:-k] = np.maximum(lift[:-k], fade[k:])
-    return lift
+        f = depth * (1.0 - k / (blend + 1))
+        fade[k:] = np.maximum(fade[k:], f[:-k])
+        fade[:-k] = np.maximum(fade[:-k], f[k:])
+    return np.where(depth > 0, depth, fade)
 
 
 def _move_leg(p: np.ndarray, frames: np.ndarray, leg: tuple[int, ...], shift: np.ndarray,
@@ -164,10 +166,11 @@ def lock_feet(p21, fps: float, *, height: float = 0.05, speed: float = 1.0, floo
               blend: int = 2, min_frames: int = 2, max_shift: float = 0.15,
               reach: float = 1.0) -> np.ndarray:
     """Global 21-joint positions (T, 21, 3) metres, Y up, at ``fps`` Hz -> the same motion
-    with every foot contact held in place and no foot under the floor (module docstring); a
-    new array.
+    with every foot contact held in place and every foot raised onto the floor where it sank
+    under it (module docstring); a new array.
 
     ``height`` / ``speed`` / ``floor``: what counts as a foot down (:func:`contacts`);
+    ``floor`` is also the height a sunk foot is raised to;
     ``blend``: frames over which a lock fades in and out; ``min_frames``: shortest contact;
     ``max_shift``: longest pull (m) of a toe to its contact's mean, beyond which the contact
     is a glide and left alone; ``reach``: the same where a held ankle would be farther from

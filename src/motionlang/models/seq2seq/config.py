@@ -114,7 +114,8 @@ class L2MConfig:
     # loss). Beyond the paper: the surrogate NLL moves a component's mean by pi_k (x -
     # mu_k) / sigma_k^2, so where a broad component has taken a feature (sigma of 3-5 std on
     # the raised arm of a procedural wave) its mean stays at rest and mean decoding never
-    # starts the gesture; this term's gradient does not shrink with sigma
+    # starts the gesture; this term's gradient does not shrink with sigma. Every feature
+    # counts alike here, whatever loss_weights gives the NLL
     mean_weight: float = 0.0
     pad_id: int = 0
     max_frames: int = 300       # decoding cap (frames)

@@ -8,6 +8,9 @@ from __future__ import annotations
 import torch
 import torch.nn.functional as F
 
+from motionlang.errors import MotionlangError
+from motionlang.features.joint_map import TOES
+
 
 def frame_mask(lengths: torch.Tensor | None, B: int, T: int) -> torch.Tensor:
     """(B, T) float mask, 1 where ``t < lengths[b]`` (all ones without lengths)."""
@@ -133,8 +136,6 @@ def expected_foot_loss(expected: torch.Tensor, motion: torch.Tensor, valid: torc
     takes for a ``rollout_input "mean"`` model, fed its expected frames; with
     :func:`fed_foot_contact_loss`); else between consecutive expected frames, the toe down
     where ``down`` says (the reference's or the expected frames' own)."""
-    from motionlang.errors import MotionlangError
-    from motionlang.features.joint_map import TOES
     norm = getattr(features, "normalizer", None)
     if norm is None or getattr(features, "kind", None) != "positions":
         raise MotionlangError("L2MConfig.foot_weight needs the model's position features "
