@@ -12,7 +12,7 @@
 # two models side by side: corpus ~2 min; procedural + Bandai: data preparation ~25 min per
 # run (fitting and encoding 6,750 training motions and their mirror images; cached by
 # MOTIONLANG_CACHE), M2L ~7-10 min an epoch (8 epochs), L2M ~28 min a teacher-forced epoch and
-# ~35 min an epoch on its own frames (1 + 1 + 1), judge ~10 min, two-stream ~20 min an epoch
+# ~35 min an epoch on its own frames (1 + 1 + 1 + 1), judge ~10 min, two-stream ~20 min an epoch
 # (4 epochs, after the M2L); procedural alone: M2L ~30 min (12 epochs), L2M ~60 min (3 + 3).
 # Every --out is a run folder: the final model is its model.pt (beside best.pt, last.pt,
 # history.json, loss_curve.png, splits/ and commands.jsonl; LICENSE.txt for Bandai runs).
@@ -47,14 +47,18 @@ C="$WORK/corpus6000"
 #    the last with the learning rate decayed; for the mixed L2M a third stage, one epoch fed
 #    its own *expected* frames (--rollout-input mean, learning rate 3e-4 decayed), so that
 #    generation continues from the frames it was trained on (docs/results/real-motion.md,
-#    seventh session: less skating, better recognised); each model.pt is the epoch with the
-#    best validation loss; then the planner alone 20 epochs more (minutes).
+#    seventh session: less skating, better recognised), and a fourth, one more such epoch with
+#    a squared error on the expected frames (--mean-frames 10), without which the decoder
+#    leaves gestures that start partway through a motion to a broad mixture component and
+#    never starts them (eighth session: procedural waves and jumps); each model.pt is the
+#    epoch with the best validation loss; then the planner alone 20 epochs more (minutes).
 L2M_COMMON=(--batch-size 64 --offsets 1 --features positions --checkpoint-every 200
             --dec-hidden 256 --dec-layers 2 --components 5 --end-weight 10 --time-input
             --progress-input --plan-parts 8 --plan-noise 0.1)
-# l2m_run OUT EPOCHS1 EPOCHS_TOTAL DECAY MEAN_EPOCHS DATA_ARGS... : the stages and the planner
+# l2m_run OUT EPOCHS1 EPOCHS_TOTAL DECAY MEAN_EPOCHS MEAN_FRAMES_EPOCHS DATA_ARGS... : the
+# stages and the planner
 l2m_run() {
-  local out=$1 e1=$2 e2=$3 decay=$4 e3=$5; shift 5
+  local out=$1 e1=$2 e2=$3 decay=$4 e3=$5 e4=$6; shift 6
   local data=("$@") plan_mirror=()
   [[ " ${data[*]} " == *" --mirror "* ]] && plan_mirror=(--mirror)
   local plan_data=()
@@ -77,6 +81,12 @@ l2m_run() {
         --rollout-input mean --resume
     touch "$out/.stage3"
   fi
+  if [ "$e4" -gt 0 ] && [ ! -f "$out/.stage4" ]; then
+    "$ML" train l2m "${data[@]}" --out "$out" "${L2M_COMMON[@]}" --epochs $((e2 + e3 + e4)) \
+        --decay-epochs "$e4" --lr 0.0003 --rollout 0.9 --rollout-warmup 225 \
+        --rollout-input mean --mean-frames 10 --resume
+    touch "$out/.stage4"
+  fi
   "$PY" "$HERE/scripts/l2m_fit_planner.py" "$out/model.pt" "${plan_data[@]}" "${plan_mirror[@]}" \
       --out "$out/planned.pt" --epochs 20
 }
@@ -87,7 +97,7 @@ if [ "$MODELS" = all ] || [ "$MODELS" = bandai ]; then
   "$ML" train m2l "${MIX[@]}" --out "$WORK/m2l" --epochs 8 --batch-size 64 --offsets 1 \
       --attention --features positions --checkpoint-every 200 $RESUME &
   M2L=$!
-  l2m_run "$WORK/l2m" 1 2 1 1 "${MIX[@]}" &
+  l2m_run "$WORK/l2m" 1 2 1 1 1 "${MIX[@]}" &
   L2M=$!
   wait $M2L
   "$ML" train judge --data "bandai:$BANDAI" --out "$WORK/judge" --epochs 30
@@ -108,7 +118,7 @@ if [ "$MODELS" = all ] || [ "$MODELS" = procedural ]; then
   "$ML" train m2l --data "$C" --out "$WORK/m2l-procedural" --epochs 12 --batch-size 64 \
       --offsets 1 --attention --features positions --checkpoint-every 200 $RESUME &
   M2L=$!
-  l2m_run "$WORK/l2m-procedural" 3 6 2 0 --data "$C" &
+  l2m_run "$WORK/l2m-procedural" 3 6 2 0 0 --data "$C" &
   L2M=$!
   wait $M2L; wait $L2M
   cp "$WORK/m2l-procedural/model.pt" "$SHIP/m2l-procedural.pt"
