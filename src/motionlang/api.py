@@ -3,13 +3,13 @@
     >>> import motionlang as ml
     >>> walk = ml.generate("a person walks forward")   # a Motion, packaged L2M (expected frames)
     >>> walk
-    Motion('generated': 56 frames at 12.5 Hz (4.5 s), 21 joints, from positions)
+    Motion('generated': 58 frames at 12.5 Hz (4.6 s), 21 joints, from positions)
     >>> text, log_p = ml.describe(walk)[0]             # packaged M2L, beam width 5
     >>> "walks" in text
     True
     >>> path = ml.write_motion(walk, tmp / "walk.bvh")  # the 21-joint body, for Blender
     >>> ml.read_motion(path).n_frames
-    56
+    58
     >>> ml.encode("a person walks").shape              # the L2M's summary of a sentence
     (128,)
 
