@@ -175,9 +175,11 @@ def test_fit_planner_script_on_a_tiny_trained_model(tmp_path, capsys):
     assert main(["train", "l2m", "--data", str(corpus), "--out", str(run), "--epochs", "1",
                  "--batch-size", "8", "--offsets", "1", "--dec-hidden", "8", "--dec-layers",
                  "1", "--enc-hidden", "8", "--embed-dim", "8", "--components", "2",
-                 "--progress-input", "--plan-parts", "4", "--plan-means", "root"]) == 0
+                 "--progress-input", "--plan-parts", "4", "--plan-means", "root",
+                 "--mean-frames", "2"]) == 0
     trained = LanguageToMotion.load(run / "model.pt")
     assert trained.config.plan_parts == 4 and trained.planner is not None
+    assert trained.config.mean_weight == 2.0      # --mean-frames reaches the saved model
     names = list(trained.features.names)[:trained.config.n_features]
     kept = [n for n, w in zip(names, trained.config.plan_mean_mask) if w]
     assert sorted(kept) == ["root_dyaw", "root_vx", "root_vz"]

@@ -298,6 +298,8 @@ def test_errors_are_one_line(tmp_path, capsys):
     assert "argument --energy: must be a finite number >= 0" in capsys.readouterr().err
     assert main(["train", "l2m", "--data", str(tmp_path), "--foot-contact", "-1"]) == 2
     assert "argument --foot-contact: must be a finite number >= 0" in capsys.readouterr().err
+    assert main(["train", "l2m", "--data", str(tmp_path), "--mean-frames", "-1"]) == 2
+    assert "argument --mean-frames: must be a finite number >= 0" in capsys.readouterr().err
     assert main(["train", "l2m", "--data", str(tmp_path), "--out", str(tmp_path / "f"),
                  "--foot-step", "input"]) == 2
     err = capsys.readouterr().err
