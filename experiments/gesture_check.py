@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from collections import defaultdict
 from pathlib import Path
 
@@ -51,6 +52,12 @@ def measure(p: np.ndarray, action: str, side: str | None) -> float:
     raise ValueError(action)
 
 
+def _fail(message: str) -> None:
+    """Bad input: one line on stderr, exit 2."""
+    print(f"gesture_check: {message}", file=sys.stderr)
+    sys.exit(2)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("corpus", type=Path)
@@ -67,6 +74,9 @@ def main() -> None:
     from motionlang.models.registry import TEXT_TO_MOTION, load_model
 
     ids = sorted(f.name[:-len("_meta.json")] for f in args.corpus.glob("*_meta.json"))
+    if not ids:
+        _fail(f"{args.corpus}: no procedural corpus there (no *_meta.json; make one with "
+              "motionlang data synth)")
     test = (load_splits(args.splits)["test"] if args.splits
             else random_split(ids, seed=0)["test"])
     picked: dict[str, list] = defaultdict(list)
@@ -84,9 +94,10 @@ def main() -> None:
         p = np.asarray(api.body21(args.corpus / f"{mid}_mmm.xml"))
         step = max(1, int(round(meta["fps"] / FPS)))
         picked[a].append((text, p[::step], prims[0].get("side")))
+    if not picked:
+        _fail(f"{args.corpus}: no test motion of one action among {', '.join(ACTIONS)}")
     models = args.model or ["l2m"]
-    rows = {a: {"real": [m for _, p, s in items for m in [measure(p, a, s)]]}
-            for a, items in picked.items()}
+    rows = {a: {"real": [measure(p, a, s) for _, p, s in items]} for a, items in picked.items()}
     for name in models:
         t2m = text_to_motion(load_model(name, kind=TEXT_TO_MOTION))
         for a, items in picked.items():

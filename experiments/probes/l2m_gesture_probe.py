@@ -24,8 +24,9 @@ import torch
 
 
 def _expected(params) -> torch.Tensor:
-    w = torch.softmax(params.logit_pi, -1)
-    return (w.unsqueeze(-1) * params.mu).sum(-2)[0]          # (T, F)
+    """The expected frames (T, F) of one motion's params (1, T, ...)."""
+    from motionlang.models.seq2seq.mdn import mixture_mean
+    return mixture_mean(params.flatten())
 
 
 def teacher_forced(m, path: str, text: str, j: int, frame: int) -> None:

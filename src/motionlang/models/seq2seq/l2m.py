@@ -324,25 +324,25 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
         w = torch.where(active > 0, 1.0, self.config.end_weight)[valid]
         bce = -(w * mdn.active_log_prob(params, active)[valid]).sum() / w.sum()
         out = {"loss": nll + bce, "nll": nll.detach(), "active_bce": bce.detach()}
-        if self.config.energy_weight > 0:
+        c = self.config
+        # the expected frames (B, T, F): what mean decoding writes, read by the terms below
+        mean = (mdn.mixture_mean(params).reshape(B, T, -1)
+                if max(c.energy_weight, c.mean_weight, c.foot_weight) > 0 else None)
+        if c.energy_weight > 0:
             # the expected frames must move as much as the reference does, wherever the
             # sample of the step before has taken the motion (phase-free, ~1 s windows)
-            mean = mdn.mixture_mean(params).reshape(B, T, -1)
-            energy = energy_loss(mean, motion, valid.reshape(B, T).to(motion),
-                                 self.config.energy_window)
-            out["loss"] = out["loss"] + self.config.energy_weight * energy
+            energy = energy_loss(mean, motion, valid.reshape(B, T).to(motion), c.energy_window)
+            out["loss"] = out["loss"] + c.energy_weight * energy
             out["energy"] = energy.detach()
-        if self.config.mean_weight > 0:
+        if c.mean_weight > 0:
             # the frames mean decoding writes must be the reference's (config.mean_weight)
-            sq = ((mdn.mixture_mean(params) - x) ** 2).sum(-1)
-            mean_sq = sq[valid].mean()
-            out["loss"] = out["loss"] + self.config.mean_weight * mean_sq
+            mean_sq = ((mean - motion) ** 2).sum(-1)[valid.reshape(B, T)].mean()
+            out["loss"] = out["loss"] + c.mean_weight * mean_sq
             out["mean_sq"] = mean_sq.detach()
-        if self.config.foot_weight > 0:
-            foot = expected_foot_loss(mdn.mixture_mean(params).reshape(B, T, -1), motion,
-                                      valid.reshape(B, T), fed, self.features,
-                                      step=self.config.foot_step, down=self.config.foot_down)
-            out["loss"] = out["loss"] + self.config.foot_weight * foot
+        if c.foot_weight > 0:
+            foot = expected_foot_loss(mean, motion, valid.reshape(B, T), fed, self.features,
+                                      step=c.foot_step, down=c.foot_down)
+            out["loss"] = out["loss"] + c.foot_weight * foot
             out["foot"] = foot.detach()
         if self.planner is not None:
             # the planner that plans from the sentence at generation time (the decoder above
