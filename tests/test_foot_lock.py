@@ -1,4 +1,6 @@
-"""Foot contact clean-up (features.foot_lock) on hand-made 21-joint bodies."""
+"""Foot contact clean-up (features.foot_lock) on hand-made 21-joint bodies. The lock's own
+steps are tested with ``anchor=False`` (the root step would otherwise have stopped the drift
+they are given before the lock sees it); the root step has tests of its own."""
 from __future__ import annotations
 
 import numpy as np
@@ -6,7 +8,7 @@ import pytest
 
 from motionlang.errors import MotionlangError
 from motionlang.evaluation.metrics.physics import floor_penetration, foot_skating
-from motionlang.features.foot_lock import LEGS, contacts, lock_feet
+from motionlang.features.foot_lock import LEGS, anchor_root, contacts, lock_feet
 from motionlang.features.joint_map import KIT21_NAMES, bone_lengths21
 
 
@@ -39,7 +41,7 @@ def test_sliding_body_gets_planted_feet_and_keeps_its_bones():
     p = standing(T)
     p[:, :, 0] += 0.01 * np.arange(T)[:, None]               # everything drifts 0.1 m/s
     assert foot_skating(p, 10.0) == pytest.approx(0.1)
-    q = lock_feet(p, 10.0)
+    q = lock_feet(p, 10.0, anchor=False)
     assert foot_skating(q, 10.0) == pytest.approx(0.0, abs=1e-9)
     # the toes stay at their mean position over the contact (the whole motion)
     for *_, toe in LEGS:
@@ -62,7 +64,7 @@ def test_lock_fades_out_where_the_foot_is_lifted():
     hip, knee, ankle, mid, toe = LEGS[0]
     p[8:, [ankle, mid, toe], 1] += 0.3                     # left foot lifted from frame 8
     p[8:, knee, 1] += 0.15
-    q = lock_feet(p, 10.0, blend=2)
+    q = lock_feet(p, 10.0, blend=2, anchor=False)
     # frames 0-7 held at their mean toe position; 8-9 fade; 10 on as decoded
     left = q[:, toe, 0] - p[:, toe, 0]
     mean = p[:8, toe, 0].mean()
@@ -76,7 +78,7 @@ def test_out_of_reach_ankle_is_pulled_back_not_stretched():
     T = 30
     p = standing(T)
     p[:, :, 0] += 0.05 * np.arange(T)[:, None]             # 0.5 m/s: 1.45 m over the run
-    q = lock_feet(p, 10.0, max_shift=1.0, reach=10.0)     # held although it is a glide
+    q = lock_feet(p, 10.0, max_shift=1.0, reach=10.0, anchor=False)   # held: a glide
     assert np.allclose(bone_lengths21(q), bone_lengths21(p))
     hip, knee, ankle, *_ = LEGS[0]
     leg = np.linalg.norm(q[:, ankle] - q[:, hip], axis=-1)
@@ -97,7 +99,7 @@ def test_frames_without_a_shift_and_collapsed_legs_are_left_alone():
     hip, knee, ankle, mid, toe = LEGS[0]
     p[8:, [ankle, mid, toe], 1] += 0.3                     # lifted from frame 8: no shift
     p[8:, knee, 1] += 0.15                                 # from frame 10 on
-    q = lock_feet(p, 10.0, blend=2)
+    q = lock_feet(p, 10.0, blend=2, anchor=False)
     assert np.array_equal(q[10:, [knee, ankle, mid, toe]], p[10:, [knee, ankle, mid, toe]])
     flat = np.zeros((5, 21, 3))                            # every joint at one point
     assert np.array_equal(lock_feet(flat, 12.5), flat)
@@ -109,7 +111,7 @@ def test_a_straight_leg_bends_forward_when_its_foot_is_held_back():
     for hip, knee, ankle, *_ in LEGS:                      # straight legs
         p[:, knee, 2] = 0.0
     p[:, :, 2] += 0.01 * np.arange(T)[:, None]             # drifting forward (+Z, the facing)
-    q = lock_feet(p, 10.0)
+    q = lock_feet(p, 10.0, anchor=False)
     for hip, knee, ankle, *_ in LEGS:
         # the knee ends up in front of the hip-ankle line, never behind it
         d, k = q[:, ankle] - q[:, hip], q[:, knee] - q[:, hip]
@@ -124,17 +126,18 @@ def test_a_glide_is_left_alone():
     T = 30
     p = standing(T)
     p[:, :, 2] += 0.05 * np.arange(T)[:, None]             # 0.5 m/s, toes down throughout
-    assert np.array_equal(lock_feet(p, 10.0), p)
-    assert not np.array_equal(lock_feet(p, 10.0, max_shift=1.0, reach=10.0), p)
+    assert np.array_equal(lock_feet(p, 10.0, anchor=False), p)
+    assert not np.array_equal(lock_feet(p, 10.0, max_shift=1.0, reach=10.0, anchor=False), p)
 
 
 def test_a_hold_the_leg_cannot_reach_is_left_alone():
     T = 12
     p = standing(T)
     p[:, :, 2] += 0.02 * np.arange(T)[:, None]             # 11 cm either side of the mean
-    q = lock_feet(p, 10.0)                                 # bent knees reach that: held
+    q = lock_feet(p, 10.0, anchor=False)                   # bent knees reach that: held
     assert foot_skating(q, 10.0) == pytest.approx(0.0, abs=1e-9)
-    assert np.array_equal(lock_feet(p, 10.0, reach=0.5), p)   # a leg reaching half as far
+    # a leg reaching half as far
+    assert np.array_equal(lock_feet(p, 10.0, reach=0.5, anchor=False), p)
 
 
 def test_a_foot_under_the_floor_is_raised_onto_it_and_the_lift_fades():
@@ -166,7 +169,7 @@ def test_a_sunk_foot_lands_on_the_floor_not_above_it_and_the_lock_still_holds():
     toe is both held and raised."""
     T = 12
     p = standing(T)
-    p[:, :, 0] += 0.01 * np.arange(T)[:, None]              # drifting: the lock holds the toes
+    p[:, :, 0] += 0.01 * np.arange(T)[:, None]              # drifting: the toes are held
     hip, knee, ankle, mid, toe = LEGS[1]
     p[4:7, [ankle, mid, toe], 1] -= np.array([0.02, 0.04, 0.02])[:, None]   # toe 1, 3, 1 cm under
     q = lock_feet(p, 10.0, blend=2)
@@ -177,3 +180,64 @@ def test_a_sunk_foot_lands_on_the_floor_not_above_it_and_the_lock_still_holds():
     assert foot_skating(q, 10.0) == pytest.approx(0.0, abs=1e-9)
     assert floor_penetration(q)[1] < 1e-12
     assert np.allclose(bone_lengths21(q), bone_lengths21(p))
+
+
+def test_a_body_drifting_on_its_feet_stands_still_as_a_whole():
+    """The root step: a body whose feet are down while it drifts is moved back by its feet's
+    step, every joint alike, so it stands where it started, pose and bones unchanged."""
+    T = 20
+    p = standing(T)
+    p[:, :, 0] += 0.01 * np.arange(T)[:, None]               # everything drifts 0.1 m/s
+    for window in (0.0, 0.4):
+        q = anchor_root(p, 10.0, window=window)
+        assert np.allclose(q, standing(T))                    # back where frame 0 stood
+        assert foot_skating(q, 10.0) == pytest.approx(0.0, abs=1e-9)
+    q = lock_feet(p, 10.0)                                    # the lock runs it first
+    assert np.allclose(q, standing(T))
+    assert p.shape == q.shape and not np.shares_memory(p, q)
+
+
+def test_a_body_in_the_air_keeps_its_path():
+    T = 12
+    p = standing(T)
+    p[:, :, 1] += 0.3                                         # feet 30 cm up: no contact
+    p[:, :, 2] += 0.05 * np.arange(T)[:, None]
+    assert np.array_equal(anchor_root(p, 10.0), p)
+    assert np.array_equal(lock_feet(p, 10.0), p)
+
+
+def test_the_body_follows_the_foot_that_is_down_or_the_mean_of_both():
+    T = 10
+    p = standing(T)
+    lt, rt = LEGS[0][4], LEGS[1][4]
+    p[:, :, 2] += 0.03 * np.arange(T)[:, None]               # the body walks at 0.3 m/s
+    p[:, rt, 1] += 0.2                                        # the right foot is up (a swing)
+    q = anchor_root(p, 10.0, window=0.0)
+    # the left toe stays where it was at frame 0, the whole body moved with it
+    assert np.allclose(q[:, lt], p[0, lt])
+    assert np.allclose(q - q[:, :1], p - p[:, :1])
+    # both down, the left toe sliding 0.02 m per frame more than the right: the mean step
+    p = standing(T)
+    p[:, :, 2] += 0.03 * np.arange(T)[:, None]
+    p[:, [j for j in LEGS[0][2:]], 2] += 0.02 * np.arange(T)[:, None]
+    q = anchor_root(p, 10.0, window=0.0)
+    assert np.allclose(np.diff(q[:, lt, 2]), 0.01) and np.allclose(np.diff(q[:, rt, 2]), -0.01)
+
+
+def test_the_correction_is_spread_where_a_contact_begins():
+    """The foot lands at frame 6 of a body travelling 0.5 m/s: without a window the root stops
+    dead in one frame step, with one it slows over several."""
+    T = 14
+    p = standing(T)
+    p[:, :, 2] += 0.05 * np.arange(T)[:, None]
+    p[:6, :, 1] += 0.3                                        # in the air until frame 6
+    for window, largest in ((0.0, 0.05), (0.5, 0.05 / 5)):
+        root = anchor_root(p, 10.0, window=window)[:, 0, 2]
+        assert np.abs(np.diff(root, n=2)).max() == pytest.approx(largest)
+    assert np.array_equal(anchor_root(p, 10.0)[:1], p[:1])    # frame 0 stays
+
+
+@pytest.mark.parametrize("bad,fps", [(np.zeros((5, 20, 3)), 12.5), (np.zeros((5, 21, 3)), 0)])
+def test_anchor_root_bad_input_is_an_error(bad, fps):
+    with pytest.raises(MotionlangError, match="anchor_root"):
+        anchor_root(bad, fps)

@@ -400,3 +400,25 @@ def test_same_parameter_oracles(data):
         oracle_generations(fake, items, min_group=0)
     with pytest.raises(MotionlangError, match="exact parameters"):
         oracle_generations(fake, items, min_group=len(train))
+
+
+def test_an_l2m_told_its_length_runs_to_it(data):
+    """Asked for n frames, an L2M told its length (progress_input) runs to it even if its end
+    flag says stop: no frozen tail of held frames. One not told its length ends where its
+    flag says, and the rest is its last frame held."""
+    from motionlang.datasets.text import Vocabulary
+    from motionlang.decoding.t2m import generate_positions21
+    from motionlang.models.seq2seq.l2m import L2MConfig, LanguageToMotion
+    vocab = Vocabulary.build([s for r in data.records.values() for s in r.annotations])
+    for told in (True, False):
+        torch.manual_seed(0)
+        cfg = L2MConfig(vocab_size=len(vocab), n_features=66, embed_dim=8, enc_hidden=8,
+                        enc_layers=1, dec_hidden=8, dec_layers=1, n_components=2,
+                        dropout=0.0, max_frames=20, progress_input=told)
+        l2m = LanguageToMotion(cfg, vocab, features=data.features).eval()
+        with torch.no_grad():
+            l2m.head.proj.bias[-1] = -30.0          # P(the motion goes on) ~ 0 at every frame
+        p = generate_positions21(l2m, "a person walks forward", 9)
+        assert p.shape == (9, 21, 3)
+        moved = np.abs(np.diff(p, axis=0)).max(axis=(1, 2)) > 1e-9      # (8,) frame steps
+        assert moved.all() if told else not moved.any()

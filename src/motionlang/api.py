@@ -178,8 +178,9 @@ def generate(text: str, model: Any = None, *, width: int = 5, method: str | None
     or "mean". rig: a Motion or motion file whose skeleton the result is retargeted onto.
     start_from: a Motion or file whose first pose begins the motion (L2M models).
     joint_map / rig_joint_map: how ``start_from`` / ``rig`` map onto the 21-joint body,
-    if no built-in map fits them. foot_lock: hold the feet that are down in place
-    (``features.foot_lock``; joint-position models); False keeps the decoded frames.
+    if no built-in map fits them. foot_lock: move the body with the feet that are down and
+    hold them in place (``features.foot_lock``; joint-position models); False keeps the
+    decoded frames.
     """
     model = _t2m(model)
     unknown = model.unknown_words(text)

@@ -239,11 +239,11 @@ def register(subparsers) -> None:
     p.add_argument("--rerank", metavar="M2L", help="rank the W motions by this M2L model's "
                    "log P(text | motion) instead of their own likelihood (L2M, sample or beam)")
     p.add_argument("--no-foot-lock", action="store_true",
-                   help="keep the model's frames as decoded (default: feet that are down "
-                        "are held in place where the leg can reach and the knees follow, "
-                        "which halves the packaged L2M's foot sliding, and a foot under the "
-                        "floor is raised onto it; joint-position models such as the packaged "
-                        "ones)")
+                   help="keep the model's frames as decoded (default: the body moves "
+                        "with the feet that are down instead of sliding over them, those "
+                        "feet are held in place where the leg can reach and the knees "
+                        "follow, and a foot under the floor is raised onto it; "
+                        "joint-position models such as the packaged ones)")
     p.add_argument("--all", action="store_true", help="write every hypothesis (OUT_2, ...)")
     p.add_argument("--rig", metavar="FILE.bvh", default=None,
                    help="write the .bvh on this rig (a BVH file of yours: its skeleton, "

@@ -150,9 +150,13 @@ class L2MText2Motion(TextToMotion):
         from motionlang.features.joint_map import positions21
         fps = self.fps
         cap = max(1, int(np.ceil(n_frames * fps / FPS)))
+        # a model told its length runs to it: its end flag fired 1-6 frames early on 345 of
+        # the 556 Bandai test sentences, and the last frame held to the length froze runs
+        # mid-stride (a one-frame stop from 3.4 m/s)
+        least = cap if self.model.config.progress_input else 1
         result, _ = generate(self.model, sentence, width=width, method=method, seed=seed,
                              n_frames=cap, skeleton=skeleton, reranker=reranker,
-                             first_frame=first_frame)[0]
+                             first_frame=first_frame, min_frames=least)[0]
         if isinstance(result, np.ndarray):  # positions features: already (T, 21, 3) at fps
             p = result
             if abs(fps - FPS) > 1e-9:
@@ -297,7 +301,8 @@ def generate_positions21(model, sentence: str, n_frames: int, **kw) -> np.ndarra
     build). ``width`` > 1 with "sample": the likeliest of that many samples, or with
     ``reranker`` (an M2L model) the one under which it finds the sentence likeliest
     (``decoding.rerank``). ``first_frame`` (L2M only): its motion starts with this frame of
-    its own features (``decoding.seq2seq.generate_features``). ``foot_lock`` (default off:
+    its own features (``decoding.seq2seq.generate_features``); an L2M told its length runs to
+    it (its end flag is not read before). ``foot_lock`` (default off:
     the model's own frames): planted feet held in place (``features.foot_lock``).
     """
     return text_to_motion(model).positions21(sentence, n_frames, **kw)
