@@ -2,7 +2,7 @@
 it (docs/results/real-motion.md, fifth session).
 
     OMP_NUM_THREADS=1 .venv/bin/python experiments/skating_by_content.py [--model l2m]
-        [--data ../shared/data/bandai] [--shifts 0.15 0.2 0.25 0.3 10]
+        [--data ../shared/data/bandai] [--shifts 0.15 0.2 0.25 0.3 10] [--judge judge]
 
 One motion per Bandai test take from its sentence (expected frames, the take's length, as
 ``motionlang evaluate-judge`` makes them). Prints the foot skating (``metrics.physics``) of
@@ -13,7 +13,8 @@ farthest a held toe may be pulled; 0.15 m is the default, 10 m means no limit: o
 reach then stops a hold), and how far the root travels (start to end, m) as decoded and as
 written, since the root step changes it; last, the real takes themselves through
 ``lock_feet``: their skating, travel and how the packaged judge (``--judge``) recognises them
-(their own labels) beside the takes as they are. Non-commercial: Bandai data and models trained on it (CC BY-NC 4.0).
+(their own labels) beside the takes as they are. Non-commercial: Bandai data and models
+trained on it (CC BY-NC 4.0).
 """
 from __future__ import annotations
 
@@ -69,6 +70,7 @@ def main() -> None:
             f"{np.mean(row[k]):.3f}" for k in columns) + " |")
     print(f"| all | {len(real)} | " + " | ".join(
         f"{np.nanmean(columns[k]):.3f}" for k in columns) + " |\n")
+
     def travel(m) -> float:
         return float(np.linalg.norm(m[-1, 0, [0, 2]] - m[0, 0, [0, 2]]))
 

@@ -241,3 +241,53 @@ def test_the_correction_is_spread_where_a_contact_begins():
 def test_anchor_root_bad_input_is_an_error(bad, fps):
     with pytest.raises(MotionlangError, match="anchor_root"):
         anchor_root(bad, fps)
+
+
+def test_the_body_stops_exactly_on_the_contact_steps():
+    """Feet down on frames 6-9 of 14 (steps 6-7, 7-8, 8-9) of a body travelling 0.05 m a
+    frame: unsmoothed, the root stands still on exactly those frames; smoothed, it slows
+    earlier and later but the total correction is the same three steps."""
+    T = 14
+    p = standing(T)
+    p[:, :, 2] += 0.05 * np.arange(T)[:, None]
+    up = [t for t in range(T) if not 6 <= t <= 9]
+    p[up, :, 1] += 0.3
+    root = anchor_root(p, 10.0, window=0.0)[:, 0, 2]
+    moves = np.diff(root)
+    assert np.allclose(moves[6:9], 0.0) and np.allclose(np.delete(moves, [6, 7, 8]), 0.05)
+    smooth = anchor_root(p, 10.0, window=0.5)[:, 0, 2]
+    assert smooth[-1] == pytest.approx(root[-1])             # 13 * 0.05 - 3 * 0.05
+    assert np.allclose(np.diff(smooth)[:4], 0.05) and np.allclose(np.diff(smooth)[11:], 0.05)
+
+
+def test_a_contact_at_the_start_is_not_over_corrected():
+    T = 12
+    p = standing(T)
+    p[:, :, 2] += 0.05 * np.arange(T)[:, None]
+    p[2:, :, 1] += 0.3                                        # down on frames 0-1 only
+    for window in (0.0, 0.5, 1.0):
+        q = anchor_root(p, 10.0, window=window)
+        back = (p[-1, 0, 2] - p[0, 0, 2]) - (q[-1, 0, 2] - q[0, 0, 2])
+        assert 0.0 < back <= 0.05 + 1e-12                     # one step's worth at most
+
+
+def test_a_nan_outside_a_contact_stays_in_its_frame():
+    T = 10
+    p = standing(T)
+    p[:, :, 0] += 0.01 * np.arange(T)[:, None]
+    lt = LEGS[0][4]
+    p[3, lt] = np.nan
+    q = anchor_root(p, 10.0)
+    assert np.isnan(q[3, lt]).all()
+    assert np.isfinite(np.delete(q, 3, axis=0)).all() and np.isfinite(q[:, :lt]).all()
+
+
+def test_by_default_the_body_stops_with_a_dragged_foot():
+    """A toe dragged along the floor slower than ``speed`` is a contact for the root step:
+    the body it belongs to stops (the lock alone leaves such a glide as it is)."""
+    T = 30
+    p = standing(T)
+    p[:, :, 2] += 0.05 * np.arange(T)[:, None]               # 0.5 m/s, toes down throughout
+    q = lock_feet(p, 10.0)
+    assert np.allclose(q, standing(T))
+    assert np.array_equal(lock_feet(p, 10.0, anchor=False), p)

@@ -74,8 +74,9 @@ class TextToMotion:
                    foot_lock: bool = False, **kw) -> list[tuple[Any, float]]:
         """``[(result, score), ...]`` best first; a result is a Motion (joint angles) or
         global positions (T, 21, 3) metres at :attr:`fps`; score NaN when deterministic.
-        ``foot_lock``: hold planted feet in place (``features.foot_lock.lock_feet``; position
-        results only: a joint-angle Motion is returned as decoded)."""
+        ``foot_lock``: move the body with its planted feet and hold them in place
+        (``features.foot_lock.lock_feet``; position results only: a joint-angle Motion is
+        returned as decoded)."""
         hyps = self._hypotheses(sentence, max_frames=max_frames, **kw)
         if not foot_lock:
             return hyps
@@ -303,6 +304,7 @@ def generate_positions21(model, sentence: str, n_frames: int, **kw) -> np.ndarra
     (``decoding.rerank``). ``first_frame`` (L2M only): its motion starts with this frame of
     its own features (``decoding.seq2seq.generate_features``); an L2M told its length runs to
     it (its end flag is not read before). ``foot_lock`` (default off:
-    the model's own frames): planted feet held in place (``features.foot_lock``).
+    the model's own frames): the body moved with its planted feet, which are held in place
+    (``features.foot_lock``).
     """
     return text_to_motion(model).positions21(sentence, n_frames, **kw)
