@@ -13,7 +13,7 @@
 # run (fitting and encoding 6,750 training motions and their mirror images; cached by
 # MOTIONLANG_CACHE), M2L ~7-10 min an epoch (8 epochs), L2M ~28 min a teacher-forced epoch and
 # ~35 min an epoch on its own frames (1 + 1 + 1 + 1), judge ~10 min, two-stream ~20 min an epoch
-# (4 epochs, after the M2L); procedural alone: M2L ~30 min (12 epochs), L2M ~60 min (3 + 3).
+# (4 epochs, after the M2L); procedural alone: M2L ~30 min (12 epochs), L2M ~90 min (3 + 3 + 1 + 1).
 # Every --out is a run folder: the final model is its model.pt (beside best.pt, last.pt,
 # history.json, loss_curve.png, splits/ and commands.jsonl; LICENSE.txt for Bandai runs).
 # OMP_NUM_THREADS=1: one thread per model as the two run side by side.
@@ -44,7 +44,7 @@ C="$WORK/corpus6000"
 #    a 2 x 256 decoder, 5 components, a clock, the fraction of the motion done and a plan of
 #    8 parts (its planner predicts it from the sentence), first teacher-forced epochs with
 #    noisy inputs, then epochs with scheduled sampling (90 % own frames after 225 steps),
-#    the last with the learning rate decayed; for the mixed L2M a third stage, one epoch fed
+#    the last with the learning rate decayed; then a third stage, one epoch fed
 #    its own *expected* frames (--rollout-input mean, learning rate 3e-4 decayed), so that
 #    generation continues from the frames it was trained on (docs/results/real-motion.md,
 #    seventh session: less skating, better recognised), and a fourth, one more such epoch with
@@ -114,11 +114,12 @@ if [ "$MODELS" = all ] || [ "$MODELS" = bandai ]; then
 fi
 
 if [ "$MODELS" = all ] || [ "$MODELS" = procedural ]; then
-  # the procedural corpus alone (MIT): M2L 12 epochs, L2M 3 + 3 epochs
+  # the procedural corpus alone (MIT): M2L 12 epochs, L2M 3 + 3 + 1 + 1 epochs (the last two
+  # since the ninth session: before them it did 13 % of the procedural gestures)
   "$ML" train m2l --data "$C" --out "$WORK/m2l-procedural" --epochs 12 --batch-size 64 \
       --offsets 1 --attention --features positions --checkpoint-every 200 $RESUME &
   M2L=$!
-  l2m_run "$WORK/l2m-procedural" 3 6 2 0 0 --data "$C" &
+  l2m_run "$WORK/l2m-procedural" 3 6 2 1 1 --data "$C" &
   L2M=$!
   wait $M2L; wait $L2M
   cp "$WORK/m2l-procedural/model.pt" "$SHIP/m2l-procedural.pt"
