@@ -13,7 +13,8 @@
 # run (fitting and encoding 6,750 training motions and their mirror images; cached by
 # MOTIONLANG_CACHE), M2L ~7-10 min an epoch (8 epochs), L2M ~28 min a teacher-forced epoch and
 # ~35 min an epoch on its own frames (1 + 1 + 1 + 1), judge ~10 min, two-stream ~20 min an epoch
-# (4 epochs, after the M2L); procedural alone: M2L ~30 min (12 epochs), L2M ~90 min (3 + 3 + 1 + 1).
+# (4 epochs, after the M2L); procedural alone: M2L ~30 min (12 epochs),
+# L2M ~90 min (3 + 3 + 1 + 1).
 # Every --out is a run folder: the final model is its model.pt (beside best.pt, last.pt,
 # history.json, loss_curve.png, splits/ and commands.jsonl; LICENSE.txt for Bandai runs).
 # OMP_NUM_THREADS=1: one thread per model as the two run side by side.
