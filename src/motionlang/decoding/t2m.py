@@ -151,9 +151,9 @@ class L2MText2Motion(TextToMotion):
         from motionlang.features.joint_map import positions21
         fps = self.fps
         cap = max(1, int(np.ceil(n_frames * fps / FPS)))
-        # a model told its length runs to it: its end flag fired 1-6 frames early on 345 of
+        # a model told its length runs to it: its end flag fired up to 12 frames early on 345 of
         # the 556 Bandai test sentences, and the last frame held to the length froze runs
-        # mid-stride (a one-frame stop from 3.4 m/s)
+        # mid-stride (a one-frame stop from a 27.8 cm move: experiments/root_checks.py)
         least = cap if self.model.config.progress_input else 1
         result, _ = generate(self.model, sentence, width=width, method=method, seed=seed,
                              n_frames=cap, skeleton=skeleton, reranker=reranker,
