@@ -73,7 +73,7 @@ def main() -> None:
         opt = torch.optim.NAdam(model.parameters(), lr=1e-3)
         model.train()
 
-        def train_step():
+        def train_step(opt=opt, model=model):
             opt.zero_grad()
             model.loss(batch)["loss"].backward()
             torch.nn.utils.clip_grad_norm_(model.parameters(), 25.0)
@@ -99,7 +99,7 @@ def main() -> None:
     print(f"generate (W=5 ancestral samples, 100 frames): median {t * 1e3:.1f} ms")
     from motionlang.decoding.rerank import rerank
     for w in (5, 10, 30, 60):
-        t = median_time(lambda: rerank(generate_features(
+        t = median_time(lambda w=w: rerank(generate_features(
             l2m, [1, 5, 6, 7, 2], width=w, method="sample", max_frames=100), m2l,
             [1, 5, 6, 7, 2]), args.repeats)
         print(f"generate (W={w} ancestral samples ranked by the M2L, 100 frames): "

@@ -37,7 +37,7 @@ def cases() -> list[tuple[str, list[str], int]]:
     m = "corpus/00001_mmm.xml"
     rows: list[tuple[str, list[str], int]] = []
     for where, path in BAD_FILES.items():
-        def f(ext: str) -> str:
+        def f(ext: str, path: str = path) -> str:
             return path.format(ext=ext)
         rows += [(f"render OUT {where}", ["render", m, f(".gif")], 2),
                  (f"convert OUT {where}", ["convert", m, f(".bvh")], 2),

@@ -56,8 +56,13 @@ def main() -> None:
     import torch
 
     from motionlang.evaluation.judge import judge_motions
-    from motionlang.models.judge.fit import (accuracy, bandai_items, fit_judge, median_bones,
-                                             primitive_items)
+    from motionlang.models.judge.fit import (
+        accuracy,
+        bandai_items,
+        fit_judge,
+        median_bones,
+        primitive_items,
+    )
     torch.set_num_threads(1)
     t0 = time.time()
     train, val, test = (bandai_items(args.data, s) for s in ("train", "val", "test"))

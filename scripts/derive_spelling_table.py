@@ -23,7 +23,6 @@ from pathlib import Path
 from motionlang.datasets.text import base_tokens, normalize
 from motionlang.utils.atomic import atomic_write
 
-
 # The reference column was made by a spell checker that sometimes replaced a word by a
 # different, wrong one ("leftwards" -> "leotards", "trunk" -> "turn", "spining" ->
 # "shining"). Copying those would damage new text, so these source words are left alone.

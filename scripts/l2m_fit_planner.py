@@ -34,12 +34,12 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     import torch
 
+    from motionlang.datasets.seq2seq_pairs import build_pairs
     from motionlang.errors import MotionlangError
     from motionlang.models.checkpoint import read_model_dict
     from motionlang.models.seq2seq.l2m import L2MConfig, LanguageToMotion
     from motionlang.models.seq2seq.plan import Planner
     from motionlang.training.plan_fit import fit_planner
-    from motionlang.datasets.seq2seq_pairs import build_pairs
 
     logging.basicConfig(level=logging.INFO, format="%(message)s")
     try:

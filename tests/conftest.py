@@ -7,10 +7,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from motionlang.kinematics import Motion
-
 from helpers.data import SHARED
 from helpers.mocap import tiny_skeleton
+from motionlang.kinematics import Motion
 
 
 @pytest.fixture(scope="session")

@@ -5,10 +5,16 @@ import numpy as np
 import pytest
 
 from motionlang.errors import MotionlangError
-from motionlang.evaluation.action_order import (Prototypes, merge_repeats, order_accuracy,
-                                                order_matches, rescale_ranges,
-                                                segment_accuracy, segment_descriptor,
-                                                segment_labels)
+from motionlang.evaluation.action_order import (
+    Prototypes,
+    merge_repeats,
+    order_accuracy,
+    order_matches,
+    rescale_ranges,
+    segment_accuracy,
+    segment_descriptor,
+    segment_labels,
+)
 
 
 def still(T, level=0.0):

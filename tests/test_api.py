@@ -184,6 +184,7 @@ def test_generate_command_names_unknown_words(tmp_path, capsys):
 
 def test_newer_crbm_formats_are_refused(tmp_path):
     import json
+
     from motionlang.models.crbm.model import CRBM, CRBMConfig
     crbm = CRBM(CRBMConfig(n_hidden=4, order=2), 3)
     crbm.save(tmp_path / "c.npz")

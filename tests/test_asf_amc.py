@@ -3,12 +3,18 @@ layout against cmu35WalkJog.mat, AMC round trips, and every kind of bad input.""
 import numpy as np
 import pytest
 
-from motionlang.errors import MotionFormatError, SkeletonError
-from motionlang.formats.asf_amc import (INCH, motion_from_channels, motion_to_channels,
-                                        read_amc, read_asf, read_asf_amc, write_amc)
-
 from helpers.data import shared_file
-from helpers.mocap import tiny_amc, TINY_ASF
+from helpers.mocap import TINY_ASF, tiny_amc
+from motionlang.errors import MotionFormatError, SkeletonError
+from motionlang.formats.asf_amc import (
+    INCH,
+    motion_from_channels,
+    motion_to_channels,
+    read_amc,
+    read_asf,
+    read_asf_amc,
+    write_amc,
+)
 
 
 @pytest.fixture

@@ -8,10 +8,9 @@ from pathlib import Path
 
 import pytest
 
+from helpers.data import shared_file
 from motionlang.datasets.bandai import bandai_folders, load_bandai, split_of
 from motionlang.errors import DatasetError
-
-from helpers.data import shared_file
 
 BVH = """HIERARCHY
 ROOT Hips

@@ -5,14 +5,20 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from motionlang.datasets.bandai_text import (CONTENTS, STYLES, contents_named, describe,
-                                             mirror_sentence, names_content, names_style,
-                                             styles_named)
+from helpers.data import bandai_takes
+from motionlang.datasets.bandai_text import (
+    CONTENTS,
+    STYLES,
+    contents_named,
+    describe,
+    mirror_sentence,
+    names_content,
+    names_style,
+    styles_named,
+)
 from motionlang.datasets.seq2seq_pairs import build_pairs, load_records
 from motionlang.features.joint_map import KIT21_MIRROR, positions21
 from motionlang.kinematics.from_positions import mirror_motion
-
-from helpers.data import bandai_takes
 
 # the labels of the two releases' cfg/content_label.txt and cfg/style_label.txt
 DATASET_1 = ("walk run dash walk-back walk-left walk-right bow bye guide byebye respond call "
@@ -143,7 +149,6 @@ def test_mirror_motion_by_positions_on_an_along_x_rig(tmp_path):
     """Bandai's rest pose lays every bone along its local x axis: ``Motion.mirror`` would
     fold the body, so the mirror goes by positions, exactly."""
     from helpers.rigs import RIGS, write
-
     from motionlang.formats import read_motion
     m = read_motion(write(RIGS["bandai"], tmp_path))
     got = mirror_motion(m)

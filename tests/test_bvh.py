@@ -3,11 +3,10 @@ written Y-up (AMC, MMM) keeps its joint positions, units, and every kind of bad 
 import numpy as np
 import pytest
 
-from motionlang.errors import MotionFormatError
-from motionlang.formats.bvh import guess_unit, read_bvh, write_bvh
-
 from helpers.data import shared_file
 from helpers.mocap import HAND
+from motionlang.errors import MotionFormatError
+from motionlang.formats.bvh import guess_unit, read_bvh, write_bvh
 
 
 def _values(text):

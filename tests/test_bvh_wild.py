@@ -11,12 +11,11 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from helpers.data import bandai_takes, shared_file
 from motionlang.errors import MotionFormatError
 from motionlang.formats import motion_info
 from motionlang.formats.bvh import read_bvh, write_bvh
 from motionlang.kinematics.rotations import AXES, chain, matrix_to_chain
-
-from helpers.data import bandai_takes, shared_file
 
 ROT = ["Zrotation", "Xrotation", "Yrotation"]
 POS = ["Xposition", "Yposition", "Zposition"]

@@ -116,8 +116,8 @@ def test_train_resume_without_checkpoint_writes_nothing(tmp_path, capsys):
 
 def test_non_finite_loss_stops_training_keeping_the_last_good_checkpoint(tmp_path):
     import torch
-    from helpers.trainer_tiny import TinyReg, collate, make_data
 
+    from helpers.trainer_tiny import TinyReg, collate, make_data
     from motionlang.training.trainer import TrainConfig, Trainer
 
     class GoesNaN(TinyReg):

@@ -5,8 +5,13 @@ from __future__ import annotations
 
 import argparse
 
-from motionlang.cli.main import (DefaultsHelpFormatter, build_parser, leaf_parsers, main,
-                                 shows_default)
+from motionlang.cli.main import (
+    DefaultsHelpFormatter,
+    build_parser,
+    leaf_parsers,
+    main,
+    shows_default,
+)
 
 
 def _options():

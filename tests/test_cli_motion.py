@@ -6,10 +6,9 @@ import imageio.v3 as iio
 import numpy as np
 import pytest
 
+from helpers.data import shared_file
 from motionlang.cli import demo as demo_mod
 from motionlang.cli.main import main
-
-from helpers.data import shared_file
 
 
 def run(capsys, *argv):

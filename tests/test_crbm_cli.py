@@ -6,15 +6,18 @@ import json
 import numpy as np
 import pytest
 
+from helpers.data import shared_file
 from motionlang.cli.main import main
 from motionlang.evaluation.crbm.fill import load_cmu35
 from motionlang.evaluation.crbm.generation import StyleLabeller, generation_report
-from motionlang.evaluation.crbm.reproduce import frames_to_motion, model_frames, model_frames_to_channels
+from motionlang.evaluation.crbm.reproduce import (
+    frames_to_motion,
+    model_frames,
+    model_frames_to_channels,
+)
 from motionlang.models.crbm.config import CRBMConfig
 from motionlang.models.crbm.model import CRBM
 from motionlang.models.crbm.stack import CRBMStack
-
-from helpers.data import shared_file
 
 
 @pytest.fixture(scope="module")

@@ -6,13 +6,26 @@ import json
 import numpy as np
 import pytest
 
-from motionlang.evaluation.crbm.fill import (
-    ERASED, GAP_START_PAIR, fill_error, frame_mask, hold_last_fill, load_cmu35,
-    nearest_neighbour_fill, per_frame_dims, score_space, taylor59)
-from motionlang.evaluation.crbm.reproduce import ReproduceConfig, format_table, model_frames, reproduce
-from motionlang.models.crbm.config import CRBMConfig
-
 from helpers.data import shared_file
+from motionlang.evaluation.crbm.fill import (
+    ERASED,
+    GAP_START_PAIR,
+    fill_error,
+    frame_mask,
+    hold_last_fill,
+    load_cmu35,
+    nearest_neighbour_fill,
+    per_frame_dims,
+    score_space,
+    taylor59,
+)
+from motionlang.evaluation.crbm.reproduce import (
+    ReproduceConfig,
+    format_table,
+    model_frames,
+    reproduce,
+)
+from motionlang.models.crbm.config import CRBMConfig
 
 
 @pytest.fixture(scope="module")

@@ -6,10 +6,9 @@ import shutil
 
 import pytest
 
+from helpers.data import shared_file
 from motionlang.datasets.custom import load_custom, read_captions
 from motionlang.errors import DatasetError
-
-from helpers.data import shared_file
 
 BVH = """HIERARCHY
 ROOT Hips

@@ -7,12 +7,11 @@ import zipfile
 
 import pytest
 
+from helpers.http_server import free_port, serve
 from motionlang.datasets.download import download_file, safe_extract, safe_extract_tar
 from motionlang.errors import DatasetError
 from motionlang.utils import atomic
 from motionlang.utils.atomic import TAG
-
-from helpers.http_server import free_port, serve
 
 PAYLOAD = bytes(range(256)) * 4000  # ~1 MB, spans several read chunks
 

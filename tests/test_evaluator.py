@@ -15,8 +15,11 @@ from motionlang.evaluation.t2m.yardstick import format_table, guo_metrics, score
 from motionlang.models.evaluator import EvaluatorConfig, TextMotionEvaluator, official_config
 from motionlang.models.evaluator.text import POS_CATEGORIES, pos_index, tag, text_inputs
 from motionlang.models.registry import load_model
-from motionlang.training.evaluator_train import (build_evaluator_data, fit_normalizer,
-                                                 train_evaluator)
+from motionlang.training.evaluator_train import (
+    build_evaluator_data,
+    fit_normalizer,
+    train_evaluator,
+)
 from motionlang.training.trainer import TrainConfig
 
 torch.set_num_threads(1)

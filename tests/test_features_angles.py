@@ -1,14 +1,13 @@
 import numpy as np
 import pytest
 
+from helpers.data import shared_file
+from helpers.mocap import synthetic_mmm, turn
 from motionlang.errors import MotionlangError, SkeletonError
 from motionlang.features import AnglesFeatures, FeatureSet, features_from_dict, pad_batch
 from motionlang.features.root import root_trajectory
 from motionlang.formats.mmm import read_mmm
 from motionlang.formats.mmm_model import MMM_DOF_ORDER
-
-from helpers.data import shared_file
-from helpers.mocap import synthetic_mmm, turn
 
 
 @pytest.fixture(scope="module")

@@ -5,13 +5,12 @@ import shutil
 import numpy as np
 import pytest
 
+from helpers.data import shared_file
 from motionlang.datasets.custom import CustomRecord
+from motionlang.datasets.feature_cache import dataset_features, record_sources
 from motionlang.datasets.kitml import KitMLRecord
 from motionlang.errors import MotionlangError
-from motionlang.datasets.feature_cache import dataset_features, record_sources
 from motionlang.formats.bvh import write_bvh
-
-from helpers.data import shared_file
 
 
 class Counting:

@@ -1,15 +1,14 @@
 import numpy as np
 import pytest
 
+from helpers.data import shared_file
+from helpers.mocap import synthetic_mmm, turn
 from motionlang.errors import MotionlangError, SkeletonError
 from motionlang.features import PositionFeatures, downsample, features_from_dict
 from motionlang.features.joint_map import KIT21_NAMES, positions21
 from motionlang.features.positions import facing_yaw, floor_height
 from motionlang.formats.asf_amc import read_asf_amc
 from motionlang.formats.mmm import read_mmm
-
-from helpers.data import shared_file
-from helpers.mocap import synthetic_mmm, turn
 
 LH, LF, LA = (KIT21_NAMES.index(n) for n in ("LH", "LF", "LA"))
 

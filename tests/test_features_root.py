@@ -2,10 +2,9 @@
 import numpy as np
 import pytest
 
+from helpers.mocap import synthetic_mmm, tiny_skeleton, turn
 from motionlang.features import root as rootlib
 from motionlang.kinematics import Motion
-
-from helpers.mocap import synthetic_mmm, tiny_skeleton, turn
 
 
 def test_turn_is_rigid():

@@ -1,15 +1,13 @@
 import numpy as np
 import pytest
 
+from helpers.data import shared_file
+from helpers.mocap import synthetic_mmm, tiny_skeleton, turn
 from motionlang.errors import MotionlangError, SkeletonError
 from motionlang.features import TaylorFeatures, features_from_dict
 from motionlang.features.root import rot_y
 from motionlang.formats.asf_amc import read_asf_amc
 from motionlang.kinematics import Motion
-
-from helpers.data import shared_file
-from helpers.mocap import synthetic_mmm, turn
-from helpers.mocap import tiny_skeleton
 
 
 @pytest.fixture(scope="module")

@@ -10,13 +10,17 @@ import pytest
 import torch
 
 from motionlang.errors import MotionlangError
+from motionlang.features import root as rootlib
 from motionlang.features.joint_map import TOES
 from motionlang.features.normalizer import Normalizer
 from motionlang.features.positions import PositionFeatures, split_global
-from motionlang.features import root as rootlib
 from motionlang.models.seq2seq.l2m import L2MConfig, LanguageToMotion
-from motionlang.models.seq2seq.losses import (expected_foot_loss, fed_foot_contact_loss,
-                                              foot_contact_loss, foot_steps)
+from motionlang.models.seq2seq.losses import (
+    expected_foot_loss,
+    fed_foot_contact_loss,
+    foot_contact_loss,
+    foot_steps,
+)
 from motionlang.models.seq2seq.mdn import mixture_mean
 
 FPS = 12.5

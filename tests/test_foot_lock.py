@@ -108,7 +108,7 @@ def test_frames_without_a_shift_and_collapsed_legs_are_left_alone():
 def test_a_straight_leg_bends_forward_when_its_foot_is_held_back():
     T = 12
     p = standing(T)
-    for hip, knee, ankle, *_ in LEGS:                      # straight legs
+    for _hip, knee, _ankle, *_ in LEGS:                      # straight legs
         p[:, knee, 2] = 0.0
     p[:, :, 2] += 0.01 * np.arange(T)[:, None]             # drifting forward (+Z, the facing)
     q = lock_feet(p, 10.0, anchor=False)

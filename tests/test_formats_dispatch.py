@@ -3,12 +3,10 @@ finding the ASF of an AMC, and clear errors."""
 import numpy as np
 import pytest
 
+from helpers.data import shared_file
+from helpers.mocap import HAND, TINY_ASF, tiny_amc
 from motionlang.errors import MotionFormatError
 from motionlang.formats import find_asf, motion_info, read_motion, write_motion
-
-from helpers.data import shared_file
-from helpers.mocap import HAND
-from helpers.mocap import tiny_amc, TINY_ASF
 
 FRAME = ([0, 0, 0, 0, 0, 0], [1, 2, 3], 4, 5)
 

@@ -7,8 +7,12 @@ from motionlang.errors import MotionlangError
 from motionlang.features.joint_map import KIT21_NAMES, KIT21_PARENTS
 from motionlang.formats import read_motion, write_motion
 from motionlang.kinematics import Motion
-from motionlang.kinematics.from_positions import (ZXY, motion_from_positions, position_error,
-                                                  skeleton_from_positions)
+from motionlang.kinematics.from_positions import (
+    ZXY,
+    motion_from_positions,
+    position_error,
+    skeleton_from_positions,
+)
 
 # a standing 21-joint body, metres, Y up, facing +Z (left = +X)
 REST = np.array([

@@ -24,11 +24,17 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from motionlang.evaluation.fuzzing import FORMATS, Sandbox, crafted, mutate, seeds
-from motionlang.evaluation.fuzzing.seeds import (TINY_ASF, h3d_files, mit_sequence, mit_tree,
-                                              npy_bytes, pack_h3d, write_mit)
-
 from helpers.data import SHARED
+from motionlang.evaluation.fuzzing import FORMATS, Sandbox, crafted, mutate, seeds
+from motionlang.evaluation.fuzzing.seeds import (
+    TINY_ASF,
+    h3d_files,
+    mit_sequence,
+    mit_tree,
+    npy_bytes,
+    pack_h3d,
+    write_mit,
+)
 
 pytest.importorskip("resource")  # the sandbox needs Unix
 MUTATED, CRAFTED = 150, 60  # inputs per format: 210, a couple of minutes in all

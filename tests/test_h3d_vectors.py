@@ -5,17 +5,25 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from helpers.data import shared_file
 from motionlang.errors import MotionlangError
 from motionlang.features.base import downsample
-from motionlang.features.h3d_vectors import (HEADINGS, KIT_H3D, SMPL_H3D, group_std,
-                                             heading_yaw, joints_to_vectors, mirror_joints,
-                                             rotation_channels, vector_dim, vector_slices,
-                                             vectors_to_joints)
+from motionlang.features.h3d_vectors import (
+    HEADINGS,
+    KIT_H3D,
+    SMPL_H3D,
+    group_std,
+    heading_yaw,
+    joints_to_vectors,
+    mirror_joints,
+    rotation_channels,
+    vector_dim,
+    vector_slices,
+    vectors_to_joints,
+)
 from motionlang.features.joint_map import KIT21_PARENTS, positions21
 from motionlang.features.root import rot_y
 from motionlang.formats import read_motion
-
-from helpers.data import shared_file
 
 # A KIT body standing at attention, in millimetres, facing +Z, every bone along its
 # raw_offsets direction (so every rotation channel is the identity).

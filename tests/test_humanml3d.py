@@ -11,13 +11,18 @@ import pytest
 from motionlang.cli.main import main
 from motionlang.datasets.humanml3d import format_caption_line, load_h3d, parse_caption_line
 from motionlang.datasets.humanml3d_export import body_joints, export_h3d
+from motionlang.datasets.seq2seq_pairs import build_pairs, load_records
 from motionlang.datasets.synth.corpus import write_corpus
 from motionlang.errors import DatasetError, MotionlangError, SkeletonError
-from motionlang.features.h3d_vectors import (KIT_H3D, SMPL_H3D, group_std, joints_to_vectors,
-                                             vectors_to_joints)
+from motionlang.features.h3d_vectors import (
+    KIT_H3D,
+    SMPL_H3D,
+    group_std,
+    joints_to_vectors,
+    vectors_to_joints,
+)
 from motionlang.features.joint_map import positions21
 from motionlang.kinematics.from_positions import motion_from_positions
-from motionlang.datasets.seq2seq_pairs import build_pairs, load_records
 
 
 @pytest.fixture(scope="module")

@@ -3,16 +3,20 @@ import itertools
 import numpy as np
 import pytest
 
+from helpers.data import shared_file
+from helpers.mocap import tiny_skeleton
 from motionlang.errors import MotionlangError, SkeletonError
-from motionlang.features.joint_map import (KIT21_NAMES, KIT21_PARENTS, bone_lengths21,
-                                           kit21_weights, positions21)
+from motionlang.features.joint_map import (
+    KIT21_NAMES,
+    KIT21_PARENTS,
+    bone_lengths21,
+    kit21_weights,
+    positions21,
+)
 from motionlang.formats.asf_amc import read_asf_amc
 from motionlang.formats.mmm import read_mmm
 from motionlang.formats.mmm_model import mmm_skeleton
 from motionlang.kinematics import Joint, Motion, Skeleton
-
-from helpers.data import shared_file
-from helpers.mocap import tiny_skeleton
 
 # bones whose segmentation differs between the MMM and CMU models (see test below)
 TRUNK = {("BP", "root"), ("BT", "BP"), ("BLN", "BT"), ("BUN", "BLN")}

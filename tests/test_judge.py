@@ -8,12 +8,10 @@ import torch
 
 from motionlang.errors import MotionlangError
 from motionlang.evaluation.judge import judge_motions, judge_report
-from motionlang.features.joint_map import KIT21_NAMES
+from motionlang.features.joint_map import KIT21_NAMES, bone_lengths21
 from motionlang.features.normalizer import Normalizer
 from motionlang.models.judge.config import JudgeConfig
-from motionlang.features.joint_map import bone_lengths21
-from motionlang.models.judge.fit import (JudgeItem, accuracy, fit_judge, median_bones,
-                                         mirror_item)
+from motionlang.models.judge.fit import JudgeItem, accuracy, fit_judge, median_bones, mirror_item
 from motionlang.models.judge.model import MotionJudge, resample_positions
 from motionlang.models.registry import load_model
 

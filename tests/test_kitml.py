@@ -2,18 +2,21 @@
 from __future__ import annotations
 
 import hashlib
-import io
-import json
 
 import pytest
-
-from motionlang.datasets.kitml import (download_kitml, load_annotations_tmr, load_kitml,
-                                       load_split, load_splits, random_split)
-from motionlang.errors import DatasetError
 
 from helpers.data import shared_file
 from helpers.http_server import serve
 from helpers.kitml import build_release, tiny_mmm
+from motionlang.datasets.kitml import (
+    download_kitml,
+    load_annotations_tmr,
+    load_kitml,
+    load_split,
+    load_splits,
+    random_split,
+)
+from motionlang.errors import DatasetError
 
 
 @pytest.fixture(scope="module")

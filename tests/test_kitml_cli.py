@@ -3,11 +3,10 @@ from __future__ import annotations
 
 import json
 
-from motionlang.cli.main import main
-
 from helpers.data import shared_file
 from helpers.http_server import free_port, serve
 from helpers.kitml import build_release
+from motionlang.cli.main import main
 
 
 def test_data_cli(tmp_path, capsys):

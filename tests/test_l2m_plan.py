@@ -6,12 +6,11 @@ import numpy as np
 import pytest
 import torch
 
+from helpers.scripts import SCRIPTS, load_script
+from helpers.seq2seq import F_DIM, make_batch, tiny
 from motionlang.errors import MotionlangError
 from motionlang.models.seq2seq.l2m import LanguageToMotion
 from motionlang.models.seq2seq.plan import motion_plan, part_index, plan_at
-
-from helpers.scripts import SCRIPTS, load_script
-from helpers.seq2seq import F_DIM, make_batch, tiny
 
 
 def test_part_index_by_fraction_done():

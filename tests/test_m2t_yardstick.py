@@ -6,8 +6,12 @@ import numpy as np
 import pytest
 
 from motionlang.errors import MotionlangError
-from motionlang.evaluation.t2m.m2t import (m2t_table, nearest_captions, other_references,
-                                           text_measures)
+from motionlang.evaluation.t2m.m2t import (
+    m2t_table,
+    nearest_captions,
+    other_references,
+    text_measures,
+)
 from motionlang.evaluation.t2m.plots import plot_yardstick
 
 WORDS = ["walks", "runs", "jumps", "waves"]

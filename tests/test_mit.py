@@ -3,10 +3,9 @@ import numpy as np
 import pytest
 from scipy.io import savemat
 
+from helpers.data import shared_file
 from motionlang.errors import MotionFormatError
 from motionlang.formats.mit import MIT_JOINT_NAMES, read_mit
-
-from helpers.data import shared_file
 
 
 @pytest.fixture(scope="module")

@@ -8,13 +8,17 @@ import json
 import pytest
 import torch
 
+from helpers.data import bandai_takes
 from motionlang.cli.main import main
-from motionlang.datasets.mixing import (DataSource, mix_items, parse_source, source_counts,
-                                        source_weights)
+from motionlang.datasets.mixing import (
+    DataSource,
+    mix_items,
+    parse_source,
+    source_counts,
+    source_weights,
+)
 from motionlang.datasets.seq2seq_pairs import build_pairs, load_records, record_splits
 from motionlang.errors import DatasetError, MotionlangError
-
-from helpers.data import bandai_takes
 
 torch.set_num_threads(1)
 TINY = ["--epochs", "1", "--batch-size", "8", "--offsets", "1", "--enc-hidden", "8",

@@ -5,12 +5,12 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import pytest
 
+from helpers.data import shared_file
 from motionlang.errors import MotionFormatError, SkeletonError
 from motionlang.formats.mmm import MMM_DOF_ORDER, mmm_skeleton, read_mmm, write_mmm
 from motionlang.formats.mmm_model import mmm_height, mmm_kinematics
 from motionlang.kinematics import Motion
 
-from helpers.data import shared_file
 
 # ------------------------------------------------------------------ model facts
 def _simox_nodes(path):

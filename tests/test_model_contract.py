@@ -4,14 +4,19 @@ of any other kind is refused with a MotionlangError naming the file; outputs in 
 are deterministic (two calls, the same result)."""
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 import pytest
 import torch
 
+from helpers.seq2seq import make_batch, outputs
+from helpers.seq2seq import tiny as tiny_seq2seq
+from helpers.twostream import HashTokens
+from helpers.twostream import tiny as tiny_twostream
 from motionlang.errors import MotionlangError
 from motionlang.models import registry
 from motionlang.models.crbm.ar import ARConfig, ARModel
@@ -25,11 +30,6 @@ from motionlang.models.judge.model import MotionJudge
 from motionlang.models.seq2seq.l2m import LanguageToMotion
 from motionlang.models.seq2seq.m2l import MotionToLanguage
 from motionlang.models.twostream import TwoStreamModel
-
-from helpers.seq2seq import make_batch, outputs
-from helpers.seq2seq import tiny as tiny_seq2seq
-from helpers.twostream import HashTokens
-from helpers.twostream import tiny as tiny_twostream
 
 torch.set_num_threads(1)
 D = 4   # features per frame of the CRBM family's tiny sequences

@@ -1,10 +1,9 @@
 import numpy as np
 import pytest
 
+from helpers.mocap import tiny_skeleton
 from motionlang.errors import MotionFormatError, SkeletonError
 from motionlang.kinematics import Motion, concatenate
-
-from helpers.mocap import tiny_skeleton
 
 
 def test_fk_by_hand():

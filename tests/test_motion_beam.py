@@ -6,8 +6,7 @@ import pytest
 import torch
 
 from motionlang.decoding.motion_beam import mean_decode, sample_decode, sampled_beam
-from motionlang.models.seq2seq.mdn import (MixtureParams, active_log_prob, mixture_log_prob,
-                                   sample)
+from motionlang.models.seq2seq.mdn import MixtureParams, active_log_prob, mixture_log_prob, sample
 
 torch.set_num_threads(1)
 K, D = 3, 2

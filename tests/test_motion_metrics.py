@@ -5,8 +5,15 @@ import numpy as np
 import pytest
 
 from motionlang.errors import MotionlangError
-from motionlang.evaluation.metrics.motion import (ape, ave, cee, gram, position_metrics_mm,
-                                                  see, temporal_variance)
+from motionlang.evaluation.metrics.motion import (
+    ape,
+    ave,
+    cee,
+    gram,
+    position_metrics_mm,
+    see,
+    temporal_variance,
+)
 
 
 def test_ape_per_joint_hand_values():

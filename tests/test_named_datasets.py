@@ -4,8 +4,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from motionlang.datasets.named import (CMU35_TEST_TRIALS, CMU35_TRAIN_TRIALS, cmu35_walkjog,
-                                       default_data_dir, mit_walk)
+from motionlang.datasets.named import (
+    CMU35_TEST_TRIALS,
+    CMU35_TRAIN_TRIALS,
+    cmu35_walkjog,
+    default_data_dir,
+    mit_walk,
+)
 from motionlang.errors import DatasetError
 
 

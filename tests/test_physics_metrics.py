@@ -7,8 +7,14 @@ import numpy as np
 import pytest
 
 from motionlang.errors import MotionlangError
-from motionlang.evaluation.metrics.physics import (TOES, floor_penetration, foot_skating,
-                                                   physics, root_jitter, root_kick)
+from motionlang.evaluation.metrics.physics import (
+    TOES,
+    floor_penetration,
+    foot_skating,
+    physics,
+    root_jitter,
+    root_kick,
+)
 
 
 def still(T: int = 5) -> np.ndarray:

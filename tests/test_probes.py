@@ -23,8 +23,8 @@ def test_probes_find_a_linear_signal_and_no_signal_in_noise():
 
 
 def test_corpus_subset_links_the_motions_made_only_of_the_given_primitives(tmp_path, capsys):
-    from motionlang.datasets.synth.corpus import write_corpus
     from motionlang.datasets.seq2seq_pairs import primitive_labels
+    from motionlang.datasets.synth.corpus import write_corpus
     src = tmp_path / "corpus"
     write_corpus(src, 12, seed=3, workers=1, show_progress=False)
     labels = {m.name[:-len("_meta.json")]: primitive_labels(json.loads(m.read_text()))
@@ -50,11 +50,11 @@ def test_directions_script_measures_the_way_true_motions_go(tmp_path):
     """experiments/probes/l2m_directions.py's measures on true procedural motions: a backward walk goes
     backward, a forward walk forward, and a second leftward sidestep goes left by the sign
     calibrated on the first."""
-    from motionlang.datasets.synth.corpus import write_corpus
-    from motionlang.features.frames import motion_frames
-    from motionlang.features.angles import AnglesFeatures
-    from motionlang.formats.mmm import read_mmm
     from motionlang.datasets.seq2seq_pairs import primitive_labels
+    from motionlang.datasets.synth.corpus import write_corpus
+    from motionlang.features.angles import AnglesFeatures
+    from motionlang.features.frames import motion_frames
+    from motionlang.formats.mmm import read_mmm
     directions = load_script(PROBES / "l2m_directions.py")
     root = tmp_path / "corpus"
     write_corpus(root, 40, seed=5, workers=1, show_progress=False)

@@ -12,12 +12,11 @@ import pytest
 import torch
 
 import motionlang as ml
+from helpers.data import shared_file
+from helpers.rigs import RIGS, write
 from motionlang.cli.main import main
 from motionlang.features.joint_map import KIT21_NAMES, positions21
 from motionlang.formats import read_motion
-
-from helpers.data import shared_file
-from helpers.rigs import RIGS, write
 
 torch.set_num_threads(1)
 RW, LW, ROOT = (KIT21_NAMES.index(n) for n in ("RW", "LW", "root"))
@@ -137,8 +136,8 @@ def test_generate_errors_for_rig_and_start(tmp_path, capsys):
 
 def test_generate_starts_from_a_real_pose(tmp_path, capsys):
     from motionlang.decoding.seq2seq import generate
-    from motionlang.features.frames import motion_frames
     from motionlang.features.body21 import normalise21
+    from motionlang.features.frames import motion_frames
     start = write(RIGS["bandai"], tmp_path, T=20)
     model = ml.load_model("l2m")
     first = motion_frames(model.features, read_motion(start), 1)[0][0]

@@ -7,16 +7,29 @@ import imageio.v3 as iio
 import numpy as np
 import pytest
 
-from motionlang.errors import MotionlangError
-from motionlang.kinematics import Motion
-from motionlang.rendering import (build_scene, contact_frames, footsteps, plot_trajectory,
-                               render_animation, render_strip)
-from motionlang.rendering import animation as animation_mod
-from motionlang.rendering.scene import (LEFT, RIGHT, TO_MPL, camera_basis, joint_sides,
-                                     sample_times, scene_from_positions, view_azimuth)
-
 from helpers.data import ROOT, shared_file
 from helpers.mocap import walker
+from motionlang.errors import MotionlangError
+from motionlang.kinematics import Motion
+from motionlang.rendering import animation as animation_mod
+from motionlang.rendering import (
+    build_scene,
+    contact_frames,
+    footsteps,
+    plot_trajectory,
+    render_animation,
+    render_strip,
+)
+from motionlang.rendering.scene import (
+    LEFT,
+    RIGHT,
+    TO_MPL,
+    camera_basis,
+    joint_sides,
+    sample_times,
+    scene_from_positions,
+    view_azimuth,
+)
 
 
 def expected_frames(motion: Motion, out_fps: float = 25.0) -> int:

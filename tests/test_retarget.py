@@ -6,6 +6,7 @@ no twist flips, the BVH keeps the rig's names and unit, and the Bandai round tri
 import numpy as np
 import pytest
 
+from helpers.data import bandai_takes, shared_file
 from motionlang.errors import MotionlangError, SkeletonError
 from motionlang.features.joint_map import KIT21_NAMES, KIT21_PARENTS, kit21_weights, positions21
 from motionlang.formats import read_motion
@@ -13,8 +14,6 @@ from motionlang.formats.bvh import read_bvh, write_bvh
 from motionlang.kinematics import Joint, Motion, Skeleton
 from motionlang.kinematics.retarget import retarget
 from motionlang.kinematics.rotations import chain, matrix_to_chain
-
-from helpers.data import bandai_takes, shared_file
 
 ZXY = np.eye(3)[[2, 0, 1]]
 K = {n: i for i, n in enumerate(KIT21_NAMES)}

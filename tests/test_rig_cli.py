@@ -1,11 +1,10 @@
 """``motionlang rig show | template`` through ``cli.main.main``, on hand-written rig fixtures."""
 import json
 
-from motionlang.cli.main import main
-from motionlang.features.joint_map import KIT21_NAMES
-
 from helpers import rigs as rf
 from helpers.data import shared_file
+from motionlang.cli.main import main
+from motionlang.features.joint_map import KIT21_NAMES
 
 ODD = rf.Rig("odd", 0.01, """
 pelvis_bone 0 0 0

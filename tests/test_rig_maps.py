@@ -7,13 +7,23 @@ import json
 import numpy as np
 import pytest
 
+from helpers import rigs as rf
+from helpers.data import shared_file
 from motionlang.errors import MotionlangError, SkeletonError
 from motionlang.features import PositionFeatures
 from motionlang.features.body21 import body21, normalise21, stature21
-from motionlang.features.joint_map import (JOINT_MAPS, KIT21_NAMES, KIT21_PARENTS,
-                                           bone_lengths21, kit21_weights, load_joint_map,
-                                           match_rig, positions21, positions21_from_smpl,
-                                           template_map)
+from motionlang.features.joint_map import (
+    JOINT_MAPS,
+    KIT21_NAMES,
+    KIT21_PARENTS,
+    bone_lengths21,
+    kit21_weights,
+    load_joint_map,
+    match_rig,
+    positions21,
+    positions21_from_smpl,
+    template_map,
+)
 from motionlang.features.positions import facing_yaw, floor_height
 from motionlang.features.rig_maps import SMPL_JOINT_NAMES
 from motionlang.formats import read_motion
@@ -21,9 +31,6 @@ from motionlang.formats.asf_amc import read_asf_amc
 from motionlang.formats.mmm import read_mmm
 from motionlang.formats.mmm_model import mmm_skeleton
 from motionlang.kinematics import Joint, Motion, Skeleton
-
-from helpers import rigs as rf
-from helpers.data import shared_file
 
 I = {n: i for i, n in enumerate(KIT21_NAMES)}
 BONES = [f"{KIT21_NAMES[i]}-{KIT21_NAMES[KIT21_PARENTS[i]]}" for i in range(1, 21)]
@@ -217,7 +224,7 @@ def test_template_filled_in_maps_the_rig(rigify, tmp_path):
     assert empty and "fill in" in t["about"]
     path = tmp_path / "map.json"
     path.write_text(json.dumps(t))
-    with pytest.raises(SkeletonError, match=rf"map\.json: body joint '\w+' is not filled in"):
+    with pytest.raises(SkeletonError, match=r"map\.json: body joint '\w+' is not filled in"):
         load_joint_map(path)
     path.write_text(json.dumps({**t, "joints": {**t["joints"], **FILL}}))
     jm = load_joint_map(path)

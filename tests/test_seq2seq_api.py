@@ -5,13 +5,12 @@ import numpy as np
 import pytest
 import torch
 
+from helpers.seq2seq import F_DIM, WORDS, items, tiny
 from motionlang.decoding.motion_beam import mean_decode
 from motionlang.decoding.seq2seq import describe_features, encode_sentence, generate_features
 from motionlang.errors import MotionlangError
 from motionlang.training.collate import collate_pairs
 from motionlang.training.trainer import TrainConfig, Trainer
-
-from helpers.seq2seq import F_DIM, items, tiny, WORDS
 
 torch.set_num_threads(1)
 def test_collate_pads_and_counts():

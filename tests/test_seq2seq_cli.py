@@ -11,12 +11,11 @@ import numpy as np
 import pytest
 import torch
 
+from helpers.scripts import PROBES
 from motionlang.cli.main import main
 from motionlang.errors import MotionlangError
 from motionlang.models.seq2seq.l2m import LanguageToMotion
 from motionlang.models.seq2seq.m2l import MotionToLanguage
-
-from helpers.scripts import PROBES
 
 torch.set_num_threads(1)
 TINY = ["--epochs", "2", "--batch-size", "8", "--offsets", "2", "--enc-hidden", "8",
@@ -72,8 +71,8 @@ def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
     l2m = LanguageToMotion.load(l2m_dir / "model.pt")
     # the length model is fitted on the training sentences (model frames at 10 Hz)
     assert l2m.config.progress_input
-    from motionlang.models.length import SentenceLength
     from motionlang.datasets.seq2seq_pairs import sentence_lengths
+    from motionlang.models.length import SentenceLength
     want = SentenceLength.fit(*sentence_lengths(build_pairs(corpus, offsets=2), "train"))
     assert l2m.length_model == want
     names = l2m.features.names[:l2m.config.n_features]
@@ -358,8 +357,8 @@ def test_data_preparation_logs_its_stages_once(corpus, caplog):
 
 
 def test_balance_repeats_by_rarest_primitive():
-    from motionlang.errors import DatasetError, MotionlangError
     from motionlang.datasets.seq2seq_pairs import balance_repeats, oversample
+    from motionlang.errors import DatasetError, MotionlangError
     labels = {f"f{i}": ["walk/forward"] for i in range(15)}
     labels |= {"fw": ["walk/forward", "wave"], "b": ["walk/backward"],
                **{f"t{i}": ["turn"] for i in range(4)}}
@@ -379,9 +378,9 @@ def test_balance_repeats_by_rarest_primitive():
 
 def test_mirror_adds_the_mirrored_training_motions_with_swapped_sides(corpus):
     from motionlang.datasets.kitml import load_kitml
+    from motionlang.datasets.seq2seq_pairs import build_pairs
     from motionlang.datasets.synth.augment import mirror_text
     from motionlang.features.frames import motion_frames
-    from motionlang.datasets.seq2seq_pairs import build_pairs
     plain = build_pairs(corpus, offsets=1)
     mirrored = build_pairs(corpus, offsets=1, mirror=True)
     n = len(plain.items["train"])

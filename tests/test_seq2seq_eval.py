@@ -7,13 +7,12 @@ import numpy as np
 import pytest
 import torch
 
+from helpers.seq2seq import WORDS, items, tiny
 from motionlang.datasets.text import normalize
 from motionlang.errors import MotionlangError
 from motionlang.evaluation import seq2seq as ev
 from motionlang.training.collate import collate_pairs
 from motionlang.training.trainer import TrainConfig, Trainer
-
-from helpers.seq2seq import items, tiny, WORDS
 
 torch.set_num_threads(1)
 

@@ -7,14 +7,13 @@ import numpy as np
 import pytest
 import torch
 
+from helpers.seq2seq import F_DIM, V, make_batch, outputs, tiny
 from motionlang.decoding.beam import beam_search
 from motionlang.decoding.motion_beam import mean_decode, sampled_beam
+from motionlang.errors import MotionlangError
 from motionlang.models.seq2seq.l2m import LanguageToMotion
 from motionlang.models.seq2seq.m2l import MotionToLanguage
-from motionlang.errors import MotionlangError
 from motionlang.models.seq2seq.mdn import sample
-
-from helpers.seq2seq import F_DIM, make_batch, outputs, tiny, V
 
 torch.set_num_threads(1)
 KINDS = [("m2l", False), ("m2l", True), ("l2m", False), ("l2m", True)]

@@ -10,13 +10,19 @@ import numpy as np
 import pytest
 import torch
 
+from helpers.twostream import HashTokens
 from motionlang.errors import MotionlangError
 from motionlang.evaluation.action_order import segment_labels
-from motionlang.evaluation.t2m.compare import (GROUND_TRUTH, NEAREST, compare, eval_items,
-                                               evaluate_model, fit_prototypes,
-                                               markdown_table, positions_to_features)
-
-from helpers.twostream import HashTokens
+from motionlang.evaluation.t2m.compare import (
+    GROUND_TRUTH,
+    NEAREST,
+    compare,
+    eval_items,
+    evaluate_model,
+    fit_prototypes,
+    markdown_table,
+    positions_to_features,
+)
 
 torch.set_num_threads(1)
 
@@ -100,9 +106,9 @@ def test_l2m_on_the_test_subjects_bodies(data):
     """An angles L2M with --true-start: the same generated angles drive each test subject's
     own MMM body, so only bone lengths change (and the root's start stays at the origin)."""
     from motionlang.datasets.text import Vocabulary
-    from motionlang.features.frames import model_dim
     from motionlang.decoding.t2m import generate_positions21
     from motionlang.features.angles import AnglesFeatures
+    from motionlang.features.frames import model_dim
     from motionlang.formats.mmm_model import mmm_skeleton
     from motionlang.models.seq2seq.l2m import L2MConfig, LanguageToMotion
     fs = AnglesFeatures().fit([r.load_motion() for r in list(data.records.values())[:3]])
@@ -362,8 +368,13 @@ def test_same_parameter_oracles(data):
 
     from motionlang.decoding.t2m import stretch
     from motionlang.evaluation.metrics.motion import position_metrics_mm
-    from motionlang.evaluation.t2m.oracle import (MEAN_ROW, ONE_ROW, oracle_generations,
-                                                  oracle_table, parameter_key)
+    from motionlang.evaluation.t2m.oracle import (
+        MEAN_ROW,
+        ONE_ROW,
+        oracle_generations,
+        oracle_table,
+        parameter_key,
+    )
     train = data.splits["train"]
     kind = {rid: "walk" if k % 3 == 0 else "wave" for k, rid in enumerate(train)}
     fake = SimpleNamespace(splits=data.splits, sequences=data.sequences, features=data.features,

@@ -5,11 +5,21 @@ import numpy as np
 import pytest
 
 from motionlang.errors import MotionlangError
-from motionlang.evaluation.metrics.t2m import (activation_statistics, diversity,
-                                               euclidean_distance_matrix, fid,
-                                               frechet_distance, mean_interval, mm_dist,
-                                               multimodality, r_precision, repeat,
-                                               retrieval_metrics, retrieval_ranks, top_k_hits)
+from motionlang.evaluation.metrics.t2m import (
+    activation_statistics,
+    diversity,
+    euclidean_distance_matrix,
+    fid,
+    frechet_distance,
+    mean_interval,
+    mm_dist,
+    multimodality,
+    r_precision,
+    repeat,
+    retrieval_metrics,
+    retrieval_ranks,
+    top_k_hits,
+)
 
 
 def test_distance_matrix_by_hand_and_brute_force():

@@ -5,11 +5,15 @@ import json
 
 import pytest
 
-from motionlang.datasets.text import (Vocabulary, normalize, parse_corrections,
-                                      spelling_corrections, tokenize)
-from motionlang.errors import DatasetError
-
 from helpers.data import shared_file
+from motionlang.datasets.text import (
+    Vocabulary,
+    normalize,
+    parse_corrections,
+    spelling_corrections,
+    tokenize,
+)
+from motionlang.errors import DatasetError
 
 
 def test_normalize_basic_rules():

@@ -10,10 +10,9 @@ from pathlib import Path
 import pytest
 import torch
 
+from helpers.trainer_tiny import TinyReg, collate, ddp_config, make_data
 from motionlang.errors import MotionlangError
 from motionlang.training.trainer import TrainConfig, Trainer
-
-from helpers.trainer_tiny import collate, ddp_config, make_data, TinyReg
 
 torch.set_num_threads(1)
 
@@ -80,7 +79,6 @@ def test_outputs_and_learning(tmp_path):
 
 def test_trains_a_seq2seq_model_and_checkpoint_loads(tmp_path):
     from helpers.seq2seq import make_batch, outputs, tiny
-
     from motionlang.models.seq2seq.m2l import MotionToLanguage
     batch = make_batch()
     items = [{k: v[i] for k, v in batch.items()} for i in range(4)]

@@ -9,11 +9,10 @@ import numpy as np
 import pytest
 import torch
 
+from helpers.twostream import HashTokens, tiny
 from motionlang.errors import MotionlangError
 from motionlang.features.normalizer import Normalizer
 from motionlang.models.twostream import TwoStreamConfig, TwoStreamModel, kit21_parts
-
-from helpers.twostream import HashTokens, tiny
 
 torch.set_num_threads(1)
 

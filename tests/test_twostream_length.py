@@ -40,7 +40,6 @@ def test_fit_checks_its_input():
 
 def test_model_carries_its_length_model(tmp_path):
     from helpers.twostream import HashTokens, tiny
-
     from motionlang.decoding.t2m import generate_any
     from motionlang.features.normalizer import Normalizer
     from motionlang.models.twostream import TwoStreamModel

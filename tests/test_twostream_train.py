@@ -13,14 +13,18 @@ import numpy as np
 import pytest
 import torch
 
+from helpers.scripts import PROBES, load_script
+from helpers.twostream import HashTokens  # fake token features, no language model
 from motionlang.errors import MotionlangError
 from motionlang.models.twostream import TwoStreamModel
 from motionlang.training.trainer import TrainConfig
-from motionlang.training.twostream_train import (ForcingSchedule, TwoStreamTrainer, make_config,
-                                                 refit_sentence_encoder, train_twostream)
-
-from helpers.scripts import PROBES, load_script
-from helpers.twostream import HashTokens  # fake token features, no language model
+from motionlang.training.twostream_train import (
+    ForcingSchedule,
+    TwoStreamTrainer,
+    make_config,
+    refit_sentence_encoder,
+    train_twostream,
+)
 
 torch.set_num_threads(1)
 

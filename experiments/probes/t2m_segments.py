@@ -15,12 +15,11 @@ import sys
 def main(argv=None) -> int:
     import torch
 
-    from motionlang.decoding.t2m import generate_positions21
-    from motionlang.models.registry import TEXT_TO_MOTION, load_model
-    from motionlang.evaluation.action_order import segment_labels, segment_tally
-    from motionlang.evaluation.t2m.compare import (eval_items, fit_prototypes,
-                                                   positions_to_features)
     from motionlang.datasets.twostream_items import build_twostream_data
+    from motionlang.decoding.t2m import generate_positions21
+    from motionlang.evaluation.action_order import segment_labels, segment_tally
+    from motionlang.evaluation.t2m.compare import eval_items, fit_prototypes, positions_to_features
+    from motionlang.models.registry import TEXT_TO_MOTION, load_model
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--data", required=True, help="the procedural corpus trained on")

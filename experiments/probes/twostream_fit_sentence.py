@@ -70,11 +70,11 @@ def main(argv=None) -> int:
     import numpy as np
     import torch
 
+    from motionlang.datasets.twostream_items import build_twostream_data
     from motionlang.errors import MotionlangError
     from motionlang.models.twostream import TwoStreamModel
     from motionlang.training.config import TrainConfig
     from motionlang.training.schedule import check_schedule
-    from motionlang.datasets.twostream_items import build_twostream_data
     from motionlang.training.twostream_train import refit_sentence_encoder
 
     logging.basicConfig(level=logging.INFO, format="%(message)s")

@@ -34,7 +34,6 @@ from motionlang.formats import read_motion, write_motion
 from motionlang.kinematics.motion import Motion
 
 
-
 def load_model(name_or_path: str | Path, kind: str | tuple[str, ...] | None = None):
     """A model in eval mode from a packaged name (``"m2l"``, ``"l2m"``), a checkpoint file
     or a training run folder, whatever its kind (``kind=`` insists on one);
@@ -145,8 +144,7 @@ def body_motion(result, fps: float, rig: Motion | None = None, name: str = "gene
         the Motion and the per-frame, per-joint distance (T, 21) in metres between its
         21 body joints and the generated ones (zeros for a Motion kept as it is).
     """
-    from motionlang.features.joint_map import (KIT21_NAMES, KIT21_PARENTS, kit21_weights,
-                                               positions21)
+    from motionlang.features.joint_map import KIT21_NAMES, KIT21_PARENTS, kit21_weights, positions21
     if isinstance(result, Motion):
         if rig is None:
             return result, np.zeros((result.n_frames, len(KIT21_NAMES)))

@@ -15,8 +15,17 @@ from pathlib import Path
 import numpy as np
 
 from motionlang.cli.options import (
-    frames_int, nonneg_float, order_int, output_dir, output_file, positive_float, positive_int,
-    probability, seed_int, size_int)
+    frames_int,
+    nonneg_float,
+    order_int,
+    output_dir,
+    output_file,
+    positive_float,
+    positive_int,
+    probability,
+    seed_int,
+    size_int,
+)
 from motionlang.cli.run_log import log_command
 from motionlang.cli.train_commands import MODEL_FILES, add_out_arg
 from motionlang.errors import MotionlangError

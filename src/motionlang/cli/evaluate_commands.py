@@ -10,8 +10,7 @@ import argparse
 import json
 from pathlib import Path
 
-from motionlang.cli.options import (
-    nonneg_float, nonneg_int, output_file, positive_float, width_int)
+from motionlang.cli.options import nonneg_float, nonneg_int, output_file, positive_float, width_int
 from motionlang.cli.text_commands import add_rank_arg, check_length_penalty
 from motionlang.errors import MotionlangError
 
@@ -27,7 +26,7 @@ def _evaluate_models(args: argparse.Namespace):
     if args.l2m_method == "mean" and args.l2m_temperature != 1.0:
         raise MotionlangError("--l2m-temperature applies to 'sample' and 'beam'; mean decoding "
                               "draws nothing")
-    from motionlang.models.registry import resolve   # a run folder -> its model file
+    from motionlang.models.registry import resolve  # a run folder -> its model file
     m2l_path = resolve(args.m2l)
     if args.l2m_rerank:
         if not args.l2m:
@@ -122,12 +121,12 @@ def _add_checks(report: dict, records: dict, test: dict, train: dict, refs: dict
 
 
 def cmd_evaluate(args: argparse.Namespace) -> int:
-    from motionlang.datasets.splits import load_splits
-    from motionlang.features.frames import motion_frames
-    from motionlang.evaluation import seq2seq as ev
-    from motionlang.models.seq2seq.m2l import MotionToLanguage
     from motionlang.datasets.mixing import parse_source
     from motionlang.datasets.seq2seq_pairs import load_sources
+    from motionlang.datasets.splits import load_splits
+    from motionlang.evaluation import seq2seq as ev
+    from motionlang.features.frames import motion_frames
+    from motionlang.models.seq2seq.m2l import MotionToLanguage
     from motionlang.utils.atomic import atomic_write
     from motionlang.utils.progress import progress
 

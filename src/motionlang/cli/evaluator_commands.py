@@ -14,11 +14,16 @@ import argparse
 import json
 from pathlib import Path
 
-from motionlang.cli.options import (dropout_float, int_range, nonneg_int, positive_float,
-                                    positive_int, size_int)
+from motionlang.cli.options import (
+    dropout_float,
+    int_range,
+    nonneg_int,
+    positive_float,
+    positive_int,
+    size_int,
+)
 from motionlang.cli.run_log import lead_process, log_command
-from motionlang.cli.train_commands import MODEL_FILES, add_out_arg, add_trainer_args, \
-    train_config
+from motionlang.cli.train_commands import MODEL_FILES, add_out_arg, add_trainer_args, train_config
 from motionlang.errors import MotionlangError
 
 BODIES = ("kit", "smpl")
@@ -128,7 +133,7 @@ def register_train(train_sub) -> None:
                         "motion laid on the training motions' median bone lengths, as the "
                         "public pipeline retargets to one subject, so that a body's "
                         "proportions do not pass for what it does)")
-    from motionlang.models.evaluator.config import EvaluatorConfig   # torch-free
+    from motionlang.models.evaluator.config import EvaluatorConfig  # torch-free
     d = EvaluatorConfig()
     for name, what in (("embed_dim", "size of the shared text/motion embedding"),
                        ("text_hidden", "GRU size of the text encoder"),
@@ -243,8 +248,12 @@ def load_evaluator(args: argparse.Namespace):
 
 def cmd_evaluate_guo(args: argparse.Namespace) -> int:
     from motionlang.cli.twostream_commands import model_spec
-    from motionlang.evaluation.t2m.yardstick import (evaluator_body, guo_table, markdown_table,
-                                                     test_pairs)
+    from motionlang.evaluation.t2m.yardstick import (
+        evaluator_body,
+        guo_table,
+        markdown_table,
+        test_pairs,
+    )
     from motionlang.models.registry import TEXT_TO_MOTION, load_model
     from motionlang.training.evaluator_train import build_evaluator_data
 

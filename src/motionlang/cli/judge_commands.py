@@ -13,9 +13,18 @@ import argparse
 import json
 from pathlib import Path
 
-from motionlang.cli.options import (dropout_float, frames_int, layers_int, nonneg_float,
-                                    nonneg_int, output_dir, positive_float, positive_int,
-                                    seed_int, size_int)
+from motionlang.cli.options import (
+    dropout_float,
+    frames_int,
+    layers_int,
+    nonneg_float,
+    nonneg_int,
+    output_dir,
+    positive_float,
+    positive_int,
+    seed_int,
+    size_int,
+)
 from motionlang.cli.run_log import LICENSE_FILE, log_command, write_license
 from motionlang.cli.train_commands import MODEL_FILES, add_out_arg
 from motionlang.errors import MotionlangError
@@ -35,8 +44,13 @@ def bandai_path(data: str) -> str:
 
 # -- train judge -----------------------------------------------------------------------------
 def cmd_train(args: argparse.Namespace) -> int:
-    from motionlang.models.judge.fit import (accuracy, bandai_items, fit_judge, median_bones,
-                                             primitive_items)
+    from motionlang.models.judge.fit import (
+        accuracy,
+        bandai_items,
+        fit_judge,
+        median_bones,
+        primitive_items,
+    )
     from motionlang.utils.atomic import atomic_write
 
     run = Path(args.out)
@@ -100,7 +114,7 @@ def register_train(train_sub) -> None:
                    help="read motions on their own bodies (default: every motion laid on "
                         "the training takes' median bone lengths, directions and gait kept, "
                         "so a body's proportions do not pass for an action)")
-    from motionlang.models.judge.config import JudgeConfig   # torch-free
+    from motionlang.models.judge.config import JudgeConfig  # torch-free
     d = JudgeConfig(contents=["x"], styles=["x"])
     p.add_argument("--hidden", type=size_int, default=d.hidden,
                    help="channels of the temporal convolutions")
@@ -130,8 +144,7 @@ def register_train(train_sub) -> None:
 def cmd_evaluate(args: argparse.Namespace) -> int:
     from motionlang.cli.twostream_commands import model_spec
     from motionlang.decoding.t2m import FPS, text_to_motion
-    from motionlang.evaluation.judge import (asked_labels, judge_table,
-                                             markdown_judge_table)
+    from motionlang.evaluation.judge import asked_labels, judge_table, markdown_judge_table
     from motionlang.features.foot_lock import lock_feet
     from motionlang.models.judge.fit import bandai_items, bandai_sentences
     from motionlang.models.registry import TEXT_TO_MOTION, load_model

@@ -40,7 +40,7 @@ def load_input(args: argparse.Namespace) -> Motion:
     for MAT files)."""
     from motionlang.formats import read_motion
 
-    path = Path(getattr(args, "input"))
+    path = Path(args.input)
     joint_map = getattr(args, "joint_map", None)
     ext = path.suffix.lower()
     if ext != ".amc" and (args.asf is not None or args.source_fps is not None):

@@ -9,8 +9,8 @@ from __future__ import annotations
 import argparse
 import math
 import os
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
 SEED_MAX = 2**32 - 1   # numpy's seeds are 32-bit
 # caps well past any sensible value, far below what would exhaust memory

@@ -14,12 +14,19 @@ import argparse
 from pathlib import Path
 
 from motionlang.cli.options import (
-    dropout_float, layers_int, nonneg_float, nonneg_int, positive_float, positive_int,
-    probability, size_int)
+    dropout_float,
+    layers_int,
+    nonneg_float,
+    nonneg_int,
+    positive_float,
+    positive_int,
+    probability,
+    size_int,
+)
 from motionlang.cli.run_log import lead_process, log_command
-from motionlang.cli.train_commands import (MODEL_FILES, add_out_arg, add_trainer_args,
-                                           train_config)
+from motionlang.cli.train_commands import MODEL_FILES, add_out_arg, add_trainer_args, train_config
 from motionlang.errors import MotionlangError
+
 
 # ------------------------------------------------------------------ train m2l | l2m
 def add_data_arg(p: argparse.ArgumentParser, shared: str = "") -> None:
@@ -256,11 +263,11 @@ def _new_model(args: argparse.Namespace, data):
 def cmd_train(args: argparse.Namespace) -> int:
     import logging
 
+    from motionlang.datasets.mixing import source_weights
+    from motionlang.datasets.seq2seq_pairs import balance_repeats, build_pairs, oversample
     from motionlang.datasets.splits import save_splits
     from motionlang.features.frames import model_dim
     from motionlang.training.collate import collate_pairs
-    from motionlang.datasets.mixing import source_weights
-    from motionlang.datasets.seq2seq_pairs import balance_repeats, build_pairs, oversample
     from motionlang.training.run_files import check_resume
     from motionlang.training.trainer import Trainer
 
@@ -290,7 +297,7 @@ def cmd_train(args: argparse.Namespace) -> int:
                        min_count=args.min_count, max_seconds=args.max_seconds,
                        mirror=args.mirror, joint_map=args.joint_map)
     if any(str(s.path).startswith("bandai:") for s in args.data) and lead_process():
-        from motionlang.cli.run_log import write_license   # CC BY-NC 4.0 data
+        from motionlang.cli.run_log import write_license  # CC BY-NC 4.0 data
         write_license(out, args.model_kind.upper())
     train_items = data.items["train"]
     if args.balance > 1:   # before anything is written

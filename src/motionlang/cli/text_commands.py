@@ -15,7 +15,14 @@ from pathlib import Path
 import numpy as np
 
 from motionlang.cli.options import (
-    frames_int, nonneg_float, nonneg_int, output_file, positive_float, seed_int, width_int)
+    frames_int,
+    nonneg_float,
+    nonneg_int,
+    output_file,
+    positive_float,
+    seed_int,
+    width_int,
+)
 from motionlang.errors import MotionlangError
 
 MOTION_OUT = (".bvh", ".xml", ".amc")

@@ -14,7 +14,7 @@ from __future__ import annotations
 import contextlib
 import os
 import sys
-from typing import Iterator
+from collections.abc import Iterator
 
 #: the default never exceeds this many threads (the models are small: more buys little)
 MAX_DEFAULT = 4

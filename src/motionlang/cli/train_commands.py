@@ -15,8 +15,14 @@ from __future__ import annotations
 import argparse
 import importlib
 
-from motionlang.cli.options import nonneg_float, nonneg_int, output_dir, positive_float, \
-    positive_int, seed_int
+from motionlang.cli.options import (
+    nonneg_float,
+    nonneg_int,
+    output_dir,
+    positive_float,
+    positive_int,
+    seed_int,
+)
 
 TRAIN_MODULES = [
     "motionlang.cli.crbm_commands",       # train crbm
@@ -41,7 +47,7 @@ def add_out_arg(p: argparse.ArgumentParser, model: str, extra: str = "") -> None
 def add_trainer_args(p: argparse.ArgumentParser, **defaults) -> None:
     """The options of the shared trainer (:class:`~motionlang.training.config.TrainConfig`),
     its defaults unless a model's recipe overrides them (``defaults``); ``--resume``."""
-    from motionlang.training.config import TrainConfig   # torch-free
+    from motionlang.training.config import TrainConfig  # torch-free
     d = {**{f: getattr(TrainConfig, f) for f in
             ("epochs", "batch_size", "lr", "grad_clip", "seed", "checkpoint_every",
              "decay_epochs", "decay_to")}, **defaults}

@@ -12,11 +12,17 @@ import argparse
 from pathlib import Path
 
 from motionlang.cli.options import (
-    frames_int, layers_int, nonneg_int, output_dir, positive_float, seed_int, size_int,
-    width_int)
+    frames_int,
+    layers_int,
+    nonneg_int,
+    output_dir,
+    positive_float,
+    seed_int,
+    size_int,
+    width_int,
+)
 from motionlang.cli.run_log import lead_process, log_command
-from motionlang.cli.train_commands import MODEL_FILES, add_out_arg, add_trainer_args, \
-    train_config
+from motionlang.cli.train_commands import MODEL_FILES, add_out_arg, add_trainer_args, train_config
 from motionlang.errors import MotionlangError
 
 ABLATION_NAMES = ("full", "no-joint-training", "one-stream", "no-extra-losses", "word-vectors")
@@ -31,10 +37,10 @@ def cmd_train(args: argparse.Namespace) -> int:
     from motionlang.cli.seq2seq_commands import mix_training
     from motionlang.datasets.mixing import source_weights
     from motionlang.datasets.splits import save_splits
+    from motionlang.datasets.twostream_items import build_twostream_data
     from motionlang.models.length import SentenceLength
     from motionlang.models.twostream import TwoStreamModel
     from motionlang.training.run_files import check_resume
-    from motionlang.datasets.twostream_items import build_twostream_data
     from motionlang.training.twostream_train import ForcingSchedule, make_config, train_twostream
 
     logging.basicConfig(level=logging.INFO, format="%(message)s")
@@ -176,10 +182,10 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     if args.protocol == "guo":
         return cmd_evaluate_guo(args)
     check_protocol(args)
-    from motionlang.decoding.t2m import text_to_motion
-    from motionlang.models.registry import TEXT_TO_MOTION, load_model
-    from motionlang.evaluation.t2m.compare import compare
     from motionlang.datasets.twostream_items import build_twostream_data
+    from motionlang.decoding.t2m import text_to_motion
+    from motionlang.evaluation.t2m.compare import compare
+    from motionlang.models.registry import TEXT_TO_MOTION, load_model
 
     models = {}
     for spec in args.model:

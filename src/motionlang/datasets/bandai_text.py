@@ -208,7 +208,7 @@ def describe(content: str, style: str, n: int = 3, seed: int = 0) -> list[Senten
 
 def mirror_sentence(s: Sentence) -> Sentence:
     """Left and right swapped in the words and in the content label."""
-    from motionlang.datasets.synth.augment import mirror_text   # same layer
+    from motionlang.datasets.synth.augment import mirror_text  # same layer
     return Sentence(mirror_text(s.text), MIRROR_CONTENT.get(s.content, s.content), s.style,
                     s.states_style)
 

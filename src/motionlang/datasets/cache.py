@@ -12,8 +12,8 @@ import hashlib
 import json
 import os
 import zipfile
+from collections.abc import Callable, Iterable
 from pathlib import Path
-from typing import Callable, Iterable
 
 import numpy as np
 

@@ -52,7 +52,7 @@ class CustomRecord:
     def has_annotations(self) -> bool:
         return bool(self.annotations)
 
-    def load_motion(self) -> "Motion":
+    def load_motion(self) -> Motion:
         """Read the file with ``motionlang.formats.read_motion`` (ASF found automatically;
         the dataset's joint map, if any, attached)."""
         from motionlang.formats import read_motion  # lower layer, loaded lazily

@@ -13,9 +13,10 @@ or ``path`` (custom datasets; an ``.amc`` also depends on its ``.asf``).
 from __future__ import annotations
 
 import json
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any
 
 import numpy as np
 

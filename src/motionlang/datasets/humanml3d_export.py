@@ -25,9 +25,9 @@ import os
 import re
 import shutil
 import tempfile
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
-from typing import Callable, Iterable, Iterator, Sequence
 
 import numpy as np
 
@@ -36,9 +36,15 @@ from motionlang.datasets.pos_tags import tag
 from motionlang.datasets.splits import random_split
 from motionlang.errors import DatasetError, MotionFormatError, SkeletonError
 from motionlang.features.base import downsample
-from motionlang.features.h3d_vectors import (H3D_BODIES, HEADINGS, H3DBody, group_std,
-                                             joints_to_vectors, mirror_joints,
-                                             vectors_to_joints)
+from motionlang.features.h3d_vectors import (
+    H3D_BODIES,
+    HEADINGS,
+    H3DBody,
+    group_std,
+    joints_to_vectors,
+    mirror_joints,
+    vectors_to_joints,
+)
 from motionlang.features.joint_map import positions21
 from motionlang.features.rig_maps import SMPL_JOINT_NAMES
 

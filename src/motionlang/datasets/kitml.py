@@ -21,8 +21,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 from urllib.parse import urlparse
 
-from motionlang.errors import DatasetError
 from motionlang.datasets.download import download_file, safe_extract
+from motionlang.errors import DatasetError
 from motionlang.utils.progress import progress
 
 if TYPE_CHECKING:
@@ -66,7 +66,7 @@ class KitMLRecord:
     def has_annotations(self) -> bool:
         return bool(self.annotations)
 
-    def load_motion(self) -> "Motion":
+    def load_motion(self) -> Motion:
         """Read the MMM file (``motionlang.formats.mmm.read_mmm``)."""
         from motionlang.formats.mmm import read_mmm  # formats are a lower layer, loaded lazily
         return read_mmm(self.mmm_path)
@@ -243,5 +243,4 @@ def load_annotations_tmr(path: str | Path) -> dict[str, dict]:
 
 
 # Splits live in their own module; re-exported here as part of the KIT-ML API.
-from motionlang.datasets.splits import (load_split, load_splits, random_split,  # noqa: E402,F401
-                                        save_splits)
+from motionlang.datasets.splits import load_split, load_splits, random_split, save_splits  # noqa: E402,F401

@@ -15,9 +15,10 @@ from __future__ import annotations
 
 import json
 import logging
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -27,10 +28,10 @@ from motionlang.datasets.kitml import find_kitml_root, load_kitml
 from motionlang.datasets.mixing import check_distinct_ids
 from motionlang.datasets.splits import random_split
 from motionlang.datasets.text import Vocabulary
-from motionlang.features.frames import motion_frames
 from motionlang.errors import DatasetError, MotionlangError
-from motionlang.kinematics.from_positions import mirror_motion
 from motionlang.features.base import FeatureSet, features_from_dict
+from motionlang.features.frames import motion_frames
+from motionlang.kinematics.from_positions import mirror_motion
 from motionlang.utils.progress import progress
 
 CACHE_VERSION = "seq2seq-pairs-1"

@@ -13,9 +13,9 @@ import functools
 import json
 import re
 from collections import Counter
+from collections.abc import Iterable, Sequence
 from importlib import resources
 from pathlib import Path
-from typing import Iterable, Sequence
 
 from motionlang.errors import DatasetError
 from motionlang.utils.atomic import atomic_write
@@ -127,7 +127,7 @@ class Vocabulary:
         return word in self.stoi
 
     @classmethod
-    def build(cls, sentences: Iterable[str], min_count: int = 1) -> "Vocabulary":
+    def build(cls, sentences: Iterable[str], min_count: int = 1) -> Vocabulary:
         """Words seen at least ``min_count`` times (after ``tokenize``), most frequent first,
         ties in alphabetical order so that the ids do not depend on the input order."""
         counts = Counter(tok for s in sentences for tok in tokenize(s))
@@ -161,7 +161,7 @@ class Vocabulary:
         return {"specials": list(SPECIALS), "itos": self.itos}
 
     @classmethod
-    def from_dict(cls, d: dict) -> "Vocabulary":
+    def from_dict(cls, d: dict) -> Vocabulary:
         """Inverse of :meth:`to_dict`; DatasetError on a malformed entry."""
         itos = d.get("itos")
         if not isinstance(itos, list) or list(itos[:4]) != list(SPECIALS):
@@ -175,7 +175,7 @@ class Vocabulary:
             json.dump(self.to_dict(), fh, indent=0)
 
     @classmethod
-    def load(cls, path: str | Path) -> "Vocabulary":
+    def load(cls, path: str | Path) -> Vocabulary:
         """Read a file written by :meth:`save`."""
         try:
             d = json.loads(Path(path).read_text(encoding="utf-8"))

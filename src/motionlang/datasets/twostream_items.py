@@ -13,14 +13,15 @@ every training motion mirrored left/right with its sentences' sides swapped.
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any
 
 import numpy as np
 
-from motionlang.errors import DatasetError
 from motionlang.datasets.feature_cache import dataset_features
+from motionlang.errors import DatasetError
 
 #: frame rate of the positions features (Ghosh et al. 2021: KIT-ML at 12.5 Hz)
 FPS = 12.5

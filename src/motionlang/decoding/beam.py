@@ -14,8 +14,9 @@ EOS included, so a hypothesis that reaches the cap is closed with EOS.
 """
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Any, Callable, Sequence
+from typing import Any
 
 import torch
 

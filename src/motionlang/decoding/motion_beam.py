@@ -13,15 +13,22 @@ log p(frame) + log P(flag), both under the model.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 import torch
 
 from motionlang.decoding.beam import select_state
-from motionlang.models.seq2seq.mdn import (MixtureParams, active_log_prob, mixture_log_prob,
-                                   mixture_mean, mode_frame, sample)
+from motionlang.models.seq2seq.mdn import (
+    MixtureParams,
+    active_log_prob,
+    mixture_log_prob,
+    mixture_mean,
+    mode_frame,
+    sample,
+)
 
 MotionStep = Callable[[Any, torch.Tensor], "tuple[MixtureParams, Any]"]
 
@@ -93,7 +100,8 @@ def sampled_beam(step: MotionStep, state: Any, *, batch_size: int, width: int,
                                    close=t == max_frames - 1, hold=t < min_frames - 1)
         row = torch.arange(len(owner)).repeat_interleave(S)
         keep_rows = _settle(finished, owner[row], af, cand, W, rank,
-                            lambda i: torch.cat([frames[int(row[i])], xf[i:i + 1]]))
+                            lambda i, frames=frames, row=row, xf=xf: torch.cat(
+                                [frames[int(row[i])], xf[i:i + 1]]))
         if not keep_rows:
             break
         keep = torch.tensor(keep_rows)

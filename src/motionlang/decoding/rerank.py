@@ -16,7 +16,7 @@ sets (kind, names, fitted normaliser), since generated frames are in the L2M's f
 """
 from __future__ import annotations
 
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 import torch

@@ -10,7 +10,8 @@ flag (AnglesFeatures) is dropped, since L2M predicts its own end-of-motion flag.
 """
 from __future__ import annotations
 
-from typing import Any, Sequence
+from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 import torch
@@ -19,7 +20,7 @@ from motionlang.decoding.beam import beam_search, greedy_search
 from motionlang.decoding.mbr import mbr_rank
 from motionlang.decoding.motion_beam import mean_decode, sample_decode, sampled_beam
 from motionlang.errors import MotionlangError
-from motionlang.features.frames import frames_to_features, model_dim, motion_frames
+from motionlang.features.frames import frames_to_features, motion_frames
 from motionlang.models.seq2seq.l2m import LanguageToMotion
 from motionlang.models.seq2seq.m2l import MotionToLanguage
 
@@ -233,7 +234,7 @@ def generate(model: LanguageToMotion, sentence: str | Sequence[int], *, width: i
     """
     fs = _features_of(model)
     if reranker is not None:   # before the (slower) generation
-        from motionlang.decoding.rerank import check_same_features, rerank   # builds on this
+        from motionlang.decoding.rerank import check_same_features, rerank  # builds on this
         if not isinstance(sentence, str):
             raise MotionlangError("reranking needs the sentence as text (the two models have "
                                   "their own vocabularies)")

@@ -18,8 +18,8 @@ Pure numpy.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
-from typing import Iterable, Sequence
 
 import numpy as np
 
@@ -58,7 +58,7 @@ class Prototypes:
 
     @classmethod
     def fit(cls, segments: Iterable[tuple[str, np.ndarray]], nearest_example: bool = False
-            ) -> "Prototypes":
+            ) -> Prototypes:
         """From (label, (T, F) segment) pairs of training motions."""
         by_label: dict[str, list[np.ndarray]] = {}
         for label, seg in segments:

@@ -6,8 +6,8 @@ scikit-learn's (``sklearn.manifold.TSNE``), an optional dependency imported on u
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Sequence
 
 import numpy as np
 import torch

@@ -20,7 +20,7 @@ for two real samples of that size (its floor), since the real set against itself
 """
 from __future__ import annotations
 
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 

@@ -10,7 +10,7 @@ ties go to the earliest indexed sentence, so a result depends on nothing but the
 from __future__ import annotations
 
 from collections import Counter
-from typing import Iterable
+from collections.abc import Iterable
 
 import numpy as np
 

@@ -17,7 +17,7 @@ references ``{id: [sentences]}``; hypotheses and references are both compared af
 """
 from __future__ import annotations
 
-from typing import Mapping, Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 

@@ -9,8 +9,7 @@
   once, cached on disk keyed by source files and options.
 """
 from motionlang.features.angles import AnglesConfig, AnglesFeatures
-from motionlang.features.base import (FeatureSet, downsample, features_from_dict,
-                                     make_features)
+from motionlang.features.base import FeatureSet, downsample, features_from_dict, make_features
 from motionlang.features.collate import lengths_to_mask, pad_batch, unpad
 from motionlang.features.joint_map import KIT21_NAMES, KIT21_PARENTS, positions21
 from motionlang.features.normalizer import Normalizer

@@ -16,8 +16,8 @@ with the root standing still at the training data's mean height.
 """
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Iterable
 
 import numpy as np
 
@@ -109,7 +109,7 @@ class AnglesFeatures(FeatureSet):
         return np.concatenate(parts, axis=1)
 
     # ------------------------------------------------------------------ API
-    def fit(self, motions: Iterable[Motion]) -> "AnglesFeatures":
+    def fit(self, motions: Iterable[Motion]) -> AnglesFeatures:
         """Fit the normaliser on every offset sequence of ``motions`` (MMM motions)."""
         motions = list(motions)
         if not motions:

@@ -19,7 +19,7 @@ from motionlang.features.normalizer import Normalizer
 from motionlang.kinematics.motion import Motion
 from motionlang.utils.atomic import atomic_write
 
-_REGISTRY: dict[str, type["FeatureSet"]] = {}
+_REGISTRY: dict[str, type[FeatureSet]] = {}
 
 
 def downsample(motion: Motion, fps: float, offset: int = 0) -> Motion:
@@ -99,7 +99,7 @@ class FeatureSet:
                 "names": self.names}
 
     @classmethod
-    def from_dict(cls, d: dict[str, Any]) -> "FeatureSet":
+    def from_dict(cls, d: dict[str, Any]) -> FeatureSet:
         """Inverse of :meth:`to_dict` (unknown config keys are ignored)."""
         if cls.kind and d.get("kind") != cls.kind:
             raise MotionlangError(f"expected {cls.kind!r} features, got {d.get('kind')!r}")
@@ -115,7 +115,7 @@ class FeatureSet:
             json.dump(self.to_dict(), fh)
 
     @classmethod
-    def load(cls, path: str | Path) -> "FeatureSet":
+    def load(cls, path: str | Path) -> FeatureSet:
         """Read a file written by :meth:`save`; on the base class, of any registered kind."""
         try:
             with open(path, encoding="utf-8") as fh:

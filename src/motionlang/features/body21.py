@@ -26,8 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from motionlang.errors import MotionlangError
-from motionlang.features.joint_map import (KIT21_NAMES, KIT21_PARENTS, bone_lengths21,
-                                           positions21)
+from motionlang.features.joint_map import KIT21_NAMES, KIT21_PARENTS, bone_lengths21, positions21
 from motionlang.features.positions import facing_yaw, floor_height
 from motionlang.features.root import to_heading
 from motionlang.kinematics.motion import Motion

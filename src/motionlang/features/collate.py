@@ -5,7 +5,7 @@ end of each sequence. Functions accept numpy arrays or torch tensors and return 
 """
 from __future__ import annotations
 
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 

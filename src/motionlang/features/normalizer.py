@@ -8,9 +8,10 @@ from __future__ import annotations
 
 import json
 import zipfile
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -41,7 +42,7 @@ class Normalizer:
     names: list[str] | None = field(default=None)
 
     # ------------------------------------------------------------------ fitting
-    def fit(self, x: np.ndarray | Sequence[np.ndarray]) -> "Normalizer":
+    def fit(self, x: np.ndarray | Sequence[np.ndarray]) -> Normalizer:
         """Fit on x (N, D), on (..., D), or on a list of (T_i, D) arrays (concatenated).
 
         Raises:
@@ -109,7 +110,7 @@ class Normalizer:
                 "names": None if self.names is None else list(self.names)}
 
     @classmethod
-    def from_dict(cls, d: dict) -> "Normalizer":
+    def from_dict(cls, d: dict) -> Normalizer:
         """Inverse of :meth:`to_dict`."""
         if d.get("type", "Normalizer") != "Normalizer":
             raise MotionlangError(f"not a Normalizer description: type {d.get('type')!r}")
@@ -137,7 +138,7 @@ class Normalizer:
                 json.dump(d, fh)
 
     @classmethod
-    def load(cls, path: str | Path) -> "Normalizer":
+    def load(cls, path: str | Path) -> Normalizer:
         """Read a ``.json`` or ``.npz`` file written by :meth:`save`."""
         path = Path(path)
         try:

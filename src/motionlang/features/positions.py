@@ -18,8 +18,8 @@ moved vertically so that the feet stand on y = 0) exactly.
 """
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Iterable
 
 import numpy as np
 
@@ -116,7 +116,7 @@ class PositionFeatures(FeatureSet):
         local, v, dyaw, start = split_global(p)
         return np.concatenate([local.reshape(len(p), -1), v, dyaw[:, None]], axis=1), start
 
-    def fit(self, motions: Iterable[Motion]) -> "PositionFeatures":
+    def fit(self, motions: Iterable[Motion]) -> PositionFeatures:
         """Fit the normaliser on the (T, 66) raw features of ``motions`` (any mappable
         skeleton: MMM, CMU-ASF, BVH)."""
         motions = list(motions)
@@ -126,7 +126,7 @@ class PositionFeatures(FeatureSet):
         return self
 
     @classmethod
-    def from_dict(cls, d: dict) -> "PositionFeatures":
+    def from_dict(cls, d: dict) -> PositionFeatures:
         # files from before the floor option: it was off
         d = {**d, "config": {"floor": False, **d.get("config", {})}}
         return super().from_dict(d)

@@ -30,9 +30,8 @@ Trunk joints are the rig's own spine nodes in order; rigs cut the trunk differen
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Union
 
-Spec = Union[str, tuple]
+Spec = str | tuple
 
 
 @dataclass(frozen=True)

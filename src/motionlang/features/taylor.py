@@ -18,8 +18,8 @@ yaw 0); :meth:`TaylorFeatures.start` gives a motion's own placement.
 """
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Iterable
 
 import numpy as np
 
@@ -28,8 +28,12 @@ from motionlang.features import root as rootlib
 from motionlang.features.base import FeatureSet, as_numpy, downsample
 from motionlang.features.normalizer import Normalizer
 from motionlang.kinematics.motion import Motion
-from motionlang.kinematics.rotations import (chain, expmap_to_matrix, matrix_to_chain,
-                                             matrix_to_expmap)
+from motionlang.kinematics.rotations import (
+    chain,
+    expmap_to_matrix,
+    matrix_to_chain,
+    matrix_to_expmap,
+)
 from motionlang.kinematics.skeleton import Skeleton
 
 ROOT_NAMES = ("root_vx", "root_vz", "root_dyaw", "root_height", "root_pitch", "root_roll")
@@ -99,7 +103,7 @@ class TaylorFeatures(FeatureSet):
         return np.concatenate(parts, axis=1)
 
     # ------------------------------------------------------------------ API
-    def fit(self, motions: Iterable[Motion]) -> "TaylorFeatures":
+    def fit(self, motions: Iterable[Motion]) -> TaylorFeatures:
         """Find constant dims and fit the normaliser; all motions share one skeleton layout."""
         motions = list(motions)
         if not motions:

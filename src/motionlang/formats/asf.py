@@ -30,9 +30,17 @@ from pathlib import Path
 import numpy as np
 
 from motionlang.errors import MotionFormatError, SkeletonError
+
 # MAX_ABS, PARSE_FACTOR, ROT_DOFS, parse_float and read_lines stay importable from here
-from motionlang.formats.asf_parse import (MAX_ABS, PARSE_FACTOR, ROT_DOFS,  # noqa: F401
-                                          AsfBone, AsfSections, parse_float, read_lines)
+from motionlang.formats.asf_parse import (  # noqa: F401
+    MAX_ABS,
+    PARSE_FACTOR,
+    ROT_DOFS,
+    AsfBone,
+    AsfSections,
+    parse_float,
+    read_lines,
+)
 from motionlang.kinematics.rotations import AXES, chain
 from motionlang.kinematics.skeleton import Joint, Skeleton
 from motionlang.utils import limits

@@ -20,8 +20,13 @@ from pathlib import Path
 import numpy as np
 
 from motionlang.errors import MotionFormatError, SkeletonError
-from motionlang.formats.units import (BVH_UNITS, SCALED_STATURE_M, detect_unit,
-                                      estimate_stature, sample_frames)
+from motionlang.formats.units import (
+    BVH_UNITS,
+    SCALED_STATURE_M,
+    detect_unit,
+    estimate_stature,
+    sample_frames,
+)
 from motionlang.kinematics.motion import Motion
 from motionlang.kinematics.rotations import AXES, chain, matrix_to_chain
 from motionlang.kinematics.skeleton import Joint, Skeleton
@@ -89,7 +94,7 @@ def _position_offsets(nodes, ch: _Channels, data: np.ndarray):
     bones = [np.linalg.norm(n["offset"]) for n in nodes[1:]]
     scale = float(np.median([b for b in bones if b > 0])) if any(b > 0 for b in bones) else 1.0
     offsets, animated, spread = [n["offset"].copy() for n in nodes], set(), {}
-    for i, n in enumerate(nodes):
+    for i, _n in enumerate(nodes):
         if not ch.pos[i]:
             continue
         axes, cols = zip(*ch.pos[i].items())

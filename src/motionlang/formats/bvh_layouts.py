@@ -150,7 +150,7 @@ def _own_columns(motion: Motion, fit: _Fit, u: float) -> dict[int, list] | None:
             move = np.repeat(jt.offset[None] / u, T, axis=0)
             angles = motion.joint_angles[:, sk.dof_slice(i - r)]
             rot = _rotation(letters, jt.axes, angles, _plain(jt),
-                            lambda: jt.pre @ chain(jt.axes, angles) @ jt.post)
+                            lambda jt=jt, angles=angles: jt.pre @ chain(jt.axes, angles) @ jt.post)
         if rot is None or (i == r and r > 0 and len(pos) < 3):
             return None
         rot_cols = iter(rot.T)
@@ -180,7 +180,7 @@ def _own_root(motion: Motion, fit: _Fit, pos: dict, letters: str, u: float):
 
 def _own_header(sk, fit: _Fit, u: float) -> list[str]:
     """The HIERARCHY lines of the file's own layout, OFFSETs from the skeleton."""
-    nodes, r, header = fit.nodes, fit.r, ["HIERARCHY"]
+    nodes, header = fit.nodes, ["HIERARCHY"]
     kids: list[list[int]] = [[] for _ in nodes]
     for i, n in enumerate(nodes[1:], start=1):
         kids[n["parent"]].append(i)

@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import re
 import xml.etree.ElementTree as ET
+from pathlib import Path
 from xml.parsers import expat
 from xml.sax.saxutils import escape
-from pathlib import Path
 
 import numpy as np
 

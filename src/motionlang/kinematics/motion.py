@@ -95,10 +95,10 @@ class Motion:
         """Seconds covered by the frames (``n_frames / fps``)."""
         return self.n_frames / self.fps
 
-    def copy(self) -> "Motion":
+    def copy(self) -> Motion:
         return copy.deepcopy(self)
 
-    def replace(self, **changes) -> "Motion":
+    def replace(self, **changes) -> Motion:
         """A new Motion with some fields replaced (arrays are not copied)."""
         kw = dict(skeleton=self.skeleton, fps=self.fps, root_translation=self.root_translation,
                   root_rotation=self.root_rotation, joint_angles=self.joint_angles,
@@ -106,7 +106,7 @@ class Motion:
         kw.update(changes)
         return Motion(**kw)
 
-    def __getitem__(self, key: slice) -> "Motion":
+    def __getitem__(self, key: slice) -> Motion:
         """Slice frames; a step ``s`` divides the frame rate by ``s`` (``m[3::10]``)."""
         if not isinstance(key, slice):
             raise TypeError("Motion supports slicing only, e.g. motion[10:50] or motion[::4]")
@@ -185,7 +185,7 @@ class Motion:
         return pos if np.array_equal(W, _EYE) else pos @ W.T
 
     # ---------------------------------------------------------------- edits
-    def resample(self, fps: float) -> "Motion":
+    def resample(self, fps: float) -> Motion:
         """Linear re-timing to ``fps`` (angles unwrapped first, so +-pi crossings are safe).
 
         The first frame is kept; the last new frame is the last one inside the original
@@ -213,7 +213,7 @@ class Motion:
                             root_rotation=interp(self.root_rotation, True),
                             joint_angles=interp(self.joint_angles, True))
 
-    def mirror(self) -> "Motion":
+    def mirror(self) -> Motion:
         """Swap left and right: reflect across the sagittal plane and exchange paired joints.
 
         Uses ``R' = S R S`` for every local rotation (S = ``skeleton.mirror``), which for a

@@ -41,8 +41,12 @@ import numpy as np
 from motionlang.errors import MotionlangError, SkeletonError
 from motionlang.kinematics.from_positions import _kabsch, _swing, _unit
 from motionlang.kinematics.motion import Motion
-from motionlang.kinematics.rotations import (chain, expmap_to_matrix, matrix_to_chain,
-                                             matrix_to_expmap)
+from motionlang.kinematics.rotations import (
+    chain,
+    expmap_to_matrix,
+    matrix_to_chain,
+    matrix_to_expmap,
+)
 from motionlang.kinematics.skeleton import Skeleton
 
 #: meta entries that describe the template's file, not the retargeted motion (the BVH

@@ -25,6 +25,7 @@ import numpy as np
 
 from motionlang.errors import SkeletonError
 
+
 @dataclass
 class Joint:
     """One node of the tree.

@@ -12,9 +12,9 @@ so a linear model over word counts fits it.
 from __future__ import annotations
 
 from collections import Counter
+from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Sequence
 
 import numpy as np
 
@@ -35,7 +35,7 @@ class SentenceLength:
 
     @classmethod
     def fit(cls, sentences: Sequence[str], lengths: Sequence[int], ridge: float = 1.0
-            ) -> "SentenceLength":
+            ) -> SentenceLength:
         """Least squares with an L2 penalty ``ridge`` on the word weights (not the bias)."""
         if len(sentences) != len(lengths) or not sentences:
             raise MotionlangError(f"need as many lengths as sentences, at least one; got "
@@ -58,7 +58,7 @@ class SentenceLength:
                    int(y.min()), int(y.max()))
 
     @classmethod
-    def from_items(cls, items: Sequence[dict]) -> "SentenceLength":
+    def from_items(cls, items: Sequence[dict]) -> SentenceLength:
         """Fitted on training items ``{"sentence", "motion": (T, F)}`` (one per sentence)."""
         return cls.fit([it["sentence"] for it in items], [len(it["motion"]) for it in items])
 
@@ -78,6 +78,6 @@ class SentenceLength:
                 "low": int(self.low), "high": int(self.high)}
 
     @classmethod
-    def from_dict(cls, d: dict) -> "SentenceLength":
+    def from_dict(cls, d: dict) -> SentenceLength:
         return cls(list(d["words"]), [float(w) for w in d["weights"]], float(d["bias"]),
                    int(d["low"]), int(d["high"]))

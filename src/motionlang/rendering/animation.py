@@ -1,17 +1,31 @@
 """Animated stick figures: ``render_animation(motion_or_motions, "out.gif" | "out.mp4")``."""
 from __future__ import annotations
 
+from collections.abc import Iterator, Sequence
 from pathlib import Path
-from typing import Iterator, Sequence
 
 import numpy as np
 
 from motionlang.errors import MotionlangError
 from motionlang.kinematics import Motion
-from motionlang.rendering.draw import (GRID_COLOUR, StickFigure, add_lines, clean_3d_axes,
-                                    clipped, grab, grid_segments, new_figure)
-from motionlang.rendering.scene import (SIDE_COLOURS, SIDE_COLOURS_ALT, Scene, build_scene,
-                                     sample_times, view_azimuth)
+from motionlang.rendering.draw import (
+    GRID_COLOUR,
+    StickFigure,
+    add_lines,
+    clean_3d_axes,
+    clipped,
+    grab,
+    grid_segments,
+    new_figure,
+)
+from motionlang.rendering.scene import (
+    SIDE_COLOURS,
+    SIDE_COLOURS_ALT,
+    Scene,
+    build_scene,
+    sample_times,
+    view_azimuth,
+)
 from motionlang.utils.atomic import atomic_path
 from motionlang.utils.progress import progress
 

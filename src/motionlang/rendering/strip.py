@@ -10,8 +10,16 @@ from matplotlib.collections import LineCollection
 from motionlang.errors import MotionlangError
 from motionlang.kinematics import Motion
 from motionlang.rendering.draw import GRID_COLOUR, bone_segments, grid_segments, new_figure
-from motionlang.rendering.scene import (CENTRE, LEFT, RIGHT, SIDE_COLOURS, Scene, build_scene,
-                                     camera_basis, view_azimuth)
+from motionlang.rendering.scene import (
+    CENTRE,
+    LEFT,
+    RIGHT,
+    SIDE_COLOURS,
+    Scene,
+    build_scene,
+    camera_basis,
+    view_azimuth,
+)
 from motionlang.utils.atomic import atomic_path
 
 POSE_INCHES = 2.2  # drawn height of the body

@@ -7,7 +7,7 @@ the dict both :class:`~motionlang.models.seq2seq.m2l.MotionToLanguage` and
 """
 from __future__ import annotations
 
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 import torch

@@ -26,9 +26,10 @@ import json
 import logging
 import math
 import time
+from collections.abc import Callable, Sequence
 from dataclasses import asdict
 from pathlib import Path
-from typing import Any, Callable, Sequence
+from typing import Any
 
 import torch
 import torch.distributed as dist
@@ -37,8 +38,13 @@ from motionlang.errors import MotionlangError
 from motionlang.models.checkpoint import write_checkpoint
 from motionlang.training.config import OPTIMIZER_NAMES, TrainConfig
 from motionlang.training.distributed import init_distributed
-from motionlang.training.run_files import (check_resume, plot_loss_curve, read_training_checkpoint,
-                                           rng_state, set_rng_state)
+from motionlang.training.run_files import (
+    check_resume,
+    plot_loss_curve,
+    read_training_checkpoint,
+    rng_state,
+    set_rng_state,
+)
 from motionlang.training.schedule import learning_rate
 from motionlang.utils.atomic import atomic_write
 from motionlang.utils.progress import progress

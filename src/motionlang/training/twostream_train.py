@@ -11,9 +11,9 @@ of the global step only, so ``fit(resume=True)`` continues it exactly.
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Sequence
 
 from motionlang.training.trainer import TrainConfig, Trainer
 

@@ -32,8 +32,9 @@ import shutil
 import socket
 import tempfile
 import time
+from collections.abc import Iterator
 from pathlib import Path
-from typing import IO, Iterator
+from typing import IO
 
 TAG = ".motionlang-tmp."
 FOREIGN_STALE_S = 24 * 3600  # another host's temporary file older than this is stale

@@ -7,7 +7,8 @@ Python API or a checkpoint, instead of a crash (or a silent model of NaNs) furth
 from __future__ import annotations
 
 import math
-from typing import Any, Iterable
+from collections.abc import Iterable
+from typing import Any
 
 from motionlang.errors import MotionlangError
 

@@ -11,10 +11,20 @@ Main entry points::
     write_corpus("data/synth", n=1000, seed=0)     # = motionlang data synth
     extract("A person waves twice with the left hand.")
 """
-from motionlang.datasets.synth.augment import (change_speed, concat_samples, mirror_sample,
-                                               mirror_text)
-from motionlang.datasets.synth.corpus import (GENERATOR_VERSION, SynthSample, generate_sample,
-                                              ground_truth, write_corpus, write_sample)
+from motionlang.datasets.synth.augment import (
+                                               change_speed,
+                                               concat_samples,
+                                               mirror_sample,
+                                               mirror_text,
+)
+from motionlang.datasets.synth.corpus import (
+                                               GENERATOR_VERSION,
+                                               SynthSample,
+                                               generate_sample,
+                                               ground_truth,
+                                               write_corpus,
+                                               write_sample,
+)
 from motionlang.datasets.synth.extract import extract, extract_keys, score
 from motionlang.datasets.synth.spec import Primitive
 

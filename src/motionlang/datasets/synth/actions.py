@@ -7,10 +7,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from motionlang.datasets.synth.body import (SIDES, Body, ankle_from_contact,
-                                            heading_vectors, smoothstep)
-from motionlang.datasets.synth.track import (FPS, Stance, Track, concat_tracks,
-                                             standing_track)
+from motionlang.datasets.synth.body import (
+    SIDES,
+    Body,
+    ankle_from_contact,
+    heading_vectors,
+    smoothstep,
+)
+from motionlang.datasets.synth.track import FPS, Stance, Track, concat_tracks, standing_track
 
 G = 9.81
 

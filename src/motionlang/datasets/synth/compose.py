@@ -14,8 +14,14 @@ from motionlang.datasets.synth import actions, arms, gait
 from motionlang.datasets.synth.actions import keyframes
 from motionlang.datasets.synth.body import Body
 from motionlang.datasets.synth.spec import UPPER_ACTIONS, Primitive
-from motionlang.datasets.synth.track import (FPS, UPPER_DOFS, Stance, Track, concat_tracks,
-                                             solve_track)
+from motionlang.datasets.synth.track import (
+    FPS,
+    UPPER_DOFS,
+    Stance,
+    Track,
+    concat_tracks,
+    solve_track,
+)
 from motionlang.kinematics.motion import Motion
 
 # action -> relative frequency (walking dominates KIT-ML, so it does here)

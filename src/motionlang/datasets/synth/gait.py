@@ -17,8 +17,13 @@ import numpy as np
 from scipy.interpolate import PchipInterpolator
 from scipy.ndimage import gaussian_filter1d
 
-from motionlang.datasets.synth.body import (SIDES, Body, ankle_from_contact,
-                                            heading_vectors, smoothstep)
+from motionlang.datasets.synth.body import (
+    SIDES,
+    Body,
+    ankle_from_contact,
+    heading_vectors,
+    smoothstep,
+)
 from motionlang.datasets.synth.track import FPS, Stance, Track, limit_reach, rest_upper
 
 # step length (m for a 1.75 m subject), step time (s), swing time / step time

@@ -192,7 +192,7 @@ def _repeat_action(ph: _Phrase) -> str:
                        _pick(rng, ("in place", "on the spot", "on the spot", "in place")))
     if p.action == "raise_arms":
         if p.side == "both":
-            arms = ph.say("side", _pick(rng, (f"both arms", f"{ph.poss} arms", "both hands")))
+            arms = ph.say("side", _pick(rng, ("both arms", f"{ph.poss} arms", "both hands")))
         else:
             arms = ph.say("side", f"{ph.poss} {p.side} {_pick(rng, ('arm', 'hand'))}")
         cnt = ph.say("count", times(p.count, rng)) if p.count and ph.maybe(0.3) else ""

@@ -60,11 +60,11 @@ class Primitive:
         return asdict(self)
 
     @classmethod
-    def from_dict(cls, d: dict) -> "Primitive":
+    def from_dict(cls, d: dict) -> Primitive:
         names = {f.name for f in fields(cls)}
         return cls(**{k: v for k, v in d.items() if k in names})
 
-    def masked(self, keep: set[str]) -> "Primitive":
+    def masked(self, keep: set[str]) -> Primitive:
         """A copy that keeps only the parameters in ``keep`` (others None); frames kept."""
         out = Primitive(**asdict(self))
         for f in PARAM_FIELDS[1:]:

@@ -14,8 +14,15 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.ndimage import distance_transform_edt, gaussian_filter1d, minimum_filter1d
 
-from motionlang.datasets.synth.body import (ARM_REST, SIDES, Body, ankle_from_contact,
-                                            pelvis_rotation, smoothstep, solve_leg)
+from motionlang.datasets.synth.body import (
+    ARM_REST,
+    SIDES,
+    Body,
+    ankle_from_contact,
+    pelvis_rotation,
+    smoothstep,
+    solve_leg,
+)
 
 FPS = 100.0
 #: Upper-body DOFs the primitives drive directly (everything but legs and feet).
@@ -40,7 +47,7 @@ class Stance:
         return (np.array(self.feet["L"][:2]) + np.array(self.feet["R"][:2])) / 2
 
     @classmethod
-    def standing(cls, center, yaw: float, width: float, toe_out: float = 0.05) -> "Stance":
+    def standing(cls, center, yaw: float, width: float, toe_out: float = 0.05) -> Stance:
         c = np.asarray(center, dtype=float)
         left = np.array([-np.cos(yaw), -np.sin(yaw)])
         return cls({"L": (*(c + left * width / 2), yaw + toe_out),

@@ -41,8 +41,18 @@ from pathlib import Path
 import numpy as np
 
 from motionlang.evaluation.crbm.fill import (
-    ERASED, JOINT_CHANNELS, Cmu35, fill_error, frame_mask, hold_last_fill, load_cmu35, nearest_neighbour_fill,
-    per_frame_dims, score_space, taylor59)
+    ERASED,
+    JOINT_CHANNELS,
+    Cmu35,
+    fill_error,
+    frame_mask,
+    hold_last_fill,
+    load_cmu35,
+    nearest_neighbour_fill,
+    per_frame_dims,
+    score_space,
+    taylor59,
+)
 from motionlang.models.crbm.ar import ARConfig, ARModel
 from motionlang.models.crbm.config import CRBMConfig
 from motionlang.models.crbm.model import CRBM

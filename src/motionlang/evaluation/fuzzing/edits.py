@@ -8,7 +8,7 @@ Every edit is driven by ``choose(n)``, an integer in ``range(n)`` (see :mod:`.in
 from __future__ import annotations
 
 import re
-from typing import Callable
+from collections.abc import Callable
 
 Choose = Callable[[int], int]
 MAX_GROWTH = 4 << 20  # a file this long is not lengthened further

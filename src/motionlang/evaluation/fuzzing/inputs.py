@@ -27,8 +27,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from motionlang.evaluation.fuzzing.edits import (SPECIAL, Choose, edit, edit_dtd,
-                                              edit_encoding, pick)
+from motionlang.evaluation.fuzzing.edits import SPECIAL, Choose, edit, edit_dtd, edit_encoding, pick
 from motionlang.evaluation.fuzzing.h3d_inputs import crafted_h3d, mutate_h3d
 from motionlang.evaluation.fuzzing.seeds import TINY_ASF, mit_sequence, mit_tree, write_mit
 
@@ -157,7 +156,7 @@ def _mit(choose: Choose):
         else:
             cell = np.empty((1, 1), dtype=object)
             cell[0, 0] = np.ones((1, 3))
-            bad = _BAD_FIELDS + [lambda: cell]
+            bad = _BAD_FIELDS + [lambda cell=cell: cell]
             tree[choose(n)][field] = pick(choose, bad)()
     T = pick(choose, [1, 3, 40])
     seq = pick(choose, [lambda: mit_sequence(T, n), lambda: "abc",

@@ -72,7 +72,7 @@ class Sandbox:
         self.starts = 0
         self._buf = b""
 
-    def __enter__(self) -> "Sandbox":
+    def __enter__(self) -> Sandbox:
         return self
 
     def __exit__(self, *exc) -> None:
@@ -285,11 +285,11 @@ def serve() -> None:
     sys.stdout = sys.stderr
     import warnings
 
+    import motionlang.datasets.humanml3d  # noqa: F401
     import motionlang.formats.asf_amc  # noqa: F401 - imported before the memory cap
     import motionlang.formats.bvh  # noqa: F401
     import motionlang.formats.mit  # noqa: F401
     import motionlang.formats.mmm  # noqa: F401
-    import motionlang.datasets.humanml3d  # noqa: F401
     import motionlang.kinematics.from_positions  # noqa: F401
     warnings.simplefilter("ignore")  # a warning is not a failure; its text is not wanted
     _limit_memory(int(sys.argv[1]))

@@ -27,13 +27,13 @@ averaged over the N items — the definitions the authors' evaluation code imple
 """
 from __future__ import annotations
 
-from typing import Sequence, Union
+from collections.abc import Sequence
 
 import numpy as np
 
 from motionlang.errors import MotionlangError
 
-Seqs = Union[np.ndarray, Sequence[np.ndarray]]
+Seqs = np.ndarray | Sequence[np.ndarray]
 
 
 def _pairs(pred: Seqs, target: Seqs) -> list[tuple[np.ndarray, np.ndarray]]:

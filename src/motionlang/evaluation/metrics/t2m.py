@@ -23,7 +23,7 @@ their positions (:func:`retrieval_metrics`).
 from __future__ import annotations
 
 import warnings
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 from scipy import linalg

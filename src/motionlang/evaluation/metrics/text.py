@@ -12,13 +12,13 @@ mean, as in Papineni et al. 2002 and Plappert et al. 2018); ROUGE-L from Google'
 from __future__ import annotations
 
 import warnings
-from typing import Sequence, Union
+from collections.abc import Sequence
 
 import numpy as np
 
 from motionlang.errors import MotionlangError
 
-Sentence = Union[str, Sequence[str]]
+Sentence = str | Sequence[str]
 
 
 def _toks(s: Sentence) -> list[str]:

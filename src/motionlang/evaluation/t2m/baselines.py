@@ -7,7 +7,8 @@ in metres, as ``decoding.t2m.generate_positions21`` does for a model.
 """
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Sequence
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 

@@ -18,19 +18,29 @@ from __future__ import annotations
 
 import math
 import textwrap
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable, Sequence
 
 import numpy as np
 
 from motionlang.errors import MotionlangError
-from motionlang.evaluation.action_order import (Prototypes, merge_repeats, order_accuracy,
-                                                rescale_ranges, segment_accuracy,
-                                                segment_labels)
+from motionlang.evaluation.action_order import (
+    Prototypes,
+    merge_repeats,
+    order_accuracy,
+    rescale_ranges,
+    segment_accuracy,
+    segment_labels,
+)
 from motionlang.evaluation.metrics.motion import position_metrics_mm
 from motionlang.evaluation.t2m.baselines import (
-    GROUND_TRUTH, NEAREST, length_errors, retrieval_baseline, still_baseline)
+    GROUND_TRUTH,
+    NEAREST,
+    length_errors,
+    retrieval_baseline,
+    still_baseline,
+)
 from motionlang.utils.progress import progress
 
 
@@ -202,8 +212,8 @@ def _l2m_on_subjects(results, name, model, data, items, protos, method, width: i
     "sample" decoding."""
     import logging
 
-    from motionlang.features.frames import motion_frames
     from motionlang.decoding.t2m import generate_positions21
+    from motionlang.features.frames import motion_frames
     from motionlang.formats.mmm_model import mmm_skeleton
     if getattr(getattr(model, "features", None), "kind", None) != "angles":
         return   # a positions L2M has no body to scale: its joints are its output

@@ -20,14 +20,14 @@ counted. R-precision: the description's text embedding ranks the 32 motions of i
 """
 from __future__ import annotations
 
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 
 from motionlang.datasets.text import normalize
 from motionlang.errors import MotionlangError
-from motionlang.evaluation.seq2seq import summary, text_scores
 from motionlang.evaluation.metrics.t2m import mm_dist, r_precision, repeat
+from motionlang.evaluation.seq2seq import summary, text_scores
 
 GROUND_TRUTH, NEAREST = "ground truth", "nearest neighbour"
 

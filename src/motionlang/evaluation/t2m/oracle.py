@@ -20,7 +20,7 @@ Every model row of the main table is re-scored on the same subset beside them.
 from __future__ import annotations
 
 from collections import defaultdict
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 

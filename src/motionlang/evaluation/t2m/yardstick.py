@@ -24,13 +24,20 @@ nearest neighbour, standing still, each model's :func:`generated_rows`) and
 """
 from __future__ import annotations
 
-from typing import Callable, Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
 from motionlang.errors import MotionlangError
-from motionlang.evaluation.metrics.t2m import (diversity, fid, mm_dist, multimodality,
-                                               r_precision, repeat, retrieval_metrics)
+from motionlang.evaluation.metrics.t2m import (
+    diversity,
+    fid,
+    mm_dist,
+    multimodality,
+    r_precision,
+    repeat,
+    retrieval_metrics,
+)
 
 Generated = Sequence | Callable[[int], Sequence]
 

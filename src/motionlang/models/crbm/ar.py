@@ -9,9 +9,9 @@ from __future__ import annotations
 
 import dataclasses
 import json
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Sequence
 
 import numpy as np
 
@@ -45,7 +45,7 @@ class ARModel:
     def denormalise(self, x: np.ndarray) -> np.ndarray:
         return np.asarray(x) * self.std + self.mean
 
-    def fit(self, sequences: Sequence[np.ndarray]) -> "ARModel":
+    def fit(self, sequences: Sequence[np.ndarray]) -> ARModel:
         """Least squares on all frames with a full past; sequences (T_i, D) unnormalised."""
         n = self.config.order
         seqs = check_sequences(sequences, self.n_visible, n + 1)
@@ -112,7 +112,7 @@ class ARModel:
                      mean=self.mean, std=self.std)
 
     @classmethod
-    def load(cls, path: str | Path) -> "ARModel":
+    def load(cls, path: str | Path) -> ARModel:
         try:
             with np.load(path, allow_pickle=False) as z:
                 meta = json.loads(str(z["meta"]))

@@ -3,7 +3,7 @@ causal generation, on-line filling of missing values and hidden activations (a m
 the model class)."""
 from __future__ import annotations
 
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 

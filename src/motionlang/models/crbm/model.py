@@ -100,7 +100,7 @@ class CRBM(CRBMTraining, CRBMGeneration):
                      history=np.asarray(self.history, dtype=np.float64), **arrays)
 
     @classmethod
-    def load(cls, path: str | Path) -> "CRBM":
+    def load(cls, path: str | Path) -> CRBM:
         try:
             with np.load(path, allow_pickle=False) as z:
                 meta = json.loads(str(z["meta"]))

@@ -2,7 +2,7 @@
 minibatch reads (shared by the CRBM and the autoregressive baseline)."""
 from __future__ import annotations
 
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import dataclasses
 import json
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Sequence
 
 import numpy as np
 
@@ -32,7 +32,7 @@ class CRBMStack:
 
     @classmethod
     def fit(cls, level1: CRBM, sequences: Sequence[np.ndarray], config2: CRBMConfig,
-            *, show_progress: bool = False) -> "CRBMStack":
+            *, show_progress: bool = False) -> CRBMStack:
         """Train level 2 on a trained ``level1``'s hidden probabilities of ``sequences``."""
         cfg = dataclasses.replace(config2, visible="binary")
         hidden = level1.hidden_activations(sequences)
@@ -81,7 +81,7 @@ class CRBMStack:
             np.savez(tmp1, kind=np.array("crbm_stack"), format=np.array(FORMAT_VERSION), **parts)
 
     @classmethod
-    def load(cls, path: str | Path) -> "CRBMStack":
+    def load(cls, path: str | Path) -> CRBMStack:
         try:
             with np.load(path, allow_pickle=False) as z:
                 if str(z["kind"]) != "crbm_stack":

@@ -3,7 +3,8 @@ minibatch loop with momentum and weight decay (a mixin of the model class)."""
 from __future__ import annotations
 
 import contextlib
-from typing import Sequence
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -11,6 +12,9 @@ from motionlang.errors import MotionlangError
 from motionlang.models.crbm.config import PARAMS
 from motionlang.models.crbm.sequences import check_sequences, chunk_index, gather_past
 from motionlang.utils.progress import progress
+
+if TYPE_CHECKING:
+    from motionlang.models.crbm.model import CRBM
 
 
 def _blas_threads(n: int | None):
@@ -67,7 +71,7 @@ class CRBMTraining:
         return grads, float((dv ** 2).mean())
 
     def fit(self, sequences: Sequence[np.ndarray], *, show_progress: bool = False,
-            epochs: int | None = None, on_epoch=None) -> "CRBM":
+            epochs: int | None = None, on_epoch=None) -> CRBM:
         """Train on a list of (T_i, D) unnormalised sequences (T_i > order each).
 
         The normaliser is fitted here for Gaussian visibles (binary ones are used as is).

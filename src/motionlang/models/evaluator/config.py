@@ -93,7 +93,7 @@ class EvaluatorConfig:
         return self.motion_dim - self.drop_last
 
     @classmethod
-    def official(cls, dataset: str = "humanml3d") -> "EvaluatorConfig":
+    def official(cls, dataset: str = "humanml3d") -> EvaluatorConfig:
         """The public evaluator's sizes for ``"humanml3d"`` (263 values a frame) or
         ``"kit"`` (251), so that its weights load (``model.load_official``)."""
         if dataset not in OFFICIAL_POSE_DIMS:

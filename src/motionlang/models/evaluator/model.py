@@ -18,9 +18,10 @@ public ``finest.tar`` and its ``mean.npy``/``std.npy``.
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import asdict
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any
 
 import numpy as np
 import torch
@@ -28,8 +29,14 @@ import torch.nn.functional as F
 from torch import nn
 
 from motionlang.errors import MotionlangError
-from motionlang.models.checkpoint import (FORMAT_VERSION, check_config_fields, load_checkpoint,
-                                          read_model_dict, unpack_normalizer, write_checkpoint)
+from motionlang.models.checkpoint import (
+    FORMAT_VERSION,
+    check_config_fields,
+    load_checkpoint,
+    read_model_dict,
+    unpack_normalizer,
+    write_checkpoint,
+)
 from motionlang.models.evaluator.config import EvaluatorConfig
 from motionlang.models.evaluator.layers import MotionEncoder, MovementEncoder, TextEncoder
 from motionlang.models.evaluator.text import caption_tokens, glove_50d, text_inputs
@@ -200,7 +207,7 @@ class TextMotionEvaluator(nn.Module):
                 "state_dict": self.state_dict()}
 
     @classmethod
-    def from_checkpoint(cls, d: dict, vectors=None) -> "TextMotionEvaluator":
+    def from_checkpoint(cls, d: dict, vectors=None) -> TextMotionEvaluator:
         norm = unpack_normalizer(d.get("normalizer")) or {}
         model = cls(EvaluatorConfig(**d["config"]), norm.get("mean"), norm.get("std"), vectors)
         model.load_state_dict(d["state_dict"])
@@ -211,7 +218,7 @@ class TextMotionEvaluator(nn.Module):
         write_checkpoint(self.to_checkpoint(), path)
 
     @classmethod
-    def load(cls, path: str | Path, vectors=None) -> "TextMotionEvaluator":
+    def load(cls, path: str | Path, vectors=None) -> TextMotionEvaluator:
         """From :meth:`save` or a trainer checkpoint; in eval mode."""
         d = read_model_dict(path, cls.kind)
         check_config_fields(EvaluatorConfig, d, path, cls.kind)
@@ -223,7 +230,7 @@ class TextMotionEvaluator(nn.Module):
 
     @classmethod
     def load_official(cls, source, mean, std, config: EvaluatorConfig | None = None,
-                      vectors=None) -> "TextMotionEvaluator":
+                      vectors=None) -> TextMotionEvaluator:
         """The public evaluator: ``source`` its ``finest.tar`` (path, read weights-only) or
         the dict in it (``movement_encoder``, ``motion_encoder``, ``text_encoder`` state
         dicts in the names of the public modules); ``mean``/``std`` its ``mean.npy`` /

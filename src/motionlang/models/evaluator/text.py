@@ -16,8 +16,8 @@ The caption becomes ``sos/OTHER w1 .. wn eos/OTHER`` with at most ``max_words`` 
 from __future__ import annotations
 
 import functools
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Sequence
 
 import numpy as np
 

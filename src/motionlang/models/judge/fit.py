@@ -12,9 +12,9 @@ from __future__ import annotations
 
 import copy
 import time
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Callable, Sequence
 
 import numpy as np
 import torch
@@ -45,7 +45,7 @@ class JudgeItem:
 def mirror_item(item: JudgeItem) -> JudgeItem:
     """Left and right swapped: positions reflected (x -> -x) with partner joints exchanged,
     the content label mirrored (``bandai_text.MIRROR_CONTENT``); id prefixed with ``M``."""
-    from motionlang.datasets.bandai_text import MIRROR_CONTENT   # a lower layer
+    from motionlang.datasets.bandai_text import MIRROR_CONTENT  # a lower layer
     return replace(item, id=f"M{item.id}",
                    positions=item.positions[:, list(KIT21_MIRROR)] * np.array([-1.0, 1, 1]),
                    content=MIRROR_CONTENT.get(item.content, item.content))

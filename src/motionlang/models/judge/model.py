@@ -12,9 +12,9 @@ never depends on the features of the model it judges.
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import asdict
 from pathlib import Path
-from typing import Sequence
 
 import numpy as np
 import torch
@@ -24,8 +24,14 @@ from torch.nn import functional as F
 from motionlang.errors import MotionlangError
 from motionlang.features.body21 import uniform_bones21
 from motionlang.features.positions import floor_height, split_global
-from motionlang.models.checkpoint import (FORMAT_VERSION, check_config_fields, pack_normalizer,
-                                          read_model_dict, unpack_normalizer, write_checkpoint)
+from motionlang.models.checkpoint import (
+    FORMAT_VERSION,
+    check_config_fields,
+    pack_normalizer,
+    read_model_dict,
+    unpack_normalizer,
+    write_checkpoint,
+)
 from motionlang.models.judge.config import JudgeConfig
 
 
@@ -150,7 +156,7 @@ class MotionJudge(nn.Module):
                 "state_dict": self.state_dict()}
 
     @classmethod
-    def from_checkpoint(cls, d: dict) -> "MotionJudge":
+    def from_checkpoint(cls, d: dict) -> MotionJudge:
         model = cls(JudgeConfig(**d["config"]), unpack_normalizer(d.get("normalizer")))
         model.load_state_dict(d["state_dict"])
         return model.eval()
@@ -160,7 +166,7 @@ class MotionJudge(nn.Module):
         write_checkpoint(self.to_checkpoint(), path)
 
     @classmethod
-    def load(cls, path: str | Path) -> "MotionJudge":
+    def load(cls, path: str | Path) -> MotionJudge:
         """Rebuild from :meth:`save`'s file; in eval mode."""
         d = read_model_dict(path, cls.kind)
         check_config_fields(JudgeConfig, d, path, cls.kind)

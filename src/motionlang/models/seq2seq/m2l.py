@@ -19,8 +19,8 @@ from torch import nn
 from torch.nn import functional as F
 
 from motionlang.models.checkpoint import Seq2SeqCheckpoint
-from motionlang.models.seq2seq.layers import AdditiveAttention, BiGRUEncoder, StackedDecoder
 from motionlang.models.seq2seq.config import M2LConfig  # noqa: F401 (re-exported)
+from motionlang.models.seq2seq.layers import AdditiveAttention, BiGRUEncoder, StackedDecoder
 
 
 class MotionToLanguage(Seq2SeqCheckpoint, nn.Module):

@@ -32,12 +32,12 @@ class MixtureParams:
     log_sigma: torch.Tensor
     active_logit: torch.Tensor
 
-    def index(self, idx: torch.Tensor) -> "MixtureParams":
+    def index(self, idx: torch.Tensor) -> MixtureParams:
         """Select rows ``idx`` (a LongTensor or boolean mask over N)."""
         return MixtureParams(self.logit_pi[idx], self.mu[idx], self.log_sigma[idx],
                              self.active_logit[idx])
 
-    def flatten(self) -> "MixtureParams":
+    def flatten(self) -> MixtureParams:
         """(B, T, ...) -> (B*T, ...)."""
         K, D = self.mu.shape[-2:]
         return MixtureParams(self.logit_pi.reshape(-1, K), self.mu.reshape(-1, K, D),

@@ -79,7 +79,7 @@ class Planner(nn.Module):
                                   nn.Linear(2 * hidden, parts * 2 * n_features))
 
     @classmethod
-    def for_config(cls, c) -> "Planner":
+    def for_config(cls, c) -> Planner:
         """The planner of an L2M config (``L2MConfig`` with ``plan_parts`` > 0)."""
         return cls(c.vocab_size, c.n_features, c.plan_parts, c.plan_hidden, c.embed_dim,
                    c.pad_id, c.dropout)

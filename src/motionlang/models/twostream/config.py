@@ -138,6 +138,6 @@ class TwoStreamConfig:
         return asdict(self)
 
     @classmethod
-    def from_dict(cls, d: dict[str, Any]) -> "TwoStreamConfig":
+    def from_dict(cls, d: dict[str, Any]) -> TwoStreamConfig:
         known = {f.name for f in fields(cls)}
         return cls(**{k: v for k, v in d.items() if k in known})

@@ -8,7 +8,12 @@ import torch
 import torch.nn.functional as F
 
 from motionlang.models.seq2seq.losses import (  # noqa: F401 (the model's terms, re-exported)
-    energy_loss, foot_contact_loss, frame_mask, masked_smooth_l1, velocity_loss)
+    energy_loss,
+    foot_contact_loss,
+    frame_mask,
+    masked_smooth_l1,
+    velocity_loss,
+)
 
 
 def embedding_loss(a: dict[str, torch.Tensor], b: dict[str, torch.Tensor]) -> torch.Tensor:

@@ -13,9 +13,10 @@ optimiser over all parameters) can therefore train both at once.
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any
 
 import numpy as np
 import torch
@@ -24,9 +25,13 @@ from torch.func import functional_call
 
 from motionlang.errors import MotionlangError
 from motionlang.features.joint_map import TOES
-from motionlang.models.checkpoint import (FORMAT_VERSION, pack_normalizer, read_model_dict,
-                                          unpack_normalizer,
-                                          write_checkpoint)
+from motionlang.models.checkpoint import (
+    FORMAT_VERSION,
+    pack_normalizer,
+    read_model_dict,
+    unpack_normalizer,
+    write_checkpoint,
+)
 from motionlang.models.length import SentenceLength
 from motionlang.models.twostream import losses as L
 from motionlang.models.twostream.config import TwoStreamConfig
@@ -306,7 +311,7 @@ class TwoStreamModel(nn.Module):
                                  else self.length_model.to_dict())}
 
     @classmethod
-    def from_checkpoint(cls, d: dict, text_encoder=None) -> "TwoStreamModel":
+    def from_checkpoint(cls, d: dict, text_encoder=None) -> TwoStreamModel:
         model = cls(TwoStreamConfig.from_dict(d["config"]),
                     unpack_normalizer(d.get("normalizer")), text_encoder)
         model.load_state_dict(d["state_dict"])
@@ -320,6 +325,6 @@ class TwoStreamModel(nn.Module):
         write_checkpoint(self.to_checkpoint(), path)
 
     @classmethod
-    def load(cls, path: str | Path, text_encoder=None) -> "TwoStreamModel":
+    def load(cls, path: str | Path, text_encoder=None) -> TwoStreamModel:
         """Rebuild from :meth:`save` or a trainer checkpoint; in eval mode."""
         return cls.from_checkpoint(read_model_dict(path, cls.kind), text_encoder)
