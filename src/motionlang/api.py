@@ -43,14 +43,28 @@ def load_model(name_or_path: str | Path, kind: str | tuple[str, ...] | None = No
     return _load(name_or_path, kind)
 
 
-def _t2m(model):
-    """A text-to-motion model (loaded, a path, a packaged name or None: the packaged L2M)
-    behind the one interface (``decoding.t2m.TextToMotion``)."""
-    from motionlang.decoding.t2m import text_to_motion
-    from motionlang.models.registry import TEXT_TO_MOTION
+def text_to_motion(model: Any = None, options: Any = None):
+    """A text-to-motion model behind the one interface (``decoding.t2m.TextToMotion``):
+    ``model`` loaded, a packaged name, a checkpoint, a run folder, ``"NAME:key=value,..."``
+    (its sampling options, ``models.options``) or None (the packaged L2M); ``options`` (a
+    dict or the family's ``Options``) are applied after those of the text."""
+    from motionlang.decoding.t2m import text_to_motion as wrap
+    from motionlang.models.options import parse_model_spec
+    from motionlang.models.registry import kinds_with
+    spec_options: dict = {}
     if model is None or isinstance(model, (str, Path)):
-        model = load_model(model or "l2m", kind=TEXT_TO_MOTION)
-    return text_to_motion(model)
+        spec = parse_model_spec(str(model or "l2m"))
+        spec_options = spec.options
+        model = load_model(spec.name, kind=kinds_with("text_to_motion"))
+    t2m = wrap(model)
+    if spec_options or options is not None:
+        merged = options if options is not None and not isinstance(options, dict) \
+            else {**spec_options, **(options or {})}
+        t2m.configure(merged)
+    return t2m
+
+
+_t2m = text_to_motion
 
 
 def read_mapped(path: str | Path, joint_map: dict | str | Path | None = None,
@@ -229,55 +243,28 @@ def encode(x: Motion | str | Path, model: Any = None, *,
            joint_map: dict | str | Path | None = None) -> np.ndarray:
     """A sentence or a motion -> one vector (D,) float32, the model's summary of it.
 
-    A ``str`` that names no file is a sentence: the L2M's text encoder (packaged L2M by
-    default), or a two-stream model's sentence embedding; a Motion or motion file: the M2L's
-    motion encoder (packaged M2L by default), or a two-stream model's pose embedding. A
-    two-stream model puts both in one space (its embeddings are trained to meet); the
-    seq2seq encoders do not, so compare sentences with sentences, motions with motions.
+    A ``str`` that names no file is a sentence, anything else a motion (a Motion or a
+    motion file). ``model``: any model whose family encodes that side
+    (``Family.encodes_text`` / ``encodes_motion``); default the packaged L2M for sentences
+    (its text encoder) and the packaged M2L for motions (its motion encoder). A two-stream
+    model puts both in one space (its embeddings are trained to meet); the seq2seq encoders
+    do not, so compare sentences with sentences, motions with motions.
     """
+    from motionlang.models.family import load_object
+    from motionlang.models.registry import families, kinds_with
     is_text = isinstance(x, str) and not Path(x).is_file()
     side = "text" if is_text else "motion"
-    kinds = tuple(k for s, k in _ENCODERS if s == side)
+    capability = f"encodes_{side}"
+    kinds = kinds_with(capability)
     if model is None or isinstance(model, (str, Path)):
         model = load_model(model or ("l2m" if is_text else "m2l"), kind=kinds)
-    encoder = _ENCODERS.get((side, getattr(model, "kind", None)))
-    if encoder is None:
-        raise MotionlangError(f"a {getattr(model, 'kind', type(model).__name__)} model does "
-                              f"not encode {side}s (models that do: {', '.join(kinds)})")
-    return encoder(model, x if is_text else _motion(x, joint_map))
-
-
-def _twostream_text(model, sentence: str) -> np.ndarray:
-    import torch
-    with torch.no_grad():
-        return model.joint(model.encode_text([sentence]))[0].numpy()
-
-
-def _twostream_motion(model, motion: Motion) -> np.ndarray:
-    import torch
-
-    from motionlang.decoding.t2m import FPS, text_to_motion
-    from motionlang.features.base import downsample
-    from motionlang.features.body21 import body21 as _body21
-    p = _body21(downsample(motion, FPS) if motion.fps > FPS else motion)
-    feats = torch.as_tensor(text_to_motion(model)._features(p), dtype=torch.float32)[None]
-    with torch.no_grad():
-        return model.joint(model.encode_motion(feats))[0].numpy()
-
-
-def _seq2seq_text(model, sentence: str) -> np.ndarray:
-    from motionlang.decoding.seq2seq import embed_sentence
-    return embed_sentence(model, sentence)
-
-
-def _seq2seq_motion(model, motion: Motion) -> np.ndarray:
-    from motionlang.decoding.seq2seq import embed_motion
-    return embed_motion(model, motion)
-
-
-#: (what is encoded, model kind) -> how; the first kind of each side is the default's
-_ENCODERS = {("text", "l2m"): _seq2seq_text, ("text", "twostream"): _twostream_text,
-             ("motion", "m2l"): _seq2seq_motion, ("motion", "twostream"): _twostream_motion}
+    kind = getattr(model, "kind", None)
+    fam = families().get(kind) if isinstance(kind, str) else None
+    spec = None if fam is None else getattr(fam, capability)
+    if spec is None:
+        raise MotionlangError(f"a {kind or type(model).__name__} model does not encode "
+                              f"{side}s (models that do: {', '.join(kinds)})")
+    return load_object(spec)(model, x if is_text else _motion(x, joint_map))
 
 
 def fill_in(frames: np.ndarray, known: np.ndarray, model: Any, *, n_gibbs: int = 30,

@@ -1,25 +1,116 @@
-"""Every text-to-motion model behind one interface: the seq2seq L2M (Plappert et al. 2018)
-and the two-stream model (Ghosh et al. 2021).
+"""Every text-to-motion model behind one kind-neutral interface.
 
-:class:`TextToMotion` is what a caller needs from such a model: its output frame rate, how
-it decodes unless told, whether it draws anything (a deterministic model has no likelihood
-and no temperature), whether it takes a start pose, hypotheses for a sentence, and global
-21-joint positions at 12.5 Hz for the comparison table. :func:`text_to_motion` wraps a loaded
-model (``models.registry.load_model``) in the implementation for its kind; no caller asks a
-model its kind. The shorthands :func:`generate_any`, :func:`default_method`,
-:func:`output_fps` and :func:`generate_positions21` call through it.
+:class:`TextToMotion` (a ``typing.Protocol``) is what a caller needs from such a model: its
+output frame rate, whether it draws anything (a deterministic model has no likelihood and
+no temperature), its sampling options (a small dataclass per family, ``Options``, given on
+the command line as ``--model NAME:key=value,...``: ``models.options``), ``sample`` (global
+21-joint positions for sentences and lengths), the words it cannot read, and optional
+capabilities (:data:`CAPABILITIES`). :func:`text_to_motion` wraps a loaded model
+(``models.registry.load_model``) as its family's registry entry says
+(``Family.text_to_motion``); no caller asks a model its kind. A new family either
+implements the protocol on its model class (entry ``"self"``) or names an adapter.
+
+:class:`Text2MotionAdapter` is the shared base of the two adapters here, the seq2seq L2M
+(Plappert et al. 2018) and the two-stream model (Ghosh et al. 2021). The shorthands
+:func:`generate_any`, :func:`default_method`, :func:`output_fps` and
+:func:`generate_positions21` call through it.
 """
 from __future__ import annotations
 
-from typing import Any
+import math
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass, field
+from typing import Any, ClassVar, Protocol, runtime_checkable
 
 import numpy as np
 import torch
 
 from motionlang.errors import MotionlangError
+from motionlang.features.positions import PositionsConfig
 
-#: frame rate of the comparison (the positions features' rate)
-FPS = 12.5
+#: frame rate of the comparison: the positions features' rate
+FPS = PositionsConfig.fps
+
+#: optional capabilities a text-to-motion model may have: "start_pose" (``hypotheses`` and
+#: ``positions21`` take ``first_frame``, a frame of its own features), "positions_start"
+#: (:meth:`start_from21`), "reconstruct" (:meth:`reconstruct21`), "hypotheses" (several
+#: ranked results for one sentence)
+CAPABILITIES = ("start_pose", "positions_start", "reconstruct", "hypotheses")
+
+
+@runtime_checkable
+class TextToMotion(Protocol):
+    """The kind-neutral text-to-motion contract.
+
+    Attributes:
+        model: the wrapped model (eval mode).
+        options: its sampling options (an instance of its family's ``Options``).
+        fps: frame rate of :meth:`sample`'s and ``hypotheses``' results (Hz).
+        deterministic: one result per sentence, no likelihood, no temperature.
+        capabilities: the subset of :data:`CAPABILITIES` it supports.
+    """
+
+    model: Any
+    options: Any
+    deterministic: bool
+    capabilities: frozenset[str]
+
+    @property
+    def fps(self) -> float: ...
+
+    def sample(self, texts: Sequence[str], lengths: Sequence[int | None], *,
+               seed: int = 0) -> list[np.ndarray]:
+        """Global 21-joint positions (T, 21, 3) metres at 12.5 Hz for each sentence, of the
+        given length in frames (None: the length the model plans)."""
+        ...
+
+    def unknown_words(self, sentence: str) -> list[str]: ...
+
+    def frames_for(self, sentence: str) -> int | None: ...
+
+
+@dataclass
+class L2MOptions:
+    """How an L2M samples (``--model l2m:method=sample,width=5``).
+
+    Attributes:
+        method: "sample" (ancestral), "beam" (the paper's sampled beam) or "mean" (the
+            mixture's expected frames); None: the model's own way for ``generate``, "mean"
+            for evaluation rows.
+        width: samples (or beam width) per sentence; the likeliest is kept (or, with
+            ``rerank``, the one that M2L finds the sentence likeliest for).
+        temperature: sharpen the mixture when sampling (1: as trained).
+        rerank: an M2L (packaged name, file or run folder) ranking the ``width`` motions.
+        length_norm: rank hypotheses by log likelihood per frame.
+    """
+
+    method: str | None = field(default=None, metadata={"choices": ("sample", "beam", "mean")})
+    width: int = 1
+    temperature: float = 1.0
+    rerank: str | None = None
+    length_norm: bool = False
+
+    def __post_init__(self) -> None:
+        if self.method not in (None, "sample", "beam", "mean"):
+            raise ValueError(f"method must be sample, beam or mean, got {self.method!r}")
+        if isinstance(self.width, bool) or not 1 <= int(self.width) <= 1000:
+            raise ValueError(f"width must be an integer in 1..1000, got {self.width}")
+        if not (math.isfinite(self.temperature) and self.temperature > 0):
+            raise ValueError(f"temperature must be a finite number > 0, got {self.temperature}")
+        if self.method == "mean" and self.width != 1:
+            raise ValueError("width applies to 'sample' and 'beam'; mean decoding gives one "
+                             "motion")
+        if self.method == "mean" and self.temperature != 1.0:
+            raise ValueError("temperature applies to 'sample' and 'beam'; mean decoding "
+                             "draws nothing")
+        if self.rerank and (self.method in (None, "mean") or self.width < 2):
+            raise ValueError("rerank ranks several motions: method=sample or beam with "
+                             "width 2 or more")
+
+
+@dataclass
+class NoOptions:
+    """A model that samples one way (the two-stream model: deterministic)."""
 
 
 def _check_words(sentence: str) -> None:
@@ -28,25 +119,71 @@ def _check_words(sentence: str) -> None:
         raise MotionlangError(f"text {sentence!r} has no words to generate a motion from")
 
 
-class TextToMotion:
-    """A text-to-motion model seen through the one interface callers use.
+def _check_words(sentence: str) -> None:
+    from motionlang.datasets.text import tokenize
+    if not tokenize(sentence):
+        raise MotionlangError(f"text {sentence!r} has no words to generate a motion from")
 
-    Attributes:
-        model: the wrapped model (eval mode).
-        fps: frame rate of :meth:`hypotheses`' results (Hz).
-        deterministic: one result per sentence, no likelihood, no temperature.
-        takes_start_pose: :meth:`hypotheses` accepts ``first_frame``.
+
+class Text2MotionAdapter:
+    """The shared base of the adapters that put a model behind :class:`TextToMotion`.
+
+    A subclass sets ``Options`` (its sampling options dataclass), ``capabilities`` and
+    ``deterministic``, and implements ``fps``, ``default_method``, ``_hypotheses`` and
+    ``_positions21``.
     """
 
+    Options: ClassVar[type] = NoOptions
     deterministic = False
-    takes_start_pose = False
-    #: decodes a motion from its own embedding (:meth:`reconstruct21`)
-    autoencodes = False
-    #: generates from a sentence and a given first pose in positions (:meth:`start_from21`)
-    starts_from_positions = False
+    capabilities: frozenset[str] = frozenset()
 
-    def __init__(self, model):
+    def __init__(self, model, options: Any = None):
         self.model = model
+        self.options = self.Options()
+        self._reranker = None
+        if options is not None:
+            self.configure(options)
+
+    def configure(self, options: Any) -> Text2MotionAdapter:
+        """Set the sampling options: an ``Options`` instance or a dict of values (text
+        from ``--model NAME:key=value`` or Python values), checked once here."""
+        from motionlang.models.options import build_options
+        if not isinstance(options, self.Options):
+            where = f"model {getattr(self.model, 'kind', type(self.model).__name__)}"
+            options = build_options(self.Options, options, where)
+        self.options = options
+        self._reranker = None
+        return self
+
+    def describe_options(self) -> dict[str, Any]:
+        """The options that differ from the defaults (for reports and row names)."""
+        default = asdict(self.Options())
+        return {k: v for k, v in asdict(self.options).items() if default.get(k) != v}
+
+    # capabilities as flags, for the callers that branch on one
+    @property
+    def takes_start_pose(self) -> bool:
+        return "start_pose" in self.capabilities
+
+    @property
+    def autoencodes(self) -> bool:
+        return "reconstruct" in self.capabilities
+
+    @property
+    def starts_from_positions(self) -> bool:
+        return "positions_start" in self.capabilities
+
+    def sample(self, texts: Sequence[str], lengths: Sequence[int | None], *,
+               seed: int = 0) -> list[np.ndarray]:
+        """:meth:`positions21` of each sentence with its options; a length of None is the
+        one the model plans (10 s without a length model); sentence i draws with
+        ``seed + i``."""
+        out = []
+        for i, (text, n) in enumerate(zip(texts, lengths, strict=True)):
+            planned = self.frames_for(text) if n is None else n
+            n = int(n if n is not None else round((planned or 125) * FPS / self.fps))
+            out.append(self.positions21(text, max(2, n), seed=seed + i))
+        return out
 
     @property
     def fps(self) -> float:
@@ -111,11 +248,32 @@ class TextToMotion:
         raise MotionlangError(f"a {self.model.kind} model takes no start pose in positions")
 
 
-class L2MText2Motion(TextToMotion):
+class L2MText2Motion(Text2MotionAdapter):
     """The seq2seq L2M: decodes by sampling, a sampled beam or component means
     (``decoding.seq2seq.generate``); starts from a given pose if asked."""
 
-    takes_start_pose = True
+    Options = L2MOptions
+    capabilities = frozenset({"start_pose", "hypotheses"})
+
+    @property
+    def reranker(self):
+        """The M2L of ``options.rerank``, loaded once and checked against the L2M's
+        features; None without one."""
+        if self.options.rerank and self._reranker is None:
+            from motionlang.decoding.rerank import check_same_features
+            from motionlang.models.registry import load_model
+            self._reranker = load_model(self.options.rerank, kind="m2l")
+            check_same_features(self.model, self._reranker, f"rerank={self.options.rerank}")
+        return self._reranker
+
+    def _option_kw(self, kw: dict, method_default: str) -> dict:
+        o = self.options
+        kw.setdefault("method", o.method or method_default)
+        if kw["method"] != "mean":
+            kw.setdefault("width", o.width)
+        if self.reranker is not None:
+            kw.setdefault("reranker", self.reranker)
+        return kw
 
     @property
     def fps(self) -> float:
@@ -137,15 +295,24 @@ class L2MText2Motion(TextToMotion):
                     ) -> list[tuple[Any, float]]:
         from motionlang.decoding.seq2seq import generate
         _check_words(sentence)
-        kw.setdefault("method", self.default_method())
+        self._option_kw(kw, self.default_method())
+        if self.options.temperature != 1.0:
+            kw.setdefault("temperature", self.options.temperature)
+        if self.options.length_norm:
+            kw.setdefault("length_norm", True)
         if self.model.config.progress_input:   # told its length: max_frames is the length
             return generate(self.model, sentence, n_frames=max_frames, **kw)
         return generate(self.model, sentence, max_frames=max_frames, **kw)
 
+    def positions21(self, sentence: str, n_frames: int, *, foot_lock: bool = False, **kw
+                    ) -> np.ndarray:
+        return super().positions21(sentence, n_frames, foot_lock=foot_lock,
+                                   **self._option_kw(kw, "mean"))
+
     @torch.no_grad()
     def _positions21(self, sentence: str, n_frames: int, *, seed: int = 0,
                      method: str = "mean", skeleton=None, width: int = 1, reranker=None,
-                     first_frame: np.ndarray | None = None) -> np.ndarray:
+                     first_frame: np.ndarray | None = None, **_) -> np.ndarray:
         from motionlang.decoding.seq2seq import generate
         from motionlang.features.base import downsample
         from motionlang.features.joint_map import positions21
@@ -169,13 +336,12 @@ class L2MText2Motion(TextToMotion):
         return fit_length(anchor(p), n_frames)
 
 
-class TwoStreamText2Motion(TextToMotion):
+class TwoStreamText2Motion(Text2MotionAdapter):
     """The two-stream model: deterministic, 12.5 Hz, the length its length model plans
     (or the one given); its start pose is given to ``model.generate(start=...)``."""
 
     deterministic = True
-    autoencodes = True
-    starts_from_positions = True
+    capabilities = frozenset({"reconstruct", "positions_start"})
 
     @property
     def fps(self) -> float:
@@ -217,27 +383,47 @@ class TwoStreamText2Motion(TextToMotion):
         return self.model.generate_positions(sentence, n_frames)
 
 
-#: a model's ``kind`` -> its implementation of the interface
-IMPLEMENTATIONS: dict[str, type[TextToMotion]] = {
-    "l2m": L2MText2Motion,
-    "twostream": TwoStreamText2Motion,
-}
+def twostream_text_vector(model, sentence: str) -> np.ndarray:
+    """A sentence -> the two-stream model's joint-space embedding (D,) float32."""
+    with torch.no_grad():
+        return model.joint(model.encode_text([sentence]))[0].numpy()
 
 
-def text_to_motion(model) -> TextToMotion:
-    """A loaded text-to-motion model (or an already wrapped one) behind the interface.
+def twostream_motion_vector(model, motion) -> np.ndarray:
+    """A Motion -> the two-stream model's joint-space pose embedding (D,) float32."""
+    from motionlang.features.base import downsample
+    from motionlang.features.body21 import body21
+    p = body21(downsample(motion, FPS) if motion.fps > FPS else motion)
+    feats = torch.as_tensor(TwoStreamText2Motion(model)._features(p),
+                            dtype=torch.float32)[None]
+    with torch.no_grad():
+        return model.joint(model.encode_motion(feats))[0].numpy()
+
+
+def text_to_motion(model, options: Any = None) -> Any:
+    """A loaded text-to-motion model (or an already wrapped one) behind the interface, as
+    its family's registry entry says; ``options``: its sampling options (an ``Options``
+    instance or a dict, e.g. ``ModelSpec.options``), checked here.
 
     Raises:
-        MotionlangError: a model that does not turn text into motion (an M2L, a CRBM).
+        MotionlangError: a model that does not turn text into motion (an M2L, a CRBM), or
+            options it does not take.
     """
-    if isinstance(model, TextToMotion):
+    from motionlang.models.family import load_object
+    from motionlang.models.registry import families, kinds_with
+    if isinstance(model, Text2MotionAdapter):
+        return model if options is None else model.configure(options)
+    kind = getattr(model, "kind", None)
+    fam = families().get(kind) if isinstance(kind, str) else None
+    if fam is None or fam.text_to_motion is None:
+        raise MotionlangError(f"a {kind or type(model).__name__} model does not generate "
+                              f"motion from text (text-to-motion kinds: "
+                              f"{', '.join(kinds_with('text_to_motion'))})")
+    if fam.text_to_motion == "self":
+        if options is not None:
+            model.configure(options)
         return model
-    impl = IMPLEMENTATIONS.get(getattr(model, "kind", None))
-    if impl is None:
-        raise MotionlangError(f"a {getattr(model, 'kind', type(model).__name__)} model does "
-                              f"not generate motion from text (text-to-motion kinds: "
-                              f"{', '.join(IMPLEMENTATIONS)})")
-    return impl(model)
+    return load_object(fam.text_to_motion)(model, options)
 
 
 def default_method(model) -> str:

@@ -1,7 +1,10 @@
 """Every model kind and every packaged model, in one place.
 
-* :data:`KINDS` — a checkpoint's ``kind`` -> the class that reads it (imported on first use,
-  so that asking for a CRBM never loads torch).
+* :func:`families` — every model family, one :class:`~motionlang.models.family.Family`
+  entry per checkpoint kind (model class, config, recipe, capabilities, run-file name),
+  read from the family folders listed in :data:`FAMILY_MODULES`; every other table
+  (``KINDS``, ``TEXT_TO_MOTION``, the ``train`` commands, the encoders) derives from it.
+  Classes are imported on first use, so that asking for a CRBM never loads torch.
 * :data:`PACKAGED` — the models shipped inside the package, by name, with their model cards
   (``data/models/NAME.md``: data, licence, recipe, measured figures).
 * :func:`load_model` — a packaged name, a checkpoint file or a training run folder -> the
@@ -13,6 +16,7 @@ without building anything.
 """
 from __future__ import annotations
 
+import functools
 import importlib
 import json
 from dataclasses import dataclass
@@ -20,22 +24,66 @@ from pathlib import Path
 from typing import Any
 
 from motionlang.errors import MotionlangError
+from motionlang.models.family import Family, load_object
 
 PACKAGE_DIR = Path(__file__).resolve().parents[1] / "data" / "models"
 
-#: kind -> "module:Class"; each class has ``kind``, ``load(path)`` and ``save(path)``
-KINDS: dict[str, str] = {
-    "m2l": "motionlang.models.seq2seq.m2l:MotionToLanguage",
-    "l2m": "motionlang.models.seq2seq.l2m:LanguageToMotion",
-    "twostream": "motionlang.models.twostream.model:TwoStreamModel",
-    "crbm": "motionlang.models.crbm.model:CRBM",
-    "crbm_stack": "motionlang.models.crbm.stack:CRBMStack",
-    "ar": "motionlang.models.crbm.ar:ARModel",
-    "evaluator": "motionlang.models.evaluator.model:TextMotionEvaluator",
-    "judge": "motionlang.models.judge.model:MotionJudge",
-}
-#: the kinds that turn text into motion (``decoding.t2m.TextToMotion``)
-TEXT_TO_MOTION = ("l2m", "twostream")
+#: One module per model family folder, each defining ``FAMILIES``: a tuple of
+#: :class:`~motionlang.models.family.Family` entries (one per checkpoint kind). This list is
+#: the only place outside a family's folder that names it (``docs/contributing.md``).
+FAMILY_MODULES: tuple[str, ...] = (
+    "motionlang.models.seq2seq.family",     # m2l, l2m (Plappert et al. 2018)
+    "motionlang.models.twostream.family",   # twostream (Ghosh et al. 2021)
+    "motionlang.models.crbm.family",        # crbm, crbm_stack, ar (Taylor et al. 2006)
+    "motionlang.models.evaluator.family",   # evaluator (Guo et al. 2022 protocol)
+    "motionlang.models.judge.family",       # judge (action and style of real motion)
+)
+
+
+@functools.cache
+def families() -> dict[str, Family]:
+    """Every model family by checkpoint kind, in :data:`FAMILY_MODULES` order.
+
+    Raises:
+        MotionlangError: a listed module that does not import, or two entries of one kind
+            (a broken family is an error, never silently skipped).
+    """
+    out: dict[str, Family] = {}
+    for name in FAMILY_MODULES:
+        try:
+            module = importlib.import_module(name)
+        except ImportError as exc:
+            raise MotionlangError(f"model family {name} does not import: {exc}") from exc
+        for fam in getattr(module, "FAMILIES", ()):
+            if fam.kind in out:
+                raise MotionlangError(f"model kind {fam.kind!r} is defined twice ({name})")
+            out[fam.kind] = fam
+    return out
+
+
+def family(kind: str) -> Family:
+    """The family entry of a checkpoint kind."""
+    fams = families()
+    if kind not in fams:
+        raise MotionlangError(f"unknown model kind {kind!r} (known: {', '.join(fams)})")
+    return fams[kind]
+
+
+def kinds_with(capability: str) -> tuple[str, ...]:
+    """The kinds that have ``capability`` (a :class:`Family` attribute: "text_to_motion",
+    "describes", "encodes_text", "encodes_motion", "recipe")."""
+    return tuple(k for k, f in families().items() if getattr(f, capability))
+
+
+def __getattr__(name: str) -> Any:
+    # derived tables, read from the family entries on first use
+    if name == "KINDS":
+        return {k: f.model for k, f in families().items()}
+    if name == "TEXT_TO_MOTION":
+        return kinds_with("text_to_motion")
+    raise AttributeError(name)
+
+
 #: file names a training run folder keeps its model under, in order of preference
 RUN_MODEL_FILES = ("model.pt", "model.npz", "best.pt")
 
@@ -90,10 +138,7 @@ PACKAGED: dict[str, Packaged] = {
 
 def model_class(kind: str) -> type:
     """The class that reads checkpoints of ``kind``."""
-    if kind not in KINDS:
-        raise MotionlangError(f"unknown model kind {kind!r} (known: {', '.join(KINDS)})")
-    module, name = KINDS[kind].split(":")
-    return getattr(importlib.import_module(module), name)
+    return load_object(family(kind).model)
 
 
 def resolve(name_or_path: str | Path) -> Path:
@@ -160,7 +205,7 @@ def load_model(name_or_path: str | Path, kind: str | tuple[str, ...] | None = No
     wanted = (kind,) if isinstance(kind, str) else kind
     if wanted and found not in wanted:
         raise MotionlangError(f"{path}: a model of kind {found}, not {' or '.join(wanted)}")
-    if found not in KINDS:
+    if found not in families():
         raise MotionlangError(f"{path}: unknown model kind {found!r}")
     return model_class(found).load(path, **kw)
 

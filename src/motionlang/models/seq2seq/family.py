@@ -1,0 +1,16 @@
+"""The seq2seq family's entries in the model registry: the M2L and the L2M."""
+from motionlang.models.family import Family
+
+FAMILIES = (
+    Family(kind="m2l", model="motionlang.models.seq2seq.m2l:MotionToLanguage",
+           summary="motion-to-language model (Plappert et al. 2018)",
+           config="motionlang.models.seq2seq.config:M2LConfig",
+           recipe="motionlang.training.recipes.seq2seq:train_m2l",
+           describes=True, encodes_motion="motionlang.decoding.seq2seq:embed_motion"),
+    Family(kind="l2m", model="motionlang.models.seq2seq.l2m:LanguageToMotion",
+           summary="language-to-motion model (Plappert et al. 2018)",
+           config="motionlang.models.seq2seq.config:L2MConfig",
+           recipe="motionlang.training.recipes.seq2seq:train_l2m",
+           text_to_motion="motionlang.decoding.t2m:L2MText2Motion",
+           encodes_text="motionlang.decoding.seq2seq:embed_sentence"),
+)
