@@ -58,17 +58,19 @@ def private_cache(tmp_path, monkeypatch):
 
 
 def test_parse_source_and_weights():
-    assert parse_source("corpus") == DataSource("corpus")
-    assert parse_source("bandai:/x/y@0.5") == DataSource("bandai:/x/y", 0.5)
-    assert parse_source("/data/me@home") == DataSource("/data/me@home")   # not a number
+    assert parse_source("corpus") == DataSource("custom", "corpus")   # no such folder
+    assert parse_source("bandai:/x/y@0.5") == DataSource("bandai", "/x/y", 0.5)
+    assert parse_source("/data/me@home") == DataSource("custom", "/data/me@home")  # not a number
     assert str(parse_source("a@2")) == "a@2"
     for bad in ("a@0", "a@-1", "a@nan", "a@inf", "@1"):
         with pytest.raises(MotionlangError):
             parse_source(bad)
-    assert source_weights([DataSource("a"), DataSource("b")]) is None
-    assert source_weights([DataSource("a", 1), DataSource("b", 3)]) == [1.0, 3.0]
+    a, b = DataSource("custom", "a"), DataSource("custom", "b")
+    assert source_weights([a, b]) is None
+    assert source_weights([DataSource("custom", "a", 1), DataSource("custom", "b", 3)]
+                          ) == [1.0, 3.0]
     with pytest.raises(MotionlangError, match="every dataset or to none; b has none"):
-        source_weights([DataSource("a", 1), DataSource("b")])
+        source_weights([DataSource("custom", "a", 1), b])
 
 
 def test_mix_items_shares_deterministic():

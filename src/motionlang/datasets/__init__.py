@@ -1,5 +1,8 @@
 """motionlang.datasets — motion-language datasets and text.
 
+* ``sources``: ``--data`` values as ``DataSource`` objects (kind, root, weight, licence), the
+  registry of kinds (``KINDS``: prefix, loader, licence), ``load``, the ``Record`` protocol
+  and the licence of what is trained on them (``licence_of``, ``non_commercial``)
 * ``text``: ``normalize``, ``tokenize``, ``Vocabulary`` (PAD/SOS/EOS/UNK = 0..3)
 * ``kitml``: KIT Motion-Language release: ``download_kitml``, ``load_kitml``, ``KitMLRecord``,
   ``load_annotations_tmr``; splits (``random_split``, ``load_split``) from ``splits``

@@ -13,7 +13,7 @@ of the two ``.tar.xz`` archives (extracted once into the cache, outside the sour
 or one dataset folder; :func:`load_bandai` lists the takes with their labels and split;
 :func:`load_bandai_text` adds English sentences for the labels (``bandai_text``) and,
 optionally, mirrored copies: records as the other datasets' (``id``, ``annotations``,
-``load_motion``), which ``seq2seq_pairs.load_records("bandai:PATH")`` returns.
+``load_motion``), which ``sources.load("bandai:PATH")`` returns.
 Splits are deterministic: in dataset 2, takes numbered 0 mod 5 are test, 4 mod 5
 validation, the rest training; dataset 1 (one take per label) is all training.
 """
@@ -26,10 +26,10 @@ from pathlib import Path
 
 from motionlang.datasets.cache import cache_dir
 from motionlang.datasets.download import safe_extract_tar, sha256_file
+from motionlang.datasets.sources import KINDS
 from motionlang.errors import DatasetError
 
-LICENSE = ("Bandai Namco Research Motion Dataset, CC BY-NC 4.0: non-commercial use only, "
-           "with attribution to Bandai Namco Research Inc.")
+LICENSE = KINDS["bandai"].notice   # the attribution line, kept with the source registry
 ARCHIVE = re.compile(r"^(Bandai-Namco-Research-Motiondataset-\d+)\.tar(\.xz|\.gz|\.bz2)?$")
 TAKE = re.compile(r"^dataset-(\d+)_(.+)_(\d+)$")
 

@@ -37,7 +37,7 @@ from motionlang.utils.limits import check, check_file, check_motion
 
 VECS, JOINTS, TEXTS = "new_joint_vecs", "new_joints", "texts"
 SPLITS = ("train", "val", "test")
-PREFIXES = {"humanml3d:": "smpl", "kitml-h3d:": "kit"}
+PREFIXES = {"humanml3d:": "smpl", "kitml-h3d:": "kit"}   # as in sources.KINDS: for hints
 #: joint positions farther than this from the origin (metres) are refused as corrupt
 MAX_METRES = 1e6
 
@@ -305,11 +305,3 @@ def load_h3d(root: str | Path, body: str = "smpl", *, mirrored: bool = False,
                    (_npy(r.path, header_only=True) or (0,))[0] / spec.fps <= max_seconds]
     return records
 
-
-def load_prefixed(data: str | Path, max_seconds: float | None = None) -> list[H3DRecord] | None:
-    """``humanml3d:DIR`` / ``kitml-h3d:DIR`` -> :func:`load_h3d`; anything else -> None."""
-    text = str(data)
-    for prefix, body in PREFIXES.items():
-        if text.startswith(prefix):
-            return load_h3d(text[len(prefix):], body, max_seconds=max_seconds)
-    return None

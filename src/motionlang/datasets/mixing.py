@@ -1,4 +1,5 @@
-"""Training on several datasets at once: ``--data PATH[@WEIGHT]`` given more than once.
+"""Training on several datasets at once: ``--data PATH[@WEIGHT]`` given more than once
+(each value a ``sources.DataSource``).
 
 Each dataset keeps its own split (a procedural corpus its random split by seed, Bandai its
 take numbers), so a mixed run's test motions are those each dataset alone would test on.
@@ -9,49 +10,13 @@ datasets dominate.
 """
 from __future__ import annotations
 
-import math
-from collections.abc import Sequence
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 
+# the ``--data`` value as an object, importable here too for the callers of before
+from motionlang.datasets.sources import DataSource, parse_source  # noqa: F401
 from motionlang.errors import DatasetError, MotionlangError
-
-
-@dataclass(frozen=True)
-class DataSource:
-    """One ``--data`` value: a dataset (folder or ``prefix:FOLDER``) and its sampling weight
-    (None: not given)."""
-
-    path: str
-    weight: float | None = None
-
-    def __str__(self) -> str:
-        return self.path if self.weight is None else f"{self.path}@{self.weight:g}"
-
-
-def parse_source(text: str) -> DataSource:
-    """``"PATH"`` or ``"PATH@WEIGHT"`` (a positive number after the last ``@``; a path whose
-    last ``@`` is not followed by a number is taken whole).
-
-    Raises:
-        MotionlangError: an empty path, or a weight that is not positive and finite.
-    """
-    head, at, tail = str(text).rpartition("@")
-    weight = None
-    if at:
-        try:
-            weight = float(tail)
-        except ValueError:
-            head = str(text)
-        else:
-            if not (math.isfinite(weight) and weight > 0):
-                raise MotionlangError(f"{text}: the weight after '@' must be a positive number")
-    else:
-        head = str(text)
-    if not head:
-        raise MotionlangError(f"{text!r}: no dataset before the weight")
-    return DataSource(head, weight)
 
 
 def source_weights(sources: Sequence[DataSource]) -> list[float] | None:
@@ -67,10 +32,10 @@ def source_weights(sources: Sequence[DataSource]) -> list[float] | None:
         bare = ", ".join(s.path for s, g in zip(sources, given) if not g)
         raise MotionlangError(f"--data: give a weight (PATH@W) to every dataset or to none; "
                               f"{bare} has none")
-    return [float(s.weight) for s in sources]
+    return [float(s.weight) for s in sources if s.weight is not None]
 
 
-def check_distinct_ids(ids_by_source: dict[str, Sequence[str]]) -> None:
+def check_distinct_ids(ids_by_source: Mapping[str, Sequence[str]]) -> None:
     """Record ids must not repeat across datasets (the split files list ids only).
 
     Raises:

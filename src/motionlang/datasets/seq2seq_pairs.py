@@ -23,9 +23,8 @@ from typing import Any
 import numpy as np
 
 from motionlang.datasets.cache import cached, file_identity
-from motionlang.datasets.custom import load_custom
-from motionlang.datasets.kitml import find_kitml_root, load_kitml
 from motionlang.datasets.mixing import check_distinct_ids
+from motionlang.datasets.sources import DataSource, Record, load
 from motionlang.datasets.splits import random_split
 from motionlang.datasets.text import Vocabulary
 from motionlang.errors import DatasetError, MotionlangError
@@ -35,29 +34,16 @@ from motionlang.kinematics.from_positions import mirror_motion
 from motionlang.utils.progress import progress
 
 CACHE_VERSION = "seq2seq-pairs-1"
-BANDAI_PREFIX = "bandai:"
 log = logging.getLogger(__name__)
 
 
-def load_records(data: str | Path, max_seconds: float | None = 30.0,
-                 joint_map: str | Path | dict | None = None) -> list:
-    """KIT-ML-format records if ``data`` holds ``*_mmm.xml`` files, else a custom dataset
-    (whose rig maps onto the 21-joint body by ``joint_map``, see ``load_custom``);
-    ``humanml3d:DIR`` / ``kitml-h3d:DIR``: a HumanML3D-layout folder (``load_h3d``);
-    ``bandai:DIR``: the Bandai Namco datasets' takes with sentences written from their labels
-    and their own split (``load_bandai_text``; non-commercial licence)."""
-    if str(data).startswith(BANDAI_PREFIX):
-        from motionlang.datasets.bandai import load_bandai_text
-        return load_bandai_text(str(data)[len(BANDAI_PREFIX):], max_seconds=max_seconds)
-    from motionlang.datasets.humanml3d import load_prefixed
-    h3d = load_prefixed(data, max_seconds)
-    if h3d is not None:
-        return h3d
-    try:
-        find_kitml_root(data)
-    except DatasetError:
-        return load_custom(data, joint_map=joint_map)
-    return load_kitml(data, max_seconds=max_seconds)
+def load_records(data: str | Path | DataSource, max_seconds: float | None = 30.0,
+                 joint_map: str | Path | dict | None = None) -> list[Record]:
+    """The records of one source (``sources.load``; text is parsed by
+    ``sources.parse_source``): a KIT-ML-format folder, a custom folder (whose rig maps onto
+    the 21-joint body by ``joint_map``, see ``load_custom``), ``humanml3d:DIR`` /
+    ``kitml-h3d:DIR`` or ``bandai:DIR`` (non-commercial licence)."""
+    return load(data, max_seconds=max_seconds, joint_map=joint_map)
 
 
 def record_splits(records: Sequence, fractions: Sequence[float] = (0.8, 0.1, 0.1),
@@ -68,12 +54,13 @@ def record_splits(records: Sequence, fractions: Sequence[float] = (0.8, 0.1, 0.1
     if records and all(s in ("train", "val", "test") for s in own):
         out: dict[str, list[str]] = {"train": [], "val": [], "test": []}
         for r, s in zip(records, own):
-            out[s].append(r.id)
+            out[str(s)].append(r.id)
         return {k: sorted(v) for k, v in out.items()}
     return random_split([r.id for r in records], fractions, seed=seed)
 
 
-def load_sources(data: str | Path | Sequence[str | Path], max_seconds: float | None = 30.0,
+def load_sources(data: str | Path | DataSource | Sequence[str | Path | DataSource],
+                 max_seconds: float | None = 30.0,
                  joint_map: str | Path | dict | None = None,
                  fractions: Sequence[float] = (0.8, 0.1, 0.1), seed: int = 0
                  ) -> tuple[list, dict[str, list[str]], dict[str, int]]:
@@ -84,7 +71,7 @@ def load_sources(data: str | Path | Sequence[str | Path], max_seconds: float | N
         DatasetError: fewer than 2 described motions (one dataset) or none (one of several);
             an id in two datasets.
     """
-    sources = [data] if isinstance(data, (str, Path)) else list(data)
+    sources = [data] if isinstance(data, (str, Path, DataSource)) else list(data)
     records: list = []
     splits: dict[str, list[str]] = {}
     source_of: dict[str, int] = {}
@@ -206,7 +193,7 @@ def _encode(fs: FeatureSet, records: Sequence, offsets: int, mirror: bool = Fals
     return seqs
 
 
-def build_pairs(data: str | Path | Sequence[str | Path], *, features: str = "angles",
+def build_pairs(data: str | Path | DataSource | Sequence[str | Path | DataSource], *, features: str = "angles",
                 offsets: int = 10,
                 fractions: Sequence[float] = (0.8, 0.1, 0.1), seed: int = 0,
                 min_count: int = 1, max_seconds: float | None = 30.0,
