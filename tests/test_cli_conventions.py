@@ -154,19 +154,27 @@ def test_only_rank_0_prints_under_torchrun(tiny_motion, tmp_path, monkeypatch, c
 
 
 def test_every_train_out_is_a_run_folder():
-    from motionlang.cli.train_commands import MODEL_FILES
+    from motionlang.models.registry import families, family
     parser = build_parser()
     trains = [leaf for leaf in leaf_parsers(parser) if leaf.prog.startswith("motionlang train ")]
-    assert {leaf.prog.split()[-1] for leaf in trains} == set(MODEL_FILES)
+    kinds = {leaf.prog.split()[-1] for leaf in trains}
+    assert kinds <= set(families()) and {"m2l", "l2m", "twostream", "crbm"} <= kinds
     for leaf in trains:
         out = leaf._option_string_actions["--out"]
         model = leaf.prog.split()[-1]
         assert out.metavar == "DIR" and out.default == f"runs/{model}", leaf.prog
-        assert "run folder" in out.help and MODEL_FILES[model] in out.help
+        assert "run folder" in out.help and family(model).model_file in out.help
 
 
 def test_run_folder_names_match_the_registry():
     # what train writes is what every model-reading command picks from a folder
-    from motionlang.cli.train_commands import MODEL_FILES
-    from motionlang.models.registry import RUN_MODEL_FILES
-    assert set(MODEL_FILES.values()) <= set(RUN_MODEL_FILES)
+    from motionlang.models.registry import RUN_MODEL_FILES, families
+    assert {f.model_file for f in families().values()} <= set(RUN_MODEL_FILES)
+
+
+def test_every_family_with_a_recipe_is_a_train_command():
+    from motionlang.models.registry import kinds_with
+    parser = build_parser()
+    trains = {leaf.prog.split()[-1] for leaf in leaf_parsers(parser)
+              if leaf.prog.startswith("motionlang train ")}
+    assert set(kinds_with("recipe")) <= trains

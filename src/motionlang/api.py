@@ -292,6 +292,18 @@ def fill_in(frames: np.ndarray, known: np.ndarray, model: Any, *, n_gibbs: int =
     return model.fill_in(frames, known, n_gibbs=n_gibbs, seed=seed)[0]   # one sample
 
 
+def train(kind: str, data: str | Path | list, out: str | Path, *, resume: bool = False,
+          **options: Any) -> Path:
+    """Train a ``kind`` model (``"m2l"``, ``"l2m"``, any family with a recipe) on ``data``
+    (a ``--data`` value such as ``"corpus"`` or ``"bandai:DIR@1"``, or a list of them) into
+    the run folder ``out``, as ``motionlang train KIND``; ``options`` are the fields of the
+    model's config, the trainer's (``epochs``, ``lr``, ...) and the recipe's data options
+    (``features``, ``offsets``, ...). Returns the trained model's path (``out/model.pt``).
+    """
+    from motionlang.training.recipes import train as run_recipe
+    return run_recipe(kind, data, out, resume=resume, **options)
+
+
 __all__ = ["read_motion", "write_motion", "read_mapped", "load_model", "describe",
            "generate", "encode", "fill_in", "body21", "retarget", "render", "body_motion",
-           "load_rig", "first_frame", "check_map"]
+           "load_rig", "first_frame", "check_map", "train", "text_to_motion"]

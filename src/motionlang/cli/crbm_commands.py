@@ -26,9 +26,9 @@ from motionlang.cli.options import (
     seed_int,
     size_int,
 )
-from motionlang.cli.run_log import log_command
-from motionlang.cli.train_commands import MODEL_FILES, add_out_arg
+from motionlang.cli.train_commands import add_out_arg, model_file
 from motionlang.errors import MotionlangError
+from motionlang.training.run_log import log_command
 
 #: the two-level model of ``train crbm --level2``, beside the run folder's model.npz
 STACK_FILE = "stack.npz"
@@ -131,8 +131,8 @@ def cmd_train(args: argparse.Namespace) -> int:
     seqs = [model_frames(c) for c in data.train]
     log_command(out / "commands.jsonl", args)
     model = CRBM(config, 59).fit(seqs, show_progress=not args.quiet)
-    model.save(out / MODEL_FILES["crbm"])
-    print(f"{out / MODEL_FILES['crbm']}: {model.describe()}")
+    model.save(out / model_file("crbm"))
+    print(f"{out / model_file('crbm')}: {model.describe()}")
     if args.level2:
         from motionlang.models.crbm.stack import CRBMStack
         # level 2's visibles are hidden probabilities in [0, 1]: level 1's noise (normalised

@@ -20,9 +20,9 @@ import sys
 
 from motionlang import __version__
 from motionlang.cli.options import threads_int
-from motionlang.cli.run_log import lead_process
 from motionlang.cli.threads import MAX_DEFAULT, default_threads, limit_threads
 from motionlang.errors import MotionlangError
+from motionlang.training.run_log import lead_process
 
 # Modules that register subcommands; one line each, order = order in --help.
 COMMAND_MODULES = [

@@ -1,100 +1,137 @@
-"""``motionlang train MODEL ...``: one ``train`` parser that model modules plug into.
+"""``motionlang train KIND ...``: one parser per trainable model family.
 
-A module that trains a model adds one line to ``TRAIN_MODULES`` and defines
-``register_train(train_subparsers)``, which adds its ``train X`` parser (with ``func=``).
-Modules not written yet are skipped, as in ``cli/main.py``.
+A family with a recipe (``Family.recipe``, ``training.recipes``) gets its ``train KIND``
+parser generated here from its configs: the recipe's data options, the trainer's
+(``TrainConfig``, with the recipe's defaults) and the model's (its config dataclass), each
+documented field an option (``cli.config_options``). A new family needs nothing in this
+folder. The families whose training still lives in a command module register their parser
+through :data:`LEGACY_TRAIN_MODULES`; a listed module that fails to import is an error.
 
 Every ``train X`` takes ``--out DIR``, a run folder (made if missing) holding the final
-model under :data:`MODEL_FILES` ``[X]`` plus ``commands.jsonl`` (every invocation's
-options); the gradient-trained models also keep ``last.pt`` / ``best.pt`` (resumable
-checkpoints), ``history.json``, ``loss_curve.png`` and ``splits/`` there. Every command that
-reads a model takes the model file or its run folder.
+model (``Family.model_file``) plus ``commands.jsonl`` (every invocation's options); the
+gradient-trained models also keep ``last.pt`` / ``best.pt`` (resumable checkpoints),
+``history.json``, ``loss_curve.png`` and ``splits/`` there. Every command that reads a model
+takes the model file or its run folder.
 """
 from __future__ import annotations
 
 import argparse
 import importlib
 
-from motionlang.cli.options import (
-    nonneg_float,
-    nonneg_int,
-    output_dir,
-    positive_float,
-    positive_int,
-    seed_int,
-)
+from motionlang.cli.config_options import add_config_options, config_from_args, option_message
+from motionlang.cli.options import output_dir
+from motionlang.errors import MotionlangError
 
-TRAIN_MODULES = [
+#: command modules that still define ``register_train(train_subparsers)`` themselves
+LEGACY_TRAIN_MODULES = (
     "motionlang.cli.crbm_commands",       # train crbm
-    "motionlang.cli.seq2seq_commands",    # train m2l | l2m
     "motionlang.cli.twostream_commands",  # train twostream
     "motionlang.cli.evaluator_commands",  # train evaluator
     "motionlang.cli.judge_commands",      # train judge
-]
-#: the final model's file name inside a run folder, per ``train`` command
-MODEL_FILES = {"m2l": "model.pt", "l2m": "model.pt", "twostream": "model.pt",
-               "crbm": "model.npz", "evaluator": "model.pt", "judge": "model.pt"}
+)
+
+
+def model_file(kind: str) -> str:
+    from motionlang.models.registry import family
+    return family(kind).model_file
 
 
 def add_out_arg(p: argparse.ArgumentParser, model: str, extra: str = "") -> None:
     """``--out DIR``, the run folder of ``train MODEL`` (default ``runs/MODEL``)."""
     p.add_argument("--out", default=f"runs/{model}", metavar="DIR", type=output_dir,
-                   help=f"run folder, made if missing: the model ({MODEL_FILES[model]}), "
+                   help=f"run folder, made if missing: the model ({model_file(model)}), "
                         f"{extra}commands.jsonl (every invocation's options); other commands "
                         "take the folder for its model")
 
 
 def add_trainer_args(p: argparse.ArgumentParser, **defaults) -> None:
-    """The options of the shared trainer (:class:`~motionlang.training.config.TrainConfig`),
-    its defaults unless a model's recipe overrides them (``defaults``); ``--resume``."""
+    """The options of the shared trainer (``TrainConfig``), with a recipe's ``defaults``;
+    ``--resume``."""
     from motionlang.training.config import TrainConfig  # torch-free
-    d = {**{f: getattr(TrainConfig, f) for f in
-            ("epochs", "batch_size", "lr", "grad_clip", "seed", "checkpoint_every",
-             "decay_epochs", "decay_to")}, **defaults}
-    p.add_argument("--epochs", type=positive_int, default=d["epochs"],
-                   help="passes over the training set")
-    p.add_argument("--batch-size", type=positive_int, default=d["batch_size"],
-                   help="sequences per optimiser step (all processes together under torchrun)")
-    p.add_argument("--lr", type=positive_float, default=d["lr"], help="learning rate")
-    p.add_argument("--decay-epochs", type=nonneg_float, default=d["decay_epochs"], metavar="N",
-                   help="lower the learning rate along a half cosine over the last N epochs "
-                        "(also when resuming a run trained at a constant rate; 0: constant)")
-    p.add_argument("--decay-to", type=nonneg_float, default=d["decay_to"], metavar="F",
-                   help="the rate at the last step, as a fraction of --lr")
-    p.add_argument("--grad-clip", type=nonneg_float, default=d["grad_clip"], metavar="NORM",
-                   help="clip the gradient's global L2 norm to NORM (default: "
-                        + (f"{d['grad_clip']:g})" if d["grad_clip"] else "no clipping)"))
-    p.add_argument("--seed", type=seed_int, default=d["seed"],
-                   help="seed of the split, the initial weights and the batch order")
-    p.add_argument("--checkpoint-every", type=nonneg_int, default=d["checkpoint_every"],
-                   metavar="STEPS", help="also write last.pt every STEPS optimiser steps "
-                                         "(0: at the end of each epoch only)")
+    add_config_options(p, TrainConfig, defaults=defaults)
     p.add_argument("--resume", action="store_true",
                    help="continue the run in --out from its last.pt")
 
 
 def train_config(args: argparse.Namespace, out_dir, **fields):
-    """The :class:`TrainConfig` of :func:`add_trainer_args`' options, checked by the config
+    """The ``TrainConfig`` of :func:`add_trainer_args`' options, checked by the config
     itself (build it before the data preparation, so that a bad value fails at once)."""
     from motionlang.training.config import TrainConfig
-    return TrainConfig(epochs=args.epochs, batch_size=args.batch_size, lr=args.lr,
-                       grad_clip=args.grad_clip, seed=args.seed, out_dir=str(out_dir),
-                       checkpoint_every=args.checkpoint_every, decay_epochs=args.decay_epochs,
-                       decay_to=args.decay_to, **fields)
+    return config_from_args(TrainConfig, args, out_dir=str(out_dir), **fields)
+
+
+def data_source(text: str):
+    """argparse type of ``--data``: ``[PREFIX:]DIR[@WEIGHT]`` (``datasets.sources``)."""
+    from motionlang.datasets.sources import parse_source
+    try:
+        return parse_source(text)
+    except MotionlangError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def add_data_arg(p: argparse.ArgumentParser, several: bool = True) -> None:
+    """``--data``: one source, or several (repeatable, ``@W`` weights)."""
+    from motionlang.datasets.sources import data_help
+    p.add_argument("--data", required=True, action="append" if several else "store",
+                   type=data_source, metavar="DIR[@W]" if several else "DIR",
+                   help=data_help(weights=several) + (
+                       " Repeat it to train on several datasets at once (one vocabulary and "
+                       "one feature set, each dataset's own split); weight every dataset or "
+                       "none (none: every pair once)." if several else ""))
+
+
+def _register_recipe(train_sub, kind: str) -> None:
+    from motionlang.models.registry import family
+    from motionlang.training.recipes import recipe_of
+    fam, recipe = family(kind), recipe_of(kind)
+    p = train_sub.add_parser(kind, help=f"train the {fam.summary}",
+                             description=f"Train the {fam.summary}.")
+    add_data_arg(p, recipe.several_sources)
+    add_out_arg(p, kind, "best.pt and last.pt (checkpoints), history.json, loss_curve.png, "
+                         "splits/, ")
+    add_config_options(p, recipe.data_config)
+    add_trainer_args(p, **recipe.train_defaults)
+    model_cls = fam.config_class()
+    if model_cls is not None:
+        add_config_options(p, model_cls, defaults=recipe.model_defaults)
+    p.set_defaults(func=cmd_train, model_kind=kind)
+
+
+def cmd_train(args: argparse.Namespace) -> int:
+    """``train KIND`` of a family with a recipe: the three configs from the options, then
+    the recipe."""
+    from pathlib import Path
+
+    from motionlang.cli.config_options import option_fields
+    from motionlang.models.registry import family
+    from motionlang.training.config import TrainConfig
+    from motionlang.training.recipes import recipe_of
+    kind = args.model_kind
+    recipe, model_cls = recipe_of(kind), family(kind).config_class()
+    train_cfg = train_config(args, args.out)
+    data_cfg = config_from_args(recipe.data_config, args)
+    model_cfg = {} if model_cls is None else {
+        f.name: getattr(args, f.name) for f in option_fields(model_cls)}
+    sources = args.data if isinstance(args.data, list) else [args.data]
+    try:
+        recipe.run(sources, Path(args.out), model_cfg, train_cfg, data_cfg,
+                   resume=args.resume, options=vars(args))
+    except MotionlangError as exc:   # a config's field names -> the options
+        message = str(exc)
+        for cls in filter(None, (model_cls, TrainConfig, recipe.data_config)):
+            message = option_message(cls, message)
+        raise MotionlangError(message) from None
+    return 0
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
+    from motionlang.models.registry import families
     parser = subparsers.add_parser("train", help="train a model",
                                    description="Train a model; see 'motionlang train MODEL -h'.")
     train_sub = parser.add_subparsers(dest="model", metavar="MODEL")
     parser.set_defaults(func=lambda args: (parser.print_help(), 1)[1])
-    for name in TRAIN_MODULES:
-        try:
-            module = importlib.import_module(name)
-        except ModuleNotFoundError as exc:
-            if exc.name == name:
-                continue
-            raise
-        hook = getattr(module, "register_train", None)
-        if hook is not None:
-            hook(train_sub)
+    for kind, fam in families().items():
+        if fam.recipe is not None:
+            _register_recipe(train_sub, kind)
+    for name in LEGACY_TRAIN_MODULES:
+        importlib.import_module(name).register_train(train_sub)

@@ -2,7 +2,7 @@
 options from these defaults, and a bad value fails here, once, before any data is read."""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from motionlang.errors import MotionlangError
 from motionlang.training.schedule import check_schedule
@@ -10,6 +10,8 @@ from motionlang.utils.checks import check_numbers
 
 #: optimisers by name (``trainer.OPTIMIZERS`` maps them to the torch classes)
 OPTIMIZER_NAMES = ("nadam", "adam", "adamw", "sgd")
+#: numpy's seeds are 32-bit
+SEED_MAX = 2**32 - 1
 
 
 @dataclass
@@ -29,26 +31,43 @@ class TrainConfig:
     so ``lr`` and the decay given to a resumed run win over the checkpoint's optimiser state.
     """
 
-    epochs: int = 10
-    batch_size: int = 128
-    lr: float = 1e-3
+    epochs: int = field(default=10, metadata={"help": "passes over the training set"})
+    batch_size: int = field(default=128, metadata={
+        "help": "sequences per optimiser step (all processes together under torchrun)"})
+    lr: float = field(default=1e-3, metadata={"help": "learning rate"})
     optimizer: str = "nadam"
     weight_decay: float = 0.0
-    grad_clip: float | None = None
-    seed: int = 0
+    grad_clip: float | None = field(default=None, metadata={
+        "metavar": "NORM", "help": "clip the gradient's global L2 norm to NORM (none: no "
+                                   "clipping)"})
+    seed: int = field(default=0, metadata={
+        "help": "seed of the split, the initial weights and the batch order"})
     out_dir: str = "runs/train"
-    checkpoint_every: int = 0
+    checkpoint_every: int = field(default=0, metadata={
+        "metavar": "STEPS", "help": "also write last.pt every STEPS optimiser steps (0: at "
+                                    "the end of each epoch only)"})
     plot: bool = True
     progress: bool | None = None
     length_buckets: int = 0
-    decay_epochs: float = 0.0
-    decay_to: float = 0.01
+    decay_epochs: float = field(default=0.0, metadata={
+        "metavar": "N", "help": "lower the learning rate along a half cosine over the last N "
+                                "epochs (also when resuming a run trained at a constant "
+                                "rate; 0: constant)"})
+    decay_to: float = field(default=0.01, metadata={
+        "metavar": "F", "help": "the rate at the last step, as a fraction of --lr"})
 
     def __post_init__(self):
         check_numbers("TrainConfig", self, positive_ints=("epochs", "batch_size"),
                       nonneg_ints=("checkpoint_every", "length_buckets"),
                       positive=("lr",), nonneg=("weight_decay", "grad_clip"))
-        check_schedule(self.decay_epochs, self.decay_to, self.epochs)
+        if isinstance(self.seed, bool) or not isinstance(self.seed, int) \
+                or not 0 <= self.seed <= SEED_MAX:
+            raise MotionlangError(f"TrainConfig.seed must be an integer in 0..{SEED_MAX}, got "
+                                  f"{self.seed!r}")
+        try:
+            check_schedule(self.decay_epochs, self.decay_to, self.epochs)
+        except MotionlangError as exc:   # named as the other fields are
+            raise MotionlangError(f"TrainConfig.{exc}") from None
         if self.optimizer not in OPTIMIZER_NAMES:
             raise MotionlangError(f"unknown optimizer {self.optimizer!r}; "
                                   f"choose from {list(OPTIMIZER_NAMES)}")

@@ -5,10 +5,22 @@ can read the default sizes for ``--help`` without importing torch (2-10 s per ca
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from motionlang.errors import MotionlangError
 from motionlang.utils.checks import check_numbers
+
+
+def _opt(default, help_: str, **meta):
+    """A field that is also a ``train`` option (``cli.config_options``)."""
+    return field(default=default, metadata={"help": help_, **meta})
+
+
+#: the help of the size options both models share
+_SIZES = {"enc_hidden": "encoder LSTM units", "enc_layers": "encoder LSTM layers",
+          "dec_hidden": "decoder LSTM units", "dec_layers": "decoder LSTM layers",
+          "embed_dim": "word embedding size", "dropout": "dropout between LSTM layers",
+          "attention": "additive attention variant"}
 
 
 @dataclass
@@ -21,13 +33,13 @@ class M2LConfig:
 
     n_features: int
     vocab_size: int
-    enc_hidden: int = 64
-    enc_layers: int = 2
-    dec_hidden: int = 128
-    dec_layers: int = 2
-    embed_dim: int = 64
-    dropout: float = 0.4
-    attention: bool = False
+    enc_hidden: int = _opt(64, _SIZES["enc_hidden"])
+    enc_layers: int = _opt(2, _SIZES["enc_layers"])
+    dec_hidden: int = _opt(128, _SIZES["dec_hidden"])
+    dec_layers: int = _opt(2, _SIZES["dec_layers"])
+    embed_dim: int = _opt(64, _SIZES["embed_dim"])
+    dropout: float = _opt(0.4, _SIZES["dropout"])
+    attention: bool = _opt(False, _SIZES["attention"])
     attn_dim: int = 64
     pad_id: int = 0
     sos_id: int = 1
@@ -49,74 +61,87 @@ class L2MConfig:
 
     vocab_size: int
     n_features: int
-    embed_dim: int = 64
-    enc_hidden: int = 64
-    enc_layers: int = 2
-    dec_hidden: int = 400
-    dec_layers: int = 3
-    n_components: int = 20
-    dropout: float = 0.1
-    attention: bool = False
+    embed_dim: int = _opt(64, _SIZES["embed_dim"])
+    enc_hidden: int = _opt(64, _SIZES["enc_hidden"])
+    enc_layers: int = _opt(2, _SIZES["enc_layers"])
+    dec_hidden: int = _opt(400, _SIZES["dec_hidden"])
+    dec_layers: int = _opt(3, _SIZES["dec_layers"])
+    n_components: int = _opt(20, "Gaussian components of the output mixture per frame",
+                             flag="--components")
+    dropout: float = _opt(0.1, _SIZES["dropout"])
+    attention: bool = _opt(False, _SIZES["attention"])
     attn_dim: int = 64
-    loss: str = "surrogate"     # or "exact"
-    end_weight: float = 1.0     # BCE weight of a motion's last frame (1 = the paper's loss)
-    input_noise: float = 0.0    # std of noise on the teacher-forced previous frames (0 = paper)
-    time_input: bool = False    # decoder also sees the elapsed time (frames / 100) (not in paper)
-    # decoder also sees the fraction of the motion done, t / (T - 1), for a length T that is
-    # the true one in training and planned from the sentence in generation (not in paper)
-    progress_input: bool = False
-    rollout: float = 0.0        # scheduled sampling: P(feed own sampled frame) while training
-    rollout_warmup: int = 0     # optimiser steps over which that probability ramps up from 0
-    # what "its own frame" is: a draw from the mixture ("sample") or its expected frame
-    # sum_k pi_k mu_k ("mean"; such a model generates with mean decoding of that frame)
-    rollout_input: str = "sample"
+    loss: str = _opt("surrogate", "mixture NLL: the paper's surrogate or the exact one",
+                     choices=("surrogate", "exact"))
+    end_weight: float = _opt(1.0, "BCE weight of each motion's last (stop) frame (paper: 1)")
+    input_noise: float = _opt(0.0, "std of noise on teacher-forced previous frames (paper: 0)")
+    time_input: bool = _opt(False, "decoder also sees the elapsed time, frames / 100 (not "
+                                   "in the paper)")
+    # the length T is the true one in training and planned from the sentence in generation
+    progress_input: bool = _opt(False, "decoder also sees the fraction of the motion done, "
+                                       "t / (T - 1); generation plans the length from the "
+                                       "sentence (not in the paper)")
+    rollout: float = _opt(0.0, "scheduled sampling: while training, feed the model's own "
+                               "sampled frame instead of the true one with probability P "
+                               "(paper: 0)", metavar="P")
+    rollout_warmup: int = _opt(0, "optimiser steps over which that probability ramps up "
+                                  "from 0", metavar="STEPS")
+    # a model fed its expected frames generates with mean decoding of that frame
+    rollout_input: str = _opt("sample", "own frame fed back: a draw from the mixture, or its "
+                                        "expected frame sum_k pi_k mu_k (then generate with "
+                                        "method mean)", choices=("sample", "mean"))
     # per-feature weights of the frame NLL (length n_features; None = all 1, the paper's):
-    # e.g. the root's ground velocity made to count more (train l2m --root-weight)
+    # set by the recipe from --root-weight
     loss_weights: list[float] | None = None
     # per-feature factors on the previous frames the decoder reads (length n_features; None =
-    # all 1, the paper's): 0 hides a feature from the input but still predicts it, e.g. the
-    # root's ground velocity and heading change (train l2m --hide-root-input), so that the
-    # way the body goes cannot be copied from the frame before and must come from the
-    # sentence and the body's own movement
+    # all 1, the paper's): 0 hides a feature from the input but still predicts it, so that
+    # the way the body goes cannot be copied from the frame before and must come from the
+    # sentence and the body's own movement (the recipe's --hide-root-input)
     input_mask: list[float] | None = None
-    # weight of a term on the local speeds of the expected frames (sum_k pi_k mu_k) against
-    # the reference's (``sequence_losses.energy_loss``, window ``energy_window`` frames, ~1 s
-    # at 10 Hz); 0 = off (the paper's loss). Beyond the paper, as for the two-stream model.
-    energy_weight: float = 0.0
+    # beyond the paper, as for the two-stream model: ``losses.energy_loss``
+    energy_weight: float = _opt(0.0, "weight of a loss on the local speeds of the expected "
+                                     "frames against the reference's, over windows of "
+                                     "energy_window frames (paper: 0)", flag="--energy",
+                                metavar="W")
     energy_window: int = 11
-    # a coarse plan fed to every decoder step (``models.seq2seq.plan``; 0 = off, the paper's): per
-    # part of ``plan_parts`` of the motion's duration, each feature's mean and mean absolute
-    # change. Training feeds the true motion's plan (plus Gaussian noise of std
-    # ``plan_noise``) and fits a planner (its own sentence encoder, ``plan_hidden`` units
-    # per direction) to it (MSE, weight ``plan_weight``); generation feeds the planner's
-    # plan. Needs ``progress_input``.
-    plan_parts: int = 0
+    # the plan (``models.seq2seq.plan``): per part of ``plan_parts`` of the motion's
+    # duration, each feature's mean and mean absolute change; training feeds the true plan
+    # plus noise and fits a planner (its own sentence encoder, ``plan_hidden`` units per
+    # direction) to it; generation feeds the planner's plan
+    plan_parts: int = _opt(0, "feed every decoder step a coarse plan of the motion (per part "
+                              "of K of its duration: mean features and mean change), the "
+                              "true one in training, one predicted from the sentence when "
+                              "generating; needs --progress-input (0: off, the paper's)",
+                           metavar="K")
     plan_hidden: int = 128
     # per feature, 1 = its mean is in the plan, 0 = not (only its change); None = all
     plan_mean_mask: list[float] | None = None
-    plan_weight: float = 1.0
-    plan_noise: float = 0.0
-    # weight of a term on the expected frames' toe speed (m/s) over the frame steps where a
-    # toe is down, the reference's or their own (foot_down; ``losses.foot_contact_loss``;
-    # position features only); 0 = off (the paper's loss). Beyond the paper: planted feet.
-    foot_weight: float = 0.0
-    # which step of a toe that term measures: between consecutive expected frames
-    # ("expected"), or from the frame fed to the decoder to the expected frame it gives
-    # ("input"). Generation continues from expected frames only for rollout_input "mean"
-    # models; the others write the heaviest component's mean (``mdn.mode_frame``)
-    foot_step: str = "expected"
-    # whose toe says it is down for that term: the reference's, or the expected frames' own
-    # (below 5 cm and slower than 1 m/s in them), for a model fed its own frames, whose steps
-    # drift out of step with the reference's
-    foot_down: str = "reference"
-    # weight of a squared error of the expected frames (sum_k pi_k mu_k) against the
-    # reference, summed over the normalised features, mean over frames; 0 = off (the paper's
-    # loss). Beyond the paper: the surrogate NLL moves a component's mean by pi_k (x -
-    # mu_k) / sigma_k^2, so where a broad component has taken a feature (sigma of 3-5 std on
-    # the raised arm of a procedural wave) its mean stays at rest and mean decoding never
+    plan_weight: float = _opt(1.0, "weight of the plan head's mean squared error", metavar="W")
+    plan_noise: float = _opt(0.0, "std of Gaussian noise on the true plan fed while training",
+                             metavar="STD")
+    # beyond the paper, planted feet: ``losses.foot_contact_loss``
+    foot_weight: float = _opt(0.0, "weight of a loss on the expected frames' toe speed (m/s) "
+                                   "where the toe is down (below 5 cm, slower than 1 m/s): "
+                                   "planted feet that do not slide; positions features only "
+                                   "(paper: 0)", flag="--foot-contact", metavar="W")
+    # generation continues from expected frames only for rollout_input "mean" models; the
+    # others write the heaviest component's mean (``mdn.mode_frame``)
+    foot_step: str = _opt("expected", "the toe step --foot-contact measures: between "
+                                      "consecutive expected frames, or from the frame fed "
+                                      "to the decoder to the expected frame it gives (the "
+                                      "step generation takes)", choices=("expected", "input"))
+    # "own": for a model fed its own frames, whose steps drift out of step with the
+    # reference's
+    foot_down: str = _opt("reference", "whose toe says a foot is down for --foot-contact: "
+                                       "the reference's, or the expected frames' own",
+                          choices=("reference", "own"))
+    # the surrogate NLL moves a component's mean by pi_k (x - mu_k) / sigma_k^2, so where a
+    # broad component has taken a feature its mean stays at rest and mean decoding never
     # starts the gesture; this term's gradient does not shrink with sigma. Every feature
     # counts alike here, whatever loss_weights gives the NLL
-    mean_weight: float = 0.0
+    mean_weight: float = _opt(0.0, "weight of a squared error of the expected frames against "
+                                   "the reference (normalised features): what method mean "
+                                   "writes (paper: 0)", flag="--mean-frames", metavar="W")
     pad_id: int = 0
     max_frames: int = 300       # decoding cap (frames)
 
@@ -135,7 +160,13 @@ class L2MConfig:
         if self.foot_down not in ("reference", "own"):
             raise MotionlangError(f"L2MConfig.foot_down must be 'reference' or 'own', not "
                                   f"{self.foot_down!r}")
+        if self.plan_parts and not self.progress_input:
+            raise MotionlangError("L2MConfig.plan_parts needs L2MConfig.progress_input")
         if self.foot_down == "own" and self.foot_step == "input":
-            raise MotionlangError("L2MConfig.foot_down 'own' measures consecutive expected "
-                                  "frames: it needs foot_step 'expected'")
+            raise MotionlangError("L2MConfig.foot_down own measures consecutive expected "
+                                  "frames: it cannot be used with L2MConfig.foot_step input")
+        for name, default in (("foot_step", "expected"), ("foot_down", "reference")):
+            if getattr(self, name) != default and not self.foot_weight > 0:
+                raise MotionlangError(f"L2MConfig.{name} says how L2MConfig.foot_weight "
+                                      f"measures: give L2MConfig.foot_weight > 0 with it")
 

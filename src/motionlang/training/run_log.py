@@ -1,4 +1,5 @@
-"""The options of every training invocation, kept beside the run's checkpoints."""
+"""The options of every training invocation and the licence note, kept beside the run's
+checkpoints (torch-free: the command line reads it at start-up)."""
 from __future__ import annotations
 
 import argparse
@@ -12,7 +13,7 @@ def lead_process() -> bool:
     return os.environ.get("RANK", "0") == "0"
 
 
-def log_command(path: Path, args: argparse.Namespace) -> None:
+def log_command(path: Path, args: argparse.Namespace | dict) -> None:
     """Append this invocation's options to ``path`` (one JSON line per invocation, resumes
     included): data options (offsets, --balance, --max-frames, ...) are not in the
     checkpoint, and a resumed run may differ from its start. Under torchrun only rank 0
@@ -20,7 +21,8 @@ def log_command(path: Path, args: argparse.Namespace) -> None:
     from motionlang.utils.atomic import atomic_write
     if not lead_process():
         return
-    opts = {k: v for k, v in vars(args).items() if not callable(v)}
+    items = args.items() if isinstance(args, dict) else vars(args).items()
+    opts = {k: v for k, v in items if not callable(v)}
     old = path.read_text() if path.exists() else ""
     with atomic_write(path) as fh:
         fh.write(old + json.dumps(opts, sort_keys=True, default=str) + "\n")

@@ -1,0 +1,93 @@
+"""Training recipes: data -> model -> trainer -> best checkpoint, one per trainable family.
+
+A :class:`Recipe` is what ``Family.recipe`` names: the function that trains, the dataclass
+of its data options, and the trainer defaults it starts from. ``motionlang train KIND`` and
+:func:`train` (``ml.train``) are both built on it, so the command line holds no training
+logic. Importing this package does not import torch.
+"""
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from motionlang.errors import MotionlangError
+
+
+@dataclass(frozen=True)
+class Recipe:
+    """A family's way to train.
+
+    Attributes:
+        run: ``run(sources, out_dir, model_cfg, train_cfg, data_cfg, *, resume)`` -> the
+            trained model's path. ``sources``: ``datasets.sources.DataSource`` list;
+            ``model_cfg``: the model config's user fields (a dict; the recipe adds what the
+            data decides, e.g. vocabulary and feature sizes); ``train_cfg``: a
+            ``training.config.TrainConfig``; ``data_cfg``: an instance of ``data_config``.
+        data_config: the dataclass of the recipe's data options (fields with ``help``
+            metadata are command-line options).
+        train_defaults: the recipe's own defaults for ``TrainConfig`` fields.
+        model_defaults: the recipe's own defaults for model config fields.
+        several_sources: the recipe reads several ``--data`` (mixed, weighted).
+    """
+
+    run: Callable[..., Path]
+    data_config: type
+    train_defaults: dict[str, Any] = field(default_factory=dict)
+    model_defaults: dict[str, Any] = field(default_factory=dict)
+    several_sources: bool = True
+
+
+def recipe_of(kind: str) -> Recipe:
+    """The recipe of a trainable kind (``Family.recipe``)."""
+    from motionlang.models.family import load_object
+    from motionlang.models.registry import family, kinds_with
+    fam = family(kind)
+    if fam.recipe is None:
+        raise MotionlangError(f"no training recipe for {kind} models (trainable: "
+                              f"{', '.join(kinds_with('recipe'))})")
+    return load_object(fam.recipe)
+
+
+def split_options(kind: str, options: dict[str, Any]) -> tuple[dict, dict, dict]:
+    """Keyword options -> (model config, trainer config, data config) values, by field.
+
+    Raises:
+        MotionlangError: a key that none of the three configs has.
+    """
+    from motionlang.models.registry import family
+    from motionlang.training.config import TrainConfig
+    recipe = recipe_of(kind)
+    model_cls = family(kind).config_class()
+    names = [set() if c is None else {f.name for f in dataclasses.fields(c)}
+             for c in (model_cls, TrainConfig, recipe.data_config)]
+    parts: tuple[dict, dict, dict] = ({}, {}, {})
+    for key, value in options.items():
+        where = next((i for i, n in enumerate(names) if key in n), None)
+        if where is None:
+            known = sorted(set().union(*names))
+            raise MotionlangError(f"train {kind}: unknown option {key!r} (known: "
+                                  f"{', '.join(known)})")
+        parts[where][key] = value
+    return parts
+
+
+def train(kind: str, data: str | Sequence[str], out: str | Path, *, resume: bool = False,
+          **options: Any) -> Path:
+    """Train a ``kind`` model on ``data`` (one ``--data`` value or several, e.g.
+    ``"corpus@1"``, ``"bandai:DIR@1"``) into the run folder ``out``; ``options`` are fields
+    of the model's config, of ``TrainConfig`` or of the recipe's data options, as the
+    command line's ``train KIND`` options (``enc_hidden=32``, ``epochs=2``,
+    ``features="positions"``). Returns the trained model's path."""
+    from motionlang.datasets.sources import parse_source
+    from motionlang.training.config import TrainConfig
+    recipe = recipe_of(kind)
+    model_kw, train_kw, data_kw = split_options(kind, options)
+    sources = [parse_source(str(d)) for d in ([data] if isinstance(data, (str, Path))
+                                              else data)]
+    train_cfg = TrainConfig(**{**recipe.train_defaults, **train_kw, "out_dir": str(out)})
+    data_cfg = recipe.data_config(**data_kw)
+    return recipe.run(sources, Path(out), {**recipe.model_defaults, **model_kw}, train_cfg,
+                      data_cfg, resume=resume)
