@@ -1,5 +1,5 @@
 """Fuzz every reader: N inputs per format (MMM, ASF, AMC, BVH, MIT, H3D), each read in a
-child process under a memory cap and a time limit (``motionlang.evaluation.fuzzing``), and count
+child process under a memory cap and a time limit (``benchmarks/fuzzing/``), and count
 what became of them.
 
 Inputs: random edits of seeds (hand-made files and real ones from ../shared/data cut to a
@@ -26,9 +26,8 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import DATA  # noqa: E402
-
-from motionlang.evaluation.fuzzing import FORMATS, Sandbox, crafted, mutate, seeds  # noqa: E402
-from motionlang.evaluation.fuzzing.sandbox import EXTENSIONS, KINDS  # noqa: E402
+from fuzzing import FORMATS, Sandbox, crafted, mutate, seeds  # noqa: E402
+from fuzzing.sandbox import EXTENSIONS, KINDS  # noqa: E402
 
 BAD = ("crash", "hang", "uncaught", "invalid")
 

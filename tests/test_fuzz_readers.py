@@ -1,5 +1,5 @@
 """Fuzzing every reader, each input read in a child process under a memory cap (RLIMIT_AS)
-and a time limit (``motionlang.evaluation.fuzzing``): the only acceptable outcomes are a
+and a time limit (``benchmarks/fuzzing/``): the only acceptable outcomes are a
 ``MotionlangError`` whose message is one line naming the file, or a valid Motion (finite
 arrays, consistent shapes, finite joint positions); never a crash, a hang, an uncaught
 exception.
@@ -18,15 +18,18 @@ from __future__ import annotations
 import io
 import os
 import signal
+import sys
 
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from helpers.data import SHARED
-from motionlang.evaluation.fuzzing import FORMATS, Sandbox, crafted, mutate, seeds
-from motionlang.evaluation.fuzzing.seeds import (
+from helpers.data import ROOT, SHARED
+
+sys.path.insert(0, str(ROOT / "benchmarks"))  # the fuzzing package lives beside its benchmark
+from fuzzing import FORMATS, Sandbox, crafted, mutate, seeds  # noqa: E402
+from fuzzing.seeds import (  # noqa: E402
     TINY_ASF,
     h3d_files,
     mit_sequence,

@@ -10,7 +10,7 @@
 Every reader turns a bad file into one :class:`MotionFormatError` naming the file (and the
 line or frame), never another exception, and checks what a file asks for (size, joints,
 frames, memory) against :mod:`motionlang.utils.limits` before asking the system for it.
-:mod:`motionlang.evaluation.fuzzing` holds the fuzzing that checks this.
+``benchmarks/fuzzing/`` (outside the package) holds the fuzzing that checks this.
 """
 from __future__ import annotations
 

@@ -12,8 +12,8 @@ import re
 
 import numpy as np
 
-from motionlang.evaluation.fuzzing.edits import Choose, edit, pick
-from motionlang.evaluation.fuzzing.seeds import h3d_files, npy_bytes, pack_h3d, unpack_h3d
+from .edits import Choose, edit, pick
+from .seeds import h3d_files, npy_bytes, pack_h3d, unpack_h3d
 
 NPY_DESCRS = [b"'|O'", b"'<c16'", b"'<U3'", b"'|S4'", b"'>f8'", b"'<f2'", b"'<i8'", b"'|b1'",
               b"[('a', '<f4')]", b"'<M8[s]'", b"'V4'", b"'<f4', (3,)", b"'x'", b"''",

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
+import importlib.util
 import json
 import os
 import select
@@ -40,7 +41,10 @@ KINDS = ("error", "valid", "invalid", "uncaught", "crash", "hang")
 EXTENSIONS = {"asf": ".asf", "amc": ".amc", "bvh": ".bvh", "mmm": ".xml", "mit": ".mat",
               "h3d": ".tar"}
 H3D_RECORDS = 4  # records of an h3d folder whose rows, joints and Motion are read
-_CHILD = "from motionlang.evaluation.fuzzing.sandbox import serve; serve()"
+# The child imports this module by the name it has here, from the folder that name is
+# relative to (``benchmarks/`` for ``fuzzing.sandbox``).
+_CHILD = f"from {__name__} import serve; serve()"
+_IMPORT_ROOT = Path(__file__).resolve().parents[__name__.count(".")]
 
 
 @dataclass
@@ -88,8 +92,10 @@ class Sandbox:
         env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1",
                    MKL_NUM_THREADS="1", PYTHONFAULTHANDLER="1",
                    MOTIONLANG_MAX_MEMORY=str(self.memory_bytes // 4))
-        package_root = str(Path(__file__).resolve().parents[3])  # .../src for this motionlang
-        env["PYTHONPATH"] = os.pathsep.join(p for p in (package_root, env.get("PYTHONPATH")) if p)
+        # the child reads with the parent's motionlang, not whichever one it would find
+        motionlang_root = str(Path(importlib.util.find_spec("motionlang").origin).parents[1])
+        env["PYTHONPATH"] = os.pathsep.join(
+            p for p in (str(_IMPORT_ROOT), motionlang_root, env.get("PYTHONPATH")) if p)
         self._err = open(self.folder / "child.err", "w+b")
         self.proc = subprocess.Popen([sys.executable, "-c", _CHILD, str(self.memory_bytes)],
                                      stdin=subprocess.PIPE, stdout=subprocess.PIPE,
@@ -144,7 +150,7 @@ class Sandbox:
             self._start()
         body = None
         if fmt == "h3d":
-            from motionlang.evaluation.fuzzing.seeds import unpack_h3d
+            from .seeds import unpack_h3d
             body, files = unpack_h3d(data)
             path = self.folder / "h3d"
             shutil.rmtree(path, ignore_errors=True)

@@ -27,9 +27,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from motionlang.evaluation.fuzzing.edits import SPECIAL, Choose, edit, edit_dtd, edit_encoding, pick
-from motionlang.evaluation.fuzzing.h3d_inputs import crafted_h3d, mutate_h3d
-from motionlang.evaluation.fuzzing.seeds import TINY_ASF, mit_sequence, mit_tree, write_mit
+from .edits import SPECIAL, Choose, edit, edit_dtd, edit_encoding, pick
+from .h3d_inputs import crafted_h3d, mutate_h3d
+from .seeds import TINY_ASF, mit_sequence, mit_tree, write_mit
 
 FORMATS = ("mmm", "asf", "amc", "bvh", "mit", "h3d")
 
