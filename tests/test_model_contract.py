@@ -1,9 +1,12 @@
 """One contract for every model kind, each built tiny: ``save`` -> ``load`` gives bit-identical
-parameters and identical outputs, through the class and through the registry; a checkpoint
-of any other kind is refused with a MotionlangError naming the file; outputs in eval mode
-are deterministic (two calls, the same result)."""
+parameters and identical outputs, through the class and through the registry (and from a
+trainer's ``{"model": ...}`` file); a checkpoint of any other kind, a config field from a
+newer release and a damaged file are each refused with one MotionlangError line naming the
+file; outputs in eval mode are deterministic (two calls, the same result); every torch
+family reads and writes through the one ``Checkpointed`` base."""
 from __future__ import annotations
 
+import json
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -19,6 +22,7 @@ from helpers.twostream import HashTokens
 from helpers.twostream import tiny as tiny_twostream
 from motionlang.errors import MotionlangError
 from motionlang.models import registry
+from motionlang.models.checkpoint import Checkpointed
 from motionlang.models.crbm.ar import ARConfig, ARModel
 from motionlang.models.crbm.config import PARAMS, CRBMConfig
 from motionlang.models.crbm.model import CRBM
@@ -213,17 +217,125 @@ def test_a_checkpoint_of_another_kind_is_refused_naming_the_file(kind, other, sa
     assert str(path) in str(err.value)
 
 
-@pytest.mark.parametrize("name", ["m2l", "l2m", "evaluator", "judge"])
-def test_a_checkpoint_from_a_newer_version_names_the_unknown_fields(name, saved, tmp_path):
+TORCH = [k for k in KINDS if k.suffix == ".pt"]
+NPZ = [k for k in KINDS if k.suffix == ".npz"]
+
+
+def _one_line_naming(err, path: Path, *words: str) -> str:
+    msg = str(err.value)
+    assert str(path) in msg and len(msg.splitlines()) == 1, msg
+    for w in words:
+        assert w in msg, msg
+    return msg
+
+
+def _load_both_ways(kind: Kind, path: Path) -> list:
+    """The MotionlangErrors of loading ``path`` through the class and the registry."""
+    errors = []
+    for load in (lambda: kind.cls.load(path, **kind.load_kw()),
+                 lambda: registry.load_model(path, kind=kind.name, **kind.load_kw())):
+        with pytest.raises(MotionlangError) as err:
+            load()
+        errors.append(err)
+    return errors
+
+
+@pytest.mark.parametrize("kind", TORCH, ids=[k.name for k in TORCH])
+def test_every_torch_family_uses_the_one_checkpoint_base(kind):
+    assert issubclass(kind.cls, Checkpointed)
+    copies = {"save", "load", "to_checkpoint", "from_checkpoint"} & set(vars(kind.cls))
+    assert not copies, f"{kind.cls.__name__} defines its own {sorted(copies)}"
+    assert kind.cls.kind == kind.name and kind.cls.config_cls is not None
+
+
+@pytest.mark.parametrize("kind", TORCH, ids=[k.name for k in TORCH])
+def test_a_trainer_checkpoint_loads_as_the_model(kind, saved, tmp_path):
+    model, path = saved[kind.name]
+    d = torch.load(path, map_location="cpu", weights_only=True)
+    wrapped = tmp_path / "best.pt"
+    torch.save({"model": d, "optimizer": {}, "step": 3}, wrapped)
+    loaded = kind.cls.load(wrapped, **kind.load_kw())
+    assert_identical(kind.params(model), kind.params(loaded))
+    assert same_output(kind.run(model), kind.run(loaded))
+
+
+@pytest.mark.parametrize("kind", TORCH, ids=[k.name for k in TORCH])
+def test_a_checkpoint_from_a_newer_version_names_the_unknown_fields(kind, saved, tmp_path):
     """A config field this version lacks (a newer release's option) is one clear line naming
     the file and the field, not 'a damaged checkpoint'."""
-    kind = BY_NAME[name]
-    d = torch.load(saved[name][1], map_location="cpu", weights_only=False)
+    d = torch.load(saved[kind.name][1], map_location="cpu", weights_only=False)
     d["config"]["option_from_the_future"] = 1
     path = tmp_path / f"newer{kind.suffix}"
     torch.save(d, path)
+    for err in _load_both_ways(kind, path):
+        msg = _one_line_naming(err, path, "option_from_the_future", "newer")
+        assert "damaged" not in msg
+
+
+@pytest.mark.parametrize("kind", NPZ, ids=[k.name for k in NPZ])
+def test_an_npz_from_a_newer_version_names_the_unknown_fields(kind, saved, tmp_path):
+    src = saved[kind.name][1]
+    with np.load(src, allow_pickle=False) as z:
+        arrays = {k: z[k] for k in z.files}
+    key = "meta" if "meta" in arrays else "l2_meta"
+    meta = json.loads(str(arrays[key]))
+    meta["config"]["option_from_the_future"] = 1
+    arrays[key] = np.array(json.dumps(meta))
+    path = tmp_path / "newer.npz"
+    np.savez(path, **arrays)
+    for err in _load_both_ways(kind, path):
+        msg = _one_line_naming(err, path, "option_from_the_future", "newer")
+        assert "damaged" not in msg
+
+
+def _damaged_torch(d: dict) -> list[tuple[str, dict]]:
+    first = next(iter(d["state_dict"]))
+    wrong = dict(d["state_dict"])
+    wrong[first] = torch.zeros(wrong[first].numel() + 1)
+    return [("no weights", {k: v for k, v in d.items() if k != "state_dict"}),
+            ("wrong shape", {**d, "state_dict": wrong}),
+            ("config not a dict", {**d, "config": [1, 2]}),
+            ("bad config value", {**d, "config": {**d["config"], next(iter(d["config"])): "x"}})]
+
+
+@pytest.mark.parametrize("kind", TORCH, ids=[k.name for k in TORCH])
+def test_a_damaged_torch_checkpoint_is_one_line(kind, saved, tmp_path):
+    src = saved[kind.name][1]
+    d = torch.load(src, map_location="cpu", weights_only=True)
+    for i, (what, bad) in enumerate(_damaged_torch(d)):
+        path = tmp_path / f"bad{i}.pt"
+        torch.save(bad, path)
+        with pytest.raises(MotionlangError) as err:
+            kind.cls.load(path, **kind.load_kw())
+        assert f"damaged {kind.name} checkpoint" in str(err.value), what
+        _one_line_naming(err, path)
+    truncated = tmp_path / "truncated.pt"
+    truncated.write_bytes(src.read_bytes()[:len(src.read_bytes()) // 2])
+    for err in _load_both_ways(kind, truncated):
+        _one_line_naming(err, truncated, "not a readable motionlang checkpoint")
+
+
+@pytest.mark.parametrize("kind", NPZ, ids=[k.name for k in NPZ])
+def test_a_damaged_npz_is_one_line(kind, saved, tmp_path):
+    src = saved[kind.name][1]
+    with np.load(src, allow_pickle=False) as z:
+        arrays = {k: z[k] for k in z.files}
+    missing = tmp_path / "missing.npz"
+    np.savez(missing, **{k: v for k, v in arrays.items() if k not in ("A", "l2_A")})
     with pytest.raises(MotionlangError) as err:
-        kind.cls.load(path, **kind.load_kw())
-    msg = str(err.value)
-    assert str(path) in msg and "option_from_the_future" in msg and "newer" in msg
-    assert "damaged" not in msg and len(msg.splitlines()) == 1
+        kind.cls.load(missing)
+    _one_line_naming(err, missing, f"damaged {kind.name} checkpoint")
+    truncated = tmp_path / "truncated.npz"
+    truncated.write_bytes(src.read_bytes()[:len(src.read_bytes()) // 2])
+    with pytest.raises(MotionlangError) as err:
+        kind.cls.load(truncated)
+    _one_line_naming(err, truncated, "damaged")
+    with pytest.raises(MotionlangError) as err:
+        kind.cls.load(tmp_path / "nothing.npz")
+    _one_line_naming(err, tmp_path / "nothing.npz", "no such checkpoint file")
+
+
+@pytest.mark.parametrize("kind", TORCH, ids=[k.name for k in TORCH])
+def test_an_option_load_does_not_take_is_the_callers_error(kind, saved):
+    with pytest.raises(TypeError, match="no_such_option"):
+        kind.cls.load(saved[kind.name][1], no_such_option=1)

@@ -7,7 +7,7 @@ import torch
 
 from motionlang.errors import MotionlangError
 from motionlang.models.length import SentenceLength
-from motionlang.models.twostream.model import DEFAULT_FRAMES
+from motionlang.models.twostream.model import DEFAULT_SECONDS
 
 
 def test_fit_recovers_additive_lengths():
@@ -45,7 +45,8 @@ def test_model_carries_its_length_model(tmp_path):
     from motionlang.models.twostream import TwoStreamModel
     m = tiny()
     m.normalizer = Normalizer().fit(np.random.default_rng(0).normal(size=(50, 66)))
-    assert m.frames_for("a person walks") == DEFAULT_FRAMES       # none fitted
+    default = round(DEFAULT_SECONDS * m.fps)
+    assert m.frames_for("a person walks") == default == 125       # none fitted: 10 s
     m.length_model = SentenceLength.fit(["walks", "walks walks"], [8, 12], ridge=0.0)
     m.eval().save(tmp_path / "ts.pt")
     back = TwoStreamModel.load(tmp_path / "ts.pt", text_encoder=HashTokens())
@@ -57,5 +58,5 @@ def test_model_carries_its_length_model(tmp_path):
     # a checkpoint written before length models existed loads with none
     d = torch.load(tmp_path / "ts.pt", weights_only=True)
     del d["length_model"]
-    old = TwoStreamModel.from_checkpoint(d, HashTokens())
-    assert old.length_model is None and old.frames_for("walks") == DEFAULT_FRAMES
+    old = TwoStreamModel.from_checkpoint(d, text_encoder=HashTokens())
+    assert old.length_model is None and old.frames_for("walks") == default

@@ -137,6 +137,19 @@ def vector_dim(n_joints: int) -> int:
     return 8 + 9 * (n_joints - 1) + 3 * n_joints
 
 
+def rows_layout(body: H3DBody) -> dict:
+    """What a model that reads this body's rows records of them (in its checkpoint): layout
+    name, body, frame rate (Hz), unit (metres per file unit) and row size."""
+    return {"layout": "h3d_vectors", "body": body.name, "fps": float(body.fps),
+            "unit": float(body.unit), "dim": body.dim}
+
+
+def layout_for_dim(dim: int) -> dict | None:
+    """:func:`rows_layout` of the body whose rows have ``dim`` numbers; None for any other
+    size (rows of some other features)."""
+    return next((rows_layout(b) for b in H3D_BODIES.values() if b.dim == dim), None)
+
+
 def vector_slices(n_joints: int) -> dict[str, slice]:
     """Name -> columns of each part of a row (see the module docstring)."""
     J, out, start = n_joints, {}, 0

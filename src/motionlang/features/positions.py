@@ -32,6 +32,12 @@ from motionlang.kinematics.motion import Motion
 
 _I = {n: i for i, n in enumerate(KIT21_NAMES)}
 
+#: frame rate of the features unless configured (Ghosh et al. 2021: KIT-ML at 12.5 Hz)
+DEFAULT_FPS = 12.5
+#: values a frame: the local joints (x, y, z each), then the root's step (2) and turn (1)
+N_LOCAL = 3 * len(KIT21_NAMES)
+DIM = N_LOCAL + 3
+
 
 @dataclass
 class PositionsConfig:
@@ -47,7 +53,7 @@ class PositionsConfig:
             written before this option existed read back with it off.
     """
 
-    fps: float = 12.5
+    fps: float = DEFAULT_FPS
     joint_map: str | None = None
     dtype: str = "float32"
     floor: bool = True
@@ -83,6 +89,30 @@ def split_global(p21: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, n
     return local, v, dyaw, np.array([ground[0, 0], ground[0, 1], yaw[0]])
 
 
+def local_joints(raw):
+    """Un-normalised rows (..., DIM) -> the local joints (..., 21, 3): numpy or torch, a view
+    where the array library gives one."""
+    return raw[..., :N_LOCAL].reshape(*raw.shape[:-1], len(KIT21_NAMES), 3)
+
+
+def root_step(raw):
+    """Un-normalised rows (..., DIM) -> the root's ground step (..., 2): sideways, forward,
+    metres/frame, in the previous frame's heading frame (numpy or torch)."""
+    return raw[..., N_LOCAL:N_LOCAL + 2]
+
+
+def root_turn(raw):
+    """Un-normalised rows (..., DIM) -> the heading change (...,), rad/frame."""
+    return raw[..., N_LOCAL + 2]
+
+
+def positions_to_rows(p21: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Global (T, 21, 3) metres -> un-normalised rows (T, DIM) as they stand (no floor
+    shift, no resampling) and the placement of frame 0 (3,) (``x0, z0, yaw0``)."""
+    local, v, dyaw, start = split_global(p21)
+    return np.concatenate([local.reshape(len(p21), -1), v, dyaw[:, None]], axis=1), start
+
+
 def join_global(local: np.ndarray, v: np.ndarray, dyaw: np.ndarray,
                 start=(0.0, 0.0, 0.0)) -> np.ndarray:
     """Inverse of :func:`split_global` -> global (T, 21, 3) metres."""
@@ -112,9 +142,7 @@ class PositionFeatures(FeatureSet):
 
     def _raw(self, motion: Motion) -> tuple[np.ndarray, np.ndarray]:
         """-> un-normalised (T, 66) of ``motion`` at ``fps``, and its start (3,)."""
-        p = self.body(motion)
-        local, v, dyaw, start = split_global(p)
-        return np.concatenate([local.reshape(len(p), -1), v, dyaw[:, None]], axis=1), start
+        return positions_to_rows(self.body(motion))
 
     def fit(self, motions: Iterable[Motion]) -> PositionFeatures:
         """Fit the normaliser on the (T, 66) raw features of ``motions`` (any mappable
@@ -136,20 +164,35 @@ class PositionFeatures(FeatureSet):
         self._require_fit()
         return self._out(self.normalizer.transform(self._raw(motion)[0]))
 
+    def encode_positions(self, p21) -> np.ndarray:
+        """Global positions (T, 21, 3) metres, already at ``fps``, -> (T, 66) normalised
+        features, the body taken as it stands (no floor shift: ``body`` does that for a
+        ``Motion``). Frame 0's placement is dropped, as in :meth:`encode`."""
+        self._require_fit()
+        p = np.asarray(p21, dtype=np.float64)
+        if p.ndim != 3 or p.shape[1:] != (len(KIT21_NAMES), 3) or not len(p):
+            raise MotionlangError(f"positions must be (T >= 1, {len(KIT21_NAMES)}, 3), got "
+                                  f"{p.shape}")
+        return self._out(self.normalizer.transform(positions_to_rows(p)[0]))
+
     def start(self, motion: Motion) -> np.ndarray:
         """(x0, z0, yaw0) of the motion's first frame: root on the ground plane, heading."""
         return self._raw(motion)[1]
 
-    def decode(self, features, start=(0.0, 0.0, 0.0)) -> np.ndarray:
+    def decode(self, features, start=(0.0, 0.0, 0.0), *, pin_root: bool = False
+               ) -> np.ndarray:
         """Features (T, 66) -> global joint positions (T, 21, 3) metres, Y up.
 
         Not a :class:`Motion`: positions carry no joint rotations (that would need inverse
-        kinematics). Frame 0 is placed at ``start`` (x0, z0, yaw0).
+        kinematics). Frame 0 is placed at ``start`` (x0, z0, yaw0). ``pin_root``: set the
+        root's local x and z to 0 first, as they are by construction (a model's frames only
+        approximate these constant columns, and would otherwise move the root off the path).
         """
         self._require_fit()
         f = as_numpy(features)
         if f.ndim != 2 or f.shape[1] != self.dim:
             raise MotionlangError(f"position features must be (T, {self.dim}), got {f.shape}")
         raw = self.normalizer.inverse(f)
-        local = raw[:, :63].reshape(len(raw), 21, 3)
-        return join_global(local, raw[:, 63:65], raw[:, 65], start)
+        if pin_root:
+            raw[:, [3 * _I["root"], 3 * _I["root"] + 2]] = 0.0
+        return join_global(local_joints(raw), root_step(raw), root_turn(raw), start)

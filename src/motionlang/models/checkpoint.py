@@ -1,23 +1,38 @@
-"""Self-describing model checkpoints: config, vocabulary, normaliser and weights in one file.
+"""Self-describing model checkpoints, written and read by one base class.
 
 A checkpoint is a plain dict that ``torch.load(..., weights_only=True)`` accepts (no
-pickled classes): ``{"kind", "format", "config", "vocab", "normalizer", "features",
-"state_dict"}``; ``format`` is :data:`FORMAT_VERSION` (files without one are format 0, read
-as before; a newer format is refused by name, since its fields may mean something else);
-the fitted feature set (whose own normaliser the data went through) rides along as its
-``to_dict``. The trainer wraps it as ``{"model": <that dict>, "optimizer": ...}``;
-:func:`read_model_dict` accepts both, so ``best.pt`` of a training run loads directly.
+pickled classes): ``{"kind", "format", "config", <the family's extra state>, "state_dict"}``.
+``format`` is :data:`~motionlang.models.versions.FORMAT_VERSION` (files without one are
+format 0, read as before; a newer format is refused by name, since its fields may mean
+something else). The extra state is what a family needs besides its weights to run: its
+vocabulary, normaliser, the fitted feature set it reads (its ``to_dict``: kind, frame rate,
+layout, normaliser), a length model, a training stage. The trainer wraps the dict as
+``{"model": <that dict>, "optimizer": ...}``; :func:`read_model_dict` accepts both, so
+``best.pt`` of a training run loads directly.
+
+:class:`Checkpointed` holds ``save`` / ``load`` for every torch family; a family sets
+``kind`` and ``config_cls`` and fills in the hooks for its extra state.
 """
 from __future__ import annotations
 
+import inspect
+from dataclasses import asdict
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar, cast
 
 import numpy as np
 import torch
 
 from motionlang.errors import MotionlangError
-from motionlang.models.versions import FORMAT_VERSION, check_format
+from motionlang.models.versions import (
+    DAMAGE,
+    FORMAT_VERSION,
+    NOT_A_CHECKPOINT,
+    check_config_fields,
+    check_format,
+    damaged,
+    unreadable,
+)
 from motionlang.utils.atomic import atomic_path
 
 
@@ -102,15 +117,16 @@ def load_checkpoint(path: str | Path) -> Any:
     """
     path = Path(path)
     if not path.is_file():
-        raise MotionlangError(f"{path}: no such checkpoint file")
+        raise MotionlangError(f"{path}: {unreadable(FileNotFoundError())}")
+    try:
+        with open(path, "rb") as fh:
+            fh.read(1)
+    except OSError as exc:
+        raise MotionlangError(f"{path}: {unreadable(exc)}") from exc
     try:
         return torch.load(path, map_location="cpu", weights_only=True)
-    except OSError as exc:
-        raise MotionlangError(f"{path}: cannot read checkpoint: "
-                              f"{exc.strerror or type(exc).__name__}") from exc
-    except Exception as exc:   # UnpicklingError, RuntimeError (zip), EOFError, ...
-        raise MotionlangError(f"{path}: not a readable motionlang checkpoint (truncated, "
-                              f"or another kind of file)") from exc
+    except Exception as exc:   # UnpicklingError, RuntimeError, EOFError, OSError (its zip) ...
+        raise MotionlangError(f"{path}: {NOT_A_CHECKPOINT}") from exc
 
 
 def model_dict(path: str | Path) -> dict:
@@ -125,21 +141,6 @@ def model_dict(path: str | Path) -> dict:
     return d
 
 
-def check_config_fields(config_cls: type, d: dict, path: str | Path, kind: str) -> None:
-    """One clear line when a checkpoint's config sets fields ``config_cls`` (a dataclass) does
-    not have: a file written by a newer motionlang, whose options this one cannot honour
-    (without this the constructor's TypeError reads as a damaged file)."""
-    from dataclasses import fields
-    config = d.get("config")
-    if not isinstance(config, dict):
-        return
-    unknown = sorted(set(config) - {f.name for f in fields(config_cls)})
-    if unknown:
-        raise MotionlangError(f"{path}: this {kind} checkpoint sets {', '.join(unknown)}, which "
-                              f"this version of motionlang does not know: it was written by a "
-                              f"newer one (upgrade motionlang to read it)")
-
-
 def read_model_dict(path: str | Path, kind: str) -> dict:
     """Load a model checkpoint (or a trainer checkpoint holding one), check format and kind."""
     d = model_dict(path)
@@ -148,40 +149,98 @@ def read_model_dict(path: str | Path, kind: str) -> dict:
     return d
 
 
-class Seq2SeqCheckpoint:
-    """Mixin: self-describing checkpoints for models built as
-    ``cls(config_cls(**config), vocab, normalizer, features)`` (M2L and L2M).
+def _check_options(cls: type[Checkpointed], kw: dict[str, Any]) -> None:
+    """A ``load`` option the family's :meth:`Checkpointed.from_state` does not take is the
+    caller's mistake: a TypeError now, not a damaged file later."""
+    params = inspect.signature(cls.from_state).parameters
+    if any(p.kind is p.VAR_KEYWORD for p in params.values()):
+        return
+    takes = {n for n, p in params.items()
+             if p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD)} - {"config", "state"}
+    unknown = sorted(set(kw) - takes)
+    if unknown:
+        raise TypeError(f"{cls.__name__}.load() got unexpected keyword argument(s) "
+                        f"{', '.join(unknown)}")
 
-    The subclass sets ``kind`` (written into the file and checked on load) and ``config_cls``.
+
+class Checkpointed:
+    """Mixin of every torch model family: one self-describing checkpoint file.
+
+    A family (an ``nn.Module`` subclass listing this mixin first) sets
+
+    * ``kind`` — written into the file and checked on load;
+    * ``config_cls`` — its config dataclass: the file's ``config`` is ``asdict(config)``,
+      rebuilt as ``config_cls(**config)``; a field it lacks is refused by name
+      (a file from a newer motionlang), never read as damage;
+
+    and overrides the hooks it needs (each has a default that stores nothing):
+
+    * :meth:`checkpoint_state` — extra entries beside config and weights (vocabulary,
+      normaliser, ``features``, length model, stage ...), weights-only loadable (plain
+      lists, dicts, numbers, strings; tensors);
+    * :meth:`from_state` — the model built from its config and those entries, before its
+      weights are loaded; ``load``'s keyword arguments arrive here (e.g. a text encoder);
+      a file written before an entry existed has none: read it as the older files meant;
+    * :meth:`restore_state` — what is set after the weights (a training stage ...).
+
+    Every failure to rebuild a file that opened (a missing entry, a wrong shape, a bad
+    value) is one line naming the file: ``PATH: a damaged KIND checkpoint (...)``.
     """
 
-    kind: str
-    config_cls: type
+    kind: ClassVar[str]
+    config_cls: ClassVar[type]
+    config: Any
 
-    def to_checkpoint(self) -> dict:
-        from dataclasses import asdict
-        return {"kind": self.kind, "format": FORMAT_VERSION, "config": asdict(self.config),
-                "vocab": pack_vocab(self.vocab), "normalizer": pack_normalizer(self.normalizer),
-                "features": pack_features(self.features), "state_dict": self.state_dict()}
+    # -- hooks --------------------------------------------------------------------------
+    def checkpoint_state(self) -> dict[str, Any]:
+        """Entries stored beside ``kind``, ``format``, ``config`` and ``state_dict``."""
+        return {}
 
     @classmethod
-    def from_checkpoint(cls, d: dict):
-        model = cls(cls.config_cls(**d["config"]), unpack_vocab(d.get("vocab")),
-                    unpack_normalizer(d.get("normalizer")), unpack_features(d.get("features")))
+    def from_state(cls, config: Any, state: dict[str, Any]) -> Any:
+        """The model (weights not yet loaded) from its config and the file's entries. A
+        family whose ``load`` takes options (a text encoder, word vectors) declares them
+        here as keyword parameters."""
+        return cast(Any, cls)(config)
+
+    def restore_state(self, state: dict[str, Any]) -> None:
+        """Set what the file holds besides the weights, after they are loaded."""
+
+    # -- written once -------------------------------------------------------------------
+    def config_dict(self) -> dict[str, Any]:
+        return asdict(self.config)
+
+    def to_checkpoint(self) -> dict[str, Any]:
+        """The checkpoint dict (what the trainer stores under ``"model"``)."""
+        module: Any = self   # an nn.Module: the family lists this mixin before it
+        return {"kind": self.kind, "format": FORMAT_VERSION, "config": self.config_dict(),
+                **self.checkpoint_state(), "state_dict": module.state_dict()}
+
+    @classmethod
+    def from_checkpoint(cls, d: dict[str, Any], **kw: Any) -> Any:
+        """Rebuild from a checkpoint dict (checked by :meth:`load`); in eval mode."""
+        model = cls.from_state(cls.config_cls(**d["config"]), d, **kw)
         model.load_state_dict(d["state_dict"])
+        model.restore_state(d)
         return model.eval()
 
     def save(self, path: str | Path) -> None:
-        """One self-describing file (atomic write)."""
+        """One self-describing file (atomic write: a crash never leaves a torn file)."""
         write_checkpoint(self.to_checkpoint(), path)
 
     @classmethod
-    def load(cls, path: str | Path):
-        """Rebuild from a file written by :meth:`save` or by the trainer; in eval mode."""
+    def load(cls, path: str | Path, **kw: Any) -> Any:
+        """Rebuild from a file written by :meth:`save` or by the trainer; in eval mode.
+        ``kw`` go to :meth:`from_state`.
+
+        Raises:
+            MotionlangError: no such file, not a checkpoint, another kind, a newer format
+                or config field, or a damaged file; always one line naming the file.
+        """
+        _check_options(cls, kw)
         d = read_model_dict(path, cls.kind)
-        check_config_fields(cls.config_cls, d, path, cls.kind)
+        check_config_fields(cls.config_cls, d.get("config"), path, cls.kind)
         try:
-            return cls.from_checkpoint(d)
-        except (KeyError, TypeError, ValueError, RuntimeError) as exc:
-            raise MotionlangError(f"{path}: a damaged {cls.kind} checkpoint "
-                                  f"({type(exc).__name__}: {str(exc).splitlines()[0]})") from exc
+            return cls.from_checkpoint(d, **kw)
+        except (*DAMAGE, MotionlangError) as exc:
+            raise MotionlangError(f"{path}: {damaged(cls.kind, exc)}") from exc

@@ -6,9 +6,9 @@ Items: ``{"motion": (T-1, D) float32 HumanML3D vectors in the body's file unit, 
 ``motionlang data export-h3d`` writes (``features.h3d_vectors``): a HumanML3D-layout folder
 of the same body gives its stored rows and tagged captions; any other dataset (KIT-ML, the
 procedural corpus, a custom folder) has each motion taken to the body's joints
-(``datasets.humanml3d_export.body_joints``: ``kit`` = the 21-joint body at 12.5 fps in
-millimetres, any rig; ``smpl`` = 22 SMPL joints at 20 fps) and turned into rows, and its
-captions tagged by ``models.evaluator.text.tag``. The model's ``collate`` normalises the
+(``datasets.humanml3d_export.body_joints``: ``kit`` = the 21-joint body in millimetres,
+any rig; ``smpl`` = 22 SMPL joints; each at its rate, ``features.h3d_vectors.H3D_BODIES``)
+and turned into rows, and its captions tagged by ``models.evaluator.text.tag``. The model's ``collate`` normalises the
 rows with the evaluator's mean/std, which :func:`fit_normalizer` sets from the training
 motions as the public ``Mean.npy``/``Std.npy`` are made (each part of the row shares one
 std).

@@ -17,7 +17,13 @@ import numpy as np
 
 from motionlang.errors import MotionFormatError, MotionlangError
 from motionlang.models.crbm.sequences import check_sequences, chunk_index, gather_past
-from motionlang.models.versions import FORMAT_VERSION, check_format
+from motionlang.models.versions import (
+    DAMAGE,
+    FORMAT_VERSION,
+    check_config_fields,
+    check_format,
+    load_problem,
+)
 from motionlang.utils.atomic import atomic_write
 
 
@@ -119,9 +125,10 @@ class ARModel:
                 if meta.get("kind") != "ar":
                     raise MotionFormatError(path, f"not an AR checkpoint (kind={meta.get('kind')!r})")
                 check_format(path, meta.get("version", 0))
+                check_config_fields(ARConfig, meta.get("config"), path, "ar")
                 model = cls(ARConfig(**meta["config"]), meta["n_visible"])
                 for k in ("A", "a", "mean", "std"):
                     setattr(model, k, z[k].astype(np.float64))
-        except (OSError, KeyError, ValueError, TypeError) as exc:
-            raise MotionFormatError(path, f"cannot read AR checkpoint: {exc}") from exc
+        except (OSError, *DAMAGE) as exc:
+            raise MotionFormatError(path, load_problem("ar", exc)) from exc
         return model

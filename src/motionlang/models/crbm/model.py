@@ -32,7 +32,13 @@ from motionlang.errors import MotionFormatError
 from motionlang.models.crbm.config import PARAMS, CRBMConfig, config_from_dict
 from motionlang.models.crbm.generation import CRBMGeneration
 from motionlang.models.crbm.training import CRBMTraining
-from motionlang.models.versions import FORMAT_VERSION, check_format
+from motionlang.models.versions import (
+    DAMAGE,
+    FORMAT_VERSION,
+    check_config_fields,
+    check_format,
+    load_problem,
+)
 from motionlang.utils.atomic import atomic_write
 
 
@@ -107,14 +113,15 @@ class CRBM(CRBMTraining, CRBMGeneration):
                 if meta.get("kind") != "crbm":
                     raise MotionFormatError(path, f"not a CRBM checkpoint (kind={meta.get('kind')!r})")
                 check_format(path, meta.get("version", 0))
+                check_config_fields(CRBMConfig, meta.get("config"), path, "crbm")
                 model = cls(config_from_dict(meta["config"]), meta["n_visible"])
                 for k in PARAMS:
                     setattr(model, k, z[k].astype(model.config.dtype))
                 for k in ("mean", "std"):
                     setattr(model, k, z[k].astype(np.float64))
                 model.history = z["history"].tolist()
-        except (OSError, KeyError, ValueError, TypeError) as exc:
-            raise MotionFormatError(path, f"cannot read CRBM checkpoint: {exc}") from exc
+        except (OSError, *DAMAGE) as exc:
+            raise MotionFormatError(path, load_problem("crbm", exc)) from exc
         return model
 
     def describe(self) -> str:

@@ -18,7 +18,13 @@ from motionlang.errors import MotionFormatError
 from motionlang.models.crbm.config import CRBMConfig, config_from_dict
 from motionlang.models.crbm.model import CRBM
 from motionlang.models.crbm.sequences import check_sequences
-from motionlang.models.versions import FORMAT_VERSION, check_format
+from motionlang.models.versions import (
+    DAMAGE,
+    FORMAT_VERSION,
+    check_config_fields,
+    check_format,
+    load_problem,
+)
 from motionlang.utils.atomic import atomic_path
 
 
@@ -90,12 +96,13 @@ class CRBMStack:
                 levels = []
                 for name in ("l1", "l2"):
                     meta = json.loads(str(z[f"{name}_meta"]))
+                    check_config_fields(CRBMConfig, meta.get("config"), path, "crbm_stack")
                     m = CRBM(config_from_dict(meta["config"]), meta["n_visible"])
                     for k in ("W", "A", "B", "a", "b"):
                         setattr(m, k, z[f"{name}_{k}"].astype(m.config.dtype))
                     for k in ("mean", "std"):
                         setattr(m, k, z[f"{name}_{k}"].astype(np.float64))
                     levels.append(m)
-        except (OSError, KeyError, ValueError, TypeError) as exc:
-            raise MotionFormatError(path, f"cannot read two-level CRBM checkpoint: {exc}") from exc
+        except (OSError, *DAMAGE) as exc:
+            raise MotionFormatError(path, load_problem("crbm_stack", exc)) from exc
         return cls(*levels)

@@ -13,13 +13,14 @@ trained autoencoder and frozen; a training crop keeps every whole unit of 4 fram
 public loader sometimes drops one more) at a random offset.
 
 Checkpoint (``save``/``load``, registry kind ``"evaluator"``): ``{"kind", "format",
-"config", "normalizer": {"mean", "std"}, "state_dict"}``. :meth:`load_official` reads the
+"config", "normalizer": {"mean", "std"}, "features", "state_dict"}``; ``features`` says
+which rows the evaluator reads (``features.h3d_vectors.rows_layout``: layout, body, frame
+rate, unit, size; None for rows of another size), read off ``motion_dim`` unless given. :meth:`load_official` reads the
 public ``finest.tar`` and its ``mean.npy``/``std.npy``.
 """
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
@@ -29,14 +30,7 @@ import torch.nn.functional as F
 from torch import nn
 
 from motionlang.errors import MotionlangError
-from motionlang.models.checkpoint import (
-    FORMAT_VERSION,
-    check_config_fields,
-    load_checkpoint,
-    read_model_dict,
-    unpack_normalizer,
-    write_checkpoint,
-)
+from motionlang.models.checkpoint import Checkpointed, load_checkpoint, unpack_normalizer
 from motionlang.models.evaluator.config import EvaluatorConfig
 from motionlang.models.evaluator.layers import MotionEncoder, MovementEncoder, TextEncoder
 from motionlang.models.evaluator.text import caption_tokens, glove_50d, text_inputs
@@ -51,7 +45,7 @@ def _array(x: Any) -> np.ndarray:
     return np.asarray(x, dtype=np.float32).reshape(-1)
 
 
-class TextMotionEvaluator(nn.Module):
+class TextMotionEvaluator(Checkpointed, nn.Module):
     """Text and motion encoders of one embedding space (see module docstring).
 
     Args:
@@ -59,13 +53,20 @@ class TextMotionEvaluator(nn.Module):
         mean, std: (F,) per-column statistics of the motion features (default 0 and 1).
         vectors: word vectors (``dim``, ``word in v``, ``v[word]``; default GloVe 6B 50d,
             which needs ``config.word_dim == 50``); they are not stored in checkpoints.
+        features: the rows' description (``features.h3d_vectors.rows_layout``); default:
+            the HumanML3D body whose rows have ``config.motion_dim`` numbers, if any.
     """
 
     kind = "evaluator"
+    config_cls = EvaluatorConfig
 
-    def __init__(self, config: EvaluatorConfig, mean=None, std=None, vectors=None):
+    def __init__(self, config: EvaluatorConfig, mean=None, std=None, vectors=None,
+                 features: dict | None = None):
         super().__init__()
+        from motionlang.features.h3d_vectors import layout_for_dim
         c = self.config = config
+        #: which rows the evaluator reads: layout, body, frame rate, unit, size (or None)
+        self.features = layout_for_dim(c.motion_dim) if features is None else dict(features)
         self.movement_encoder = MovementEncoder(c.input_dim, c.movement_hidden,
                                                 c.movement_latent, c.dropout)
         self.motion_encoder = MotionEncoder(c.movement_latent, c.motion_hidden, c.embed_dim)
@@ -200,33 +201,16 @@ class TextMotionEvaluator(nn.Module):
         return torch.cat(out).double().numpy() if out else np.zeros((0, self.config.embed_dim))
 
     # -- checkpoints --------------------------------------------------------------------
-    def to_checkpoint(self) -> dict:
-        return {"kind": self.kind, "format": FORMAT_VERSION, "config": asdict(self.config),
-                "normalizer": {"type": "dict", "data": {"mean": self.mean.tolist(),
+    def checkpoint_state(self) -> dict[str, Any]:
+        return {"normalizer": {"type": "dict", "data": {"mean": self.mean.tolist(),
                                                         "std": self.std.tolist()}},
-                "state_dict": self.state_dict()}
+                "features": self.features}
 
     @classmethod
-    def from_checkpoint(cls, d: dict, vectors=None) -> TextMotionEvaluator:
-        norm = unpack_normalizer(d.get("normalizer")) or {}
-        model = cls(EvaluatorConfig(**d["config"]), norm.get("mean"), norm.get("std"), vectors)
-        model.load_state_dict(d["state_dict"])
-        return model.eval()
-
-    def save(self, path: str | Path) -> None:
-        """One self-describing file (atomic write)."""
-        write_checkpoint(self.to_checkpoint(), path)
-
-    @classmethod
-    def load(cls, path: str | Path, vectors=None) -> TextMotionEvaluator:
-        """From :meth:`save` or a trainer checkpoint; in eval mode."""
-        d = read_model_dict(path, cls.kind)
-        check_config_fields(EvaluatorConfig, d, path, cls.kind)
-        try:
-            return cls.from_checkpoint(d, vectors)
-        except (KeyError, TypeError, ValueError, RuntimeError) as exc:
-            raise MotionlangError(f"{path}: a damaged evaluator checkpoint "
-                                  f"({type(exc).__name__}: {str(exc).splitlines()[0]})") from exc
+    def from_state(cls, config: EvaluatorConfig, state: dict[str, Any], vectors=None
+                   ) -> TextMotionEvaluator:
+        norm = unpack_normalizer(state.get("normalizer")) or {}
+        return cls(config, norm.get("mean"), norm.get("std"), vectors, state.get("features"))
 
     @classmethod
     def load_official(cls, source, mean, std, config: EvaluatorConfig | None = None,

@@ -4,6 +4,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from motionlang.errors import MotionlangError
+from motionlang.features.positions import DEFAULT_FPS
+from motionlang.features.positions import DIM as POSITIONS_DIM
 from motionlang.utils.checks import check_bones, check_numbers
 
 
@@ -14,7 +16,7 @@ class JudgeConfig:
     Attributes:
         contents, styles: the label names, in the order of the two heads' outputs (from the
             training data, never fixed here).
-        n_features: per-frame input size F (66: the 21-joint position features' layout).
+        n_features: per-frame input size F (the 21-joint position features' size).
         fps: frame rate the judge reads (Hz); other rates are resampled to it.
         hidden: channels of the temporal convolutions; embed: size of the penultimate
             features (the ones FID is computed on).
@@ -32,8 +34,8 @@ class JudgeConfig:
 
     contents: list[str] = field(default_factory=list)
     styles: list[str] = field(default_factory=list)
-    n_features: int = 66
-    fps: float = 12.5
+    n_features: int = POSITIONS_DIM
+    fps: float = DEFAULT_FPS
     hidden: int = 128
     embed: int = 128
     layers: int = 4

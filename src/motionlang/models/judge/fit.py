@@ -1,7 +1,7 @@
 """Training the motion judge: labelled 21-joint motions in, a fitted :class:`MotionJudge` out.
 
 :func:`bandai_items` reads the Bandai Namco takes of a split as :class:`JudgeItem`
-(positions at 12.5 Hz, cached by file identity); any other labelled motions can join them,
+(positions at the positions features' rate, cached by file identity); any other labelled motions can join them,
 ``style=None`` where there is none: :func:`primitive_items` cuts a procedural corpus'
 primitives that show a Bandai action (walks, runs, waves, raised arms, bows, kicks,
 punches). :func:`fit_judge` is a plain torch loop: AdamW, random crops of ``config.window`` frames, optional mirrored
@@ -24,6 +24,7 @@ from motionlang.errors import MotionlangError
 from motionlang.features.body21 import median_bones21
 from motionlang.features.joint_map import KIT21_MIRROR
 from motionlang.features.normalizer import Normalizer
+from motionlang.features.positions import DEFAULT_FPS
 from motionlang.models.judge.config import JudgeConfig
 from motionlang.models.judge.model import MotionJudge, judge_rows
 
@@ -51,7 +52,7 @@ def mirror_item(item: JudgeItem) -> JudgeItem:
                    content=MIRROR_CONTENT.get(item.content, item.content))
 
 
-def bandai_items(source: str | Path, split: str | None = None, fps: float = 12.5
+def bandai_items(source: str | Path, split: str | None = None, fps: float = DEFAULT_FPS
                  ) -> list[JudgeItem]:
     """The Bandai Namco takes of ``split`` (``datasets.bandai.load_bandai``) as items: each
     take's 21-joint body (``PositionFeatures.body``: on the floor) at ``fps`` Hz. Cached
@@ -83,7 +84,7 @@ def primitive_content(action: str, side: str | None = None, direction: str | Non
     return action if action in ("bow", "kick", "punch") else None
 
 
-def primitive_items(corpus: str | Path, fps: float = 12.5, min_seconds: float = 0.5
+def primitive_items(corpus: str | Path, fps: float = DEFAULT_FPS, min_seconds: float = 0.5
                     ) -> list[JudgeItem]:
     """The primitives of a procedural corpus (``motionlang data synth``) that show a Bandai
     content, as items without a style: each body primitive with nothing layered on it, and

@@ -5,7 +5,7 @@ Input is what every model and reader can give: global 21-joint positions (T, 21,
 metres, Y up (``features.joint_map.positions21``; a ``Motion`` goes through
 ``PositionFeatures.body``). :func:`position_rows` turns them into the position features'
 layout (``features.positions``: local joints in the body frame + root steps and heading
-change, 66 numbers a frame at 12.5 Hz), invariant to where the body stands and faces, and
+change, at ``JudgeConfig.fps``), invariant to where the body stands and faces, and
 (:func:`judge_rows`, with ``config.bones``) to its proportions; the
 judge's own normaliser (fitted on its training takes) rides in its checkpoint, so a judge
 never depends on the features of the model it judges.
@@ -13,8 +13,7 @@ never depends on the features of the model it judges.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import asdict
-from pathlib import Path
+from typing import Any
 
 import numpy as np
 import torch
@@ -23,14 +22,17 @@ from torch.nn import functional as F
 
 from motionlang.errors import MotionlangError
 from motionlang.features.body21 import uniform_bones21
-from motionlang.features.positions import floor_height, split_global
+from motionlang.features.positions import (
+    PositionFeatures,
+    PositionsConfig,
+    floor_height,
+    positions_to_rows,
+)
 from motionlang.models.checkpoint import (
-    FORMAT_VERSION,
-    check_config_fields,
+    Checkpointed,
+    pack_features,
     pack_normalizer,
-    read_model_dict,
     unpack_normalizer,
-    write_checkpoint,
 )
 from motionlang.models.judge.config import JudgeConfig
 
@@ -49,20 +51,18 @@ def resample_positions(p21: np.ndarray, fps: float, to: float) -> np.ndarray:
 
 
 def position_rows(p21: np.ndarray) -> np.ndarray:
-    """Global (T, 21, 3) metres -> (T, 66) un-normalised rows in ``PositionFeatures``'
-    layout: the feet put on y = 0 (``floor_height``), then local joints (63), root step
-    (sideways, forward; metres/frame) and heading change (rad/frame)."""
+    """Global (T, 21, 3) metres -> (T, F) un-normalised rows in ``PositionFeatures``'
+    layout (``positions_to_rows``: local joints, root step and heading change), the feet
+    put on y = 0 first (``floor_height``)."""
     p = np.asarray(p21, dtype=float)
     if p.ndim != 3 or p.shape[1:] != (21, 3) or not len(p) or not np.isfinite(p).all():
         raise MotionlangError(f"the judge reads finite (T >= 1, 21, 3) positions, got "
                               f"{p.shape}")
-    p = p - np.array([0.0, floor_height(p), 0.0])
-    local, v, dyaw, _ = split_global(p)
-    return np.concatenate([local.reshape(len(p), -1), v, dyaw[:, None]], axis=1)
+    return positions_to_rows(p - np.array([0.0, floor_height(p), 0.0]))[0]
 
 
 def judge_rows(p21: np.ndarray, fps: float, config: JudgeConfig) -> np.ndarray:
-    """(T, 21, 3) metres at ``fps`` -> (T', 66) un-normalised rows as ``config`` reads them:
+    """(T, 21, 3) metres at ``fps`` -> (T', F) un-normalised rows as ``config`` reads them:
     resampled to ``config.fps``, laid on ``config.bones`` if set, :func:`position_rows`."""
     p = resample_positions(p21, fps, config.fps)
     if config.bones is not None:
@@ -70,11 +70,12 @@ def judge_rows(p21: np.ndarray, fps: float, config: JudgeConfig) -> np.ndarray:
     return position_rows(p)
 
 
-class MotionJudge(nn.Module):
+class MotionJudge(Checkpointed, nn.Module):
     """Features (B, T, F) with lengths (B,) -> content logits (B, C), style logits (B, S)
     and the penultimate embedding (B, E)."""
 
     kind = "judge"
+    config_cls = JudgeConfig
 
     def __init__(self, config: JudgeConfig, normalizer=None):
         super().__init__()
@@ -149,29 +150,25 @@ class MotionJudge(nn.Module):
         return [(self.config.contents[c], self.config.styles[s]) for c, s in
                 zip(got["content"].argmax(-1), got["style"].argmax(-1))]
 
+    @property
+    def features(self) -> PositionFeatures | None:
+        """The layout, frame rate and normaliser of the rows the judge reads: positions
+        features at ``config.fps``, feet on the floor; None before the normaliser is fitted.
+        The rows themselves come from :func:`judge_rows` (resampled in time, laid on
+        ``config.bones``), not from the features' ``encode``."""
+        if self.normalizer is None:
+            return None
+        fs = PositionFeatures(PositionsConfig(fps=self.config.fps, floor=True))
+        fs.normalizer = self.normalizer
+        return fs
+
     # -- checkpoint ----------------------------------------------------------------------
-    def to_checkpoint(self) -> dict:
-        return {"kind": self.kind, "format": FORMAT_VERSION, "config": asdict(self.config),
-                "normalizer": pack_normalizer(self.normalizer),
-                "state_dict": self.state_dict()}
+    def checkpoint_state(self) -> dict[str, Any]:
+        return {"normalizer": pack_normalizer(self.normalizer),
+                "features": pack_features(self.features)}
 
     @classmethod
-    def from_checkpoint(cls, d: dict) -> MotionJudge:
-        model = cls(JudgeConfig(**d["config"]), unpack_normalizer(d.get("normalizer")))
-        model.load_state_dict(d["state_dict"])
-        return model.eval()
-
-    def save(self, path: str | Path) -> None:
-        """One self-describing file (atomic write): config, labels, normaliser, weights."""
-        write_checkpoint(self.to_checkpoint(), path)
-
-    @classmethod
-    def load(cls, path: str | Path) -> MotionJudge:
-        """Rebuild from :meth:`save`'s file; in eval mode."""
-        d = read_model_dict(path, cls.kind)
-        check_config_fields(JudgeConfig, d, path, cls.kind)
-        try:
-            return cls.from_checkpoint(d)
-        except (KeyError, TypeError, ValueError, RuntimeError) as exc:
-            raise MotionlangError(f"{path}: a damaged judge checkpoint "
-                                  f"({type(exc).__name__}: {str(exc).splitlines()[0]})") from exc
+    def from_state(cls, config: JudgeConfig, state: dict[str, Any]) -> MotionJudge:
+        # the normaliser, not the features: every judge file has it, and the features
+        # (from it and the config) only describe what the judge reads
+        return cls(config, unpack_normalizer(state.get("normalizer")))

@@ -59,16 +59,16 @@ import torch
 from torch import nn
 
 from motionlang.errors import MotionlangError
-from motionlang.models.checkpoint import Seq2SeqCheckpoint
 from motionlang.models.length import SentenceLength
 from motionlang.models.seq2seq import mdn
+from motionlang.models.seq2seq.checkpoint import Seq2SeqCheckpointed
 from motionlang.models.seq2seq.config import L2MConfig  # noqa: F401 (re-exported)
 from motionlang.models.seq2seq.layers import AdditiveAttention, BiGRUEncoder, StackedDecoder
 from motionlang.models.seq2seq.losses import energy_loss, expected_foot_loss
 from motionlang.models.seq2seq.plan import Planner, motion_plan, plan_at
 
 
-class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
+class LanguageToMotion(Seq2SeqCheckpointed, nn.Module):
     """Token ids (B, L) -> mixture parameters of every next frame (B, T, ...)."""
 
     kind = "l2m"
@@ -103,7 +103,7 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
                                   f">= 0, got {c.plan_parts!r}, {c.plan_weight!r}, "
                                   f"{c.plan_noise!r}")
         if c.foot_weight > 0 and features is not None and (
-                getattr(features, "kind", None) != "positions" or c.n_features != 66):
+                getattr(features, "kind", None) != "positions" or c.n_features != features.dim):
             raise MotionlangError("L2MConfig.foot_weight needs position features (train l2m "
                                   "--features positions): the foot's step is read from "
                                   "joint positions")
@@ -353,17 +353,13 @@ class LanguageToMotion(Seq2SeqCheckpoint, nn.Module):
             out["plan"] = plan_mse.detach()
         return out
 
-    def to_checkpoint(self) -> dict:
-        d = super().to_checkpoint()
-        d["length_model"] = None if self.length_model is None else self.length_model.to_dict()
-        return d
+    def checkpoint_state(self) -> dict:
+        return {**super().checkpoint_state(), "length_model": (
+            None if self.length_model is None else self.length_model.to_dict())}
 
-    @classmethod
-    def from_checkpoint(cls, d: dict):
-        model = super().from_checkpoint(d)
-        if d.get("length_model"):   # checkpoints before it have none
-            model.length_model = SentenceLength.from_dict(d["length_model"])
-        return model
+    def restore_state(self, state: dict) -> None:
+        if state.get("length_model"):   # checkpoints before it have none
+            self.length_model = SentenceLength.from_dict(state["length_model"])
 
 
 def _lengths(motion: torch.Tensor, lengths: torch.Tensor | None) -> torch.Tensor:

@@ -10,6 +10,7 @@ import torch.nn.functional as F
 
 from motionlang.errors import MotionlangError
 from motionlang.features.joint_map import TOES
+from motionlang.features.positions import local_joints, root_step, root_turn
 
 
 def frame_mask(lengths: torch.Tensor | None, B: int, T: int) -> torch.Tensor:
@@ -38,8 +39,8 @@ def velocity_loss(pred: torch.Tensor, target: torch.Tensor, mask: torch.Tensor
 def energy_loss(pred: torch.Tensor, target: torch.Tensor, mask: torch.Tensor,
                 window: int = 13) -> torch.Tensor:
     """Smooth-L1 between the local *speeds* of both sequences: per feature, the mean absolute
-    frame-to-frame change over a centred window of ``window`` frames (odd; 13 = about 1 s at
-    12.5 Hz, one gait cycle), over valid frame pairs only.
+    frame-to-frame change over a centred window of ``window`` frames (odd; 13 frames: about one
+    gait cycle at the two-stream model's rate), over valid frame pairs only.
 
     Unlike :func:`velocity_loss` it does not care about phase: a step taken a little earlier
     or later costs nothing, but standing where the reference moves does. Beyond the paper.
@@ -60,20 +61,20 @@ def energy_loss(pred: torch.Tensor, target: torch.Tensor, mask: torch.Tensor,
 def foot_steps(raw: torch.Tensor, feet: tuple[int, ...]) -> torch.Tensor:
     """Horizontal steps of foot joints between consecutive frames of position features.
 
-    raw: (B, T, 66) *un-normalised* features of ``features.positions`` (21 local joints in
+    raw: (B, T, F) *un-normalised* features of ``features.positions`` (21 local joints in
     the body's heading frame, then the root's ground step (sideways, forward; m/frame) in
     the previous frame's heading frame and its heading change (rad/frame)). feet: indices
     into the 21 joints. Returns (B, T-1, k, 2): each joint's move from frame t-1 to t, in
     metres, in the heading frame of t-1 (the frame that ``root.increments`` steps from):
     ``v_t + Ry(dyaw_t) local_t - local_{t-1}``, the same step the decoded global positions take.
     """
-    B, T, _ = raw.shape
-    local = raw[..., :63].reshape(B, T, 21, 3)[:, :, list(feet)]
+    local = local_joints(raw)[:, :, list(feet)]
     x, z = local[..., 0], local[..., 2]                       # (B, T, k)
-    a = raw[:, 1:, 65].unsqueeze(-1)
+    a = root_turn(raw)[:, 1:].unsqueeze(-1)
     c, s = torch.cos(a), torch.sin(a)
-    dx = raw[:, 1:, 63:64] + c * x[:, 1:] + s * z[:, 1:] - x[:, :-1]
-    dz = raw[:, 1:, 64:65] - s * x[:, 1:] + c * z[:, 1:] - z[:, :-1]
+    step = root_step(raw)[:, 1:]
+    dx = step[..., 0:1] + c * x[:, 1:] + s * z[:, 1:] - x[:, :-1]
+    dz = step[..., 1:2] - s * x[:, 1:] + c * z[:, 1:] - z[:, :-1]
     return torch.stack([dx, dz], dim=-1)
 
 
@@ -87,7 +88,7 @@ def foot_contact_loss(pred_raw: torch.Tensor, target_raw: torch.Tensor, mask: to
     test read from ``pred_raw`` without a gradient: the model's own steps need not fall
     when the reference's do once it runs on its own frames). Zero when no foot is down.
 
-    pred_raw, target_raw: (B, T, 66) un-normalised position features; mask: (B, T), 1 on
+    pred_raw, target_raw: (B, T, F) un-normalised position features; mask: (B, T), 1 on
     valid frames. A planted foot should not move: this asks the model's frames to keep
     it where it was, which the frame NLL alone does not (small errors of the root's step and
     of the local foot position each look likely but add up to a slide).
@@ -99,7 +100,7 @@ def foot_contact_loss(pred_raw: torch.Tensor, target_raw: torch.Tensor, mask: to
     with torch.no_grad():
         test = target_raw if down == "reference" else pred_raw.detach()
         ref = foot_steps(test, feet).norm(dim=-1) * fps                   # (B, T-1, k)
-        y = test[..., :63].reshape(*test.shape[:2], 21, 3)[:, :, list(feet), 1]
+        y = local_joints(test)[:, :, list(feet), 1]
         low = y < height
         pair = (mask[:, 1:] * mask[:, :-1]).bool().unsqueeze(-1)
         contact = (low[:, 1:] & low[:, :-1] & (ref < speed) & pair).to(pred_raw.dtype)
@@ -112,9 +113,9 @@ def fed_foot_contact_loss(fed_raw: torch.Tensor, pred_raw: torch.Tensor,
                           target_raw: torch.Tensor, mask: torch.Tensor,
                           feet: tuple[int, ...], fps: float, **contact) -> torch.Tensor:
     """:func:`foot_contact_loss` of the one-frame steps a decoder takes: from the frame it was
-    fed at step t (``fed_raw`` (B, T, 66); step 0's is a zero frame, left out) to the frame it
-    gave (``pred_raw`` (B, T, 66)), where the reference's toe is down over its own step from
-    frame t-1 to t (``target_raw`` (B, T, 66)); mask (B, T). ``contact``: ``height``, ``speed``.
+    fed at step t (``fed_raw`` (B, T, F); step 0's is a zero frame, left out) to the frame it
+    gave (``pred_raw`` (B, T, F)), where the reference's toe is down over its own step from
+    frame t-1 to t (``target_raw`` (B, T, F)); mask (B, T). ``contact``: ``height``, ``speed``.
     """
     B, T, F = pred_raw.shape
     prev = torch.cat([target_raw[:, :1], target_raw[:, :-1]], dim=1)

@@ -18,12 +18,12 @@ import torch
 from torch import nn
 from torch.nn import functional as F
 
-from motionlang.models.checkpoint import Seq2SeqCheckpoint
+from motionlang.models.seq2seq.checkpoint import Seq2SeqCheckpointed
 from motionlang.models.seq2seq.config import M2LConfig  # noqa: F401 (re-exported)
 from motionlang.models.seq2seq.layers import AdditiveAttention, BiGRUEncoder, StackedDecoder
 
 
-class MotionToLanguage(Seq2SeqCheckpoint, nn.Module):
+class MotionToLanguage(Seq2SeqCheckpointed, nn.Module):
     """Motion features (B, T, F) -> next-word logits (B, L, V).
 
     ``vocab`` (a ``Vocabulary`` or a token list) and ``normalizer`` ride along in the

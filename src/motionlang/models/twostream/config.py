@@ -14,6 +14,8 @@ from typing import Any
 
 from motionlang.errors import MotionlangError
 from motionlang.features.joint_map import KIT21_NAMES
+from motionlang.features.positions import DIM as POSITIONS_DIM
+from motionlang.features.positions import N_LOCAL
 from motionlang.utils.checks import check_numbers
 
 #: joint names of each body part, subject's left/right (MMM naming, ``KIT21_NAMES``).
@@ -37,15 +39,16 @@ DEFAULT_LAMBDAS = {"pose": 1.0, "manifold": 0.001, "velocity": 0.1, "embedding":
                    "adversarial": 0.001, "discriminator": 1.0, "energy": 0.0, "foot": 0.0}
 
 
-def kit21_parts(n_features: int = 66) -> dict[str, list[int]]:
-    """Feature columns of each part for 21 joints x 3 then ``n_features - 63`` trajectory
-    columns (which go to the trunk)."""
-    if n_features < 63:
-        raise MotionlangError(f"the 21-joint layout needs >= 63 features, got {n_features}")
+def kit21_parts(n_features: int = POSITIONS_DIM) -> dict[str, list[int]]:
+    """Feature columns of each part for the positions features' 21 joints x 3, then
+    ``n_features`` minus those trajectory columns (which go to the trunk)."""
+    if n_features < N_LOCAL:
+        raise MotionlangError(f"the 21-joint layout needs >= {N_LOCAL} features, got "
+                              f"{n_features}")
     idx = {n: i for i, n in enumerate(KIT21_NAMES)}
     parts = {p: [3 * idx[j] + c for j in joints for c in range(3)]
              for p, joints in KIT21_PART_JOINTS.items()}
-    parts["trunk"] += list(range(63, n_features))
+    parts["trunk"] += list(range(N_LOCAL, n_features))
     return parts
 
 
@@ -54,7 +57,7 @@ class TwoStreamConfig:
     """Sizes, text encoder, loss weights and ablation flags.
 
     Attributes:
-        n_features: per-frame feature size F (66 for the positions features).
+        n_features: per-frame feature size F (the positions features' size by default).
         h1, h2, h: per-part, trunk+limb and stream embedding sizes (paper: 32, 128, 512).
         parts: feature columns of ``left_arm, right_arm, trunk, left_leg, right_leg``;
             together they must cover ``range(n_features)`` exactly once.
@@ -87,7 +90,7 @@ class TwoStreamConfig:
             decoder can tell which action is due without counting frames.
     """
 
-    n_features: int = 66
+    n_features: int = POSITIONS_DIM
     h1: int = 32
     h2: int = 128
     h: int = 512

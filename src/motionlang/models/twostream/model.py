@@ -2,6 +2,11 @@
 pose sequences with upper- and lower-body streams, a shared hierarchical decoder and a pose
 discriminator; losses as a dict of named terms weighted by ``config.lambdas``.
 
+The model reads the *positions* features (``features.positions.PositionFeatures``): the
+fitted feature set travels in its checkpoint, and everything about their layout and frame
+rate (decoding to global positions, encoding positions, the foot term's metres and
+seconds) goes through it.
+
 Batch (see :meth:`TwoStreamModel.loss`): ``motion`` (B, T, F) normalised features,
 optional ``lengths`` (B,), and either ``sentences`` (list of B strings; features come from
 the frozen, cached text encoder) or ``text`` (B, L, D) + ``text_lengths`` (B,).
@@ -15,8 +20,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import replace
-from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import torch
@@ -24,13 +28,16 @@ from torch import nn
 from torch.func import functional_call
 
 from motionlang.errors import MotionlangError
+from motionlang.features.base import FeatureSet
 from motionlang.features.joint_map import TOES
+from motionlang.features.normalizer import Normalizer
+from motionlang.features.positions import PositionFeatures
 from motionlang.models.checkpoint import (
-    FORMAT_VERSION,
+    Checkpointed,
+    pack_features,
     pack_normalizer,
-    read_model_dict,
+    unpack_features,
     unpack_normalizer,
-    write_checkpoint,
 )
 from motionlang.models.length import SentenceLength
 from motionlang.models.twostream import losses as L
@@ -41,28 +48,46 @@ from motionlang.models.twostream.sentence import SentenceEncoder
 from motionlang.models.twostream.text import build_text_encoder
 
 STAGES = ("joint", "pose", "text")
-#: the length of a generation without a length model (frames at 12.5 Hz: 10 s)
-DEFAULT_FRAMES = 125
-#: frame rate of the model's position features (Ghosh et al. 2021: KIT-ML at 12.5 Hz)
-FPS = 12.5
+#: the length of a generation without a length model, in seconds
+DEFAULT_SECONDS = 10.0
 
 
-class TwoStreamModel(nn.Module):
+def position_features(features: Any = None) -> PositionFeatures:
+    """What a two-stream model reads, from what it is given: a fitted ``PositionFeatures``
+    as is; a bare normaliser (a ``Normalizer``, or a dict with ``mean`` and ``std``: the
+    models and checkpoints from before features were stored) inside default positions
+    features; None: default positions features, not fitted."""
+    if isinstance(features, FeatureSet):
+        if not isinstance(features, PositionFeatures):
+            raise MotionlangError(f"the two-stream model reads positions features, not "
+                                  f"{features.kind!r}")
+        return features
+    out = PositionFeatures()
+    if isinstance(features, dict):
+        features = Normalizer.from_dict({"mean": features["mean"], "std": features["std"]})
+    out.normalizer = features
+    return out
+
+
+class TwoStreamModel(Checkpointed, nn.Module):
     """Sentence / pose-sequence joint embedding and hierarchical pose decoder.
 
     Args:
         config: sizes and flags; ``config.text_dim == 0`` is filled in from the text encoder.
-        normalizer: the features' Normalizer (travels in the checkpoint), optional.
+        features: the fitted ``PositionFeatures`` the model reads (travel in the
+            checkpoint), or just their normaliser (:func:`position_features`); optional.
         text_encoder: token-feature source (``text.CachedTokens``); built from the config
             on first use when None.
     """
 
     kind = "twostream"
+    config_cls = TwoStreamConfig
 
-    def __init__(self, config: TwoStreamConfig, normalizer: Any = None, text_encoder=None):
+    def __init__(self, config: TwoStreamConfig, features: Any = None, text_encoder=None):
         super().__init__()
         self._text = text_encoder
-        self.config, self.normalizer = config, normalizer
+        self.config = config
+        self.features = position_features(features)
         if config.text_dim <= 0:  # a copy: the caller's config is left as given
             config = self.config = replace(config, text_dim=self.text_encoder.dim)
         self.pose_encoder = PoseEncoder(config)
@@ -75,11 +100,28 @@ class TwoStreamModel(nn.Module):
         #: e.g. annealed to 0 by the training loop; never used in eval mode)
         self.teacher_forcing = 0.0
         #: sentence -> frames for generation without a given length (``SentenceLength``,
-        #: fitted by the trainer; None: :data:`DEFAULT_FRAMES`)
-        self.length_model = None
+        #: fitted by the trainer; None: :data:`DEFAULT_SECONDS`)
+        self.length_model: SentenceLength | None = None
         self.set_stage("joint" if config.joint_training else "pose")
 
     # ------------------------------------------------------------------ parts
+    @property
+    def normalizer(self) -> Normalizer | None:
+        """The features' normaliser (None before they are fitted)."""
+        return self.features.normalizer
+
+    @normalizer.setter
+    def normalizer(self, norm: Any) -> None:
+        # new features of the same options: a feature set shared with a dataset stays as it is
+        features = PositionFeatures(self.features.config)
+        features.normalizer = position_features(norm).normalizer
+        self.features = features
+
+    @property
+    def fps(self) -> float:
+        """Frame rate of the model's frames (its features'), Hz."""
+        return self.features.fps
+
     @property
     def text_encoder(self):
         if self._text is None:
@@ -220,17 +262,20 @@ class TwoStreamModel(nn.Module):
         return {"loss": total, **{k: v.detach() for k, v in terms.items()}}
 
     def _foot_term(self, q: torch.Tensor, x: torch.Tensor, mask: torch.Tensor) -> torch.Tensor:
-        """``foot_contact_loss`` of decoded frames q against x (both (B, T, 66), normalised),
-        read in metres through the model's normaliser; mask (B, T)."""
-        norm = self.normalizer
-        mean = norm.get("mean") if isinstance(norm, dict) else getattr(norm, "mean", None)
-        std = norm.get("std") if isinstance(norm, dict) else getattr(norm, "std", None)
-        if mean is None or std is None or self.config.n_features != 66:
-            raise MotionlangError("the foot loss needs the 66 position features and their "
-                                  "normaliser (mean and std)")
-        mean = torch.as_tensor(np.asarray(mean), dtype=x.dtype, device=x.device)
-        std = torch.as_tensor(np.asarray(std), dtype=x.dtype, device=x.device)
-        return L.foot_contact_loss(q * std + mean, x * std + mean, mask, TOES, FPS)
+        """``foot_contact_loss`` of decoded frames q against x (both (B, T, F), normalised),
+        read in metres and seconds through the model's features; mask (B, T)."""
+        norm = cast(Normalizer, self._fitted_features("the foot loss").normalizer)
+        mean = torch.as_tensor(np.asarray(norm.mean), dtype=x.dtype, device=x.device)
+        std = torch.as_tensor(np.asarray(norm.std), dtype=x.dtype, device=x.device)
+        return L.foot_contact_loss(q * std + mean, x * std + mean, mask, TOES, self.fps)
+
+    def _fitted_features(self, what: str) -> PositionFeatures:
+        fs = self.features
+        if not fs.fitted or fs.dim != self.config.n_features:
+            raise MotionlangError(f"{what} needs a model of the {fs.dim} positions features "
+                                  f"with their normaliser (this one: {self.config.n_features} "
+                                  f"features{'' if fs.fitted else ', no normaliser'})")
+        return fs
 
     # ------------------------------------------------------------------ generation
     def set_rest_pose(self, first_frames) -> None:
@@ -284,47 +329,46 @@ class TwoStreamModel(nn.Module):
 
     def frames_for(self, sentence: str) -> int:
         """The length to generate ``sentence`` for when none is given: the length model's
-        prediction, else :data:`DEFAULT_FRAMES` (10 s at 12.5 Hz)."""
+        prediction, else :data:`DEFAULT_SECONDS` at the model's frame rate."""
         if self.length_model is None:
-            return DEFAULT_FRAMES
+            return int(round(DEFAULT_SECONDS * self.fps))
         return self.length_model.frames(sentence)
 
     def positions(self, x: torch.Tensor, start=(0.0, 0.0, 0.0)) -> np.ndarray:
         """Normalised features (T, F) of this model -> global 21-joint positions (T, 21, 3)
-        metres, Y up (models of the 66 *positions* features with their normaliser)."""
-        from motionlang.features.positions import join_global
-        if self.normalizer is None or self.config.n_features != 66:
-            raise MotionlangError("positions need a model of the 66 positions "
-                                  "features with its normaliser")
-        raw = self.normalizer.inverse(torch.as_tensor(x).detach().double().numpy())
-        # the local frame's origin is the root projected on the ground: the root's local
-        # x and z are 0 by construction (constant columns the model only approximates)
-        raw[:, [0, 2]] = 0.0
-        return join_global(raw[:, :63].reshape(-1, 21, 3), raw[:, 63:65], raw[:, 65], start)
+        metres, Y up, frame 0 at ``start`` (x0, z0, yaw0); the root's local x and z, 0 by
+        construction, are set to 0 (``PositionFeatures.decode(pin_root=True)``)."""
+        fs = self._fitted_features("positions")
+        return fs.decode(torch.as_tensor(x), start, pin_root=True)
+
+    def features_from_positions(self, p21: np.ndarray) -> np.ndarray:
+        """Global 21-joint positions (T, 21, 3) metres at :attr:`fps` -> the model's
+        normalised features (T, F) (float32: the features' dtype), the body as it stands (the inverse of
+        :meth:`positions` up to frame 0's placement): what :meth:`reconstruct`, the
+        ``start`` of :meth:`generate` and :meth:`encode_motion` read."""
+        return self._fitted_features("features").encode_positions(p21)
 
     # ------------------------------------------------------------------ persistence
-    def to_checkpoint(self) -> dict:
-        return {"kind": self.kind, "format": FORMAT_VERSION, "config": self.config.to_dict(),
-                "stage": self.stage,
-                "normalizer": pack_normalizer(self.normalizer), "state_dict": self.state_dict(),
+    def checkpoint_state(self) -> dict[str, Any]:
+        fitted = self.features.fitted
+        return {"stage": self.stage,
+                "features": pack_features(self.features) if fitted else None,
+                # the features' normaliser again: what releases before features were stored read
+                "normalizer": pack_normalizer(self.normalizer) if fitted else None,
                 "length_model": (None if self.length_model is None
                                  else self.length_model.to_dict())}
 
     @classmethod
-    def from_checkpoint(cls, d: dict, text_encoder=None) -> TwoStreamModel:
-        model = cls(TwoStreamConfig.from_dict(d["config"]),
-                    unpack_normalizer(d.get("normalizer")), text_encoder)
-        model.load_state_dict(d["state_dict"])
-        model.set_stage(d.get("stage", "joint"))
-        if d.get("length_model"):   # checkpoints before it have none
-            model.length_model = SentenceLength.from_dict(d["length_model"])
-        return model.eval()
+    def from_state(cls, config: TwoStreamConfig, state: dict[str, Any],
+                   text_encoder=None) -> TwoStreamModel:
+        # checkpoints before features were stored carry their normaliser alone
+        features = unpack_features(state.get("features"))
+        if features is None:
+            features = unpack_normalizer(state.get("normalizer"))
+        return cls(config, features, text_encoder)
 
-    def save(self, path: str | Path) -> None:
-        """One self-describing file: config, stage, normaliser, weights (atomic write)."""
-        write_checkpoint(self.to_checkpoint(), path)
+    def restore_state(self, state: dict[str, Any]) -> None:
+        self.set_stage(state.get("stage", "joint"))
+        if state.get("length_model"):   # checkpoints before it have none
+            self.length_model = SentenceLength.from_dict(state["length_model"])
 
-    @classmethod
-    def load(cls, path: str | Path, text_encoder=None) -> TwoStreamModel:
-        """Rebuild from :meth:`save` or a trainer checkpoint; in eval mode."""
-        return cls.from_checkpoint(read_model_dict(path, cls.kind), text_encoder)
