@@ -32,6 +32,7 @@ import numpy as np
 from motionlang.errors import MotionlangError
 from motionlang.formats import read_motion, write_motion
 from motionlang.kinematics.motion import Motion
+from motionlang.rendering.output import body_motion, write_result
 
 
 def load_model(name_or_path: str | Path, kind: str | tuple[str, ...] | None = None):
@@ -147,67 +148,77 @@ def describe(motion: Motion | str | Path, model: Any = None, width: int = 5, *,
                          length_penalty=length_penalty, rank=rank)
 
 
-def body_motion(result, fps: float, rig: Motion | None = None, name: str = "generated"
-                ) -> tuple[Motion, np.ndarray]:
-    """A generated motion as a :class:`Motion`: positions (T, 21, 3) metres at ``fps`` Hz
-    get joint angles fitted on a 21-joint skeleton, or, with ``rig``, are retargeted onto
-    the rig's skeleton (its names, units and rest pose; ``rig.meta["joint_map"]`` honoured).
-    A Motion (angles L2M) is returned as it is unless ``rig`` is given.
+def generate_hypotheses(text: str, model: Any = None, *, width: int = 5,
+                        method: str | None = None, seed: int = 0,
+                        max_frames: int | None = None, min_frames: int = 5,
+                        temperature: float = 1.0, length_norm: bool = False,
+                        rerank: Any = None, start_from: Motion | str | Path | None = None,
+                        joint_map: dict | str | Path | None = None,
+                        foot_lock: bool = True) -> tuple[list[tuple[Any, float]], float]:
+    """Every hypothesis ``motionlang generate`` makes for ``text``, best first, and their
+    frame rate: ``([(result, score), ...], fps)``; a result is a Motion (joint-angle
+    models) or global 21-joint positions (T, 21, 3) metres; the score is the log likelihood
+    (with ``rerank``: the M2L's log P(text | motion)), NaN for deterministic models.
 
-    Returns:
-        the Motion and the per-frame, per-joint distance (T, 21) in metres between its
-        21 body joints and the generated ones (zeros for a Motion kept as it is).
+    model: as :func:`text_to_motion` (None: the packaged L2M). width: hypotheses (samples
+    or beam width). method: None for the model's own way, else "sample", "beam" or "mean".
+    max_frames: length cap in model frames (a model told its length generates exactly
+    this many). min_frames: no end before this many frames. temperature: sharpen the
+    mixture when sampling. length_norm: rank by log likelihood per frame. rerank: an M2L
+    (loaded, a name or a path) ranking the ``width`` motions. start_from: a Motion or file
+    whose first pose begins every motion (``joint_map``: its map, if no built-in map fits).
+    foot_lock: move the body with its planted feet and hold them (position models).
+
+    Raises:
+        MotionlangError: options that contradict each other or the model, checked before
+            anything is generated.
     """
-    from motionlang.features.joint_map import KIT21_NAMES, KIT21_PARENTS, kit21_weights, positions21
-    if isinstance(result, Motion):
-        if rig is None:
-            return result, np.zeros((result.n_frames, len(KIT21_NAMES)))
-        fps, result = result.fps, positions21(result)
-    if rig is None:
-        from motionlang.kinematics.from_positions import motion_from_positions
-        motion = motion_from_positions(result, fps, KIT21_NAMES, KIT21_PARENTS, name=name)
-        W = np.eye(len(KIT21_NAMES))
-    else:
-        from motionlang.kinematics.retarget import retarget
-        W = kit21_weights(rig.skeleton, joint_map=rig.meta.get("joint_map"))[1]
-        motion = retarget(result, fps, rig, weights=W, name=name)
-    err = np.linalg.norm(np.einsum("kj,tjc->tkc", W, motion.positions()) - result, axis=-1)
-    return motion, err
-
-
-def generate(text: str, model: Any = None, *, width: int = 5, method: str | None = None,
-             seed: int = 0, max_frames: int | None = None,
-             rig: Motion | str | Path | None = None,
-             start_from: Motion | str | Path | None = None,
-             joint_map: dict | str | Path | None = None,
-             rig_joint_map: dict | str | Path | None = None,
-             foot_lock: bool = True) -> Motion:
-    """A motion for ``text`` (the best of ``width`` hypotheses), as a :class:`Motion`.
-
-    model: a loaded text-to-motion model, a checkpoint path, or None for the packaged L2M.
-    method: None for the model's own way (as ``motionlang generate``: ancestral sampling,
-    or mean decoding for models trained on their expected frames), else "sample", "beam"
-    or "mean". rig: a Motion or motion file whose skeleton the result is retargeted onto.
-    start_from: a Motion or file whose first pose begins the motion (L2M models).
-    joint_map / rig_joint_map: how ``start_from`` / ``rig`` map onto the 21-joint body,
-    if no built-in map fits them. foot_lock: move the body with the feet that are down and
-    hold them in place (``features.foot_lock``; joint-position models); False keeps the
-    decoded frames.
-    """
-    model = _t2m(model)
-    unknown = model.unknown_words(text)
+    if temperature != 1.0 and method == "mean":
+        raise MotionlangError("temperature applies to 'sample' and 'beam'; mean decoding "
+                              "draws nothing")
+    t2m = text_to_motion(model)
+    if temperature != 1.0 and t2m.deterministic:
+        raise MotionlangError(f"temperature applies to models that sample; this "
+                              f"{t2m.model.kind} model is deterministic")
+    method = method or t2m.default_method()
+    if method == "mean" and temperature != 1.0:
+        raise MotionlangError("temperature: this model generates with mean decoding (trained "
+                              "on its expected frames); ask for method sample")
+    kw: dict[str, Any] = {}
+    if rerank is not None:
+        if t2m.deterministic or method == "mean" or width < 2:
+            raise MotionlangError("rerank ranks several L2M motions: an L2M model with method "
+                                  "sample or beam and width 2 or more")
+        from motionlang.decoding.rerank import check_same_features
+        kw["reranker"] = rerank if not isinstance(rerank, (str, Path)) \
+            else load_model(rerank, kind="m2l")
+        check_same_features(t2m.model, kw["reranker"], f"rerank {rerank}")
+    unknown = t2m.unknown_words(text)
     if unknown:   # a warning, not an error: the rest of the sentence still steers
         import warnings
+        vocab = getattr(t2m.model, "vocab", None)
         warnings.warn(f"the model does not know {', '.join(repr(w) for w in unknown)}; each "
-                      "is read as an unknown word", UserWarning, stacklevel=2)
-    rig_motion = None if rig is None else load_rig(rig, rig_joint_map)
-    kw: dict[str, Any] = {}
+                      f"is read as an unknown word (its vocabulary: {len(vocab or ())} words)",
+                      UserWarning, stacklevel=2)
     if start_from is not None:
-        kw["first_frame"] = first_frame(model, start_from, joint_map)
-    hyps = model.hypotheses(text, width=width, method=method or model.default_method(),
-                            seed=seed, max_frames=max_frames, min_frames=5,
-                            foot_lock=foot_lock, **kw)
-    return body_motion(hyps[0][0], model.fps, rig_motion)[0]
+        kw["first_frame"] = first_frame(t2m, start_from, joint_map)
+    hyps = t2m.hypotheses(text, width=width, method=method, seed=seed, max_frames=max_frames,
+                          min_frames=min_frames, length_norm=length_norm,
+                          temperature=temperature, foot_lock=foot_lock, **kw)
+    return hyps, t2m.fps
+
+
+def generate(text: str, model: Any = None, *, rig: Motion | str | Path | None = None,
+             rig_joint_map: dict | str | Path | None = None, **options: Any) -> Motion:
+    """A motion for ``text`` (the best of ``width`` hypotheses), as a :class:`Motion`: on
+    the 21-joint body, or with ``rig`` (a Motion or motion file; ``rig_joint_map``: its map
+    onto the 21-joint body, if no built-in map fits) retargeted onto that skeleton.
+    ``options``: those of :func:`generate_hypotheses` (``width``, ``method``, ``seed``,
+    ``max_frames``, ``start_from`` ...), the same as ``motionlang generate``'s.
+    """
+    rig_motion = None if rig is None else load_rig(rig, rig_joint_map)
+    hyps, fps = generate_hypotheses(text, model, **options)
+    return body_motion(hyps[0][0], fps, rig_motion)[0]
 
 
 def body21(motion: Motion | str | Path, *, joint_map: dict | str | Path | None = None,
@@ -306,4 +317,5 @@ def train(kind: str, data: str | Path | list, out: str | Path, *, resume: bool =
 
 __all__ = ["read_motion", "write_motion", "read_mapped", "load_model", "describe",
            "generate", "encode", "fill_in", "body21", "retarget", "render", "body_motion",
-           "load_rig", "first_frame", "check_map", "train", "text_to_motion"]
+           "load_rig", "first_frame", "check_map", "train", "text_to_motion",
+           "generate_hypotheses", "write_result"]

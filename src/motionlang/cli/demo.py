@@ -118,7 +118,7 @@ def generate_part(out_dir: Path, sentence: str, *, width: int = 5, seed: int = 0
 
     max_frames: length cap in model frames (None: the model's own cap).
     """
-    from motionlang.api import body_motion
+    from motionlang.rendering.output import body_motion
     from motionlang.decoding.seq2seq import generate
     from motionlang.decoding.t2m import default_method
     from motionlang.formats import write_motion

@@ -12,8 +12,6 @@ import math
 import sys
 from pathlib import Path
 
-import numpy as np
-
 from motionlang.cli.options import (
     frames_int,
     nonneg_float,
@@ -24,9 +22,6 @@ from motionlang.cli.options import (
     width_int,
 )
 from motionlang.errors import MotionlangError
-
-MOTION_OUT = (".bvh", ".xml", ".amc")
-RENDER_OUT = (".gif", ".mp4")
 
 
 def add_rank_arg(p: argparse.ArgumentParser, default: str) -> None:
@@ -45,13 +40,12 @@ def check_length_penalty(alpha: float) -> None:
 
 
 def cmd_describe(args: argparse.Namespace) -> int:
+    from motionlang.api import describe, load_model
     from motionlang.cli.motion_commands import load_input
-    from motionlang.decoding.seq2seq import describe
-    from motionlang.models.registry import load_model
 
     check_length_penalty(args.length_penalty)
-    model = load_model(args.model, kind="m2l")
-    hyps = describe(model, load_input(args), width=args.width,
+    model = load_model(args.model, kind="m2l")   # a missing model is named first
+    hyps = describe(load_input(args), model, width=args.width,
                     length_penalty=args.length_penalty, rank=args.rank)
     if args.json:
         print(json.dumps([{"rank": i + 1, "text": t, "log_p": s} for i, (t, s) in
@@ -62,133 +56,46 @@ def cmd_describe(args: argparse.Namespace) -> int:
     return 0
 
 
-def _read_rig(args: argparse.Namespace, out: Path):
-    """The ``--rig`` motion file (its skeleton is the target of a .bvh output), checked
-    before anything is generated, or None."""
-    if args.rig is None:
-        if args.rig_joint_map is not None:
-            raise MotionlangError("--rig-joint-map needs --rig")
-        return None
-    if out.suffix.lower() != ".bvh":
-        raise MotionlangError(f"{out}: --rig writes .bvh files; got {out.suffix or 'none'!r}")
-    from motionlang.api import load_rig
-    return load_rig(args.rig, args.rig_joint_map)
-
-
-def _on_rig(result, fps: float, rig) -> tuple:
-    """Generated positions (T, 21, 3) at ``fps`` or a Motion -> (Motion on ``rig``'s
-    skeleton, note on how far its body joints are from the generated ones)."""
-    from motionlang.api import body_motion
-    motion, err = body_motion(result, fps, rig)
-    err = err * 1000.0
-    return motion, (f" (on the rig of {rig.meta.get('path', rig.name)}: body joints "
-                    f"{err.mean():.1f} mm from the generated ones on average, at most "
-                    f"{err.max():.0f} mm)")
-
-
-def _write(result, path: Path, title: str, fps: float, rig=None) -> str:
-    """A generated Motion, or 21-joint positions (T, 21, 3) at ``fps`` Hz, to ``path``:
-    .npz (positions and fps), .bvh (a Motion as it is; positions on a 21-joint skeleton
-    fitted to them), .xml / .amc (Motions on such skeletons only), .gif / .mp4 animation or
-    .png pose strip.
-
-    Returns a note for the user ("" or how far a fitted skeleton is from the positions)."""
-    from motionlang.kinematics import Motion
-    ext = path.suffix.lower()
-    note = ""
-    if rig is not None:
-        result, note = _on_rig(result, fps, rig)
-    if ext == ".npz":
-        from motionlang.utils.atomic import atomic_write
-        data = {"positions": result, "fps": np.float64(fps)} if isinstance(result, np.ndarray) \
-            else {"positions": result.positions(), "fps": np.float64(result.fps)}
-        with atomic_write(path, "wb") as fh:
-            np.savez(fh, **data)
-        return note
-    if ext not in MOTION_OUT + RENDER_OUT + (".png",):
-        raise MotionlangError(f"{path}: output must be .bvh, .xml, .amc, .gif, .mp4, .png "
-                              "or .npz")
-    if not isinstance(result, Motion):
-        if ext in MOTION_OUT:
-            if ext != ".bvh":
-                raise MotionlangError(f"{path}: this model's features decode to joint "
-                                      "positions; write .bvh, .npz, .gif, .mp4 or .png")
-            # joint angles fitted to the 21 positions (bone lengths made constant)
-            from motionlang.api import body_motion
-            result, err = body_motion(result, fps, name=path.stem)
-            err = err * 1000.0
-            note = (f" (joints {err.mean():.1f} mm from the generated ones on average, "
-                    f"at most {err.max():.0f} mm: bone lengths held at their medians, "
-                    "pelvis and neck turned by least squares)")
-        else:
-            from motionlang.rendering.scene import kit21_scene
-            result = kit21_scene(result, fps)
-    if ext in MOTION_OUT:
-        from motionlang.formats import write_motion
-        write_motion(result, path)
-    elif ext == ".png":
-        from motionlang.rendering import render_strip
-        render_strip(result, path, title=title)
-    else:
-        from motionlang.rendering import render_animation
-        render_animation(result, path, title=title)
-    return note
-
-
 def cmd_generate(args: argparse.Namespace) -> int:
-    # any text-to-motion checkpoint: L2M (seq2seq) or the two-stream model
-    from motionlang.decoding.t2m import text_to_motion
-    from motionlang.models.registry import TEXT_TO_MOTION, load_model
+    import warnings
 
+    from motionlang.api import generate_hypotheses, load_rig, write_result
+    from motionlang.rendering.output import RESULT_OUT
+
+    out = Path(args.output)
+    if out.suffix.lower() not in RESULT_OUT:   # before the model is read
+        raise MotionlangError(f"{out}: output must be .bvh, .xml, .amc, .gif, .mp4, .png "
+                              "or .npz")
     if args.temperature != 1.0 and args.method == "mean":
         raise MotionlangError("--temperature applies to 'sample' and 'beam'; mean decoding "
                               "draws nothing")
-    model = text_to_motion(load_model(args.model, kind=TEXT_TO_MOTION))
-    if args.temperature != 1.0 and model.deterministic:
-        raise MotionlangError("--temperature applies to models that sample; this "
-                              f"{model.model.kind} model is deterministic")
-    unknown = model.unknown_words(args.text)
-    if unknown:
-        print(f"motionlang generate: warning: the model does not know "
-              f"{', '.join(repr(w) for w in unknown)}; each is read as an unknown word "
-              f"(its vocabulary: {len(model.model.vocab)} words)", file=sys.stderr)
-    if args.method is None:   # how the model was trained to continue its own frames
-        args.method = model.default_method()
-        if args.method == "mean" and args.temperature != 1.0:
-            raise MotionlangError("--temperature: this model generates with mean decoding "
-                                  "(trained on its expected frames); add --method sample")
-    extra = {}
-    if args.rerank:
-        if model.deterministic or args.method == "mean" or args.width < 2:
-            raise MotionlangError("--rerank ranks several L2M motions: an L2M model with "
-                                  "--method sample or beam and -w 2 or more")
-        from motionlang.decoding.rerank import check_same_features
-        extra["reranker"] = load_model(args.rerank, kind="m2l")
-        check_same_features(model.model, extra["reranker"], f"--rerank {args.rerank}")
-    out = Path(args.output)
-    rig = _read_rig(args, out)
-    if args.start_from:
-        from motionlang.api import first_frame
-        extra["first_frame"] = first_frame(model, args.start_from, args.joint_map)
-    hyps = model.hypotheses(args.text, width=args.width, method=args.method, seed=args.seed,
-                        max_frames=args.max_frames, min_frames=args.min_frames,
-                        length_norm=args.length_norm, temperature=args.temperature,
-                        foot_lock=not args.no_foot_lock, **extra)
-    # rate of position outputs: the two-stream model's 12.5 Hz, else the model's features'
-    fps = model.fps
+    if args.rig_joint_map is not None and args.rig is None:
+        raise MotionlangError("--rig-joint-map needs --rig")
+    if args.rig is not None and out.suffix.lower() != ".bvh":
+        raise MotionlangError(f"{out}: --rig writes .bvh files; got {out.suffix or 'none'!r}")
+    rig = None if args.rig is None else load_rig(args.rig, args.rig_joint_map)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", UserWarning)
+        hyps, fps = generate_hypotheses(
+            args.text, args.model, width=args.width, method=args.method, seed=args.seed,
+            max_frames=args.max_frames, min_frames=args.min_frames,
+            length_norm=args.length_norm, temperature=args.temperature, rerank=args.rerank,
+            start_from=args.start_from, joint_map=args.joint_map,
+            foot_lock=not args.no_foot_lock)
+    for w in caught:
+        print(f"motionlang generate: warning: {w.message}", file=sys.stderr)
     for i, (result, score) in enumerate(hyps, 1):
         n = len(result.joint_angles) if hasattr(result, "joint_angles") else len(result)
-        # the two-stream model is deterministic: it has no likelihood to rank by
+        # a deterministic model (two-stream) has no likelihood to rank by
         likelihood = "" if math.isnan(score) else \
             f" log P(text | motion) = {score:8.2f} " if args.rerank else f" log L = {score:10.2f} "
         line = f"{i}.{likelihood} {n} frames"
         if i == 1 or args.all:
             path = out if i == 1 else out.with_name(f"{out.stem}_{i}{out.suffix}")
-            note = _write(result, path, f"{args.text} (#{i})", fps, rig)
+            note = write_result(result, path, fps=fps, title=f"{args.text} (#{i})", rig=rig)
             line += f"  -> {path}{note}"
         print(line)
     return 0
-
 
 
 def register(subparsers) -> None:

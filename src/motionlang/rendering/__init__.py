@@ -1,11 +1,20 @@
-"""Rendering: animated stick figures (GIF/MP4), pose strips and trajectory plots (PNG).
+"""Rendering: animated stick figures (GIF/MP4), pose strips and trajectory plots (PNG), and
+generated results written by their extension (:mod:`.output`).
 
 All figures are drawn with an explicit Agg canvas (no pyplot state) and written atomically.
+The names below are imported on first use, so that importing a submodule (or the API) does
+not load matplotlib.
 """
-from motionlang.rendering.animation import animation_frames, render_animation
-from motionlang.rendering.scene import Scene, build_scene, contact_frames, footsteps
-from motionlang.rendering.strip import render_strip
-from motionlang.rendering.trajectory import plot_trajectory
+_NAMES = {"render_animation": "animation", "animation_frames": "animation",
+          "render_strip": "strip", "plot_trajectory": "trajectory", "Scene": "scene",
+          "build_scene": "scene", "contact_frames": "scene", "footsteps": "scene"}
 
-__all__ = ["render_animation", "animation_frames", "render_strip", "plot_trajectory",
-           "Scene", "build_scene", "contact_frames", "footsteps"]
+
+def __getattr__(name: str):
+    if name in _NAMES:
+        import importlib
+        return getattr(importlib.import_module(f"{__name__}.{_NAMES[name]}"), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+__all__ = list(_NAMES)

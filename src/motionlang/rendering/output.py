@@ -1,0 +1,106 @@
+"""Generated results to files: the one place that writes a result by its file extension.
+
+A result is a :class:`Motion` (a joint-angle model's output, or a retargeted one) or global
+21-joint positions (T, 21, 3) metres at a given frame rate (a joint-position model's).
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from motionlang.errors import MotionlangError
+from motionlang.kinematics.motion import Motion
+
+#: motion files (.bvh also for positions, fitted on a 21-joint skeleton)
+MOTION_OUT = (".bvh", ".xml", ".amc")
+#: animations; ``.png`` is a pose strip, ``.npz`` the positions and frame rate
+RENDER_OUT = (".gif", ".mp4")
+RESULT_OUT = MOTION_OUT + RENDER_OUT + (".png", ".npz")
+
+
+def body_motion(result, fps: float, rig: Motion | None = None, name: str = "generated"
+                ) -> tuple[Motion, np.ndarray]:
+    """A generated motion as a :class:`Motion`: positions (T, 21, 3) metres at ``fps`` Hz
+    get joint angles fitted on a 21-joint skeleton, or, with ``rig``, are retargeted onto
+    the rig's skeleton (its names, units and rest pose; ``rig.meta["joint_map"]`` honoured).
+    A Motion (angles L2M) is returned as it is unless ``rig`` is given.
+
+    Returns:
+        the Motion and the per-frame, per-joint distance (T, 21) in metres between its
+        21 body joints and the generated ones (zeros for a Motion kept as it is).
+    """
+    from motionlang.features.joint_map import KIT21_NAMES, KIT21_PARENTS, kit21_weights, positions21
+    if isinstance(result, Motion):
+        if rig is None:
+            return result, np.zeros((result.n_frames, len(KIT21_NAMES)))
+        fps, result = result.fps, positions21(result)
+    if rig is None:
+        from motionlang.kinematics.from_positions import motion_from_positions
+        motion = motion_from_positions(result, fps, KIT21_NAMES, KIT21_PARENTS, name=name)
+        W = np.eye(len(KIT21_NAMES))
+    else:
+        from motionlang.kinematics.retarget import retarget
+        W = kit21_weights(rig.skeleton, joint_map=rig.meta.get("joint_map"))[1]
+        motion = retarget(result, fps, rig, weights=W, name=name)
+    err = np.linalg.norm(np.einsum("kj,tjc->tkc", W, motion.positions()) - result, axis=-1)
+    return motion, err
+
+
+def _error_note(err_m: np.ndarray, what: str) -> str:
+    err = err_m * 1000.0
+    return f" ({what}{err.mean():.1f} mm from the generated ones on average, at most " \
+           f"{err.max():.0f} mm"
+
+
+def write_result(result, path: str | Path, *, fps: float, title: str = "",
+                 rig: Motion | None = None) -> str:
+    """A generated Motion, or 21-joint positions (T, 21, 3) at ``fps`` Hz, to ``path``:
+    .npz (positions and fps), .bvh (a Motion as it is; positions on a 21-joint skeleton
+    fitted to them), .xml / .amc (Motions on such skeletons only), .gif / .mp4 animation or
+    .png pose strip; with ``rig``, retargeted onto the rig's skeleton first. Atomic.
+
+    Returns:
+        a note for the user: "" or how far a fitted skeleton's joints are from the result.
+
+    Raises:
+        MotionlangError: an extension that cannot hold this result, naming the path.
+    """
+    path = Path(path)
+    ext = path.suffix.lower()
+    if ext not in RESULT_OUT:
+        raise MotionlangError(f"{path}: output must be .bvh, .xml, .amc, .gif, .mp4, .png "
+                              "or .npz")
+    note = ""
+    if rig is not None:
+        result, err = body_motion(result, fps, rig)
+        note = _error_note(err, f"on the rig of {rig.meta.get('path', rig.name)}: body joints "
+                                ) + ")"
+    if ext == ".npz":
+        from motionlang.utils.atomic import atomic_write
+        data = {"positions": result, "fps": np.float64(fps)} if isinstance(result, np.ndarray) \
+            else {"positions": result.positions(), "fps": np.float64(result.fps)}
+        with atomic_write(path, "wb") as fh:
+            np.savez(fh, **data)
+        return note
+    if not isinstance(result, Motion):
+        if ext in MOTION_OUT:
+            if ext != ".bvh":
+                raise MotionlangError(f"{path}: this model's features decode to joint "
+                                      "positions; write .bvh, .npz, .gif, .mp4 or .png")
+            result, err = body_motion(result, fps, name=path.stem)
+            note = _error_note(err, "joints ") + (": bone lengths held at their medians, "
+                                                  "pelvis and neck turned by least squares)")
+        else:
+            from motionlang.rendering.scene import kit21_scene
+            result = kit21_scene(result, fps)
+    if ext in MOTION_OUT:
+        from motionlang.formats import write_motion
+        write_motion(result, path)
+    elif ext == ".png":
+        from motionlang.rendering.strip import render_strip
+        render_strip(result, path, title=title)
+    else:
+        from motionlang.rendering.animation import render_animation
+        render_animation(result, path, title=title)
+    return note
