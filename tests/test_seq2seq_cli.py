@@ -1,11 +1,21 @@
-"""``motionlang train m2l|l2m``, ``describe`` and ``generate`` end to end on tiny data:
-a procedural corpus in KIT-ML format and a custom BVH + captions folder; the training pairs'
-mirror augmentation."""
+"""``motionlang train m2l|l2m``, ``describe``, ``generate`` and ``evaluate`` end to end on tiny
+data: a procedural corpus in KIT-ML format and a custom BVH + captions folder; the training
+pairs' mirror augmentation.
+
+An M2L and an L2M are trained once for the module (:func:`trained_runs`) and every test of
+what they became, and of the commands that use them, reads that pair."""
 from __future__ import annotations
 
+import argparse
+import contextlib
+import io
 import json
+import re
+import shutil
 import subprocess
 import sys
+from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -13,13 +23,29 @@ import torch
 
 from helpers.scripts import PROBES
 from motionlang.cli.main import main
+from motionlang.datasets.seq2seq_pairs import (
+    balance_repeats,
+    build_pairs,
+    oversample,
+    sentence_lengths,
+)
+from motionlang.datasets.synth import ground_truth
 from motionlang.errors import MotionlangError
+from motionlang.evaluation.seq2seq import actions_named
+from motionlang.formats import read_motion
+from motionlang.models.length import SentenceLength
 from motionlang.models.seq2seq.l2m import LanguageToMotion
 from motionlang.models.seq2seq.m2l import MotionToLanguage
+from motionlang.training.run_log import log_command
 
 torch.set_num_threads(1)
 TINY = ["--epochs", "2", "--batch-size", "8", "--offsets", "2", "--enc-hidden", "8",
         "--dec-hidden", "16", "--embed-dim", "8", "--dec-layers", "2"]
+M2L_OPTIONS = ["--decay-epochs", "1", "--decay-to", "0.2", "--mirror"]
+L2M_OPTIONS = ["--balance", "3", "--components", "2", "--attention", "--input-noise", "0.3",
+               "--time-input", "--rollout", "0.5", "--rollout-warmup", "2", "--root-weight",
+               "5", "--progress-input", "--energy", "2.5", "--rollout-input", "mean",
+               "--hide-root-input"]
 
 
 @pytest.fixture(scope="module")
@@ -35,218 +61,385 @@ def private_cache(tmp_path, monkeypatch):
     monkeypatch.setenv("MOTIONLANG_CACHE", str(tmp_path / "cache"))
 
 
-def test_train_describe_generate_on_kitml_format(corpus, tmp_path, capsys):
-    m2l_dir, l2m_dir = tmp_path / "m2l", tmp_path / "l2m"
-    assert main(["train", "m2l", "--data", str(corpus), "--out", str(m2l_dir), *TINY,
-                 "--decay-epochs", "1", "--decay-to", "0.2", "--mirror"]) == 0
-    from motionlang.datasets.seq2seq_pairs import build_pairs
+@dataclass(frozen=True)
+class Runs:
+    """The run folders of the M2L and L2M trained on the corpus, what each training printed,
+    and the cache that their training pairs were written to."""
+    m2l: Path
+    l2m: Path
+    cache: Path
+    m2l_printed: str
+    l2m_printed: str
+
+    @property
+    def m2l_pt(self) -> str:
+        return str(self.m2l / "model.pt")
+
+    @property
+    def l2m_pt(self) -> str:
+        return str(self.l2m / "model.pt")
+
+
+@pytest.fixture(scope="module")
+def trained_runs(corpus, tmp_path_factory) -> Runs:
+    """``train m2l`` (learning-rate decay, mirrored pairs) and ``train l2m`` (balanced, with
+    most of its model options) on the corpus, once for the module: the costly part."""
+    root = tmp_path_factory.mktemp("runs")
+    printed = {}
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("MOTIONLANG_CACHE", str(root / "cache"))
+        for kind, options in (("m2l", M2L_OPTIONS), ("l2m", L2M_OPTIONS)):
+            with contextlib.redirect_stdout(io.StringIO()) as out:
+                assert main(["train", kind, "--data", str(corpus), "--out", str(root / kind),
+                             *TINY, *options]) == 0
+            printed[kind] = out.getvalue()
+    return Runs(root / "m2l", root / "l2m", root / "cache", printed["m2l"], printed["l2m"])
+
+
+@pytest.fixture
+def runs(trained_runs, monkeypatch) -> Runs:
+    """:func:`trained_runs`, with the cache its training filled (the pairs are not rebuilt)."""
+    monkeypatch.setenv("MOTIONLANG_CACHE", str(trained_runs.cache))
+    return trained_runs
+
+
+@pytest.fixture(scope="module")
+def l2m_model(trained_runs) -> LanguageToMotion:
+    return LanguageToMotion.load(trained_runs.l2m / "model.pt")
+
+
+@pytest.fixture
+def one_offset(runs, corpus):
+    """The corpus's pairs at one offset, as the probe scripts build them."""
+    return build_pairs(corpus, offsets=1)
+
+
+@pytest.fixture
+def train_motion(runs, corpus) -> Path:
+    """A motion of the M2L's training split."""
+    first = (runs.m2l / "splits" / "train.txt").read_text().split()[0]
+    return corpus / f"{first}_mmm.xml"
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    report: dict
+    markdown: str
+    tsne: Path
+
+
+@pytest.fixture(scope="module")
+def evaluation(trained_runs, corpus, tmp_path_factory) -> Evaluation:
+    """``evaluate`` of both trained models on the training split, given as their run folders
+    (which stand for their model.pt), with a t-SNE plot."""
+    out = tmp_path_factory.mktemp("evaluation")
+    report = out / "report.json"
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("MOTIONLANG_CACHE", str(trained_runs.cache))
+        assert main(["evaluate", "--m2l", str(trained_runs.m2l), "--t2m", str(trained_runs.l2m),
+                     "--data", str(corpus), "--split", "train", "-w", "2", "-o", str(report),
+                     "--tsne", str(out / "tsne.png")]) == 0
+    return Evaluation(json.loads(report.read_text()), report.with_suffix(".md").read_text(),
+                      out / "tsne.png")
+
+
+# ------------------------------------------------------------------ training
+
+
+def test_mirror_doubles_the_m2l_training_pairs(runs, corpus):
     n_plain = len(build_pairs(corpus, offsets=2).items["train"])
-    assert f"m2l: {2 * n_plain} training pairs" in capsys.readouterr().out   # mirrored too
-    lrs = [h["lr"] for h in json.loads((m2l_dir / "history.json").read_text())]
+    assert f"m2l: {2 * n_plain} training pairs" in runs.m2l_printed   # mirrored too
+
+
+def test_the_learning_rate_decays_in_the_last_epoch(runs):
+    lrs = [h["lr"] for h in json.loads((runs.m2l / "history.json").read_text())]
     assert lrs == pytest.approx([1e-3, 2e-4])           # --lr, then decayed in the last epoch
-    assert main(["train", "l2m", "--balance", "3", "--data", str(corpus), "--out", str(l2m_dir), *TINY,
-                 "--components", "2", "--attention", "--input-noise", "0.3", "--time-input",
-                 "--rollout", "0.5", "--rollout-warmup", "2", "--root-weight", "5",
-                 "--progress-input", "--energy", "2.5", "--rollout-input", "mean",
-                 "--hide-root-input"]) == 0
-    balanced = [l for l in capsys.readouterr().out.splitlines() if l.startswith("balanced:")]
+
+
+def test_balance_oversamples_the_training_pairs(runs, corpus):
+    balanced = [ln for ln in runs.l2m_printed.splitlines() if ln.startswith("balanced:")]
     assert len(balanced) == 1
     before, after = (int(w) for w in balanced[0].split()[1:4:2])
-    from motionlang.datasets.seq2seq_pairs import balance_repeats, build_pairs, oversample
     data = build_pairs(corpus, offsets=2)          # the same pairs (cached)
     assert before == len(data.items["train"])
     assert after == len(oversample(data.items["train"],
                                    balance_repeats(data.labels, data.splits["train"], 3)))
-    logged = [json.loads(l) for l in (l2m_dir / "commands.jsonl").read_text().splitlines()]
-    assert len(logged) == 1 and logged[0]["balance"] == 3 and logged[0]["rollout"] == 0.5
-    import argparse
 
-    from motionlang.cli.run_log import log_command
-    log_command(l2m_dir / "commands.jsonl", argparse.Namespace(resume=True, func=main))
-    lines = (l2m_dir / "commands.jsonl").read_text().splitlines()   # a resume appends
+
+def test_the_command_line_is_logged_and_a_resume_appends(runs, tmp_path):
+    logged = [json.loads(ln) for ln in (runs.l2m / "commands.jsonl").read_text().splitlines()]
+    assert len(logged) == 1 and logged[0]["balance"] == 3 and logged[0]["rollout"] == 0.5
+    log = tmp_path / "commands.jsonl"             # a copy: the run is shared by the module
+    shutil.copy(runs.l2m / "commands.jsonl", log)
+    log_command(log, argparse.Namespace(resume=True, func=main))
+    lines = log.read_text().splitlines()          # a resume appends
     assert len(lines) == 2 and json.loads(lines[1]) == {"resume": True}
-    for d in (m2l_dir, l2m_dir):
+
+
+def test_a_run_folder_holds_checkpoints_history_and_splits(runs):
+    for d in (runs.m2l, runs.l2m):
         assert {"model.pt", "best.pt", "last.pt", "history.json", "splits"} <= \
             {p.name for p in d.iterdir()}
-    l2m = LanguageToMotion.load(l2m_dir / "model.pt")
-    # the length model is fitted on the training sentences (model frames at 10 Hz)
-    assert l2m.config.progress_input
-    from motionlang.datasets.seq2seq_pairs import sentence_lengths
-    from motionlang.models.length import SentenceLength
+
+
+def test_the_length_model_is_fitted_on_the_training_sentences(runs, corpus, l2m_model):
+    # model frames at 10 Hz
+    assert l2m_model.config.progress_input
     want = SentenceLength.fit(*sentence_lengths(build_pairs(corpus, offsets=2), "train"))
-    assert l2m.length_model == want
-    names = l2m.features.names[:l2m.config.n_features]
-    assert [n for n, w in zip(names, l2m.config.loss_weights) if w != 1.0] == \
+    assert l2m_model.length_model == want
+
+
+def test_root_weight_and_hidden_root_input_touch_only_the_root_features(l2m_model):
+    config = l2m_model.config
+    names = l2m_model.features.names[:config.n_features]
+    assert [n for n, w in zip(names, config.loss_weights) if w != 1.0] == \
         ["root_vx", "root_vz", "root_dyaw"]
-    assert set(l2m.config.loss_weights) == {1.0, 5.0}
-    assert [n for n, w in zip(names, l2m.config.input_mask) if w != 1.0] == \
-        ["root_vx", "root_vz", "root_dyaw"] and set(l2m.config.input_mask) == {0.0, 1.0}
-    assert l2m.config.energy_weight == 2.5 and l2m.config.rollout_input == "mean"
-    assert "energy" in json.loads((l2m_dir / "history.json").read_text())[-1]["train"]
-    # experiments/probes/l2m_word_use.py on a word of the held-out sentences, and on an absent one
-    import re
-    one = build_pairs(corpus, offsets=1)           # the script's pairs: one offset
-    held_out = [one.vocab.decode(it["tokens"]) for split in ("val", "test")
-                for it in one.items.get(split, [])]
+    assert set(config.loss_weights) == {1.0, 5.0}
+    assert [n for n, w in zip(names, config.input_mask) if w != 1.0] == \
+        ["root_vx", "root_vz", "root_dyaw"] and set(config.input_mask) == {0.0, 1.0}
+
+
+def test_the_l2m_options_reach_its_config(runs, l2m_model):
+    config = l2m_model.config
+    assert config.energy_weight == 2.5 and config.rollout_input == "mean"
+    assert "energy" in json.loads((runs.l2m / "history.json").read_text())[-1]["train"]
+    assert config.attention and config.time_input and config.input_noise == 0.3
+    assert config.rollout == 0.5 and int(l2m_model.rollout_steps) > 0
+
+
+def test_the_m2l_keeps_its_features_vocabulary_and_splits(runs):
+    m2l = MotionToLanguage.load(runs.m2l / "model.pt")
+    assert m2l.features is not None and len(m2l.vocab) == m2l.config.vocab_size
+    train_ids = (runs.m2l / "splits" / "train.txt").read_text().split()
+    assert len(train_ids) >= 5
+
+
+@pytest.mark.parametrize(("options", "message"), [
+    (["--input-noise", "-1"], "--input-noise must be a finite number >= 0, got -1.0"),
+    (["--rollout", "1.5"], "--rollout must be in [0, 1], got 1.5"),
+])
+def test_train_l2m_refuses_out_of_range_options(corpus, tmp_path, capsys, options, message):
+    assert main(["train", "l2m", "--data", str(corpus), "--out", str(tmp_path / "bad"), *TINY,
+                 *options]) == 2
+    assert message in capsys.readouterr().err
+
+
+# ------------------------------------------------------------------ probe scripts
+
+
+def _word_use(runs: Runs, corpus: Path, word: str) -> subprocess.CompletedProcess:
+    """experiments/probes/l2m_word_use.py on ``word``."""
+    return subprocess.run([sys.executable, str(PROBES / "l2m_word_use.py"), "--data",
+                           str(corpus), "--model", runs.l2m_pt, "--samples", "1", "--feature",
+                           "root_vx", "--word", word], capture_output=True, text=True)
+
+
+def test_word_use_probe_on_a_held_out_word(runs, corpus, one_offset):
+    held_out = [one_offset.vocab.decode(it["tokens"]) for split in ("val", "test")
+                for it in one_offset.items.get(split, [])]
     word = max(held_out[0].split(), key=len)
     n = sum(bool(re.search(rf"\b{re.escape(word)}\b", s)) for s in held_out)
-    script = PROBES / "l2m_word_use.py"
-    run = [sys.executable, str(script), "--data", str(corpus), "--model",
-           str(l2m_dir / "model.pt"), "--samples", "1", "--feature", "root_vx"]
-    res = subprocess.run(run + ["--word", word], capture_output=True, text=True)
+    res = _word_use(runs, corpus, word)
     assert res.returncode == 0, res.stderr
     lines = res.stdout.splitlines()
     assert lines[0].startswith(f"{min(n, 48)} validation/test pairs with {word!r}")
-    assert len([l for l in lines if "NLL/frame teacher-forced" in l]) == 2
-    res = subprocess.run(run + ["--word", "zzzz"], capture_output=True, text=True)
+    assert len([ln for ln in lines if "NLL/frame teacher-forced" in ln]) == 2
+
+
+def test_word_use_probe_refuses_an_absent_word(runs, corpus):
+    res = _word_use(runs, corpus, "zzzz")
     assert res.returncode != 0 and "no validation or test sentence holds 'zzzz'" in res.stderr
+
+
+def test_feature_fit_probe_gives_the_data_lag1_correlation(runs, corpus, one_offset, l2m_model):
     # experiments/probes/l2m_feature_fit.py: the data's lag-1 correlation as computed here
-    script = PROBES / "l2m_feature_fit.py"
-    res = subprocess.run([sys.executable, str(script), "--data", str(corpus), "--model",
-                          str(l2m_dir / "model.pt"), "--split", "train", "--features",
+    res = subprocess.run([sys.executable, str(PROBES / "l2m_feature_fit.py"), "--data",
+                          str(corpus), "--model", runs.l2m_pt, "--split", "train", "--features",
                           "root_vz"], capture_output=True, text=True)
     assert res.returncode == 0, res.stderr
-    items = one.items["train"][:128]
-    col = l2m.features.names.index("root_vz")
+    items = one_offset.items["train"][:128]
+    col = l2m_model.features.names.index("root_vz")
     now = np.concatenate([it["motion"][1:, col] for it in items])
     before = np.concatenate([it["motion"][:-1, col] for it in items])
-    row = [l for l in res.stdout.splitlines() if "root_vz" in l][0].split()
+    row = [ln for ln in res.stdout.splitlines() if "root_vz" in ln][0].split()
     assert float(row[2]) == pytest.approx(np.corrcoef(now, before)[0, 1], abs=1e-3)
     assert -1 <= float(row[4]) <= 1 and float(row[6]) > 0
-    m2l = MotionToLanguage.load(m2l_dir / "model.pt")
-    assert m2l.features is not None and len(m2l.vocab) == m2l.config.vocab_size
-    train_ids = (m2l_dir / "splits" / "train.txt").read_text().split()
-    assert len(train_ids) >= 5
-    capsys.readouterr()
-    motion = corpus / f"{train_ids[0]}_mmm.xml"
-    assert main(["describe", str(motion), "--model", str(m2l_dir / "model.pt"), "-w", "3",
+
+
+# ------------------------------------------------------------------ describe
+
+
+def test_describe_ranks_its_hypotheses_by_log_p(runs, train_motion, capsys):
+    assert main(["describe", str(train_motion), "--model", runs.m2l_pt, "-w", "3",
                  "--json"]) == 0
     hyps = json.loads(capsys.readouterr().out)
     assert [h["rank"] for h in hyps] == [1, 2, 3]
     assert all(h["text"] for h in hyps)                       # no empty sentence
     assert hyps[0]["log_p"] >= hyps[1]["log_p"] >= hyps[2]["log_p"]
-    assert main(["describe", str(motion), "--model", str(m2l_dir / "model.pt"), "-w", "3",
+
+
+def test_describe_with_a_length_penalty(runs, train_motion, capsys):
+    assert main(["describe", str(train_motion), "--model", runs.m2l_pt, "-w", "3",
                  "--length-penalty", "1", "--json"]) == 0
     normed = json.loads(capsys.readouterr().out)
     assert len(normed) == 3 and all(h["text"] for h in normed)
-    assert main(["describe", str(motion), "--length-penalty", "-1"]) == 2
+
+
+def test_describe_refuses_a_negative_length_penalty(train_motion, capsys):
+    assert main(["describe", str(train_motion), "--length-penalty", "-1"]) == 2
     assert "argument --length-penalty: must be a finite number >= 0" in capsys.readouterr().err
-    assert main(["train", "l2m", "--data", str(corpus), "--out", str(tmp_path / "bad"), *TINY,
-                 "--input-noise", "-1"]) == 2
-    assert "argument --input-noise" in capsys.readouterr().err
-    l2m = LanguageToMotion.load(l2m_dir / "model.pt")
-    assert l2m.config.attention and l2m.config.time_input and l2m.config.input_noise == 0.3
-    assert l2m.config.rollout == 0.5 and int(l2m.rollout_steps) > 0
+
+
+# ------------------------------------------------------------------ generate
+
+
+def test_generate_writes_every_beam_hypothesis_with_all(runs, tmp_path, capsys):
     out = tmp_path / "gen.bvh"
-    assert main(["generate", "a person walks forward", "--model", str(l2m_dir / "model.pt"),
-                 "-o", str(out), "-w", "2", "--max-frames", "12", "--min-frames", "6",
-                 "--all", "--method", "beam"]) == 0
+    assert main(["generate", "a person walks forward", "--model", runs.l2m_pt, "-o", str(out),
+                 "-w", "2", "--max-frames", "12", "--min-frames", "6", "--all", "--method",
+                 "beam"]) == 0
     printed = capsys.readouterr().out
     assert "log L" in printed and str(out) in printed
-    report = tmp_path / "report.json"
-    # run folders stand for their model.pt
-    assert main(["evaluate", "--m2l", str(m2l_dir), "--l2m",
-                 str(l2m_dir), "--data", str(corpus), "--split", "train", "-w", "2",
-                 "-o", str(report), "--tsne", str(tmp_path / "tsne.png")]) == 0
-    rep = json.loads(report.read_text())
+    for path in (out, tmp_path / "gen_2.bvh"):
+        m = read_motion(path)
+        assert 6 <= m.n_frames <= 12 and np.isfinite(m.joint_angles).all()
+
+
+def test_generate_samples_within_the_frame_limits(runs, tmp_path):
+    sampled = tmp_path / "sampled.npz"
+    assert main(["generate", "a person walks forward", "--model", runs.l2m_pt, "-o",
+                 str(sampled), "-w", "2", "--method", "sample", "--max-frames", "12",
+                 "--min-frames", "6"]) == 0
+    with np.load(sampled) as z:
+        n = {k: z[k].shape for k in z.files}
+    assert any(len(shape) >= 1 and 6 <= shape[0] <= 12 for shape in n.values()), n
+
+
+def test_generate_decodes_the_expected_frames_once_by_default(runs, tmp_path, capsys):
+    # without --method, a model trained on its expected frames decodes those: one motion
+    assert main(["generate", "a person walks forward", "--model", runs.l2m_pt, "-o",
+                 str(tmp_path / "mean.npz"), "-w", "2", "--max-frames", "12"]) == 0
+    assert [ln[:3] for ln in capsys.readouterr().out.splitlines()] == ["1. "]
+
+
+def test_generate_reranks_sampled_motions_by_an_m2l(runs, tmp_path, capsys):
+    assert main(["generate", "a person walks", "--model", runs.l2m_pt, "-o",
+                 str(tmp_path / "rr.npz"), "-w", "3", "--method", "sample",
+                 "--rerank", runs.m2l_pt]) == 0
+    lines = [ln for ln in capsys.readouterr().out.splitlines() if "log P(text | motion)" in ln]
+    scores = [float(ln.split("=")[1].split()[0]) for ln in lines]
+    assert len(scores) == 3 and scores == sorted(scores, reverse=True)
+    assert (tmp_path / "rr.npz").exists()
+
+
+@pytest.mark.parametrize(("output", "options", "message"), [
+    ("rr1.npz", ["-w", "1", "--rerank", "{m2l}"], "rerank ranks several L2M motions"),
+    ("none.npz", ["-w", "0"], "argument -w/--width: must be an integer in 1..1000"),
+    ("gen.obj", [], "gen.obj: output must be .bvh, .xml, .amc, .gif, .mp4, .png or .npz"),
+    ("t.npz", ["--temperature", "0.5"], "ask for method sample"),
+])
+def test_generate_refuses_bad_options_and_writes_nothing(runs, tmp_path, capsys, output,
+                                                         options, message):
+    out = tmp_path / output
+    assert main(["generate", "a person walks", "--model", runs.l2m_pt, "-o", str(out),
+                 *(o.format(m2l=runs.m2l_pt) for o in options)]) == 2
+    assert message in capsys.readouterr().err
+    assert not out.exists()
+
+
+# ------------------------------------------------------------------ evaluate
+
+
+def test_evaluate_scores_the_ground_truth_parameters_both_ways(evaluation):
+    rep = evaluation.report
     # a procedural corpus carries ground truth: parameter accuracy of both directions
     for key in ("m2l_parameters", "l2m_parameters", "nn_parameters"):
         acc = rep[key]
         assert acc["n"] >= 1 and 0.0 <= acc["actions_match"] <= 1.0
         assert all(acc[f] != acc[f] or 0.0 <= acc[f] <= 1.0 for f in ("side", "count"))
     assert rep["l2m_parameters"]["n"] == rep["l2m_round_trip"]["n_sentences"]
+
+
+def test_the_round_trip_baseline_scores_the_same_sentences(evaluation):
     # the round trip's baseline (retrieved training motions) scores the same sentences
+    rep = evaluation.report
     assert rep["nn_round_trip"]["n_sentences"] == rep["l2m_round_trip"]["n_sentences"]
+    assert rep["l2m_round_trip"]["n_sentences"] >= 1
+    assert rep["l2m_round_trip"]["method"] == "mean"
+
+
+def test_evaluate_scores_the_m2l_by_rank_beside_the_nearest_neighbour(evaluation):
+    rep = evaluation.report
     assert rep["m2l_actions_by_rank"][0] == rep["m2l_parameters"]["actions_match"]
     assert len(rep["m2l_actions_by_rank"]) == 2
-    md = report.with_suffix(".md").read_text()
-    assert "| nearest training sentence, round trip |" in md and "naming exactly" in md
-    # the round trip's actions named by place
-    from motionlang.datasets.synth import ground_truth
-    from motionlang.evaluation.seq2seq import actions_named
+    assert len(rep["m2l"]["bleu_by_rank"]) == 2 and rep["m2l"]["n"] >= 1
+    assert {"bleu", "rouge_l"} <= set(rep["nearest_neighbour"])
+
+
+def test_the_round_trip_names_the_true_actions_by_place(evaluation, corpus):
+    rep = evaluation.report
     descr = rep["l2m_round_trip"]["descriptions"]
     truths = {i: ground_truth(json.loads((corpus / f"{i}_meta.json").read_text()))
               for i, _, _ in descr}
     assert rep["l2m_parameters"]["named"] == actions_named(descr, truths)
-    assert "L2M round trip, true actions named: first" in md
-    assert (tmp_path / "tsne.png").stat().st_size > 1000
-    assert len(rep["m2l"]["bleu_by_rank"]) == 2 and rep["m2l"]["n"] >= 1
-    assert {"bleu", "rouge_l"} <= set(rep["nearest_neighbour"])
-    assert rep["l2m_round_trip"]["n_sentences"] >= 1
-    assert "| nearest neighbour |" in report.with_suffix(".md").read_text()
-    assert rep["l2m_round_trip"]["method"] == "mean"
-    assert main(["evaluate", "--m2l", str(m2l_dir / "model.pt"), "--l2m",
-                 str(l2m_dir / "model.pt"), "--data", str(corpus), "--split", "train", "-w", "2",
-                 "--limit", "2", "--l2m-method", "sample", "--l2m-width", "2",
-                 "-o", str(report)]) == 0
+    assert "L2M round trip, true actions named: first" in evaluation.markdown
+
+
+def test_evaluate_writes_markdown_and_a_tsne_plot(evaluation):
+    md = evaluation.markdown
+    assert "| nearest training sentence, round trip |" in md and "naming exactly" in md
+    assert "| nearest neighbour |" in md
+    assert evaluation.tsne.stat().st_size > 1000
+
+
+def test_evaluate_samples_the_round_trip(runs, corpus, tmp_path):
+    report = tmp_path / "report.json"
+    sampled = f"{runs.l2m_pt}:method=sample,width=2"
+    assert main(["evaluate", "--m2l", runs.m2l_pt, "--t2m", sampled, "--data", str(corpus),
+                 "--split", "train", "-w", "2", "--limit", "2", "-o", str(report)]) == 0
     rep = json.loads(report.read_text())
     assert rep["l2m_round_trip"]["method"] == "sample" and rep["l2m_round_trip"]["width"] == 2
     assert "| L2M round trip (sample) |" in report.with_suffix(".md").read_text()
-    # ranked by another M2L: a copy of the describer is another file, so it is allowed
-    import shutil
-    shutil.copy(m2l_dir / "model.pt", tmp_path / "ranker.pt")
-    assert main(["evaluate", "--m2l", str(m2l_dir / "model.pt"), "--l2m",
-                 str(l2m_dir / "model.pt"), "--data", str(corpus), "--split", "train", "-w", "2",
-                 "--limit", "2", "--l2m-method", "sample", "--l2m-width", "3",
-                 "--l2m-rerank", str(tmp_path / "ranker.pt"), "-o", str(report)]) == 0
+
+
+def test_evaluate_ranks_the_round_trip_by_another_m2l(runs, corpus, tmp_path):
+    # a copy of the describer is another file, so it is allowed
+    shutil.copy(runs.m2l / "model.pt", tmp_path / "ranker.pt")
+    report = tmp_path / "report.json"
+    ranked = f"{runs.l2m_pt}:method=sample,width=3,rerank={tmp_path / 'ranker.pt'}"
+    assert main(["evaluate", "--m2l", runs.m2l_pt, "--t2m", ranked, "--data", str(corpus),
+                 "--split", "train", "-w", "2", "--limit", "2", "-o", str(report)]) == 0
     rep = json.loads(report.read_text())
     assert rep["l2m_round_trip"]["rerank"] == str(tmp_path / "ranker.pt")
-    assert main(["generate", "a person walks", "--model", str(l2m_dir / "model.pt"), "-o",
-                 str(tmp_path / "rr.npz"), "-w", "3", "--method", "sample",
-                 "--rerank", str(m2l_dir / "model.pt")]) == 0
-    lines = [l for l in capsys.readouterr().out.splitlines() if "log P(text | motion)" in l]
-    scores = [float(l.split("=")[1].split()[0]) for l in lines]
-    assert len(scores) == 3 and scores == sorted(scores, reverse=True)
-    assert (tmp_path / "rr.npz").exists()
-    assert main(["generate", "a person walks", "--model", str(l2m_dir / "model.pt"), "-o",
-                 str(tmp_path / "rr1.npz"), "-w", "1", "--rerank", str(m2l_dir / "model.pt")]) == 2
-    assert "--rerank ranks several L2M motions" in capsys.readouterr().err
-    assert not (tmp_path / "rr1.npz").exists()
-    for opts, msg in (([], "the reranker must not be the describer"),
-                      (["--l2m-width", "1"], "needs several motions per sentence")):
-        assert main(["evaluate", "--m2l", str(m2l_dir / "model.pt"), "--l2m",
-                     str(l2m_dir / "model.pt"), "--data", str(corpus), "--l2m-method", "sample",
-                     "--l2m-width", "3", "--l2m-rerank", str(m2l_dir / "model.pt"), *opts,
-                     "-o", str(tmp_path / "rr.json")]) == 2
-        assert msg in capsys.readouterr().err
+
+
+RERANKED_BY_THE_DESCRIBER = ["--t2m", "{l2m}:method=sample,width=3,rerank={m2l}",
+                             "--data", "{corpus}"]
+
+
+@pytest.mark.parametrize(("options", "message"), [
+    ([*RERANKED_BY_THE_DESCRIBER, "-o", "{tmp}/rr.json"],
+     "the reranker must not be the describer"),
+    (["--t2m", "{l2m}:method=sample,width=1,rerank={m2l}", "--data", "{corpus}", "-o",
+      "{tmp}/rr.json"], "rerank ranks several motions"),
+    (["--data", "{corpus}", "--t2m", "{l2m}:method=sample,width=0"],
+     "width must be an integer in 1..1000"),
+    (["--data", "{corpus}", "--t2m", "{l2m}:width=3"],   # mean decoding: one motion
+     "width applies to 'sample' and 'beam'"),
+    (["--data", "{corpus}", "--t2m", "{l2m}:temperature=0.5"],
+     "mean decoding draws nothing"),
+    (["--data", "{corpus}", "--t2m", "{l2m}:beam=3"],
+     "unknown option beam (this model's options: method, width"),
+])
+def test_evaluate_refuses_bad_round_trip_options(runs, corpus, tmp_path, capsys, options,
+                                                 message):
+    paths = dict(m2l=runs.m2l_pt, l2m=runs.l2m_pt, corpus=corpus, tmp=tmp_path)
+    assert main(["evaluate", "--m2l", runs.m2l_pt, *(o.format(**paths) for o in options)]) == 2
+    assert message in capsys.readouterr().err
     assert not (tmp_path / "rr.json").exists()
-    assert main(["evaluate", "--m2l", str(m2l_dir / "model.pt"), "--data", str(corpus),
-                 "--l2m-width", "0"]) == 2
-    assert "argument --l2m-width: must be an integer in 1..1000" in capsys.readouterr().err
-    assert main(["evaluate", "--m2l", str(m2l_dir / "model.pt"), "--data", str(corpus),
-                 "--l2m-width", "3"]) == 2                      # mean decoding: one motion
-    assert "--l2m-width applies to" in capsys.readouterr().err
-    assert main(["train", "l2m", "--data", str(corpus), "--out", str(tmp_path / "bad"), *TINY,
-                 "--rollout", "1.5"]) == 2
-    assert "argument --rollout: must be a finite number >= 0 and <= 1" in capsys.readouterr().err
-    assert main(["generate", "a person walks", "--model", str(l2m_dir / "model.pt"), "-o",
-                 str(tmp_path / "none.npz"), "-w", "0"]) == 2
-    assert "argument -w/--width: must be an integer in 1..1000" in capsys.readouterr().err
-    assert not (tmp_path / "none.npz").exists()
-    assert main(["generate", "a person walks", "--model", str(l2m_dir / "model.pt"), "-o",
-                 str(tmp_path / "gen.obj")]) == 2
-    assert "gen.obj: output must be .bvh, .xml, .amc, .gif, .mp4, .png or .npz" in \
-        capsys.readouterr().err
-    assert not (tmp_path / "gen.obj").exists()
-    from motionlang.formats import read_motion
-    for path in (out, tmp_path / "gen_2.bvh"):
-        m = read_motion(path)
-        assert 6 <= m.n_frames <= 12 and np.isfinite(m.joint_angles).all()
-    sampled = tmp_path / "sampled.npz"
-    assert main(["generate", "a person walks forward", "--model", str(l2m_dir / "model.pt"),
-                 "-o", str(sampled), "-w", "2", "--method", "sample", "--max-frames", "12",
-                 "--min-frames", "6"]) == 0
-    with np.load(sampled) as z:
-        n = {k: z[k].shape for k in z.files}
-    assert any(len(shape) >= 1 and 6 <= shape[0] <= 12 for shape in n.values()), n
-    # without --method, a model trained on its expected frames decodes those: one motion
-    capsys.readouterr()
-    assert main(["generate", "a person walks forward", "--model", str(l2m_dir / "model.pt"),
-                 "-o", str(tmp_path / "mean.npz"), "-w", "2", "--max-frames", "12"]) == 0
-    assert [l[:3] for l in capsys.readouterr().out.splitlines()] == ["1. "]
-    assert main(["generate", "a person walks", "--model", str(l2m_dir / "model.pt"), "-o",
-                 str(tmp_path / "t.npz"), "--temperature", "0.5"]) == 2
-    assert "add --method sample" in capsys.readouterr().err
+
+
+# ------------------------------------------------------------------ other data and checks
 
 
 def test_custom_bvh_folder_with_position_features(corpus, tmp_path, capsys):
@@ -278,7 +471,7 @@ def test_custom_bvh_folder_with_position_features(corpus, tmp_path, capsys):
 def test_root_weights_need_the_root_motion_features():
     import types
 
-    from motionlang.cli.seq2seq_commands import root_loss_weights
+    from motionlang.training.recipes.seq2seq import root_loss_weights
     fs = types.SimpleNamespace(names=["a", "root_vz", "root_vx", "b", "root_dyaw", "active"],
                                n_normalised=5, dim=6)
     assert root_loss_weights(fs, 4.0) == [1.0, 4.0, 4.0, 1.0, 4.0]
@@ -292,22 +485,22 @@ def test_errors_are_one_line(tmp_path, capsys):
     assert main(["train", "m2l", "--data", str(tmp_path), "--out", str(tmp_path / "o")]) == 2
     capsys.readouterr()
     assert main(["train", "l2m", "--data", str(tmp_path), "--balance", "0"]) == 2
-    assert "argument --balance: must be an integer >= 1" in capsys.readouterr().err
+    assert "--balance must be an integer >= 1" in capsys.readouterr().err
     assert main(["train", "l2m", "--data", str(tmp_path), "--energy", "-1"]) == 2
-    assert "argument --energy: must be a finite number >= 0" in capsys.readouterr().err
+    assert "--energy must be a finite number >= 0" in capsys.readouterr().err
     assert main(["train", "l2m", "--data", str(tmp_path), "--foot-contact", "-1"]) == 2
-    assert "argument --foot-contact: must be a finite number >= 0" in capsys.readouterr().err
+    assert "--foot-contact must be a finite number >= 0" in capsys.readouterr().err
     assert main(["train", "l2m", "--data", str(tmp_path), "--mean-frames", "-1"]) == 2
-    assert "argument --mean-frames: must be a finite number >= 0" in capsys.readouterr().err
+    assert "--mean-frames must be a finite number >= 0" in capsys.readouterr().err
     assert main(["train", "l2m", "--data", str(tmp_path), "--out", str(tmp_path / "f"),
                  "--foot-step", "input"]) == 2
     err = capsys.readouterr().err
-    assert "--foot-contact W > 0" in err and len(err.strip().splitlines()) == 1
+    assert "give --foot-contact > 0" in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "f").exists()
     assert main(["train", "l2m", "--data", str(tmp_path), "--out", str(tmp_path / "f"),
                  "--foot-down", "own"]) == 2
     err = capsys.readouterr().err
-    assert "--foot-contact W > 0" in err and len(err.strip().splitlines()) == 1
+    assert "give --foot-contact > 0" in err and len(err.strip().splitlines()) == 1
     assert main(["train", "l2m", "--data", str(tmp_path), "--out", str(tmp_path / "f"),
                  "--foot-contact", "1", "--foot-down", "own", "--foot-step", "input"]) == 2
     err = capsys.readouterr().err
@@ -320,9 +513,6 @@ def test_errors_are_one_line(tmp_path, capsys):
                      "--model", str(tmp_path / "none.pt"), *opts]) == 2
         assert msg in capsys.readouterr().err
     assert not (tmp_path / "g.npz").exists()
-    assert main(["evaluate", "--m2l", str(tmp_path / "none.pt"), "--data", str(tmp_path),
-                 "--l2m-temperature", "0.5"]) == 2
-    assert "mean decoding draws" in capsys.readouterr().err
 
 
 def test_building_the_parser_does_not_import_torch():
