@@ -17,13 +17,11 @@ implements the protocol on its model class (entry ``"self"``) or names an adapte
 """
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass
 from typing import Any, ClassVar, Protocol, runtime_checkable
 
 import numpy as np
-import torch
 
 from motionlang.errors import MotionlangError
 from motionlang.features.positions import PositionsConfig
@@ -70,53 +68,8 @@ class TextToMotion(Protocol):
 
 
 @dataclass
-class L2MOptions:
-    """How an L2M samples (``--model l2m:method=sample,width=5``).
-
-    Attributes:
-        method: "sample" (ancestral), "beam" (the paper's sampled beam) or "mean" (the
-            mixture's expected frames); None: the model's own way for ``generate``, "mean"
-            for evaluation rows.
-        width: samples (or beam width) per sentence; the likeliest is kept (or, with
-            ``rerank``, the one that M2L finds the sentence likeliest for).
-        temperature: sharpen the mixture when sampling (1: as trained).
-        rerank: an M2L (packaged name, file or run folder) ranking the ``width`` motions.
-        length_norm: rank hypotheses by log likelihood per frame.
-    """
-
-    method: str | None = field(default=None, metadata={"choices": ("sample", "beam", "mean")})
-    width: int = 1
-    temperature: float = 1.0
-    rerank: str | None = None
-    length_norm: bool = False
-
-    def __post_init__(self) -> None:
-        if self.method not in (None, "sample", "beam", "mean"):
-            raise ValueError(f"method must be sample, beam or mean, got {self.method!r}")
-        if isinstance(self.width, bool) or not 1 <= int(self.width) <= 1000:
-            raise ValueError(f"width must be an integer in 1..1000, got {self.width}")
-        if not (math.isfinite(self.temperature) and self.temperature > 0):
-            raise ValueError(f"temperature must be a finite number > 0, got {self.temperature}")
-        if self.method == "mean" and self.width != 1:
-            raise ValueError("width applies to 'sample' and 'beam'; mean decoding gives one "
-                             "motion")
-        if self.method == "mean" and self.temperature != 1.0:
-            raise ValueError("temperature applies to 'sample' and 'beam'; mean decoding "
-                             "draws nothing")
-        if self.rerank and (self.method in (None, "mean") or self.width < 2):
-            raise ValueError("rerank ranks several motions: method=sample or beam with "
-                             "width 2 or more")
-
-
-@dataclass
 class NoOptions:
     """A model that samples one way (the two-stream model: deterministic)."""
-
-
-def _check_words(sentence: str) -> None:
-    from motionlang.datasets.text import tokenize
-    if not tokenize(sentence):
-        raise MotionlangError(f"text {sentence!r} has no words to generate a motion from")
 
 
 def _check_words(sentence: str) -> None:
@@ -180,8 +133,9 @@ class Text2MotionAdapter:
         ``seed + i``."""
         out = []
         for i, (text, n) in enumerate(zip(texts, lengths, strict=True)):
-            planned = self.frames_for(text) if n is None else n
-            n = int(n if n is not None else round((planned or 125) * FPS / self.fps))
+            if n is None:   # the model's plan, at its own rate, else 10 s
+                planned = self.frames_for(text)
+                n = round(planned * FPS / self.fps) if planned else round(10.0 * FPS)
             out.append(self.positions21(text, max(2, n), seed=seed + i))
         return out
 
@@ -246,158 +200,6 @@ class Text2MotionAdapter:
     def start_from21(self, sentence: str, p21: np.ndarray) -> np.ndarray:
         """``len(p21)`` frames for ``sentence`` starting at ``p21``'s first pose."""
         raise MotionlangError(f"a {self.model.kind} model takes no start pose in positions")
-
-
-class L2MText2Motion(Text2MotionAdapter):
-    """The seq2seq L2M: decodes by sampling, a sampled beam or component means
-    (``decoding.seq2seq.generate``); starts from a given pose if asked."""
-
-    Options = L2MOptions
-    capabilities = frozenset({"start_pose", "hypotheses"})
-
-    @property
-    def reranker(self):
-        """The M2L of ``options.rerank``, loaded once and checked against the L2M's
-        features; None without one."""
-        if self.options.rerank and self._reranker is None:
-            from motionlang.decoding.rerank import check_same_features
-            from motionlang.models.registry import load_model
-            self._reranker = load_model(self.options.rerank, kind="m2l")
-            check_same_features(self.model, self._reranker, f"rerank={self.options.rerank}")
-        return self._reranker
-
-    def _option_kw(self, kw: dict, method_default: str) -> dict:
-        o = self.options
-        kw.setdefault("method", o.method or method_default)
-        if kw["method"] != "mean":
-            kw.setdefault("width", o.width)
-        if self.reranker is not None:
-            kw.setdefault("reranker", self.reranker)
-        return kw
-
-    @property
-    def fps(self) -> float:
-        return float(self.model.features.fps)
-
-    def default_method(self) -> str:
-        # trained on its own expected frames (rollout_input "mean"): continue them. Joint
-        # positions drawn from the mixture get independent noise per coordinate, which
-        # stretches bones (the packaged position L2M's sampled waves: forearms of 0.2-2.9 m,
-        # 95th-percentile bone-length error 50-170 %; its expected frames: 6-50 %); joint
-        # angles sample (a beam keeps the likeliest frames, and standing still is always
-        # likelier than moving)
-        if getattr(self.model.config, "rollout_input", None) == "mean":
-            return "mean"
-        kind = getattr(getattr(self.model, "features", None), "kind", None)
-        return "mean" if kind == "positions" else "sample"
-
-    def _hypotheses(self, sentence: str, *, max_frames: int | None = None, **kw
-                    ) -> list[tuple[Any, float]]:
-        from motionlang.decoding.seq2seq import generate
-        _check_words(sentence)
-        self._option_kw(kw, self.default_method())
-        if self.options.temperature != 1.0:
-            kw.setdefault("temperature", self.options.temperature)
-        if self.options.length_norm:
-            kw.setdefault("length_norm", True)
-        if self.model.config.progress_input:   # told its length: max_frames is the length
-            return generate(self.model, sentence, n_frames=max_frames, **kw)
-        return generate(self.model, sentence, max_frames=max_frames, **kw)
-
-    def positions21(self, sentence: str, n_frames: int, *, foot_lock: bool = False, **kw
-                    ) -> np.ndarray:
-        return super().positions21(sentence, n_frames, foot_lock=foot_lock,
-                                   **self._option_kw(kw, "mean"))
-
-    @torch.no_grad()
-    def _positions21(self, sentence: str, n_frames: int, *, seed: int = 0,
-                     method: str = "mean", skeleton=None, width: int = 1, reranker=None,
-                     first_frame: np.ndarray | None = None, **_) -> np.ndarray:
-        from motionlang.decoding.seq2seq import generate
-        from motionlang.features.base import downsample
-        from motionlang.features.joint_map import positions21
-        fps = self.fps
-        cap = max(1, int(np.ceil(n_frames * fps / FPS)))
-        # a model told its length runs to it: its end flag fired up to 12 frames early on 345 of
-        # the 556 Bandai test sentences, and the last frame held to the length froze runs
-        # mid-stride (a one-frame stop from a 27.8 cm move: experiments/root_checks.py)
-        least = cap if self.model.config.progress_input else 1
-        result, _ = generate(self.model, sentence, width=width, method=method, seed=seed,
-                             n_frames=cap, skeleton=skeleton, reranker=reranker,
-                             first_frame=first_frame, min_frames=least)[0]
-        if isinstance(result, np.ndarray):  # positions features: already (T, 21, 3) at fps
-            p = result
-            if abs(fps - FPS) > 1e-9:
-                t_src = np.arange(len(p)) / fps
-                p = interp_frames(p, t_src,
-                                  np.arange(int(np.floor(t_src[-1] * FPS)) + 1) / FPS)
-        else:
-            p = positions21(downsample(result, FPS) if result.n_frames > 1 else result)
-        return fit_length(anchor(p), n_frames)
-
-
-class TwoStreamText2Motion(Text2MotionAdapter):
-    """The two-stream model: deterministic, 12.5 Hz, the length its length model plans
-    (or the one given); its start pose is given to ``model.generate(start=...)``."""
-
-    deterministic = True
-    capabilities = frozenset({"reconstruct", "positions_start"})
-
-    @property
-    def fps(self) -> float:
-        return FPS
-
-    def _features(self, p21: np.ndarray) -> np.ndarray:
-        """Global (T, 21, 3) -> the model's normalised (T, 66) positions features."""
-        from motionlang.features.positions import split_global
-        local, v, dyaw, _ = split_global(np.asarray(p21, dtype=np.float64))
-        raw = np.concatenate([local.reshape(len(p21), -1), v, dyaw[:, None]], axis=1)
-        return self.model.normalizer.transform(raw)
-
-    @torch.no_grad()
-    def reconstruct21(self, p21: np.ndarray) -> np.ndarray:
-        return self.model.positions(self.model.reconstruct(self._features(p21)))
-
-    @torch.no_grad()
-    def start_from21(self, sentence: str, p21: np.ndarray) -> np.ndarray:
-        return self.model.positions(self.model.generate(
-            sentence, len(p21), start=self._features(p21)[0]))
-
-    def default_method(self) -> str:
-        return "mean"
-
-    def _hypotheses(self, sentence: str, *, max_frames: int | None = None, **kw
-                    ) -> list[tuple[Any, float]]:
-        _check_words(sentence)
-        if kw.get("first_frame") is not None:
-            raise MotionlangError("a start pose applies to L2M models")
-        n = max_frames or self.model.frames_for(sentence)
-        return [(self.model.generate_positions(sentence, n), float("nan"))]
-
-    @torch.no_grad()
-    def _positions21(self, sentence: str, n_frames: int, *, first_frame=None, **kw
-                     ) -> np.ndarray:
-        if first_frame is not None:
-            raise MotionlangError("first_frame is for L2M models; a two-stream model takes "
-                                  "its start pose in generate(start=...)")
-        return self.model.generate_positions(sentence, n_frames)
-
-
-def twostream_text_vector(model, sentence: str) -> np.ndarray:
-    """A sentence -> the two-stream model's joint-space embedding (D,) float32."""
-    with torch.no_grad():
-        return model.joint(model.encode_text([sentence]))[0].numpy()
-
-
-def twostream_motion_vector(model, motion) -> np.ndarray:
-    """A Motion -> the two-stream model's joint-space pose embedding (D,) float32."""
-    from motionlang.features.base import downsample
-    from motionlang.features.body21 import body21
-    p = body21(downsample(motion, FPS) if motion.fps > FPS else motion)
-    feats = torch.as_tensor(TwoStreamText2Motion(model)._features(p),
-                            dtype=torch.float32)[None]
-    with torch.no_grad():
-        return model.joint(model.encode_motion(feats))[0].numpy()
 
 
 def text_to_motion(model, options: Any = None) -> Any:

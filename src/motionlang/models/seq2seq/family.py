@@ -11,6 +11,6 @@ FAMILIES = (
            summary="language-to-motion model (Plappert et al. 2018)",
            config="motionlang.models.seq2seq.config:L2MConfig",
            recipe="motionlang.training.recipes.seq2seq:L2M",
-           text_to_motion="motionlang.decoding.t2m:L2MText2Motion",
+           text_to_motion="motionlang.decoding.t2m_models:L2MText2Motion",
            encodes_text="motionlang.decoding.seq2seq:embed_sentence"),
 )
