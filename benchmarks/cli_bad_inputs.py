@@ -101,6 +101,13 @@ def cases() -> list[tuple[str, list[str], int]]:
         ("evaluate --m2l not a checkpoint", ["evaluate", "--m2l", "junk.pt", "--data",
                                              "corpus"], 2),
     ]
+    # a model's sampling options (--model NAME:key=value): unknown, mistyped, contradictory
+    for spec in ("l2m:beam=3", "l2m:width=two", "l2m:method=mean,rerank=m2l", "l2m:width=0",
+                 "l2m:method=sample,width", "junk.pt:method=sample", "twostream:width=2"):
+        rows += [(f"evaluate-t2m --model {spec}", ["evaluate-t2m", "--data", "corpus",
+                                                  "--model", spec, "-o", "t2m"], 2),
+                 (f"evaluate --t2m {spec}", ["evaluate", "--m2l", "m2l", "--data", "corpus",
+                                             "--t2m", spec, "-o", "r.json"], 2)]
     m2l = ["train", "m2l", "--data", "corpus", "--out", "run"]
     rows += [(f"train m2l {' '.join(o)}", m2l + o, 2) for o in (
         ["--batch-size", "0"], ["--batch-size", "-1"], ["--lr", "nan"], ["--lr", "inf"],

@@ -29,11 +29,11 @@ corpus "$CORPUS"
 "$ML" evaluate --m2l "$M2L" --data "$CORPUS" --splits "$OUT/splits" -o "$OUT/m2l.json"
 "$ML" evaluate --m2l "$M2L" --data "$CORPUS" --splits "$OUT/splits" --length-penalty 1 \
     -o "$OUT/m2l_per_token.json"
-"$ML" evaluate --m2l "$M2L" --l2m "$L2M" --data "$CORPUS" --splits "$OUT/splits" \
-    --l2m-method sample -o "$OUT/round_trip.json"
-"$ML" evaluate --m2l "$M2L" --l2m "$L2M" --data "$CORPUS" --splits "$OUT/splits" \
-    --l2m-method sample --l2m-temperature 1.2 -o "$OUT/round_trip_t1.2.json"
-"$ML" evaluate-t2m --data "$CORPUS" --model l2m="$L2M" --l2m-method sample -o "$OUT/t2m_sample"
+"$ML" evaluate --m2l "$M2L" --t2m "$L2M:method=sample" --data "$CORPUS" --splits "$OUT/splits" \
+    -o "$OUT/round_trip.json"
+"$ML" evaluate --m2l "$M2L" --t2m "$L2M:method=sample,temperature=1.2" --data "$CORPUS" \
+    --splits "$OUT/splits" -o "$OUT/round_trip_t1.2.json"
+"$ML" evaluate-t2m --data "$CORPUS" --model "l2m=$L2M:method=sample" -o "$OUT/t2m_sample"
 "$ML" evaluate-t2m --data "$CORPUS" --model l2m="$L2M" -o "$OUT/t2m_mean"
 "$PY" "$HERE/experiments/probes/l2m_directions.py" --data "$CORPUS" --model "$L2M" \
     | tee "$OUT/directions.txt"

@@ -20,6 +20,6 @@ mkdir -p "$OUT"
     --threads "$THREADS"
 "$ML" train l2m --data "$KITML" --out "$OUT/l2m" --batch-size 64 --threads "$THREADS"
 "$ML" evaluate --m2l "$OUT/m2l" --data "$KITML" -o "$OUT/m2l.json"
-"$ML" evaluate --m2l "$OUT/m2l" --l2m "$OUT/l2m" --data "$KITML" --splits "$OUT/m2l/splits" \
-    --l2m-method sample -o "$OUT/round_trip.json"
+"$ML" evaluate --m2l "$OUT/m2l" --t2m "$OUT/l2m:method=sample" --data "$KITML" \
+    --splits "$OUT/m2l/splits" -o "$OUT/round_trip.json"
 echo "reports in $OUT"

@@ -24,8 +24,8 @@ corpus "$CORPUS"
 "$ML" data split "$CORPUS" --seed 0 --out "$OUT/splits"
 
 "$ML" evaluate --m2l "$M/m2l-procedural.pt" --data "$CORPUS" --splits "$OUT/splits" -o "$OUT/m2l.json"
-"$ML" evaluate --m2l "$M/m2l-procedural.pt" --l2m "$M/l2m-procedural.pt" --data "$CORPUS" --splits "$OUT/splits" \
-    --l2m-method mean --limit 200 -o "$OUT/round_trip.json"
+"$ML" evaluate --m2l "$M/m2l-procedural.pt" --t2m "$M/l2m-procedural.pt:method=mean" --data "$CORPUS" \
+    --splits "$OUT/splits" --limit 200 -o "$OUT/round_trip.json"
 
 if [ -e "$DATA/cmu35/35_01.amc" ]; then
   for f in cmu35/35_01.amc kitml/00001_mmm.xml cmu49/49_20.amc; do

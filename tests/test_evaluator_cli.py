@@ -89,18 +89,19 @@ def test_guo_table_rows_and_files(run, corpus, tmp_path, capsys):
 def test_guo_regenerates_sampling_models_for_each_repeat(run, corpus, capsys):
     """--regenerate: one generation per repeat (seeds 0, 1, ...), so FID has a spread."""
     common = ["evaluate-t2m", *GUO, "--evaluator", str(run), "--data", str(corpus),
-              "--m2l", "none", "--l2m-method", "sample", "--repeats", "3"]
+              "--m2l", "none", "--model", "sampled=l2m:method=sample", "--repeats", "3"]
     assert main([*common, "--regenerate"]) == 0
     out = capsys.readouterr()
-    row = next(l for l in out.out.splitlines() if l.startswith("| l2m |"))
+    row = next(l for l in out.out.splitlines() if l.startswith("| sampled |"))
     fid_mean, fid_half = row.split("|")[5].split(" ± ")
     assert float(fid_half) > 0   # three generations differ
     assert main(common) == 0
-    row = next(l for l in capsys.readouterr().out.splitlines() if l.startswith("| l2m |"))
+    row = next(l for l in capsys.readouterr().out.splitlines() if l.startswith("| sampled |"))
     assert float(row.split("|")[5].split(" ± ")[1]) == 0   # one generation, reshuffled
     assert main(["evaluate-t2m", *GUO, "--evaluator", str(run), "--data", str(corpus),
-                 "--regenerate"]) == 2
-    assert "--regenerate needs --l2m-method sample" in capsys.readouterr().err
+                 "--regenerate"]) == 2      # the packaged l2m, decoding its means
+    assert "--regenerate needs a model that samples, e.g. --model l2m:method=sample" in \
+        capsys.readouterr().err
 
 
 def test_guo_ground_truth_fid_against_the_validation_motions(run, corpus, tmp_path, capsys):

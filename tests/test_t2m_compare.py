@@ -272,19 +272,32 @@ def test_evaluate_command(corpus, data, tmp_path, monkeypatch, capsys):
     assert rc == 0 and "| ts |" in out and "| l2m |" in out
     assert (tmp_path / "eval" / "t2m_table.md").exists()
     assert not list((tmp_path / "eval").glob("*.png"))
-    mean_l2m = json.loads((tmp_path / "eval" / "t2m_report.json").read_text())["results"]["l2m"]
-    assert main(["evaluate-t2m", "--data", str(corpus), "--model", str(tmp_path / "l2m.pt"),
-                 "--split", "train", "--limit", "3", "--figures", "0", "--l2m-method", "sample",
-                 "-o", str(tmp_path / "eval")]) == 0
-    sampled = json.loads((tmp_path / "eval" / "t2m_report.json").read_text())["results"]["l2m"]
+    first = json.loads((tmp_path / "eval" / "t2m_report.json").read_text())
+    mean_l2m = first["results"]["l2m"]
+    assert first["options"] == {"ts": {}, "l2m": {"method": "mean"}}
+    # each row decodes with its own model's options: the same L2M twice, two rows
+    l2m = str(tmp_path / "l2m.pt")
+    assert main(["evaluate-t2m", "--data", str(corpus), "--model", l2m,
+                 "--model", f"{l2m}:method=sample", "--split", "train", "--limit", "3",
+                 "--figures", "0", "-o", str(tmp_path / "eval")]) == 0
+    report = json.loads((tmp_path / "eval" / "t2m_report.json").read_text())
+    sampled = report["results"]["l2m:method=sample"]
+    assert report["results"]["l2m"]["ape_local"] == mean_l2m["ape_local"]
     assert sampled["ape_local"] != mean_l2m["ape_local"]     # other motions were scored
+    assert report["options"]["l2m:method=sample"] == {"method": "sample"}
     capsys.readouterr()
-    for opts, msg in ((["--l2m-width", "3"], "--l2m-width applies to --l2m-method sample"),
-                      (["--l2m-method", "sample", "--l2m-rerank", "m2l.pt"],
-                       "--l2m-rerank needs several samples")):
-        assert main(["evaluate-t2m", "--data", str(corpus), "--model", str(tmp_path / "l2m.pt"),
-                     *opts, "-o", str(tmp_path / "rr")]) == 2
-        assert msg in capsys.readouterr().err
+    for spec, msg in ((f"{l2m}:width=3", "width applies to 'sample' and 'beam'"),
+                      (f"{l2m}:method=sample,rerank=m2l.pt", "rerank ranks several motions"),
+                      (f"{l2m}:tempo=2", "unknown option tempo"),
+                      (f"{tmp_path / 'ts.pt'}:method=sample", "unknown option method"),
+                      (f"{l2m}:method=sample,width=two", "'two' is not a valid int")):
+        assert main(["evaluate-t2m", "--data", str(corpus), "--model", spec,
+                     "-o", str(tmp_path / "rr")]) == 2
+        err = capsys.readouterr().err
+        assert msg in err and f"--model {spec}" in err and err.count("\n") == 1, err
+    assert main(["evaluate-t2m", "--data", str(corpus), "--model", l2m, "--model",
+                 f"{tmp_path}/./l2m.pt", "-o", str(tmp_path / "rr")]) == 2
+    assert "a second row named 'l2m'; give one a label" in capsys.readouterr().err
     assert not (tmp_path / "rr").exists()
     assert main(["evaluate-t2m", "--data", str(corpus), "--model", str(tmp_path / "l2m.pt"),
                  "--autoencode", "-o", str(tmp_path / "ae")]) == 2
@@ -352,13 +365,21 @@ def test_ranges_of_cropped_sequences(data):
     assert cut_truth == truth[:len(cut)] and len(cut) < len(full)
 
 
-def test_model_spec_names_may_hold_equals_signs(tmp_path):
-    from motionlang.cli.twostream_commands import model_spec
-    assert model_spec("full (h=128)=runs/ts.pt") == ("full (h=128)", "runs/ts.pt")
-    assert model_spec("runs/ts.pt") == ("ts", "runs/ts.pt")
+def test_model_labels_may_hold_equals_signs(tmp_path):
+    from motionlang.cli.models_arg import parse_t2m, split_label
+    assert split_label("full (h=128)=runs/ts.pt") == ("full (h=128)", "runs/ts.pt")
+    assert split_label("runs/ts.pt") == ("ts", "runs/ts.pt")
     odd = tmp_path / "a=b.pt"
     odd.write_bytes(b"x")
-    assert model_spec(str(odd)) == ("a=b", str(odd))     # an existing file wins
+    assert split_label(str(odd)) == ("a=b", str(odd))     # an existing file wins
+    # a label, a model and its options in one value; without a label the row is the
+    # model's stem and its options
+    label, spec = parse_t2m("best of 5 (w=5)=runs/l2m.pt:method=sample,width=5")
+    assert (label, spec.name, spec.options) == ("best of 5 (w=5)", "runs/l2m.pt",
+                                                {"method": "sample", "width": "5"})
+    label, spec = parse_t2m("runs/l2m.pt:method=sample")
+    assert (label, spec.name) == ("l2m:method=sample", "runs/l2m.pt")
+    assert parse_t2m(str(odd)) == ("a=b", type(spec)(str(odd)))
 
 
 def test_same_parameter_oracles(data):

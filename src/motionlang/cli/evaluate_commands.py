@@ -1,5 +1,6 @@
 """``motionlang evaluate``: BLEU / ROUGE / CIDEr of an M2L model against the nearest-neighbour
-baseline, and optionally an L2M model's round trip (sentence -> motion -> M2L description).
+baseline, and optionally a text-to-motion model's round trip (sentence -> motion -> M2L
+description; ``--t2m MODEL[:options]``, ``cli.models_arg``).
 
 A thin wrapper over :mod:`motionlang.evaluation.seq2seq`; ``--m2l`` is a model file or its
 run folder (``train m2l --out DIR``), whose ``splits/`` says which motions are the test set.
@@ -7,6 +8,7 @@ run folder (``train m2l --out DIR``), whose ``splits/`` says which motions are t
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 from pathlib import Path
 
@@ -16,36 +18,23 @@ from motionlang.errors import MotionlangError
 
 
 def _evaluate_models(args: argparse.Namespace):
-    """The options about models checked, and (M2L file, L2M or None, reranker or None)
-    loaded: the round trip's models first, as their errors come before the long M2L run."""
-    from motionlang.models.seq2seq.m2l import MotionToLanguage
-    check_length_penalty(args.length_penalty)
-    if args.l2m_method == "mean" and args.l2m_width != 1:
-        raise MotionlangError("--l2m-width applies to 'sample' and 'beam'; mean decoding gives "
-                              "one motion")
-    if args.l2m_method == "mean" and args.l2m_temperature != 1.0:
-        raise MotionlangError("--l2m-temperature applies to 'sample' and 'beam'; mean decoding "
-                              "draws nothing")
+    """The options about models checked, and (M2L file, round-trip model or None) loaded:
+    the round trip's model (with its options and reranker) first, as its errors come
+    before the long M2L run."""
+    from motionlang.cli.models_arg import load_t2m
+    from motionlang.evaluation.seq2seq import round_trip_model
     from motionlang.models.registry import resolve  # a run folder -> its model file
+    check_length_penalty(args.length_penalty)
     m2l_path = resolve(args.m2l)
-    if args.l2m_rerank:
-        if not args.l2m:
-            raise MotionlangError("--l2m-rerank ranks the round trip's motions: give --l2m")
-        if args.l2m_method == "mean" or args.l2m_width < 2:
-            raise MotionlangError("--l2m-rerank needs several motions per sentence: "
-                                  "--l2m-method sample or beam with --l2m-width > 1")
-        if resolve(args.l2m_rerank).resolve() == m2l_path.resolve():
-            raise MotionlangError(f"--l2m-rerank {args.l2m_rerank}: the reranker must not be "
-                                  "the describer (--m2l), which would grade its own choice")
-    l2m = reranker = None
-    if args.l2m:
-        from motionlang.models.seq2seq.l2m import LanguageToMotion
-        l2m = LanguageToMotion.load(resolve(args.l2m))
-    if args.l2m_rerank:   # before the long M2L evaluation
-        from motionlang.decoding.rerank import check_same_features
-        reranker = MotionToLanguage.load(resolve(args.l2m_rerank))
-        check_same_features(l2m, reranker, f"--l2m-rerank {args.l2m_rerank}")
-    return m2l_path, l2m, reranker
+    if not args.t2m:
+        return m2l_path, None
+    _, t2m = load_t2m(args.t2m, "--t2m")
+    round_trip_model(t2m, f"--t2m {args.t2m}")
+    rerank = getattr(t2m.options, "rerank", None)
+    if rerank and resolve(rerank).resolve() == m2l_path.resolve():
+        raise MotionlangError(f"--t2m {args.t2m}: the reranker must not be the describer "
+                              "(--m2l), which would grade its own choice")
+    return m2l_path, t2m
 
 
 def _report_text(report: dict, args: argparse.Namespace) -> str:
@@ -54,9 +43,7 @@ def _report_text(report: dict, args: argparse.Namespace) -> str:
     from motionlang.evaluation import seq2seq as ev
     table = ev.markdown_table({"M2L (top hypothesis)": report["m2l"],
                                "nearest neighbour": report["nearest_neighbour"],
-                               **({f"L2M round trip ({args.l2m_method}"
-                                   + (f", best of {args.l2m_width} by reranker" if args.l2m_rerank
-                                      else "") + ")":
+                               **({f"L2M round trip ({_decoding(report['l2m_round_trip'])})":
                                    report["l2m_round_trip"],
                                    "nearest training sentence, round trip":
                                    report["nn_round_trip"]}
@@ -85,6 +72,15 @@ def _report_text(report: dict, args: argparse.Namespace) -> str:
             table += (f"{name}, labelled takes ({acc['n']}): action named {acc['content']:.1%}, "
                       f"style named {acc['style']:.1%}, both {acc['both']:.1%}\n")
     return table
+
+
+def _decoding(trip: dict) -> str:
+    """How the round trip's motions were made, for its row: "mean", "sample", "sample, best
+    of 5 by reranker"."""
+    text = str(trip.get("method") or "mean")
+    if trip.get("rerank"):
+        text += f", best of {trip.get('width')} by reranker"
+    return text
 
 
 def _add_checks(report: dict, records: dict, test: dict, train: dict, refs: dict,
@@ -130,7 +126,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     from motionlang.utils.atomic import atomic_write
     from motionlang.utils.progress import progress
 
-    m2l_path, l2m, reranker = _evaluate_models(args)
+    m2l_path, t2m = _evaluate_models(args)
     m2l = MotionToLanguage.load(m2l_path)
     splits = load_splits(args.splits or m2l_path.parent / "splits")
     for name in ("train", args.split):
@@ -157,21 +153,18 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
               "m2l": ev.evaluate_m2l(m2l, test, refs, args.width, args.length_penalty,
                                      rank=args.rank),
               "nearest_neighbour": ev.evaluate_nn_baseline(train, refs, test, refs)}
-    if l2m is not None:
-        report["l2m_round_trip"] = ev.evaluate_round_trip(
-            l2m, m2l, {i: refs[i] for i in test}, report["m2l"]["bleu"],
-            method=args.l2m_method, width=args.l2m_width, temperature=args.l2m_temperature,
-            reranker=reranker)
-        report["l2m_round_trip"].update(method=args.l2m_method, width=args.l2m_width,
-                                        temperature=args.l2m_temperature,
-                                        rerank=args.l2m_rerank)
+    if t2m is not None:
+        report["l2m_round_trip"] = ev.round_trip_of(t2m, m2l, {i: refs[i] for i in test},
+                                                    report["m2l"]["bleu"])
+        report["l2m_round_trip"].update(model=args.t2m, **dataclasses.asdict(t2m.options))
         from motionlang.evaluation.retrieval import SentenceIndex
         index = SentenceIndex((i, s) for i in sorted(train) for s in refs[i])
         report["nn_round_trip"] = ev.evaluate_round_trip_nn(
             index, train, m2l, {i: refs[i] for i in test}, report["m2l"]["bleu"])
     _add_checks(report, records, test, train, refs, args.width)
     if args.tsne:
-        _context_tsne(Path(args.tsne), m2l, l2m if args.l2m else None, test, records)
+        _context_tsne(Path(args.tsne), m2l, t2m.model if t2m is not None else None, test,
+                      records)
         report["tsne"] = str(args.tsne)
     table = _report_text(report, args)
     if args.output:
@@ -225,13 +218,18 @@ def _context_tsne(path: Path, m2l, l2m, test: dict, records: dict) -> None:
 
 
 def register(subparsers) -> None:
+    from motionlang.cli.models_arg import add_model_arg
     p = subparsers.add_parser("evaluate", help="BLEU/ROUGE/CIDEr of M2L, baseline, L2M round trip")
     p.add_argument("--m2l", required=True, metavar="MODEL",
                    help="M2L model file or its run folder (train m2l --out), which holds "
                         "splits/")
-    p.add_argument("--l2m", metavar="MODEL", help="L2M model file or run folder: also run "
-                   "the round trip, and its baseline "
-                   "(the motion of the closest training sentence in bag of words)")
+    add_model_arg(p, "--t2m", repeat=False,
+                  help="a text-to-motion model (file, run folder or packaged name) with its "
+                       "sampling options: also run the round trip (each test sentence -> its "
+                       "motion -> the M2L's description; the model's own frames, so one of the "
+                       "M2L's features: an L2M), and its baseline (the motion of the closest "
+                       "training sentence in bag of words); e.g. --t2m l2m:method=sample,"
+                       "width=10,rerank=OTHER_M2L (a reranker other than --m2l)")
     p.add_argument("--data", required=True, action="append", metavar="DIR",
                    help="the dataset trained on (KIT-ML-format or custom folder, bandai:DIR, "
                         "...); repeat it for several (no @W weights here). The test motions "
@@ -251,16 +249,5 @@ def register(subparsers) -> None:
     p.add_argument("--length-penalty", type=nonneg_float, default=0.0, metavar="ALPHA",
                    help="rank M2L hypotheses by log P / length**ALPHA (default 0: total, the paper's)")
     add_rank_arg(p, "logp")   # the paper's protocol; --rank mbr scores what describe shows
-    p.add_argument("--l2m-method", choices=("mean", "sample", "beam"), default="mean",
-                   help="round trip: how each motion is generated (default: heaviest-component "
-                        "means); the likeliest of --l2m-width hypotheses is described (with "
-                        "--l2m-rerank: the one that M2L ranks first)")
-    p.add_argument("--l2m-width", type=width_int, default=1, metavar="W",
-                   help="hypotheses per sentence for 'sample' / 'beam' (default 1)")
-    p.add_argument("--l2m-temperature", type=positive_float, default=1.0, metavar="TAU",
-                   help="sampling temperature for 'sample' / 'beam' (see generate --temperature)")
-    p.add_argument("--l2m-rerank", metavar="MODEL", help="round trip: describe the hypothesis "
-                   "under which this other M2L model finds the sentence likeliest, not the "
-                   "L2M's likeliest (not the --m2l file)")
     p.set_defaults(func=cmd_evaluate)
 

@@ -22,14 +22,13 @@ from motionlang.cli.options import (
     positive_int,
     size_int,
 )
-from motionlang.cli.run_log import lead_process, log_command
-from motionlang.cli.train_commands import MODEL_FILES, add_out_arg, add_trainer_args, train_config
+from motionlang.cli.train_commands import add_out_arg, add_trainer_args, model_file, train_config
 from motionlang.errors import MotionlangError
+from motionlang.training.run_log import lead_process, log_command
 
 BODIES = ("kit", "smpl")
 #: options of the default (``ape``) protocol that mean nothing under ``guo``: name -> unset
-APE_ONLY = {"autoencode": False, "true_start": False, "oracle": 0, "l2m_rerank": None,
-            "l2m_width": 1}
+APE_ONLY = {"autoencode": False, "true_start": False, "oracle": 0}
 GUO_ONLY = ("evaluator", "evaluator_official", "mean", "std", "word_vectors", "m2l",
             "regenerate")   # (--fid-reference has a default: not checked)
 
@@ -52,6 +51,7 @@ def cmd_train(args: argparse.Namespace) -> int:
 
     import torch
 
+    from motionlang.datasets.sources import non_commercial
     from motionlang.datasets.splits import save_splits
     from motionlang.models.evaluator import TextMotionEvaluator
     from motionlang.training.evaluator_train import build_evaluator_data, train_evaluator
@@ -76,8 +76,8 @@ def cmd_train(args: argparse.Namespace) -> int:
         save_splits({s: list(dict.fromkeys(it["id"] for it in items))
                      for s, items in data.items.items()}, run / "splits")
     log_command(run / "commands.jsonl", args)
-    if lead and str(args.data).startswith("bandai:"):
-        from motionlang.cli.run_log import write_license
+    if lead and non_commercial(args.data):
+        from motionlang.training.run_log import write_license
         write_license(run, "evaluator")
     torch.manual_seed(args.seed)
     model = TextMotionEvaluator(config)
@@ -98,7 +98,7 @@ def cmd_train(args: argparse.Namespace) -> int:
         return 0
     if val and (run / "best.pt").is_file():   # the epoch of the lowest validation loss
         model = TextMotionEvaluator.load(run / "best.pt")
-    out = run / MODEL_FILES["evaluator"]
+    out = run / model_file("evaluator")
     model.save(out)
     # the epoch saved: the best validation score (R-precision, else loss), else the last
     with_val = [h for h in history if h.get("val")]
@@ -189,9 +189,9 @@ def add_guo_args(p: argparse.ArgumentParser) -> None:
                         "with (val: held out like them, when the training split holds data "
                         "the test split has not, e.g. Bandai's dataset 1)")
     g.add_argument("--regenerate", action="store_true",
-                   help="with --l2m-method sample: L2M models generate anew for each of the "
-                        "--repeats, as the papers do (that many times the generation time); "
-                        "default: one generation, its pairs reshuffled")
+                   help="the models that sample (e.g. --model l2m:method=sample) generate "
+                        "anew for each of the --repeats, as the papers do (that many times the "
+                        "generation time); default: one generation, its pairs reshuffled")
     g.add_argument("--m2l", action="append", metavar="[NAME=]PATH",
                    help="motion to text: an M2L model (file, run folder or packaged name) "
                         "whose descriptions of the test motions are scored (BLEU@1/4, "
@@ -213,9 +213,6 @@ def check_protocol(args: argparse.Namespace) -> None:
         if bool(args.evaluator_official) != bool(args.mean and args.std) or (
                 args.evaluator and (args.mean or args.std)):
             raise MotionlangError("--mean and --std go with --evaluator-official (both)")
-        if args.regenerate and args.l2m_method != "sample":
-            raise MotionlangError("--regenerate needs --l2m-method sample (the models' other "
-                                  "ways of generating give the same motions every time)")
         if args.multimodality and args.multimodality <= 10:
             raise MotionlangError(f"--multimodality {args.multimodality}: need more than 10 "
                                   "samples a caption (10 pairs are drawn among them)")
@@ -247,14 +244,14 @@ def load_evaluator(args: argparse.Namespace):
 
 
 def cmd_evaluate_guo(args: argparse.Namespace) -> int:
-    from motionlang.cli.twostream_commands import model_spec
+    from motionlang.cli.models_arg import draws, load_t2m_models, split_label
     from motionlang.evaluation.t2m.yardstick import (
         evaluator_body,
         guo_table,
         markdown_table,
         test_pairs,
     )
-    from motionlang.models.registry import TEXT_TO_MOTION, load_model
+    from motionlang.models.registry import load_model
     from motionlang.training.evaluator_train import build_evaluator_data
 
     check_protocol(args)
@@ -264,13 +261,13 @@ def cmd_evaluate_guo(args: argparse.Namespace) -> int:
     if specs and body != "kit":
         raise MotionlangError("the models' 21-joint motions cannot be scored by an SMPL-body "
                               "(263-value) evaluator; use a kit-body (251) one")
-    models = {}
-    for spec in specs:
-        name, path = model_spec(spec)
-        models[name] = load_model(path, kind=TEXT_TO_MOTION)
+    models = load_t2m_models(specs)
+    if args.regenerate and not any(draws(m) for m in models.values()):
+        raise MotionlangError("--regenerate needs a model that samples, e.g. --model "
+                              "l2m:method=sample (the others give the same motions every time)")
     m2l_specs, m2l_models = m2l_specs_of(args), {}
     for spec in m2l_specs:   # loaded before the data is read: a bad --m2l fails at once
-        name, path = model_spec(spec)
+        name, path = split_label(spec)
         m2l_models[name] = load_model(path, kind="m2l")
     bones = evaluator.config.bones
     data = build_evaluator_data(args.data, body, seed=args.seed, max_seconds=args.max_seconds,
@@ -318,26 +315,27 @@ def cmd_evaluate_guo(args: argparse.Namespace) -> int:
 
 def model_rows(args: argparse.Namespace, models: dict, captions: list[str], frames: list[int],
                bones=None) -> tuple[dict, dict]:
-    """Each text-to-motion model's rows for the captions (a function of the repetition with
-    ``--regenerate``), and with ``--multimodality`` S samples for the first captions; laid
-    on ``bones`` (the evaluator's) if given."""
-    from motionlang.decoding.t2m import text_to_motion
+    """Each text-to-motion model's rows for the captions with its own options (a function
+    of the repetition with ``--regenerate``, for the models that sample), and with
+    ``--multimodality`` S samples for the first captions; laid on ``bones`` (the
+    evaluator's) if given."""
+    from motionlang.cli.models_arg import draws
     from motionlang.evaluation.t2m.yardstick import generated_rows
     gen = {}
     for name, m in models.items():
-        if args.regenerate and not text_to_motion(m).deterministic:
+        if args.regenerate and draws(m):
             # a new generation for each repetition, seeds seed, seed + 1, ... (the papers')
             gen[name] = (lambda i, m=m, name=name: generated_rows(
-                m, captions, frames, method=args.l2m_method, seed=args.seed + i,
-                desc=f"{name} #{i + 1}", bones=bones))
+                m, captions, frames, seed=args.seed + i, desc=f"{name} #{i + 1}",
+                bones=bones))
         else:
-            gen[name] = generated_rows(m, captions, frames, method=args.l2m_method,
-                                       seed=args.seed, desc=name, bones=bones)
+            gen[name] = generated_rows(m, captions, frames, seed=args.seed, desc=name,
+                                       bones=bones)
     samples = {}
     if args.multimodality:
         n = min(args.mm_texts, len(captions))
         for name, m in models.items():
-            if text_to_motion(m).deterministic:   # one motion a caption: nothing to measure
+            if m.deterministic:   # one motion a caption: nothing to measure
                 continue
             samples[name] = [[generated_rows(m, [c], [f], method="sample", seed=k,
                                              desc=f"{name} sample", bones=bones)[0]

@@ -25,9 +25,10 @@ from motionlang.cli.options import (
     seed_int,
     size_int,
 )
-from motionlang.cli.run_log import LICENSE_FILE, log_command, write_license
-from motionlang.cli.train_commands import MODEL_FILES, add_out_arg
+from motionlang.cli.train_commands import add_out_arg, model_file
+from motionlang.datasets.sources import parse_source
 from motionlang.errors import MotionlangError
+from motionlang.training.run_log import LICENSE_FILE, log_command, write_license
 
 BANDAI = "bandai:"
 NON_COMMERCIAL = ("Trained on the Bandai Namco Research Motion Datasets (CC BY-NC 4.0): the "
@@ -36,7 +37,7 @@ NON_COMMERCIAL = ("Trained on the Bandai Namco Research Motion Datasets (CC BY-N
 
 def bandai_path(data: str) -> str:
     """``bandai:DIR`` (or a plain DIR) -> DIR."""
-    path = data[len(BANDAI):] if data.startswith(BANDAI) else data
+    path = parse_source(data, kind="bandai").root
     if not path.strip():
         raise MotionlangError(f"--data {data!r}: expected bandai:DIR")
     return path
@@ -82,7 +83,7 @@ def cmd_train(args: argparse.Namespace) -> int:
                                batch_size=args.batch_size, lr=args.lr,
                                weight_decay=args.weight_decay, mirror=args.mirror,
                                seed=args.seed, log=epoch_line, **config)
-    out = run / MODEL_FILES["judge"]
+    out = run / model_file("judge")
     judge.save(out)
     with atomic_write(run / "history.json") as fh:
         fh.write(json.dumps(history, indent=1) + "\n")
@@ -142,19 +143,16 @@ def register_train(train_sub) -> None:
 
 # -- evaluate-judge --------------------------------------------------------------------------
 def cmd_evaluate(args: argparse.Namespace) -> int:
-    from motionlang.cli.twostream_commands import model_spec
-    from motionlang.decoding.t2m import FPS, text_to_motion
+    from motionlang.cli.models_arg import load_t2m_models
+    from motionlang.decoding.t2m import FPS
     from motionlang.evaluation.judge import asked_labels, judge_table, markdown_judge_table
     from motionlang.features.foot_lock import lock_feet
     from motionlang.models.judge.fit import bandai_items, bandai_sentences
-    from motionlang.models.registry import TEXT_TO_MOTION, load_model
+    from motionlang.models.registry import load_model
     from motionlang.utils.progress import progress
 
     judge = load_model(args.judge, kind="judge")
-    models = {}
-    for spec in args.model or []:
-        name, path = model_spec(spec)
-        models[name] = load_model(path, kind=TEXT_TO_MOTION)
+    models = load_t2m_models(args.model)
     source = bandai_path(args.data)
     real = bandai_items(source, args.split, fps=FPS)
     sentences = bandai_sentences(source, args.split, seed=args.seed)
@@ -163,9 +161,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     real, sentences = real[:args.limit or None], sentences[:args.limit or None]
     asked = asked_labels(sentences)
     generated = {}
-    for name, model in models.items():
-        t2m = text_to_motion(model)
-        kw = {} if t2m.deterministic else {"method": args.l2m_method, "seed": args.seed}
+    for name, t2m in models.items():
+        kw = {} if t2m.deterministic else {"seed": args.seed}   # its options: how it decodes
         raw = [t2m.positions21(s.text, max(2, len(it.positions)), **kw)
                for s, it in progress(list(zip(sentences, real)), desc=name, unit="motions")]
         # the lock is a post-process of the decoded frames: both rows from one decoding
@@ -199,6 +196,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
 
 
 def register(subparsers) -> None:
+    from motionlang.cli.models_arg import add_model_arg
     h = "judge text-to-motion models on real motion (Bandai Namco test takes)"
     p = subparsers.add_parser(
         "evaluate-judge", help=h, description=h + ": the judge's own accuracy on the real "
@@ -209,22 +207,19 @@ def register(subparsers) -> None:
                    help="a judge file or run folder (train judge --out)")
     p.add_argument("--data", required=True, metavar="bandai:DIR",
                    help="the Bandai Namco datasets (CC BY-NC 4.0)")
-    p.add_argument("--model", action="append", metavar="[NAME=]PATH",
-                   help="an L2M or two-stream model file, run folder or packaged name "
-                        "(e.g. l2m); repeat for each model (none: the judge and the real "
-                        "takes only)")
+    add_model_arg(p, help="a text-to-motion model (file, run folder or packaged name, e.g. "
+                          "l2m) with its sampling options; repeat for each model (none: the "
+                          "judge and the real takes only)")
     p.add_argument("--split", choices=("train", "val", "test"), default="test",
                    help="the Bandai split judged")
     p.add_argument("--limit", type=nonneg_int, default=0,
                    help="judge at most N takes (0: all)")
     p.add_argument("--seed", type=seed_int, default=0,
-                   help="seed of the sentences, L2M sampling and the FID halves")
+                   help="seed of the sentences, the sampling models' draws and the FID halves")
     p.add_argument("--foot-lock", choices=("on", "off", "both"), default="on",
                    help="judge the motions with feet that are down held in place, as "
                         "'motionlang generate' writes joint-position models' motions (on), "
                         "as decoded (off), or both (rows NAME and 'NAME (raw)')")
-    p.add_argument("--l2m-method", choices=("mean", "sample"), default="mean",
-                   help="how L2M models generate (mean: heaviest-component means)")
     p.add_argument("-o", "--output", metavar="DIR", type=output_dir,
                    help="write judge_table.md and judge_report.json here")
     p.set_defaults(func=cmd_evaluate)

@@ -19,11 +19,10 @@ from motionlang.cli.options import (
     positive_float,
     seed_int,
     size_int,
-    width_int,
 )
-from motionlang.cli.run_log import lead_process, log_command
-from motionlang.cli.train_commands import MODEL_FILES, add_out_arg, add_trainer_args, train_config
+from motionlang.cli.train_commands import add_out_arg, add_trainer_args, model_file, train_config
 from motionlang.errors import MotionlangError
+from motionlang.training.run_log import lead_process, log_command
 
 ABLATION_NAMES = ("full", "no-joint-training", "one-stream", "no-extra-losses", "word-vectors")
 
@@ -33,14 +32,15 @@ def cmd_train(args: argparse.Namespace) -> int:
 
     import torch
 
-    from motionlang.cli.run_log import write_license
-    from motionlang.cli.seq2seq_commands import mix_training
     from motionlang.datasets.mixing import source_weights
+    from motionlang.datasets.sources import non_commercial
     from motionlang.datasets.splits import save_splits
     from motionlang.datasets.twostream_items import build_twostream_data
     from motionlang.models.length import SentenceLength
     from motionlang.models.twostream import TwoStreamModel
+    from motionlang.training.recipes.seq2seq import mix_training
     from motionlang.training.run_files import check_resume
+    from motionlang.training.run_log import write_license
     from motionlang.training.twostream_train import ForcingSchedule, make_config, train_twostream
 
     logging.basicConfig(level=logging.INFO, format="%(message)s")
@@ -58,7 +58,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     train_items = mix_training(args.data, data.items["train"], data.sources, args.seed)
     if lead:
         save_splits(data.splits, run / "splits")
-        if any(p.startswith("bandai:") for p in paths):
+        if non_commercial(args.data):
             write_license(run, "two-stream model")   # CC BY-NC 4.0 data
     log_command(run / "commands.jsonl", args)
     sizes = dict(h1=args.h1, h2=args.h2, h=args.h, lstm_layers=args.lstm_layers)
@@ -80,7 +80,7 @@ def cmd_train(args: argparse.Namespace) -> int:
         schedule=ForcingSchedule(1.0, 0.0, args.forcing_steps))
     if not lead:
         return 0
-    out = run / MODEL_FILES["twostream"]
+    out = run / model_file("twostream")
     model.save(out)
     print(run_summary(out, history))
     return 0
@@ -118,20 +118,11 @@ def parse_lambdas(specs: list[str] | None) -> dict[str, float]:
     return out
 
 
-def model_spec(spec: str) -> tuple[str, str]:
-    """``[NAME=]PATH`` -> (name, path). An existing file is a path even if it holds "=";
-    otherwise the name ends at the *last* "=", so names may contain "=" ("h=128")."""
-    if Path(spec).is_file():
-        return Path(spec).stem, spec
-    name, sep, path = spec.rpartition("=")
-    return (name, path) if sep and name else (Path(spec).stem, spec.lstrip("="))
-
-
 def register_train(train_sub) -> None:
     """Hook of ``cli/train_commands.py``: adds ``train twostream``."""
     h = "train the two-stream text-to-motion model (Ghosh et al. 2021)"
     p = train_sub.add_parser("twostream", help=h, description=h)
-    from motionlang.cli.seq2seq_commands import add_data_arg
+    from motionlang.cli.train_commands import add_data_arg
     add_data_arg(p)
     add_out_arg(p, "twostream", "best.pt and last.pt (checkpoints; in pose/ and text/ for "
                                 "the two-stage ablation), history.json, splits/, ")
@@ -182,47 +173,24 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     if args.protocol == "guo":
         return cmd_evaluate_guo(args)
     check_protocol(args)
+    from motionlang.cli.models_arg import load_t2m_models
     from motionlang.datasets.twostream_items import build_twostream_data
-    from motionlang.decoding.t2m import text_to_motion
     from motionlang.evaluation.t2m.compare import compare
-    from motionlang.models.registry import TEXT_TO_MOTION, load_model
 
-    models = {}
-    for spec in args.model:
-        name, path = model_spec(spec)
-        models[name] = load_model(path, kind=TEXT_TO_MOTION)
-    if args.autoencode and not any(text_to_motion(m).autoencodes for m in models.values()):
+    models = load_t2m_models(args.model)
+    if args.autoencode and not any(m.autoencodes for m in models.values()):
         raise MotionlangError("--autoencode needs a two-stream model among --model")
-    reranker = None
-    if args.l2m_width > 1 and args.l2m_method != "sample":
-        raise MotionlangError("--l2m-width applies to --l2m-method sample; mean decoding "
-                              "gives one motion")
-    if args.l2m_rerank:
-        if args.l2m_width < 2:
-            raise MotionlangError("--l2m-rerank needs several samples: --l2m-method sample "
-                                  "--l2m-width 2 or more")
-        from motionlang.decoding.rerank import check_same_features
-        from motionlang.models.seq2seq.m2l import MotionToLanguage
-        reranker = MotionToLanguage.load(args.l2m_rerank)
-        for model in models.values():
-            if not text_to_motion(model).deterministic:   # the models that sample
-                check_same_features(model, reranker, f"--l2m-rerank {args.l2m_rerank}")
-    if (args.l2m_rerank or args.l2m_width > 1) and all(
-            text_to_motion(m).deterministic for m in models.values()):
-        raise MotionlangError("--l2m-width and --l2m-rerank apply to L2M models: none among "
-                              "--model")
     data = build_twostream_data(args.data, seed=args.seed, max_seconds=args.max_seconds)
     _, table = compare(models, data, split=args.split, limit=args.limit or None,
-                       l2m_method=args.l2m_method, l2m_width=args.l2m_width,
-                       l2m_reranker=reranker, autoencode=args.autoencode,
-                       out_dir=args.output, figures=args.figures, oracle=args.oracle,
-                       true_start=args.true_start)
+                       autoencode=args.autoencode, out_dir=args.output, figures=args.figures,
+                       oracle=args.oracle, true_start=args.true_start)
     print(table, end="")
     return 0
 
 
 def register(subparsers) -> None:
     from motionlang.cli.evaluator_commands import add_guo_args
+    from motionlang.cli.models_arg import add_model_arg
     p = subparsers.add_parser(
         "evaluate-t2m", help="one table for text-to-motion models: APE/AVE and action order "
                              "(--protocol ape) or the papers' R-precision, FID, MM-Dist, "
@@ -232,10 +200,10 @@ def register(subparsers) -> None:
                         "motions; guo: the yardstick of Guo et al. 2022 under a text-motion "
                         "evaluator (--evaluator)")
     p.add_argument("--data", required=True, metavar="DIR", help="the dataset trained on")
-    p.add_argument("--model", action="append", metavar="[NAME=]PATH",
-                   help="an L2M or two-stream model file, run folder or packaged name; "
-                        "repeat for each model (ape: at least one; guo: default the "
-                        "packaged l2m)")
+    add_model_arg(p, help="a text-to-motion model (file, run folder or packaged name) with "
+                          "its sampling options, one row each; repeat for each model (ape: at "
+                          "least one; guo: default the packaged l2m), e.g. --model l2m "
+                          "--model l2m:method=sample,width=10,rerank=m2l")
     p.add_argument("--split", default="test", help="the split to evaluate (in the dataset's "
                    "splits, as training made them with --seed)")
     p.add_argument("--seed", type=seed_int, default=0, help="the split seed used in training")
@@ -258,13 +226,5 @@ def register(subparsers) -> None:
                         "motions (how much of APE no sentence can explain)")
     p.add_argument("-o", "--output", metavar="DIR", type=output_dir,
                    help="write t2m_table.md, t2m_report.json and trajectory PNGs here")
-    p.add_argument("--l2m-method", choices=("mean", "sample"), default="mean",
-                   help="how L2M models generate (default: heaviest-component means; "
-                        "sample: one ancestral sample per sentence, or the best of "
-                        "--l2m-width)")
-    p.add_argument("--l2m-width", type=width_int, default=1, metavar="W",
-                   help="sample: draw W and keep the likeliest (default 1)")
-    p.add_argument("--l2m-rerank", metavar="M2L", help="sample: keep the one of the W under "
-                   "which this M2L model finds the sentence likeliest")
     add_guo_args(p)
     p.set_defaults(func=cmd_evaluate)

@@ -9,7 +9,7 @@ information decoding), beyond the paper.
 
 An honest round trip must not rank with the model that then describes the motions: that
 model would be graded on the choice it made. ``motionlang evaluate`` therefore refuses the
-describer's own file as reranker (``--l2m-rerank``; a copy of it is not detected).
+describer's own file as reranker (``--t2m l2m:rerank=M2L``; a copy of it is not detected).
 
 Both models must read the same frames: :func:`check_same_features` compares their feature
 sets (kind, names, fitted normaliser), since generated frames are in the L2M's feature units.
@@ -22,7 +22,7 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
-from motionlang.decoding.seq2seq import _normalize, encode_sentence
+from motionlang.decoding.seq2seq_io import encode_sentence, normalize
 from motionlang.errors import MotionlangError
 from motionlang.features.collate import pad_batch
 from motionlang.models.seq2seq.m2l import MotionToLanguage
@@ -60,7 +60,7 @@ def sentence_log_probs(m2l: MotionToLanguage, motions: Sequence[np.ndarray],
                                   f"got {m.shape}")
     m2l.eval()
     ids = encode_sentence(m2l.vocab, sentence)
-    x, mask = pad_batch([torch.as_tensor(_normalize(m2l.normalizer, m), dtype=torch.float32)
+    x, mask = pad_batch([torch.as_tensor(normalize(m2l.normalizer, m), dtype=torch.float32)
                          for m in motions])
     lengths = mask.sum(1).long()
     tokens = torch.tensor([ids] * len(motions))

@@ -97,10 +97,12 @@ def evaluate_nn_baseline(train_frames, train_refs, frames, references) -> dict:
 def evaluate_round_trip(l2m, m2l, references: Mapping[str, Sequence[str]],
                         m2l_bleu: float, *, method: str = "mean", width: int = 1,
                         max_frames: int | None = None, seed: int = 0,
-                        temperature: float = 1.0, reranker=None) -> dict:
+                        temperature: float = 1.0, reranker=None,
+                        length_norm: bool = False) -> dict:
     """Generate from each reference sentence (``decoding.seq2seq.generate_features`` with
-    ``method``, ``width``, ``temperature``; its best hypothesis), describe the result, score
-    against the motion's references. Both models must share one feature set (same frames).
+    ``method``, ``width``, ``temperature``, ``length_norm``; its best hypothesis), describe
+    the result, score against the motion's references. Both models must share one feature
+    set (same frames). :func:`round_trip_of` runs it with a text-to-motion model's options.
 
     reranker: another M2L model; the described hypothesis is then the one of the ``width``
     under which it finds the sentence likeliest (``decoding.rerank``), not the L2M's likeliest.
@@ -118,11 +120,37 @@ def evaluate_round_trip(l2m, m2l, references: Mapping[str, Sequence[str]],
 
     def motion(sentence):
         hyps = generate_features(l2m, sentence, width=width, method=method,
-                                 max_frames=max_frames, seed=seed, temperature=temperature)
+                                 max_frames=max_frames, seed=seed, temperature=temperature,
+                                 length_norm=length_norm)
         if reranker is not None:
             hyps = rerank(hyps, reranker, sentence)
         return hyps[0][0]
     return round_trip(motion, m2l, references, m2l_bleu)
+
+
+def round_trip_model(t2m, what: str = "the round trip's model") -> None:
+    """Raise :class:`MotionlangError` (naming ``what``) unless the text-to-motion model
+    ``t2m`` (``decoding.t2m.TextToMotion``) can make the round trip's motions: ranked
+    hypotheses of frames in its own features, which the M2L describes (an L2M)."""
+    if "hypotheses" not in t2m.capabilities:
+        kind = getattr(t2m.model, "kind", type(t2m.model).__name__)
+        raise MotionlangError(f"{what}: the round trip describes ranked motions in the "
+                              f"model's own features; a {kind} model gives one motion in "
+                              "positions (an L2M gives them)")
+
+
+def round_trip_of(t2m, m2l, references: Mapping[str, Sequence[str]], m2l_bleu: float, *,
+                  max_frames: int | None = None, seed: int = 0) -> dict:
+    """:func:`evaluate_round_trip` of a text-to-motion model (``decoding.t2m``, checked by
+    :func:`round_trip_model`) decoding with its own options: ``method`` (unset: "mean"),
+    ``width``, ``temperature``, ``length_norm`` and the reranker its ``rerank`` names."""
+    round_trip_model(t2m)
+    o = t2m.options
+    method = o.method or "mean"
+    return evaluate_round_trip(t2m.model, m2l, references, m2l_bleu, method=method,
+                               width=o.width if method != "mean" else 1,
+                               temperature=o.temperature, length_norm=o.length_norm,
+                               reranker=t2m.reranker, max_frames=max_frames, seed=seed)
 
 
 def evaluate_round_trip_nn(index, train_frames: Mapping[str, np.ndarray], m2l,

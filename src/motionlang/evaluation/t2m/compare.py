@@ -3,8 +3,9 @@
 For each test motion: one description (the first that states all of its body actions,
 else the first), the target = the motion's 21 joints at 12.5 Hz anchored at the origin
 facing +Z (``PositionFeatures.decode`` of its features), and each model's generation of the
-same length from the same sentence (``decoding.t2m.generate_positions21``: the two-stream
-model directly, the seq2seq L2M through forward kinematics). Columns:
+same length from the same sentence with its own sampling options
+(``decoding.t2m.TextToMotion.positions21``: the two-stream model directly, the seq2seq L2M
+through forward kinematics). Columns:
 
 * APE / AVE local (mean of the 20 non-root joints in the body frame) and root (global
   trajectory), **millimetres** (AVE mm^2) after undoing the normalisation
@@ -19,21 +20,12 @@ from __future__ import annotations
 import math
 import textwrap
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from motionlang.errors import MotionlangError
-from motionlang.evaluation.action_order import (
-    Prototypes,
-    merge_repeats,
-    order_accuracy,
-    rescale_ranges,
-    segment_accuracy,
-    segment_labels,
-)
-from motionlang.evaluation.metrics.motion import position_metrics_mm
+from motionlang.evaluation.action_order import Prototypes, rescale_ranges
 from motionlang.evaluation.t2m.baselines import (
     GROUND_TRUTH,
     NEAREST,
@@ -41,23 +33,13 @@ from motionlang.evaluation.t2m.baselines import (
     retrieval_baseline,
     still_baseline,
 )
+from motionlang.evaluation.t2m.scoring import (  # T2MItem .. markdown_table: importable here too
+    T2MItem,
+    markdown_table,
+    score_generated,
+)
+from motionlang.evaluation.t2m.scoring import positions_to_features as positions_to_features
 from motionlang.utils.progress import progress
-
-
-@dataclass
-class T2MItem:
-    """One test sentence. target: (T, 21, 3) metres, anchored. ranges: body-primitive frame
-    ranges at 12.5 Hz; truth: their actions (empty when the record has no ground truth)."""
-
-    id: str
-    sentence: str
-    target: np.ndarray
-    ranges: list[tuple[int, int]] = field(default_factory=list)
-    truth: list[str] = field(default_factory=list)
-
-    @property
-    def compositional(self) -> bool:
-        return len(merge_repeats(self.truth)) >= 2
 
 
 def body_primitives(record) -> list[tuple[str, int, int]]:
@@ -114,15 +96,6 @@ def fit_prototypes(data, split: str = "train", nearest_example: bool = True
     return Prototypes.fit(segs, nearest_example) if segs else None
 
 
-def positions_to_features(features, p21: np.ndarray) -> np.ndarray:
-    """Global (T, 21, 3) -> the normalised (T, 66) positions features (as ``encode``);
-    ``features`` is anything with the positions features' ``normalizer``."""
-    from motionlang.features.positions import split_global
-    local, v, dyaw, _ = split_global(np.asarray(p21, dtype=np.float64))
-    raw = np.concatenate([local.reshape(len(p21), -1), v, dyaw[:, None]], axis=1)
-    return features.normalizer.transform(raw)
-
-
 def evaluate_model(generate: Callable[[str, int], np.ndarray], items: Sequence[T2MItem],
                    features, prototypes: Prototypes | None) -> dict:
     """Metrics of one model. ``generate(sentence, n_frames) -> (n_frames, 21, 3)``.
@@ -136,44 +109,6 @@ def evaluate_model(generate: Callable[[str, int], np.ndarray], items: Sequence[T
     gen = {it.id: np.asarray(generate(it.sentence, len(it.target)))
            for it in progress(items, desc="generate", unit="sentences")}
     return score_generated(gen, items, features, prototypes)
-
-
-def score_generated(gen: dict[str, np.ndarray], items: Sequence[T2MItem], features,
-                    prototypes: Prototypes | None) -> dict:
-    """:func:`evaluate_model`'s result for motions already generated, ``{id: (T, 21, 3)}``
-    with T = the item's target length."""
-    m = position_metrics_mm([gen[it.id] for it in items], [it.target for it in items])
-    comp = [it for it in items if it.compositional] if prototypes is not None else []
-    acc = first = later = math.nan
-    if comp:
-        pred = [segment_labels(positions_to_features(features, gen[it.id]), it.ranges,
-                               prototypes) for it in comp]
-        acc = order_accuracy(pred, [it.truth for it in comp])
-        first, later = segment_accuracy(pred, [it.truth for it in comp])
-    return {"ape_local": m["ape_local"], "ape_root": m["ape_root"],
-            "ave_local": m["ave_local"], "ave_root": m["ave_root"],
-            "order_accuracy": acc, "first_segment_accuracy": first,
-            "later_segment_accuracy": later, "n_items": len(items), "n_compositional": len(comp),
-            "generated": gen}
-
-
-def markdown_table(results: dict[str, dict]) -> str:
-    """One row per model: APE/AVE local and root (mm, mm^2), order accuracy, and the
-    fraction of first / later segments of the compositional items labelled right."""
-    lines = ["| model | APE local (mm) | APE root (mm) | AVE local (mm^2) | AVE root (mm^2) "
-             "| order acc. | segments right (first / later) |", "|---|---|---|---|---|---|---|"]
-
-    def frac(x):
-        return "-" if x is None or math.isnan(x) else f"{x:.2f}"
-    for name, r in results.items():
-        acc = "-" if math.isnan(r["order_accuracy"]) else \
-            f"{r['order_accuracy']:.2f} ({r['n_compositional']})"
-        segs = f"{frac(r.get('first_segment_accuracy'))} / {frac(r.get('later_segment_accuracy'))}"
-        lines.append(f"| {name} | {r['ape_local']:.1f} | {r['ape_root']:.1f} | "
-                     f"{r['ave_local']:.1f} | {r['ave_root']:.1f} | {acc} | {segs} |")
-    n = next(iter(results.values()))["n_items"] if results else 0
-    return "\n".join(lines) + f"\n\n{n} test sentences; positions after undoing the " \
-        "normalisation (not the authors' normalised units).\n"
 
 
 def trajectory_figures(results: dict[str, dict], items: Sequence[T2MItem], out_dir: str | Path,
@@ -200,8 +135,7 @@ def subject_height(record) -> float | None:
     return None if h is None else float(h)
 
 
-def _l2m_on_subjects(results, name, model, data, items, protos, method, width: int = 1,
-                     reranker=None) -> None:
+def _l2m_on_subjects(results, name, t2m, data, items, protos) -> None:
     """The L2M's counterparts of a true start, two rows: its joint angles drive each test
     subject's own body (``mmm_skeleton`` of the subject's height) instead of the mean
     build; and on that body, its motion also starts with the test motion's first frame in
@@ -209,12 +143,12 @@ def _l2m_on_subjects(results, name, model, data, items, protos, method, width: i
     what the two-stream model is told with a true start. Only for angles models; skipped,
     with a log line, when a test motion's height is unknown (an MMM file without one reads
     as the reader's default height, so not for those). The second row needs "mean" or
-    "sample" decoding."""
+    "sample" decoding (``t2m``'s options decide, as in its main row)."""
     import logging
 
-    from motionlang.decoding.t2m import generate_positions21
     from motionlang.features.frames import motion_frames
     from motionlang.formats.mmm_model import mmm_skeleton
+    model = t2m.model
     if getattr(getattr(model, "features", None), "kind", None) != "angles":
         return   # a positions L2M has no body to scale: its joints are its output
     heights = {it.id: subject_height(data.records[it.id]) for it in items}
@@ -222,7 +156,7 @@ def _l2m_on_subjects(results, name, model, data, items, protos, method, width: i
         logging.getLogger(__name__).info("%s: no subject heights, no row on their bodies", name)
         return
     rows = {"on the test subject's body": None}
-    if method == "beam":
+    if getattr(t2m.options, "method", None) == "beam":
         logging.getLogger(__name__).info("%s: the sampled beam takes no first pose, no row "
                                          "from the test motion's first pose", name)
     else:
@@ -230,22 +164,20 @@ def _l2m_on_subjects(results, name, model, data, items, protos, method, width: i
             it.id: motion_frames(model.features, data.records[it.id].load_motion())[0][0]
             for it in items}
     for row, firsts in rows.items():
-        gen = {it.id: generate_positions21(
-                   model, it.sentence, len(it.target), method=method,
-                   skeleton=mmm_skeleton(heights[it.id]), width=width, reranker=reranker,
+        gen = {it.id: t2m.positions21(
+                   it.sentence, len(it.target), skeleton=mmm_skeleton(heights[it.id]),
                    first_frame=None if firsts is None else firsts[it.id]) for it in items}
         results[f"{name}, {row}"] = score_generated(gen, items, data.features, protos)
 
 
 def compare(models: dict[str, object], data, *, split: str = "test", limit: int | None = None,
             out_dir: str | Path | None = None, figures: int = 3, baseline: bool = True,
-            l2m_method: str = "mean", autoencode: bool = False, true_start: bool = False,
-            oracle: int = 0, l2m_width: int = 1, l2m_reranker=None) -> tuple[dict, str]:
-    """Evaluate ``{name: model}`` (anything ``decoding.t2m.generate_positions21`` takes) on
-    ``data`` (``TwoStreamData``); L2M models decode with ``l2m_method`` ("mean" or
-    "sample"; with ``l2m_width`` > 1 the likeliest of that many samples, or, with
-    ``l2m_reranker``, the one that M2L model finds the sentence likeliest for). Extra rows
-    unless ``baseline`` is False: the no-motion baseline
+            autoencode: bool = False, true_start: bool = False, oracle: int = 0
+            ) -> tuple[dict, str]:
+    """Evaluate ``{name: model}`` on ``data`` (``TwoStreamData``). A model is a
+    text-to-motion model behind ``decoding.t2m.TextToMotion`` and decodes with its own
+    sampling options (``text_to_motion(model, options)``; a loaded model as it is: its
+    default options, an L2M's mean decoding). Extra rows unless ``baseline`` is False: the no-motion baseline
     (``still_baseline``), the nearest-neighbour baseline (``retrieval_baseline``) and the
     ground truth (:data:`GROUND_TRUTH`); with ``autoencode``, each
     two-stream model decoding each test motion from its own pose embedding
@@ -258,22 +190,20 @@ def compare(models: dict[str, object], data, *, split: str = "test", limit: int 
     (``t2m_oracle.oracle_table``): every row again on the test motions with k training
     motions of the same parameters, beside the oracles; its rows go into the results with
     names prefixed "same-parameter subset: ". With ``out_dir`` also write ``t2m_table.md``,
-    ``t2m_report.json`` and the trajectory figures. Returns (results, table)."""
-    from motionlang.decoding.t2m import generate_positions21
+    ``t2m_report.json`` (with each model's options that differ from the defaults) and the
+    trajectory figures. Returns (results, table)."""
+    from motionlang.decoding.t2m import text_to_motion
+    models = {name: text_to_motion(model) for name, model in models.items()}
     items = eval_items(data, split, limit)
     protos = fit_prototypes(data)
     if oracle:   # before the models run: a K no test motion meets fails at once
         from motionlang.evaluation.t2m.oracle import oracle_generations, oracle_table
         kept, oracle_gens = oracle_generations(data, items, oracle)
-    results = {name: evaluate_model(lambda s, t, m=model: generate_positions21(
-                                        m, s, t, method=l2m_method, width=l2m_width,
-                                        reranker=l2m_reranker),
-                                    items, data.features, protos)
-               for name, model in models.items()}
-    for name, model in models.items():
-        _extra_model_rows(results, name, model, data, items, protos, autoencode=autoencode,
-                          true_start=true_start, method=l2m_method, width=l2m_width,
-                          reranker=l2m_reranker)
+    results = {name: evaluate_model(t2m.positions21, items, data.features, protos)
+               for name, t2m in models.items()}
+    for name, t2m in models.items():
+        _extra_model_rows(results, name, t2m, data, items, protos, autoencode=autoencode,
+                          true_start=true_start)
     if baseline:
         _baseline_rows(results, data, items, protos, true_start)
     table = markdown_table(results)
@@ -284,24 +214,21 @@ def compare(models: dict[str, object], data, *, split: str = "test", limit: int 
         results.update({f"same-parameter subset: {k}": r for k, r in rows.items()})
         table += "\n" + sub_table
     if out_dir is not None:
-        _write_report(Path(out_dir), table, results, lengths, split, l2m_method, l2m_width,
-                      l2m_reranker)
+        _write_report(Path(out_dir), table, results, lengths, split,
+                      {name: t2m.describe_options() for name, t2m in models.items()})
         if figures:
             # models only: the no-motion baseline is a dot at the origin
             trajectory_figures({k: results[k] for k in models}, items, Path(out_dir), figures)
     return results, table
 
 
-def _extra_model_rows(results: dict, name: str, model, data, items, protos, *,
-                      autoencode: bool, true_start: bool, method: str, width: int,
-                      reranker) -> None:
+def _extra_model_rows(results: dict, name: str, t2m, data, items, protos, *,
+                      autoencode: bool, true_start: bool) -> None:
     """The rows of :func:`compare`'s ``autoencode`` and ``true_start``, for the models that
     can do them (``TextToMotion.autoencodes``, ``takes_start_pose``,
     ``starts_from_positions``)."""
-    from motionlang.decoding.t2m import text_to_motion
-    t2m = text_to_motion(model)
     if true_start and t2m.takes_start_pose:
-        _l2m_on_subjects(results, name, model, data, items, protos, method, width, reranker)
+        _l2m_on_subjects(results, name, t2m, data, items, protos)
     if autoencode and t2m.autoencodes:
         gen = {it.id: t2m.reconstruct21(it.target) for it in items}
         results[f"{name}, from the motion's own embedding"] = score_generated(
@@ -330,13 +257,13 @@ def _baseline_rows(results: dict, data, items, protos, true_start: bool) -> None
 def _length_rows(models: dict, data, items) -> tuple[dict, str]:
     """Sentence -> length errors of each model's length model (and of one refit on the
     training motions), and the table's line about them."""
-    from motionlang.decoding.t2m import FPS, text_to_motion
+    from motionlang.decoding.t2m import FPS
     lengths = {"refit on the whole training motions": length_errors(data, items)}
     # models whose length model counts frames at 12.5 Hz (an angles L2M's counts at 10 Hz)
-    lengths.update({name: length_errors(data, items, m.length_model)
-                    for name, m in models.items()
-                    if getattr(m, "length_model", None) is not None
-                    and abs(text_to_motion(m).fps - FPS) < 1e-9})
+    lengths.update({name: length_errors(data, items, t2m.model.length_model)
+                    for name, t2m in models.items()
+                    if getattr(t2m.model, "length_model", None) is not None
+                    and abs(t2m.fps - FPS) < 1e-9})
     line = ("\nSentence -> length (what `generate` uses without --max-frames), mean absolute "
             "error in frames at 12.5 Hz: "
             + "; ".join(f"{k} {v['mae_frames']:.1f}" for k, v in lengths.items())
@@ -346,8 +273,9 @@ def _length_rows(models: dict, data, items) -> tuple[dict, str]:
 
 
 def _write_report(out: Path, table: str, results: dict, lengths: dict, split: str,
-                  method: str, width: int, reranker) -> None:
-    """``t2m_table.md`` and ``t2m_report.json`` (NaN as null) in ``out``."""
+                  options: dict[str, dict]) -> None:
+    """``t2m_table.md`` and ``t2m_report.json`` (NaN as null) in ``out``; ``options``: each
+    model's sampling options that differ from its family's defaults."""
     import json
 
     from motionlang.utils.atomic import atomic_write
@@ -358,5 +286,4 @@ def _write_report(out: Path, table: str, results: dict, lengths: dict, split: st
               for k, r in results.items()}
     with atomic_write(out / "t2m_report.json") as fh:
         json.dump({"split": split, "results": report, "length_model": lengths,
-                   "l2m_decoding": {"method": method, "width": width,
-                                    "reranked": reranker is not None}}, fh, indent=1)
+                   "options": options}, fh, indent=1)

@@ -1,0 +1,161 @@
+"""``--model [LABEL=]NAME[:key=value,...]``: a text-to-motion model named with its options.
+
+One value names the model (a packaged name, a checkpoint file or a run folder), its sampling
+options after ``:`` (the fields of its family's ``Options`` dataclass, ``models.options``) and,
+optionally, the label of its row before ``=``::
+
+    --model l2m                                   # row "l2m", default options
+    --model l2m:method=sample,width=5,rerank=m2l  # row "l2m:method=sample,width=5,rerank=m2l"
+    --model "best of 5=runs/l2m:method=sample,width=5"
+
+Every command that takes text-to-motion models parses, loads and wraps them here
+(:func:`load_t2m`), so no command has an option of one family. The help lists each family's
+options, read from its ``Options`` dataclass when the help is shown: those classes live beside
+torch code, which building the parser must not import.
+"""
+from __future__ import annotations
+
+import argparse
+import dataclasses
+from pathlib import Path
+from typing import Any
+
+from motionlang.errors import MotionlangError
+
+SYNTAX = "MODEL[:key=value,...]"
+
+
+def split_label(text: str) -> tuple[str, str]:
+    """``[LABEL=]PATH`` -> (label, path). An existing file is a path even if it holds "=";
+    otherwise the label ends at the *last* "=", so labels may contain "=" ("h=128")."""
+    if Path(text).is_file():
+        return Path(text).stem, text
+    label, sep, path = text.rpartition("=")
+    return (label, path) if sep and label else (Path(text).stem, text.lstrip("="))
+
+
+def parse_t2m(text: str) -> tuple[str, Any]:
+    """``[LABEL=]NAME[:key=value,...]`` -> (row label, ``ModelSpec``). Without a label the
+    row is the model's file stem, followed by its options as given (two rows of one model
+    with other options get two names).
+
+    Raises:
+        MotionlangError: a malformed option list (``models.options.parse_model_spec``).
+    """
+    from motionlang.models.options import ModelSpec, parse_model_spec
+    if Path(text).exists():   # an existing file or folder is a name, whatever it holds
+        return Path(text).stem, ModelSpec(text)
+    spec = parse_model_spec(text)
+    label, name = split_label(spec.name)
+    if name == spec.name:   # no label given: the stem and the options
+        label = str(ModelSpec(label, spec.options))
+    return label, ModelSpec(name, spec.options)
+
+
+def load_t2m(text: str, flag: str = "--model") -> tuple[str, Any]:
+    """(row label, the model behind ``decoding.t2m.TextToMotion`` with its options) of one
+    ``--model`` value: parsed, loaded as any text-to-motion kind and wrapped; a ``method``
+    left to the model is "mean", as evaluation rows decode; an option that names another
+    model (an L2M's ``rerank``) is loaded now, so that a bad one fails before any data is
+    read.
+
+    Raises:
+        MotionlangError: one line naming ``flag`` and the value: an unknown option or a bad
+            value (the known options listed), or a model that is missing or of another kind.
+    """
+    from motionlang.decoding.t2m import text_to_motion
+    from motionlang.models import registry
+    label, spec = parse_t2m(text)
+    model = registry.load_model(spec.name, kind=registry.kinds_with("text_to_motion"))
+    try:
+        t2m = text_to_motion(model, spec.options or None)
+        if getattr(t2m.options, "method", "") is None:
+            # "the model's own way" is the means in an evaluation row (L2MText2Motion's
+            # positions21): said outright, so that the options' own checks refuse what
+            # mean decoding would ignore (a width, a temperature)
+            t2m.configure({**dataclasses.asdict(t2m.options), "method": "mean"})
+        getattr(t2m, "reranker", None)
+    except MotionlangError as exc:
+        raise MotionlangError(f"{flag} {text}: {exc}") from None
+    return label, t2m
+
+
+def load_t2m_models(values: list[str] | None, flag: str = "--model") -> dict[str, Any]:
+    """``{row label: model}`` of repeated ``--model`` values (:func:`load_t2m`), in order.
+
+    Raises:
+        MotionlangError: as :func:`load_t2m`, or two values with one label.
+    """
+    out: dict[str, Any] = {}
+    for text in values or []:
+        label, t2m = load_t2m(text, flag)
+        if label in out:
+            raise MotionlangError(f"{flag} {text}: a second row named {label!r}; give one "
+                                  f"a label ({flag} LABEL=MODEL)")
+        out[label] = t2m
+    return out
+
+
+def draws(t2m) -> bool:
+    """Whether the model's motions change with the seed under its options: not
+    deterministic, and not told ``method=mean`` (the default of :func:`load_t2m`)."""
+    return not t2m.deterministic and getattr(t2m.options, "method", None) != "mean"
+
+
+# -- help ------------------------------------------------------------------------------------
+def _field_text(f: dataclasses.Field) -> str:
+    default = f.default if f.default is not dataclasses.MISSING else (
+        f.default_factory() if f.default_factory is not dataclasses.MISSING else None)
+    shown = "none" if default is None else str(default).lower() if isinstance(
+        default, bool) else str(default)
+    choices = f.metadata.get("choices")
+    return f"{f.name} ({'|'.join(choices) + ', ' if choices else ''}default {shown})"
+
+
+def options_help() -> str:
+    """Each text-to-motion kind and its options with their defaults (and choices), from its
+    ``Options`` dataclass: ``l2m: method (sample|beam|mean, default none), width (default
+    1), ...; twostream: none``. Imports the families' adapters (torch)."""
+    from motionlang.models.family import load_object
+    from motionlang.models.registry import families
+    parts = []
+    for kind, fam in families().items():
+        if fam.text_to_motion is None:
+            continue
+        owner = fam.model_class() if fam.text_to_motion == "self" else \
+            load_object(fam.text_to_motion)
+        cls = getattr(owner, "Options", None)
+        fields = dataclasses.fields(cls) if cls is not None else ()
+        parts.append(f"{kind}: {', '.join(_field_text(f) for f in fields) or 'none'}")
+    return "; ".join(parts)
+
+
+class _OptionsHelp:
+    """An action whose help ends with :func:`options_help`, made when the help is shown."""
+
+    @property
+    def help(self) -> str | None:
+        if not self._base_help:
+            return self._base_help
+        return (f"{self._base_help}. Options by kind (a method left unset decodes the "
+                f"means): {options_help()}")
+
+    @help.setter
+    def help(self, text: str | None) -> None:
+        self._base_help = text
+
+
+class _StoreModel(_OptionsHelp, argparse._StoreAction):
+    pass
+
+
+class _AppendModel(_OptionsHelp, argparse._AppendAction):
+    pass
+
+
+def add_model_arg(parser, *flags: str, help: str, repeat: bool = True, **kw) -> None:
+    """Add a text-to-motion model option (``--model`` by default; repeatable, each value
+    with an optional row label, unless ``repeat`` is False) whose help ends with every
+    family's options."""
+    parser.add_argument(*(flags or ("--model",)), action=_AppendModel if repeat else _StoreModel,
+                        metavar=("[LABEL=]" if repeat else "") + SYNTAX, help=help, **kw)
