@@ -31,7 +31,7 @@ def model_path(data_dir, tmp_path_factory):
     assert main(["train", "crbm", "--data", str(data_dir), "--out", str(run), "--epochs", "3",
                  "--hidden", "12", "--quiet", "--level2",
                  "--level2-hidden", "5", "--level2-order", "2"]) == 0
-    assert json.loads((run / "commands.jsonl").read_text())["hidden"] == 12
+    assert json.loads((run / "commands.jsonl").read_text())["n_hidden"] == 12
     return run / "model.npz"
 
 
@@ -86,6 +86,44 @@ def test_errors_are_one_line(data_dir, tmp_path, capsys):
     assert "no such model file" in capsys.readouterr().err
     assert main(["train", "crbm", "--data", str(tmp_path), "--out", str(tmp_path / "run"),
                  "--quiet"]) == 2
+
+
+def test_ml_train_runs_the_recipe(data_dir, tmp_path):
+    import motionlang as ml
+    from motionlang.models.crbm.config import SELECTED
+    out = tmp_path / "run"
+    path = ml.train("crbm", str(data_dir), out, n_hidden=6, epochs=2, lr=2e-3, quiet=True,
+                    level2=True, level2_hidden=4, level2_order=2)
+    assert path == out / "model.npz"
+    m = ml.load_model(path)
+    # the recipe's defaults (the selected settings) under the given fields; --lr's rule
+    assert (m.config.n_hidden, m.config.epochs, m.config.lr_autoregressive) == (6, 2, 2e-3)
+    assert m.config.weight_decay_autoregressive == SELECTED["weight_decay_autoregressive"]
+    assert CRBMStack.load(out / "stack.npz").level2.config.order == 2
+    assert json.loads((out / "commands.jsonl").read_text())["level2_hidden"] == 4
+    from motionlang.errors import MotionlangError
+    with pytest.raises(MotionlangError, match="unknown option 'grad_clip'"):
+        ml.train("crbm", str(data_dir), tmp_path / "x", grad_clip=1.0)   # no shared trainer
+    with pytest.raises(MotionlangError, match="cannot be resumed"):
+        ml.train("crbm", str(data_dir), out, resume=True)
+    with pytest.raises(MotionlangError, match="level2_order must be <= 1000"):
+        ml.train("crbm", str(data_dir), tmp_path / "x", level2_order=5000)
+    assert not (tmp_path / "x").exists()
+
+
+def test_crbm_options_are_checked_by_the_config(data_dir, tmp_path, capsys):
+    train = ["train", "crbm", "--data", str(data_dir), "--out", str(tmp_path / "run")]
+    reproduce = ["crbm", "reproduce", "--data", str(data_dir), "--quiet"]
+    for argv, fragment in (
+            (train + ["--level2-hidden", "0"], "--level2-hidden must be an integer >= 1"),
+            (train + ["--hidden", "5000"], "--hidden must be <= 4096"),
+            (train + ["--momentum", "1.5"], "--momentum must be a number in [0, 1)"),
+            (reproduce + ["--ar-weight-decay", "-1"], "--ar-weight-decay must be"),
+            (reproduce + ["--seed", "-1"], "--seed must be an integer >= 0")):
+        assert main(argv) == 2
+        err = capsys.readouterr().err
+        assert fragment in err, err
+    assert not (tmp_path / "run").exists()
 
 
 def test_model_frames_invert_to_channels_and_a_motion(data_dir):

@@ -2,7 +2,8 @@
 
 A family with a recipe (``Family.recipe``, ``training.recipes``) gets its ``train KIND``
 parser generated here from its configs: the recipe's data options, the trainer's
-(``TrainConfig``, with the recipe's defaults) and the model's (its config dataclass), each
+(``TrainConfig``, with the recipe's defaults; not for a recipe with its own training loop,
+``Recipe.trainer``) and the model's (its config dataclass, with the recipe's defaults), each
 documented field an option (``cli.config_options``). A new family needs nothing in this
 folder. The families whose training still lives in a command module register their parser
 through :data:`LEGACY_TRAIN_MODULES`; a listed module that fails to import is an error.
@@ -24,11 +25,14 @@ from motionlang.errors import MotionlangError
 
 #: command modules that still define ``register_train(train_subparsers)`` themselves
 LEGACY_TRAIN_MODULES = (
-    "motionlang.cli.crbm_commands",       # train crbm
     "motionlang.cli.twostream_commands",  # train twostream
     "motionlang.cli.evaluator_commands",  # train evaluator
     "motionlang.cli.judge_commands",      # train judge
 )
+
+
+#: what a run of the shared trainer keeps beside the model (``--out``'s help)
+TRAINER_FILES = "best.pt and last.pt (checkpoints), history.json, loss_curve.png, splits/"
 
 
 def model_file(kind: str) -> str:
@@ -86,11 +90,15 @@ def _register_recipe(train_sub, kind: str) -> None:
     fam, recipe = family(kind), recipe_of(kind)
     p = train_sub.add_parser(kind, help=f"train the {fam.summary}",
                              description=f"Train the {fam.summary}.")
-    add_data_arg(p, recipe.several_sources)
-    add_out_arg(p, kind, "best.pt and last.pt (checkpoints), history.json, loss_curve.png, "
-                         "splits/, ")
+    if recipe.data_help:   # one folder in the recipe's own format
+        p.add_argument("--data", required=True, metavar="DIR", help=recipe.data_help)
+    else:
+        add_data_arg(p, recipe.several_sources)
+    files = TRAINER_FILES if recipe.run_files is None else recipe.run_files
+    add_out_arg(p, kind, f"{files}, " if files else "")
     add_config_options(p, recipe.data_config)
-    add_trainer_args(p, **recipe.train_defaults)
+    if recipe.trainer:
+        add_trainer_args(p, **recipe.train_defaults)
     model_cls = fam.config_class()
     if model_cls is not None:
         add_config_options(p, model_cls, defaults=recipe.model_defaults)
@@ -108,17 +116,18 @@ def cmd_train(args: argparse.Namespace) -> int:
     from motionlang.training.recipes import recipe_of
     kind = args.model_kind
     recipe, model_cls = recipe_of(kind), family(kind).config_class()
-    train_cfg = train_config(args, args.out)
+    train_cfg = train_config(args, args.out) if recipe.trainer else None
     data_cfg = config_from_args(recipe.data_config, args)
     model_cfg = {} if model_cls is None else {
         f.name: getattr(args, f.name) for f in option_fields(model_cls)}
     sources = args.data if isinstance(args.data, list) else [args.data]
     try:
         recipe.run(sources, Path(args.out), model_cfg, train_cfg, data_cfg,
-                   resume=args.resume, options=vars(args))
+                   resume=recipe.trainer and args.resume, options=vars(args))
     except MotionlangError as exc:   # a config's field names -> the options
         message = str(exc)
-        for cls in filter(None, (model_cls, TrainConfig, recipe.data_config)):
+        for cls in filter(None, (model_cls, TrainConfig if recipe.trainer else None,
+                                 recipe.data_config)):
             message = option_message(cls, message)
         raise MotionlangError(message) from None
     return 0

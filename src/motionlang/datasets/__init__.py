@@ -7,6 +7,8 @@
 * ``kitml``: KIT Motion-Language release: ``download_kitml``, ``load_kitml``, ``KitMLRecord``,
   ``load_annotations_tmr``; splits (``random_split``, ``load_split``) from ``splits``
 * ``named``: ``cmu35_walkjog`` (Taylor et al. 2006 data), ``mit_walk``
+* ``cmu35``: ``load_cmu35`` — CMU subject 35 walk/jog as the CRBM experiment reads it, and
+  its per-frame CRBM features (``model_frames``)
 * ``custom``: ``load_custom`` — a folder of BVH / ASF-AMC files plus captions
 * ``bandai``: the Bandai Namco Research Motion Datasets (``load_bandai``; with English for
   the labels, ``load_bandai_text``; CC BY-NC 4.0); ``bandai_text``: that English grammar and

@@ -4,7 +4,7 @@ Style of a generated frame = the label (walk / jog) of the nearest training fram
 model's normalised feature space (Euclidean over all features except the root's ground
 step, whose speed alone would give the style away: the label should judge the pose).
 
-Measured 2026-11-22 (model of ``crbm_reproduce.SELECTED`` trained on all 31 trials, 1000
+Measured 2026-11-22 (model of ``models.crbm.config.SELECTED`` trained on all 31 trials, 1000
 frames, 30 Gibbs updates): from the walking test frames 100 % walk at 1.2 m/s (seeds 0-3),
 from the jogging test frames 100 % jog at 3.1 m/s, range excess <= 0.7 std. What made the
 difference is ``CRBMConfig.history_noise`` (0.3): without noise on the past frames while
@@ -20,8 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from motionlang.evaluation.crbm.fill import Cmu35
-from motionlang.evaluation.crbm.reproduce import model_frames
+from motionlang.datasets.cmu35 import Cmu35, model_frames
 from motionlang.models.crbm.model import CRBM
 
 STYLE_DIMS = np.r_[1, 3:59]   # all model features but the root's ground step
@@ -31,7 +30,7 @@ FPS = 30.0
 
 def forward_speed(frames: np.ndarray) -> float:
     """Mean forward speed (m/s) of (T, 59) model features: the root's ground-plane step
-    along the facing direction (dim 2, see ``crbm_reproduce.model_frames``). Walking on the
+    along the facing direction (dim 2, see ``datasets.cmu35.model_frames``). Walking on the
     spot ~ 0, backwards < 0."""
     f = np.asarray(frames, dtype=np.float64)
     return float(f[:, 2].mean() * METRES_PER_UNIT * FPS)
@@ -111,3 +110,34 @@ def generation_report(model, data: Cmu35, *, n_frames: int = 1000, seed: int = 0
                       "forward_speed_last_half": float(np.mean(speed)),
                       "forward_speed_training": _training_speed(data, style)}
     return out
+
+
+#: the test trial each start style begins from
+START_TRIALS = {"walk": "35_29", "jog": "35_18"}
+
+
+def generate_from_test(model, data: Cmu35, start: str = "walk", n_frames: int = 1000, *,
+                       n_gibbs: int = 30, seed: int = 0, hidden_noise: float = 0.0
+                       ) -> tuple[np.ndarray, dict]:
+    """Generate ``n_frames`` on-line from the first frames of the walking or jogging
+    (``start``) test trial with a CRBM or a ``CRBMStack``.
+
+    Returns (frames, report): frames (n_init + n_frames, 59) model features, the real
+    starting frames first; report: the fractions of generated frames labelled walk and jog,
+    the label changes, the range excess (training std units) and the forward speed (m/s) over
+    the last half.
+    """
+    base = getattr(model, "level1", model)   # a two-level model generates through both
+    n = getattr(model, "n_init", base.config.order)
+    init = model_frames(data.test[START_TRIALS[start]])[:n]
+    gen = model.generate(init, n_frames, n_gibbs=n_gibbs, seed=seed, hidden_noise=hidden_noise)
+    gen = gen[0] if gen.ndim == 3 else gen
+    lab = StyleLabeller(data, base.mean, base.std)
+    labels = lab(gen[n:])
+    report = {"frames": n_frames, "start_style": start,
+              "fraction_walk": float((labels == "walk").mean()),
+              "fraction_jog": float((labels == "jog").mean()),
+              "label_changes": int((labels[1:] != labels[:-1]).sum()),
+              "range_excess_std": lab.range_excess(gen[n:]),
+              "forward_speed_last_half_m_s": forward_speed(gen[n:][-n_frames // 2:])}
+    return gen, report

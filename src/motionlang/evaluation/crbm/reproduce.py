@@ -40,21 +40,26 @@ from pathlib import Path
 
 import numpy as np
 
-from motionlang.evaluation.crbm.fill import (
-    ERASED,
+from motionlang.datasets.cmu35 import (
     JOINT_CHANNELS,
     Cmu35,
+    load_cmu35,
+    model_frames,
+    taylor59,
+)
+from motionlang.datasets.cmu35 import unwrap_degrees as unwrap_degrees
+from motionlang.datasets.cmu35 import world_to_body as world_to_body
+from motionlang.evaluation.crbm.fill import (
+    ERASED,
     fill_error,
     frame_mask,
     hold_last_fill,
-    load_cmu35,
     nearest_neighbour_fill,
     per_frame_dims,
     score_space,
-    taylor59,
 )
 from motionlang.models.crbm.ar import ARConfig, ARModel
-from motionlang.models.crbm.config import CRBMConfig
+from motionlang.models.crbm.config import SELECTED, CRBMConfig
 from motionlang.models.crbm.model import CRBM
 from motionlang.utils.progress import progress
 
@@ -64,13 +69,6 @@ PAPER = {  # Taylor et al. 2006, walking test sequence; the paper reports no jog
 }
 METHODS = ("nearest neighbour", "hold last value", "AR(n)", "CRBM", "CRBM (sampled hiddens)")
 TRIAL_NAMES = {"35_29": "walking (35_29)", "35_18": "jogging (35_18)"}
-
-
-# Chosen by ``evaluation/crbm/select.py`` on 4 held-out TRAINING trials (grid and scores in
-# this module's docstring). The test trials' numbers played no part in the choice of values;
-# history noise as a remedy was prompted by generation from the walking test frames.
-SELECTED = {"weight_decay": 2e-3, "weight_decay_autoregressive": 2e-2, "lr": 1e-3, "epochs": 4000,
-            "n_gibbs": 5, "mean_field": True, "history_noise": 0.3}
 
 
 def selected_crbm_config(**overrides) -> CRBMConfig:
@@ -93,22 +91,6 @@ class ReproduceConfig:
     mean_field: bool = SELECTED["mean_field"]  # deterministic fill-in (hidden probabilities)
 
 
-def unwrap_degrees(angles: np.ndarray) -> np.ndarray:
-    """(T, K) degrees -> the same rotations without 360-degree jumps along T, the first
-    frame brought into [-180, 180)."""
-    a = np.rad2deg(np.unwrap(np.deg2rad(np.asarray(angles, dtype=np.float64)), axis=0))
-    return a - 360.0 * np.floor((a[:1] + 180.0) / 360.0)
-
-
-def world_to_body(step_xz: np.ndarray, sin_ry: np.ndarray, cos_ry: np.ndarray) -> np.ndarray:
-    """Ground-plane steps (T, 2) as (x, z) in the world -> (side, forward) in the frame the
-    root faces (facing direction (sin ry, cos ry), side (cos ry, -sin ry)): a rotation of
-    the plane, undone by :func:`body_to_world`."""
-    s, c = np.asarray(sin_ry), np.asarray(cos_ry)
-    x, z = step_xz[:, 0], step_xz[:, 1]
-    return np.stack([x * c - z * s, x * s + z * c], axis=1)
-
-
 def body_to_world(step_body: np.ndarray, sin_ry: np.ndarray, cos_ry: np.ndarray) -> np.ndarray:
     """Inverse of :func:`world_to_body`; (sin, cos) pairs need not be unit length (generated)."""
     s, c = np.asarray(sin_ry, dtype=np.float64), np.asarray(cos_ry, dtype=np.float64)
@@ -117,26 +99,6 @@ def body_to_world(step_body: np.ndarray, sin_ry: np.ndarray, cos_ry: np.ndarray)
     s, c = s / r, c / r
     side, fwd = step_body[:, 0], step_body[:, 1]
     return np.stack([side * c + fwd * s, fwd * c - side * s], axis=1)
-
-
-def model_frames(channels: np.ndarray) -> np.ndarray:
-    """(T, 62) degrees -> (T, 59) model features: the protocol's 59 values with root x, z as
-    the per-frame ground step *in the root's facing frame* (dim 0 sideways, dim 2 forward;
-    the frame-to-frame step is stationary where the absolute position is not, and in the
-    facing frame it no longer depends on where the subject happens to head - a walk is
-    "1.2 m/s forward" whatever its direction, as in Taylor et al.'s body-centred root) and
-    the 50 joint channels *unwrapped* instead of folded as asin(sin(x)): the jogs' knees
-    bend past 90 degrees and several arm channels pass +-90 (14 % of the training frames),
-    and a fold turns a smooth swing into a kink (110 -> 70 degrees) that the CRBM's
-    dynamics cannot follow. :func:`to_protocol59` folds back."""
-    x = taylor59(channels)
-    out = x.copy()
-    out[:, 9:] = unwrap_degrees(channels[:, JOINT_CHANNELS])
-    if len(x) > 1:
-        step = np.diff(x[:, [0, 2]], axis=0)
-        step = np.concatenate([step[:1], step])  # the first frame has no predecessor: copy the next step
-        out[:, [0, 2]] = world_to_body(step, x[:, 4], x[:, 7])
-    return out
 
 
 def to_protocol59(frames: np.ndarray) -> np.ndarray:
@@ -237,6 +199,17 @@ def fill_trial(data: Cmu35, trial: str, part: str, crbm: CRBM, ar: ARModel,
     return {"errors": errors, "crbm_std": float(sampled[2].std()), "gap_start": gap,
             "true59": true59, "filled59": filled, "erased_dims59": fdims,
             "crbm_model_frames": samples}   # (R, T, 59) model space: unfolded angles, for rendering
+
+
+def fill_test_trial(crbm: CRBM, data: Cmu35, trial: str = "35_29", part: str = "leg", *,
+                    n_repeats: int = 100, n_gibbs: int = SELECTED["n_gibbs"], seed: int = 0,
+                    mean_field: bool = SELECTED["mean_field"]) -> dict:
+    """:func:`fill_trial` of one test trial and part with a trained ``crbm`` and an AR(n) of
+    its order fitted on the training trials."""
+    ar = ARModel(ARConfig(order=crbm.config.order), 59).fit([model_frames(c) for c in data.train])
+    cfg = ReproduceConfig(crbm=crbm.config, n_repeats=n_repeats, n_gibbs=n_gibbs, seed=seed,
+                          mean_field=mean_field)
+    return fill_trial(data, trial, part, crbm, ar, cfg)
 
 
 def reproduce(data_dir: str | Path, cfg: ReproduceConfig | None = None, *,

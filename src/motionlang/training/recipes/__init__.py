@@ -21,16 +21,25 @@ class Recipe:
     """A family's way to train.
 
     Attributes:
-        run: ``run(sources, out_dir, model_cfg, train_cfg, data_cfg, *, resume)`` -> the
-            trained model's path. ``sources``: ``datasets.sources.DataSource`` list;
-            ``model_cfg``: the model config's user fields (a dict; the recipe adds what the
-            data decides, e.g. vocabulary and feature sizes); ``train_cfg``: a
-            ``training.config.TrainConfig``; ``data_cfg``: an instance of ``data_config``.
+        run: ``run(sources, out_dir, model_cfg, train_cfg, data_cfg, *, resume, options)``
+            -> the trained model's path. ``sources``: ``datasets.sources.DataSource`` list
+            (with ``data_help``: folder paths); ``model_cfg``: the model config's user fields
+            (a dict; the recipe adds what the data decides, e.g. vocabulary and feature
+            sizes); ``train_cfg``: a ``training.config.TrainConfig`` (None without
+            ``trainer``); ``data_cfg``: an instance of ``data_config``; ``options``: what
+            to log in ``commands.jsonl`` (None: the configs).
         data_config: the dataclass of the recipe's data options (fields with ``help``
             metadata are command-line options).
         train_defaults: the recipe's own defaults for ``TrainConfig`` fields.
         model_defaults: the recipe's own defaults for model config fields.
         several_sources: the recipe reads several ``--data`` (mixed, weighted).
+        trainer: the recipe trains with the shared ``Trainer``, so the ``TrainConfig``
+            options and ``--resume`` are its options. False (a model with its own training
+            loop, whose epochs and rates are model config fields): neither is offered.
+        data_help: where set, ``--data`` is one folder in the recipe's own format (not a
+            ``datasets.sources`` dataset) and this is its help; ``run`` gets its path.
+        run_files: what the run folder holds besides the model and ``commands.jsonl``, for
+            ``--out``'s help (None: the trainer's checkpoints, history and splits).
     """
 
     run: Callable[..., Path]
@@ -38,6 +47,9 @@ class Recipe:
     train_defaults: dict[str, Any] = field(default_factory=dict)
     model_defaults: dict[str, Any] = field(default_factory=dict)
     several_sources: bool = True
+    trainer: bool = True
+    data_help: str = ""
+    run_files: str | None = None
 
 
 def recipe_of(kind: str) -> Recipe:
@@ -62,7 +74,8 @@ def split_options(kind: str, options: dict[str, Any]) -> tuple[dict, dict, dict]
     recipe = recipe_of(kind)
     model_cls = family(kind).config_class()
     names = [set() if c is None else {f.name for f in dataclasses.fields(c)}
-             for c in (model_cls, TrainConfig, recipe.data_config)]
+             for c in (model_cls, TrainConfig if recipe.trainer else None,
+                       recipe.data_config)]
     parts: tuple[dict, dict, dict] = ({}, {}, {})
     for key, value in options.items():
         where = next((i for i, n in enumerate(names) if key in n), None)
@@ -78,16 +91,18 @@ def train(kind: str, data: str | Sequence[str], out: str | Path, *, resume: bool
           **options: Any) -> Path:
     """Train a ``kind`` model on ``data`` (one ``--data`` value or several, e.g.
     ``"corpus@1"``, ``"bandai:DIR@1"``) into the run folder ``out``; ``options`` are fields
-    of the model's config, of ``TrainConfig`` or of the recipe's data options, as the
-    command line's ``train KIND`` options (``enc_hidden=32``, ``epochs=2``,
-    ``features="positions"``). Returns the trained model's path."""
+    of the model's config, of ``TrainConfig`` (where the recipe uses the shared trainer) or
+    of the recipe's data options, as the command line's ``train KIND`` options
+    (``enc_hidden=32``, ``epochs=2``, ``features="positions"``). Returns the trained model's
+    path."""
     from motionlang.datasets.sources import parse_source
     from motionlang.training.config import TrainConfig
     recipe = recipe_of(kind)
     model_kw, train_kw, data_kw = split_options(kind, options)
-    sources = [parse_source(str(d)) for d in ([data] if isinstance(data, (str, Path))
-                                              else data)]
-    train_cfg = TrainConfig(**{**recipe.train_defaults, **train_kw, "out_dir": str(out)})
+    given = [data] if isinstance(data, (str, Path)) else list(data)
+    sources = [str(d) if recipe.data_help else parse_source(str(d)) for d in given]
+    train_cfg = (TrainConfig(**{**recipe.train_defaults, **train_kw, "out_dir": str(out)})
+                 if recipe.trainer else None)
     data_cfg = recipe.data_config(**data_kw)
     return recipe.run(sources, Path(out), {**recipe.model_defaults, **model_kw}, train_cfg,
                       data_cfg, resume=resume)
