@@ -283,7 +283,7 @@ def fill_in(frames: np.ndarray, known: np.ndarray, model: Any, *, n_gibbs: int =
     """Fill in lost values of a motion with a CRBM (Taylor et al. 2006, sec. 5).
 
     frames: (T, D) in the model's own frame space (the channels it was trained on, e.g.
-    ``evaluation.crbm.reproduce.model_frames`` of CMU subject 35's AMC channels); entries
+    ``datasets.cmu35.model_frames`` of CMU subject 35's AMC channels); entries
     where ``known`` is False are ignored and filled. known: (T, D) bool; the first
     ``order`` frames must be complete. model: a CRBM, its ``.npz`` or a run folder.
     Returns (T, D): the known values kept, the rest filled frame by frame by Gibbs sampling

@@ -118,12 +118,12 @@ def generate_part(out_dir: Path, sentence: str, *, width: int = 5, seed: int = 0
 
     max_frames: length cap in model frames (None: the model's own cap).
     """
-    from motionlang.rendering.output import body_motion
     from motionlang.decoding.seq2seq import generate
     from motionlang.decoding.t2m import default_method
     from motionlang.formats import write_motion
     from motionlang.models.registry import load_model
     from motionlang.rendering import render_animation, render_strip
+    from motionlang.rendering.output import body_motion
 
     model = load_model(model_path or "l2m", kind="l2m")
     # as `motionlang generate` does: expected frames for joint-position models (a draw
