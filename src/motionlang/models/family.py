@@ -13,8 +13,9 @@ it is used.
 from __future__ import annotations
 
 import importlib
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol
 
 from motionlang.errors import MotionlangError
 
@@ -35,6 +36,13 @@ def load_object(spec: str) -> Any:
         raise MotionlangError(f"{spec}: {module} does not import ({exc})") from exc
     except AttributeError:
         raise MotionlangError(f"{spec}: {module} has no {attr}") from None
+
+
+class ModelClass(Protocol):
+    """What a family's ``model`` names: a class whose ``load(path, **kw)`` reads the family's
+    checkpoints (the keywords, if any, are the family's own)."""
+
+    load: Callable[..., Any]
 
 
 @dataclass(frozen=True)
@@ -73,7 +81,7 @@ class Family:
     model_file: str = "model.pt"
     commercial_use: bool = True
 
-    def model_class(self) -> type:
+    def model_class(self) -> ModelClass:
         return load_object(self.model)
 
     def config_class(self) -> type | None:

@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from motionlang.errors import MotionlangError
-from motionlang.models.family import Family, load_object
+from motionlang.models.family import Family, ModelClass, load_object
 
 PACKAGE_DIR = Path(__file__).resolve().parents[1] / "data" / "models"
 
@@ -136,7 +136,7 @@ PACKAGED: dict[str, Packaged] = {
 }
 
 
-def model_class(kind: str) -> type:
+def model_class(kind: str) -> ModelClass:
     """The class that reads checkpoints of ``kind``."""
     return load_object(family(kind).model)
 

@@ -4,17 +4,31 @@ the model class)."""
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from motionlang.errors import MotionFormatError, MotionlangError
 from motionlang.models.crbm.sequences import check_sequences, gather_past
 
+if TYPE_CHECKING:
+    from motionlang.models.crbm.config import CRBMConfig
+
 
 class CRBMGeneration:
     """``gibbs_frame``, ``generate``, ``fill_in`` and ``hidden_activations`` of
     :class:`~motionlang.models.crbm.model.CRBM` (which provides ``config``, ``n_visible``,
     the conditionals and the normaliser)."""
+
+    if TYPE_CHECKING:   # what the model class provides, declared for the type checker only
+        config: CRBMConfig
+        n_visible: int
+
+        def dynamic_biases(self, past: np.ndarray) -> tuple[np.ndarray, np.ndarray]: ...
+        def hidden_probs(self, v: np.ndarray, b_star: np.ndarray) -> np.ndarray: ...
+        def visible_mean(self, h: np.ndarray, a_star: np.ndarray) -> np.ndarray: ...
+        def normalise(self, x: np.ndarray) -> np.ndarray: ...
+        def denormalise(self, x: np.ndarray) -> np.ndarray: ...
 
     def gibbs_frame(self, v: np.ndarray, past: np.ndarray, rng: np.random.Generator,
                     n_gibbs: int = 30, missing: np.ndarray | None = None,

@@ -14,7 +14,9 @@ from motionlang.models.crbm.sequences import check_sequences, chunk_index, gathe
 from motionlang.utils.progress import progress
 
 if TYPE_CHECKING:
-    from motionlang.models.crbm.model import CRBM
+    from typing_extensions import Self
+
+    from motionlang.models.crbm.config import CRBMConfig
 
 
 def _blas_threads(n: int | None):
@@ -29,6 +31,18 @@ def _blas_threads(n: int | None):
 class CRBMTraining:
     """``cd_gradients`` and ``fit`` of :class:`~motionlang.models.crbm.model.CRBM` (which
     provides the parameters, ``config``, the conditionals and the normaliser)."""
+
+    if TYPE_CHECKING:   # what the model class provides, declared for the type checker only
+        config: CRBMConfig
+        n_visible: int
+        mean: np.ndarray
+        std: np.ndarray
+        history: list[float]
+
+        def dynamic_biases(self, past: np.ndarray) -> tuple[np.ndarray, np.ndarray]: ...
+        def hidden_probs(self, v: np.ndarray, b_star: np.ndarray) -> np.ndarray: ...
+        def visible_mean(self, h: np.ndarray, a_star: np.ndarray) -> np.ndarray: ...
+        def normalise(self, x: np.ndarray) -> np.ndarray: ...
 
     def cd_gradients(self, v0: np.ndarray, past: np.ndarray, rng: np.random.Generator | None
                      ) -> tuple[dict[str, np.ndarray], float]:
@@ -71,7 +85,7 @@ class CRBMTraining:
         return grads, float((dv ** 2).mean())
 
     def fit(self, sequences: Sequence[np.ndarray], *, show_progress: bool = False,
-            epochs: int | None = None, on_epoch=None) -> CRBM:
+            epochs: int | None = None, on_epoch=None) -> Self:
         """Train on a list of (T_i, D) unnormalised sequences (T_i > order each).
 
         The normaliser is fitted here for Gaussian visibles (binary ones are used as is).

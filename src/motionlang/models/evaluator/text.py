@@ -95,7 +95,7 @@ class TextFileVectors:
                     try:
                         v = np.asarray(parts[1:dim + 1], dtype=np.float32)
                     except ValueError:
-                        v = np.zeros(0)
+                        v = np.zeros(0, dtype=np.float32)
                     if v.shape != (dim,):
                         raise MotionlangError(f"{path}:{n}: not a word and {dim} numbers")
                     vectors.setdefault(parts[0], v)
@@ -104,6 +104,7 @@ class TextFileVectors:
                                   f"{exc.strerror or exc}") from None
         if not vectors:
             raise MotionlangError(f"{path}: no word vectors in it")
+        assert dim is not None   # set by the first vector read
         for w in ("unk", "sos", "eos"):
             vectors.setdefault(w, np.zeros(dim, dtype=np.float32))
         self.dim, self._v = dim, vectors

@@ -76,8 +76,10 @@ def primitive_content(action: str, side: str | None = None, direction: str | Non
     """The Bandai content a procedural primitive (``datasets.synth.spec``) shows, or None
     where Bandai has no such action (turns, squats, jumps, sidesteps ...)."""
     if action in ("walk", "run"):
-        return {("walk", "forward"): "walk", ("walk", "backward"): "walk-back",
-                ("run", "forward"): "run"}.get((action, direction))
+        gaits: dict[tuple[str, str | None], str] = {
+            ("walk", "forward"): "walk", ("walk", "backward"): "walk-back",
+            ("run", "forward"): "run"}
+        return gaits.get((action, direction))
     if action in ("wave", "raise_arms"):
         stem = "wave" if action == "wave" else "raise-up"
         return f"{stem}-both-hands" if side == "both" else f"{stem}-{side}-hand"
@@ -198,7 +200,7 @@ def fit_judge(train: Sequence[JudgeItem], val: Sequence[JudgeItem] = (), *,
         if val:
             acc = accuracy(judge, val)
             rec.update(val_content=acc["content"], val_style=acc["style"])
-            score = np.nanmean([acc["content"], acc["style"]])
+            score = float(np.nanmean([acc["content"], acc["style"]]))
             if score > best_score:
                 best_score, best = score, copy.deepcopy(judge.state_dict())
         rec.update(epoch=epoch + 1, seconds=time.time() - t0)

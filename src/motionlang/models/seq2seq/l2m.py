@@ -73,6 +73,8 @@ class LanguageToMotion(Seq2SeqCheckpointed, nn.Module):
 
     kind = "l2m"
     config_cls = L2MConfig
+    input_mask: torch.Tensor | None   # buffers, registered in __init__
+    rollout_steps: torch.Tensor
 
     def __init__(self, config: L2MConfig, vocab: Any = None, normalizer: Any = None,
                  features: Any = None):
@@ -331,6 +333,7 @@ class LanguageToMotion(Seq2SeqCheckpointed, nn.Module):
         if c.energy_weight > 0:
             # the expected frames must move as much as the reference does, wherever the
             # sample of the step before has taken the motion (phase-free, ~1 s windows)
+            assert mean is not None
             energy = energy_loss(mean, motion, valid.reshape(B, T).to(motion), c.energy_window)
             out["loss"] = out["loss"] + c.energy_weight * energy
             out["energy"] = energy.detach()
@@ -340,6 +343,7 @@ class LanguageToMotion(Seq2SeqCheckpointed, nn.Module):
             out["loss"] = out["loss"] + c.mean_weight * mean_sq
             out["mean_sq"] = mean_sq.detach()
         if c.foot_weight > 0:
+            assert mean is not None
             foot = expected_foot_loss(mean, motion, valid.reshape(B, T), fed, self.features,
                                       step=c.foot_step, down=c.foot_down)
             out["loss"] = out["loss"] + c.foot_weight * foot

@@ -4,6 +4,8 @@ re-exported.
 """
 from __future__ import annotations
 
+from typing import cast
+
 import torch
 import torch.nn.functional as F
 
@@ -18,7 +20,7 @@ from motionlang.models.seq2seq.losses import (  # noqa: F401 (the model's terms,
 
 def embedding_loss(a: dict[str, torch.Tensor], b: dict[str, torch.Tensor]) -> torch.Tensor:
     """Sum over streams of the smooth-L1 between two embeddings (B, H)."""
-    return sum(F.smooth_l1_loss(a[s], b[s]) for s in a)
+    return cast(torch.Tensor, sum(F.smooth_l1_loss(a[s], b[s]) for s in a))   # >= 1 stream
 
 
 def bce_logits(logits: torch.Tensor, real: bool) -> torch.Tensor:

@@ -82,6 +82,7 @@ class TwoStreamModel(Checkpointed, nn.Module):
 
     kind = "twostream"
     config_cls = TwoStreamConfig
+    rest_pose: torch.Tensor   # buffer, registered in __init__
 
     def __init__(self, config: TwoStreamConfig, features: Any = None, text_encoder=None):
         super().__init__()
@@ -254,6 +255,7 @@ class TwoStreamModel(Checkpointed, nn.Module):
             if foot:
                 terms["foot"] = terms.get("foot", 0.0) + self._foot_term(qs, x, mask)
         if extra and stage != "text":
+            assert fake is not None   # outside the text stage the pose embedding is decoded
             terms["adversarial"] = L.bce_logits(self._disc(fake, lengths, frozen=True), True)
             terms["discriminator"] = (
                 L.bce_logits(self._disc(x, lengths, frozen=False), True)
@@ -296,7 +298,7 @@ class TwoStreamModel(Checkpointed, nn.Module):
         if n_frames < 1:
             raise MotionlangError(f"n_frames must be >= 1, got {n_frames}")
         single = isinstance(sentence, str)
-        sentences = [sentence] if single else list(sentence)
+        sentences = [sentence] if isinstance(sentence, str) else list(sentence)
         z = self.encode_text(sentences)
         x0 = self.rest_pose if start is None else torch.as_tensor(start, dtype=torch.float32)
         x0 = x0.expand(len(sentences), -1) if x0.ndim == 1 else x0

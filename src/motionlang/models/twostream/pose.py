@@ -24,6 +24,8 @@ input, up to 60 % of the orders come out right.
 """
 from __future__ import annotations
 
+from typing import cast
+
 import torch
 from torch import nn
 
@@ -60,12 +62,14 @@ class PoseEncoder(nn.Module):
         for s, limbs in self.config.streams().items():
             x = torch.cat([self.layer2[p](torch.cat([l1[p], l1["trunk"]], dim=-1))
                            for p in limbs], dim=-1)
-            out[s] = last_valid_output(self.gru[s], self.norm[s](x), lengths)
+            out[s] = last_valid_output(cast(nn.GRU, self.gru[s]), self.norm[s](x), lengths)
         return out
 
 
 class HierBlock(nn.Module):
     """Stream hidden states {stream: (B, stream_size)} -> pose change (B, F)."""
+
+    order: torch.Tensor   # buffer: the PART_NAMES-order position of each feature column
 
     def __init__(self, config: TwoStreamConfig):
         super().__init__()
@@ -180,7 +184,8 @@ class PoseDecoder(nn.Module):
             span = self._span(x0, n_frames, lengths)[:, 0]                    # (B,)
             clocks.append(((steps - 1)[:, None] / span[None]).clamp(max=1.0))
         w_x, base = [], []
-        for s, cell in self.cells.items():
+        for s, module in self.cells.items():
+            cell = cast(nn.GRUCell, module)
             cols = getattr(self, f"cols_{s}")
             n = len(cols)
             w = cell.weight_ih                                   # (3H, n + [H] + clocks)
@@ -192,7 +197,7 @@ class PoseDecoder(nn.Module):
             if clocks:
                 g = g + torch.stack(clocks, dim=-1) @ w[:, w.shape[1] - len(clocks):].t()
             base.append(g)
-        cells = list(self.cells.values())
+        cells = [cast(nn.GRUCell, cell) for cell in self.cells.values()]
         return (torch.cat(w_x).t(), torch.stack([cell.weight_hh.t() for cell in cells]),
                 torch.stack([cell.bias_hh for cell in cells]), torch.stack(base, dim=2))
 

@@ -52,8 +52,8 @@ class CachedTokens:
         """Token features of each sentence; computes only the uncached ones, in one batch."""
         todo = list(dict.fromkeys(s for s in sentences if s not in self._cache))
         if todo:
-            for s, f in zip(todo, self._compute(todo)):
-                self._cache[s] = f.detach().to(torch.float32)
+            for s, computed in zip(todo, self._compute(todo)):
+                self._cache[s] = computed.detach().to(torch.float32)
             while len(self._cache) > self.cache_size:
                 self._cache.popitem(last=False)
         out = []

@@ -141,7 +141,7 @@ def unroll(x0: torch.Tensor, h0: torch.Tensor, base: torch.Tensor, w_x: torch.Te
     expected = {"x0": (x0, (B, F)), "h0": (h0, (B, S, H3 // 3)), "w_x": (w_x, (F, S * H3)),
                 "w_h": (w_h, (S, H3 // 3, H3)), "b_h": (b_h, (S, H3)),
                 "w_o": (w_o, (S * H3 // 3, F)), "bias": (bias, (F,))}
-    if use is not None:
+    if target_prev is not None and use is not None:   # both or neither (checked above)
         expected.update(target_prev=(target_prev, (steps, B, F)), use=(use, (steps, B, 1)))
     for name, (tensor, shape) in expected.items():
         if tuple(tensor.shape) != shape:
