@@ -19,6 +19,10 @@ import torch
 from motionlang.decoding.beam import beam_search, greedy_search
 from motionlang.decoding.mbr import mbr_rank
 from motionlang.decoding.motion_beam import mean_decode, sample_decode, sampled_beam
+from motionlang.decoding.rerank import check_same_features, rerank
+from motionlang.decoding.seq2seq_io import denormalize as _denormalize
+from motionlang.decoding.seq2seq_io import encode_sentence
+from motionlang.decoding.seq2seq_io import normalize as _normalize
 from motionlang.errors import MotionlangError
 from motionlang.features.frames import frames_to_features, motion_frames
 from motionlang.models.seq2seq.l2m import LanguageToMotion
@@ -29,43 +33,12 @@ METHODS = ("beam", "mean", "sample")
 #: how :func:`describe_features` orders a beam: total log P (the paper's), or minimum Bayes risk
 RANKS = ("logp", "mbr")
 
-UNK_ID = 3
-
-
-def _normalize(norm: Any, x: np.ndarray) -> np.ndarray:
-    if norm is None:
-        return x
-    if hasattr(norm, "transform"):
-        return norm.transform(x)
-    return (x - np.asarray(norm["mean"])) / np.asarray(norm["std"])
-
-
-def _denormalize(norm: Any, x: np.ndarray) -> np.ndarray:
-    if norm is None:
-        return x
-    if hasattr(norm, "inverse"):
-        return norm.inverse(x)
-    return x * np.asarray(norm["std"]) + np.asarray(norm["mean"])
-
-
 def _words(vocab: Any, ids: Sequence[int]) -> str:
     if vocab is None:
         return " ".join(map(str, ids))
     if hasattr(vocab, "decode"):
         return vocab.decode(ids)
     return " ".join(vocab[i] for i in ids if i >= 4)  # list vocab: drop PAD/SOS/EOS/UNK
-
-
-def encode_sentence(vocab: Any, sentence: str | Sequence[int]) -> list[int]:
-    """Token ids SOS .. EOS of a sentence (ids pass through unchanged)."""
-    if not isinstance(sentence, str):
-        return [int(i) for i in sentence]
-    if vocab is None:
-        raise MotionlangError("this model has no vocabulary; pass token ids")
-    if hasattr(vocab, "encode"):
-        return list(vocab.encode(sentence))
-    index = {w: i for i, w in enumerate(vocab)}
-    return [1] + [index.get(w, UNK_ID) for w in sentence.lower().split()] + [2]
 
 
 @torch.no_grad()
@@ -234,7 +207,6 @@ def generate(model: LanguageToMotion, sentence: str | Sequence[int], *, width: i
     """
     fs = _features_of(model)
     if reranker is not None:   # before the (slower) generation
-        from motionlang.decoding.rerank import check_same_features, rerank  # builds on this
         if not isinstance(sentence, str):
             raise MotionlangError("reranking needs the sentence as text (the two models have "
                                   "their own vocabularies)")

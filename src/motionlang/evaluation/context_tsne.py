@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from motionlang.decoding.seq2seq import _normalize, encode_sentence
+from motionlang.decoding.seq2seq_io import encode_sentence, normalize
 
 
 @torch.no_grad()
@@ -21,7 +21,7 @@ def m2l_contexts(model, features: Sequence[np.ndarray]) -> np.ndarray:
     model.eval()
     out = []
     for f in features:
-        x = torch.as_tensor(_normalize(model.normalizer, f), dtype=torch.float32)[None]
+        x = torch.as_tensor(normalize(model.normalizer, f), dtype=torch.float32)[None]
         out.append(model.encode(x, torch.tensor([len(f)]))["context"][0].numpy())
     return np.stack(out)
 
