@@ -1,19 +1,17 @@
-"""Reference rows of the text-to-motion table (``t2m_compare``): what no model, a
+"""Reference rows of the text-to-motion table (:mod:`.compare`): what no model, a
 retrieved real motion and the test motions themselves score, and how well a sentence ->
 length model guesses the test lengths.
 
 Each ``*_baseline`` returns ``generate(sentence, n_frames) -> (n_frames, 21, 3)`` positions
-in metres, as ``decoding.t2m.generate_positions21`` does for a model.
+in metres, as ``decoding.t2m.TextToMotion.positions21`` does for a model.
 """
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
 
 import numpy as np
 
-if TYPE_CHECKING:   # t2m_compare imports this module
-    from motionlang.evaluation.t2m.compare import T2MItem
+from motionlang.evaluation.t2m.scoring import T2MItem
 
 GROUND_TRUTH = "ground truth (order check's ceiling)"
 NEAREST = "nearest training sentence's motion (bag of words)"

@@ -33,12 +33,10 @@ from motionlang.evaluation.t2m.baselines import (
     retrieval_baseline,
     still_baseline,
 )
-from motionlang.evaluation.t2m.scoring import (  # T2MItem .. markdown_table: importable here too
-    T2MItem,
-    markdown_table,
-    score_generated,
+from motionlang.evaluation.t2m.scoring import T2MItem, markdown_table, score_generated
+from motionlang.evaluation.t2m.scoring import (  # importable from here, as before
+    positions_to_features as positions_to_features,
 )
-from motionlang.evaluation.t2m.scoring import positions_to_features as positions_to_features
 from motionlang.utils.progress import progress
 
 

@@ -25,6 +25,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from motionlang.errors import MotionlangError
+from motionlang.evaluation.t2m.scoring import markdown_table, score_generated
 
 MEAN_ROW = "oracle: mean of the same-parameter training motions"
 ONE_ROW = "oracle: one same-parameter training motion"
@@ -81,10 +82,9 @@ def oracle_generations(data, items: Sequence, min_group: int = 3
 
 def oracle_table(results: dict[str, dict], data, kept: Sequence, gens: dict, n_items: int,
                  prototypes) -> tuple[dict[str, dict], str]:
-    """Every row of ``results`` (``t2m_compare.compare``'s, with ``generated``) re-scored on
+    """Every row of ``results`` (``compare.compare``'s, with ``generated``) re-scored on
     ``kept``, and the oracle rows ``gens`` (both from :func:`oracle_generations` over
     ``n_items`` test items). Returns (rows, markdown)."""
-    from motionlang.evaluation.t2m.compare import markdown_table, score_generated
     rows = {name: score_generated({it.id: r["generated"][it.id] for it in kept}, kept,
                                   data.features, prototypes) for name, r in results.items()}
     rows.update({name: score_generated(g, kept, data.features, prototypes)
