@@ -8,6 +8,8 @@
 * :func:`~motionlang.datasets.feature_cache.dataset_features` — a dataset fitted and encoded
   once, cached on disk keyed by source files and options.
 """
+# importing the feature modules here registers their kinds with base.features_from_dict
+# and base.make_features, which rely on it (base cannot import its own subclasses)
 from motionlang.features.angles import AnglesConfig, AnglesFeatures
 from motionlang.features.base import FeatureSet, downsample, features_from_dict, make_features
 from motionlang.features.collate import lengths_to_mask, pad_batch, unpad

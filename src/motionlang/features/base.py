@@ -19,6 +19,8 @@ from motionlang.features.normalizer import Normalizer
 from motionlang.kinematics.motion import Motion
 from motionlang.utils.atomic import atomic_write
 
+#: kind -> feature class, filled by ``FeatureSet.__init_subclass__``; ``motionlang.features``
+#: imports the built-in kinds, so they are here before any of its modules is used
 _REGISTRY: dict[str, type[FeatureSet]] = {}
 
 
@@ -126,9 +128,8 @@ class FeatureSet:
 
 
 def _feature_class(kind: Any) -> type[FeatureSet]:
-    import motionlang.features.angles  # noqa: F401  (register the built-in kinds)
-    import motionlang.features.positions  # noqa: F401
-    import motionlang.features.taylor  # noqa: F401
+    # the built-in kinds are registered: importing this module runs the package's
+    # __init__ first, which imports them (importing them here would be an import circle)
     if kind not in _REGISTRY:
         raise MotionlangError(f"unknown feature kind {kind!r}; known: {sorted(_REGISTRY)}")
     return _REGISTRY[kind]
