@@ -1,5 +1,5 @@
-"""The package's shape: imports flow down the layers the README states, no module-level
-import loops, no source file over 400 lines."""
+"""The package's shape: imports flow down the layers the README states, no import circles
+(at module level or through imports inside functions), no source file over 400 lines."""
 from __future__ import annotations
 
 import ast
@@ -29,11 +29,31 @@ def modules() -> dict[str, Path]:
             .removesuffix(".__init__"): p for p in SRC.rglob("*.py")}
 
 
-def imports(path: Path, top_level_only: bool) -> list[str]:
-    """motionlang modules imported by a file (at module level only, if asked); ``from X
-    import y`` counts as X.y when that is a module, else X."""
+def _is_type_checking(node: ast.AST) -> bool:
+    """``if TYPE_CHECKING:`` / ``if typing.TYPE_CHECKING:``"""
+    test = getattr(node, "test", None) if isinstance(node, ast.If) else None
+    return (isinstance(test, ast.Name) and test.id == "TYPE_CHECKING") or \
+        (isinstance(test, ast.Attribute) and test.attr == "TYPE_CHECKING")
+
+
+def _walk(node: ast.AST, type_checking: bool):
+    """``ast.walk`` in source order, leaving out the bodies of ``if TYPE_CHECKING:`` unless
+    ``type_checking`` (their ``else`` branches run, so they stay)."""
+    yield node
+    for child in ast.iter_child_nodes(node):
+        if not type_checking and _is_type_checking(child):
+            for sub in child.orelse:
+                yield from _walk(sub, type_checking)
+        else:
+            yield from _walk(child, type_checking)
+
+
+def imports(path: Path, top_level_only: bool, type_checking: bool = True) -> list[str]:
+    """motionlang modules imported by a file (at module level only, if asked; without the
+    imports under ``if TYPE_CHECKING:`` unless ``type_checking``); ``from X import y``
+    counts as X.y when that is a module, else X."""
     tree = ast.parse(path.read_text(encoding="utf-8"))
-    nodes = tree.body if top_level_only else ast.walk(tree)
+    nodes = tree.body if top_level_only else _walk(tree, type_checking)
     known = modules()
     out = []
     for node in nodes:
@@ -98,6 +118,56 @@ def test_no_import_loops_at_module_level():
     assert not loops, "\n".join(loops)
 
 
+def import_circles(graph: dict[str, list[str]]) -> list[list[str]]:
+    """The strongly connected components of more than one module (Tarjan), each sorted:
+    the sets of modules that import each other round a circle."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    circles = []
+
+    def strong(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on_stack.add(v)
+        for w in graph.get(v, []):
+            if w not in index:
+                strong(w)
+                low[v] = min(low[v], low[w])
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on_stack.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                circles.append(sorted(comp))
+
+    for v in graph:
+        if v not in index:
+            strong(v)
+    return sorted(circles)
+
+
+def test_no_import_circles_anywhere():
+    """Imports inside functions count too (a circle there is two modules that each need the
+    other, whenever it runs); imports under ``if TYPE_CHECKING:`` do not (they never run)."""
+    known = modules()
+    graph = {m: sorted({d for d in imports(p, top_level_only=False, type_checking=False)
+                        if d in known and d != m})
+             for m, p in known.items()}
+    circles = import_circles(graph)
+    assert not circles, "import circles:\n" + "\n".join(
+        "  {" + ", ".join(c) + "}: " + "; ".join(
+            f"{m} -> {', '.join(d for d in graph[m] if d in c)}" for m in c)
+        for c in circles)
+
+
 @pytest.mark.parametrize("path", sorted(SRC.rglob("*.py")), ids=lambda p: str(p.relative_to(SRC)))
 def test_no_source_file_over_400_lines(path):
     n = len(path.read_text(encoding="utf-8").splitlines())
@@ -112,3 +182,19 @@ def test_the_checks_can_fail(tmp_path):
     assert imports(f, top_level_only=True) == []
     layers = readme_layers()
     assert layer_of("motionlang.cli.main", layers) > layer_of("motionlang.formats", layers)
+
+
+def test_the_circle_check_can_fail(tmp_path):
+    """Imports inside functions are seen, ``if TYPE_CHECKING:`` ones are not (but their
+    ``else`` is), and a circle is reported with all of its members."""
+    f = tmp_path / "m.py"
+    f.write_text("from typing import TYPE_CHECKING\n"
+                 "if TYPE_CHECKING:\n    from motionlang.cli.main import main\n"
+                 "else:\n    import motionlang.errors\n"
+                 "def f():\n    from motionlang.formats import mmm_model\n")
+    assert imports(f, top_level_only=False) == [
+        "motionlang.cli.main", "motionlang.errors", "motionlang.formats.mmm_model"]
+    assert imports(f, top_level_only=False, type_checking=False) == [
+        "motionlang.errors", "motionlang.formats.mmm_model"]
+    graph = {"a": ["b"], "b": ["c"], "c": ["a", "d"], "d": [], "e": ["e"]}
+    assert import_circles(graph) == [["a", "b", "c"]]
