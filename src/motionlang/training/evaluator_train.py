@@ -18,12 +18,15 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from motionlang.errors import DatasetError
 from motionlang.training.trainer import TrainConfig, Trainer
+
+if TYPE_CHECKING:
+    from motionlang.datasets.sources import Record
 
 
 def body_joints_of(motion, body: str = "kit") -> np.ndarray:
@@ -121,7 +124,7 @@ class EvaluatorData:
         return H3D_BODIES[self.body].dim
 
 
-def build_evaluator_data(data: str | Path | Sequence[Any], body: str = "kit", *,
+def build_evaluator_data(data: str | Path | Sequence[Record], body: str = "kit", *,
                          fractions: Sequence[float] = (0.8, 0.1, 0.1), seed: int = 0,
                          max_seconds: float | None = 30.0, bones=None) -> EvaluatorData:
     """Read ``data`` (anything ``datasets.seq2seq_pairs.load_records`` reads, or a list of
@@ -142,7 +145,7 @@ def build_evaluator_data(data: str | Path | Sequence[Any], body: str = "kit", *,
         raise DatasetError(f"{data}: need at least 2 described motions, found {len(records)}")
     by_id = {str(r.id): r for r in records}
     if all(getattr(r, "split", None) for r in records):
-        splits = {s: [i for i, r in by_id.items() if r.split == s]
+        splits = {s: [i for i, r in by_id.items() if getattr(r, "split", None) == s]
                   for s in ("train", "val", "test")}
     else:
         splits = random_split(list(by_id), fractions, seed=seed)

@@ -42,6 +42,7 @@ def read_training_checkpoint(path: Path) -> dict:
 def rng_state() -> dict:
     """torch, numpy and Python RNG states as plain lists (``weights_only`` loadable)."""
     np_state = np.random.get_state()
+    assert isinstance(np_state, tuple)   # the global RandomState's MT19937, legacy form
     py_state = random.getstate()
     return {"torch": torch.get_rng_state(),
             "numpy": [np_state[0], np_state[1].tolist(), *map(float, np_state[2:])],

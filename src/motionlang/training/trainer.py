@@ -29,13 +29,13 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import asdict
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol, cast
 
 import torch
 import torch.distributed as dist
 
 from motionlang.errors import MotionlangError
-from motionlang.models.checkpoint import write_checkpoint
+from motionlang.models.checkpoint import Checkpointed, write_checkpoint
 from motionlang.training.config import OPTIMIZER_NAMES, TrainConfig
 from motionlang.training.distributed import init_distributed
 from motionlang.training.run_files import (
@@ -52,6 +52,14 @@ from motionlang.utils.progress import progress
 log = logging.getLogger(__name__)
 OPTIMIZERS = dict(zip(OPTIMIZER_NAMES, (torch.optim.NAdam, torch.optim.Adam,
                                          torch.optim.AdamW, torch.optim.SGD)))
+
+
+class LossModel(Protocol):
+    """What the trainer needs of a model besides ``nn.Module``'s methods."""
+
+    def loss(self, batch: Any) -> dict[str, torch.Tensor]:
+        """Named loss terms of a collated batch; ``"loss"`` is the scalar minimised."""
+        ...
 
 
 def check_finite(terms: dict[str, float], model: torch.nn.Module, step: int) -> None:
@@ -137,13 +145,16 @@ class Trainer:
             group["lr"] = lr
         return lr
 
+    def _loss(self, batch: Any) -> dict[str, torch.Tensor]:
+        return cast(LossModel, self.model).loss(batch)
+
     def _train_step(self, idx: list[int]) -> dict[str, float]:
         mine = self._share(idx)
         self.model.train()
         self.optimizer.zero_grad(set_to_none=False)
         terms: dict[str, float] = {}
         if mine:
-            out = self.model.loss(self.collate([self.train_set[i] for i in mine]))
+            out = self._loss(self.collate([self.train_set[i] for i in mine]))
             out["loss"].backward()
             terms = {k: float(v.detach()) for k, v in out.items()}
         params = [p for p in self.model.parameters() if p.requires_grad]
@@ -188,7 +199,7 @@ class Trainer:
             mine = self._share(order[i:i + bs])
             if not mine:
                 continue
-            out = self.model.loss(self.collate([self.val_set[j] for j in mine]))
+            out = self._loss(self.collate([self.val_set[j] for j in mine]))
             for k, v in out.items():
                 sums[k] = sums.get(k, 0.0) + float(v) * len(mine)
             count += len(mine)
@@ -196,8 +207,8 @@ class Trainer:
 
     # -- checkpoints --------------------------------------------------------------------
     def _model_dict(self) -> dict:
-        if hasattr(self.model, "to_checkpoint"):
-            return self.model.to_checkpoint()
+        if hasattr(self.model, "to_checkpoint"):   # a self-describing model
+            return cast(Checkpointed, self.model).to_checkpoint()
         return {"kind": type(self.model).__name__, "state_dict": self.model.state_dict()}
 
     def _save(self, name: str, pos: dict) -> None:

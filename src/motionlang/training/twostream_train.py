@@ -14,8 +14,12 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from motionlang.training.trainer import TrainConfig, Trainer
+
+if TYPE_CHECKING:
+    from motionlang.models.twostream.model import TwoStreamModel
 
 #: ablation name -> TwoStreamConfig fields it changes (Ghosh et al. 2021, Table 2)
 ABLATIONS: dict[str, dict] = {
@@ -45,6 +49,8 @@ class ForcingSchedule:
 class TwoStreamTrainer(Trainer):
     """:class:`Trainer` that sets ``model.teacher_forcing = schedule(step)`` before every
     optimiser step (``step`` = steps already taken in this stage)."""
+
+    model: TwoStreamModel
 
     def __init__(self, *args, schedule: ForcingSchedule | None = None, **kw):
         super().__init__(*args, **kw)
