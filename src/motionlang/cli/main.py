@@ -97,14 +97,8 @@ def build_parser() -> argparse.ArgumentParser:
         description="Human whole-body motion and natural language.")
     parser.add_argument("--version", action="version", version=f"motionlang {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for name in COMMAND_MODULES:
-        try:
-            module = importlib.import_module(name)
-        except ModuleNotFoundError as exc:
-            if exc.name == name:  # a command module not written yet
-                continue
-            raise
-        module.register(sub)
+    for name in COMMAND_MODULES:   # a listed module that does not import is an error
+        importlib.import_module(name).register(sub)
     for leaf in leaf_parsers(parser):
         if leaf is not parser:
             add_common_options(leaf)
