@@ -110,16 +110,16 @@ def generate_features(model: LanguageToMotion, sentence: str | Sequence[int], *,
     """
     if method not in METHODS:
         raise MotionlangError(f"method must be one of {METHODS}, not {method!r}")
-    first = None
+    first: torch.Tensor | None = None   # normalised
     if first_frame is not None:
         if method == "beam":
             raise MotionlangError("a given first frame works with method 'mean' or 'sample', "
                                   "not the sampled beam")
-        first = np.asarray(first_frame, dtype=np.float32)
-        if first.shape != (model.config.n_features,):
+        raw = np.asarray(first_frame, dtype=np.float32)
+        if raw.shape != (model.config.n_features,):
             raise MotionlangError(f"first_frame must be ({model.config.n_features},) model "
-                                  f"features, got {first.shape}")
-        first = torch.from_numpy(_normalize(model.normalizer, first[None])[0].astype(np.float32))
+                                  f"features, got {raw.shape}")
+        first = torch.from_numpy(_normalize(model.normalizer, raw[None])[0].astype(np.float32))
     if width < 1:
         raise MotionlangError(f"width must be >= 1, got {width}")
     if not temperature > 0:

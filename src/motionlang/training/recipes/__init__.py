@@ -87,8 +87,8 @@ def split_options(kind: str, options: dict[str, Any]) -> tuple[dict, dict, dict]
     return parts
 
 
-def train(kind: str, data: str | Sequence[str], out: str | Path, *, resume: bool = False,
-          **options: Any) -> Path:
+def train(kind: str, data: str | Path | Sequence[str | Path], out: str | Path, *,
+          resume: bool = False, **options: Any) -> Path:
     """Train a ``kind`` model on ``data`` (one ``--data`` value or several, e.g.
     ``"corpus@1"``, ``"bandai:DIR@1"``) into the run folder ``out``; ``options`` are fields
     of the model's config, of ``TrainConfig`` (where the recipe uses the shared trainer) or
