@@ -134,9 +134,10 @@ class L2MText2Motion(Text2MotionAdapter):
         # the 556 Bandai test sentences, and the last frame held to the length froze runs
         # mid-stride (a one-frame stop from a 27.8 cm move: experiments/root_checks.py)
         least = cap if self.model.config.progress_input else 1
-        result, _score = generate(self.model, sentence, width=width, method=method, seed=seed,
-                             n_frames=cap, skeleton=skeleton, reranker=reranker,
-                             first_frame=first_frame, min_frames=least)[0]
+        result, _score = generate(self.model, sentence, width=width, method=method,
+                                  seed=seed, n_frames=cap, skeleton=skeleton,
+                                  reranker=reranker, first_frame=first_frame,
+                                  min_frames=least)[0]
         if isinstance(result, np.ndarray):  # positions features: already (T, 21, 3) at fps
             p = result
             if abs(fps - FPS) > 1e-9:
