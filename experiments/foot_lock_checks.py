@@ -32,14 +32,12 @@ def main() -> None:
     import numpy as np
     import torch
     torch.set_num_threads(1)
-    from motionlang.cli.main import main as cli
+    import motionlang as ml
+    from motionlang.api import generate_hypotheses, load_rig, write_result
     from motionlang.datasets.bandai import bandai_folders
-    from motionlang.decoding.t2m import FPS, text_to_motion
+    from motionlang.decoding.t2m import FPS
     from motionlang.evaluation.metrics.physics import foot_skating, root_jitter
-    from motionlang.features.body21 import body21
-    from motionlang.formats import read_motion
     from motionlang.models.judge.fit import bandai_items, bandai_sentences
-    from motionlang.models.registry import load_model
     from motionlang.utils.progress import progress
 
     out = Path(args.out)
@@ -49,21 +47,26 @@ def main() -> None:
     text = "a person walks forward"
     for lock in (True, False):
         tag = "" if lock else "_raw"
-        flag = [] if lock else ["--no-foot-lock"]
-        for name, extra in ((f"walk{tag}.npz", []), (f"walk{tag}.bvh", []),
-                            (f"walk{tag}_rig.bvh", ["--rig", str(rig)])):
-            assert cli(["generate", text, "--model", args.model, "-w", "1", "-o",
-                        str(out / name)] + flag + extra) == 0
+        for name, on_rig in ((f"walk{tag}.npz", None), (f"walk{tag}.bvh", None),
+                             (f"walk{tag}_rig.bvh", load_rig(rig))):
+            # as `motionlang generate TEXT --model M -w 1 -o NAME [--no-foot-lock] [--rig R]`
+            # writes it, and its line
+            hyps, fps = generate_hypotheses(text, args.model, width=1, foot_lock=lock)
+            result, score = hyps[0]
+            note = write_result(result, out / name, fps=fps, title=f"{text} (#1)", rig=on_rig)
+            n = len(result.joint_angles) if hasattr(result, "joint_angles") else len(result)
+            likelihood = "" if np.isnan(score) else f" log L = {score:10.2f} "
+            print(f"1.{likelihood} {n} frames  -> {out / name}{note}")
             if name.endswith(".npz"):
                 pos, fps = np.load(out / name)["positions"], 12.5
             else:
-                m = read_motion(out / name)
-                pos, fps = body21(m), m.fps
+                m = ml.read_motion(out / name)
+                pos, fps = ml.body21(m), m.fps
             print(f"{name}: foot skating {foot_skating(pos, fps):.3f} m/s"
                   + ("" if lock or not name.endswith(".npz") else
                      f", toes at most {pos[:, [15, 20], 1].max() * 100:.1f} cm up"))
 
-    t2m = text_to_motion(load_model(args.model))
+    t2m = ml.text_to_motion(args.model)
     real = bandai_items(args.data, "test", fps=FPS)
     sentences = bandai_sentences(args.data, "test")
     jumps_real = [root_jitter(it.positions) for it in real]

@@ -68,10 +68,9 @@ def main() -> None:
 
     import torch
     torch.set_num_threads(1)
-    from motionlang import api
+    import motionlang as ml
     from motionlang.datasets.splits import load_splits, random_split
-    from motionlang.decoding.t2m import FPS, text_to_motion
-    from motionlang.models.registry import TEXT_TO_MOTION, load_model
+    from motionlang.decoding.t2m import FPS
 
     ids = sorted(f.name[:-len("_meta.json")] for f in args.corpus.glob("*_meta.json"))
     if not ids:
@@ -91,7 +90,7 @@ def main() -> None:
         if len(picked[a]) >= args.per_action:
             continue
         text = json.loads((args.corpus / f"{mid}_annotations.json").read_text())[0]
-        p = np.asarray(api.body21(args.corpus / f"{mid}_mmm.xml"))
+        p = np.asarray(ml.body21(args.corpus / f"{mid}_mmm.xml"))
         step = max(1, int(round(meta["fps"] / FPS)))
         picked[a].append((text, p[::step], prims[0].get("side")))
     if not picked:
@@ -99,7 +98,7 @@ def main() -> None:
     models = args.model or ["l2m"]
     rows = {a: {"real": [measure(p, a, s) for _, p, s in items]} for a, items in picked.items()}
     for name in models:
-        t2m = text_to_motion(load_model(name, kind=TEXT_TO_MOTION))
+        t2m = ml.text_to_motion(name)
         for a, items in picked.items():
             rows[a][name] = [measure(t2m.positions21(text, len(p), foot_lock=True), a, s)
                              for text, p, s in items]

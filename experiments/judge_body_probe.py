@@ -30,10 +30,10 @@ def main() -> None:
     import numpy as np
     import torch
     torch.set_num_threads(1)
-    from motionlang.decoding.t2m import FPS, text_to_motion
+    import motionlang as ml
+    from motionlang.decoding.t2m import FPS
     from motionlang.models.judge.fit import bandai_items, bandai_sentences
     from motionlang.models.judge.model import position_rows
-    from motionlang.models.registry import TEXT_TO_MOTION, load_model
 
     train = np.concatenate([position_rows(it.positions)[:, LEFT_HIP_X]
                             for it in bandai_items(args.data, "train", fps=FPS)])
@@ -44,7 +44,7 @@ def main() -> None:
     sentences = bandai_sentences(args.data, "test", seed=0)
     step = max(1, len(real) // args.sentences)
     for name in args.model or ["l2m", "twostream"]:
-        t2m = text_to_motion(load_model(name, kind=TEXT_TO_MOTION))
+        t2m = ml.text_to_motion(name)
         kw = {} if t2m.deterministic else {"method": "mean", "seed": 0}
         x = np.concatenate([position_rows(t2m.positions21(
             sentences[i].text, len(real[i].positions), **kw))[:, LEFT_HIP_X]

@@ -50,13 +50,13 @@ def main() -> None:
 
     import torch
     torch.set_num_threads(1)
-    from motionlang.decoding.t2m import FPS, text_to_motion
+    import motionlang as ml
+    from motionlang.decoding.t2m import FPS
     from motionlang.evaluation.judge import asked_labels, judge_table, markdown_judge_table
     from motionlang.models.judge.fit import bandai_items, bandai_sentences
-    from motionlang.models.registry import TEXT_TO_MOTION, load_model
     from motionlang.utils.progress import progress
 
-    judge = load_model(args.judge, kind="judge")
+    judge = ml.load_model(args.judge, kind="judge")
     real = bandai_items(args.data, "test", fps=FPS)[:args.limit or None]
     sentences = bandai_sentences(args.data, "test")[:args.limit or None]
     swapped = [replace(s, text=paraphrase(s.text)) for s in sentences]
@@ -67,7 +67,7 @@ def main() -> None:
     for spec in args.model:
         name, _, path = spec.rpartition("=")
         name = name or path
-        t2m = text_to_motion(load_model(path, kind=TEXT_TO_MOTION))
+        t2m = ml.text_to_motion(path)
         unknown = sum(bool(t2m.unknown_words(s.text)) for s in swapped)
         print(f"{name}: {unknown} swapped sentences have words outside its vocabulary")
         for tag, batch in (("", sentences), (" (synonyms)", swapped)):

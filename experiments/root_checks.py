@@ -30,11 +30,11 @@ def main() -> None:
     import numpy as np
     import torch
     torch.set_num_threads(1)
+    import motionlang as ml
     from motionlang.decoding.seq2seq import generate
-    from motionlang.decoding.t2m import FPS, text_to_motion
+    from motionlang.decoding.t2m import FPS
     from motionlang.evaluation.metrics.physics import root_jitter, root_kick
     from motionlang.models.judge.fit import bandai_items, bandai_sentences
-    from motionlang.models.registry import TEXT_TO_MOTION, load_model
     from motionlang.utils.progress import progress
 
     real = bandai_items(args.data, "test", fps=FPS)
@@ -42,8 +42,8 @@ def main() -> None:
     pairs = list(zip(sentences, real))
     motions = {"real takes": [it.positions for it in real]}
     for name in args.model or ["l2m", "twostream"]:
-        model = load_model(name, kind=TEXT_TO_MOTION)
-        t2m = text_to_motion(model)
+        t2m = ml.text_to_motion(name)
+        model = t2m.model
         if model.kind == "l2m" and model.config.progress_input:
             short = []
             for s, it in progress(pairs, desc=f"{name}, own end", unit="motions"):

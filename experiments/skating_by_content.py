@@ -36,15 +36,15 @@ def main() -> None:
     import numpy as np
     import torch
     torch.set_num_threads(1)
-    from motionlang.decoding.t2m import FPS, text_to_motion
+    import motionlang as ml
+    from motionlang.decoding.t2m import FPS
     from motionlang.evaluation.metrics.physics import foot_skating
     from motionlang.features.foot_lock import lock_feet
     from motionlang.models.judge.fit import bandai_items, bandai_sentences
-    from motionlang.models.registry import TEXT_TO_MOTION, load_model
 
     real = bandai_items(args.data, "test", fps=FPS)
     sentences = bandai_sentences(args.data, "test", seed=0)
-    t2m = text_to_motion(load_model(args.model, kind=TEXT_TO_MOTION))
+    t2m = ml.text_to_motion(args.model)
     kw = {} if t2m.deterministic else {"method": "mean", "seed": 0}
     gen = [t2m.positions21(s.text, max(2, len(it.positions)), **kw)
            for s, it in zip(sentences, real)]
@@ -95,7 +95,7 @@ def main() -> None:
 
     from motionlang.evaluation.judge import judge_table
     labels = [(it.content, it.style) for it in real]
-    table = judge_table(load_model(args.judge, kind="judge"), [it.positions for it in real],
+    table = judge_table(ml.load_model(args.judge, kind="judge"), [it.positions for it in real],
                         labels, FPS, {"locked": locked_real}, labels, FPS)
     t, lk = table["ground truth"], table["locked"]
     print(f"\nThe real takes through the lock: skating {np.nanmean(skating(locked_real)):.3f} "

@@ -59,11 +59,12 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     torch.set_num_threads(1)
 
+    import motionlang as ml
     from motionlang.datasets.seq2seq_pairs import build_pairs
-    from motionlang.models.registry import load_model, resolve
+    from motionlang.models.registry import resolve
     from motionlang.models.seq2seq.l2m import LanguageToMotion
     path = resolve(args.model or "l2m")
-    model = load_model(path, kind="l2m")
+    model = ml.load_model(path, kind="l2m")
     fs = model.features
     missing = [n for n in ROOT if n not in fs.names]
     if missing:

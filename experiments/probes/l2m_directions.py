@@ -36,12 +36,13 @@ def left_sign(fs, corpus: Path) -> float:
     """+1 if a positive sideways step is to the left, from a sample described 'leftwards'."""
     import json
 
+    import motionlang as ml
     from motionlang.features.frames import motion_frames
-    from motionlang.formats.mmm import read_mmm
     for ann in sorted(corpus.glob("*_annotations.json")):
         texts = json.loads(ann.read_text())
         if any("sidesteps" in t and "leftwards" in t for t in texts):
-            motion = read_mmm(ann.with_name(ann.name.replace("_annotations.json", "_mmm.xml")))
+            stem = ann.name[:-len("_annotations.json")]
+            motion = ml.read_motion(ann.with_name(f"{stem}_mmm.xml"))
             side, _, _ = body_frame_distances(fs, motion_frames(fs, motion, 1)[0])
             return 1.0 if side > 0 else -1.0
     raise SystemExit(f"{corpus}: no sample described as sidestepping leftwards")
@@ -59,9 +60,9 @@ def main() -> None:
                     "this M2L's log P(sentence | motion)")
     ap.add_argument("--candidates", type=int, default=10)
     args = ap.parse_args()
+    import motionlang as ml
     from motionlang.decoding.seq2seq import generate_features
-    from motionlang.models.registry import load_model
-    model = load_model(args.model or "l2m", kind="l2m")
+    model = ml.load_model(args.model or "l2m", kind="l2m")
     fs = model.features
     method = args.method or ("mean" if model.config.rollout_input == "mean" else "sample")
     if args.rerank and (method == "mean" or args.candidates < 2):
@@ -70,7 +71,7 @@ def main() -> None:
     reranker = None
     if args.rerank:
         from motionlang.decoding.rerank import check_same_features, rerank
-        reranker = load_model(args.rerank, kind="m2l")
+        reranker = ml.load_model(args.rerank, kind="m2l")
         check_same_features(model, reranker, f"--rerank {args.rerank}")
     for sentence, way in SENTENCES.items():
         if reranker is None:

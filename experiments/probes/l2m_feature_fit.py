@@ -58,11 +58,12 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     torch.set_num_threads(1)
 
+    import motionlang as ml
     from motionlang.datasets.seq2seq_pairs import build_pairs
     from motionlang.features.frames import model_dim
-    from motionlang.models.registry import load_model, resolve
+    from motionlang.models.registry import resolve
     path = resolve(args.model or "l2m")
-    model = load_model(path, kind="l2m")
+    model = ml.load_model(path, kind="l2m")
     names = list(model.features.names[:model_dim(model.features)])
     wanted = args.features.split(",")
     missing = [n for n in wanted if n not in names]

@@ -30,10 +30,10 @@ def _expected(params) -> torch.Tensor:
 
 
 def teacher_forced(m, path: str, text: str, j: int, frame: int) -> None:
+    import motionlang as ml
     from motionlang.decoding.seq2seq import encode_sentence, motion_frames
-    from motionlang.formats import read_motion
     from motionlang.models.seq2seq.l2m import _previous_frames
-    x = torch.as_tensor(motion_frames(m.features, read_motion(path), 1)[0])[None]
+    x = torch.as_tensor(motion_frames(m.features, ml.read_motion(path), 1)[0])[None]
     T = x.shape[1]
     ids = encode_sentence(m.vocab, text)
     tok, tl, n = torch.tensor([ids]), torch.tensor([len(ids)]), torch.tensor([T])
@@ -105,15 +105,15 @@ def main() -> None:
     ap.add_argument("--bandai-text", default="a person waves with the right hand")
     args = ap.parse_args()
     torch.set_num_threads(1)
-    from motionlang.decoding.t2m import text_to_motion
+    import motionlang as ml
     from motionlang.features.joint_map import KIT21_NAMES
-    from motionlang.models.registry import TEXT_TO_MOTION, load_model
-    m = load_model(args.model, kind=TEXT_TO_MOTION).eval()
+    t2m = ml.text_to_motion(args.model)
+    m = t2m.model.eval()
     j = m.features.names.index(args.feature)
     teacher_forced(m, args.motion, args.text, j, args.frame)
     if args.bandai:
         teacher_forced(m, args.bandai, args.bandai_text, j, args.frame)
-    generated(m, text_to_motion(m), args.text, KIT21_NAMES.index(args.feature.split("_")[0]))
+    generated(m, t2m, args.text, KIT21_NAMES.index(args.feature.split("_")[0]))
 
 
 if __name__ == "__main__":

@@ -70,12 +70,13 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     torch.set_num_threads(1)
 
+    import motionlang as ml
     from motionlang.datasets.seq2seq_pairs import build_pairs
     from motionlang.decoding.seq2seq import _normalize, generate_features
     from motionlang.features.frames import model_dim
-    from motionlang.models.registry import load_model, resolve
+    from motionlang.models.registry import resolve
     path = resolve(args.model or "l2m")
-    model = load_model(path, kind="l2m")
+    model = ml.load_model(path, kind="l2m")
     fs, vocab = model.features, model.vocab
     if args.feature not in fs.names[:model_dim(fs)]:
         raise SystemExit(f"{path}: no feature {args.feature!r} among the model's features")

@@ -15,11 +15,10 @@ import sys
 def main(argv=None) -> int:
     import torch
 
+    import motionlang as ml
     from motionlang.datasets.twostream_items import build_twostream_data
-    from motionlang.decoding.t2m import generate_positions21
     from motionlang.evaluation.action_order import segment_labels, segment_tally
     from motionlang.evaluation.t2m.compare import eval_items, fit_prototypes, positions_to_features
-    from motionlang.models.registry import TEXT_TO_MOTION, load_model
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--data", required=True, help="the procedural corpus trained on")
@@ -35,9 +34,9 @@ def main(argv=None) -> int:
               file=sys.stderr)
         return 2
     items = [it for it in eval_items(data, args.split) if it.compositional]
-    model = load_model(args.model, kind=TEXT_TO_MOTION)
-    pred = [segment_labels(positions_to_features(data.features, generate_positions21(
-        model, it.sentence, len(it.target))), it.ranges, protos) for it in items]
+    t2m = ml.text_to_motion(args.model)
+    pred = [segment_labels(positions_to_features(data.features, t2m.positions21(
+        it.sentence, len(it.target))), it.ranges, protos) for it in items]
     right, confusions = segment_tally(pred, [it.truth for it in items])
     print(f"{len(items)} compositional {args.split} sentences; segments labelled right:")
     for action in sorted({a for _, a in right}):

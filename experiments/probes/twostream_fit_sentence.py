@@ -70,9 +70,9 @@ def main(argv=None) -> int:
     import numpy as np
     import torch
 
+    import motionlang as ml
     from motionlang.datasets.twostream_items import build_twostream_data
     from motionlang.errors import MotionlangError
-    from motionlang.models.twostream import TwoStreamModel
     from motionlang.training.config import TrainConfig
     from motionlang.training.schedule import check_schedule
     from motionlang.training.twostream_train import refit_sentence_encoder
@@ -87,7 +87,7 @@ def main(argv=None) -> int:
         if out.suffix != ".pt":
             raise MotionlangError(f"{out}: the model file must end in .pt")
         lambdas = parse_weights(args.weight)
-        model = TwoStreamModel.load(args.model)
+        model = ml.load_model(args.model, kind="twostream")
         own = dict(model.config.lambdas)
         # for this fit only, not saved; the config checks the terms and weights
         model.config.lambdas = dataclasses.replace(model.config,
