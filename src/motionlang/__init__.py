@@ -11,9 +11,9 @@ __version__ = "0.1.0"
 
 #: the Python API (:mod:`motionlang.api`), imported on first use so that ``import
 #: motionlang`` stays light (no torch until a model is needed)
-_API = ("read_motion", "write_motion", "load_model", "describe", "generate", "encode", "train",
-        "text_to_motion",
-        "fill_in", "body21", "retarget", "render")
+_API = ("read_motion", "write_motion", "load_model", "describe", "generate",
+        "generate_hypotheses", "text_to_motion", "encode", "train", "fill_in", "body21",
+        "retarget", "render", "write_result", "load_rig")
 
 
 def __getattr__(name: str):
