@@ -11,6 +11,7 @@ import pytest
 import torch
 
 from motionlang.cli.main import main
+from motionlang.errors import MotionlangError
 
 TINY = ["--embed-dim", "8", "--text-hidden", "8", "--motion-hidden", "8",
         "--movement-hidden", "8", "--movement-latent", "8"]
@@ -57,6 +58,27 @@ def test_a_resumed_evaluator_keeps_the_body_it_started_on(corpus, tmp_path, monk
     assert load_model(out, kind="evaluator").config.bones is None
     assert main([*args, "--epochs", "2", "--resume"]) == 0     # no --as-given: kept anyway
     assert load_model(out / "last.pt", kind="evaluator").config.bones is None
+
+
+def test_ml_train_runs_the_evaluator_recipe(corpus, tmp_path, monkeypatch):
+    import motionlang as ml
+    from motionlang.models.registry import load_model
+    monkeypatch.setenv("MOTIONLANG_CACHE", str(tmp_path / "cache"))
+    sizes = {k: 8 for k in ("embed_dim", "text_hidden", "motion_hidden", "movement_hidden",
+                            "movement_latent")}
+    path = ml.train("evaluator", str(corpus), tmp_path / "ev", epochs=1, batch_size=16,
+                    as_given=True, loss="infonce", **sizes)
+    assert path == tmp_path / "ev" / "model.pt"
+    model = load_model(path, kind="evaluator")
+    assert model.config.loss == "infonce" and model.config.embed_dim == 8
+    assert model.config.bones is None                      # as_given: each on its own bones
+    assert not (tmp_path / "ev" / "LICENSE.txt").exists()  # no restricting source
+    for bad, message in (({"motion_dim": 10}, "come from the data"),
+                         ({"body": "mixamo"}, "EvaluatorDataOptions.body"),
+                         ({"embed_dim": 5000}, "at most 4096")):
+        with pytest.raises(MotionlangError, match=message):
+            ml.train("evaluator", str(corpus), tmp_path / "bad", **bad)
+    assert not (tmp_path / "bad").exists()   # refused before anything is written
 
 
 def test_guo_table_rows_and_files(run, corpus, tmp_path, capsys):
@@ -184,6 +206,10 @@ def test_bad_inputs_against_a_trained_evaluator(run, corpus, tmp_path, capsys):
         (["evaluate-t2m", "--data", str(corpus), "--model", "l2m", "--m2l", "m2l"],
          "--m2l applies to --protocol guo"),
         (["train", "evaluator", "--data", str(corpus), "--body", "mixamo"], "--body"),
+        (["train", "evaluator", "--data", str(corpus), "--out", str(tmp_path / "r"),
+          "--embed-dim", "5000"], "--embed-dim must be at most 4096"),
+        (["evaluate-t2m", *GUO, "--data", str(corpus), "--evaluator", str(run),
+          "--rp-batch", "1"], "--rp-batch must be an integer >= 2"),
         (["train", "evaluator", "--data", str(tmp_path / "none"), "--out", str(tmp_path / "r")],
          str(tmp_path / "none")),
         (["train", "evaluator", "--data", str(corpus), "--resume", "--out",

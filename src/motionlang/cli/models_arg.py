@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from motionlang.errors import MotionlangError
+from motionlang.evaluation.t2m.guo import draws  # noqa: F401 (whether a loaded model samples)
 
 SYNTAX = "MODEL[:key=value,...]"
 
@@ -94,12 +95,6 @@ def load_t2m_models(values: list[str] | None, flag: str = "--model") -> dict[str
                                   f"a label ({flag} LABEL=MODEL)")
         out[label] = t2m
     return out
-
-
-def draws(t2m) -> bool:
-    """Whether the model's motions change with the seed under its options: not
-    deterministic, and not told ``method=mean`` (the default of :func:`load_t2m`)."""
-    return not t2m.deterministic and getattr(t2m.options, "method", None) != "mean"
 
 
 # -- help ------------------------------------------------------------------------------------

@@ -25,7 +25,6 @@ from motionlang.errors import MotionlangError
 
 #: command modules that still define ``register_train(train_subparsers)`` themselves
 LEGACY_TRAIN_MODULES = (
-    "motionlang.cli.evaluator_commands",  # train evaluator
     "motionlang.cli.judge_commands",      # train judge
 )
 

@@ -11,7 +11,8 @@ model on GloVe 50d, which is what this package ships word vectors for.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import Any
 
 from motionlang.errors import MotionlangError
 from motionlang.utils.checks import check_bones, check_numbers
@@ -19,6 +20,15 @@ from motionlang.utils.checks import check_bones, check_numbers
 #: the motion feature size of each public dataset (``dataset_name`` "t2m" / "kit")
 OFFICIAL_POSE_DIMS = {"humanml3d": 263, "kit": 251}
 LOSSES = ("hinge", "infonce")
+#: the largest layer size a config may ask for, so that a mistyped size fails at once
+#: instead of exhausting memory (the public evaluator's largest is 1024)
+MAX_SIZE = 4096
+SIZES = ("text_hidden", "motion_hidden", "movement_hidden", "movement_latent", "embed_dim")
+
+
+def _opt(default: Any, help_: str, **meta: Any) -> Any:
+    """A field that is a ``train evaluator`` option (``cli.config_options``)."""
+    return field(default=default, metadata={"help": help_, **meta})
 
 
 @dataclass
@@ -53,17 +63,19 @@ class EvaluatorConfig:
     drop_last: int = 4
     word_dim: int = 50
     n_pos: int = 15
-    text_hidden: int = 128
-    motion_hidden: int = 256
-    movement_hidden: int = 128
-    movement_latent: int = 128
-    embed_dim: int = 128
+    text_hidden: int = _opt(128, "GRU size of the text encoder")
+    motion_hidden: int = _opt(256, "GRU size of the motion encoder")
+    movement_hidden: int = _opt(128, "channels of the movement encoder's convolutions")
+    movement_latent: int = _opt(128, "size of the movement codes (4 frames each)")
+    embed_dim: int = _opt(128, "size of the shared text/motion embedding")
     unit_length: int = 4
-    max_words: int = 20
-    loss: str = "hinge"
-    margin: float = 10.0
-    temperature: float = 0.1
-    dropout: float = 0.2
+    max_words: int = _opt(20, "words kept of a caption")
+    loss: str = _opt("hinge", "hinge: the public contrastive loss (matched pairs near, "
+                              "shifted pairs beyond --margin); infonce: cross-entropy over "
+                              "the batch", choices=LOSSES)
+    margin: float = _opt(10.0, "the hinge's margin")
+    temperature: float = _opt(0.1, "InfoNCE's temperature")
+    dropout: float = _opt(0.2, "dropout of the movement encoder")
     bones: list[float] | None = None
 
     def __post_init__(self):
@@ -73,6 +85,10 @@ class EvaluatorConfig:
                                      "embed_dim", "max_words"),
                       nonneg_ints=("drop_last",), positive=("margin", "temperature"),
                       unit=("dropout",))
+        big = next((n for n in SIZES if getattr(self, n) > MAX_SIZE), None)
+        if big:
+            raise MotionlangError(f"EvaluatorConfig.{big} must be at most {MAX_SIZE}, got "
+                                  f"{getattr(self, big)!r}")
         if self.unit_length != 4:
             raise MotionlangError("EvaluatorConfig.unit_length must be 4 (two stride-2 "
                                   f"convolutions), got {self.unit_length!r}")

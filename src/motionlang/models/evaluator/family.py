@@ -4,5 +4,6 @@ from motionlang.models.family import Family
 FAMILIES = (
     Family(kind="evaluator", model="motionlang.models.evaluator.model:TextMotionEvaluator",
            summary="text-motion evaluator (Guo et al. 2022 protocol)",
-           config="motionlang.models.evaluator.config:EvaluatorConfig"),
+           config="motionlang.models.evaluator.config:EvaluatorConfig",
+           recipe="motionlang.training.recipes.evaluator:EVALUATOR"),
 )
