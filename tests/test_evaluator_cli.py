@@ -81,6 +81,14 @@ def test_ml_train_runs_the_evaluator_recipe(corpus, tmp_path, monkeypatch):
     assert not (tmp_path / "bad").exists()   # refused before anything is written
 
 
+def test_train_evaluator_options_from_the_configs():
+    from motionlang.cli.main import build_parser
+    args = build_parser().parse_args(["train", "evaluator", "--data", "corpus", "--data-body",
+                                      "smpl", "--loss", "infonce", "--as-given"])
+    assert (args.body, args.loss, args.as_given, args.epochs, args.grad_clip) == (
+        "smpl", "infonce", True, 30, 0.5)
+
+
 def test_guo_table_rows_and_files(run, corpus, tmp_path, capsys):
     out = tmp_path / "guo"
     assert main(["evaluate-t2m", *GUO, "--evaluator", str(run), "--data", str(corpus),

@@ -2,7 +2,8 @@
 
 A field becomes an option when its ``metadata`` has ``"help"``; other metadata keys:
 ``"flag"`` (the option's name when it is not ``--field-name``), ``"metavar"``,
-``"choices"``, ``"append"`` (repeatable: the field gets the list of texts given). The type
+``"choices"``, ``"append"`` (repeatable: the field gets the list of texts given),
+``"aliases"`` (further names of the option, e.g. an older one that scripts use). The type
 comes from the annotation (int, float, bool, or one of them or None; anything else is
 passed on as text, for the config to read); a bool field defaulting to False is a flag, one
 defaulting to True gets ``--no-NAME``. Argparse only parses the text: every range and
@@ -80,12 +81,13 @@ def add_config_options(parser: argparse.ArgumentParser, cls: type, *,
                 parser.add_argument("--no-" + flag_of(f)[2:], dest=f.name,
                                     action="store_false", help=meta["help"])
             else:
-                parser.add_argument(flag_of(f), dest=f.name, action="store_true",
-                                    help=meta["help"])
+                parser.add_argument(flag_of(f), *meta.get("aliases", ()), dest=f.name,
+                                    action="store_true", help=meta["help"])
             parser.set_defaults(**{f.name: bool(default)})
             continue
         kind = {int: _parse_int, float: _parse_float}.get(base, str)
-        parser.add_argument(flag_of(f), dest=f.name, type=kind, default=default,
+        parser.add_argument(flag_of(f), *meta.get("aliases", ()), dest=f.name, type=kind,
+                            default=default,
                             action="append" if meta.get("append") else "store",
                             choices=meta.get("choices"), metavar=meta.get("metavar"),
                             help=meta["help"])

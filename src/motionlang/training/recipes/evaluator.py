@@ -41,7 +41,7 @@ class EvaluatorDataOptions:
 
     body: str = _opt("kit", "the rows' body: kit = 21 joints at 12.5 fps, 251 values (any "
                             "rig); smpl = 22 SMPL joints at 20 fps, 263 values (rigs with "
-                            "SMPL joints)", choices=BODIES)
+                            "SMPL joints)", choices=BODIES, aliases=("--data-body",))
     as_given: bool = _opt(False, "kit body: make each motion's rows on its own bones "
                                  "(default: every motion laid on the training motions' "
                                  "median bone lengths, as the public pipeline retargets to "
