@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from helpers.data import shared_file
-from motionlang.cli import demo as demo_mod
 from motionlang.cli.main import main
+from motionlang.datasets import named
 
 
 def run(capsys, *argv):
@@ -115,7 +115,7 @@ def test_demo_main_job_offline_with_packaged_models(tmp_path, capsys, monkeypatc
     # The README's main job on a machine without shared data: the packaged L2M generates,
     # the packaged M2L describes a procedural sample; GIF, strip and BVH are written.
     from motionlang.formats import read_motion
-    monkeypatch.setattr(demo_mod, "data_dirs", lambda: [tmp_path])
+    monkeypatch.setattr(named, "data_dirs", lambda: [tmp_path])
     out_dir = tmp_path / "o"
     code, out, _ = run(capsys, "demo", "--out", out_dir, "-w", "3", "--max-frames", "12")
     assert code == 0
@@ -177,6 +177,6 @@ def test_demo_says_when_a_rig_cannot_be_described(tmp_path, capsys):
 
 def test_demo_finds_shared_data(monkeypatch, tmp_path):
     path = shared_file("kitml/00001_mmm.xml")
-    monkeypatch.setenv(demo_mod.DATA_ENV, str(path.parents[1]))
+    monkeypatch.setenv(named.DATA_ENV, str(path.parents[1]))
     monkeypatch.chdir(tmp_path)
-    assert demo_mod.find_demo_motion() == path
+    assert named.find_data_file("kitml/00001_mmm.xml") == path

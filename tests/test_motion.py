@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from helpers.mocap import tiny_skeleton
-from motionlang.errors import MotionFormatError, SkeletonError
+from motionlang.errors import MotionFormatError, MotionlangError, SkeletonError
 from motionlang.kinematics import Motion, concatenate
 
 
@@ -87,3 +87,17 @@ def test_positions_of_some_joints_match_all_joints(tiny_motion):
     everything = tiny_motion.positions()
     for joints in ([3], [0], [6, 2], [7, 3, 5]):
         assert np.array_equal(tiny_motion.positions(joints), everything[:, joints])
+
+
+def test_between_keeps_both_ends_and_names_an_empty_span():
+    sk = tiny_skeleton()
+    m = Motion(sk, 10, np.zeros((20, 3)), np.zeros((20, 3)), np.zeros((20, sk.ndof)),
+               meta={"path": "walk.bvh"})
+    assert m.between() is m
+    assert m.between(0.5, 1.0).n_frames == 6           # frames 5..10, both ends
+    assert m.between(end=0.2).n_frames == 3 and m.between(1.5).n_frames == 5
+    with pytest.raises(MotionlangError, match=r"walk.bvh: no frames between 3 s and the end "
+                                              r"\(motion lasts 2.00 s\)"):
+        m.between(3.0)
+    with pytest.raises(MotionlangError, match="no frames between 1 s and 0.5 s"):
+        m.between(1.0, 0.5)

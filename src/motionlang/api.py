@@ -240,14 +240,15 @@ def retarget(motion: Motion | str | Path, rig: Motion | str | Path, *,
 
 
 def render(motion: Motion | str | Path, path: str | Path, *, title: str | None = None,
-           joint_map: dict | str | Path | None = None) -> Path:
+           joint_map: dict | str | Path | None = None, **options: Any) -> Path:
     """Draw a motion (a Motion or a file): ``.gif`` / ``.mp4`` animation or ``.png`` pose
-    strip, as ``motionlang render``. Returns the path written."""
-    from motionlang.rendering import render_animation, render_strip
+    strip, as ``motionlang render``; ``title`` defaults to the motion's name, ``options``
+    are those of ``rendering.output.render_file`` (``n_poses``, ``fps``, ``camera``,
+    ``trajectory``). Returns the path written."""
+    from motionlang.rendering.output import check_drawable, render_file
+    check_drawable(path)   # before a file is read
     m = _motion(motion, joint_map)
-    if Path(path).suffix.lower() == ".png":
-        return render_strip(m, path, title=title or m.name)
-    return render_animation(m, path, title=title or m.name)
+    return render_file(m, path, title=m.name if title is None else title, **options)
 
 
 def encode(x: Motion | str | Path, model: Any = None, *,

@@ -12,52 +12,23 @@ folder, ``humanml3d:DIR`` or ``kitml-h3d:DIR``).
 from __future__ import annotations
 
 import argparse
-import importlib
 import json
-from pathlib import Path
 
 from motionlang.cli.options import nonneg_float, output_dir, positive_float, positive_int, seed_int
-from motionlang.errors import DatasetError
-
-
-def _is_custom(folder: Path) -> bool:
-    from motionlang.datasets.custom import CAPTION_NAMES
-    return any((folder / n).is_file() for n in CAPTION_NAMES)
-
-
-def _records(folder: Path, max_seconds: float | None) -> list:
-    """Records of either dataset kind (custom datasets have no duration filter)."""
-    if _is_custom(folder):
-        from motionlang.datasets.custom import load_custom
-        return load_custom(folder)
-    from motionlang.datasets.kitml import load_kitml
-    return load_kitml(folder, max_seconds=max_seconds)
+from motionlang.cli.synth_commands import register_synth
 
 
 def cmd_download(args: argparse.Namespace) -> int:
     from motionlang.datasets.kitml import KITML_URL, download_kitml
-    if args.dataset != "kitml":  # argparse choices guard this; kept for API callers
-        raise DatasetError(f"unknown dataset {args.dataset!r}")
     root = download_kitml(args.dest, url=args.url or KITML_URL, sha256=args.sha256,
                           include_raw=args.include_raw, keep_archive=not args.remove_archive)
     print(root)
     return 0
 
 
-def _custom_summary(folder: Path) -> dict:
-    recs = _records(folder, None)
-    return {"root": str(folder), "kind": "custom", "motions": len(recs),
-            "annotations": sum(len(r.annotations) for r in recs),
-            "without_annotations": sum(not r.has_annotations for r in recs)}
-
-
 def cmd_info(args: argparse.Namespace) -> int:
-    folder = Path(args.dir)
-    if _is_custom(folder):
-        info = _custom_summary(folder)
-    else:
-        from motionlang.datasets.kitml import kitml_summary
-        info = {"kind": "kitml", **kitml_summary(folder, max_seconds=args.max_seconds)}
+    from motionlang.datasets.folders import folder_summary
+    info = folder_summary(args.dir, args.max_seconds)
     if args.json:
         print(json.dumps(info, indent=2))
         return 0
@@ -77,13 +48,11 @@ def cmd_info(args: argparse.Namespace) -> int:
 
 
 def cmd_split(args: argparse.Namespace) -> int:
-    from motionlang.datasets.splits import random_split, save_splits
-    recs = _records(Path(args.dir), args.max_seconds)
-    if not recs:
-        raise DatasetError(f"{args.dir}: no motions to split")
-    splits = random_split([r.id for r in recs], args.fractions, seed=args.seed)
-    for path in save_splits(splits, args.out):
-        print(f"{path}: {sum(1 for _ in path.open())} ids")
+    from motionlang.datasets.folders import split_folder
+    written = split_folder(args.dir, args.out, args.fractions, seed=args.seed,
+                           max_seconds=args.max_seconds)
+    for path, n in written.items():
+        print(f"{path}: {n} ids")
     return 0
 
 
@@ -93,8 +62,6 @@ def cmd_export_h3d(args: argparse.Namespace) -> int:
 
     from motionlang.datasets.humanml3d_export import export_h3d
     from motionlang.datasets.seq2seq_pairs import load_records
-    if args.workers is not None and args.workers < 1:
-        raise DatasetError(f"--workers must be at least 1, got {args.workers}")
     t0 = time.perf_counter()
     records = load_records(args.data, args.max_seconds, args.joint_map)
     print(f"export-h3d: {len(records)} motions from {args.data} "
@@ -180,11 +147,4 @@ def register(subparsers) -> None:
     s.set_defaults(func=cmd_split)
 
     _register_export_h3d(sub)
-
-    try:  # the corpus team's ``data synth`` lives in its own module
-        synth = importlib.import_module("motionlang.cli.synth_commands")
-    except ModuleNotFoundError as exc:
-        if exc.name != "motionlang.cli.synth_commands":
-            raise
-    else:
-        synth.register_synth(sub)
+    register_synth(sub)

@@ -1,7 +1,9 @@
 """``motionlang info | render | convert``: look at, draw and convert one motion file.
 
-Thin wrappers over :mod:`motionlang.formats` and :mod:`motionlang.rendering`; every problem
-is a :class:`MotionlangError`, which the main entry turns into one line and exit code 2.
+Thin layers over :mod:`motionlang.api` and :mod:`motionlang.formats`; every problem is a
+:class:`MotionlangError`, which the main entry turns into one line and exit code 2. The
+input options (:func:`add_input_args`, :func:`load_input`) serve every command that reads
+one motion file.
 """
 from __future__ import annotations
 
@@ -12,8 +14,6 @@ from pathlib import Path
 from motionlang.cli.options import nonneg_float, output_file, positive_float, positive_int
 from motionlang.errors import MotionlangError
 from motionlang.kinematics import Motion
-
-RENDER_EXTENSIONS = (".gif", ".mp4", ".png")
 
 
 def add_input_args(p: argparse.ArgumentParser) -> None:
@@ -37,48 +37,22 @@ def add_joint_map_arg(p: argparse.ArgumentParser) -> None:
 
 def load_input(args: argparse.Namespace) -> Motion:
     """Read ``args.input`` (with ``--asf`` / ``--source-fps`` for AMC files, ``--sequence``
-    for MAT files)."""
-    from motionlang.formats import read_motion
+    for MAT files; a ``--joint-map`` is checked against the rig at once)."""
+    from motionlang.api import read_mapped
 
     path = Path(args.input)
-    joint_map = getattr(args, "joint_map", None)
     ext = path.suffix.lower()
     if ext != ".amc" and (args.asf is not None or args.source_fps is not None):
         raise MotionlangError(f"{path}: --asf and --source-fps apply to .amc inputs only")
     if ext != ".mat" and args.sequence is not None:
         raise MotionlangError(f"{path}: --sequence applies to .mat inputs only")
-    if ext == ".amc":
-        motion = read_motion(path, skeleton=args.asf, fps=args.source_fps, joint_map=joint_map)
-    elif ext == ".mat":
-        motion = read_motion(path, sequence=1 if args.sequence is None else args.sequence,
-                             joint_map=joint_map)
-    else:
-        motion = read_motion(path, joint_map=joint_map)
-    if joint_map is not None:   # a wrong map is named now, whatever the command does next
-        from motionlang.api import check_map
-        check_map(motion, joint_map)
-    return motion
+    return read_mapped(path, args.joint_map, skeleton=args.asf, fps=args.source_fps,
+                       sequence=args.sequence or 1)
 
 
 def add_clip_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--start", type=nonneg_float, default=None, metavar="S", help="start, seconds")
     p.add_argument("--end", type=nonneg_float, default=None, metavar="E", help="end, seconds")
-
-
-def clip_seconds(motion: Motion, start: float | None, end: float | None,
-                 where: str) -> Motion:
-    """Frames from ``start`` to ``end`` seconds (inclusive of the frame at ``end``)."""
-    if start is None and end is None:
-        return motion
-    a = 0 if start is None else int(round(start * motion.fps))
-    b = motion.n_frames - 1 if end is None else int(round(end * motion.fps))
-    if a < 0 or (start is not None and start < 0):
-        raise MotionlangError(f"{where}: --start must be >= 0 seconds, got {start}")
-    if a >= motion.n_frames or b < a:
-        raise MotionlangError(f"{where}: no frames between {start or 0:g} s and "
-                              f"{'the end' if end is None else f'{end:g} s'} (motion lasts "
-                              f"{motion.duration:.2f} s)")
-    return motion[a:b + 1]
 
 
 # ------------------------------------------------------------------ info
@@ -104,22 +78,14 @@ def cmd_info(args: argparse.Namespace) -> int:
 
 # ------------------------------------------------------------------ render
 def cmd_render(args: argparse.Namespace) -> int:
-    from motionlang.rendering import plot_trajectory, render_animation, render_strip
+    from motionlang.api import render
+    from motionlang.rendering.output import check_drawable
 
-    out = Path(args.output)
-    ext = out.suffix.lower()
-    if ext not in RENDER_EXTENSIONS:  # checked before the (slow) read
-        raise MotionlangError(f"{out}: cannot render to {ext or '(no extension)'!r}; use "
-                              f"{', '.join(RENDER_EXTENSIONS)}")
-    motion = clip_seconds(load_input(args), args.start, args.end, str(args.input))
-    title = args.title if args.title is not None else motion.name
-    if ext == ".png" and args.trajectory:
-        plot_trajectory(motion, out, title=title)
-    elif ext == ".png":
-        render_strip(motion, out, n_frames=args.strip or 8, title=title)
-    else:
-        render_animation(motion, out, fps=args.fps, title=title, camera=args.camera)
-    print(out)
+    check_drawable(args.output)   # before the (slow) read
+    motion = load_input(args).between(args.start, args.end)
+    render(motion, args.output, title=args.title, n_poses=args.strip, fps=args.fps,
+           camera=args.camera, trajectory=args.trajectory)
+    print(Path(args.output))
     return 0
 
 
@@ -130,8 +96,7 @@ def cmd_convert(args: argparse.Namespace) -> int:
     out = Path(args.output)
     if out.resolve() == Path(args.input).resolve():
         raise MotionlangError(f"{out}: output would overwrite the input")
-    motion = clip_seconds(load_input(args), args.start, args.end, str(args.input))
-    write_motion(motion, out)
+    write_motion(load_input(args).between(args.start, args.end), out)
     print(out)
     return 0
 
@@ -152,8 +117,8 @@ def register(subparsers) -> None:
     p.add_argument("--fps", type=positive_float, default=None,
                    help="animation frame rate (default: min(25, source rate))")
     add_clip_args(p)
-    p.add_argument("--strip", type=positive_int, default=None, metavar="N",
-                   help="number of poses in a .png strip (default 8)")
+    p.add_argument("--strip", type=positive_int, default=8, metavar="N",
+                   help="number of poses in a .png strip")
     p.add_argument("--trajectory", action="store_true",
                    help="for .png: top view of the root path with footsteps instead of poses")
     p.add_argument("--camera", choices=("auto", "follow", "fixed"), default="auto",

@@ -242,5 +242,21 @@ def load_annotations_tmr(path: str | Path) -> dict[str, dict]:
     return out
 
 
+def caption_of(motion_path: str | Path) -> str | None:
+    """"KIT-ML 00001: A person is walking forwards." for ``NNNNN_mmm.xml`` when TMR's
+    ``annotations_tmr.json`` lies beside it; None otherwise (a caption is a nicety: an
+    unreadable annotation file gives None too)."""
+    motion_path = Path(motion_path)
+    m = re.fullmatch(r"(\d{5})_mmm", motion_path.stem)
+    ann = motion_path.parent / "annotations_tmr.json"
+    if not m or not ann.is_file():
+        return None
+    try:
+        texts = load_annotations_tmr(ann).get(m.group(1), {}).get("texts") or []
+    except DatasetError:
+        return None
+    return f"KIT-ML {m.group(1)}: {texts[0]}" if texts else None
+
+
 # Splits live in their own module; re-exported here as part of the KIT-ML API.
 from motionlang.datasets.splits import load_split, load_splits, random_split, save_splits  # noqa: E402,F401

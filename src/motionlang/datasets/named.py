@@ -49,6 +49,24 @@ def default_data_dir() -> Path:
     raise DatasetError(f"no data folder: set {DATA_ENV} or pass data_dir (looked in {p})")
 
 
+def data_dirs() -> list[Path]:
+    """The folders the shared data may lie in, most specific first: ``$MOTIONLANG_DATA``,
+    then ``shared/data`` beside and below the current folder, then beside the source
+    checkout; unlike :func:`default_data_dir`, a missing one is no error."""
+    dirs = [Path(os.environ[DATA_ENV]).expanduser()] if os.environ.get(DATA_ENV) else []
+    checkout = Path(__file__).resolve().parents[3]  # src/motionlang/datasets/named.py
+    return dirs + [Path.cwd().parent / "shared" / "data", Path.cwd() / "shared" / "data",
+                   checkout.parent / "shared" / "data"]
+
+
+def find_data_file(rel: str | Path) -> Path | None:
+    """``rel`` in the first of :func:`data_dirs` that holds it, else None."""
+    for d in data_dirs():
+        if (d / rel).is_file():
+            return d / rel
+    return None
+
+
 def _data_file(data_dir: str | Path | None, rel: str) -> Path:
     root = Path(data_dir) if data_dir is not None else default_data_dir()
     path = root / rel

@@ -119,6 +119,15 @@ def _listed(items: list[str], limit: int = 12) -> str:
     return ", ".join(items[:limit]) + more
 
 
+def _used(sources: dict[str, Spec]) -> set[str]:
+    """The rig joints a map's sources read."""
+    return {n for s in sources.values() for n in ([s] if isinstance(s, str) else s[1:3])}
+
+
+def _is_end_site(name: str) -> bool:
+    return re.search(r"_end\d*$", name, re.IGNORECASE) is not None
+
+
 def closest_map(skeleton: Skeleton) -> tuple[RigMap, list[str], dict[str, Spec]]:
     """The built-in map the rig comes nearest to (its signature matches, it places the most
     body joints, lacks the fewest names; then table order): (map, names it lacks, the body
@@ -167,8 +176,8 @@ def match_rig(skeleton: Skeleton, map_name: str | None = None,
         raise SkeletonError(f"skeleton {label!r} cannot be mapped to the 21 KIT joints with "
                             f"map {map_name!r}: it lacks {_listed(missing)}; {HINT}")
     rig, missing, sources = closest_map(skeleton)
-    used = {n for s in sources.values() for n in ([s] if isinstance(s, str) else s[1:3])}
-    unmatched = [n for n in names if n not in used and not re.search(r"_end\d*$", n, re.I)]
+    used = _used(sources)
+    unmatched = [n for n in names if n not in used and not _is_end_site(n)]
     closest = f" (closest map {rig.name!r} lacks {_listed(missing)})" if sources else ""
     raise SkeletonError(f"skeleton {label!r} cannot be mapped to the 21 KIT joints: no "
                         f"built-in map fits; rig joints not matched: {_listed(unmatched, 40)}"
@@ -300,3 +309,43 @@ def template_map(skeleton: Skeleton) -> dict:
             "about": f'{guesses}; {fill} (a name, ["mid", a, b] or ["lerp", a, b, t]); '
                      "left = the subject's left",
             "joints": joints, "rig_joints": list(skeleton.names)}
+
+
+def rig_summary(skeleton: Skeleton, joint_map: dict | str | Path | None = None) -> dict:
+    """How a rig maps onto the 21-joint body (:func:`match_rig`, ``joint_map`` as there):
+    ``{"rig", "joints" (its joints, end sites left out), "end_sites" (how many), "map",
+    "about", "body" ({body joint: its source in the rig's names}), "unused" (the rig's
+    joints the map does not read)}``.
+
+    Raises:
+        SkeletonError: as :func:`match_rig`.
+    """
+    m = match_rig(skeleton, joint_map=joint_map)
+    names = list(skeleton.names)
+    joints = [n for n in names if not _is_end_site(n)]
+    body = {k: m.sources[k] for k in KIT21_NAMES}
+    used = _used(body)
+    return {"rig": skeleton.name, "joints": joints, "end_sites": len(names) - len(joints),
+            "map": m.name, "about": m.about, "body": body,
+            "unused": [n for n in joints if n not in used]}
+
+
+def spec_text(spec: Spec) -> str:
+    """A body joint's source as text: ``"Hips"``, ``"mid(a, b)"``, ``"lerp(a, b, 0.4)"``."""
+    if isinstance(spec, str):
+        return spec
+    args = ", ".join(str(a) if isinstance(a, str) else f"{a:g}" for a in spec[1:])
+    return f"{spec[0]}({args})"
+
+
+def map_json(d: dict) -> str:
+    """A joint map (e.g. :func:`template_map`'s) as JSON with one line per body joint, to
+    edit by hand (``json.dumps`` would spread every ``["mid", a, b]`` over four lines)."""
+    lines = []
+    for key, value in d.items():
+        if isinstance(value, dict):
+            inner = [f"    {json.dumps(k)}: {json.dumps(v)}" for k, v in value.items()]
+            lines.append(f"  {json.dumps(key)}: {{\n" + ",\n".join(inner) + "\n  }")
+        else:
+            lines.append(f"  {json.dumps(key)}: {json.dumps(value)}")
+    return "{\n" + ",\n".join(lines) + "\n}"

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from motionlang.errors import MotionFormatError, SkeletonError
+from motionlang.errors import MotionFormatError, MotionlangError, SkeletonError
 from motionlang.kinematics.rotations import chain
 from motionlang.kinematics.skeleton import Skeleton
 
@@ -116,6 +116,24 @@ class Motion:
         return self.replace(root_translation=self.root_translation[key],
                             root_rotation=self.root_rotation[key],
                             joint_angles=self.joint_angles[key], fps=self.fps / step)
+
+    def between(self, start: float | None = None, end: float | None = None) -> Motion:
+        """The frames from ``start`` to ``end`` seconds, both ends included (None: the
+        motion's own start or end).
+
+        Raises:
+            MotionlangError: no frame in that span (naming the file and the motion's length).
+        """
+        if start is None and end is None:
+            return self
+        a = 0 if start is None else int(round(start * self.fps))
+        b = self.n_frames - 1 if end is None else int(round(end * self.fps))
+        if not 0 <= a < self.n_frames or b < a:
+            where = self.meta.get("path") or self.name
+            raise MotionlangError(f"{where}: no frames between {start or 0:g} s and "
+                                  f"{'the end' if end is None else f'{end:g} s'} (motion "
+                                  f"lasts {self.duration:.2f} s)")
+        return self[a:b + 1]
 
     def angle(self, dof_name: str) -> np.ndarray:
         """(T,) radians of one DOF, by name."""

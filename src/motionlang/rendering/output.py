@@ -17,6 +17,36 @@ MOTION_OUT = (".bvh", ".xml", ".amc")
 #: animations; ``.png`` is a pose strip, ``.npz`` the positions and frame rate
 RENDER_OUT = (".gif", ".mp4")
 RESULT_OUT = MOTION_OUT + RENDER_OUT + (".png", ".npz")
+#: what :func:`render_file` draws: an animation, or a ``.png`` pose strip or trajectory
+DRAW_OUT = RENDER_OUT + (".png",)
+
+
+def check_drawable(path: str | Path) -> None:
+    """Raise :class:`MotionlangError` naming ``path`` unless :func:`render_file` can draw
+    to its extension (before anything slow is read)."""
+    ext = Path(path).suffix.lower()
+    if ext not in DRAW_OUT:
+        raise MotionlangError(f"{path}: cannot render to {ext or '(no extension)'!r}; use "
+                              f"{', '.join(DRAW_OUT)}")
+
+
+def render_file(motion, path: str | Path, *, title: str | None = None, n_poses: int = 8,
+                fps: float | None = None, camera: str = "auto", trajectory: bool = False
+                ) -> Path:
+    """Draw a Motion (or a ``rendering.scene.Scene``) by ``path``'s extension: ``.gif`` /
+    ``.mp4`` animation at ``fps`` (default min(25, the motion's)) with ``camera``, or a
+    ``.png`` strip of ``n_poses`` poses (with ``trajectory``: the root's path seen from
+    above, with footsteps). Atomic; returns the path.
+    """
+    check_drawable(path)
+    if Path(path).suffix.lower() != ".png":
+        from motionlang.rendering.animation import render_animation
+        return render_animation(motion, path, fps=fps, title=title, camera=camera)
+    if trajectory:
+        from motionlang.rendering.trajectory import plot_trajectory
+        return plot_trajectory(motion, path, title=title)
+    from motionlang.rendering.strip import render_strip
+    return render_strip(motion, path, n_frames=n_poses, title=title)
 
 
 def body_motion(result, fps: float, rig: Motion | None = None, name: str = "generated"
@@ -97,10 +127,6 @@ def write_result(result, path: str | Path, *, fps: float, title: str = "",
     if ext in MOTION_OUT:
         from motionlang.formats import write_motion
         write_motion(result, path)
-    elif ext == ".png":
-        from motionlang.rendering.strip import render_strip
-        render_strip(result, path, title=title)
     else:
-        from motionlang.rendering.animation import render_animation
-        render_animation(result, path, title=title)
+        render_file(result, path, title=title)
     return note
