@@ -15,6 +15,8 @@ from pathlib import Path
 SEED_MAX = 2**32 - 1   # numpy's seeds are 32-bit
 # caps well past any sensible value, far below what would exhaust memory
 MAX_WIDTH = 1000       # beam width / hypotheses
+MAX_SIZE = 4096        # layer sizes, mixture components (an LSTM of 4096: 256 MB a matrix)
+MAX_LAYERS = 16
 MAX_FRAMES = 100_000
 MAX_THREADS = 256
 
@@ -60,12 +62,15 @@ def float_range(lo: float = -math.inf, hi: float = math.inf, *,
 
 positive_int = int_range(1)             # counts without a memory cost (epochs, batch size)
 nonneg_int = int_range(0)
+size_int = int_range(1, MAX_SIZE)
+layers_int = int_range(1, MAX_LAYERS)
 frames_int = int_range(1, MAX_FRAMES)
 width_int = int_range(1, MAX_WIDTH)
 seed_int = int_range(0, SEED_MAX)
 threads_int = int_range(1, MAX_THREADS)
 nonneg_float = float_range(0.0)
 positive_float = float_range(0.0, open_lo=True)
+dropout_float = float_range(0.0, 0.99)
 
 
 def _check_writable(path: Path, what: str) -> None:
