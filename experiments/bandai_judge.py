@@ -4,7 +4,7 @@ print its content and style accuracy on the held-out test takes (dataset 2, take
 
     MOTIONLANG_CACHE=/tmp/cache OMP_NUM_THREADS=1 .venv/bin/python experiments/bandai_judge.py \
         [--data ../shared/data/bandai] [--epochs 30] [--out judge.pt] [--no-mirror] [--cross]
-        [--primitives CORPUS]
+        [--primitives CORPUS] [--runs DIR]
 
 Validation takes (4 mod 5) pick the epoch. Accuracy is over the judge's every label (25
 contents, 19 styles) and, in brackets, among dataset 2's own (10 contents, 7 styles), the
@@ -19,6 +19,7 @@ The judge is trained on Bandai data: CC BY-NC 4.0, non-commercial use only.
 from __future__ import annotations
 
 import argparse
+import tempfile
 import time
 from collections import Counter
 from pathlib import Path
@@ -51,6 +52,8 @@ def main() -> None:
                     help="also train on this procedural corpus' primitives")
     ap.add_argument("--cross", action="store_true",
                     help="also: train on dataset 2 only, test on dataset 1's walks and runs")
+    ap.add_argument("--runs", type=Path, help="the trainer's run folders (default: a temporary "
+                                              "folder)")
     args = ap.parse_args()
 
     import torch
@@ -59,11 +62,12 @@ def main() -> None:
     from motionlang.models.judge.fit import (
         accuracy,
         bandai_items,
-        fit_judge,
         median_bones,
         primitive_items,
     )
+    from motionlang.training.recipes.judge import train_on_items
     torch.set_num_threads(1)
+    args.runs = args.runs or Path(tempfile.mkdtemp(prefix="bandai_judge_"))
     t0 = time.time()
     train, val, test = (bandai_items(args.data, s) for s in ("train", "val", "test"))
     extra = primitive_items(args.primitives) if args.primitives else []
@@ -71,9 +75,9 @@ def main() -> None:
           f"primitives {len(extra)} (read in {time.time() - t0:.0f} s)", flush=True)
     t1 = time.time()
     # the real actors' body, not a median with the procedural primitives' (as train judge)
-    judge, _ = fit_judge(train + extra, val, epochs=args.epochs, seed=args.seed,
-                         mirror=args.mirror, bones=median_bones(train or extra),
-                         log=lambda s: print(s, flush=True))
+    judge, _ = train_on_items(train + extra, val, {"bones": median_bones(train or extra)},
+                              train_config(args, "main"), mirror=args.mirror,
+                              log=lambda s: print(s, flush=True))
     fit_s = time.time() - t1
     if args.out:
         judge.save(args.out)
@@ -110,15 +114,25 @@ def main() -> None:
     print(f"total {(time.time() - t0) / 60:.1f} min")
 
 
+def train_config(args, name: str):
+    """``train judge``'s trainer settings, with this script's epochs and seed, run folder
+    ``args.runs / name``."""
+    from motionlang.training.config import TrainConfig
+    from motionlang.training.recipes.judge import JUDGE
+    return TrainConfig(**{**JUDGE.train_defaults, "epochs": args.epochs, "seed": args.seed,
+                          "out_dir": str(args.runs / name)})
+
+
 def cross(train, val, args) -> None:
     """A judge trained on dataset 2 alone, scored on dataset 1's walk and run takes."""
     from dataclasses import replace
 
-    from motionlang.models.judge.fit import accuracy, fit_judge
+    from motionlang.models.judge.fit import accuracy
+    from motionlang.training.recipes.judge import train_on_items
     two = [it for it in train if it.id.startswith("dataset-2")]
     one = [replace(it, style=SAME_STYLE.get(it.style)) for it in train
            if it.id.startswith("dataset-1") and it.content in ("walk", "run")]
-    judge, _ = fit_judge(two, val, epochs=args.epochs, seed=args.seed, mirror=args.mirror)
+    judge, _ = train_on_items(two, val, {}, train_config(args, "cross"), mirror=args.mirror)
     acc = accuracy(judge, one)
     print(f"\ncross-dataset: trained on dataset 2 ({len(two)} takes), tested on dataset 1's "
           f"{acc['n']} walks and runs: content {acc['content']:.3f}, style {acc['style']:.3f} "

@@ -1,5 +1,6 @@
 """The motion judge: padding-invariant outputs, a checkpoint round trip through the
-registry, fitting a tiny judge on hand-made motions, and the measures built on it."""
+registry, its batches, training a tiny judge on hand-made motions (the recipe on the shared
+trainer), and the measures built on it."""
 from __future__ import annotations
 
 import numpy as np
@@ -11,9 +12,18 @@ from motionlang.evaluation.judge import judge_motions, judge_report
 from motionlang.features.joint_map import KIT21_NAMES, bone_lengths21
 from motionlang.features.normalizer import Normalizer
 from motionlang.models.judge.config import JudgeConfig
-from motionlang.models.judge.fit import JudgeItem, accuracy, fit_judge, median_bones, mirror_item
+from motionlang.models.judge.fit import (
+    JudgeItem,
+    accuracy,
+    collate,
+    examples,
+    median_bones,
+    mirror_item,
+)
 from motionlang.models.judge.model import MotionJudge, resample_positions
 from motionlang.models.registry import load_model
+from motionlang.training.config import TrainConfig
+from motionlang.training.recipes.judge import train_on_items
 
 TINY = dict(hidden=16, embed=8, layers=2, kernel=3, window=16, dropout=0.0)
 _J = {n: i for i, n in enumerate(KIT21_NAMES)}
@@ -42,6 +52,13 @@ def items(n: int = 3, seed: int = 0) -> list[JudgeItem]:
     rng = np.random.default_rng(seed)
     return [JudgeItem(f"{c}_{s}_{k}", motion(c, s, rng), 12.5, c, s)
             for c in ("walk", "wave-left-hand") for s in ("happy", "sad") for k in range(n)]
+
+
+def fit(train, val, out, *, uniform=True, **train_kw):
+    """A tiny judge trained as ``train judge`` trains one (AdamW, mirrored copies)."""
+    cfg = TrainConfig(**{"optimizer": "adamw", "weight_decay": 1e-4, "batch_size": 32,
+                         "out_dir": str(out), "plot": False, "progress": False, **train_kw})
+    return train_on_items(train, val, TINY, cfg, uniform=uniform, log=None)
 
 
 def tiny_judge() -> MotionJudge:
@@ -87,13 +104,42 @@ def test_resample_and_mirror_by_hand():
     assert m.positions[:, _J["RW"], 0] == pytest.approx(-it.positions[:, _J["LW"], 0])
 
 
-def test_fit_a_tiny_judge_and_judge_with_it():
+def test_batches_crop_training_examples_and_keep_whole_ones():
+    judge = tiny_judge()
+    its = items(1)
+    odd = JudgeItem("x", its[0].positions, 12.5, "run", "angry")   # labels it does not know
+    exs = examples(judge, its + [odd], window=7)
+    assert [(e["content"], e["style"]) for e in exs] == [(0, 0), (0, 1), (1, 0), (1, 1),
+                                                         (-1, -1)]
+    assert np.allclose(exs[0]["rows"], judge.rows(its[0].positions, 12.5))
+    torch.manual_seed(0)
+    batch = collate(exs)
+    assert batch["x"].shape == (5, 7, 66) and batch["lengths"].tolist() == [7] * 5
+    assert batch["content"].tolist() == [0, 0, 1, 1, -1]
+    # the crop is a window of the rows, at a random start
+    rows = torch.from_numpy(exs[0]["rows"])
+    assert any(torch.equal(batch["x"][0], rows[s:s + 7]) for s in range(len(rows) - 6))
+    whole = collate(examples(judge, its[:2]))
+    assert whole["lengths"].tolist() == [len(exs[0]["rows"]), len(exs[1]["rows"])]
+    # a batch without a known style trains the content head only, and stays finite
+    terms = judge.loss({**batch, "style": torch.full((5,), -1)})
+    assert "style_acc" not in terms and float(terms["style_loss"].detach()) == 0.0
+    assert torch.isfinite(terms["loss"])
+
+
+def test_fit_a_tiny_judge_and_judge_with_it(tmp_path):
     train, val = items(3, seed=0), items(2, seed=1)
-    judge, history = fit_judge(train, val, epochs=40, lr=1e-2, batch_size=8, **TINY)
+    judge, history = fit(train, val, tmp_path, epochs=40, lr=1e-2, batch_size=8)
     assert judge.config.contents == ["walk", "wave-left-hand", "wave-right-hand"]
-    assert len(history) == 40 and {"val_content", "val_style", "loss"} <= set(history[-1])
+    assert len(history) == 40 and "loss" in history[-1]["train"]
+    assert {"content_acc", "style_acc", "select"} <= set(history[-1]["val"])
+    # the judge kept is the epoch whose validation motions it named best
+    acc = accuracy(judge, val)
+    assert -np.mean([acc["content"], acc["style"]]) == pytest.approx(
+        min(h["val"]["select"] for h in history))
+    assert acc["content"] >= 0.75
+    judge = MotionJudge.load(tmp_path / "last.pt")     # the last epoch's weights
     assert accuracy(judge, train) == {"content": 1.0, "style": 1.0, "n": 12}   # fits
-    assert accuracy(judge, val)["content"] >= 0.75
     ms = [it.positions for it in train[::2] + train[1::3]]
     asked = [(it.content, it.style) for it in train[::2] + train[1::3]]
     ref = judge.judge(ms, 12.5)["embedding"]
@@ -140,12 +186,12 @@ def test_a_judge_with_bones_reads_the_motion_not_the_body():
     assert np.allclose(a["embedding"], b["embedding"], atol=1e-5)
 
 
-def test_fit_judge_sets_the_training_bodies_median_bones():
+def test_training_sets_the_training_bodies_median_bones(tmp_path):
     train = items(1)
-    judge, _ = fit_judge(train, epochs=1, **TINY)
+    judge, _ = fit(train, [], tmp_path / "a", epochs=1)
     want = np.median(np.concatenate([bone_lengths21(it.positions) for it in train]), axis=0)
     assert judge.config.bones == pytest.approx(want)
-    plain, _ = fit_judge(train, epochs=1, uniform=False, **TINY)
+    plain, _ = fit(train, [], tmp_path / "b", epochs=1, uniform=False)
     assert plain.config.bones is None
     with pytest.raises(MotionlangError, match="20 lengths"):
         JudgeConfig(contents=["walk"], styles=["happy"], bones=[0.3] * 19)

@@ -68,6 +68,29 @@ def test_train_judge_prints_a_line_per_epoch(bandai, tmp_path, monkeypatch, caps
     assert all("validation content" in l for l in lines)
 
 
+def test_ml_train_judge_as_train_judge(bandai, tmp_path, monkeypatch):
+    """``ml.train("judge", ...)``: the recipe's defaults (AdamW with weight decay), its data
+    options, a bare folder read as Bandai, one source only."""
+    import motionlang as ml
+    from motionlang.errors import MotionlangError
+    from motionlang.models.registry import load_model
+    monkeypatch.setenv("MOTIONLANG_CACHE", str(tmp_path / "cache"))
+    path = ml.train("judge", str(bandai), tmp_path / "run", epochs=1, mirror=False, plot=False,
+                    hidden=8, embed=8, layers=2, kernel=3, window=12)
+    assert path == tmp_path / "run" / "model.pt"
+    judge = load_model(path, kind="judge")
+    assert judge.config.contents == ["walk", "wave-left-hand"] and judge.config.hidden == 8
+    logged = json.loads((tmp_path / "run" / "commands.jsonl").read_text())
+    assert (logged["optimizer"], logged["weight_decay"], logged["data"]) == (
+        "adamw", 1e-4, f"bandai:{bandai}")
+    assert "non-commercial" in (tmp_path / "run" / "LICENSE.txt").read_text()
+    with pytest.raises(MotionlangError, match="one bandai:DIR source"):
+        ml.train("judge", [f"bandai:{bandai}"] * 2, tmp_path / "two")
+    with pytest.raises(MotionlangError, match="come from the training data"):
+        ml.train("judge", f"bandai:{bandai}", tmp_path / "labels", contents=["walk"])
+    assert not (tmp_path / "two").exists() and not (tmp_path / "labels").exists()
+
+
 def test_evaluate_judge_table_with_a_model(judge_run, bandai, tmp_path, capsys):
     out = tmp_path / "report"
     assert main(["evaluate-judge", "--judge", str(judge_run), "--data", f"bandai:{bandai}",

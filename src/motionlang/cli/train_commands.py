@@ -24,9 +24,7 @@ from motionlang.cli.options import output_dir
 from motionlang.errors import MotionlangError
 
 #: command modules that still define ``register_train(train_subparsers)`` themselves
-LEGACY_TRAIN_MODULES = (
-    "motionlang.cli.judge_commands",      # train judge
-)
+LEGACY_TRAIN_MODULES: tuple[str, ...] = ()
 
 
 #: what a run of the shared trainer keeps beside the model (``--out``'s help)
@@ -62,18 +60,28 @@ def train_config(args: argparse.Namespace, out_dir, **fields):
     return config_from_args(TrainConfig, args, out_dir=str(out_dir), **fields)
 
 
-def data_source(text: str):
-    """argparse type of ``--data``: ``[PREFIX:]DIR[@WEIGHT]`` (``datasets.sources``)."""
+def data_source(text: str, kind: str | None = None):
+    """argparse type of ``--data``: ``[PREFIX:]DIR[@WEIGHT]`` (``datasets.sources``), of
+    ``kind`` where given."""
     from motionlang.datasets.sources import parse_source
     try:
-        return parse_source(text)
+        return parse_source(text, kind=kind)
     except MotionlangError as exc:
         raise argparse.ArgumentTypeError(str(exc)) from None
 
 
-def add_data_arg(p: argparse.ArgumentParser, several: bool = True) -> None:
-    """``--data``: one source, or several (repeatable, ``@W`` weights)."""
-    from motionlang.datasets.sources import data_help
+def add_data_arg(p: argparse.ArgumentParser, several: bool = True,
+                 kind: str | None = None) -> None:
+    """``--data``: one source, or several (repeatable, ``@W`` weights); with ``kind``, one
+    source of that kind (``datasets.sources.KINDS``)."""
+    from motionlang.datasets.sources import KINDS, data_help
+    if kind is not None:
+        def parse(text: str):
+            return data_source(text, kind)
+        parse.__name__ = "data source"
+        p.add_argument("--data", required=True, type=parse, metavar=f"{KINDS[kind].prefix}DIR",
+                       help=KINDS[kind].description)
+        return
     p.add_argument("--data", required=True, action="append" if several else "store",
                    type=data_source, metavar="DIR[@W]" if several else "DIR",
                    help=data_help(weights=several) + (
@@ -87,11 +95,12 @@ def _register_recipe(train_sub, kind: str) -> None:
     from motionlang.training.recipes import recipe_of
     fam, recipe = family(kind), recipe_of(kind)
     p = train_sub.add_parser(kind, help=f"train the {fam.summary}",
-                             description=f"Train the {fam.summary}.")
+                             description=" ".join(filter(None, (f"Train the {fam.summary}.",
+                                                                recipe.description))))
     if recipe.data_help:   # one folder in the recipe's own format
         p.add_argument("--data", required=True, metavar="DIR", help=recipe.data_help)
     else:
-        add_data_arg(p, recipe.several_sources)
+        add_data_arg(p, recipe.several_sources, recipe.source_kind)
     files = TRAINER_FILES if recipe.run_files is None else recipe.run_files
     add_out_arg(p, kind, f"{files}, " if files else "")
     add_config_options(p, recipe.data_config)

@@ -36,7 +36,8 @@ class TrainConfig:
         "help": "sequences per optimiser step (all processes together under torchrun)"})
     lr: float = field(default=1e-3, metadata={"help": "learning rate"})
     optimizer: str = "nadam"
-    weight_decay: float = 0.0
+    weight_decay: float = field(default=0.0, metadata={
+        "help": "the optimiser's weight decay (AdamW: decoupled from the gradient)"})
     grad_clip: float | None = field(default=None, metadata={
         "metavar": "NORM", "help": "clip the gradient's global L2 norm to NORM (none: no "
                                    "clipping)"})

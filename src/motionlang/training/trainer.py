@@ -92,14 +92,18 @@ class Trainer:
     def __init__(self, model: torch.nn.Module, train_set: Sequence, collate: Callable[[list], Any],
                  config: TrainConfig, val_set: Sequence | None = None,
                  length_of: Callable[[Any], int] | None = None,
-                 select: Callable[[torch.nn.Module], float] | None = None):
+                 select: Callable[[torch.nn.Module], float] | None = None,
+                 on_epoch: Callable[[dict], None] | None = None):
         """``select``: model -> a validation score, lower is better, that picks ``best.pt``
         instead of the validation loss (recorded as ``val["select"]``; e.g. the evaluator's
-        R-precision, which its contrastive loss follows badly on templated captions)."""
+        R-precision, which its contrastive loss follows badly on templated captions).
+        ``on_epoch``: called on every rank with each epoch's history record, once its
+        checkpoints are written (e.g. a recipe's own progress line)."""
         if len(train_set) == 0:
             raise MotionlangError("training set is empty")
         self.model, self.train_set, self.val_set = model, train_set, val_set
         self.collate, self.config, self.select = collate, config, select
+        self.on_epoch = on_epoch
         self._lengths = None
         if config.length_buckets > 0:
             length_of = length_of or (lambda item: len(item["motion"]))
@@ -341,6 +345,8 @@ class Trainer:
             self._save("last.pt", {**pos, "best": best})
             if self.rank == 0:
                 self._write_history()
+            if self.on_epoch is not None:
+                self.on_epoch(self.history[-1])
         return self.history
 
     def _write_history(self) -> None:

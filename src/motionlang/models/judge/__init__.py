@@ -2,6 +2,7 @@
 trained on real mocap (the Bandai Namco takes), independent of the text models it judges.
 
 :mod:`.config` (sizes, label lists), :mod:`.model` (the network, its features and its
-self-describing checkpoint, kind ``"judge"``), :mod:`.fit` (the training takes and a plain
-training loop). Measures built on it: ``evaluation.judge``.
+self-describing checkpoint, kind ``"judge"``), :mod:`.fit` (the labelled takes, a fresh
+judge for them, its batches, accuracy). Its recipe (on the shared trainer):
+``training.recipes.judge``. Measures built on it: ``evaluation.judge``.
 """

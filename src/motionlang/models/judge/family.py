@@ -4,5 +4,6 @@ from motionlang.models.family import Family
 FAMILIES = (
     Family(kind="judge", model="motionlang.models.judge.model:MotionJudge",
            summary="action and style classifier of real motion",
-           config="motionlang.models.judge.config:JudgeConfig"),
+           config="motionlang.models.judge.config:JudgeConfig",
+           recipe="motionlang.training.recipes.judge:JUDGE"),
 )

@@ -1,20 +1,22 @@
-"""Training the motion judge: labelled 21-joint motions in, a fitted :class:`MotionJudge` out.
+"""What the motion judge is trained and scored on: labelled 21-joint motions, a fresh judge
+for them, their batches, accuracy.
 
 :func:`bandai_items` reads the Bandai Namco takes of a split as :class:`JudgeItem`
-(positions at the positions features' rate, cached by file identity); any other labelled motions can join them,
-``style=None`` where there is none: :func:`primitive_items` cuts a procedural corpus'
-primitives that show a Bandai action (walks, runs, waves, raised arms, bows, kicks,
-punches). :func:`fit_judge` is a plain torch loop: AdamW, random crops of ``config.window`` frames, optional mirrored
-copies (left/right swapped in positions and label), the epoch with the best validation
-accuracy kept. :func:`accuracy` scores whole motions.
+(positions at the positions features' rate, cached by file identity); any other labelled
+motions can join them, ``style=None`` where there is none: :func:`primitive_items` cuts a
+procedural corpus' primitives that show a Bandai action (walks, runs, waves, raised arms,
+bows, kicks, punches); :func:`mirror_item` swaps left and right. :func:`new_judge` makes a
+judge for some items (labels, normaliser) and :func:`examples` / :func:`collate` turn items
+into the batches of its ``loss`` (random crops of ``config.window`` frames); the training
+itself is the shared trainer's (``training.recipes.judge``). :func:`accuracy` scores whole
+motions.
 """
 from __future__ import annotations
 
-import copy
-import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import torch
@@ -115,17 +117,62 @@ def primitive_items(corpus: str | Path, fps: float = DEFAULT_FPS, min_seconds: f
     return out
 
 
-def _crop(rows: np.ndarray, window: int, rng: np.random.Generator) -> np.ndarray:
-    if len(rows) <= window:
-        return rows
-    s = int(rng.integers(len(rows) - window + 1))
-    return rows[s:s + window]
+def new_judge(items: Sequence[JudgeItem], window: int | None = None, **config: Any
+              ) -> tuple[MotionJudge, list[dict]]:
+    """A fresh judge for ``items`` and the items as its examples (:func:`examples`).
+
+    The judge's labels are every content and every known style of ``items`` (sorted), its
+    normaliser is fitted on their rows; ``config``: the other :class:`JudgeConfig` fields
+    (sizes, ``bones``). ``window``: the examples' crop (default ``config.window``).
+    """
+    if not items:
+        raise MotionlangError("no training items for the judge")
+    cfg = JudgeConfig(contents=sorted({it.content for it in items}),
+                      styles=sorted({it.style for it in items if it.style is not None}),
+                      **config)
+    raw = [judge_rows(it.positions, it.fps, cfg) for it in items]
+    judge = MotionJudge(cfg, Normalizer().fit(raw))
+    return judge, _examples(judge, items, raw, cfg.window if window is None else window)
 
 
-def _batch(rows: Sequence[np.ndarray], ids: dict[str, np.ndarray]) -> dict:
-    x = nn.utils.rnn.pad_sequence([torch.from_numpy(r) for r in rows], batch_first=True)
-    return {"x": x, "lengths": torch.tensor([len(r) for r in rows]),
-            **{k: torch.as_tensor(v) for k, v in ids.items()}}
+def examples(judge: MotionJudge, items: Sequence[JudgeItem], window: int | None = None
+             ) -> list[dict]:
+    """``items`` as what :func:`collate` batches for ``judge``: ``rows`` (T, F) float32
+    normalised (``MotionJudge.rows``), ``content`` / ``style`` label ids (-1: unknown, or
+    not one of the judge's labels; not trained or scored on), ``window``: frames of the
+    random crop a batch takes of the rows (None: the whole motion, as judged)."""
+    return _examples(judge, items, [judge_rows(it.positions, it.fps, judge.config)
+                                    for it in items], window)
+
+
+def _examples(judge: MotionJudge, items: Sequence[JudgeItem], raw: Sequence[np.ndarray],
+              window: int | None) -> list[dict]:
+    norm = judge.normalizer
+    if norm is None:
+        raise MotionlangError("the judge has no normaliser: make it with new_judge")
+    content = {c: i for i, c in enumerate(judge.config.contents)}
+    style: dict[str | None, int] = {s: i for i, s in enumerate(judge.config.styles)}
+    return [{"rows": norm.transform(r).astype(np.float32),
+             "content": content.get(it.content, -1), "style": style.get(it.style, -1),
+             "window": window} for it, r in zip(items, raw)]
+
+
+def collate(batch: Sequence[dict]) -> dict[str, torch.Tensor]:
+    """Examples (:func:`examples`) -> the batch ``MotionJudge.loss`` takes: ``x`` (B, T, F)
+    zero-padded, ``lengths`` (B,), ``content`` and ``style`` (B,) long. An example with a
+    ``window`` shorter than its rows gives a crop at a random start (torch's global
+    generator, whose state the trainer's checkpoints keep)."""
+    rows = []
+    for ex in batch:
+        r, window = torch.from_numpy(ex["rows"]), ex["window"]
+        if window is not None and len(r) > window:
+            s = int(torch.randint(len(r) - window + 1, ()))
+            r = r[s:s + window]
+        rows.append(r)
+    return {"x": nn.utils.rnn.pad_sequence(rows, batch_first=True),
+            "lengths": torch.tensor([len(r) for r in rows]),
+            "content": torch.tensor([ex["content"] for ex in batch]),
+            "style": torch.tensor([ex["style"] for ex in batch])}
 
 
 def accuracy(judge: MotionJudge, items: Sequence[JudgeItem]) -> dict[str, float]:
@@ -147,70 +194,6 @@ def median_bones(items: Sequence[JudgeItem]) -> list[float]:
     """The 20 median bone lengths (m) over every frame of ``items``: the body a judge
     reads motions on (``JudgeConfig.bones``)."""
     return median_bones21([it.positions for it in items])
-
-
-def fit_judge(train: Sequence[JudgeItem], val: Sequence[JudgeItem] = (), *,
-              epochs: int = 30, batch_size: int = 32, lr: float = 1e-3,
-              weight_decay: float = 1e-4, mirror: bool = True, seed: int = 0,
-              uniform: bool = True, log: Callable[[str], None] | None = None, **config
-              ) -> tuple[MotionJudge, list]:
-    """Train a judge on ``train`` (labels: every content, every known style there); keep the
-    epoch whose ``val`` accuracy (mean of content and style) is best, else the last.
-
-    uniform: read every motion on one body, the training motions' median bone lengths
-    (``JudgeConfig.bones``), unless ``config`` gives ``bones``.
-    config: :class:`JudgeConfig` fields (sizes, window). Returns the judge (eval mode) and
-    one dict per epoch (``loss``, ``content_acc``, ``style_acc`` on the training crops,
-    ``val_content``, ``val_style``, ``seconds``).
-    """
-    if not train:
-        raise MotionlangError("fit_judge: no training items")
-    torch.manual_seed(seed)
-    rng = np.random.default_rng(seed)
-    items = list(train) + ([mirror_item(it) for it in train] if mirror else [])
-    if uniform and config.get("bones") is None:
-        config["bones"] = median_bones(train)
-    cfg = JudgeConfig(contents=sorted({it.content for it in items}),
-                      styles=sorted({it.style for it in items if it.style is not None}),
-                      **config)
-    raw = [judge_rows(it.positions, it.fps, cfg) for it in items]
-    norm = Normalizer().fit(raw)
-    rows = [norm.transform(r).astype(np.float32) for r in raw]
-    c_id = np.array([cfg.contents.index(it.content) for it in items])
-    s_id = np.array([-1 if it.style is None else cfg.styles.index(it.style) for it in items])
-    judge = MotionJudge(cfg, norm)
-    opt = torch.optim.AdamW(judge.parameters(), lr=lr, weight_decay=weight_decay)
-    history, best, best_score = [], None, -1.0
-    for epoch in range(epochs):
-        t0 = time.time()
-        judge.train()
-        sums: dict[str, float] = {}
-        order = rng.permutation(len(items))
-        for s in range(0, len(order), batch_size):
-            idx = order[s:s + batch_size]
-            batch = _batch([_crop(rows[i], cfg.window, rng) for i in idx],
-                           {"content": c_id[idx], "style": s_id[idx]})
-            terms = judge.loss(batch)
-            opt.zero_grad()
-            terms["loss"].backward()
-            opt.step()
-            for k, v in terms.items():
-                sums[k] = sums.get(k, 0.0) + float(v.detach()) * len(idx)
-        rec = {k: v / len(items) for k, v in sums.items() if not k.endswith("_loss")}
-        if val:
-            acc = accuracy(judge, val)
-            rec.update(val_content=acc["content"], val_style=acc["style"])
-            score = float(np.nanmean([acc["content"], acc["style"]]))
-            if score > best_score:
-                best_score, best = score, copy.deepcopy(judge.state_dict())
-        rec.update(epoch=epoch + 1, seconds=time.time() - t0)
-        history.append(rec)
-        if log:
-            log(" ".join(f"{k} {v:.3f}" if isinstance(v, float) else f"{k} {v}"
-                         for k, v in rec.items()))
-    if best is not None:
-        judge.load_state_dict(best)
-    return judge.eval(), history
 
 
 def bandai_sentences(source: str | Path, split: str | None = "test", seed: int = 0) -> list:

@@ -104,16 +104,19 @@ class MotionJudge(Checkpointed, nn.Module):
 
     def loss(self, batch: dict) -> dict[str, torch.Tensor]:
         """batch: ``x`` (B, T, F), ``lengths`` (B,), ``content`` (B,), ``style`` (B,) long
-        label ids (-1: unknown, not counted). Loss = content CE + style CE."""
+        label ids (-1: unknown, not counted). Loss = content CE + style CE; ``content_acc`` /
+        ``style_acc``: top-1 accuracy over the known labels, left out where a batch has none
+        (a loss term must be a finite number)."""
         out = self(batch["x"], batch["lengths"])
         terms = {}
         for head in ("content", "style"):
             y = batch[head]
             known = y >= 0
-            terms[f"{head}_loss"] = (F.cross_entropy(out[head][known], y[known])
-                                     if known.any() else out[head].sum() * 0.0)
-            terms[f"{head}_acc"] = ((out[head].argmax(-1) == y)[known].float().mean().detach()
-                                    if known.any() else torch.tensor(float("nan")))
+            if not known.any():
+                terms[f"{head}_loss"] = out[head].sum() * 0.0
+                continue
+            terms[f"{head}_loss"] = F.cross_entropy(out[head][known], y[known])
+            terms[f"{head}_acc"] = (out[head].argmax(-1) == y)[known].float().mean().detach()
         terms["loss"] = terms["content_loss"] + terms["style_loss"]
         return terms
 

@@ -40,6 +40,11 @@ class Recipe:
             ``datasets.sources`` dataset) and this is its help; ``run`` gets its path.
         run_files: what the run folder holds besides the model and ``commands.jsonl``, for
             ``--out``'s help (None: the trainer's checkpoints, history and splits).
+        source_kind: where set, the one kind of ``datasets.sources`` dataset the recipe
+            reads (e.g. ``"bandai"``): ``--data`` is parsed as that kind, a bare folder
+            included, and another kind is refused.
+        description: what ``train KIND -h`` says after the family's summary (the data's
+            terms, how it is split).
     """
 
     run: Callable[..., Path]
@@ -50,6 +55,8 @@ class Recipe:
     trainer: bool = True
     data_help: str = ""
     run_files: str | None = None
+    source_kind: str | None = None
+    description: str = ""
 
 
 def recipe_of(kind: str) -> Recipe:
@@ -100,7 +107,8 @@ def train(kind: str, data: str | Path | Sequence[str | Path], out: str | Path, *
     recipe = recipe_of(kind)
     model_kw, train_kw, data_kw = split_options(kind, options)
     given = [data] if isinstance(data, (str, Path)) else list(data)
-    sources = [str(d) if recipe.data_help else parse_source(str(d)) for d in given]
+    sources = [str(d) if recipe.data_help else parse_source(str(d), kind=recipe.source_kind)
+               for d in given]
     train_cfg = (TrainConfig(**{**recipe.train_defaults, **train_kw, "out_dir": str(out)})
                  if recipe.trainer else None)
     data_cfg = recipe.data_config(**data_kw)
