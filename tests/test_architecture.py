@@ -198,3 +198,11 @@ def test_the_circle_check_can_fail(tmp_path):
         "motionlang.errors", "motionlang.formats.mmm_model"]
     graph = {"a": ["b"], "b": ["c"], "c": ["a", "d"], "d": [], "e": ["e"]}
     assert import_circles(graph) == [["a", "b", "c"]]
+
+
+def test_the_command_line_is_a_thin_layer():
+    # the CLI parses, calls motionlang.api / recipes / evaluation functions and prints: its
+    # size is a symptom of logic that belongs in a lower layer
+    lines = sum(len(p.read_text(encoding="utf-8").splitlines())
+                for p in (SRC / "cli").glob("*.py"))
+    assert lines < 2000, f"cli/ has {lines} lines"

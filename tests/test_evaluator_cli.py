@@ -75,7 +75,7 @@ def test_ml_train_runs_the_evaluator_recipe(corpus, tmp_path, monkeypatch):
     assert not (tmp_path / "ev" / "LICENSE.txt").exists()  # no restricting source
     for bad, message in (({"motion_dim": 10}, "come from the data"),
                          ({"body": "mixamo"}, "EvaluatorDataOptions.body"),
-                         ({"embed_dim": 5000}, "at most 4096")):
+                         ({"embed_dim": 5000}, "embed_dim must be an integer in 1..4096")):
         with pytest.raises(MotionlangError, match=message):
             ml.train("evaluator", str(corpus), tmp_path / "bad", **bad)
     assert not (tmp_path / "bad").exists()   # refused before anything is written
@@ -215,7 +215,7 @@ def test_bad_inputs_against_a_trained_evaluator(run, corpus, tmp_path, capsys):
          "--m2l applies to --protocol guo"),
         (["train", "evaluator", "--data", str(corpus), "--body", "mixamo"], "--body"),
         (["train", "evaluator", "--data", str(corpus), "--out", str(tmp_path / "r"),
-          "--embed-dim", "5000"], "--embed-dim must be at most 4096"),
+          "--embed-dim", "5000"], "--embed-dim must be an integer in 1..4096"),
         (["evaluate-t2m", *GUO, "--data", str(corpus), "--evaluator", str(run),
           "--rp-batch", "1"], "--rp-batch must be an integer >= 2"),
         (["train", "evaluator", "--data", str(tmp_path / "none"), "--out", str(tmp_path / "r")],

@@ -51,8 +51,9 @@ def test_no_command_has_a_family_specific_option():
 
 
 def test_the_options_are_read_from_the_model_and_checked_once():
-    from motionlang.cli.models_arg import draws, load_t2m, load_t2m_models
+    from motionlang.cli.models_arg import load_t2m, load_t2m_models
     from motionlang.decoding.t2m_models import L2MOptions
+    from motionlang.evaluation.t2m.guo import draws
     label, t2m = load_t2m("l2m:method=sample,width=3,temperature=0.8")
     assert label == "l2m:method=sample,width=3,temperature=0.8"
     assert t2m.options == L2MOptions(method="sample", width=3, temperature=0.8)

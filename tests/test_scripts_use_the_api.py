@@ -34,7 +34,7 @@ def test_the_check_sees_every_form_of_a_cli_import():
               "import motionlang.client_tools\n"
               "def f():\n"
               "    from motionlang.cli.main import main\n"
-              "    import motionlang.cli.text_commands as tc\n"
+              "    import motionlang.cli.describe_generate as tc\n"
               "    from motionlang import cli\n"
               "from motionlang.cli import main\n")
     assert [line for line, _ in cli_imports(source)] == [6, 7, 8, 9]

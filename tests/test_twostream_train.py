@@ -356,10 +356,10 @@ def test_ml_train_runs_the_recipe(corpus, tmp_path, monkeypatch, capsys):
 def test_weight_help_names_every_loss_term():
     import argparse
 
-    from motionlang.cli import train_commands
+    from motionlang.cli import train as train_cli
     from motionlang.models.twostream.config import DEFAULT_LAMBDAS
     sub = argparse.ArgumentParser().add_subparsers()
-    train_commands.register(sub)
+    train_cli.register(sub)
     (train,) = [a for a in sub.choices["train"]._actions
                 if isinstance(a, argparse._SubParsersAction)]
     (weight,) = [a for a in train.choices["twostream"]._actions

@@ -50,11 +50,12 @@ def text_to_motion(model: Any = None, options: Any = None):
     (its sampling options, ``models.options``) or None (the packaged L2M); ``options`` (a
     dict or the family's ``Options``) are applied after those of the text."""
     from motionlang.decoding.t2m import text_to_motion as wrap
-    from motionlang.models.options import parse_model_spec
+    from motionlang.models.options import ModelSpec, parse_model_spec
     from motionlang.models.registry import kinds_with
     spec_options: dict = {}
     if model is None or isinstance(model, (str, Path)):
-        spec = parse_model_spec(str(model or "l2m"))
+        name = str(model or "l2m")   # an existing file or folder is a name, whatever it holds
+        spec = ModelSpec(name) if Path(name).exists() else parse_model_spec(name)
         spec_options = spec.options
         model = load_model(spec.name, kind=kinds_with("text_to_motion"))
     t2m = wrap(model)
@@ -142,6 +143,9 @@ def describe(motion: Motion | str | Path, model: Any = None, width: int = 5, *,
     from motionlang.decoding.seq2seq import describe as beam_describe
     if width < 1:
         raise MotionlangError(f"width must be >= 1, got {width}")
+    if not (np.isfinite(length_penalty) and length_penalty >= 0):
+        raise MotionlangError(f"length_penalty must be a finite number >= 0, got "
+                              f"{length_penalty}")
     if model is None or isinstance(model, (str, Path)):
         model = load_model(model or "m2l", kind="m2l")
     return beam_describe(model, _motion(motion, joint_map), width=width,

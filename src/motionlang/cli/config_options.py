@@ -19,6 +19,7 @@ import types
 import typing
 from typing import Any
 
+from motionlang.cli.options import parse_number
 from motionlang.errors import MotionlangError
 
 
@@ -31,17 +32,11 @@ def _base_type(hint: Any) -> Any:
 
 
 def _parse_int(text: str) -> int:
-    try:
-        return int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be an integer, got {text!r}") from None
+    return parse_number(text, int)
 
 
 def _parse_float(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a number, got {text!r}") from None
+    v = parse_number(text, float)
     if not math.isfinite(v):
         raise argparse.ArgumentTypeError(f"must be a finite number, got {text}")
     return v

@@ -26,17 +26,17 @@ from motionlang.training.run_log import lead_process
 
 # Modules that register subcommands; one line each, order = order in --help.
 COMMAND_MODULES = [
-    "motionlang.cli.motion_commands",   # info, render, convert
-    "motionlang.cli.rig_commands",      # rig show | template
-    "motionlang.cli.data_commands",     # data ...
-    "motionlang.cli.demo",              # demo (the main job)
-    "motionlang.cli.train_commands",    # train m2l | l2m | twostream | crbm
-    "motionlang.cli.crbm_commands",     # crbm generate | fill | reproduce
-    "motionlang.cli.text_commands",     # describe, generate
-    "motionlang.cli.model_commands",    # models [NAME|FILE]
-    "motionlang.cli.evaluate_commands",  # evaluate (train m2l | l2m via train)
-    "motionlang.cli.twostream_commands",  # evaluate-t2m (train twostream via train)
-    "motionlang.cli.judge_commands",      # evaluate-judge (train judge via train)
+    "motionlang.cli.motion_commands",     # info, render, convert
+    "motionlang.cli.rig_commands",        # rig show | template
+    "motionlang.cli.data_commands",       # data ...
+    "motionlang.cli.demo",                # demo (the main job)
+    "motionlang.cli.train",               # train KIND, one per family with a recipe
+    "motionlang.cli.crbm_commands",       # crbm generate | fill | reproduce
+    "motionlang.cli.describe_generate",   # describe, generate
+    "motionlang.cli.model_commands",      # models [NAME|FILE]
+    "motionlang.cli.evaluate",            # evaluate (M2L, round trip)
+    "motionlang.cli.evaluate_t2m",        # evaluate-t2m (APE, or Guo with evaluate_guo)
+    "motionlang.cli.evaluate_judge",      # evaluate-judge
 ]
 
 

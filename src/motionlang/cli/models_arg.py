@@ -21,7 +21,6 @@ from pathlib import Path
 from typing import Any
 
 from motionlang.errors import MotionlangError
-from motionlang.evaluation.t2m.guo import draws  # noqa: F401 (whether a loaded model samples)
 
 SYNTAX = "MODEL[:key=value,...]"
 
@@ -64,18 +63,15 @@ def load_t2m(text: str, flag: str = "--model") -> tuple[str, Any]:
         MotionlangError: one line naming ``flag`` and the value: an unknown option or a bad
             value (the known options listed), or a model that is missing or of another kind.
     """
-    from motionlang.decoding.t2m import text_to_motion
-    from motionlang.models import registry
+    from motionlang.api import text_to_motion
     label, spec = parse_t2m(text)
-    model = registry.load_model(spec.name, kind=registry.kinds_with("text_to_motion"))
     try:
-        t2m = text_to_motion(model, spec.options or None)
+        t2m = text_to_motion(spec.name, spec.options or None)
         if getattr(t2m.options, "method", "") is None:
-            # "the model's own way" is the means in an evaluation row (L2MText2Motion's
-            # positions21): said outright, so that the options' own checks refuse what
-            # mean decoding would ignore (a width, a temperature)
+            # "the model's own way" is the means in an evaluation row: said outright, so
+            # that the options' own checks refuse what mean decoding would ignore
             t2m.configure({**dataclasses.asdict(t2m.options), "method": "mean"})
-        getattr(t2m, "reranker", None)
+        getattr(t2m, "reranker", None)   # a reranker named in the options loads now
     except MotionlangError as exc:
         raise MotionlangError(f"{flag} {text}: {exc}") from None
     return label, t2m

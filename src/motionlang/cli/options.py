@@ -12,16 +12,15 @@ import os
 from collections.abc import Callable
 from pathlib import Path
 
-SEED_MAX = 2**32 - 1   # numpy's seeds are 32-bit
+from motionlang.utils.checks import MAX_WIDTH, SEED_MAX
+
 # caps well past any sensible value, far below what would exhaust memory
-MAX_WIDTH = 1000       # beam width / hypotheses
-MAX_SIZE = 4096        # layer sizes, mixture components (an LSTM of 4096: 256 MB a matrix)
-MAX_LAYERS = 16
 MAX_FRAMES = 100_000
 MAX_THREADS = 256
 
 
-def _number(text: str, kind: type):
+def parse_number(text: str, kind: type):
+    """``int(text)`` or ``float(text)``, a failure as argparse's one-line error."""
     try:
         return kind(text)
     except ValueError:
@@ -32,7 +31,7 @@ def _number(text: str, kind: type):
 def int_range(lo: int, hi: int | None = None) -> Callable[[str], int]:
     """An integer in [lo, hi] (no upper bound with ``hi=None``)."""
     def parse(text: str) -> int:
-        v = _number(text, int)
+        v = parse_number(text, int)
         if v < lo or (hi is not None and v > hi):
             bound = f">= {lo}" if hi is None else f"in {lo}..{hi}"
             raise argparse.ArgumentTypeError(f"must be an integer {bound}, got {text}")
@@ -45,7 +44,7 @@ def float_range(lo: float = -math.inf, hi: float = math.inf, *,
                 open_lo: bool = False) -> Callable[[str], float]:
     """A finite number in [lo, hi] (``(lo, hi]`` with ``open_lo``)."""
     def parse(text: str) -> float:
-        v = _number(text, float)
+        v = parse_number(text, float)
         ok = math.isfinite(v) and (v > lo if open_lo else v >= lo) and v <= hi
         if not ok:
             bounds = []
@@ -62,15 +61,12 @@ def float_range(lo: float = -math.inf, hi: float = math.inf, *,
 
 positive_int = int_range(1)             # counts without a memory cost (epochs, batch size)
 nonneg_int = int_range(0)
-size_int = int_range(1, MAX_SIZE)
-layers_int = int_range(1, MAX_LAYERS)
 frames_int = int_range(1, MAX_FRAMES)
 width_int = int_range(1, MAX_WIDTH)
 seed_int = int_range(0, SEED_MAX)
 threads_int = int_range(1, MAX_THREADS)
 nonneg_float = float_range(0.0)
 positive_float = float_range(0.0, open_lo=True)
-dropout_float = float_range(0.0, 0.99)
 
 
 def _check_writable(path: Path, what: str) -> None:

@@ -19,6 +19,7 @@ from motionlang.decoding.t2m import (
     interp_frames,
 )
 from motionlang.errors import MotionlangError
+from motionlang.utils.checks import MAX_WIDTH
 
 
 @dataclass
@@ -45,8 +46,8 @@ class L2MOptions:
     def __post_init__(self) -> None:
         if self.method not in (None, "sample", "beam", "mean"):
             raise ValueError(f"method must be sample, beam or mean, got {self.method!r}")
-        if isinstance(self.width, bool) or not 1 <= int(self.width) <= 1000:
-            raise ValueError(f"width must be an integer in 1..1000, got {self.width}")
+        if isinstance(self.width, bool) or not 1 <= int(self.width) <= MAX_WIDTH:
+            raise ValueError(f"width must be an integer in 1..{MAX_WIDTH}, got {self.width}")
         if not (math.isfinite(self.temperature) and self.temperature > 0):
             raise ValueError(f"temperature must be a finite number > 0, got {self.temperature}")
         if self.method == "mean" and self.width != 1:
@@ -94,10 +95,9 @@ class L2MText2Motion(Text2MotionAdapter):
     def default_method(self) -> str:
         # trained on its own expected frames (rollout_input "mean"): continue them. Joint
         # positions drawn from the mixture get independent noise per coordinate, which
-        # stretches bones (the packaged position L2M's sampled waves: forearms of 0.2-2.9 m,
-        # 95th-percentile bone-length error 50-170 %; its expected frames: 6-50 %); joint
-        # angles sample (a beam keeps the likeliest frames, and standing still is always
-        # likelier than moving)
+        # stretches bones far more than the expected frames do (docs/results/real-rigs.md);
+        # joint angles sample (a beam keeps the likeliest frames, and standing still is
+        # always likelier than moving)
         if getattr(self.model.config, "rollout_input", None) == "mean":
             return "mean"
         kind = getattr(getattr(self.model, "features", None), "kind", None)
@@ -130,9 +130,9 @@ class L2MText2Motion(Text2MotionAdapter):
         from motionlang.features.joint_map import positions21
         fps = self.fps
         cap = max(1, int(np.ceil(n_frames * fps / FPS)))
-        # a model told its length runs to it: its end flag fired up to 12 frames early on 345 of
-        # the 556 Bandai test sentences, and the last frame held to the length froze runs
-        # mid-stride (a one-frame stop from a 27.8 cm move: experiments/root_checks.py)
+        # a model told its length runs to it: its end flag fires early on many test
+        # sentences, and the last frame held to the length froze runs mid-stride (a one-frame
+        # stop; experiments/root_checks.py, figures in docs/results/real-motion.md)
         least = cap if self.model.config.progress_input else 1
         result, _score = generate(self.model, sentence, width=width, method=method,
                                   seed=seed, n_frames=cap, skeleton=skeleton,

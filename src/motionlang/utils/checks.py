@@ -12,14 +12,33 @@ from typing import Any
 
 from motionlang.errors import MotionlangError
 
+#: numpy's legacy seeds are 32-bit: the range of every seed of the toolkit
+SEED_MAX = 2**32 - 1
+#: bounds that keep a mistyped size from allocating gigabytes: layer widths (an LSTM of
+#: 4096 units holds 256 MB a matrix), stacked layers
+MAX_SIZE = 4096
+MAX_LAYERS = 16
+#: hypotheses of one sentence (beam width, samples)
+MAX_WIDTH = 1000
+
 
 def check_numbers(owner: str, cfg: Any, *, positive_ints: Iterable[str] = (),
                   nonneg_ints: Iterable[str] = (), positive: Iterable[str] = (),
-                  nonneg: Iterable[str] = (), unit: Iterable[str] = ()) -> None:
+                  nonneg: Iterable[str] = (), unit: Iterable[str] = (),
+                  sizes: Iterable[str] = (), layers: Iterable[str] = (),
+                  seeds: Iterable[str] = ()) -> None:
     """Raise if a field of ``cfg`` is out of range. ``positive_ints``: integers >= 1;
     ``nonneg_ints``: integers >= 0; ``positive``: finite numbers > 0; ``nonneg``: finite
-    numbers >= 0; ``unit``: numbers in [0, 1). A field set to None is not checked."""
-    rules = [(positive_ints, lambda v: _is_int(v) and v >= 1, "an integer >= 1"),
+    numbers >= 0; ``unit``: numbers in [0, 1); ``sizes``: integers in 1..:data:`MAX_SIZE`;
+    ``layers``: integers in 1..:data:`MAX_LAYERS`; ``seeds``: integers in
+    0..:data:`SEED_MAX`. A field set to None is not checked."""
+    rules = [(sizes, lambda v: _is_int(v) and 1 <= v <= MAX_SIZE,
+              f"an integer in 1..{MAX_SIZE}"),
+             (layers, lambda v: _is_int(v) and 1 <= v <= MAX_LAYERS,
+              f"an integer in 1..{MAX_LAYERS}"),
+             (seeds, lambda v: _is_int(v) and 0 <= v <= SEED_MAX,
+              f"an integer in 0..{SEED_MAX}"),
+             (positive_ints, lambda v: _is_int(v) and v >= 1, "an integer >= 1"),
              (nonneg_ints, lambda v: _is_int(v) and v >= 0, "an integer >= 0"),
              (positive, lambda v: _is_real(v) and v > 0, "a finite number > 0"),
              (nonneg, lambda v: _is_real(v) and v >= 0, "a finite number >= 0"),

@@ -22,7 +22,6 @@ OFFICIAL_POSE_DIMS = {"humanml3d": 263, "kit": 251}
 LOSSES = ("hinge", "infonce")
 #: the largest layer size a config may ask for, so that a mistyped size fails at once
 #: instead of exhausting memory (the public evaluator's largest is 1024)
-MAX_SIZE = 4096
 SIZES = ("text_hidden", "motion_hidden", "movement_hidden", "movement_latent", "embed_dim")
 
 
@@ -55,7 +54,7 @@ class EvaluatorConfig:
             every motion is laid on before its rows are made (``features.body21.
             uniform_bones21``), as the public pipeline retargets every motion to one
             subject's bones; ``train evaluator`` sets them to the training motions' median.
-            None (evaluators from before 2026-11-24's fifth session, and official
+            None (evaluators written before the ``bones`` field existed, and official
             weights, whose HumanML3D rows are on one body already): each on its own.
     """
 
@@ -80,15 +79,10 @@ class EvaluatorConfig:
 
     def __post_init__(self):
         check_numbers("EvaluatorConfig", self,
-                      positive_ints=("motion_dim", "word_dim", "n_pos", "text_hidden",
-                                     "motion_hidden", "movement_hidden", "movement_latent",
-                                     "embed_dim", "max_words"),
+                      positive_ints=("motion_dim", "word_dim", "n_pos", "max_words"),
+                      sizes=SIZES,
                       nonneg_ints=("drop_last",), positive=("margin", "temperature"),
                       unit=("dropout",))
-        big = next((n for n in SIZES if getattr(self, n) > MAX_SIZE), None)
-        if big:
-            raise MotionlangError(f"EvaluatorConfig.{big} must be at most {MAX_SIZE}, got "
-                                  f"{getattr(self, big)!r}")
         if self.unit_length != 4:
             raise MotionlangError("EvaluatorConfig.unit_length must be 4 (two stride-2 "
                                   f"convolutions), got {self.unit_length!r}")

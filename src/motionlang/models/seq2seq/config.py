@@ -1,7 +1,7 @@
 """Configs of the seq2seq models (Plappert, Mandery & Asfour 2018), free of torch.
 
 Kept apart from :mod:`motionlang.models.seq2seq.m2l` / :mod:`motionlang.models.seq2seq.l2m` so that the CLI
-can read the default sizes for ``--help`` without importing torch (2-10 s per call).
+can read the default sizes for ``--help`` without importing torch (seconds on every call).
 """
 from __future__ import annotations
 
@@ -48,8 +48,9 @@ class M2LConfig:
 
     def __post_init__(self):
         check_numbers("M2LConfig", self, unit=("dropout",), positive_ints=(
-            "n_features", "vocab_size", "enc_hidden", "enc_layers", "dec_hidden",
-            "dec_layers", "embed_dim", "attn_dim", "max_len"))
+            "n_features", "vocab_size", "max_len"), sizes=("enc_hidden", "dec_hidden",
+                                                           "embed_dim", "attn_dim"),
+            layers=("enc_layers", "dec_layers"))
 
 
 @dataclass
@@ -147,9 +148,10 @@ class L2MConfig:
 
     def __post_init__(self):
         check_numbers("L2MConfig", self, unit=("dropout",), positive_ints=(
-            "vocab_size", "n_features", "embed_dim", "enc_hidden", "enc_layers", "dec_hidden",
-            "dec_layers", "n_components", "attn_dim", "max_frames", "energy_window",
-            "plan_hidden"), nonneg_ints=("rollout_warmup", "plan_parts"),
+            "vocab_size", "n_features", "max_frames", "energy_window"),
+            sizes=("embed_dim", "enc_hidden", "dec_hidden", "n_components", "attn_dim",
+                   "plan_hidden"), layers=("enc_layers", "dec_layers"),
+            nonneg_ints=("rollout_warmup", "plan_parts"),
             nonneg=("end_weight", "input_noise", "energy_weight", "plan_weight", "plan_noise",
                     "foot_weight", "mean_weight"))
         if not 0 <= self.rollout <= 1:

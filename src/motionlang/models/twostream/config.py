@@ -50,8 +50,6 @@ ABLATIONS: dict[str, dict[str, bool]] = {
     "word-vectors": {"word_vectors": True},
 }
 # caps well past any sensible size, far below what would exhaust memory
-MAX_SIZE = 4096
-MAX_LAYERS = 16
 _OWNER = "TwoStreamConfig"
 
 
@@ -192,13 +190,8 @@ class TwoStreamConfig:
     def __post_init__(self):
         self.lambdas = _lambdas(self.lambdas)
         self.text_layers = _layers(self.text_layers)
-        check_numbers(_OWNER, self, nonneg_ints=("text_dim",), positive_ints=(
-            "n_features", "h1", "h2", "h", "lstm_layers", "disc_hidden"))
-        for name, top in (("h1", MAX_SIZE), ("h2", MAX_SIZE), ("h", MAX_SIZE),
-                          ("disc_hidden", MAX_SIZE), ("lstm_layers", MAX_LAYERS)):
-            if getattr(self, name) > top:
-                raise MotionlangError(f"{_OWNER}.{name} must be <= {top}, got "
-                                      f"{getattr(self, name)}")
+        check_numbers(_OWNER, self, nonneg_ints=("text_dim",), positive_ints=("n_features",),
+                      sizes=("h1", "h2", "h", "disc_hidden"), layers=("lstm_layers",))
         if set(self.parts) != set(PART_NAMES):
             raise MotionlangError(f"parts must be exactly {PART_NAMES}, got {sorted(self.parts)}")
         cols = sorted(c for p in self.parts.values() for c in p)

@@ -5,8 +5,7 @@ parser generated here from its configs: the recipe's data options, the trainer's
 (``TrainConfig``, with the recipe's defaults; not for a recipe with its own training loop,
 ``Recipe.trainer``) and the model's (its config dataclass, with the recipe's defaults), each
 documented field an option (``cli.config_options``). A new family needs nothing in this
-folder. The families whose training still lives in a command module register their parser
-through :data:`LEGACY_TRAIN_MODULES`; a listed module that fails to import is an error.
+folder.
 
 Every ``train X`` takes ``--out DIR``, a run folder (made if missing) holding the final
 model (``Family.model_file``) plus ``commands.jsonl`` (every invocation's options); the
@@ -17,15 +16,10 @@ takes the model file or its run folder.
 from __future__ import annotations
 
 import argparse
-import importlib
 
 from motionlang.cli.config_options import add_config_options, config_from_args, option_message
 from motionlang.cli.options import output_dir
 from motionlang.errors import MotionlangError
-
-#: command modules that still define ``register_train(train_subparsers)`` themselves
-LEGACY_TRAIN_MODULES: tuple[str, ...] = ()
-
 
 #: what a run of the shared trainer keeps beside the model (``--out``'s help)
 TRAINER_FILES = "best.pt and last.pt (checkpoints), history.json, loss_curve.png, splits/"
@@ -149,5 +143,3 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     for kind, fam in families().items():
         if fam.recipe is not None:
             _register_recipe(train_sub, kind)
-    for name in LEGACY_TRAIN_MODULES:
-        importlib.import_module(name).register_train(train_sub)

@@ -2,7 +2,7 @@
 
 Parsing and printing only: ``--protocol ape`` is
 :func:`motionlang.evaluation.t2m.ape.evaluate_ape`, ``--protocol guo`` is
-``cli/evaluator_commands.py``'s; the ``--model`` values are loaded by
+``cli/evaluate_guo.py``'s; the ``--model`` values are loaded by
 :mod:`motionlang.cli.models_arg`. (``train twostream`` is generated from its recipe,
 ``training/recipes/twostream.py``.) torch is imported inside the commands only, so building
 the CLI parser stays cheap.
@@ -15,7 +15,7 @@ from motionlang.cli.options import nonneg_int, output_dir, positive_float, seed_
 
 
 def cmd_evaluate(args: argparse.Namespace) -> int:
-    from motionlang.cli.evaluator_commands import check_protocol, cmd_evaluate_guo
+    from motionlang.cli.evaluate_guo import check_protocol, cmd_evaluate_guo
     if args.protocol == "guo":
         return cmd_evaluate_guo(args)
     check_protocol(args)
@@ -30,7 +30,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
 
 
 def register(subparsers) -> None:
-    from motionlang.cli.evaluator_commands import add_guo_args
+    from motionlang.cli.evaluate_guo import add_guo_args
     from motionlang.cli.models_arg import add_model_arg
     p = subparsers.add_parser(
         "evaluate-t2m", help="one table for text-to-motion models: APE/AVE and action order "

@@ -34,16 +34,10 @@ def add_rank_arg(p: argparse.ArgumentParser, default: str) -> None:
                         f"shortest phrasing) (default: {default})")
 
 
-def check_length_penalty(alpha: float) -> None:
-    if not (math.isfinite(alpha) and alpha >= 0):
-        raise MotionlangError(f"--length-penalty must be a finite number >= 0, got {alpha}")
-
-
 def cmd_describe(args: argparse.Namespace) -> int:
     from motionlang.api import describe, load_model
     from motionlang.cli.motion_commands import load_input
 
-    check_length_penalty(args.length_penalty)
     model = load_model(args.model, kind="m2l")   # a missing model is named first
     hyps = describe(load_input(args), model, width=args.width,
                     length_penalty=args.length_penalty, rank=args.rank)

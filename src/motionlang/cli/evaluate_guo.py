@@ -1,7 +1,7 @@
 """``evaluate-t2m --protocol guo``: the yardstick of the text-to-motion papers under a
 text-motion evaluator (Guo et al. 2022).
 
-The ``evaluate-t2m`` parser itself is ``cli/twostream_commands.py``'s; this module adds the
+The ``evaluate-t2m`` parser itself is ``cli/evaluate_t2m.py``'s; this module adds the
 options of the ``guo`` protocol to it (:func:`add_guo_args`), checks which options go with
 which protocol (:func:`check_protocol`) and runs it (:func:`cmd_evaluate_guo`) through
 :mod:`motionlang.evaluation.t2m.guo`. ``train evaluator`` is generated from its recipe

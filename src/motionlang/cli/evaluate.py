@@ -12,8 +12,8 @@ import argparse
 import json
 from pathlib import Path
 
+from motionlang.cli.describe_generate import add_rank_arg
 from motionlang.cli.options import nonneg_float, nonneg_int, output_file, positive_float, width_int
-from motionlang.cli.text_commands import add_rank_arg
 from motionlang.errors import MotionlangError
 
 
