@@ -96,3 +96,15 @@ def test_the_round_trip_needs_ranked_motions_of_the_models_own_features():
                                               "one motion"):
         round_trip_model(positions_only, "--t2m twostream")
     round_trip_model(SimpleNamespace(capabilities=frozenset({"hypotheses"}), model=None))
+
+
+def test_generate_reads_the_sampling_options_of_the_model_value():
+    pytest.importorskip("torch")
+    import motionlang as ml
+    t2m = ml.text_to_motion("l2m:method=sample,width=2")
+    assert t2m.default_method() == "sample" and t2m.options.width == 2
+    assert ml.text_to_motion("l2m").default_method() == "mean"   # the packaged L2M's own way
+    hyps, fps = ml.generate_hypotheses("a person walks forward", "l2m:method=sample", width=2,
+                                       max_frames=8, seed=0)
+    mean = ml.generate_hypotheses("a person walks forward", "l2m", width=2, max_frames=8)[0]
+    assert len(hyps) == 2 and len(mean) == 1 and fps == pytest.approx(12.5)

@@ -93,6 +93,8 @@ class L2MText2Motion(Text2MotionAdapter):
         return float(self.model.features.fps)
 
     def default_method(self) -> str:
+        if self.options.method:   # asked for in its options (``--model l2m:method=sample``)
+            return self.options.method
         # trained on its own expected frames (rollout_input "mean"): continue them. Joint
         # positions drawn from the mixture get independent noise per coordinate, which
         # stretches bones far more than the expected frames do (docs/results/real-rigs.md);
