@@ -1,13 +1,10 @@
 """``--threads N`` of every command: how many threads torch and numpy's BLAS may use.
 
-The default follows ``benchmarks/bench_threads.py`` (the packaged M2L: training steps and
-beam-search describing, on this project's 2-core machine, 2026-11-24): with the other cores
-idle-ish (load ~1.7) two threads took ~0.55x the time of one; with the CPU already busy (load
-~5) two threads took 3.5-7x and torch's own default 4.7-5.5x the time of one, and 11x with a
-process spinning on a core besides. Losing 2-11x when busy costs far more than the ~1.8x won
-when idle, so: one thread as soon as the 1-minute load average is near the number of CPUs,
-else up to :data:`MAX_DEFAULT` (4: more than 2 threads was not measured here, a 2-core
-machine; the models are small LSTMs, which gain little from many threads).
+The default follows ``benchmarks/bench_threads.py`` (figures in ``docs/results/seq2seq.md``,
+Threads): on an idle machine a second thread speeds work up, but on a CPU that is already busy
+extra threads fight the other work and cost many times what they win when idle. So: one
+thread as soon as the 1-minute load average is near the number of CPUs, else up to
+:data:`MAX_DEFAULT` (the models are small LSTMs, which gain little from many threads).
 """
 from __future__ import annotations
 

@@ -100,7 +100,7 @@ def _extract(archive: Path) -> Path:
     The extraction is stamped with the archive's size and SHA-256, not its time: a copy of
     the same archive (a fresh checkout, ``cp`` without ``-p``) reuses it, so the extracted
     files keep their times and the feature caches keyed on them still hit (re-extracting
-    cost every later training run ~20 minutes of feature preparation)."""
+    would make every later training run prepare its features again, a long wait)."""
     dest = cache_dir() / "bandai" / ARCHIVE.match(archive.name).group(1)
     stamp = {"size": archive.stat().st_size, "sha256": sha256_file(archive)}
     marker = dest / ".source.json"

@@ -10,9 +10,8 @@ unsmoothed, so sentences sharing no word score 0): the first is the beam's medoi
 phrasing it agrees on most. This is minimum Bayes risk decoding with the beam as a uniform
 sample of the model's sentences. Weighting the sentences by their renormalised beam
 probabilities instead (the textbook evidence distribution) returns the likeliest sentence
-almost always, since the beam's probabilities are peaked: on the packaged M2L's 200 Bandai
-validation takes corpus BLEU-4 was 0.396 likeliest first, 0.438 probability-weighted, 0.493
-uniform (`docs/results/real-motion.md`).
+almost always, since the beam's probabilities are peaked, and scores below the uniform
+weighting on real validation takes (figures in `docs/results/real-motion.md`).
 """
 from __future__ import annotations
 

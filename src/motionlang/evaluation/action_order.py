@@ -1,6 +1,6 @@
 """Does a generated motion perform the sentence's actions in the right order?
 
-The check of the compositional-sentence criterion (issue 6): the procedural corpus knows,
+The check of the compositional-sentence criterion: the procedural corpus knows,
 for each sample, its body primitives and their frame ranges. A generated motion of the
 same sentence is cut at the same (time-rescaled) ranges, each segment gets the label of the
 nearest *primitive prototype* (the mean descriptor of all training segments of that action),
@@ -45,9 +45,9 @@ class Prototypes:
             speed), so that no block dominates the distance by its range.
         examples, example_labels: the N training descriptors (N, 3F) and their labels, kept
             when fitted with ``nearest_example=True``: :meth:`label` then returns the label
-            of the nearest training segment (1-NN) instead of the nearest centroid. On a
-            300-motion procedural corpus, 1-NN labels the held-out ground-truth segments
-            100 % right where centroids get 79-89 % (walk vs turn, kick vs stomp).
+            of the nearest training segment (1-NN) instead of the nearest centroid, which
+            tells apart actions whose mean descriptors lie close (walk vs turn, kick vs
+            stomp; figures in ``docs/results/twostream.md``, The order check).
     """
 
     labels: list[str]

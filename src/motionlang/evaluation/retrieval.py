@@ -1,5 +1,5 @@
-"""The text-to-motion nearest-neighbour baseline (issues 5 and 6): the motion of the
-training sentence closest to the query in bag of words.
+"""The text-to-motion nearest-neighbour baseline: the motion of the training sentence
+closest to the query in bag of words.
 
 Sentences are compared after ``datasets.text.tokenize`` (case, punctuation, spelled-out
 numbers and the KIT-ML spelling table normalised) as word-count vectors, by cosine

@@ -1,23 +1,22 @@
 """Foot contact clean-up for generated 21-joint motion: planted feet stay where they land.
 
 A text-to-motion model predicts every frame's pose and the root's velocity separately, so a
-foot that should stand on the floor drifts with the root's small errors (the packaged
-L2M's toes slide at 0.155 m/s while down, real Bandai takes at 0.046 m/s). :func:`lock_feet`
-is the usual post-process of animation pipelines (as in Kovar, Schreiner & Gleicher 2002,
-"Footskate cleanup": move the root so the planted feet can stay, then the legs by IK), done
-on positions:
+foot that should stand on the floor drifts with the root's small errors (a generated foot
+slides several times as fast as a real take's while down; the figures of every step below are
+in ``docs/results/real-motion.md``). :func:`lock_feet` is the usual post-process of animation
+pipelines (as in Kovar, Schreiner & Gleicher 2002, "Footskate cleanup": move the root so the
+planted feet can stay, then the legs by IK), done on positions:
 
 0. **root**: over every frame step on which a foot is down (step 1's contacts), the whole
    body is moved back horizontally by that foot's step (by the mean step when both are down),
    the correction smoothed over ``window`` seconds so that the root's speed does not jump
    where a contact begins or ends. A body that drifts or slides while its feet are down then
    stands on them; a body in the air keeps its own path. It changes travel where the model's
-   stance feet slide: the packaged two-stream model's walks and runs travel 4 % further (its
-   stance feet slid backwards), the L2M's 8 % less, real takes' 3.5 % less. A foot dragged
-   along the floor (slower than ``speed``) is a contact here too: the body stops with it.
-   (The lock alone could not
-   hold the two-stream model's drifting standing gestures: the leg would have to reach too
-   far.)
+   stance feet slide: a body whose stance feet slide backwards travels further, one whose
+   feet slide forwards less, and real takes a little less (their own small slides). A foot
+   dragged along the floor (slower than ``speed``) is a contact here too: the body stops with
+   it. (The lock alone could not hold the two-stream model's drifting standing gestures: the
+   leg would have to reach too far.)
 1. **contact**: a foot is down at frame t when its toe is below ``height`` m above the floor
    and moves slower than ``speed`` m/s (central difference); runs of at least ``min_frames``
    such frames are the contacts (the thresholds of
@@ -27,9 +26,9 @@ on positions:
    leg could not reach, is a glide, not a plant (a foot dragged along while the body
    travels): it is left as decoded, since holding it would stretch the leg out behind the
    body. (Step 0 has already moved the body with such a foot: what is left to hold is the
-   foot's slide against its own hip. Holding every contact, leg or not, got the packaged
-   L2M's Bandai skating down to 0.049 m/s, but stretched legs out straight, e.g. for "a
-   person kicks" from a Bandai pose.)
+   foot's slide against its own hip. Holding every contact, leg or not, brings a model's
+   skating down to the real takes', but stretches legs out straight, e.g. for "a person
+   kicks" from a Bandai pose.)
 2. **lock**: during a contact the whole foot (ankle, mid-foot, toe) is moved horizontally so
    that its toe stays at the contact's mean toe position; over ``blend`` frames either side
    the shift fades linearly to zero (or to the next contact's), so the foot does not pop; a
@@ -42,10 +41,10 @@ on positions:
 4. **floor**: a foot whose lowest joint (ankle, mid-foot or toe) is below the floor is
    raised until it is on it, by the same IK (the hip stays, the knee bends a little more);
    the lift fades in and out linearly over ``blend`` frames either side, so the foot does
-   not pop. (The packaged two-stream model stands with its toes about 5 mm under the floor in
-   most frames of its standing gestures; the real takes' joints are under it by 0.01 mm on
-   average.) Other joints below the floor (a hand on the ground), a collapsed leg and an
-   ankle the leg cannot reach stay where they are.
+   not pop. (A generated standing gesture can keep its toes under the floor for most of its
+   frames, where the real takes' joints hardly ever go under it.) Other joints below the
+   floor (a hand on the ground), a collapsed leg and an ankle the leg cannot reach stay where
+   they are.
 
 Apart from step 0's horizontal move of the whole body, the hips, trunk and arms are
 untouched.
@@ -147,7 +146,7 @@ def anchor_root(p21, fps: float, *, height: float = 0.05, speed: float = 1.0,
         # a box average over the steps there are: a steady drift is removed exactly up to
         # both ends; a contact within ``half`` steps of an end is corrected a little less
         # than in full, never more (repeating the end step instead over-corrected a
-        # one-step contact there: 1.2 times at 12.5 Hz, 3.6 times at 60 Hz)
+        # one-step contact there, the more so the higher the frame rate)
         box, n = np.ones(2 * half + 1), len(step)
         there = np.convolve(np.ones(n), box)[half:half + n]          # steps in each box
         step = np.stack([np.convolve(step[:, k], box)[half:half + n] / there

@@ -6,10 +6,10 @@ compressed variable expands to. This reader is numpy and the standard library on
 tag is checked against the bytes that contain it before it is used, every element count
 against the bytes left, decompressed bytes and arrays against ``MOTIONLANG_MAX_MEMORY``
 (:mod:`motionlang.utils.limits`), nesting to :data:`MAX_DEPTH` levels. A bad file is a
-:class:`MotionFormatError` naming the file, the byte and what is wrong. The price, measured
-by ``benchmarks/bench_mit_read.py`` on Taylor's ``motion.mat``: 22 ms against 12 ms for
-scipy's ``loadmat`` in the same process, and 490 ms for scipy isolated in a child process
-(the other way to survive such files).
+:class:`MotionFormatError` naming the file, the byte and what is wrong. The price is some
+speed against scipy's ``loadmat`` in the same process, far less than scipy isolated in a
+child process, the other way to survive such files (``benchmarks/bench_mit_read.py``;
+figures in ``docs/results/real-rigs.md``).
 
 It reads what MATLAB's ``save`` writes for numeric, logical, char, cell and struct arrays:
 level 5 files (``-v6`` and ``-v7``: compressed or not), either byte order. Sparse arrays,

@@ -128,9 +128,9 @@ PACKAGED: dict[str, Packaged] = {
                           "procedural corpus + Bandai Namco takes; 4 epochs: weak on Bandai "
                           "sentences (see its card)", NON_COMMERCIAL),
     "m2l-procedural": Packaged("m2l-procedural", "m2l", "the M2L of the procedural corpus "
-                               "alone (the packaged m2l until 2026-11-24)"),
+                               "alone, free of the Bandai Namco licence"),
     "l2m-procedural": Packaged("l2m-procedural", "l2m", "the L2M of the procedural corpus "
-                               "alone (the packaged l2m until 2026-11-24)"),
+                               "alone, free of the Bandai Namco licence"),
     "judge": Packaged("judge", "judge", "action and style classifier of real motion "
                       "(evaluate-judge), Bandai Namco takes", NON_COMMERCIAL),
 }

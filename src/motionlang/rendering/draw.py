@@ -1,7 +1,7 @@
 """Matplotlib drawing of stick figures on 3-D axes, without pyplot's global state.
 
 Figures are built from ``matplotlib.figure.Figure`` with an explicit Agg canvas, so
-importing or using this module never changes the backend of a user's session.
+importing or using this module never changes the backend of a user's program.
 """
 from __future__ import annotations
 

@@ -1,9 +1,8 @@
 """Fitting an L2M's planner on its own (``models.seq2seq.plan.Planner``), the rest of the model frozen.
 
 The planner only maps a sentence to a coarse plan, so it can be fitted from the sentences and
-the true plans alone, without the decoder: an epoch over 14,388 pairs takes seconds. Used to
-give a trained plan model a planner fitted longer than its decoder was trained, or a fresh
-one.
+the true plans alone, without the decoder: an epoch takes seconds. Used to give a trained
+plan model a planner fitted longer than its decoder was trained, or a fresh one.
 """
 from __future__ import annotations
 

@@ -3,8 +3,8 @@ rest pose from the training set, the two-stage "w/o joint training" ablation, an
 of a trained model's sentence encoder alone.
 
 Annealed teacher forcing: the decoder is unrolled from the initial pose; trained on its own
-outputs from the first step it collapses to the mean pose (the core's notes: local APE 211
-mm vs 163 mm with annealing, 6 samples, h 64, 300 steps). So the probability of feeding the
+outputs from the first step it collapses to the mean pose (``docs/results/twostream.md``,
+Annealed teacher forcing). So the probability of feeding the
 true previous frame goes linearly from ``forcing_start`` (1) to ``forcing_end`` (0) over
 ``forcing_steps`` optimiser steps, then stays at ``forcing_end``. The schedule is a function
 of the global step only, so ``fit(resume=True)`` continues it exactly.

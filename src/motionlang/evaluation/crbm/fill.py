@@ -26,7 +26,7 @@ from motionlang.datasets.cmu35 import load_cmu35 as load_cmu35
 from motionlang.datasets.cmu35 import taylor59 as taylor59
 
 # Erased dimensions (0-based, of the 118-value pair rows) and the gap (0-based pair rows of
-# the walking test trial): the 1-based dims 17-23 / 76-82 and 30-59 / 89-118, pairs 63-124.
+# the walking test trial): 1-based, dims 17-23 / 76-82 and 30-59 / 89-118, pairs 63-124.
 ERASED = {
     "leg": np.r_[16:23, 75:82],
     "upper body": np.r_[29:59, 88:118],

@@ -4,17 +4,11 @@ Style of a generated frame = the label (walk / jog) of the nearest training fram
 model's normalised feature space (Euclidean over all features except the root's ground
 step, whose speed alone would give the style away: the label should judge the pose).
 
-Measured 2026-11-22 (model of ``models.crbm.config.SELECTED`` trained on all 31 trials, 1000
-frames, 30 Gibbs updates): from the walking test frames 100 % walk at 1.2 m/s (seeds 0-3),
-from the jogging test frames 100 % jog at 3.1 m/s, range excess <= 0.7 std. What made the
-difference is ``CRBMConfig.history_noise`` (0.3): without noise on the past frames while
-training, the walk turned into a jog after ~60 frames (5.8 % walk), and settings that kept
-walking (weight decay 2e-2, 1000 passes) walked on the spot. Tried before without a fix:
-world/facing-frame root steps, yaw rate, 1-100 Gibbs updates, mean-field hiddens, weight
-decays 2e-4 - 2e-2, 1000-4000 passes, CD-10, the negative chain started from the previous
-frame (``CRBMConfig.negative_start``), orders 1, 2 and 6, the two-level model. From the first
-frames of some *training* walks the selected model still turns to jogging (held-out
-selection run: 32 % of frames walk in the worst training walk).
+What keeps a generated walk walking is ``CRBMConfig.history_noise``: generation conditions
+on its own imperfect frames, and without noise on the past frames while training the walk
+drifts into a jog, and the settings that kept walking without it walked on the spot. From the first frames
+of some *training* walks the selected model still turns to jogging. The figures, and what
+else was tried without a fix, are in ``docs/results/crbm.md`` (Generation).
 """
 from __future__ import annotations
 

@@ -13,24 +13,12 @@ folded back (:func:`to_protocol59`) and scored in the protocol space.
 Hyper-parameters (:data:`SELECTED`) were chosen on training trials only
 (``experiments/probes/crbm_select.py`` / ``evaluation/crbm/select.py``: train on 27 trials, fill in
 35_15, 35_16 (walks) and 35_25, 35_26 (jogs) with the same erase protocol, score = mean CRBM /
-nearest-neighbour error ratio over the 8 cells, 20 repeats; eligible only if generation from
-each held-out trial keeps its walk/jog label on >= 90 % of 1000 frames). Grid (2026-11-22,
-facing-frame root): weight decay of W, B in {2e-4, 2e-3, 2e-2} x decay of the autoregressive
-A in {same, 2e-2} x {1000, 2000, 4000} passes x fill-in with sampled or mean-field hiddens
-(5 Gibbs updates). Best eligible: W decay 2e-3, A decay 2e-2, 4000 passes (the paper's), mean
-field: 0.564 (sampled hiddens 0.579); the best with A decayed like W was 0.617 (not eligible).
-Then, with those fixed, noise on the past frames while training (``history_noise``, not in the
-paper; tried because generation from the walking *test* frames turned into jogging, first with
-0.3) in {0, 0.1, 0.3, 1}: scores 0.564, 0.555, 0.463, 0.525, all eligible; 0.3 selected. With
-0 and 0.1 the held-out walks walk slowly or on the spot (0.6 / 0.0 m/s), with 0.3 at 1.2 m/s.
-
-Test table with the selected settings (seed 0; ``motionlang crbm reproduce``, the same table
-on two runs): walking leg 9.43 (sampled hiddens, 100 repeats: 9.68 +- 0.40; paper 8.78,
-nearest neighbour 11.68), upper body 10.36 (sampled 11.37 +- 0.62; paper 20.52, nearest
-neighbour 22.20); AR(n) 12.62 / 9.21. Jogging leg 13.47 (NN 19.14), upper body 12.72 (NN
-45.78). Without history noise: 7.99 / 19.94, jogging 13.50 / 14.08. Earlier tables in this
-project (9.95 / 16.03: settings tuned on these test numbers; 10.58 / 35.15: world-frame root
-steps, A decayed like W) are superseded.
+nearest-neighbour error ratio over the 8 cells; eligible only if generation from each
+held-out trial keeps its walk/jog label), over weight decays, the autoregressive weights'
+decay, passes and the fill-in's hiddens; then noise on the past frames while training
+(``history_noise``, not in the paper), tried because generation from the walking *test*
+frames turned into jogging, and kept because it also scores best on the held-out trials.
+The grid, its scores and the test table: ``docs/results/crbm.md``.
 """
 from __future__ import annotations
 

@@ -106,12 +106,12 @@ def choose(runs: list[dict], min_style_kept: float, held_out=VALIDATION_TRIALS
            ) -> tuple[dict, list[dict]]:
     """The winning run and the eligible ones.
 
-    The issue asks for both: a good fill-in AND generation that keeps its style. A setting
+    Both are wanted: a good fill-in AND generation that keeps its style. A setting
     is eligible only if its generation from every held-out trial keeps the trial's walk/jog
     label on >= ``min_style_kept`` of the frames; the lowest fill-in score among the
     eligible wins (if none is eligible, the lowest overall). Generation from the model's own
     training trials is recorded but not gated on: no setting tried keeps walking from all
-    of them (see ``crbm_generation``).
+    of them (``docs/results/crbm.md``).
     """
     if not runs:
         raise ValueError("no runs to choose from")

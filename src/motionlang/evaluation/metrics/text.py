@@ -4,7 +4,7 @@ Conventions: ``references[i]`` is the list of ALL reference sentences of item i 
 ``hypotheses[i]`` the one hypothesis for it; a sentence is a string (split on whitespace,
 so pass normalised text) or a list of tokens. Scores are in [0, 1] (CIDEr: [0, 10]).
 
-Libraries (maintained, stated as the issue asks): BLEU from ``nltk.translate.bleu_score``
+Libraries (maintained ones, named here): BLEU from ``nltk.translate.bleu_score``
 (corpus-level: n-gram counts and lengths are summed over the corpus before the geometric
 mean, as in Papineni et al. 2002 and Plappert et al. 2018); ROUGE-L from Google's
 ``rouge_score``; CIDEr(-D) from ``pycocoevalcap`` (optional).

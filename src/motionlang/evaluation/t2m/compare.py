@@ -1,4 +1,4 @@
-"""Every text-to-motion model on the same test sentences, in one table (issue 6).
+"""Every text-to-motion model on the same test sentences, in one table.
 
 For each test motion: one description (the first that states all of its body actions,
 else the first), the target = the motion's 21 joints at 12.5 Hz anchored at the origin

@@ -1,5 +1,5 @@
 """How low can APE go on the procedural corpus? Oracles that know each test motion's full
-ground-truth parameters (issue 6).
+ground-truth parameters.
 
 A corpus motion is drawn from its parameters (actions, sides, counts, directions, speeds,
 angles) *and* from unstated ones: the subject's height, tempo, stride, posture and the

@@ -57,7 +57,7 @@ class CRBMConfig:
     init_std: float = 0.01
     seed: int = _opt(0, "seed of the initial weights and the batch order")
     visible: str = "gaussian"   # "gaussian" (unit variance) or "binary"
-    dtype: str = "float32"      # of weights and training arithmetic: float32 trains faster
+    dtype: str = "float32"      # of weights and training arithmetic: faster than float64
     blas_threads: int | None = 1  # the matrices are small: one BLAS thread avoids oversubscription
     cd_steps: int = 1           # k of CD-k (the paper: 1)
     negative_start: str = "data"  # where the negative chain starts: "data" (v_t, the paper's

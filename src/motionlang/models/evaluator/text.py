@@ -119,8 +119,8 @@ class TextFileVectors:
 def caption_tokens(caption: str, tokens: Sequence[str] | None = None) -> list[str]:
     """The ``word/POS`` tokens of a caption: ``tokens`` when the data gives them (those
     without a ``/`` are tagged OTHER), else :func:`tag`. Tokens tagged ``X`` (what
-    ``motionlang data export-h3d`` wrote for open-class words before 2026-11-24) count as
-    not given: the caption is tagged here."""
+    ``motionlang data export-h3d`` wrote for open-class words before it had a tagger) count
+    as not given: the caption is tagged here."""
     if tokens and not any(t.rpartition("/")[2] == "X" for t in tokens):
         return [t if "/" in t else f"{t}/OTHER" for t in tokens]
     return tag(caption)

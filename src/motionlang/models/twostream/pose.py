@@ -18,9 +18,9 @@ Options beyond the paper (``TwoStreamConfig.z_every_step`` / ``time_input`` /
 ``[x_{t-1} columns, z_stream, (t - 1) / 100, (t - 1) / (T - 1)]``: with z only as the
 initial state, the decoder has to carry a whole sequence of actions in a state it also
 overwrites every step, and our models (h 128) lost the order of actions even when decoding a
-motion from its own embedding. Measured (README): z and the elapsed time alone did not bring
-the order back; with the phase-free energy loss (``sequence_losses.energy_loss``), z and the progress
-input, up to 60 % of the orders come out right.
+motion from its own embedding. z and the elapsed time alone did not bring the order back; the
+phase-free energy loss (``models.seq2seq.losses.energy_loss``) with z and the progress input
+did (figures in ``docs/results/twostream.md``).
 """
 from __future__ import annotations
 
