@@ -31,6 +31,8 @@ from motionlang.models.evaluator.config import EvaluatorConfig
 from motionlang.models.evaluator.model import TextMotionEvaluator
 from motionlang.models.judge.config import JudgeConfig
 from motionlang.models.judge.model import MotionJudge
+from motionlang.models.retrieval.config import RetrievalConfig
+from motionlang.models.retrieval.model import RetrievalModel
 from motionlang.models.seq2seq.l2m import LanguageToMotion
 from motionlang.models.seq2seq.m2l import MotionToLanguage
 from motionlang.models.twostream import TwoStreamModel
@@ -98,6 +100,18 @@ def _judge_out(model: MotionJudge) -> torch.Tensor:
     return torch.cat([out[k].flatten() for k in ("content", "style", "embedding")])
 
 
+def _retrieval() -> RetrievalModel:
+    torch.manual_seed(0)
+    return RetrievalModel(RetrievalConfig(hidden=8, layers=1, heads=2, text_hidden=8, embed=4),
+                          text_encoder=HashTokens())
+
+
+def _retrieval_out(model: RetrievalModel) -> np.ndarray:
+    motions = [np.random.default_rng(k).normal(size=(9 + k, 66)) for k in range(2)]
+    return np.concatenate([model.embed_motions(motions),
+                           model.embed_texts(["a person walks", "jump"])])
+
+
 def _torch_params(model) -> dict[str, Any]:
     return dict(model.state_dict())
 
@@ -143,6 +157,8 @@ KINDS = [
          lambda m: {**m.state_dict(), "mean": m.mean, "std": m.std}, _evaluator_out,
          lambda: {"vectors": HashVectors()}),
     Kind("judge", MotionJudge, ".pt", _judge, _torch_params, _judge_out),
+    Kind("retrieval", RetrievalModel, ".pt", _retrieval, _torch_params, _retrieval_out,
+         lambda: {"text_encoder": HashTokens()}),
 ]
 BY_NAME = {k.name: k for k in KINDS}
 IDS = [k.name for k in KINDS]

@@ -11,6 +11,7 @@ from motionlang.evaluation.metrics.t2m import (
     euclidean_distance_matrix,
     fid,
     frechet_distance,
+    hit_ranks,
     mean_interval,
     mm_dist,
     multimodality,
@@ -18,6 +19,7 @@ from motionlang.evaluation.metrics.t2m import (
     repeat,
     retrieval_metrics,
     retrieval_ranks,
+    retrieval_scores,
     top_k_hits,
 )
 
@@ -114,6 +116,29 @@ def test_retrieval_ranks_by_hand():
     assert retrieval_ranks(sims).tolist() == [0.5, 2.0, 0.0]        # a tie shares 0 and 1
     same_text = np.array([[1, 0, 0], [0, 1, 1], [0, 1, 1]])          # texts 1 and 2 alike
     assert retrieval_ranks(sims, same_text, threshold=0.95).tolist() == [0.5, 0.0, 0.0]
+
+
+def test_retrieval_scores_with_hits_by_hand():
+    """Two texts, three motions. Text 0 counts motions 0 and 1 as its pair: its best hit
+    (0.9) ties with motion 2, rank 0.5. Text 1 counts motions 1 and 2: its two hits tie at
+    0.8, which costs neither, rank 0. Motion 2 as a query: text 0 (0.9, not a hit) is above
+    its hit text 1 (0.8), rank 1."""
+    sims = [[0.9, 0.5, 0.9], [0.1, 0.8, 0.8]]
+    hits = [[True, True, False], [False, True, True]]
+    assert hit_ranks(sims, hits).tolist() == [0.5, 0.0]
+    got = retrieval_scores(sims, hits, ks=(1, 2))
+    assert got == pytest.approx({"t2m/R01": 100.0, "t2m/R02": 100.0, "t2m/MedR": 1.25,
+                                 "m2t/R01": 200 / 3, "m2t/R02": 100.0, "m2t/MedR": 1.0})
+    # the default hits are the diagonal: the same ranks as retrieval_ranks
+    square = np.round(np.random.default_rng(2).uniform(size=(12, 12)), 1)
+    scores = retrieval_scores(square, ks=(1, 5))
+    ranks = retrieval_ranks(square)
+    assert scores["t2m/R05"] == pytest.approx(100 * np.mean(ranks < 5))
+    assert scores["t2m/MedR"] == pytest.approx(np.median(ranks) + 1)
+    with pytest.raises(MotionlangError, match="query 1 has no hit"):
+        hit_ranks(sims, [[True, False, False], [False, False, False]])
+    with pytest.raises(MotionlangError, match="one"):
+        hit_ranks(sims, [[True]])
 
 
 def _tmr_like_ranks(sims):

@@ -37,6 +37,7 @@ FAMILY_MODULES: tuple[str, ...] = (
     "motionlang.models.crbm.family",        # crbm, crbm_stack, ar (Taylor et al. 2006)
     "motionlang.models.evaluator.family",   # evaluator (Guo et al. 2022 protocol)
     "motionlang.models.judge.family",       # judge (action and style of real motion)
+    "motionlang.models.retrieval.family",   # retrieval (text-motion, TMR-style)
 )
 
 

@@ -18,7 +18,8 @@ sqrt(20) (:func:`repeat`, :func:`mean_interval`).
 TMR (Petrovich et al. 2023) retrieval: cosine similarity of the embeddings, every text
 ranking every motion (text-to-motion) and the reverse; R@k is the percentage of queries
 whose pair is among the first k, MedR the median rank (1 = first); ties share the mean of
-their positions (:func:`retrieval_metrics`).
+their positions (:func:`retrieval_metrics`; from any similarity matrix and any set of pairs
+that count as hits, :func:`retrieval_scores`).
 """
 from __future__ import annotations
 
@@ -154,29 +155,71 @@ def multimodality(x, times: int = 10, rng: Rng = None) -> float:
     return float(np.linalg.norm(x[:, first] - x[:, second], axis=2).mean())
 
 
+def hit_ranks(sims, hits) -> np.ndarray:
+    """(Q, C) similarities of Q queries to C candidates and (Q, C) bool ``hits`` (the
+    candidates that count as the query's pair; every query needs one) -> (Q,) 0-based rank
+    of the query's best hit among the candidates by decreasing similarity: the number of
+    other candidates above it, plus half of those tied with it (ties share the mean of their
+    positions). Hits tied with the best hit do not count against it."""
+    s, h = np.asarray(sims, dtype=float), np.asarray(hits, dtype=bool)
+    if s.ndim != 2 or h.shape != s.shape:
+        raise MotionlangError(f"similarities and hits must be one (Q, C) shape, got "
+                              f"{s.shape} and {h.shape}")
+    if not h.any(axis=1).all():
+        raise MotionlangError(f"query {int(np.argmin(h.any(axis=1)))} has no hit among the "
+                              "candidates")
+    gt = np.where(h, s, -np.inf).max(axis=1)[:, None]
+    better = ((s > gt) & ~h).sum(axis=1)
+    equal = ((s == gt) & ~h).sum(axis=1)
+    return better + equal / 2.0
+
+
 def retrieval_ranks(sims, text_selfsim=None, threshold: float | None = None) -> np.ndarray:
     """(N, N) similarities, query i's pair at column i -> (N,) 0-based rank of the pair
     among the query's candidates by decreasing similarity; ties: the mean of their
     positions. With ``text_selfsim`` (N, N) and ``threshold`` t (TMR's, on the (1 + cos) / 2
     scale), any candidate j whose text has cosine > 2 t - 1 with text i also counts as the
-    pair; the best of them is ranked."""
+    pair; the best of them is ranked (:func:`hit_ranks`)."""
     s = np.asarray(sims, dtype=float)
     if s.ndim != 2 or s.shape[0] != s.shape[1]:
         raise MotionlangError(f"similarities must be (N, N), got {s.shape}")
-    gt = np.diag(s).copy()
+    hits = np.eye(len(s), dtype=bool)
     if text_selfsim is not None and threshold is not None:
-        same = np.asarray(text_selfsim, dtype=float) > 2.0 * threshold - 1.0
-        gt = np.where(same, s, -np.inf).max(axis=1)
-    better = (s > gt[:, None]).sum(axis=1)
-    equal = (s == gt[:, None]).sum(axis=1)
-    return better + (equal - 1) / 2.0
+        hits |= np.asarray(text_selfsim, dtype=float) > 2.0 * threshold - 1.0
+    return hit_ranks(s, hits)
+
+
+def retrieval_scores(sims, hits=None, ks=(1, 2, 3, 5, 10)) -> dict[str, float]:
+    """TMR's measures from a (Q, C) text-to-motion similarity matrix, both directions:
+    ``{"t2m/R01": %, ..., "t2m/MedR": rank, "m2t/R01": %, ..., "m2t/MedR": rank}``.
+
+    Text -> motion: each row is a query ranking the C motions; motion -> text: each column
+    ranks the Q texts. ``hits`` (Q, C) bool: which text-motion pairs count as matched
+    (default: the diagonal of a square matrix). R@k: the percentage of queries whose best
+    hit ranks among the first k; MedR: the median rank (1 = first); ties as
+    :func:`hit_ranks`.
+    """
+    s = np.asarray(sims, dtype=float)
+    if hits is None:
+        if s.ndim != 2 or s.shape[0] != s.shape[1]:
+            raise MotionlangError(f"similarities without hits must be (N, N), got {s.shape}")
+        hits = np.eye(len(s), dtype=bool)
+    h = np.asarray(hits, dtype=bool)
+    out = {}
+    for name, ranks in (("t2m", hit_ranks(s, h)), ("m2t", hit_ranks(s.T, h.T))):
+        for k in ks:
+            out[f"{name}/R{k:02d}"] = 100.0 * float(np.mean(ranks < k))
+        out[f"{name}/MedR"] = float(np.median(ranks) + 1.0)
+    return out
 
 
 def retrieval_metrics(text, motion, ks=(1, 2, 3, 5, 10), text_selfsim=None,
                       threshold: float | None = None, batch_size: int | None = None
                       ) -> dict[str, float]:
     """TMR's measures from text (N, D) and motion (N, D) embeddings of N pairs (cosine
-    similarity): ``{"t2m/R01": %, ..., "t2m/MedR": rank, "m2t/...": ...}``.
+    similarity): ``{"t2m/R01": %, ..., "t2m/MedR": rank, "m2t/...": ...}``
+    (:func:`retrieval_scores`; ``text_selfsim`` and ``threshold`` as
+    :func:`retrieval_ranks`).
 
     ``batch_size``: TMR's small-batch protocol (32, after Guo et al.): the mean of the
     measures over consecutive full batches instead of one ranking among all N.
@@ -189,14 +232,10 @@ def retrieval_metrics(text, motion, ks=(1, 2, 3, 5, 10), text_selfsim=None,
         return {k: float(np.mean([r[k] for r in sub])) for k in sub[0]}
     t = t / np.maximum(np.linalg.norm(t, axis=1, keepdims=True), 1e-12)
     m = m / np.maximum(np.linalg.norm(m, axis=1, keepdims=True), 1e-12)
-    sims = t @ m.T
-    out = {}
-    for name, s in (("t2m", sims), ("m2t", sims.T)):
-        ranks = retrieval_ranks(s, text_selfsim, threshold)
-        for k in ks:
-            out[f"{name}/R{k:02d}"] = 100.0 * float(np.mean(ranks < k))
-        out[f"{name}/MedR"] = float(np.median(ranks) + 1.0)
-    return out
+    hits = np.eye(len(t), dtype=bool)
+    if text_selfsim is not None and threshold is not None:
+        hits |= np.asarray(text_selfsim, dtype=float) > 2.0 * threshold - 1.0
+    return retrieval_scores(t @ m.T, hits, ks)
 
 
 def mean_interval(values) -> tuple[np.ndarray | float, np.ndarray | float]:

