@@ -19,7 +19,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
-from typing import Any, ClassVar, Protocol, runtime_checkable
+from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -38,12 +38,14 @@ CAPABILITIES = ("start_pose", "positions_start", "reconstruct", "hypotheses")
 
 @runtime_checkable
 class TextToMotion(Protocol):
-    """The kind-neutral text-to-motion contract.
+    """The kind-neutral text-to-motion contract every caller uses (``generate``, the
+    evaluations, ``ml.text_to_motion``); :class:`Text2MotionAdapter` implements it for any
+    model that follows :class:`SamplingModel`, or through a family's own adapter.
 
     Attributes:
         model: the wrapped model (eval mode).
         options: its sampling options (an instance of its family's ``Options``).
-        fps: frame rate of :meth:`sample`'s and ``hypotheses``' results (Hz).
+        fps: frame rate of ``hypotheses``' results (Hz).
         deterministic: one result per sentence, no likelihood, no temperature.
         capabilities: the subset of :data:`CAPABILITIES` it supports.
     """
@@ -56,15 +58,56 @@ class TextToMotion(Protocol):
     @property
     def fps(self) -> float: ...
 
-    def sample(self, texts: Sequence[str], lengths: Sequence[int | None], *,
-               seed: int = 0) -> list[np.ndarray]:
-        """Global 21-joint positions (T, 21, 3) metres at 12.5 Hz for each sentence, of the
-        given length in frames (None: the length the model plans)."""
+    def configure(self, options: Any) -> Any:
+        """Set (and check) its sampling options from a dict or an ``Options``."""
         ...
+
+    def describe_options(self) -> dict[str, Any]: ...
+
+    def default_method(self) -> str: ...
+
+    def hypotheses(self, sentence: str, *, max_frames: int | None = None,
+                   foot_lock: bool = False, **kw: Any) -> list[tuple[Any, float]]:
+        """``[(result, score), ...]`` best first (results at :attr:`fps`)."""
+        ...
+
+    def positions21(self, sentence: str, n_frames: int, *, foot_lock: bool = False,
+                    **kw: Any) -> np.ndarray:
+        """Global 21-joint positions (n_frames, 21, 3) metres at 12.5 Hz."""
+        ...
+
+    def sample(self, texts: Sequence[str], lengths: Sequence[int | None], *,
+               seed: int = 0) -> list[np.ndarray]: ...
 
     def unknown_words(self, sentence: str) -> list[str]: ...
 
     def frames_for(self, sentence: str) -> int | None: ...
+
+
+@runtime_checkable
+class SamplingModel(Protocol):
+    """What a family's model implements to generate through :class:`SelfAdapter` (its
+    registry entry says ``text_to_motion="self"``): the rest of :class:`TextToMotion`
+    (options checked once, foot lock, re-timing to 12.5 Hz, the comparison's anchoring)
+    comes from the adapter.
+
+    ``sample`` returns global 21-joint positions (T, 21, 3) metres at ``fps`` for each
+    sentence, ``lengths`` in frames at ``fps`` (None: the length it plans); ``options`` is
+    an instance of its ``Options`` dataclass (its sampling options, e.g. top-k, guidance)."""
+
+    kind: str
+    Options: type
+    deterministic: bool
+
+    @property
+    def fps(self) -> float: ...
+
+    def sample(self, texts: Sequence[str], lengths: Sequence[int | None], *, seed: int,
+               options: Any) -> list[np.ndarray]: ...
+
+    def frames_for(self, sentence: str) -> int | None: ...
+
+    def unknown_words(self, sentence: str) -> list[str]: ...
 
 
 @dataclass
@@ -86,7 +129,7 @@ class Text2MotionAdapter:
     ``_positions21``.
     """
 
-    Options: ClassVar[type] = NoOptions
+    Options: type = NoOptions
     deterministic = False
     capabilities: frozenset[str] = frozenset()
 
@@ -203,9 +246,11 @@ class Text2MotionAdapter:
 
 
 def text_to_motion(model, options: Any = None) -> Any:
-    """A loaded text-to-motion model (or an already wrapped one) behind the interface, as
-    its family's registry entry says; ``options``: its sampling options (an ``Options``
-    instance or a dict, e.g. ``ModelSpec.options``), checked here.
+    """A loaded text-to-motion model (or an already wrapped one) behind
+    :class:`TextToMotion`, as its family's registry entry says (``"self"``: the model
+    follows :class:`SamplingModel` and :class:`SelfAdapter` wraps it); ``options``: its
+    sampling options (an ``Options`` instance or a dict, e.g. ``ModelSpec.options``),
+    checked here.
 
     Raises:
         MotionlangError: a model that does not turn text into motion (an M2L, a CRBM), or
@@ -213,7 +258,7 @@ def text_to_motion(model, options: Any = None) -> Any:
     """
     from motionlang.models.family import load_object
     from motionlang.models.registry import families, kinds_with
-    if isinstance(model, Text2MotionAdapter):
+    if isinstance(model, TextToMotion):
         return model if options is None else model.configure(options)
     kind = getattr(model, "kind", None)
     fam = families().get(kind) if isinstance(kind, str) else None
@@ -221,11 +266,51 @@ def text_to_motion(model, options: Any = None) -> Any:
         raise MotionlangError(f"a {kind or type(model).__name__} model does not generate "
                               f"motion from text (text-to-motion kinds: "
                               f"{', '.join(kinds_with('text_to_motion'))})")
-    if fam.text_to_motion == "self":
-        if options is not None:
-            model.configure(options)
-        return model
-    return load_object(fam.text_to_motion)(model, options)
+    adapter = SelfAdapter if fam.text_to_motion == "self" else load_object(fam.text_to_motion)
+    return adapter(model, options)
+
+
+class SelfAdapter(Text2MotionAdapter):
+    """:class:`TextToMotion` for a model that follows :class:`SamplingModel`."""
+
+    capabilities = frozenset({"hypotheses"})
+
+    def __init__(self, model, options: Any = None):
+        self.Options = model.Options   # the family's own options dataclass
+        self.deterministic = bool(model.deterministic)
+        super().__init__(model, options)
+
+    @property
+    def fps(self) -> float:
+        return float(self.model.fps)
+
+    def default_method(self) -> str:
+        return "mean" if self.deterministic else "sample"
+
+    def frames_for(self, sentence: str) -> int | None:
+        return self.model.frames_for(sentence)
+
+    def unknown_words(self, sentence: str) -> list[str]:
+        return list(self.model.unknown_words(sentence))
+
+    def _hypotheses(self, sentence: str, *, max_frames: int | None = None, seed: int = 0,
+                    width: int = 1, **_: Any) -> list[tuple[Any, float]]:
+        _check_words(sentence)
+        texts = [sentence] * max(1, int(width))
+        out = self.model.sample(texts, [max_frames] * len(texts), seed=seed,
+                                options=self.options)
+        return [(np.asarray(p, dtype=np.float64), float("nan")) for p in out]
+
+    def _positions21(self, sentence: str, n_frames: int, *, seed: int = 0, **_: Any
+                     ) -> np.ndarray:
+        _check_words(sentence)
+        own = max(2, int(np.ceil(n_frames * self.fps / FPS)))
+        p = np.asarray(self.model.sample([sentence], [own], seed=seed,
+                                         options=self.options)[0], dtype=np.float64)
+        if abs(self.fps - FPS) > 1e-9:
+            t_src = np.arange(len(p)) / self.fps
+            p = interp_frames(p, t_src, np.arange(int(np.floor(t_src[-1] * FPS)) + 1) / FPS)
+        return fit_length(anchor(p), n_frames)
 
 
 def default_method(model) -> str:
