@@ -178,3 +178,9 @@ def test_every_family_with_a_recipe_is_a_train_command():
     trains = {leaf.prog.split()[-1] for leaf in leaf_parsers(parser)
               if leaf.prog.startswith("motionlang train ")}
     assert set(kinds_with("recipe")) <= trains
+
+
+def test_train_m2l_has_no_options_of_the_l2m(capsys):
+    # the L2M's data options (root weights, plan means) are not offered to the M2L
+    assert main(["train", "m2l", "--data", "d", "--root-weight", "2"]) == 2
+    assert "unrecognized arguments: --root-weight" in capsys.readouterr().err

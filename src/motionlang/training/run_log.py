@@ -28,17 +28,16 @@ def log_command(path: Path, args: argparse.Namespace | dict) -> None:
         fh.write(old + json.dumps(opts, sort_keys=True, default=str) + "\n")
 
 
-#: the licence note of a run trained on Bandai Namco data
-LICENSE_FILE = "LICENSE.txt"
-
-
-def write_license(run: Path, what: str) -> None:
-    """:data:`LICENSE_FILE` in ``run``: ``what`` (e.g. "M2L", "judge") was trained on the
-    Bandai Namco data (CC BY-NC 4.0), so it and the figures made with it are non-commercial."""
-    from motionlang.datasets.bandai import LICENSE
+def write_licence(run: Path, sources, what: str) -> bool:
+    """The licence note (``datasets.sources.LICENCE_FILE``) in ``run`` when a source
+    restricts the use of ``what`` (e.g. "M2L") and the figures made with it; nothing
+    otherwise. Only the lead process writes. Returns whether a note was written."""
+    from motionlang.datasets.sources import LICENCE_FILE, licence_text
     from motionlang.utils.atomic import atomic_write
+    note = licence_text(sources, what)
+    if note is None or not lead_process():
+        return False
     run.mkdir(parents=True, exist_ok=True)
-    with atomic_write(run / LICENSE_FILE) as fh:
-        fh.write(f"Trained on the Bandai Namco Research Motion Datasets (CC BY-NC 4.0): the "
-                 f"{what} and the figures made with it are for non-commercial use only.\n\n"
-                 f"Data: {LICENSE}\nLicence text: https://creativecommons.org/licenses/by-nc/4.0/\n")
+    with atomic_write(run / LICENCE_FILE) as fh:
+        fh.write(note)
+    return True

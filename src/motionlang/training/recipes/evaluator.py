@@ -75,17 +75,6 @@ def _resumed_bones(out: Path) -> list[float] | None:
     return ck["model"]["config"].get("bones")
 
 
-def _write_licence(out: Path, sources: Sequence) -> None:
-    """The licence note of an evaluator trained on a restricting source (none otherwise)."""
-    from motionlang.datasets.sources import LICENCE_FILE, licence_text
-    from motionlang.utils.atomic import atomic_write
-    text = licence_text(sources, "evaluator")
-    if text:
-        out.mkdir(parents=True, exist_ok=True)
-        with atomic_write(out / LICENCE_FILE) as fh:
-            fh.write(text)
-
-
 def _kept_epoch(history: list[dict], with_val: bool) -> str:
     """One line on the epoch saved: the best validation score (R-precision, else the
     loss), else the last."""
@@ -119,7 +108,7 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg,
     from motionlang.models.family import load_object
     from motionlang.models.registry import family
     from motionlang.training.evaluator_train import build_evaluator_data, train_evaluator
-    from motionlang.training.run_log import lead_process, log_command
+    from motionlang.training.run_log import lead_process, log_command, write_licence
 
     if len(sources) != 1:
         raise MotionlangError(f"train evaluator reads one dataset, got {len(sources)}")
@@ -139,7 +128,7 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg,
     if lead:
         save_splits({s: list(dict.fromkeys(it["id"] for it in items))
                      for s, items in data.items.items()}, out / "splits")
-        _write_licence(out, sources)
+        write_licence(out, sources, "evaluator")
     log_command(out / "commands.jsonl", options if options is not None else
                 {"model": "evaluator", "data": [str(s) for s in sources], "resume": resume,
                  **model_cfg, **vars(data_cfg), **vars(cfg)})

@@ -154,8 +154,7 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
     from motionlang.models.judge.fit import accuracy, bandai_items, median_bones, primitive_items
     from motionlang.models.registry import family
     from motionlang.training.run_files import check_resume
-    from motionlang.training.run_log import lead_process, log_command
-    from motionlang.utils.atomic import atomic_write
+    from motionlang.training.run_log import lead_process, log_command, write_licence
 
     if len(sources) != 1:
         raise MotionlangError(f"train judge reads one bandai:DIR source, got {len(sources)}")
@@ -171,10 +170,8 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
         raise MotionlangError(f"{source.root}: no Bandai training takes")
     used = [source] + ([data_cfg.primitives] if data_cfg.primitives else [])
     out.mkdir(parents=True, exist_ok=True)
+    write_licence(out, used, "judge")
     note = licence_text(used, "judge")
-    if note and lead_process():
-        with atomic_write(out / LICENCE_FILE) as fh:
-            fh.write(note)
     log_command(out / "commands.jsonl", options if options is not None else
                 {"model": "judge", "data": str(source), "resume": resume, **model_cfg,
                  **dataclasses.asdict(data_cfg), **dataclasses.asdict(train_cfg)})

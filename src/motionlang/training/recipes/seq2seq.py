@@ -46,25 +46,37 @@ class Seq2SeqData:
     balance: int = _opt(1, "repeat training motions with rare ground-truth primitives (e.g. "
                            "walking backwards) up to MAX times per epoch; needs a procedural "
                            "corpus (1: off)", metavar="MAX")
-    root_weight: float = _opt(1.0, "L2M: weight of the root's ground velocity and heading "
-                                   "change (root_vx, root_vz, root_dyaw) in the frame NLL "
-                                   "(paper: 1)", metavar="W")
-    hide_root_input: bool = _opt(False, "L2M: the decoder does not read the previous frame's "
-                                        "root velocity and heading change (it still predicts "
-                                        "them; not in the paper)")
-    plan_means: str = _opt("all", "L2M: which features' part means the plan holds: all, or "
-                                  "only the root's ground velocity and heading change (every "
+
+    def __post_init__(self) -> None:
+        check_numbers(type(self).__name__, self, positive_ints=("offsets", "min_count",
+                                                               "balance"),
+                      positive=("max_seconds",))
+        if self.features not in ("angles", "positions"):
+            raise MotionlangError(f"{type(self).__name__}.features must be angles or "
+                                  f"positions, got {self.features!r}")
+
+
+@dataclass
+class L2MData(Seq2SeqData):
+    """The data options of ``train l2m``: those of the M2L and what the L2M derives from
+    the features (weights and masks of the root's values)."""
+
+    root_weight: float = _opt(1.0, "weight of the root's ground velocity and heading change "
+                                   "(root_vx, root_vz, root_dyaw) in the frame NLL (paper: 1)",
+                              metavar="W")
+    hide_root_input: bool = _opt(False, "the decoder does not read the previous frame's root "
+                                        "velocity and heading change (it still predicts them; "
+                                        "not in the paper)")
+    plan_means: str = _opt("all", "which features' part means the plan holds: all, or only "
+                                  "the root's ground velocity and heading change (every "
                                   "feature's change is in it either way)",
                            choices=("all", "root"))
 
     def __post_init__(self) -> None:
-        check_numbers("Seq2SeqData", self, positive_ints=("offsets", "min_count", "balance"),
-                      positive=("max_seconds",), nonneg=("root_weight",))
-        if self.features not in ("angles", "positions"):
-            raise MotionlangError(f"Seq2SeqData.features must be angles or positions, got "
-                                  f"{self.features!r}")
+        super().__post_init__()
+        check_numbers("L2MData", self, nonneg=("root_weight",))
         if self.plan_means not in ("all", "root"):
-            raise MotionlangError(f"Seq2SeqData.plan_means must be all or root, got "
+            raise MotionlangError(f"L2MData.plan_means must be all or root, got "
                                   f"{self.plan_means!r}")
 
 
@@ -130,6 +142,8 @@ def new_model(kind: str, model_cfg: dict, data, data_cfg: Seq2SeqData, seed: int
                                 data.vocab, features=data.features)
     from motionlang.models.seq2seq.l2m import L2MConfig, LanguageToMotion
     derived: dict[str, Any] = {}
+    if not isinstance(data_cfg, L2MData):
+        data_cfg = L2MData(**vars(data_cfg))
     if data_cfg.root_weight != 1.0:
         derived["loss_weights"] = root_loss_weights(data.features, data_cfg.root_weight)
     if data_cfg.hide_root_input:
@@ -154,12 +168,11 @@ def run(kind: str, sources: Sequence, out: Path, model_cfg: dict, train_cfg,
     log in ``commands.jsonl`` (default: the configs). Returns ``out/model.pt``."""
     from motionlang.datasets.mixing import source_weights
     from motionlang.datasets.seq2seq_pairs import balance_repeats, build_pairs, oversample
-    from motionlang.datasets.sources import non_commercial
     from motionlang.datasets.splits import save_splits
     from motionlang.features.frames import model_dim
     from motionlang.training.collate import collate_pairs
     from motionlang.training.run_files import check_resume
-    from motionlang.training.run_log import lead_process, log_command, write_license
+    from motionlang.training.run_log import log_command, write_licence
     from motionlang.training.trainer import Trainer
 
     out = Path(out)
@@ -182,8 +195,7 @@ def run(kind: str, sources: Sequence, out: Path, model_cfg: dict, train_cfg,
               f"(motions repeated up to {data_cfg.balance} times)")
     train_items = mix_training(sources, train_items, data.sources, train_cfg.seed)
     model = new_model(kind, model_cfg, data, data_cfg, train_cfg.seed)   # checks root options
-    if non_commercial(sources) and lead_process():
-        write_license(out, kind.upper())
+    write_licence(out, sources, kind.upper())
     save_splits(data.splits, out / "splits")
     log_command(out / "commands.jsonl", options if options is not None else
                 {"model": kind, "data": [str(s) for s in sources], "resume": resume,
@@ -217,5 +229,5 @@ def _run_l2m(*args: Any, **kw: Any) -> Path:
 
 
 M2L = Recipe(run=_run_m2l, data_config=Seq2SeqData, train_defaults={"epochs": 20})
-L2M = Recipe(run=_run_l2m, data_config=Seq2SeqData,
+L2M = Recipe(run=_run_l2m, data_config=L2MData,
              train_defaults={"epochs": 20, "grad_clip": 25.0})

@@ -85,7 +85,6 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg,
     import torch
 
     from motionlang.datasets.mixing import source_weights
-    from motionlang.datasets.sources import non_commercial
     from motionlang.datasets.splits import save_splits
     from motionlang.datasets.twostream_items import build_twostream_data
     from motionlang.models.length import SentenceLength
@@ -93,7 +92,7 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg,
     from motionlang.models.twostream import TwoStreamModel
     from motionlang.training.recipes.seq2seq import mix_training
     from motionlang.training.run_files import check_resume
-    from motionlang.training.run_log import lead_process, log_command, write_license
+    from motionlang.training.run_log import lead_process, log_command, write_licence
     from motionlang.training.twostream_train import ForcingSchedule, train_twostream
 
     out = Path(out_dir)
@@ -112,8 +111,7 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg,
     train_items = mix_training(sources, data.items["train"], data.sources, train_cfg.seed)
     if lead:
         save_splits(data.splits, out / "splits")
-        if non_commercial(sources):
-            write_license(out, "two-stream model")
+        write_licence(out, sources, "two-stream model")
     log_command(out / "commands.jsonl", options if options is not None else
                 {"model": "twostream", "data": [str(s) for s in sources], "resume": resume,
                  **config.to_dict(), **vars(data_cfg), **vars(train_cfg)})
