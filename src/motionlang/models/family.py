@@ -54,19 +54,18 @@ class Family:
         model: ``"module:Class"`` whose ``load(path, **kw)`` reads its checkpoints.
         summary: one line for ``--help`` and ``motionlang models``.
         config: ``"module:Class"`` of its config dataclass (torch-free module), whose fields
-            carry ``metadata`` for generated command-line options (``utils.config_cli``).
-        recipe: ``"module:function"``, ``train(sources, out_dir, model_cfg, train_cfg)``
-            -> the path of the trained model (``training.recipes``); None: not trainable
-            through ``ml.train`` (yet).
+            carry ``metadata`` for generated command-line options (``cli.config_options``).
+        recipe: ``"module:NAME"`` of its ``training.recipes.Recipe`` (data -> model ->
+            trainer -> model file, behind ``train KIND`` and ``ml.train``); None: not
+            trainable.
         text_to_motion: ``"module:Class"`` wrapping a loaded model in the text-to-motion
-            interface (``decoding.t2m.TextToMotion``), or ``"self"`` when the model class
-            implements it itself; None: not a text-to-motion family.
+            interface (``decoding.t2m.TextToMotion``), or ``"self"`` when the model follows
+            the small ``decoding.t2m.SamplingModel`` protocol (the generic adapter does the
+            rest); None: not a text-to-motion family.
         describes: turns motion into text (``describe``).
         encodes_text / encodes_motion: ``"module:function"`` ``(model, x) -> (D,) vector``
             for ``ml.encode``; None where the family does not encode that side.
         model_file: the final model's file name inside a training run folder.
-        commercial_use: a checkpoint of this kind may be used commercially unless its
-            training data's licence forbids it (the data decides; see ``datasets``).
     """
 
     kind: str
@@ -79,7 +78,6 @@ class Family:
     encodes_text: str | None = None
     encodes_motion: str | None = None
     model_file: str = "model.pt"
-    commercial_use: bool = True
 
     def model_class(self) -> ModelClass:
         return load_object(self.model)

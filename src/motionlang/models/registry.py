@@ -55,7 +55,10 @@ def families() -> dict[str, Family]:
             module = importlib.import_module(name)
         except ImportError as exc:
             raise MotionlangError(f"model family {name} does not import: {exc}") from exc
-        for fam in getattr(module, "FAMILIES", ()):
+        entries = getattr(module, "FAMILIES", None)
+        if not entries:
+            raise MotionlangError(f"model family {name} defines no FAMILIES")
+        for fam in entries:
             if fam.kind in out:
                 raise MotionlangError(f"model kind {fam.kind!r} is defined twice ({name})")
             out[fam.kind] = fam
