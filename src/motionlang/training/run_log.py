@@ -28,16 +28,15 @@ def log_command(path: Path, args: argparse.Namespace | dict) -> None:
         fh.write(old + json.dumps(opts, sort_keys=True, default=str) + "\n")
 
 
-def write_licence(run: Path, sources, what: str) -> bool:
+def write_licence(run: Path, sources, what: str) -> str | None:
     """The licence note (``datasets.sources.LICENCE_FILE``) in ``run`` when a source
     restricts the use of ``what`` (e.g. "M2L") and the figures made with it; nothing
-    otherwise. Only the lead process writes. Returns whether a note was written."""
+    otherwise. Only the lead process writes. Returns the note (None: no restriction)."""
     from motionlang.datasets.sources import LICENCE_FILE, licence_text
     from motionlang.utils.atomic import atomic_write
     note = licence_text(sources, what)
-    if note is None or not lead_process():
-        return False
-    run.mkdir(parents=True, exist_ok=True)
-    with atomic_write(run / LICENCE_FILE) as fh:
-        fh.write(note)
-    return True
+    if note is not None and lead_process():
+        run.mkdir(parents=True, exist_ok=True)
+        with atomic_write(run / LICENCE_FILE) as fh:
+            fh.write(note)
+    return note

@@ -170,8 +170,7 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
         raise MotionlangError(f"{source.root}: no Bandai training takes")
     used = [source] + ([data_cfg.primitives] if data_cfg.primitives else [])
     out.mkdir(parents=True, exist_ok=True)
-    write_licence(out, used, "judge")
-    note = licence_text(used, "judge")
+    note = write_licence(out, used, "judge")
     log_command(out / "commands.jsonl", options if options is not None else
                 {"model": "judge", "data": str(source), "resume": resume, **model_cfg,
                  **dataclasses.asdict(data_cfg), **dataclasses.asdict(train_cfg)})

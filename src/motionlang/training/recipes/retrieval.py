@@ -158,7 +158,6 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
     import torch
 
     from motionlang.datasets.mixing import source_weights
-    from motionlang.datasets.sources import LICENCE_FILE, licence_text
     from motionlang.datasets.splits import save_splits
     from motionlang.datasets.twostream_items import build_twostream_data
     from motionlang.models.registry import family
@@ -166,8 +165,7 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
     from motionlang.models.retrieval.text import sentence_vectors
     from motionlang.training.recipes.seq2seq import mix_training
     from motionlang.training.run_files import check_resume
-    from motionlang.training.run_log import lead_process, log_command
-    from motionlang.utils.atomic import atomic_write
+    from motionlang.training.run_log import lead_process, log_command, write_licence
 
     out = Path(out_dir)
     data_cfg = data_cfg if data_cfg is not None else RetrievalOptions()
@@ -181,12 +179,9 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
                                 max_seconds=data_cfg.max_seconds, mirror=data_cfg.mirror)
     train_items = mix_training(sources, data.items["train"], data.sources, train_cfg.seed)
     lead = lead_process()
-    note = licence_text(sources, "retrieval model")
     if lead:
         save_splits(data.splits, out / "splits")
-        if note:
-            with atomic_write(out / LICENCE_FILE) as fh:
-                fh.write(note)
+    note = write_licence(out, sources, "retrieval model")
     log_command(out / "commands.jsonl", options if options is not None else
                 {"model": "retrieval", "data": [str(s) for s in sources], "resume": resume,
                  **config.to_dict(), **dataclasses.asdict(data_cfg),
