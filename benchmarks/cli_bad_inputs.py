@@ -130,6 +130,25 @@ def cases() -> list[tuple[str, list[str], int]]:
         ("crbm generate OUT existing folder", ["crbm", "generate", "junk.pt", "adir"], 2),
         ("crbm fill --repeats 0", ["crbm", "fill", "junk.pt", "f.npy", "--repeats", "0"], 2),
     ]
+    ix = ["index", "corpus", "-o", "l.idx", "--model", "twostream"]
+    rows += [(f"index -o {where}", ix[:2] + ["-o", path.format(ext=".idx")] + ix[4:], 2)
+             for where, path in BAD_FILES.items()]
+    rows += [(f"search --render {where}", ["search", "walks", "--index", "junk.pt",
+                                           "--render", path.format(ext=".png")], 2)
+             for where, path in BAD_FILES.items()]
+    rows += [(f"index {' '.join(o)}", ix + o, 2) for o in (
+        ["--window", "0"], ["--window", "inf"], ["--hop", "nan"], ["--hop", "5"])]
+    rows += [
+        ("index DIR missing", ["index", "nodir", "-o", "l.idx", "--model", "twostream"], 2),
+        ("index --model not a checkpoint", ix[:4] + ["--model", "junk.pt"], 2),
+        ("index --model m2l (motions only)", ix[:4] + ["--model", "m2l"], 2),
+        ("index -o a file that is not an index", ix[:2] + ["-o", "afile"] + ix[4:], 2),
+        ("search --index not an index", ["search", "walks", "--index", "junk.pt"], 2),
+        ("search --index missing", ["search", "walks", "--index", "none.idx"], 2),
+        ("search -k 0", ["search", "walks", "--index", "junk.pt", "-k", "0"], 2),
+        ("search --render .gif", ["search", "walks", "--index", "junk.pt", "--render",
+                                  "x.gif"], 2),
+    ]
     return rows
 
 

@@ -2,7 +2,8 @@
 
 Layers (a module imports from its own layer and those before it; ``tests/test_architecture``
 checks the README's statement of it): utils, errors -> kinematics -> formats -> features ->
-rendering -> datasets -> models -> decoding -> training -> evaluation -> api -> cli.
+rendering -> datasets -> models -> decoding -> training -> evaluation -> library -> api
+-> cli.
 """
 from motionlang.errors import DatasetError, MotionFormatError, MotionlangError, SkeletonError
 from motionlang.kinematics import Joint, Motion, Skeleton
@@ -13,7 +14,7 @@ __version__ = "0.1.0"
 #: motionlang`` stays light (no torch until a model is needed)
 _API = ("read_motion", "write_motion", "load_model", "describe", "generate",
         "generate_hypotheses", "text_to_motion", "encode", "train", "fill_in", "body21",
-        "retarget", "render", "write_result", "load_rig")
+        "retarget", "render", "write_result", "load_rig", "index", "search")
 
 
 def __getattr__(name: str):

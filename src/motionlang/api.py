@@ -320,7 +320,29 @@ def train(kind: str, data: str | Path | list, out: str | Path, *, resume: bool =
     return run_recipe(kind, data, out, resume=resume, **options)
 
 
+def index(folder: str | Path, out: str | Path, model: Any = None, **options: Any):
+    """Index every motion file under ``folder`` (recursively, any rig) into the file ``out``,
+    as ``motionlang index``: each take cut into overlapping windows, each window embedded by
+    ``model`` (a name, checkpoint or loaded model whose family encodes sentences and
+    motions; default the packaged ``retrieval`` model). A second run embeds only new or
+    changed files. ``options``: ``window``, ``hop`` (seconds), ``rebuild``
+    (``library.options.IndexOptions``). Returns a ``library.index.IndexSummary``; files that
+    do not read are in its ``failed``, with their reasons."""
+    from motionlang.library.index import build_index
+    return build_index(folder, out, model, **options)
+
+
+def search(query: str, index: Any, k: int = 10, *, model: Any = None,
+           render: str | Path | None = None) -> list:
+    """The ``k`` best matches of ``query`` in an index file (or an open
+    ``library.search.Library``), as ``motionlang search``: ``[(file, start, end, score)]``
+    (``library.search.Hit``), overlapping windows of a take merged into one span, best
+    first; ``model``: the index's own unless given; ``render``: also draw them (``.png``)."""
+    from motionlang.library.search import search as run_search
+    return run_search(query, index, k, model=model, render=render)
+
+
 __all__ = ["read_motion", "write_motion", "read_mapped", "load_model", "describe",
            "generate", "encode", "fill_in", "body21", "retarget", "render", "body_motion",
            "load_rig", "first_frame", "check_map", "train", "text_to_motion",
-           "generate_hypotheses", "write_result"]
+           "generate_hypotheses", "write_result", "index", "search"]

@@ -14,12 +14,11 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import math
 import types
 import typing
 from typing import Any
 
-from motionlang.cli.options import parse_number
+from motionlang.cli.options import float_range, parse_number
 from motionlang.errors import MotionlangError
 
 
@@ -35,14 +34,7 @@ def _parse_int(text: str) -> int:
     return parse_number(text, int)
 
 
-def _parse_float(text: str) -> float:
-    v = parse_number(text, float)
-    if not math.isfinite(v):
-        raise argparse.ArgumentTypeError(f"must be a finite number, got {text}")
-    return v
-
-
-_parse_int.__name__, _parse_float.__name__ = "integer", "number"
+_parse_int.__name__ = "integer"
 
 
 def flag_of(f: dataclasses.Field) -> str:
@@ -80,7 +72,7 @@ def add_config_options(parser: argparse.ArgumentParser, cls: type, *,
                                     action="store_true", help=meta["help"])
             parser.set_defaults(**{f.name: bool(default)})
             continue
-        kind = {int: _parse_int, float: _parse_float}.get(base, str)
+        kind = {int: _parse_int, float: float_range()}.get(base, str)   # any finite number
         parser.add_argument(flag_of(f), *meta.get("aliases", ()), dest=f.name, type=kind,
                             default=default,
                             action="append" if meta.get("append") else "store",

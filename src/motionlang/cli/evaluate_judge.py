@@ -20,7 +20,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     from motionlang.cli.models_arg import load_t2m_models
     from motionlang.evaluation.judge_bandai import evaluate_on_bandai
     from motionlang.models.registry import load_model
-    from motionlang.utils.atomic import atomic_write
+    from motionlang.utils.atomic import write_texts
 
     judge = load_model(args.judge, kind="judge")
     models = load_t2m_models(args.model)
@@ -30,13 +30,9 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     text = got.markdown()
     print(text, end="")
     if args.output:
-        out = Path(args.output)
-        out.mkdir(parents=True, exist_ok=True)
-        with atomic_write(out / "judge_table.md") as fh:
-            fh.write(text)
         report = {**got.report, "models": dict(zip(models, args.model or []))}
-        with atomic_write(out / "judge_report.json") as fh:
-            fh.write(json.dumps(report, indent=1) + "\n")
+        write_texts({Path(args.output) / "judge_table.md": text, Path(args.output) /
+                     "judge_report.json": json.dumps(report, indent=1) + "\n"})
     return 0
 
 

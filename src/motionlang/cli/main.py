@@ -33,6 +33,7 @@ COMMAND_MODULES = [
     "motionlang.cli.train",               # train KIND, one per family with a recipe
     "motionlang.cli.crbm_commands",       # crbm generate | fill | reproduce
     "motionlang.cli.describe_generate",   # describe, generate
+    "motionlang.cli.library_commands",    # index, search
     "motionlang.cli.model_commands",      # models [NAME|FILE]
     "motionlang.cli.evaluate",            # evaluate (M2L, round trip)
     "motionlang.cli.evaluate_t2m",        # evaluate-t2m (APE, or Guo with evaluate_guo)

@@ -10,8 +10,8 @@ optionally, the label of its row before ``=``::
 
 Every command that takes text-to-motion models parses, loads and wraps them here
 (:func:`load_t2m`), so no command has an option of one family. The help lists each family's
-options, read from its ``Options`` dataclass when the help is shown: those classes live beside
-torch code, which building the parser must not import.
+options (``models.options.options_help``) when it is shown: those classes live beside torch
+code, which building the parser must not import.
 """
 from __future__ import annotations
 
@@ -93,41 +93,15 @@ def load_t2m_models(values: list[str] | None, flag: str = "--model") -> dict[str
     return out
 
 
-# -- help ------------------------------------------------------------------------------------
-def _field_text(f: dataclasses.Field) -> str:
-    default = f.default if f.default is not dataclasses.MISSING else (
-        f.default_factory() if f.default_factory is not dataclasses.MISSING else None)
-    shown = "none" if default is None else str(default).lower() if isinstance(
-        default, bool) else str(default)
-    choices = f.metadata.get("choices")
-    return f"{f.name} ({'|'.join(choices) + ', ' if choices else ''}default {shown})"
-
-
-def options_help() -> str:
-    """Each text-to-motion kind and its options with their defaults (and choices), from its
-    ``Options`` dataclass: ``l2m: method (sample|beam|mean, default none), width (default
-    1), ...; twostream: none``. Imports the families' adapters (torch)."""
-    from motionlang.models.family import load_object
-    from motionlang.models.registry import families
-    parts = []
-    for kind, fam in families().items():
-        if fam.text_to_motion is None:
-            continue
-        owner = fam.model_class() if fam.text_to_motion == "self" else \
-            load_object(fam.text_to_motion)
-        cls = getattr(owner, "Options", None)
-        fields = dataclasses.fields(cls) if cls is not None else ()
-        parts.append(f"{kind}: {', '.join(_field_text(f) for f in fields) or 'none'}")
-    return "; ".join(parts)
-
-
 class _OptionsHelp:
-    """An action whose help ends with :func:`options_help`, made when the help is shown."""
+    """An action whose help ends with ``models.options.options_help``, made when the help
+    is shown."""
 
     @property
     def help(self) -> str | None:
         if not self._base_help:
             return self._base_help
+        from motionlang.models.options import options_help
         return (f"{self._base_help}. Options by kind (a method left unset decodes the "
                 f"means): {options_help()}")
 

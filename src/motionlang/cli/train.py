@@ -25,35 +25,6 @@ from motionlang.errors import MotionlangError
 TRAINER_FILES = "best.pt and last.pt (checkpoints), history.json, loss_curve.png, splits/"
 
 
-def model_file(kind: str) -> str:
-    from motionlang.models.registry import family
-    return family(kind).model_file
-
-
-def add_out_arg(p: argparse.ArgumentParser, model: str, extra: str = "") -> None:
-    """``--out DIR``, the run folder of ``train MODEL`` (default ``runs/MODEL``)."""
-    p.add_argument("--out", default=f"runs/{model}", metavar="DIR", type=output_dir,
-                   help=f"run folder, made if missing: the model ({model_file(model)}), "
-                        f"{extra}commands.jsonl (every invocation's options); other commands "
-                        "take the folder for its model")
-
-
-def add_trainer_args(p: argparse.ArgumentParser, **defaults) -> None:
-    """The options of the shared trainer (``TrainConfig``), with a recipe's ``defaults``;
-    ``--resume``."""
-    from motionlang.training.config import TrainConfig  # torch-free
-    add_config_options(p, TrainConfig, defaults=defaults)
-    p.add_argument("--resume", action="store_true",
-                   help="continue the run in --out from its last.pt")
-
-
-def train_config(args: argparse.Namespace, out_dir, **fields):
-    """The ``TrainConfig`` of :func:`add_trainer_args`' options, checked by the config
-    itself (build it before the data preparation, so that a bad value fails at once)."""
-    from motionlang.training.config import TrainConfig
-    return config_from_args(TrainConfig, args, out_dir=str(out_dir), **fields)
-
-
 def data_source(text: str, kind: str | None = None):
     """argparse type of ``--data``: ``[PREFIX:]DIR[@WEIGHT]`` (``datasets.sources``), of
     ``kind`` where given."""
@@ -86,6 +57,7 @@ def add_data_arg(p: argparse.ArgumentParser, several: bool = True,
 
 def _register_recipe(train_sub, kind: str) -> None:
     from motionlang.models.registry import family
+    from motionlang.training.config import TrainConfig  # torch-free
     from motionlang.training.recipes import recipe_of
     fam, recipe = family(kind), recipe_of(kind)
     p = train_sub.add_parser(kind, help=f"train the {fam.summary}",
@@ -96,10 +68,15 @@ def _register_recipe(train_sub, kind: str) -> None:
     else:
         add_data_arg(p, recipe.several_sources, recipe.source_kind)
     files = TRAINER_FILES if recipe.run_files is None else recipe.run_files
-    add_out_arg(p, kind, f"{files}, " if files else "")
+    p.add_argument("--out", default=f"runs/{kind}", metavar="DIR", type=output_dir,
+                   help=f"run folder, made if missing: the model ({fam.model_file}), "
+                        f"{files + ', ' if files else ''}commands.jsonl (every invocation's "
+                        "options); other commands take the folder for its model")
     add_config_options(p, recipe.data_config)
-    if recipe.trainer:
-        add_trainer_args(p, **recipe.train_defaults)
+    if recipe.trainer:   # the shared trainer's options, with the recipe's defaults
+        add_config_options(p, TrainConfig, defaults=recipe.train_defaults)
+        p.add_argument("--resume", action="store_true",
+                       help="continue the run in --out from its last.pt")
     model_cls = fam.config_class()
     if model_cls is not None:
         add_config_options(p, model_cls, defaults=recipe.model_defaults)
@@ -117,7 +94,8 @@ def cmd_train(args: argparse.Namespace) -> int:
     from motionlang.training.recipes import recipe_of
     kind = args.model_kind
     recipe, model_cls = recipe_of(kind), family(kind).config_class()
-    train_cfg = train_config(args, args.out) if recipe.trainer else None
+    train_cfg = config_from_args(TrainConfig, args, out_dir=str(args.out)) \
+        if recipe.trainer else None
     data_cfg = config_from_args(recipe.data_config, args)
     model_cfg = {} if model_cls is None else {
         f.name: getattr(args, f.name) for f in option_fields(model_cls)}

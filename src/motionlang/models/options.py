@@ -102,3 +102,32 @@ def build_options(cls: type, values: dict[str, Any] | None, where: str) -> Any:
         return cls(**converted)
     except (TypeError, ValueError) as exc:
         raise MotionlangError(f"{where}: {exc}") from None
+
+
+def field_text(f: dataclasses.Field) -> str:
+    """An options field as help shows it: ``width (default 1)``, ``method (sample|beam|mean,
+    default none)``."""
+    default = f.default if f.default is not dataclasses.MISSING else (
+        f.default_factory() if f.default_factory is not dataclasses.MISSING else None)
+    shown = "none" if default is None else str(default).lower() if isinstance(
+        default, bool) else str(default)
+    choices = f.metadata.get("choices")
+    return f"{f.name} ({'|'.join(choices) + ', ' if choices else ''}default {shown})"
+
+
+def options_help() -> str:
+    """Each text-to-motion kind and its options with their defaults (and choices), from its
+    ``Options`` dataclass: ``l2m: method (sample|beam|mean, default none), width (default
+    1), ...; twostream: none``. Imports the families' adapters (torch)."""
+    from motionlang.models.family import load_object
+    from motionlang.models.registry import families
+    parts = []
+    for kind, fam in families().items():
+        if fam.text_to_motion is None:
+            continue
+        owner = fam.model_class() if fam.text_to_motion == "self" else \
+            load_object(fam.text_to_motion)
+        cls = getattr(owner, "Options", None)
+        fields = dataclasses.fields(cls) if cls is not None else ()
+        parts.append(f"{kind}: {', '.join(field_text(f) for f in fields) or 'none'}")
+    return "; ".join(parts)

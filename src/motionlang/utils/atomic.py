@@ -164,3 +164,10 @@ def atomic_write(target: str | Path, mode: str = "w", encoding: str | None = "ut
             fh.flush()
             if fsync:
                 os.fsync(fh.fileno())
+
+
+def write_texts(files: dict) -> None:
+    """Write each ``{path: text}`` atomically (UTF-8; missing folders are made)."""
+    for target, text in files.items():
+        with atomic_write(target) as fh:
+            fh.write(text)

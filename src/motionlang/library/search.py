@@ -1,0 +1,192 @@
+"""Search an index by text: the takes and time spans whose windows best match a sentence.
+
+The sentence is embedded by the index's model and compared with every window by cosine
+similarity. Windows are taken best first. A window that overlaps (or touches) a hit of its
+own take joins that hit, widening its span, when it scores at least half-way from the
+typical window (the median score) to the hit's best: a span is where the take matches
+about as well as at its peak, as a peak's width is read at half its height. Any other
+window starts a new hit, until ``k`` hits exist. A hit runs from the start of its first
+window to the end of its last; its score is its best window's.
+
+Scores come from one matrix product in numpy; where ``faiss`` is installed and the index is
+large, an exact inner-product index of faiss gives the same hits behind the same call (it
+is optional, not a dependency).
+"""
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from motionlang.errors import MotionlangError
+from motionlang.library.embedder import Embedder
+from motionlang.library.store import IndexData, load_index
+
+#: windows from which faiss, when installed, is used instead of numpy
+FAISS_MIN_ROWS = 200_000
+BACKENDS = ("auto", "numpy", "faiss")
+EPS = 1e-6   # seconds: windows that touch are one span
+#: windows whose median score is the typical one (a sample: the median of millions costs)
+TYPICAL_SAMPLE = 4096
+
+
+class Hit(NamedTuple):
+    """One result: a take (its path relative to the indexed folder, ``#N`` after a file of
+    several sequences), a span in seconds and the best window's cosine similarity."""
+
+    file: str
+    start: float
+    end: float
+    score: float
+
+
+def unit_rows(x: np.ndarray) -> np.ndarray:
+    x = np.asarray(x, dtype=np.float32)
+    return x / np.maximum(np.linalg.norm(x, axis=-1, keepdims=True), 1e-12)
+
+
+def merge_windows(rows: np.ndarray, scores: np.ndarray, entry_of: np.ndarray,
+                  spans: np.ndarray, k: int, typical: float) -> tuple[list[list], bool]:
+    """Hits from windows taken best first (module docstring).
+
+    Args:
+        rows: window indices, best first (a prefix of the full order is enough).
+        scores: (N,) every window's score; entry_of: (N,) its take; spans: (N, 2) seconds.
+        typical: the score of a typical window (the median).
+    Returns:
+        ``[[take, start, end, score, cut], ...]`` best first (``cut``: the least score a
+        window needs to join the hit), and whether they are final (``k`` hits and a window
+        below every cut: no later window changes anything).
+    """
+    hits: list[list] = []
+    for r in rows:
+        score = float(scores[r])
+        if len(hits) == k and score < min(h[4] for h in hits):
+            return hits, True
+        e, (s, t) = int(entry_of[r]), spans[r]
+        near = [h for h in hits if h[0] == e and s <= h[2] + EPS and t >= h[1] - EPS]
+        if near:
+            best = near[0]   # hits are kept best first
+            if score >= best[4]:
+                best[1] = min([float(s)] + [h[1] for h in near])
+                best[2] = max([float(t)] + [h[2] for h in near])
+                hits = [h for h in hits if h is best or all(h is not x for x in near)]
+        elif len(hits) < k:
+            hits.append([e, float(s), float(t), score, score - 0.5 * (score - typical)])
+    return hits, False
+
+
+class Library:
+    """An open index and its model, ready for queries.
+
+    Args:
+        data: the index (``store.load_index``).
+        embedder: its model (checked against the index's identity).
+        where: the index's name for messages.
+    """
+
+    def __init__(self, data: IndexData, embedder: Embedder, where: str = "index"):
+        embedder.check(data.model, where)
+        self.data, self.embedder, self.where = data, embedder, where
+        self.unit = unit_rows(data.vectors)
+        self.entry_of = data.entry_of_rows()
+        self._faiss: Any = None
+
+    @classmethod
+    def open(cls, index: str | Path, model: Any = None) -> Library:
+        """Open an index file with its own model (the one it names) or ``model``.
+
+        Raises:
+            MotionlangError: a missing or damaged index, or a model other than its own.
+        """
+        data = load_index(index)
+        if model is None:
+            try:
+                model = Embedder.load(data.model["name"])
+            except MotionlangError as exc:
+                raise MotionlangError(f"{index}: its model {data.model['name']!r} does not "
+                                      f"load ({exc}); pass the model") from None
+        return cls(data, Embedder.load(model), str(index))
+
+    def search(self, query: str, k: int = 10, backend: str = "auto") -> list[Hit]:
+        """The ``k`` best hits for ``query``, best first."""
+        if not isinstance(query, str) or not query.split():
+            raise MotionlangError(f"the query has no words: {query!r}")
+        return self.rank(self.embedder.text(query), k, backend)
+
+    def rank(self, vector: np.ndarray, k: int = 10, backend: str = "auto") -> list[Hit]:
+        """The ``k`` best hits for a query vector (D,) of the index's space."""
+        if isinstance(k, bool) or not isinstance(k, int) or k < 1:
+            raise MotionlangError(f"k must be an integer >= 1, got {k!r}")
+        if backend not in BACKENDS:
+            raise MotionlangError(f"backend must be one of {', '.join(BACKENDS)}, got "
+                                  f"{backend!r}")
+        n = len(self.unit)
+        if n == 0:
+            return []
+        if vector.shape != (self.unit.shape[1],):
+            raise MotionlangError(f"{self.where}: a query vector of shape {vector.shape}, "
+                                  f"the index holds vectors of {self.unit.shape[1]}")
+        q = unit_rows(vector)
+        # a fixed sample of the windows, so that both backends see the same typical score
+        typical = float(np.median(self.unit[::max(1, n // TYPICAL_SAMPLE)] @ q))
+        use_faiss = backend == "faiss" or (backend == "auto" and n >= FAISS_MIN_ROWS
+                                           and importlib.util.find_spec("faiss") is not None)
+        if not use_faiss:
+            scores = self.unit @ q
+            order = np.argsort(-scores, kind="stable")
+            hits, _ = merge_windows(order, scores, self.entry_of, self.data.spans, k, typical)
+        else:
+            hits = self._faiss_hits(q, k, typical)
+        names = [e.name for e in self.data.entries]
+        return [Hit(names[h[0]], h[1], h[2], h[3]) for h in hits]
+
+    def _faiss_hits(self, q: np.ndarray, k: int, typical: float) -> list[list]:
+        """As the numpy path, over faiss's best windows: more of them until the hits are
+        final (or every window was taken)."""
+        try:
+            import faiss
+        except ImportError:
+            raise MotionlangError("backend 'faiss' needs the faiss-cpu package "
+                                  "(pip install faiss-cpu)") from None
+        if self._faiss is None:
+            self._faiss = faiss.IndexFlatIP(self.unit.shape[1])
+            self._faiss.add(self.unit)
+        n, m = len(self.unit), 8 * k
+        scores = np.zeros(n, dtype=np.float32)
+        while True:
+            m = min(m, n)
+            got, rows = self._faiss.search(q[None], m)
+            rows, got = rows[0][rows[0] >= 0], got[0][rows[0] >= 0]
+            scores[rows] = got
+            hits, final = merge_windows(rows, scores, self.entry_of, self.data.spans, k,
+                                        typical)
+            if final or m == n:
+                return hits
+            m *= 4
+
+    def take(self, hit: Hit):
+        """The motion of a hit's take, read again from the indexed folder."""
+        from motionlang.library.scan import read_takes
+        entry = next((e for e in self.data.entries if e.name == hit.file), None)
+        if entry is None:
+            raise MotionlangError(f"{self.where}: no take {hit.file!r}")
+        return read_takes(Path(self.data.root) / entry.path)[entry.sequence - 1]
+
+
+def search(query: str, index: str | Path | Library, k: int = 10, *, model: Any = None,
+           render: str | Path | None = None, backend: str = "auto") -> list[Hit]:
+    """The ``k`` best hits for ``query`` in ``index`` (a file or an open :class:`Library`),
+    best first; ``render``: also write a contact sheet of the hits there (``.png``)."""
+    if render is not None and Path(render).suffix.lower() != ".png":
+        raise MotionlangError(f"{render}: a contact sheet is written as .png")
+    lib = index if isinstance(index, Library) else Library.open(index, model)
+    hits = lib.search(query, k, backend)
+    if render is not None:
+        from motionlang.library.sheet import contact_sheet
+        contact_sheet([(f"{h.file}  {h.start:.1f}-{h.end:.1f} s  ({h.score:.3f})",
+                        lib.take(h).between(h.start, h.end)) for h in hits], render,
+                      title=f'"{query}"')
+    return hits

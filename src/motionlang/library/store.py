@@ -1,0 +1,173 @@
+"""The index file: one ``.npz`` holding the window vectors, their spans and one JSON string.
+
+Arrays (no pickled objects: read with ``allow_pickle=False``):
+
+* ``vectors`` (N, D) float32: one vector per window, as the model gave it;
+* ``spans`` (N, 2) float64: each window's (start, end) in seconds of its take;
+* ``meta``: a JSON string: ``what``, ``format``, the model's identity (``name``, ``digest``),
+  the indexed folder (``root``), the windows' ``window`` and ``hop`` (seconds), ``entries``
+  (one per take, in row order: path relative to the root, ``sequence`` / ``sequences`` of a
+  file holding several, size, mtime, ``sha256``, ``rig`` (joint count and map name),
+  ``fps``, ``duration`` (seconds) and ``rows``, its number of windows) and ``failed`` (files
+  skipped: path, size, mtime, sha256, one-line ``reason``).
+
+Reading checks every size and shape against the others before anything is used, so that a
+damaged or foreign file is one line naming it. Writing is atomic (``utils.atomic``).
+"""
+from __future__ import annotations
+
+import json
+import zipfile
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from motionlang.errors import MotionlangError
+from motionlang.library.scan import take_name
+from motionlang.utils import limits
+from motionlang.utils.atomic import atomic_write
+
+WHAT = "motionlang index"
+FORMAT = 1
+
+
+@dataclass
+class Entry:
+    """One take of the index and its windows' rows (``rows`` of them, in order)."""
+
+    path: str
+    size: int
+    mtime: float
+    sha256: str
+    rig: dict
+    fps: float
+    duration: float
+    rows: int
+    sequence: int = 1
+    sequences: int = 1
+
+    @property
+    def name(self) -> str:
+        """The take as hits name it (``scan.take_name``)."""
+        return take_name(self.path, self.sequence, self.sequences)
+
+
+@dataclass
+class Failure:
+    """A file that was skipped, and why (one line)."""
+
+    path: str
+    size: int
+    mtime: float
+    sha256: str
+    reason: str
+
+
+@dataclass
+class IndexData:
+    """An index in memory: what the file holds (see the module docstring)."""
+
+    model: dict
+    root: str
+    window: float
+    hop: float
+    entries: list[Entry] = field(default_factory=list)
+    failed: list[Failure] = field(default_factory=list)
+    vectors: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), np.float32))
+    spans: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+
+    @property
+    def first_rows(self) -> np.ndarray:
+        """(len(entries) + 1,) the first row of each entry, then the row count."""
+        return np.concatenate([[0], np.cumsum([e.rows for e in self.entries])]).astype(int)
+
+    def entry_of_rows(self) -> np.ndarray:
+        """(N,) the entry each row belongs to."""
+        return np.repeat(np.arange(len(self.entries)), [e.rows for e in self.entries])
+
+    def meta(self) -> dict:
+        return {"what": WHAT, "format": FORMAT, "model": self.model, "root": self.root,
+                "window": self.window, "hop": self.hop,
+                "entries": [asdict(e) for e in self.entries],
+                "failed": [asdict(f) for f in self.failed]}
+
+
+def save_index(data: IndexData, path: str | Path) -> Path:
+    """Write ``data`` to ``path`` atomically (uncompressed: it loads fastest)."""
+    path = Path(path)
+    with atomic_write(path, "wb") as fh:
+        np.savez(fh, vectors=np.asarray(data.vectors, dtype=np.float32),
+                 spans=np.asarray(data.spans, dtype=np.float64),
+                 meta=np.array(json.dumps(data.meta())))
+    return path
+
+
+def _damaged(path: Path, why: str) -> MotionlangError:
+    return MotionlangError(f"{path}: not a readable motionlang index ({why}); make it again "
+                           "with 'motionlang index DIR -o FILE --rebuild'")
+
+
+def _arrays(path: Path) -> dict[str, np.ndarray]:
+    """The three arrays of an index file, their sizes checked before they are read."""
+    try:
+        with zipfile.ZipFile(path) as zf:
+            infos = {i.filename: i for i in zf.infolist()}
+    except (OSError, zipfile.BadZipFile, ValueError) as exc:
+        raise _damaged(path, f"not an npz archive: {exc}") from None
+    names = {"vectors.npy", "spans.npy", "meta.npy"}
+    if set(infos) != names:
+        raise _damaged(path, f"a zip archive of {len(infos)} members, not of "
+                             f"{', '.join(sorted(names))}")
+    limits.check(path, "max_memory_bytes", sum(i.file_size for i in infos.values()),
+                 "memory needed to read the index")
+    try:
+        with np.load(path, allow_pickle=False) as npz:
+            return {k: npz[k] for k in ("vectors", "spans", "meta")}
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
+        raise _damaged(path, f"an array does not read: {exc}") from None
+
+
+def load_index(path: str | Path) -> IndexData:
+    """The index in ``path``, every part checked against the others.
+
+    Raises:
+        MotionlangError: one line naming the file: missing, damaged, foreign, or written
+            by a newer motionlang.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise MotionlangError(f"{path}: no such index file (make one with 'motionlang index "
+                              "DIR -o FILE')")
+    a = _arrays(path)
+    vectors, spans, meta = a["vectors"], a["spans"], a["meta"]
+    if meta.shape != () or meta.dtype.kind != "U":
+        raise _damaged(path, "no metadata string")
+    try:
+        m = json.loads(str(meta))
+    except ValueError:
+        raise _damaged(path, "its metadata is not JSON") from None
+    if not isinstance(m, dict) or m.get("what") != WHAT:
+        raise _damaged(path, "no motionlang index metadata")
+    if not isinstance(m.get("format"), int) or m["format"] > FORMAT:
+        raise MotionlangError(f"{path}: index format {m.get('format')!r} is newer than this "
+                              f"motionlang reads ({FORMAT}); upgrade motionlang")
+    try:
+        data = IndexData(model=dict(m["model"]), root=str(m["root"]),
+                         window=float(m["window"]), hop=float(m["hop"]),
+                         entries=[Entry(**e) for e in m["entries"]],
+                         failed=[Failure(**f) for f in m["failed"]], vectors=vectors,
+                         spans=spans)
+    except (KeyError, TypeError, ValueError) as exc:
+        raise _damaged(path, f"malformed metadata: {exc}") from None
+    n = int(data.first_rows[-1])
+    if vectors.ndim != 2 or vectors.dtype != np.float32 or len(vectors) != n:
+        raise _damaged(path, f"vectors {vectors.shape} {vectors.dtype}, expected ({n}, D) "
+                             "float32")
+    if spans.shape != (n, 2) or spans.dtype.kind != "f":
+        raise _damaged(path, f"spans {spans.shape}, expected ({n}, 2)")
+    if n and not (np.isfinite(vectors).all() and np.isfinite(spans).all()):
+        raise _damaged(path, "non-finite values")
+    if any(e.rows < 0 for e in data.entries):
+        raise _damaged(path, "a negative window count")
+    return data
