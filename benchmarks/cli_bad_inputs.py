@@ -149,6 +149,15 @@ def cases() -> list[tuple[str, list[str], int]]:
         ("search --render .gif", ["search", "walks", "--index", "junk.pt", "--render",
                                   "x.gif"], 2),
     ]
+    dd = ["describe", "corpus", "-o", "d.jsonl"]
+    rows += [(f"describe DIR -o {where}", dd[:3] + [path.format(ext=".jsonl")], 2)
+             for where, path in BAD_FILES.items()]
+    rows += [(f"describe DIR {' '.join(o)}", dd + o, 2) for o in (
+        ["--segments", "--window", "0"], ["--segments", "--hop", "nan"],
+        ["--segments", "--hop", "5"], ["--bridge", "-1"], ["--workers", "0"],
+        ["--bank", "none.txt"], ["--bank", "afile", "--model", "m2l"],
+        ["--model", "junk.pt"])]
+    rows.append(("describe DIR missing", ["describe", "nodir", "-o", "d.jsonl"], 2))
     return rows
 
 

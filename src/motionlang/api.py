@@ -152,6 +152,30 @@ def describe(motion: Motion | str | Path, model: Any = None, width: int = 5, *,
                          length_penalty=length_penalty, rank=rank)
 
 
+def describe_many(paths: Any, model: Any = None, *, joint_map: dict | str | Path | None = None,
+                  show_progress: bool | None = False, **options: Any) -> list[dict]:
+    """One record per motion file of ``paths`` (a file or folder, or a list of them; folders
+    recursively), what ``motionlang describe PATHS -o FILE.jsonl`` writes a line of:
+    ``{"file", "sentences": [{"text", "log_p"}, ...]}``, ``"segments"`` instead with
+    ``segments=True``, ``"cos"`` scores with a ``bank``, ``{"file", "error"}`` for a file that
+    cannot be read. ``options``: the fields of ``library.describe.DescribeOptions``
+    (``width``, ``rank``, ``segments``, ``window``, ``hop``, ``merge``, ``bank``, ``workers``)."""
+    from motionlang.library.describe import DescribeOptions, ReadOptions, describe_run
+    run = describe_run([paths] if isinstance(paths, (str, Path)) else paths, model,
+                       DescribeOptions(**options), read=ReadOptions(joint_map=joint_map))
+    return list(run.records(show_progress=show_progress))
+
+
+def timeline(motion: Motion | str | Path, model: Any = None, *,
+             joint_map: dict | str | Path | None = None, **options: Any) -> list:
+    """A long take (a Motion or file) as ``library.timeline.Segment``s (``start``, ``end``
+    seconds, ``text``, ``score``), as ``motionlang describe --segments`` prints it;
+    ``options`` as :func:`describe_many`'s."""
+    from motionlang.library.describe import DescribeOptions, describer
+    d = describer(model, DescribeOptions(**{**options, "segments": True}))
+    return d.timeline(_motion(motion, joint_map))
+
+
 def generate_hypotheses(text: str, model: Any = None, *, width: int = 5,
                         method: str | None = None, seed: int = 0,
                         max_frames: int | None = None, min_frames: int = 5,
@@ -343,6 +367,7 @@ def search(query: str, index: Any, k: int = 10, *, model: Any = None,
 
 
 __all__ = ["read_motion", "write_motion", "read_mapped", "load_model", "describe",
+           "describe_many", "timeline",
            "generate", "encode", "fill_in", "body21", "retarget", "render", "body_motion",
            "load_rig", "first_frame", "check_map", "train", "text_to_motion",
            "generate_hypotheses", "write_result", "index", "search"]

@@ -112,8 +112,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     g.add_argument("--frames", type=frames_int, default=1000, help="frames to generate")
     g.add_argument("--noise", type=nonneg_float, default=0.0,
                    help="std of noise on the hidden biases")
-    g.add_argument("--gibbs", type=positive_int, default=30, help="Gibbs updates per frame")
-    g.add_argument("--seed", type=seed_int, default=0, help="seed of the Gibbs sampling")
     g.add_argument("--json", action="store_true", help="print the report as one JSON line")
     g.set_defaults(func=cmd_generate)
 
@@ -128,8 +126,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="what is erased and filled in")
     f.add_argument("--repeats", type=positive_int, default=100,
                    help="stochastic fill-ins averaged for the errors")
-    f.add_argument("--gibbs", type=positive_int, default=30, help="Gibbs updates per frame")
-    f.add_argument("--seed", type=seed_int, default=0, help="seed of the Gibbs sampling")
+    for q in (g, f):
+        q.add_argument("--gibbs", type=positive_int, default=30, help="Gibbs updates per frame")
+        q.add_argument("--seed", type=seed_int, default=0, help="seed of the Gibbs sampling")
     f.add_argument("--sampled", dest="mean_field", action="store_false",
                    help="write/plot a fill-in with sampled hiddens (default: mean-field, the "
                         "selected setting; the sampled one is scored beside it either way)")

@@ -27,23 +27,9 @@ def cmd_download(args: argparse.Namespace) -> int:
 
 
 def cmd_info(args: argparse.Namespace) -> int:
-    from motionlang.datasets.folders import folder_summary
+    from motionlang.datasets.folders import folder_summary, summary_text
     info = folder_summary(args.dir, args.max_seconds)
-    if args.json:
-        print(json.dumps(info, indent=2))
-        return 0
-    print(f"{info['kind']} dataset at {info['root']}")
-    if info["kind"] == "custom":
-        print(f"  motions {info['motions']}, annotations {info['annotations']}, "
-              f"without annotations {info['without_annotations']}")
-        return 0
-    for part, title in (("all", "all motions"), ("kept", f"< {info['max_seconds']:g} s")):
-        s = info[part]
-        d = s["duration_s"]
-        dur = "" if d["min"] is None else (f", duration min/median/max "
-                                           f"{d['min']:.2f}/{d['median']:.2f}/{d['max']:.2f} s")
-        print(f"  {title:>12}: motions {s['motions']}, annotations {s['annotations']}, "
-              f"without annotations {s['without_annotations']}, {s['hours']:.2f} h{dur}")
+    print(json.dumps(info, indent=2) if args.json else summary_text(info))
     return 0
 
 

@@ -24,29 +24,48 @@ from motionlang.cli.options import (
 from motionlang.errors import MotionlangError
 
 
-def add_rank_arg(p: argparse.ArgumentParser, default: str) -> None:
-    """``--rank``: how a description beam is ordered (the names of
-    ``decoding.seq2seq.RANKS``, not imported here: that would load torch for every command)."""
-    p.add_argument("--rank", choices=("logp", "mbr"), default=default,
+def add_beam_args(p: argparse.ArgumentParser, rank: str) -> None:
+    """``-w``, ``--length-penalty`` and ``--rank`` (default ``rank``) of a description beam
+    (the ranks are ``decoding.seq2seq.RANKS``, not imported here: that would load torch)."""
+    p.add_argument("-w", "--width", type=width_int, default=5,
+                   help="beam width = sentences a motion gets")
+    p.add_argument("--length-penalty", type=nonneg_float, default=0.0, metavar="ALPHA",
+                   help="beam search ranks by log P / length**ALPHA (default 0: total log P, "
+                        "the paper's; no effect with -w 1); with --rank mbr it only changes "
+                        "which sentences the beam keeps")
+    p.add_argument("--rank", choices=("logp", "mbr"), default=rank,
                    help="order of the beam's sentences: mbr puts first the one the beam "
                         "agrees on most (mean sentence BLEU against the beam, "
                         "decoding/mbr.py), logp the likeliest (the paper's; it favours the "
-                        f"shortest phrasing) (default: {default})")
+                        f"shortest phrasing) (default: {rank})")
 
 
 def cmd_describe(args: argparse.Namespace) -> int:
-    from motionlang.api import describe, load_model
-    from motionlang.cli.motion_commands import load_input
+    from motionlang.cli.config_options import config_from_args
+    from motionlang.library.describe import DescribeOptions, ReadOptions, describe_run, write_jsonl
+    options = config_from_args(DescribeOptions, args, width=args.width,
+                               length_penalty=args.length_penalty, rank=args.rank)
+    if args.output is None and len(args.input) == 1 and not Path(args.input[0]).is_dir():
+        return _describe_one(args, options)
+    read = ReadOptions(args.asf, args.source_fps, args.sequence or 1, args.joint_map)
+    run = describe_run(args.input, args.model, options, read=read)   # all checked first
+    if args.output is None:
+        for record in run.records():
+            print(json.dumps(record, ensure_ascii=False), flush=True)
+        return 0
+    n, errors = write_jsonl(run.records(), args.output)
+    print(f"{args.output}: {n - errors} of {n} files described" +
+          (f"; {errors} could not be (their \"error\" says why)" if errors else ""))
+    return 0
 
-    model = load_model(args.model, kind="m2l")   # a missing model is named first
-    hyps = describe(load_input(args), model, width=args.width,
-                    length_penalty=args.length_penalty, rank=args.rank)
-    if args.json:
-        print(json.dumps([{"rank": i + 1, "text": t, "log_p": s} for i, (t, s) in
-                          enumerate(hyps)], indent=1))
-    else:
-        for i, (text, score) in enumerate(hyps, 1):
-            print(f"{i}. log P = {score:8.3f}  {text}")
+
+def _describe_one(args: argparse.Namespace, options) -> int:
+    """One motion file, printed: its sentences, or with --segments its timeline."""
+    from motionlang.cli.motion_commands import load_input
+    from motionlang.library.describe import describer, printed
+
+    d = describer(args.model, options)   # a missing model is named first
+    print(printed(d, load_input(args, args.input[0]), as_json=args.json))
     return 0
 
 
@@ -60,9 +79,6 @@ def cmd_generate(args: argparse.Namespace) -> int:
     if out.suffix.lower() not in RESULT_OUT:   # before the model is read
         raise MotionlangError(f"{out}: output must be .bvh, .xml, .amc, .gif, .mp4, .png "
                               "or .npz")
-    if args.temperature != 1.0 and args.method == "mean":
-        raise MotionlangError("--temperature applies to 'sample' and 'beam'; mean decoding "
-                              "draws nothing")
     if args.rig_joint_map is not None and args.rig is None:
         raise MotionlangError("--rig-joint-map needs --rig")
     if args.rig is not None and out.suffix.lower() != ".bvh":
@@ -92,23 +108,31 @@ def cmd_generate(args: argparse.Namespace) -> int:
     return 0
 
 
-def register(subparsers) -> None:
-    from motionlang.cli.motion_commands import add_input_args, add_joint_map_arg
-    p = subparsers.add_parser("describe", help="describe a motion in English (M2L, beam search)")
-    add_input_args(p)
+def _add_model_arg(p: argparse.ArgumentParser, default: str | None, packaged: str,
+                   files: str) -> None:
     from motionlang.models.registry import licence_note
-    p.add_argument("--model", default="m2l", metavar="MODEL",
-                   help="a packaged model's name, an M2L model file or a training run folder "
-                        "('motionlang models' lists the packaged ones; "
-                        f"{licence_note('m2l')}; any model trained on Bandai Namco data is "
+    p.add_argument("--model", default=default, metavar="MODEL",
+                   help=f"a packaged model's name, {files} or a training run folder "
+                        f"(default: {packaged}; 'motionlang models' lists the packaged ones; "
+                        f"{licence_note(packaged)}; any model trained on Bandai Namco data is "
                         "for non-commercial use only, CC BY-NC 4.0)")
-    p.add_argument("-w", "--width", type=width_int, default=5,
-                   help="beam width = hypotheses shown")
-    p.add_argument("--length-penalty", type=nonneg_float, default=0.0, metavar="ALPHA",
-                   help="beam search ranks by log P / length**ALPHA (default 0: total log P, "
-                        "the paper's; no effect with -w 1); with --rank mbr it only changes "
-                        "which sentences the beam keeps")
-    add_rank_arg(p, "mbr")
+
+
+def register(subparsers) -> None:
+    from motionlang.cli.config_options import add_config_options
+    from motionlang.cli.motion_commands import add_input_args, add_joint_map_arg
+    from motionlang.library.describe import DescribeOptions
+    p = subparsers.add_parser("describe", help="describe motions in English: a file, a "
+                              "library (-o captions.jsonl), long takes as timelines")
+    add_input_args(p, many=True)
+    _add_model_arg(p, None, "m2l", "an M2L model file (with --bank: one that encodes "
+                   "sentences and motions, default the packaged one)")
+    add_beam_args(p, "mbr")
+    add_config_options(p, DescribeOptions)
+    p.add_argument("-o", "--output", type=output_file, metavar="FILE.jsonl",
+                   help="write one JSON line a file (its sentences or segments, or why it "
+                        "could not be read) here; several files or a folder without -o: to "
+                        "stdout")
     p.add_argument("--json", action="store_true", help="print the hypotheses as JSON")
     p.set_defaults(func=cmd_describe)
     p = subparsers.add_parser("generate", help="generate a motion from English (L2M)")
@@ -117,11 +141,7 @@ def register(subparsers) -> None:
                    help="out.gif, .mp4 (animation), .png (pose strip), .bvh (joint angles; "
                         "for position models such as two-stream fitted on a 21-joint "
                         "skeleton) or .npz (joint positions and fps)")
-    p.add_argument("--model", default="l2m", metavar="MODEL",
-                   help="a packaged model's name, an L2M or two-stream model file or a "
-                        "training run folder ('motionlang models' lists the packaged ones; "
-                        f"{licence_note('l2m')}; any model trained on Bandai Namco data is "
-                        "for non-commercial use only, CC BY-NC 4.0)")
+    _add_model_arg(p, "l2m", "l2m", "an L2M or two-stream model file")
     p.add_argument("-w", "--width", type=width_int, default=5,
                    help="hypotheses (samples or beam width)")
     p.add_argument("--method", choices=("sample", "beam", "mean"), default=None,

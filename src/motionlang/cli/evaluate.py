@@ -12,8 +12,8 @@ import argparse
 import json
 from pathlib import Path
 
-from motionlang.cli.describe_generate import add_rank_arg
-from motionlang.cli.options import nonneg_float, nonneg_int, output_file, positive_float, width_int
+from motionlang.cli.describe_generate import add_beam_args
+from motionlang.cli.options import nonneg_int, output_file, positive_float
 from motionlang.errors import MotionlangError
 
 
@@ -86,15 +86,11 @@ def register(subparsers) -> None:
                         "beside the nearest neighbour's")
     p.add_argument("--splits", metavar="DIR", help="split files (default: M2L_DIR/splits)")
     p.add_argument("--split", default="test", help="the split to evaluate (of --splits)")
-    p.add_argument("-w", "--width", type=width_int, default=5,
-                   help="M2L beam width: hypotheses per motion")
     p.add_argument("--limit", type=nonneg_int, default=0, help="evaluate at most N motions")
     p.add_argument("--max-seconds", type=positive_float, default=30.0,
                    help="drop longer motions (as in training)")
     p.add_argument("-o", "--output", type=output_file, help="report.json (+ report.md beside it)")
     p.add_argument("--tsne", metavar="PNG", type=output_file,
                    help="also plot the context vectors' t-SNE map")
-    p.add_argument("--length-penalty", type=nonneg_float, default=0.0, metavar="ALPHA",
-                   help="rank M2L hypotheses by log P / length**ALPHA (default 0: total, the paper's)")
-    add_rank_arg(p, "logp")   # the paper's protocol; --rank mbr scores what describe shows
+    add_beam_args(p, "logp")   # the paper's protocol; --rank mbr scores what describe shows
     p.set_defaults(func=cmd_evaluate)

@@ -16,9 +16,10 @@ from motionlang.errors import MotionlangError
 from motionlang.kinematics import Motion
 
 
-def add_input_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("input", metavar="IN",
-                   help="motion file: .xml (KIT MMM), .bvh, .amc or .mat (MIT walking data)")
+def add_input_args(p: argparse.ArgumentParser, many: bool = False) -> None:
+    p.add_argument("input", metavar="IN", nargs="+" if many else None,
+                   help="motion file: .xml (KIT MMM), .bvh, .amc or .mat (MIT walking data)"
+                        + ("; or several, and folders (their motion files)" if many else ""))
     p.add_argument("--asf", metavar="PATH", default=None,
                    help="ASF skeleton of an .amc input (default: <subject>.asf next to it)")
     p.add_argument("--source-fps", type=positive_float, default=None, metavar="HZ",
@@ -35,12 +36,12 @@ def add_joint_map_arg(p: argparse.ArgumentParser) -> None:
                         "template FILE > map.json'; default: chosen by joint names)")
 
 
-def load_input(args: argparse.Namespace) -> Motion:
-    """Read ``args.input`` (with ``--asf`` / ``--source-fps`` for AMC files, ``--sequence``
-    for MAT files; a ``--joint-map`` is checked against the rig at once)."""
+def load_input(args: argparse.Namespace, path: str | None = None) -> Motion:
+    """Read ``path`` (default ``args.input``; with ``--asf`` / ``--source-fps`` for AMC
+    files, ``--sequence`` for MAT files; a ``--joint-map`` is checked against the rig)."""
     from motionlang.api import read_mapped
 
-    path = Path(args.input)
+    path = Path(path or args.input)
     ext = path.suffix.lower()
     if ext != ".amc" and (args.asf is not None or args.source_fps is not None):
         raise MotionlangError(f"{path}: --asf and --source-fps apply to .amc inputs only")
@@ -57,22 +58,11 @@ def add_clip_args(p: argparse.ArgumentParser) -> None:
 
 # ------------------------------------------------------------------ info
 def cmd_info(args: argparse.Namespace) -> int:
-    from motionlang.formats import motion_info
+    from motionlang.formats import info_text, motion_info
 
     info = motion_info(load_input(args))
     info["path"] = str(args.input)
-    if args.json:
-        print(json.dumps(info, indent=2))
-        return 0
-    names = info["joint_names"]
-    shown = ", ".join(names[:8]) + (f", ... ({len(names)} in all)" if len(names) > 8 else "")
-    print(f"{info['path']}")
-    print(f"  format    {info['source_format']}  (skeleton {info.get('skeleton', '?')})")
-    print(f"  frames    {info['frames']} at {info['fps']:g} Hz = {info['duration_s']:.2f} s")
-    print(f"  joints    {info['joints']} with {info['dofs']} DOFs (+ root), "
-          f"{info['nodes']} skeleton nodes")
-    print(f"  body      {info['stature_m']:.2f} m tall; lengths in {info['unit']}")
-    print(f"  names     {shown}")
+    print(json.dumps(info, indent=2) if args.json else info_text(info))
     return 0
 
 

@@ -10,30 +10,17 @@ from __future__ import annotations
 
 import argparse
 import json
-import textwrap
 
 from motionlang.cli.motion_commands import add_input_args, load_input
 
 
 def cmd_show(args: argparse.Namespace) -> int:
-    from motionlang.features.joint_map import rig_summary, spec_text
+    from motionlang.features.joint_map import rig_summary, summary_text
 
     motion = load_input(args)
     s = rig_summary(motion.skeleton, motion.meta.get("joint_map"))
-    if args.json:
-        print(json.dumps({"path": str(args.input), **s}, indent=2))
-        return 0
-    wrap = textwrap.TextWrapper(width=92, initial_indent=" " * 11, subsequent_indent=" " * 11)
-    print(f"{args.input}")
-    print(f"  rig      {s['rig']}: {len(s['joints'])} joints"
-          + (f" (+ {s['end_sites']} end sites)" if s["end_sites"] else ""))
-    print(wrap.fill(", ".join(s["joints"])))
-    print(f"  map      {s['map']}: {s['about']}")
-    print("  body joint <- rig joint")
-    for k, spec in s["body"].items():
-        print(f"    {k:<6} <- {spec_text(spec)}")
-    if s["unused"]:
-        print("  unused   " + wrap.fill(", ".join(s["unused"])).lstrip())
+    print(json.dumps({"path": str(args.input), **s}, indent=2) if args.json else
+          f"{args.input}\n{summary_text(s)}")
     return 0
 
 

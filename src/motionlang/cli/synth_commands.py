@@ -25,12 +25,7 @@ def register_synth(data_subparsers) -> None:
 
 def _run(args) -> int:
     from motionlang.datasets.synth.corpus import write_corpus
-    from motionlang.errors import DatasetError
 
-    if args.n < 1:
-        raise DatasetError(f"--n must be at least 1, got {args.n}")
-    if args.start < 0 or args.seed < 0:
-        raise DatasetError(f"--start and --seed must be >= 0, got {args.start}, {args.seed}")
     t0 = time.perf_counter()
     ids = write_corpus(args.out, args.n, args.seed, start=args.start, workers=args.workers)
     print(f"wrote {len(ids)} motions ({ids[0]}..{ids[-1]}) to {args.out} "

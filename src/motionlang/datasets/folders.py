@@ -46,6 +46,23 @@ def folder_summary(folder: str | Path, max_seconds: float = 30.0) -> dict:
             "without_annotations": sum(not r.has_annotations for r in recs)}
 
 
+def summary_text(info: dict) -> str:
+    """:func:`folder_summary` as ``motionlang data info`` prints it."""
+    lines = [f"{info['kind']} dataset at {info['root']}"]
+    if info["kind"] == "custom":
+        return "\n".join([*lines, f"  motions {info['motions']}, annotations "
+                           f"{info['annotations']}, without annotations "
+                           f"{info['without_annotations']}"])
+    for part, title in (("all", "all motions"), ("kept", f"< {info['max_seconds']:g} s")):
+        s = info[part]
+        d = s["duration_s"]
+        dur = "" if d["min"] is None else (f", duration min/median/max "
+                                           f"{d['min']:.2f}/{d['median']:.2f}/{d['max']:.2f} s")
+        lines.append(f"  {title:>12}: motions {s['motions']}, annotations {s['annotations']}, "
+                     f"without annotations {s['without_annotations']}, {s['hours']:.2f} h{dur}")
+    return "\n".join(lines)
+
+
 def split_folder(folder: str | Path, out: str | Path, fractions: Sequence[float] = (0.8, 0.1, 0.1),
                  seed: int = 0, max_seconds: float | None = 30.0) -> dict[Path, int]:
     """Split a folder's motions at random (``splits.random_split``) into ``out``'s

@@ -338,6 +338,20 @@ def spec_text(spec: Spec) -> str:
     return f"{spec[0]}({args})"
 
 
+def summary_text(s: dict) -> str:
+    """A :func:`rig_summary` as ``motionlang rig show`` prints it."""
+    import textwrap
+    wrap = textwrap.TextWrapper(width=92, initial_indent=" " * 11, subsequent_indent=" " * 11)
+    lines = [f"  rig      {s['rig']}: {len(s['joints'])} joints"
+             + (f" (+ {s['end_sites']} end sites)" if s["end_sites"] else ""),
+             wrap.fill(", ".join(s["joints"])), f"  map      {s['map']}: {s['about']}",
+             "  body joint <- rig joint",
+             *(f"    {k:<6} <- {spec_text(spec)}" for k, spec in s["body"].items())]
+    if s["unused"]:
+        lines.append("  unused   " + wrap.fill(", ".join(s["unused"])).lstrip())
+    return "\n".join(lines)
+
+
 def map_json(d: dict) -> str:
     """A joint map (e.g. :func:`template_map`'s) as JSON with one line per body joint, to
     edit by hand (``json.dumps`` would spread every ``["mid", a, b]`` over four lines)."""

@@ -185,4 +185,19 @@ def motion_info(motion: Motion) -> dict:
             "stature_m": float(stature if stature is not None else motion_stature(motion))}
 
 
-__all__ = ["read_motion", "write_motion", "motion_info", "find_asf", "read_joint_map"]
+def info_text(info: dict) -> str:
+    """A :func:`motion_info` (with its ``path``) as ``motionlang info`` prints it."""
+    names = info["joint_names"]
+    shown = ", ".join(names[:8]) + (f", ... ({len(names)} in all)" if len(names) > 8 else "")
+    return "\n".join([
+        f"{info['path']}",
+        f"  format    {info['source_format']}  (skeleton {info.get('skeleton', '?')})",
+        f"  frames    {info['frames']} at {info['fps']:g} Hz = {info['duration_s']:.2f} s",
+        f"  joints    {info['joints']} with {info['dofs']} DOFs (+ root), "
+        f"{info['nodes']} skeleton nodes",
+        f"  body      {info['stature_m']:.2f} m tall; lengths in {info['unit']}",
+        f"  names     {shown}"])
+
+
+__all__ = ["read_motion", "write_motion", "motion_info", "info_text", "find_asf",
+           "read_joint_map"]

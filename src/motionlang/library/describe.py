@@ -1,0 +1,334 @@
+"""Describing a whole library: many files in one process (the model loaded once, or once per
+worker process), long takes as timelines, and sentences from a bank instead of a model's own.
+
+Each file gives one record, a dict that is also its JSON line::
+
+    {"file": "takes/walk.bvh", "sentences": [{"text": "a person walks", "log_p": -3.2}, ...]}
+    {"file": "takes/long.bvh", "segments": [{"start": 0.0, "end": 4.0, "text": ...,
+                                            "log_p": ...}, ...]}
+    {"file": "takes/broken.bvh", "error": "takes/broken.bvh:12: ..."}
+
+A bank's scores are cosines (``"cos"``), a model's log probabilities (``"log_p"``); scores are
+rounded to 4 decimals so that records compare equal whatever process or thread count made
+them. A file that cannot be read or described is a record with its reason, never the end of
+the run.
+"""
+from __future__ import annotations
+
+import copy
+import json
+import os
+from collections.abc import Iterable, Iterator, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from motionlang.errors import MotionlangError
+from motionlang.library.bank import SentenceBank
+from motionlang.library.timeline import MERGES, Segment, merge_windows
+from motionlang.library.windows import motion_windows, span
+from motionlang.utils.checks import MAX_WIDTH, check_numbers
+
+RANKS = ("mbr", "logp")   # decoding.seq2seq.RANKS, named here without importing torch
+
+
+def _option(default: Any, help_: str, **meta: Any) -> Any:
+    return field(default=default, metadata={"help": help_, **meta})
+
+
+@dataclass(frozen=True)
+class DescribeOptions:
+    """How motions are described. The fields with a help text are ``motionlang describe``
+    options (``cli/config_options.py``); ``width``, ``length_penalty`` and ``rank`` are its
+    beam options, given by hand there."""
+
+    width: int = 5
+    length_penalty: float = 0.0
+    rank: str = "mbr"
+    segments: bool = _option(False, "describe overlapping windows of each take and merge "
+                             "neighbours that say the same thing: a timeline of (start, "
+                             "end, sentence) segments")
+    window: float = _option(3.0, "--segments: window length in seconds", metavar="S")
+    hop: float = _option(1.0, "--segments: seconds between window starts (at most the "
+                         "window)", metavar="S")
+    merge: str = _option("action", "--segments: neighbours are merged when they name the "
+                         "same action (main verb and side: left, right, both, back) or the "
+                         "same sentence", choices=MERGES)
+    bridge: int = _option(1, "--segments: a run of at most N windows between two that "
+                          "agree is taken for a flicker and joins them (0: none is)",
+                          metavar="N")
+    bank: str | None = _option(None, "describe by retrieval: the nearest sentences of this "
+                               "bank (one sentence a line, captions.csv/.jsonl, or KIT-ML's "
+                               "annotations .json) in the joint space of a model that encodes "
+                               "both (--model; default: the packaged one), scored by cosine",
+                               metavar="FILE")
+    workers: int = _option(1, "processes describing files, each loading the model once "
+                           "(at most the CPU count)", metavar="N")
+
+    def __post_init__(self) -> None:
+        check_numbers("DescribeOptions", self, positive_ints=("workers", "width"),
+                      nonneg_ints=("bridge",),
+                      positive=("window", "hop"), nonneg=("length_penalty",))
+        if self.width > MAX_WIDTH:
+            raise MotionlangError(f"DescribeOptions.width must be an integer in "
+                                  f"1..{MAX_WIDTH}, got {self.width}")
+        if self.hop > self.window:
+            raise MotionlangError(f"DescribeOptions.hop ({self.hop:g}) must not exceed "
+                                  f"DescribeOptions.window ({self.window:g}): time between "
+                                  "windows would go undescribed")
+        for name, allowed in (("rank", RANKS), ("merge", MERGES)):
+            if getattr(self, name) not in allowed:
+                raise MotionlangError(f"DescribeOptions.{name} must be one of "
+                                      f"{', '.join(allowed)}, got {getattr(self, name)!r}")
+
+
+@dataclass(frozen=True)
+class ReadOptions:
+    """How files are read: the ``read_motion`` options that apply to some formats only
+    (``skeleton``, ``fps``: AMC; ``sequence``: MAT), and a joint map for every file."""
+
+    skeleton: str | None = None
+    fps: float | None = None
+    sequence: int = 1
+    joint_map: dict | str | Path | None = None
+
+    def read(self, path: Path):
+        from motionlang.formats import read_motion
+        ext = path.suffix.lower()
+        kw: dict[str, Any] = {"skeleton": self.skeleton, "fps": self.fps} if ext == ".amc" \
+            else {"sequence": self.sequence} if ext == ".mat" else {}
+        motion = read_motion(path, joint_map=self.joint_map, **kw)
+        if self.joint_map is not None:   # a map that does not fit this rig: this file's error
+            from motionlang.features.joint_map import match_rig
+            match_rig(motion.skeleton, joint_map=motion.meta["joint_map"])
+        return motion
+
+
+def load_describer_model(model: Any, options: DescribeOptions) -> tuple[Any, Path | None]:
+    """``(model, the file it was read from or None)``. Without a bank: ``model`` (loaded, a
+    name, a file, a run folder; None: the packaged m2l) of a kind that describes; with one,
+    an ``Embedder`` (``library.embedder``) of a model that encodes sentences and motions
+    (None: ``bank.default_bank_model``)."""
+    from motionlang.models.registry import kinds_with, load_model, resolve
+    named = model is None or isinstance(model, (str, Path))
+    if options.bank:
+        from motionlang.library.bank import default_bank_model
+        from motionlang.library.embedder import Embedder
+        name = default_bank_model() if model is None else model
+        return Embedder.load(name), resolve(name) if named else None
+    if not named:
+        return model, None
+    return load_model(model or "m2l", kind=kinds_with("describes")), resolve(model or "m2l")
+
+
+class Describer:
+    """A loaded model with its options: sentences, timelines and records of motions.
+    ``model`` is a model that describes or, with a ``bank``, an ``Embedder`` of a model
+    that encodes both sentences and motions."""
+
+    def __init__(self, model: Any, options: DescribeOptions, bank: SentenceBank | None = None,
+                 read: ReadOptions | None = None):
+        if (bank is None) != (options.bank is None):
+            raise MotionlangError("a sentence bank goes with the bank option, both or neither")
+        self.model, self.options, self.bank = model, options, bank
+        self.reading = read or ReadOptions()
+
+    def detached(self) -> Describer:
+        """A copy without the model's weights, to send to a worker that loads them."""
+        shell = copy.copy(self)
+        if self.bank is None:
+            shell.model = None
+        else:
+            shell.model = copy.copy(self.model)
+            shell.model.model = None
+        return shell
+
+    def attach(self, loaded: Any) -> None:
+        """Put a loaded model into a :meth:`detached` describer."""
+        if self.bank is None:
+            self.model = loaded
+        else:
+            self.model.model = loaded
+
+    @property
+    def score_key(self) -> str:
+        """The name of the score in records: a bank's cosine or a model's log P."""
+        return "log_p" if self.bank is None else "cos"
+
+    def sentences(self, motion) -> list[tuple[str, float]]:
+        """``[(sentence, score), ...]`` best first, ``width`` of them."""
+        o = self.options
+        if self.bank is not None:
+            return self.bank.nearest(self.model.motion(motion), o.width)
+        from motionlang.decoding.seq2seq import describe
+        return describe(self.model, motion, width=o.width, length_penalty=o.length_penalty,
+                        rank=o.rank)
+
+    def timeline(self, motion) -> list[Segment]:
+        """The take as segments (``library.timeline``) of its windows' first sentences."""
+        o = self.options
+        parts = motion_windows(motion, o.window, o.hop)
+        labels = [self.sentences(part)[0] for _, part in parts]
+        return merge_windows([w for w, _ in parts], labels, end=span(motion), merge=o.merge,
+                             bridge=o.bridge)
+
+    def segment_dicts(self, segments: Sequence[Segment]) -> list[dict]:
+        return [{"start": s.start, "end": s.end, "text": s.text,
+                 self.score_key: round(s.score, 4)} for s in segments]
+
+    def record(self, path: str | Path) -> dict:
+        """The record of one file (module docstring); its failure is its record."""
+        out: dict[str, Any] = {"file": str(path)}
+        try:
+            motion = self.reading.read(Path(path))
+            if self.options.segments:
+                out["segments"] = self.segment_dicts(self.timeline(motion))
+            else:
+                out["sentences"] = [{"text": t, self.score_key: round(s, 4)}
+                                    for t, s in self.sentences(motion)]
+        except MotionlangError as exc:
+            out["error"] = " ".join(str(exc).split())
+        except Exception as exc:   # noqa: BLE001 - one odd take must not end a long run
+            out["error"] = f"{type(exc).__name__}: {' '.join(str(exc).split())}"
+        return out
+
+
+def _bank(embedder: Any, options: DescribeOptions,
+          show_progress: bool | None) -> SentenceBank | None:
+    from motionlang.library.bank import embed_bank, read_bank
+    if not options.bank:
+        return None
+    return embed_bank(embedder, read_bank(options.bank), show_progress=show_progress)
+
+
+def describer(model: Any = None, options: DescribeOptions | None = None, *,
+              bank: SentenceBank | None = None, read: ReadOptions | None = None,
+              show_progress: bool | None = None) -> Describer:
+    """A :class:`Describer` of ``model`` (loaded, a name, a file, a run folder; None: the
+    packaged default), its bank read and embedded when ``options.bank`` names one (cached
+    per model: ``bank.embed_bank``) unless ``bank`` is given."""
+    options = options or DescribeOptions()
+    loaded = load_describer_model(model, options)[0]
+    bank = bank or _bank(loaded, options, show_progress)
+    return Describer(loaded, options, bank, read)
+
+
+def printed(d: Describer, motion, *, as_json: bool = False) -> str:
+    """What ``motionlang describe FILE`` prints of one motion: ``1. log P =   -3.210  a
+    person walks`` lines (a bank's: ``cos =``), or with segments ``0.0-4.0 s  a person
+    walks`` lines; ``as_json``: a JSON list of the sentences (with their rank) or segments."""
+    if d.options.segments:
+        segments = d.timeline(motion)
+        return json.dumps(d.segment_dicts(segments), indent=1) if as_json else \
+            "\n".join(s.line() for s in segments)
+    hyps, label = d.sentences(motion), "log P" if d.bank is None else "cos"
+    if as_json:
+        return json.dumps([{"rank": i + 1, "text": t, d.score_key: s}
+                           for i, (t, s) in enumerate(hyps)], indent=1)
+    return "\n".join(f"{i}. {label} = {score:8.3f}  {text}"
+                     for i, (text, score) in enumerate(hyps, 1))
+
+
+_WORKER: Describer | None = None
+
+
+def _start_worker(model_file: Path | None, describer_: Describer, threads: int) -> None:
+    """A worker process: its describer, the model loaded from its file once (or sent
+    whole when it came loaded)."""
+    global _WORKER
+    import torch
+    torch.set_num_threads(threads)
+    if model_file is not None:
+        from motionlang.models.registry import load_model
+        describer_.attach(load_model(model_file))
+    _WORKER = describer_
+
+
+def _worker_record(path: Path) -> dict:
+    assert _WORKER is not None, "worker not started"
+    return _WORKER.record(path)
+
+
+@dataclass
+class DescribeRun:
+    """Files to describe and the describer, checked before anything is written."""
+
+    files: list[Path]
+    describer: Describer
+    model_file: Path | None = None
+
+    def records(self, *, show_progress: bool | None = None) -> Iterator[dict]:
+        """One record per file, in order; ``options.workers`` processes (at most the CPU
+        count and the files), each loading the model once."""
+        from motionlang.utils.progress import progress
+        d = self.describer
+        workers = max(1, min(d.options.workers, os.cpu_count() or 1, len(self.files)))
+        bar = progress(total=len(self.files), desc="describe", unit="files",
+                       disable=None if show_progress is None else not show_progress)
+        with bar:
+            if workers == 1:
+                for path in self.files:
+                    yield d.record(path)
+                    bar.update(1)
+                return
+            yield from self._in_workers(workers, bar)
+
+    def _in_workers(self, workers: int, bar) -> Iterator[dict]:
+        import multiprocessing
+
+        import torch
+        d = self.describer   # a file is cheaper to send than the weights
+        shell = d.detached() if self.model_file is not None else d
+        threads = max(1, torch.get_num_threads() // workers)
+        # spawned, not forked: a fork of a process whose torch runs threads can hang
+        ctx = multiprocessing.get_context("spawn")
+        with ctx.Pool(workers, initializer=_start_worker,
+                      initargs=(self.model_file, shell, threads)) as pool:
+            for rec in pool.imap(_worker_record, self.files):
+                yield rec
+                bar.update(1)
+
+
+def motion_paths(inputs: Iterable[str | Path]) -> list[Path]:
+    """Every motion file of ``inputs``, each once, in the order given: a file as named
+    (whatever its extension: the reader says why it cannot read it), a folder's motion files
+    (``library.scan.motion_files``: recursive, the extensions the readers know).
+
+    Raises:
+        MotionlangError: an input that does not exist, or no motion file at all.
+    """
+    from motionlang.library.scan import motion_files
+    out: dict[Path, None] = {}
+    given = [Path(p) for p in inputs]
+    for path in given:
+        if not path.exists():
+            raise MotionlangError(f"{path}: no such file or folder")
+        out.update(dict.fromkeys(motion_files(path) if path.is_dir() else [path]))
+    if not out:
+        raise MotionlangError(f"{', '.join(map(str, given[:3]))}: no motion files")
+    return list(out)
+
+
+def describe_run(paths: Iterable[str | Path], model: Any = None,
+                 options: DescribeOptions | None = None, *, read: ReadOptions | None = None,
+                 show_progress: bool | None = None) -> DescribeRun:
+    """The run of ``paths`` (files and folders, ``library.files``): the model loaded and
+    checked first, then the inputs listed, the bank embedded last."""
+    options = options or DescribeOptions()
+    loaded, where = load_describer_model(model, options)
+    files = motion_paths(paths)
+    bank = _bank(loaded, options, show_progress)
+    return DescribeRun(files, Describer(loaded, options, bank, read), where)
+
+
+def write_jsonl(records: Iterable[dict], out: str | Path) -> tuple[int, int]:
+    """Write records as JSON lines to ``out`` (atomically: the file appears complete or not
+    at all); returns (records, errors among them)."""
+    from motionlang.utils.atomic import atomic_write
+    n = errors = 0
+    with atomic_write(out) as fh:
+        for rec in records:
+            fh.write(json.dumps(rec, ensure_ascii=False) + "\n")
+            n += 1
+            errors += "error" in rec
+    return n, errors
