@@ -104,7 +104,13 @@ def test_generate_reads_the_sampling_options_of_the_model_value():
     t2m = ml.text_to_motion("l2m:method=sample,width=2")
     assert t2m.default_method() == "sample" and t2m.options.width == 2
     assert ml.text_to_motion("l2m").default_method() == "mean"   # the packaged L2M's own way
-    hyps, fps = ml.generate_hypotheses("a person walks forward", "l2m:method=sample", width=2,
+    hyps, fps = ml.generate_hypotheses("a person walks forward", "l2m:method=sample,width=2",
                                        max_frames=8, seed=0)
     mean = ml.generate_hypotheses("a person walks forward", "l2m", width=2, max_frames=8)[0]
     assert len(hyps) == 2 and len(mean) == 1 and fps == pytest.approx(12.5)
+    # every option of the value reaches generation, and an explicit argument wins
+    hot = ml.generate_hypotheses("a person walks forward",
+                                 "l2m:method=sample,width=2,temperature=0.5", max_frames=8)[0]
+    assert [s for _, s in hot] != [s for _, s in hyps]
+    assert len(ml.generate_hypotheses("a person walks forward", "l2m:method=sample,width=2",
+                                      width=3, max_frames=8)[0]) == 3

@@ -176,10 +176,10 @@ def timeline(motion: Motion | str | Path, model: Any = None, *,
     return d.timeline(_motion(motion, joint_map))
 
 
-def generate_hypotheses(text: str, model: Any = None, *, width: int = 5,
+def generate_hypotheses(text: str, model: Any = None, *, width: int | None = None,
                         method: str | None = None, seed: int = 0,
                         max_frames: int | None = None, min_frames: int = 5,
-                        temperature: float = 1.0, length_norm: bool = False,
+                        temperature: float | None = None, length_norm: bool | None = None,
                         rerank: Any = None, start_from: Motion | str | Path | None = None,
                         joint_map: dict | str | Path | None = None,
                         foot_lock: bool = True) -> tuple[list[tuple[Any, float]], float]:
@@ -188,8 +188,10 @@ def generate_hypotheses(text: str, model: Any = None, *, width: int = 5,
     models) or global 21-joint positions (T, 21, 3) metres; the score is the log likelihood
     (with ``rerank``: the M2L's log P(text | motion)), NaN for deterministic models.
 
-    model: as :func:`text_to_motion` (None: the packaged L2M). width: hypotheses (samples
-    or beam width). method: None for the model's own way, else "sample", "beam" or "mean".
+    model: as :func:`text_to_motion` (None: the packaged L2M; ``"NAME:key=value"`` sets
+    its sampling options, which ``width``, ``method``, ``temperature``, ``length_norm`` and
+    ``rerank`` override when given). width: hypotheses (samples or beam width; default 5).
+    method: None for the model's own way, else "sample", "beam" or "mean".
     max_frames: length cap in model frames (a model told its length generates exactly
     this many). min_frames: no end before this many frames. temperature: sharpen the
     mixture when sampling. length_norm: rank by log likelihood per frame. rerank: an M2L
@@ -201,10 +203,18 @@ def generate_hypotheses(text: str, model: Any = None, *, width: int = 5,
         MotionlangError: options that contradict each other or the model, checked before
             anything is generated.
     """
-    if temperature != 1.0 and method == "mean":
+    if temperature not in (None, 1.0) and method == "mean":   # before any model is read
         raise MotionlangError("temperature applies to 'sample' and 'beam'; mean decoding "
                               "draws nothing")
     t2m = text_to_motion(model)
+    given = t2m.describe_options()   # what the model's options set away from their defaults
+    width = width if width is not None else given.get("width", 5)
+    temperature = temperature if temperature is not None else given.get("temperature", 1.0)
+    length_norm = length_norm if length_norm is not None else given.get("length_norm", False)
+    rerank = rerank if rerank is not None else given.get("rerank")
+    if temperature != 1.0 and method == "mean":
+        raise MotionlangError("temperature applies to 'sample' and 'beam'; mean decoding "
+                              "draws nothing")
     if temperature != 1.0 and t2m.deterministic:
         raise MotionlangError(f"temperature applies to models that sample; this "
                               f"{t2m.model.kind} model is deterministic")

@@ -142,8 +142,9 @@ def register(subparsers) -> None:
                         "for position models such as two-stream fitted on a 21-joint "
                         "skeleton) or .npz (joint positions and fps)")
     _add_model_arg(p, "l2m", "l2m", "an L2M or two-stream model file")
-    p.add_argument("-w", "--width", type=width_int, default=5,
-                   help="hypotheses (samples or beam width)")
+    p.add_argument("-w", "--width", type=width_int, default=None,
+                   help="hypotheses (samples or beam width; default: the model value's width "
+                        "option, else 5)")
     p.add_argument("--method", choices=("sample", "beam", "mean"), default=None,
                    help="W ancestral samples, the paper's sampled beam (ranked by likelihood, "
                         "it favours standing still), or the mixture's expected frames "
@@ -159,9 +160,9 @@ def register(subparsers) -> None:
                         "sentence; a two-stream model without one: 125 = 10 s)")
     p.add_argument("--min-frames", type=nonneg_int, default=5,
                    help="no end-of-motion before this many model frames (default 5)")
-    p.add_argument("--length-norm", action="store_true",
+    p.add_argument("--length-norm", action="store_true", default=None,
                    help="rank hypotheses (beam, sample) by log likelihood per frame (default: total)")
-    p.add_argument("--temperature", type=positive_float, default=1.0, metavar="TAU",
+    p.add_argument("--temperature", type=positive_float, default=None, metavar="TAU",
                    help="sample (beam, sample) from the mixture sharpened by TAU: weights "
                         "softmax(logits / TAU), deviations x TAU (default 1: as trained)")
     p.add_argument("--rerank", metavar="M2L", help="rank the W motions by this M2L model's "
