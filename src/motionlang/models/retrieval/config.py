@@ -46,7 +46,10 @@ class RetrievalConfig:
         temperature: of InfoNCE over cosine similarities (TMR's 0.1).
         duplicate: two captions whose frozen sentence vectors have a cosine at or above this
             are not each other's negatives (TMR filters near-duplicates so); identical
-            captions never are. 1 leaves only identical ones out.
+            captions never are. 1 leaves only identical ones out. The default is high
+            because MiniLM puts captions that differ only in a side ("waves the left hand",
+            "... the right hand") almost as close as rewordings of one caption, and those
+            are the negatives that teach left from right.
         window: seconds of the random crops trained on (whole motions are encoded).
     """
 
@@ -56,7 +59,7 @@ class RetrievalConfig:
     text_model: str = "minilm"
     text_layer: int = 6
     hidden: int = _opt(128, "width of the motion encoder (a transformer over the frames)")
-    layers: int = _opt(3, "transformer layers of the motion encoder")
+    layers: int = _opt(2, "transformer layers of the motion encoder")
     heads: int = _opt(4, "attention heads of the motion encoder (divides --hidden)")
     text_hidden: int = _opt(512, "hidden units of the projection of the frozen sentence "
                                  "vectors")

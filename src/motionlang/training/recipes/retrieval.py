@@ -186,6 +186,13 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
                 {"model": "retrieval", "data": [str(s) for s in sources], "resume": resume,
                  **config.to_dict(), **dataclasses.asdict(data_cfg),
                  **dataclasses.asdict(train_cfg)})
+    # every caption through the frozen encoder once, in large batches, before training
+    started = time.perf_counter()
+    captions = sorted({str(it["sentence"]) for part in data.items.values() for it in part})
+    text.vectors(captions)
+    if lead:
+        print(f"sentence vectors of {len(captions)} captions: "
+              f"{time.perf_counter() - started:.0f} s")
     torch.manual_seed(train_cfg.seed)
     config = dataclasses.replace(config, n_features=data.features.dim, fps=data.features.fps)
     model = RetrievalModel(config, data.features, text)

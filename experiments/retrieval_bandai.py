@@ -1,0 +1,147 @@
+"""Text -> motion retrieval on the Bandai Namco test takes: a retrieval model
+(``train retrieval``) against a text-motion evaluator's encoders (``train evaluator``) on
+the same pairs, and search queries in words the training captions do not use.
+
+    OMP_NUM_THREADS=2 .venv/bin/python experiments/retrieval_bandai.py \
+        --retrieval RUN/model.pt --evaluator EVAL_RUN [--data bandai:../shared/data/bandai] \
+        [--corpus CORPUS] [--json out.json]
+
+Pairs: one caption per test take (dataset 2, take numbers 0 mod 5), drawn as the yardstick
+draws them (``evaluation.t2m.yardstick.test_pairs``, seed 0). Each caption ranks every test
+take, each take every caption (``metrics.t2m.retrieval_scores``), with three ideas of a hit:
+the pair's own take only; any take of the same label (action and style: Bandai's captions
+are written from the labels, so these captions cannot tell such takes apart); any take of
+the same action. The evaluator is scored by cosine (as the yardstick's TMR columns) and by
+its own Euclidean distance. Queries: one sentence per action of the test takes, its action
+named in other words; precision@5 is the share of the five best-ranked takes that show the
+action. ``--corpus``: the procedural corpus trained on too, so that the query words found in
+any training caption are listed. A few minutes; CC BY-NC data.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import re
+from pathlib import Path
+
+import numpy as np
+
+import motionlang as ml
+from motionlang.evaluation.metrics.t2m import euclidean_distance_matrix, retrieval_scores
+from motionlang.evaluation.t2m.guo import load_evaluator
+from motionlang.evaluation.t2m.yardstick import evaluator_body, test_pairs
+from motionlang.training.evaluator_train import build_evaluator_data
+
+#: one query per action of the test takes, the action in words the captions do not use
+QUERIES = {
+    "walk": "somebody strolls along at an easy pace",
+    "walk-turn-left": "somebody strolls and veers round leftward",
+    "walk-turn-right": "somebody strolls and veers round rightward",
+    "run": "somebody hurries along at a trot",
+    "wave-both-hands": "somebody greets using both palms",
+    "wave-left-hand": "somebody greets using the left palm",
+    "wave-right-hand": "somebody greets using the right palm",
+    "raise-up-both-hands": "somebody reaches skyward using both palms",
+    "raise-up-left-hand": "somebody reaches skyward using the left palm",
+    "raise-up-right-hand": "somebody reaches skyward using the right palm",
+}
+WORD = re.compile(r"[a-z]+")
+
+
+def hit_sets(labels: list[tuple[str, str]]) -> dict[str, np.ndarray]:
+    """(content, style) of each pair -> {name: (N, N) bool hits}."""
+    content = np.array([c for c, _ in labels])
+    label = np.array([f"{c}/{s}" for c, s in labels])
+    return {"pair": np.eye(len(labels), dtype=bool),
+            "label": label[:, None] == label[None],
+            "action": content[:, None] == content[None]}
+
+
+def precision_at(sims: np.ndarray, content: list[str], k: int = 5) -> dict[str, float]:
+    """(queries, takes) similarities of the :data:`QUERIES` -> precision@k per action."""
+    out = {}
+    for (action, _), row in zip(QUERIES.items(), sims):
+        top = np.argsort(-row, kind="stable")[:k]
+        out[action] = float(np.mean([content[j] == action for j in top]))
+    return out
+
+
+def training_words(data: str, corpus: str | None) -> set[str]:
+    """Every word of every training caption of ``data`` (and ``corpus``)."""
+    from motionlang.datasets.seq2seq_pairs import load_records
+    words: set[str] = set()
+    for source in [data] + ([corpus] if corpus else []):
+        for r in load_records(source, 30.0):
+            if getattr(r, "split", "train") in ("train", None):
+                for a in r.annotations:
+                    words |= set(WORD.findall(a.lower()))
+    return words
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--retrieval", required=True, help="retrieval model (file or run folder)")
+    ap.add_argument("--evaluator", required=True, help="text-motion evaluator (file or run)")
+    ap.add_argument("--data", default="bandai:../shared/data/bandai", help="Bandai source")
+    ap.add_argument("--corpus", help="the procedural corpus the model was also trained on")
+    ap.add_argument("--json", help="also write the figures here")
+    args = ap.parse_args(argv)
+
+    model = ml.load_model(args.retrieval, kind="retrieval")
+    evaluator = load_evaluator(args.evaluator)
+    from motionlang.datasets.seq2seq_pairs import load_records
+    tests = [r for r in load_records(args.data, 30.0) if r.split == "test"]
+    built = build_evaluator_data(tests, evaluator_body(evaluator), seed=0,
+                                 bones=evaluator.config.bones)
+    pairs = test_pairs(built.items["test"], 0)
+    records = [built.records[p["id"]] for p in pairs]
+    labels = [(r.labels["content"], r.labels["style"]) for r in records]
+    captions = [p["caption"] for p in pairs]
+    print(f"{len(pairs)} test takes, {len({c for c, _ in labels})} actions, "
+          f"{len(set(labels))} labels, {len(set(captions))} distinct captions")
+
+    emb = {"retrieval": (model.embed_texts(captions),
+                         model.embed_motions([model.motion_rows(r.load_motion())
+                                              for r in records]))}
+    ev_t = evaluator.embed_texts(captions, [p.get("tokens") for p in pairs])
+    ev_m = evaluator.embed_motions([p["motion"] for p in pairs])
+    unit = [x / np.linalg.norm(x, axis=1, keepdims=True) for x in (ev_t, ev_m)]
+    sims = {"retrieval": emb["retrieval"][0] @ emb["retrieval"][1].T,
+            "evaluator (cosine)": unit[0] @ unit[1].T,
+            "evaluator (distance)": -euclidean_distance_matrix(ev_t, ev_m)}
+    hits = hit_sets(labels)
+    report: dict = {"pairs": len(pairs), "retrieval": {}, "queries": {}}
+    print("\n| encoders | hit | t2m R@1 | R@2 | R@3 | R@5 | R@10 | MedR | m2t R@1 | R@5 | MedR |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    for name, s in sims.items():
+        for hit, h in hits.items():
+            r = retrieval_scores(s, h)
+            report["retrieval"][f"{name}/{hit}"] = r
+            print(f"| {name} | {hit} | " + " | ".join(
+                f"{r[k]:.1f}" if "MedR" not in k else f"{r[k]:g}" for k in (
+                    "t2m/R01", "t2m/R02", "t2m/R03", "t2m/R05", "t2m/R10", "t2m/MedR",
+                    "m2t/R01", "m2t/R05", "m2t/MedR")) + " |")
+
+    content = [c for c, _ in labels]
+    queries = list(QUERIES.values())
+    q_sims = {"retrieval": model.embed_texts(queries) @ emb["retrieval"][1].T,
+              "evaluator (distance)": -euclidean_distance_matrix(
+                  evaluator.embed_texts(queries), ev_m)}
+    known = training_words(args.data, args.corpus)
+    print("\n| action | query | words in training captions | retrieval P@5 | evaluator P@5 |")
+    print("|---|---|---|---|---|")
+    precision = {name: precision_at(s, content) for name, s in q_sims.items()}
+    for action, query in QUERIES.items():
+        used = sorted(set(WORD.findall(query)) & known)
+        report["queries"][action] = {"query": query, "known_words": used,
+                                     **{n: p[action] for n, p in precision.items()}}
+        print(f"| {action} | {query} | {', '.join(used)} | "
+              f"{precision['retrieval'][action]:.1f} | "
+              f"{precision['evaluator (distance)'][action]:.1f} |")
+    if args.json:
+        Path(args.json).write_text(json.dumps(report, indent=1) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
