@@ -65,7 +65,7 @@ def main() -> None:
         median_bones,
         primitive_items,
     )
-    from motionlang.training.recipes.judge import train_on_items
+    from motionlang.recipes.judge import train_on_items
     torch.set_num_threads(1)
     args.runs = args.runs or Path(tempfile.mkdtemp(prefix="bandai_judge_"))
     t0 = time.time()
@@ -117,8 +117,8 @@ def main() -> None:
 def train_config(args, name: str):
     """``train judge``'s trainer settings, with this script's epochs and seed, run folder
     ``args.runs / name``."""
+    from motionlang.recipes.judge import JUDGE
     from motionlang.training.config import TrainConfig
-    from motionlang.training.recipes.judge import JUDGE
     return TrainConfig(**{**JUDGE.train_defaults, "epochs": args.epochs, "seed": args.seed,
                           "out_dir": str(args.runs / name)})
 
@@ -128,7 +128,7 @@ def cross(train, val, args) -> None:
     from dataclasses import replace
 
     from motionlang.models.judge.fit import accuracy
-    from motionlang.training.recipes.judge import train_on_items
+    from motionlang.recipes.judge import train_on_items
     two = [it for it in train if it.id.startswith("dataset-2")]
     one = [replace(it, style=SAME_STYLE.get(it.style)) for it in train
            if it.id.startswith("dataset-1") and it.content in ("walk", "run")]

@@ -22,8 +22,8 @@ from motionlang.models.judge.fit import (
 )
 from motionlang.models.judge.model import MotionJudge, resample_positions
 from motionlang.models.registry import load_model
+from motionlang.recipes.judge import train_on_items
 from motionlang.training.config import TrainConfig
-from motionlang.training.recipes.judge import train_on_items
 
 TINY = dict(hidden=16, embed=8, layers=2, kernel=3, window=16, dropout=0.0)
 _J = {n: i for i, n in enumerate(KIT21_NAMES)}

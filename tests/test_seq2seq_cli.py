@@ -471,7 +471,7 @@ def test_custom_bvh_folder_with_position_features(corpus, tmp_path, capsys):
 def test_root_weights_need_the_root_motion_features():
     import types
 
-    from motionlang.training.recipes.seq2seq import root_loss_weights
+    from motionlang.recipes.seq2seq import root_loss_weights
     fs = types.SimpleNamespace(names=["a", "root_vz", "root_vx", "b", "root_dyaw", "active"],
                                n_normalised=5, dim=6)
     assert root_loss_weights(fs, 4.0) == [1.0, 4.0, 4.0, 1.0, 4.0]

@@ -350,7 +350,7 @@ def train(kind: str, data: str | Path | list, out: str | Path, *, resume: bool =
     model's config, the trainer's (``epochs``, ``lr``, ...) and the recipe's data options
     (``features``, ``offsets``, ...). Returns the trained model's path (``out/model.pt``).
     """
-    from motionlang.training.recipes import train as run_recipe
+    from motionlang.recipes import train as run_recipe
     return run_recipe(kind, data, out, resume=resume, **options)
 
 

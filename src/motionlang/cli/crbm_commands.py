@@ -1,6 +1,6 @@
 """``motionlang crbm generate | fill | reproduce``: the CMU subject-35 experiment of Taylor,
 Hinton & Roweis 2006 (``evaluation.crbm``) on the command line. ``train crbm`` is the
-family's recipe (``training.recipes.crbm``). ``--data`` is the folder holding
+family's recipe (``recipes.crbm``). ``--data`` is the folder holding
 ``cmu35WalkJog.mat``, ``cmu35TaylorScaleBias.mat`` and ``35.asf``.
 """
 from __future__ import annotations
@@ -20,7 +20,7 @@ from motionlang.cli.options import (
 )
 from motionlang.errors import MotionlangError
 from motionlang.models.crbm.config import SELECTED, CRBMConfig
-from motionlang.training.recipes.crbm import DATA_HELP, MODEL_DEFAULTS, STACK_FILE
+from motionlang.recipes.crbm import DATA_HELP, MODEL_DEFAULTS, STACK_FILE
 
 
 def _add_data(p: argparse.ArgumentParser) -> None:
@@ -68,7 +68,7 @@ def cmd_fill(args: argparse.Namespace) -> int:
 
 def cmd_reproduce(args: argparse.Namespace) -> int:
     from motionlang.evaluation.crbm.reproduce import ReproduceConfig, format_table, reproduce
-    from motionlang.training.recipes.crbm import model_config
+    from motionlang.recipes.crbm import model_config
     if args.model:
         from motionlang.api import load_model
         model, config = load_model(args.model, kind="crbm"), None

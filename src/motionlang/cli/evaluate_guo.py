@@ -5,7 +5,7 @@ The ``evaluate-t2m`` parser itself is ``cli/evaluate_t2m.py``'s; this module add
 options of the ``guo`` protocol to it (:func:`add_guo_args`), checks which options go with
 which protocol (:func:`check_protocol`) and runs it (:func:`cmd_evaluate_guo`) through
 :mod:`motionlang.evaluation.t2m.guo`. ``train evaluator`` is generated from its recipe
-(``training/recipes/evaluator.py``). torch is imported inside the commands only.
+(``recipes/evaluator.py``). torch is imported inside the commands only.
 """
 from __future__ import annotations
 

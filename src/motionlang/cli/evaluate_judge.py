@@ -2,7 +2,7 @@
 
 Parsing and printing over :func:`motionlang.evaluation.judge_bandai.evaluate_on_bandai`;
 ``--model`` values go through :mod:`motionlang.cli.models_arg`. ``train judge`` is generated
-from its recipe (``training.recipes.judge``) by ``cli/train.py``. The judge is
+from its recipe (``recipes.judge``) by ``cli/train.py``. The judge is
 trained on the Bandai Namco datasets, CC BY-NC 4.0: it and every figure made with it are for
 non-commercial use only. torch is imported inside the command only.
 """
@@ -13,7 +13,7 @@ import json
 from pathlib import Path
 
 from motionlang.cli.options import nonneg_int, output_dir, seed_int
-from motionlang.training.recipes.judge import NON_COMMERCIAL
+from motionlang.recipes.judge import NON_COMMERCIAL
 
 
 def cmd_evaluate(args: argparse.Namespace) -> int:

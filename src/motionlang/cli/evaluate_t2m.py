@@ -4,7 +4,7 @@ Parsing and printing only: ``--protocol ape`` is
 :func:`motionlang.evaluation.t2m.ape.evaluate_ape`, ``--protocol guo`` is
 ``cli/evaluate_guo.py``'s; the ``--model`` values are loaded by
 :mod:`motionlang.cli.models_arg`. (``train twostream`` is generated from its recipe,
-``training/recipes/twostream.py``.) torch is imported inside the commands only, so building
+``recipes/twostream.py``.) torch is imported inside the commands only, so building
 the CLI parser stays cheap.
 """
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """``motionlang train KIND ...``: one parser per trainable model family.
 
-A family with a recipe (``Family.recipe``, ``training.recipes``) gets its ``train KIND``
+A family with a recipe (``Family.recipe``, ``recipes``) gets its ``train KIND``
 parser generated here from its configs: the recipe's data options, the trainer's
 (``TrainConfig``, with the recipe's defaults; not for a recipe with its own training loop,
 ``Recipe.trainer``) and the model's (its config dataclass, with the recipe's defaults), each
@@ -57,8 +57,8 @@ def add_data_arg(p: argparse.ArgumentParser, several: bool = True,
 
 def _register_recipe(train_sub, kind: str) -> None:
     from motionlang.models.registry import family
+    from motionlang.recipes import recipe_of
     from motionlang.training.config import TrainConfig  # torch-free
-    from motionlang.training.recipes import recipe_of
     fam, recipe = family(kind), recipe_of(kind)
     p = train_sub.add_parser(kind, help=f"train the {fam.summary}",
                              description=" ".join(filter(None, (f"Train the {fam.summary}.",
@@ -90,8 +90,8 @@ def cmd_train(args: argparse.Namespace) -> int:
 
     from motionlang.cli.config_options import option_fields
     from motionlang.models.registry import family
+    from motionlang.recipes import recipe_of
     from motionlang.training.config import TrainConfig
-    from motionlang.training.recipes import recipe_of
     kind = args.model_kind
     recipe, model_cls = recipe_of(kind), family(kind).config_class()
     train_cfg = config_from_args(TrainConfig, args, out_dir=str(args.out)) \

@@ -55,7 +55,7 @@ class Family:
         summary: one line for ``--help`` and ``motionlang models``.
         config: ``"module:Class"`` of its config dataclass (torch-free module), whose fields
             carry ``metadata`` for generated command-line options (``cli.config_options``).
-        recipe: ``"module:NAME"`` of its ``training.recipes.Recipe`` (data -> model ->
+        recipe: ``"module:NAME"`` of its ``recipes.Recipe`` (data -> model ->
             trainer -> model file, behind ``train KIND`` and ``ml.train``); None: not
             trainable.
         text_to_motion: ``"module:Class"`` wrapping a loaded model in the text-to-motion

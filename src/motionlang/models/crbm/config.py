@@ -19,7 +19,7 @@ MAX_ORDER = 1000
 
 #: The settings chosen for the CMU subject-35 experiment by ``evaluation/crbm/select.py`` on 4
 #: held-out TRAINING trials (grid and scores in ``docs/results/crbm.md``):
-#: the defaults of ``train crbm`` (``training.recipes.crbm``) and ``crbm reproduce``. The
+#: the defaults of ``train crbm`` (``recipes.crbm``) and ``crbm reproduce``. The
 #: test trials' numbers played no part in the choice; history noise as a remedy was prompted
 #: by generation from the walking test frames.
 SELECTED: dict[str, Any] = {

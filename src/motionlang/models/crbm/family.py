@@ -6,7 +6,7 @@ FAMILIES = (
     Family(kind="crbm", model="motionlang.models.crbm.model:CRBM",
            summary="conditional RBM of motion (Taylor et al. 2006)",
            config="motionlang.models.crbm.config:CRBMConfig", model_file="model.npz",
-           recipe="motionlang.training.recipes.crbm:CRBM"),
+           recipe="motionlang.recipes.crbm:CRBM"),
     Family(kind="crbm_stack", model="motionlang.models.crbm.stack:CRBMStack",
            summary="two-level CRBM stack (Taylor et al. 2006, sec. 4)", model_file="model.npz"),
     Family(kind="ar", model="motionlang.models.crbm.ar:ARModel",

@@ -5,5 +5,5 @@ FAMILIES = (
     Family(kind="evaluator", model="motionlang.models.evaluator.model:TextMotionEvaluator",
            summary="text-motion evaluator (Guo et al. 2022 protocol)",
            config="motionlang.models.evaluator.config:EvaluatorConfig",
-           recipe="motionlang.training.recipes.evaluator:EVALUATOR"),
+           recipe="motionlang.recipes.evaluator:EVALUATOR"),
 )

@@ -4,5 +4,5 @@ trained on real mocap (the Bandai Namco takes), independent of the text models i
 :mod:`.config` (sizes, label lists), :mod:`.model` (the network, its features and its
 self-describing checkpoint, kind ``"judge"``), :mod:`.fit` (the labelled takes, a fresh
 judge for them, its batches, accuracy). Its recipe (on the shared trainer):
-``training.recipes.judge``. Measures built on it: ``evaluation.judge``.
+``recipes.judge``. Measures built on it: ``evaluation.judge``.
 """

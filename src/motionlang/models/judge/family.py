@@ -5,5 +5,5 @@ FAMILIES = (
     Family(kind="judge", model="motionlang.models.judge.model:MotionJudge",
            summary="action and style classifier of real motion",
            config="motionlang.models.judge.config:JudgeConfig",
-           recipe="motionlang.training.recipes.judge:JUDGE"),
+           recipe="motionlang.recipes.judge:JUDGE"),
 )

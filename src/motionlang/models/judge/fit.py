@@ -8,7 +8,7 @@ procedural corpus' primitives that show a Bandai action (walks, runs, waves, rai
 bows, kicks, punches); :func:`mirror_item` swaps left and right. :func:`new_judge` makes a
 judge for some items (labels, normaliser) and :func:`examples` / :func:`collate` turn items
 into the batches of its ``loss`` (random crops of ``config.window`` frames); the training
-itself is the shared trainer's (``training.recipes.judge``). :func:`accuracy` scores whole
+itself is the shared trainer's (``recipes.judge``). :func:`accuracy` scores whole
 motions.
 """
 from __future__ import annotations

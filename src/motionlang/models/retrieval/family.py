@@ -6,7 +6,7 @@ FAMILIES = (
            summary="text-motion retrieval model: contrastive text and motion encoders into one "
                    "space (TMR-style; frozen MiniLM sentence vectors)",
            config="motionlang.models.retrieval.config:RetrievalConfig",
-           recipe="motionlang.training.recipes.retrieval:RETRIEVAL",
+           recipe="motionlang.recipes.retrieval:RETRIEVAL",
            encodes_text="motionlang.models.retrieval.model:text_vector",
            encodes_motion="motionlang.models.retrieval.model:motion_vector"),
 )

@@ -5,7 +5,7 @@ FAMILIES = (
     Family(kind="twostream", model="motionlang.models.twostream.model:TwoStreamModel",
            summary="hierarchical two-stream text-to-motion model (Ghosh et al. 2021)",
            config="motionlang.models.twostream.config:TwoStreamConfig",
-           recipe="motionlang.training.recipes.twostream:TWOSTREAM",
+           recipe="motionlang.recipes.twostream:TWOSTREAM",
            text_to_motion="motionlang.decoding.t2m_models:TwoStreamText2Motion",
            encodes_text="motionlang.decoding.t2m_models:twostream_text_vector",
            encodes_motion="motionlang.decoding.t2m_models:twostream_motion_vector"),

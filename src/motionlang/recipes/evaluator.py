@@ -18,17 +18,13 @@ from pathlib import Path
 from typing import Any
 
 from motionlang.errors import MotionlangError
-from motionlang.training.recipes import Recipe
+from motionlang.recipes import Recipe
 from motionlang.utils.checks import check_numbers
 
 #: the HumanML3D bodies the rows can be made on (``features.h3d_vectors.H3D_BODIES``)
 BODIES = ("kit", "smpl")
 #: config fields the recipe sets from the data, never the user
 FROM_DATA = ("motion_dim", "drop_last", "bones")
-#: the validation score that picks the kept epoch: the yardstick's R-precision, a measure of
-#: the evaluation layer (above this one), named here as a family names its parts and
-#: imported when a run starts
-SELECT = "motionlang.evaluation.t2m.yardstick:r_precision_miss"
 
 
 def _opt(default: Any, help_: str, **meta: Any) -> Any:
@@ -104,8 +100,8 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg,
     import torch
 
     from motionlang.datasets.splits import save_splits
+    from motionlang.evaluation.t2m.yardstick import r_precision_miss
     from motionlang.models.evaluator import TextMotionEvaluator
-    from motionlang.models.family import load_object
     from motionlang.models.registry import family
     from motionlang.training.evaluator_train import build_evaluator_data, train_evaluator
     from motionlang.training.run_log import lead_process, log_command, write_licence
@@ -142,7 +138,7 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg,
     # the epoch kept: the best validation R-precision top-3 (one caption per motion, batches
     # of 32), what the evaluator is for; the contrastive loss follows it badly where
     # captions repeat (templated captions). Fewer than 32 validation motions: the loss.
-    select = load_object(SELECT)(val, seed=cfg.seed) if val else None
+    select = r_precision_miss(val, seed=cfg.seed) if val else None
     model, history = train_evaluator(model, data.items["train"], cfg, val_items=val,
                                      body=body, resume=resume, select=select)
     path = out / family("evaluator").model_file

@@ -21,7 +21,7 @@ from typing import Any
 
 from motionlang.errors import MotionlangError
 from motionlang.models.twostream.config import ABLATIONS
-from motionlang.training.recipes import Recipe
+from motionlang.recipes import Recipe
 from motionlang.utils.checks import check_numbers
 
 #: what a run folder holds besides the model and commands.jsonl
@@ -90,7 +90,7 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg,
     from motionlang.models.length import SentenceLength
     from motionlang.models.registry import family
     from motionlang.models.twostream import TwoStreamModel
-    from motionlang.training.recipes.seq2seq import mix_training
+    from motionlang.recipes.seq2seq import mix_training
     from motionlang.training.run_files import check_resume
     from motionlang.training.run_log import lead_process, log_command, write_licence
     from motionlang.training.twostream_train import ForcingSchedule, train_twostream

@@ -19,7 +19,7 @@ from typing import Any
 
 from motionlang.errors import MotionlangError
 from motionlang.models.crbm.config import SELECTED, CRBMConfig
-from motionlang.training.recipes import Recipe
+from motionlang.recipes import Recipe
 
 #: the two-level model of ``level2``, beside the run folder's model.npz
 STACK_FILE = "stack.npz"

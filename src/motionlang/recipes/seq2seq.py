@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from motionlang.errors import MotionlangError
-from motionlang.training.recipes import Recipe
+from motionlang.recipes import Recipe
 from motionlang.utils.checks import check_numbers
 
 #: the root's ground velocity and heading change among the features

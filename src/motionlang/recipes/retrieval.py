@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from motionlang.errors import MotionlangError
-from motionlang.training.recipes import Recipe
+from motionlang.recipes import Recipe
 from motionlang.utils.checks import check_numbers
 
 if TYPE_CHECKING:
@@ -27,9 +27,6 @@ if TYPE_CHECKING:
 
 #: the model config fields the data decides, never the user
 FROM_DATA = ("n_features", "fps", "text_dim")
-#: the retrieval measures, a function of the evaluation layer (above this one), named here
-#: as a family names its parts and imported when a run starts
-SCORES = "motionlang.evaluation.metrics.t2m:retrieval_scores"
 RUN_FILES = ("best.pt and last.pt (checkpoints), history.json, loss_curve.png, splits/, "
              "LICENSE.txt for non-commercial data")
 
@@ -94,8 +91,7 @@ def scorer(items: Sequence[dict]) -> Callable[[Any], dict[str, float]]:
     ``items``' captions among their motions (:func:`retrieval_set`)."""
     import numpy as np
 
-    from motionlang.models.family import load_object
-    scores = load_object(SCORES)
+    from motionlang.evaluation.metrics.t2m import retrieval_scores as scores
     captions, motions, hits = retrieval_set(items)
 
     def score(model: Any) -> dict[str, float]:
@@ -163,7 +159,7 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
     from motionlang.models.registry import family
     from motionlang.models.retrieval.model import RetrievalModel
     from motionlang.models.retrieval.text import sentence_vectors
-    from motionlang.training.recipes.seq2seq import mix_training
+    from motionlang.recipes.seq2seq import mix_training
     from motionlang.training.run_files import check_resume
     from motionlang.training.run_log import lead_process, log_command, write_licence
 

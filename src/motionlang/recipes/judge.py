@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any, cast
 
 from motionlang.datasets.sources import LICENCE_FILE, DataSource, licence_text
 from motionlang.errors import MotionlangError
-from motionlang.training.recipes import Recipe
+from motionlang.recipes import Recipe
 
 if TYPE_CHECKING:
     from motionlang.models.judge.fit import JudgeItem
