@@ -136,20 +136,21 @@ def describe(motion: Motion | str | Path, model: Any = None, width: int = 5, *,
              length_penalty: float = 0.0, rank: str = "mbr") -> list[tuple[str, float]]:
     """Sentences for a motion (a Motion or a file), best first: ``[(text, log P), ...]``.
 
-    model: a loaded M2L, a checkpoint path, or None for the packaged one. width: beam width
+    model: a loaded model whose family describes motion (``Family.describes``: the M2L), a
+    packaged name, a checkpoint path, or None for the packaged M2L. width: beam width
     and number of sentences (as ``motionlang describe -w``). rank: "mbr" (as ``describe``)
     puts first the sentence the beam agrees on most (``decoding.mbr``), "logp" the
     likeliest (the paper's)."""
-    from motionlang.decoding.seq2seq import describe as beam_describe
+    from motionlang.models.registry import describer, kinds_with
     if width < 1:
         raise MotionlangError(f"width must be >= 1, got {width}")
     if not (np.isfinite(length_penalty) and length_penalty >= 0):
         raise MotionlangError(f"length_penalty must be a finite number >= 0, got "
                               f"{length_penalty}")
     if model is None or isinstance(model, (str, Path)):
-        model = load_model(model or "m2l", kind="m2l")
-    return beam_describe(model, _motion(motion, joint_map), width=width,
-                         length_penalty=length_penalty, rank=rank)
+        model = load_model(model or "m2l", kind=kinds_with("describes"))
+    return describer(model)(model, _motion(motion, joint_map), width=width,
+                            length_penalty=length_penalty, rank=rank)
 
 
 def describe_many(paths: Any, model: Any = None, *, joint_map: dict | str | Path | None = None,

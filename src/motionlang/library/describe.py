@@ -160,9 +160,9 @@ class Describer:
         o = self.options
         if self.bank is not None:
             return self.bank.nearest(self.model.motion(motion), o.width)
-        from motionlang.decoding.seq2seq import describe
-        return describe(self.model, motion, width=o.width, length_penalty=o.length_penalty,
-                        rank=o.rank)
+        from motionlang.models.registry import describer
+        return describer(self.model)(self.model, motion, width=o.width,
+                                     length_penalty=o.length_penalty, rank=o.rank)
 
     def timeline(self, motion) -> list[Segment]:
         """The take as segments (``library.timeline``) of its windows' first sentences."""

@@ -62,7 +62,9 @@ class Family:
             interface (``decoding.t2m.TextToMotion``), or ``"self"`` when the model follows
             the small ``decoding.t2m.SamplingModel`` protocol (the generic adapter does the
             rest); None: not a text-to-motion family.
-        describes: turns motion into text (``describe``).
+        describes: ``"module:function"`` turning motion into text, ``(model, motion, *,
+            width, length_penalty, rank) -> [(sentence, score), ...]`` best first
+            (``describe``); None where the family does not describe motion.
         encodes_text / encodes_motion: ``"module:function"`` ``(model, x) -> (D,) vector``
             for ``ml.encode``; None where the family does not encode that side.
         model_file: the final model's file name inside a training run folder.
@@ -74,7 +76,7 @@ class Family:
     config: str | None = None
     recipe: str | None = None
     text_to_motion: str | None = None
-    describes: bool = False
+    describes: str | None = None
     encodes_text: str | None = None
     encodes_motion: str | None = None
     model_file: str = "model.pt"

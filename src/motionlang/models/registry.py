@@ -73,6 +73,20 @@ def family(kind: str) -> Family:
     return fams[kind]
 
 
+def describer(model: Any) -> Any:
+    """The function that describes motions for ``model``'s family (``Family.describes``).
+
+    Raises:
+        MotionlangError: a model whose family does not turn motion into text.
+    """
+    kind = getattr(model, "kind", None)
+    fam = families().get(kind) if isinstance(kind, str) else None
+    if fam is None or fam.describes is None:
+        raise MotionlangError(f"a {kind or type(model).__name__} model does not describe "
+                              f"motion (kinds that do: {', '.join(kinds_with('describes'))})")
+    return load_object(fam.describes)
+
+
 def kinds_with(capability: str) -> tuple[str, ...]:
     """The kinds that have ``capability`` (a :class:`Family` attribute: "text_to_motion",
     "describes", "encodes_text", "encodes_motion", "recipe")."""

@@ -70,8 +70,9 @@ def describe_motions(model, motions: Sequence, *, width: int = 5, desc: str = "d
     """An M2L's likeliest beam hypothesis (``decoding.seq2seq.describe``, beam ``width``,
     the paper's order; ``describe`` shows its minimum-Bayes-risk choice first) for each
     ``Motion``."""
-    from motionlang.decoding.seq2seq import describe
+    from motionlang.models.registry import describer
     from motionlang.utils.progress import progress
+    describe = describer(model)
     return [describe(model, m, width=width)[0][0]
             for m in progress(list(motions), desc=desc, unit="motions")]
 
