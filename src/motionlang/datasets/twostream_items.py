@@ -22,9 +22,10 @@ import numpy as np
 
 from motionlang.datasets.feature_cache import dataset_features
 from motionlang.errors import DatasetError
+from motionlang.features.positions import DEFAULT_FPS
 
-#: frame rate of the positions features (Ghosh et al. 2021: KIT-ML at 12.5 Hz)
-FPS = 12.5
+#: frame rate of the positions features (the features' own default)
+FPS = DEFAULT_FPS
 
 
 @dataclass

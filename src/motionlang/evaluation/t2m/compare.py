@@ -37,6 +37,7 @@ from motionlang.evaluation.t2m.scoring import T2MItem, markdown_table, score_gen
 from motionlang.evaluation.t2m.scoring import (  # importable from here, as before
     positions_to_features as positions_to_features,
 )
+from motionlang.features.positions import DEFAULT_FPS as FPS
 from motionlang.utils.progress import progress
 
 
@@ -64,7 +65,7 @@ def _ranges(record, n_frames: int) -> tuple[list[tuple[int, int]], list[str]]:
     if not prims:
         return [], []
     src = int(getattr(record, "n_frames", 0) or max(e for _, _, e in prims))
-    full = max(1, int(np.ceil(src * 12.5 / float(getattr(record, "fps", 100.0)) - 1e-9)))
+    full = max(1, int(np.ceil(src * FPS / float(getattr(record, "fps", 100.0)) - 1e-9)))
     ranges = rescale_ranges([(s, e) for _, s, e in prims], src, max(full, n_frames))
     kept = [(min(a, n_frames - 1), min(b, n_frames), act)
             for (a, b), (act, _, _) in zip(ranges, prims) if a < n_frames]
@@ -119,7 +120,7 @@ def trajectory_figures(results: dict[str, dict], items: Sequence[T2MItem], out_d
     for it in chosen:
         path = Path(out_dir) / f"trajectory_{it.id}.png"
         plot_trajectory([it.target] + [r["generated"][it.id] for r in results.values()], path,
-                        labels=["ground truth", *results], fps=12.5,
+                        labels=["ground truth", *results], fps=FPS,
                         title="\n".join(textwrap.wrap(it.sentence, 58)[:3]))
         paths.append(path)
     return paths
