@@ -2,6 +2,7 @@
 import json
 
 from helpers import rigs as rf
+from helpers.auto_rigs import mirrored
 from helpers.data import shared_file
 from motionlang.cli.main import main
 from motionlang.features.joint_map import KIT21_NAMES
@@ -53,7 +54,11 @@ def test_show_prints_joints_map_and_sources(tmp_path, capsys):
 
 def test_no_fit_then_template_then_joint_map(tmp_path, capsys):
     path = rf.write(ODD, tmp_path)
-    code, out, err = run(capsys, "rig", "show", path)
+    code, out, _ = run(capsys, "rig", "show", path)   # no table fits: mapped automatically
+    assert code == 0 and "map      auto: automatic" in out
+    assert "    LS     name     1.00 <- arm_L" in out and "    BT     topology 0.90 <- ribs" in out
+    # mirrored, its names contradict its rest pose: an error that offers a map of one's own
+    code, out, err = run(capsys, "rig", "show", rf.write(mirrored(ODD), tmp_path, "flipped"))
     assert code == 2 and out == "" and len(err.strip().splitlines()) == 1
     assert "rig joints not matched: pelvis_bone, hip_L" in err and "skull" in err
     assert err.strip().endswith("motionlang rig template FILE > map.json")
@@ -74,7 +79,7 @@ def test_no_fit_then_template_then_joint_map(tmp_path, capsys):
     (tmp_path / "map.json").write_text(json.dumps(template))
     code, out, _ = run(capsys, "rig", "show", path, "--joint-map", tmp_path / "map.json")
     assert code == 0 and "map      bvh:odd-map: user map" in out
-    assert "    LF     <- ball_L" in out
+    assert "    LF     user     1.00 <- ball_L" in out
 
 
 def test_bad_joint_map_and_missing_file(tmp_path, capsys):
@@ -90,4 +95,4 @@ def test_bad_joint_map_and_missing_file(tmp_path, capsys):
 def test_show_cmu_amc_with_asf(capsys):
     code, out, _ = run(capsys, "rig", "show", shared_file("cmu35/35_01.amc"), "--asf",
                        shared_file("cmu35/35.asf"))
-    assert code == 0 and "map      cmu-asf" in out and "    LK     <- ltibia" in out
+    assert code == 0 and "map      cmu-asf" in out and "    LK     table    1.00 <- ltibia" in out

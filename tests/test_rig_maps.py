@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from helpers import rigs as rf
+from helpers.auto_rigs import mirrored
 from helpers.data import shared_file
 from motionlang.errors import MotionlangError, SkeletonError
 from motionlang.features import PositionFeatures
@@ -206,10 +207,13 @@ def rigify(tmp_path):
     return read_motion(rf.write(RIGIFY, tmp_path))
 
 
-def test_no_fit_error_names_the_unmatched_joints_and_the_way_out(rigify):
-    with pytest.raises(SkeletonError) as err:
-        positions21(rigify)
+def test_no_fit_error_names_the_unmatched_joints_and_the_way_out(rigify, tmp_path):
+    assert match_rig(rigify.skeleton).name == "auto"   # no table fits; found automatically
+    flipped = read_motion(rf.write(mirrored(RIGIFY), tmp_path, "flipped"))
+    with pytest.raises(SkeletonError) as err:       # names and rest pose disagree on sides
+        positions21(flipped)
     msg = str(err.value)
+    assert "the names say thigh.R is on the right but the rest pose puts it on the left" in msg
     assert "\n" not in msg and "cannot be mapped" in msg
     assert "rig joints not matched: " in msg and "thigh.L" in msg and "upper_arm.R" in msg
     assert "toe.L_end" not in msg  # End Sites are not joints to map

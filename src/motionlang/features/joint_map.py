@@ -72,6 +72,8 @@ class RigMatch:
     about: str
     weights: np.ndarray
     sources: dict[str, Spec]
+    #: body joint -> (how it was found: "table", "user", "name" or "topology", confidence)
+    how: dict[str, tuple[str, float]] | None = None
 
 
 def _key(name: str) -> str:
@@ -159,7 +161,8 @@ def match_rig(skeleton: Skeleton, map_name: str | None = None,
             raise SkeletonError(f"joint map {jm['name']!r} ({jm['source']}) names joints that "
                                 f"rig {label!r} lacks: {_listed(missing)}; its joints: "
                                 f"{_listed(names, 40)}")
-        return RigMatch(jm["name"], f"user map {jm['source']}", W, sources)
+        return RigMatch(jm["name"], f"user map {jm['source']}", W, sources,
+                        {k: ("user", 1.0) for k in KIT21_NAMES})
     if map_name is not None:
         if map_name not in _BY_NAME:
             raise SkeletonError(f"unknown joint map {map_name!r}; known: {sorted(_BY_NAME)}")
@@ -171,17 +174,24 @@ def match_rig(skeleton: Skeleton, map_name: str | None = None,
             continue
         W, missing, sources = _resolve(names, rig.joints)
         if not missing:
-            return RigMatch(rig.name, rig.about, W, sources)
+            return RigMatch(rig.name, rig.about, W, sources,
+                            {k: ("table", 1.0) for k in KIT21_NAMES})
     if map_name is not None:
         raise SkeletonError(f"skeleton {label!r} cannot be mapped to the 21 KIT joints with "
                             f"map {map_name!r}: it lacks {_listed(missing)}; {HINT}")
+    from motionlang.features.rig_auto import ABOUT, auto_map
+    auto = auto_map(skeleton)
+    if auto.confident:
+        W, missing, sources = _resolve(names, {k: f.spec for k, f in auto.joints.items()})
+        return RigMatch("auto", ABOUT, W, sources,
+                        {k: (f.how, f.confidence) for k, f in auto.joints.items()})
     rig, missing, sources = closest_map(skeleton)
     used = _used(sources)
     unmatched = [n for n in names if n not in used and not _is_end_site(n)]
     closest = f" (closest map {rig.name!r} lacks {_listed(missing)})" if sources else ""
     raise SkeletonError(f"skeleton {label!r} cannot be mapped to the 21 KIT joints: no "
                         f"built-in map fits; rig joints not matched: {_listed(unmatched, 40)}"
-                        f"{closest}; {HINT}")
+                        f"{closest}; automatic map unsure: {'; '.join(auto.low())}; {HINT}")
 
 
 def kit21_weights(skeleton: Skeleton, map_name: str | None = None, *,
@@ -314,8 +324,8 @@ def template_map(skeleton: Skeleton) -> dict:
 def rig_summary(skeleton: Skeleton, joint_map: dict | str | Path | None = None) -> dict:
     """How a rig maps onto the 21-joint body (:func:`match_rig`, ``joint_map`` as there):
     ``{"rig", "joints" (its joints, end sites left out), "end_sites" (how many), "map",
-    "about", "body" ({body joint: its source in the rig's names}), "unused" (the rig's
-    joints the map does not read)}``.
+    "about", "body" ({body joint: its source in the rig's names}), "how" ({body joint:
+    [how it was found, confidence]}), "unused" (the rig's joints the map does not read)}``.
 
     Raises:
         SkeletonError: as :func:`match_rig`.
@@ -327,6 +337,7 @@ def rig_summary(skeleton: Skeleton, joint_map: dict | str | Path | None = None) 
     used = _used(body)
     return {"rig": skeleton.name, "joints": joints, "end_sites": len(names) - len(joints),
             "map": m.name, "about": m.about, "body": body,
+            "how": {k: list(m.how[k]) if m.how else ["table", 1.0] for k in KIT21_NAMES},
             "unused": [n for n in joints if n not in used]}
 
 
@@ -345,8 +356,9 @@ def summary_text(s: dict) -> str:
     lines = [f"  rig      {s['rig']}: {len(s['joints'])} joints"
              + (f" (+ {s['end_sites']} end sites)" if s["end_sites"] else ""),
              wrap.fill(", ".join(s["joints"])), f"  map      {s['map']}: {s['about']}",
-             "  body joint <- rig joint",
-             *(f"    {k:<6} <- {spec_text(spec)}" for k, spec in s["body"].items())]
+             "  body joint, how found, confidence <- rig joint",
+             *(f"    {k:<6} {s['how'][k][0]:<8} {s['how'][k][1]:4.2f} <- {spec_text(spec)}"
+               for k, spec in s["body"].items())]
     if s["unused"]:
         lines.append("  unused   " + wrap.fill(", ".join(s["unused"])).lstrip())
     return "\n".join(lines)
