@@ -1,7 +1,8 @@
 """``motionlang rig show | template``: how a motion file's rig maps onto the 21-joint body.
 
 ``rig show FILE`` prints the rig's joints, the joint map chosen (a built-in one from the
-joint names, or ``--joint-map MAP``) and where each of the 21 body joints comes from
+joint names, the automatic one of ``features.rig_auto``, or ``--joint-map MAP``), where each of
+the 21 body joints comes from, how it was found and with what confidence
 (``features.joint_map.rig_summary``). ``rig template FILE > map.json`` writes a map to fill
 in for a rig no built-in map fits (``features.joint_map.template_map``); pass it back with
 ``--joint-map map.json``.

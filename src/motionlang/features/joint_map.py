@@ -17,7 +17,8 @@ Tree: root-BP-BT-BLN-BUN; BLN-shoulders-elbows-wrists; root-hips-knees-ankles-mi
 A map sends each of the 21 joints to a rig node name, ``("mid", a, b)`` or
 ``("lerp", a, b, t)``. The built-in maps (MMM, CMU ASF and its BVH conversions, Bandai Namco,
 iClone CC, Second Life, Poser/DAZ, SMPL, Mixamo, generic BVH and Biped namings) and the facts
-behind their synthetic points are in :mod:`.rig_maps`; one is chosen from the joint names. A
+behind their synthetic points are in :mod:`.rig_maps`; one is chosen from the joint names; a
+rig none fits is mapped from its tree, rest pose and names (:mod:`.rig_auto`). A
 user's own map is a JSON file (:func:`load_joint_map`, :func:`template_map`)::
 
     {"name": "my-rig", "joints": {"root": ["mid", "L_hip", "R_hip"], "BP": "spine_01", ...,
