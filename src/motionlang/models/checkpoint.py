@@ -28,6 +28,7 @@ from motionlang.models.versions import (
     DAMAGE,
     FORMAT_VERSION,
     NOT_A_CHECKPOINT,
+    check_archive,
     check_config_fields,
     check_format,
     damaged,
@@ -112,7 +113,8 @@ def load_checkpoint(path: str | Path) -> Any:
     """``torch.load(path, weights_only=True)``, its failures as one line.
 
     A file that is not a checkpoint, a truncated one or one holding pickled classes fails
-    the same way. torch's own message advises retrying with ``weights_only=False``, which
+    the same way; a zip member whose CRC does not match is a damaged file
+    (:func:`~motionlang.models.versions.check_archive`). torch's own message advises retrying with ``weights_only=False``, which
     would run code from the file: it is not repeated, and that is never done here.
     """
     path = Path(path)
@@ -123,6 +125,7 @@ def load_checkpoint(path: str | Path) -> Any:
             fh.read(1)
     except OSError as exc:
         raise MotionlangError(f"{path}: {unreadable(exc)}") from exc
+    check_archive(path)
     try:
         return torch.load(path, map_location="cpu", weights_only=True)
     except Exception as exc:   # UnpicklingError, RuntimeError, EOFError, OSError (its zip) ...
