@@ -91,6 +91,26 @@ def test_fid_against_eigenvalues():
     assert fid(a, a) == pytest.approx(0, abs=1e-8)
 
 
+def test_fid_of_fewer_samples_than_dimensions_takes_an_offset_and_says_so(caplog):
+    # 20 samples in 128 dimensions: sqrtm's root of the singular product has an imaginary
+    # diagonal beyond the public code's tolerance for this draw (which stopped with an error)
+    rng = np.random.default_rng(192)
+    a, b = rng.normal(size=(20, 128)) * 3, rng.normal(size=(20, 128)) * 3 + 0.5
+    (mu1, s1), (mu2, s2) = activation_statistics(a), activation_statistics(b)
+    root_trace = np.sqrt(np.clip(np.linalg.eigvals(s1 @ s2).real, 0, None)).sum()
+    want = ((mu1 - mu2) ** 2).sum() + np.trace(s1) + np.trace(s2) - 2 * root_trace
+    with caplog.at_level("WARNING"):
+        got = fid(a, b)
+    assert got == pytest.approx(want, rel=1e-3)
+    assert "singular" in caplog.text and "added to the diagonals" in caplog.text
+    with pytest.raises(MotionlangError, match="imaginary part"):   # no offset at all
+        frechet_distance(mu1, s1, mu2, s2, eps=0.0)
+    caplog.clear()
+    with caplog.at_level("WARNING"):   # a well-conditioned pair needs no offset: no warning
+        fid(rng.normal(size=(200, 5)), rng.normal(size=(200, 5)))
+    assert caplog.text == ""
+
+
 def test_diversity_and_multimodality():
     assert diversity(np.ones((5, 3)), times=4) == 0.0
     x = np.arange(6.0)[:, None]

@@ -23,6 +23,7 @@ that count as hits, :func:`retrieval_scores`).
 """
 from __future__ import annotations
 
+import logging
 import warnings
 from collections.abc import Callable
 
@@ -32,6 +33,7 @@ from scipy import linalg
 from motionlang.errors import MotionlangError
 
 Rng = np.random.Generator | int | None
+log = logging.getLogger(__name__)
 
 
 def _rng(rng: Rng) -> np.random.Generator:
@@ -100,29 +102,58 @@ def activation_statistics(x) -> tuple[np.ndarray, np.ndarray]:
     return x.mean(axis=0), np.cov(x, rowvar=False)
 
 
+#: the imaginary part of the square root's diagonal taken as rounding (pytorch-fid's atol)
+IMAG_TOL = 1e-3
+
+
+def _sqrtm(a: np.ndarray) -> np.ndarray:
+    with warnings.catch_warnings():   # singular products are handled by the caller
+        warnings.simplefilter("ignore", linalg.LinAlgWarning)
+        return linalg.sqrtm(a)
+
+
+def _numerical(covmean: np.ndarray) -> bool:
+    """Finite, and any imaginary part on the diagonal within :data:`IMAG_TOL`."""
+    return bool(np.isfinite(covmean).all()) and (
+        not np.iscomplexobj(covmean)
+        or np.allclose(np.diagonal(covmean).imag, 0, atol=IMAG_TOL))
+
+
 def frechet_distance(mu1, sigma1, mu2, sigma2, eps: float = 1e-6) -> float:
     """|mu1 - mu2|^2 + tr(S1 + S2 - 2 (S1 S2)^(1/2)) between two Gaussians.
 
-    ``scipy.linalg.sqrtm``; if it is not finite (a singular product) ``eps I`` is added to
-    both covariances; an imaginary part from rounding is dropped unless the diagonal's
-    exceeds 1e-3, which raises.
+    ``scipy.linalg.sqrtm`` of ``S1 S2``; an imaginary part whose diagonal stays within
+    :data:`IMAG_TOL` is rounding and dropped (as the public FID code does). Otherwise the
+    product is singular, as covariances of fewer samples than dimensions are: ``eps`` times
+    the covariances' mean variance is added to both diagonals (then 10x, 100x ... up to
+    ``1e4 eps``) until the root is numerical, and a warning says which offset was used.
+
+    Raises:
+        MotionlangError: shapes that disagree, or no offset in that range helps.
     """
     mu1, mu2 = np.atleast_1d(mu1).astype(float), np.atleast_1d(mu2).astype(float)
     s1, s2 = np.atleast_2d(sigma1).astype(float), np.atleast_2d(sigma2).astype(float)
     if mu1.shape != mu2.shape or s1.shape != s2.shape or s1.shape != (len(mu1),) * 2:
         raise MotionlangError(f"means {mu1.shape}, {mu2.shape} and covariances {s1.shape}, "
                               f"{s2.shape} do not agree")
-    with warnings.catch_warnings():   # singular products are handled below (disp=False)
-        warnings.simplefilter("ignore", linalg.LinAlgWarning)
-        covmean = linalg.sqrtm(s1 @ s2)
-        if not np.isfinite(covmean).all():
-            offset = np.eye(len(s1)) * eps
-            covmean = linalg.sqrtm((s1 + offset) @ (s2 + offset))
-    if np.iscomplexobj(covmean):
-        if not np.allclose(np.diagonal(covmean).imag, 0, atol=1e-3):
-            raise MotionlangError(f"FID: imaginary part {np.abs(covmean.imag).max():.3g} in "
-                                  "the covariance square root")
-        covmean = covmean.real
+    covmean = _sqrtm(s1 @ s2)
+    if not _numerical(covmean):
+        # relative to the data's scale, so that embeddings in any unit get the same offset
+        scale = float(np.mean(np.r_[np.diagonal(s1), np.diagonal(s2)])) or 1.0
+        for factor in (1.0, 10.0, 100.0, 1e3, 1e4):
+            offset = np.eye(len(s1)) * (eps * factor * scale)
+            covmean = _sqrtm((s1 + offset) @ (s2 + offset))
+            if _numerical(covmean):
+                log.warning("FID: the covariance product is singular (too few samples for "
+                            "%d dimensions?): %.3g (%.3g x the mean variance) added to the "
+                            "diagonals", len(s1), eps * factor * scale, eps * factor)
+                break
+        else:
+            bad = np.abs(np.asarray(covmean).imag).max() if np.iscomplexobj(covmean) else np.nan
+            raise MotionlangError(f"FID: imaginary part {bad:.3g} in the covariance square "
+                                  f"root, even with {eps * 1e4:.3g} x the mean variance added "
+                                  "to the diagonals")
+    covmean = covmean.real
     diff = mu1 - mu2
     return float(diff @ diff + np.trace(s1) + np.trace(s2) - 2.0 * np.trace(covmean))
 
