@@ -117,7 +117,7 @@ def test_generate_errors_for_rig_and_start(tmp_path, capsys):
     rig = write(RIGS["bandai"], tmp_path, T=5)
     assert main(["generate", "a person walks", "-o", str(tmp_path / "w.gif"),
                  "--rig", str(rig)]) == 2
-    assert "--rig writes .bvh" in capsys.readouterr().err
+    assert "w.gif: a result on a rig is written as .bvh, .glb, .gltf" in capsys.readouterr().err
     assert main(["generate", "a person walks", "-o", str(tmp_path / "w.bvh"),
                  "--rig-joint-map", str(rig)]) == 2
     assert "--rig-joint-map needs --rig" in capsys.readouterr().err

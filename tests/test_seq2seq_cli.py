@@ -335,7 +335,7 @@ def test_generate_reranks_sampled_motions_by_an_m2l(runs, tmp_path, capsys):
 @pytest.mark.parametrize(("output", "options", "message"), [
     ("rr1.npz", ["-w", "1", "--rerank", "{m2l}"], "rerank ranks several L2M motions"),
     ("none.npz", ["-w", "0"], "argument -w/--width: must be an integer in 1..1000"),
-    ("gen.obj", [], "gen.obj: output must be .bvh, .xml, .amc, .gif, .mp4, .png or .npz"),
+    ("gen.obj", [], "gen.obj: output must be .bvh, .glb, .gltf, .xml, .amc, .gif, .mp4, .png or .npz"),
     ("t.npz", ["--temperature", "0.5"], "ask for method sample"),
 ])
 def test_generate_refuses_bad_options_and_writes_nothing(runs, tmp_path, capsys, output,

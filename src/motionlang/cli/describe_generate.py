@@ -73,16 +73,12 @@ def cmd_generate(args: argparse.Namespace) -> int:
     import warnings
 
     from motionlang.api import generate_hypotheses, load_rig, write_result
-    from motionlang.rendering.output import RESULT_OUT
+    from motionlang.rendering.output import check_result_path
 
     out = Path(args.output)
-    if out.suffix.lower() not in RESULT_OUT:   # before the model is read
-        raise MotionlangError(f"{out}: output must be .bvh, .xml, .amc, .gif, .mp4, .png "
-                              "or .npz")
+    check_result_path(out, rig=args.rig is not None)   # before the model is read
     if args.rig_joint_map is not None and args.rig is None:
         raise MotionlangError("--rig-joint-map needs --rig")
-    if args.rig is not None and out.suffix.lower() != ".bvh":
-        raise MotionlangError(f"{out}: --rig writes .bvh files; got {out.suffix or 'none'!r}")
     rig = None if args.rig is None else load_rig(args.rig, args.rig_joint_map)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", UserWarning)
@@ -138,9 +134,10 @@ def register(subparsers) -> None:
     p = subparsers.add_parser("generate", help="generate a motion from English (L2M)")
     p.add_argument("text", help="sentence, e.g. \"a person waves with the left hand\"")
     p.add_argument("-o", "--output", required=True, type=output_file,
-                   help="out.gif, .mp4 (animation), .png (pose strip), .bvh (joint angles; "
-                        "for position models such as two-stream fitted on a 21-joint "
-                        "skeleton) or .npz (joint positions and fps)")
+                   help="out.gif, .mp4 (animation), .png (pose strip), .bvh or .glb / "
+                        ".gltf (joint angles; for position models such as two-stream fitted "
+                        "on a 21-joint skeleton; glTF in metres, Y up, with a stick mesh) "
+                        "or .npz (joint positions and fps)")
     _add_model_arg(p, "l2m", "l2m", "an L2M or two-stream model file")
     p.add_argument("-w", "--width", type=width_int, default=None,
                    help="hypotheses (samples or beam width; default: the model value's width "
@@ -175,8 +172,9 @@ def register(subparsers) -> None:
                         "joint-position models such as the packaged ones)")
     p.add_argument("--all", action="store_true", help="write every hypothesis (OUT_2, ...)")
     p.add_argument("--rig", metavar="FILE.bvh", default=None,
-                   help="write the .bvh on this rig (a BVH file of yours: its skeleton, "
-                        "joint names, units, rest pose and channel layout), retargeted from "
+                   help="write the .bvh / .glb on this rig (a BVH file of yours: its "
+                        "skeleton, joint names, units, rest pose and channel layout), "
+                        "retargeted from "
                         "the 21-joint body (default: the 21-joint body itself). Needs joints "
                         "that turn about 3 axes, as BVH rigs have; not ASF or MMM hinges")
     p.add_argument("--rig-joint-map", metavar="MAP.json", default=None,

@@ -3,6 +3,9 @@
 * ``.xml`` — KIT MMM (:mod:`motionlang.formats.mmm`)
 * ``.bvh`` — Biovision hierarchy (:mod:`motionlang.formats.bvh`)
 * ``.amc`` — Acclaim motion with its ``.asf`` skeleton (:mod:`motionlang.formats.asf_amc`)
+* ``.glb`` / ``.gltf`` — glTF 2.0 skeletal animation with a skinned stick mesh
+  (:mod:`motionlang.formats.gltf`; write only, :mod:`motionlang.formats.gltf_read` plays a
+  file back as node positions)
 * ``.mat`` — the MIT walking data as Taylor distributed it (:mod:`motionlang.formats.mit`;
   read only, one sequence at a time), through a strict MAT-file reader of our own
   (:mod:`motionlang.formats.matfile`: scipy's can be crashed by a crafted file)
@@ -21,7 +24,7 @@ from motionlang.kinematics.motion import Motion
 from motionlang.kinematics.skeleton import Skeleton
 
 READ_EXTENSIONS = (".xml", ".bvh", ".amc", ".mat")
-WRITE_EXTENSIONS = (".bvh", ".xml", ".amc")
+WRITE_EXTENSIONS = (".bvh", ".xml", ".amc", ".glb", ".gltf")
 
 
 def find_asf(amc_path: str | Path) -> Path:
@@ -131,7 +134,8 @@ def read_motion(path: str | Path, *, skeleton: Skeleton | str | Path | None = No
 def write_motion(motion: Motion, path: str | Path) -> Path:
     """Write ``motion``, choosing the writer from the extension; returns the path.
 
-    ``.bvh`` accepts any motion; ``.xml`` needs an MMM skeleton and ``.amc`` an ASF one.
+    ``.bvh``, ``.glb`` and ``.gltf`` accept any motion; ``.xml`` needs an MMM skeleton and
+    ``.amc`` an ASF one.
 
     Raises:
         MotionFormatError: unknown extension or a skeleton the format cannot hold.
@@ -142,6 +146,9 @@ def write_motion(motion: Motion, path: str | Path) -> Path:
         if ext == ".bvh":
             from motionlang.formats.bvh import write_bvh
             write_bvh(motion, path)
+        elif ext in (".glb", ".gltf"):
+            from motionlang.formats.gltf import write_gltf
+            write_gltf(motion, path)
         elif ext == ".amc":
             from motionlang.formats.asf_amc import write_amc
             write_amc(motion, path)

@@ -12,13 +12,27 @@ import numpy as np
 from motionlang.errors import MotionlangError
 from motionlang.kinematics.motion import Motion
 
-#: motion files (.bvh also for positions, fitted on a 21-joint skeleton)
-MOTION_OUT = (".bvh", ".xml", ".amc")
+#: motion files (.bvh, .glb and .gltf also for positions, fitted on a 21-joint skeleton)
+MOTION_OUT = (".bvh", ".glb", ".gltf", ".xml", ".amc")
+#: the motion files that any skeleton can be written to
+ANY_SKELETON_OUT = (".bvh", ".glb", ".gltf")
 #: animations; ``.png`` is a pose strip, ``.npz`` the positions and frame rate
 RENDER_OUT = (".gif", ".mp4")
 RESULT_OUT = MOTION_OUT + RENDER_OUT + (".png", ".npz")
 #: what :func:`render_file` draws: an animation, or a ``.png`` pose strip or trajectory
 DRAW_OUT = RENDER_OUT + (".png",)
+
+
+def check_result_path(path: str | Path, *, rig: bool = False) -> None:
+    """Raise :class:`MotionlangError` naming ``path`` unless :func:`write_result` can write
+    a result there (with ``rig``: a file that holds any skeleton), before anything slow."""
+    ext = Path(path).suffix.lower()
+    if ext not in RESULT_OUT:
+        raise MotionlangError(f"{path}: output must be .bvh, .glb, .gltf, .xml, .amc, .gif, "
+                              ".mp4, .png or .npz")
+    if rig and ext not in ANY_SKELETON_OUT:
+        raise MotionlangError(f"{path}: a result on a rig is written as "
+                              f"{', '.join(ANY_SKELETON_OUT)}; got {ext or 'none'!r}")
 
 
 def check_drawable(path: str | Path) -> None:
@@ -86,8 +100,9 @@ def _error_note(err_m: np.ndarray, what: str) -> str:
 def write_result(result, path: str | Path, *, fps: float, title: str = "",
                  rig: Motion | None = None) -> str:
     """A generated Motion, or 21-joint positions (T, 21, 3) at ``fps`` Hz, to ``path``:
-    .npz (positions and fps), .bvh (a Motion as it is; positions on a 21-joint skeleton
-    fitted to them), .xml / .amc (Motions on such skeletons only), .gif / .mp4 animation or
+    .npz (positions and fps), .bvh / .glb / .gltf (a Motion as it is; positions on a
+    21-joint skeleton fitted to them; glTF: metres, Y up, a skinned stick mesh, see
+    ``formats.gltf``), .xml / .amc (Motions on such skeletons only), .gif / .mp4 animation or
     .png pose strip; with ``rig``, retargeted onto the rig's skeleton first. Atomic.
 
     Returns:
@@ -98,9 +113,7 @@ def write_result(result, path: str | Path, *, fps: float, title: str = "",
     """
     path = Path(path)
     ext = path.suffix.lower()
-    if ext not in RESULT_OUT:
-        raise MotionlangError(f"{path}: output must be .bvh, .xml, .amc, .gif, .mp4, .png "
-                              "or .npz")
+    check_result_path(path)
     note = ""
     if rig is not None:
         result, err = body_motion(result, fps, rig)
@@ -115,9 +128,10 @@ def write_result(result, path: str | Path, *, fps: float, title: str = "",
         return note
     if not isinstance(result, Motion):
         if ext in MOTION_OUT:
-            if ext != ".bvh":
+            if ext not in ANY_SKELETON_OUT:
                 raise MotionlangError(f"{path}: this model's features decode to joint "
-                                      "positions; write .bvh, .npz, .gif, .mp4 or .png")
+                                      "positions; write .bvh, .glb, .gltf, .npz, .gif, .mp4 "
+                                      "or .png")
             result, err = body_motion(result, fps, name=path.stem)
             note = _error_note(err, "joints ") + (": bone lengths held at their medians, "
                                                   "pelvis and neck turned by least squares)")

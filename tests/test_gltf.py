@@ -1,0 +1,89 @@
+"""glTF / GLB export: what a glTF reader plays back is motionlang's own forward kinematics."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from helpers.mocap import synthetic_mmm
+from helpers.rigs import RIGS, write
+from motionlang.api import write_result
+from motionlang.cli.main import main
+from motionlang.errors import MotionFormatError
+from motionlang.features.joint_map import KIT21_NAMES, positions21
+from motionlang.formats import read_motion, write_motion
+from motionlang.formats.gltf_read import read_gltf_animation
+
+
+@pytest.mark.parametrize("ext", [".glb", ".gltf"])
+def test_a_z_up_mmm_motion_plays_back_as_its_own_kinematics(tmp_path, ext):
+    # MMM: a Z-up source frame, millimetre file units and fixed segment rotations (pre),
+    # so every conversion the writer does is exercised
+    motion = synthetic_mmm(T=25, fps=100.0)
+    out = write_motion(motion, tmp_path / f"walk{ext}")
+    back = read_gltf_animation(out)
+    sk = motion.skeleton
+    assert back.names[:len(sk)] == sk.names
+    assert list(back.parents[:len(sk)]) == list(sk.parents)
+    assert back.positions.shape[0] == 25 and back.fps == pytest.approx(100.0)
+    assert np.allclose(back.times, np.arange(25) / 100.0, atol=1e-6)
+    assert back.skin_joints == list(range(len(sk)))
+    err = np.abs(back.positions[:, :len(sk)] - motion.positions()).max()
+    assert err < 1e-5, f"{err * 1000:.4f} mm"   # float32 storage, metres
+    assert back.positions[0, 0, 1] > 0.5   # Y up: the pelvis is above the floor
+
+
+def test_the_glb_holds_a_skinned_mesh_and_names_the_animation(tmp_path):
+    import pygltflib
+
+    motion = synthetic_mmm(T=5, fps=100.0)
+    gltf = pygltflib.GLTF2.load(str(write_motion(motion, tmp_path / "m.glb")))
+    mesh_nodes = [n for n in gltf.nodes if n.mesh is not None]
+    assert len(mesh_nodes) == 1 and mesh_nodes[0].skin == 0
+    prim = gltf.meshes[0].primitives[0]
+    assert gltf.accessors[prim.attributes.POSITION].count > 0
+    assert gltf.accessors[prim.indices].count % 3 == 0
+    assert gltf.animations[0].name == motion.name
+    assert gltf.animations[0].extras == {"fps": 100.0, "frames": 5}
+    assert gltf.asset.version == "2.0"
+
+
+def test_a_user_rig_keeps_its_names_and_rest_pose_in_metres(tmp_path):
+    bvh = write(RIGS["bandai"], tmp_path, T=12)
+    motion = read_motion(bvh)
+    back = read_gltf_animation(write_motion(motion, tmp_path / "rig.gltf"))
+    assert back.names[:len(motion.skeleton)] == motion.skeleton.names
+    assert np.abs(back.positions[:, :len(motion.skeleton)] - motion.positions()).max() < 1e-5
+    with open(tmp_path / "rig.gltf", encoding="utf-8") as fh:
+        assert json.load(fh)["buffers"][0]["uri"].startswith("data:")   # one file
+
+
+def test_write_result_fits_positions_on_the_body_for_a_glb(tmp_path):
+    motion = read_motion(write(RIGS["bandai"], tmp_path, T=10))
+    p21 = positions21(motion)
+    note = write_result(p21, tmp_path / "gen.glb", fps=30.0)
+    back = read_gltf_animation(tmp_path / "gen.glb")
+    assert "from the generated ones" in note
+    assert back.names[:21] == list(KIT21_NAMES) and back.fps == pytest.approx(30.0)
+    assert np.abs(back.positions[:, :21] - p21).max() < 0.1
+
+
+def test_convert_writes_glb_and_refuses_a_bad_path_with_one_line(tmp_path, capsys):
+    bvh = write(RIGS["bandai"], tmp_path, T=6)
+    assert main(["convert", str(bvh), str(tmp_path / "out.glb")]) == 0
+    assert read_gltf_animation(tmp_path / "out.glb").positions.shape[0] == 6
+    capsys.readouterr()
+    bad = tmp_path / "no" / "such" / "out.glb"
+    (tmp_path / "no").write_text("a file, not a folder")
+    assert main(["convert", str(bvh), str(bad)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "Traceback" not in err and "out.glb" in err
+    assert not bad.exists()
+
+
+def test_a_broken_glb_is_one_error_naming_the_file(tmp_path):
+    bad = tmp_path / "broken.glb"
+    bad.write_bytes(b"glTF\x02\x00\x00\x00garbage")
+    with pytest.raises(MotionFormatError, match="broken.glb"):
+        read_gltf_animation(bad)
