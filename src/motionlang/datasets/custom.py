@@ -15,14 +15,16 @@ annotations, like KIT-ML records without any.
 from __future__ import annotations
 
 import csv
-import json
+import io
 import posixpath
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from motionlang.errors import DatasetError
+from motionlang.errors import DatasetError, MotionlangError
+from motionlang.utils import limits
+from motionlang.utils.sidecar import check_name, check_text, parse_json, read_text
 
 if TYPE_CHECKING:
     from motionlang.kinematics import Motion
@@ -59,42 +61,44 @@ class CustomRecord:
         return read_motion(self.path, fps=self.fps, joint_map=self.joint_map)
 
 
-def _read_csv(path: Path) -> list[tuple[int, str, str]]:
+def _read_csv(path: Path, text: str) -> list[tuple[int, str, str]]:
     rows = []
+    reader = csv.reader(io.StringIO(text, newline=""), strict=True)
+    start = 1   # the line the next row starts on
     try:
-        with open(path, newline="", encoding="utf-8-sig") as fh:
-            reader = csv.reader(fh)
-            header = next(reader, None)
-            if header is None or [h.strip().lower() for h in header[:2]] != ["file", "text"]:
-                raise DatasetError(f"{path}:1: expected the header 'file,text', got {header}")
-            for row in reader:
-                line = reader.line_num
-                if not any(c.strip() for c in row):
-                    continue
-                if len(row) < 2:
-                    raise DatasetError(f"{path}:{line}: expected 2 columns (file,text), "
-                                       f"got {len(row)}")
-                rows.append((line, row[0].strip(), row[1].strip()))
+        header = next(reader, None)
+        if header is None or [h.strip().lower() for h in header[:2]] != ["file", "text"]:
+            raise DatasetError(f"{path}:1: expected the header 'file,text', got {header}")
+        start = reader.line_num + 1
+        for row in reader:
+            line, start = start, reader.line_num + 1
+            if line != reader.line_num:
+                # a quote left open takes the lines after it into one field
+                raise DatasetError(f"{path}:{line}: a quoted field runs on to line "
+                                   f"{reader.line_num} (an unterminated quote?)")
+            if not any(c.strip() for c in row):
+                continue
+            if len(row) < 2:
+                raise DatasetError(f"{path}:{line}: expected 2 columns (file,text), "
+                                   f"got {len(row)}")
+            rows.append((line, row[0].strip(), row[1].strip()))
     except csv.Error as exc:
-        raise DatasetError(f"{path}: malformed CSV ({exc})") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise DatasetError(f"{path}: cannot read ({exc})") from None
+        why = str(exc)
+        if "unexpected end of data" in why:
+            why = "a quote is never closed"
+        elif "field limit" in why:
+            why = (f"a field longer than {csv.field_size_limit():,} characters; a caption "
+                   f"has at most {limits.current().max_caption_chars:,}")
+        raise DatasetError(f"{path}:{start}: malformed CSV ({why})") from None
     return rows
 
 
-def _read_jsonl(path: Path) -> list[tuple[int, str, str]]:
-    try:
-        lines = path.read_text(encoding="utf-8").splitlines()
-    except (OSError, UnicodeDecodeError) as exc:
-        raise DatasetError(f"{path}: cannot read ({exc})") from None
+def _read_jsonl(path: Path, text: str) -> list[tuple[int, str, str]]:
     rows = []
-    for lineno, line in enumerate(lines, 1):
+    for lineno, line in enumerate(text.splitlines(), 1):
         if not line.strip():
             continue
-        try:
-            obj = json.loads(line)
-        except json.JSONDecodeError as exc:
-            raise DatasetError(f"{path}:{lineno}: invalid JSON ({exc.msg})") from None
+        obj = parse_json(line, f"{path}:{lineno}")
         if not isinstance(obj, dict) or not isinstance(obj.get("file"), str) \
                 or not isinstance(obj.get("text"), str):
             raise DatasetError(f"{path}:{lineno}: expected {{\"file\": str, \"text\": str}}")
@@ -103,16 +107,37 @@ def _read_jsonl(path: Path) -> list[tuple[int, str, str]]:
 
 
 def read_captions(path: str | Path) -> list[tuple[int, str, str]]:
-    """``(line, file, text)`` rows of a captions file (``.csv`` or ``.jsonl``/``.json``)."""
+    """``(line, file, text)`` rows of a captions file (``.csv`` or ``.jsonl``/``.json``;
+    UTF-8, a byte-order mark allowed).
+
+    The one reader of caption files: a regular file only (a FIFO or folder is refused by
+    name), every caption one line of at most ``max_caption_chars`` characters without
+    control characters, every file name without them
+    (:mod:`motionlang.utils.sidecar`).
+
+    Raises:
+        DatasetError: ``PATH:LINE: ...`` for the first bad row (an unterminated quote names
+            the line it opens on).
+    """
     path = Path(path)
-    if not path.is_file():
+    if not path.exists():
         raise DatasetError(f"{path}: captions file not found")
-    rows = _read_csv(path) if path.suffix.lower() == ".csv" else _read_jsonl(path)
-    for line, f, text in rows:
-        if not f:
-            raise DatasetError(f"{path}:{line}: empty 'file'")
-        if not text:
-            raise DatasetError(f"{path}:{line}: empty 'text' for {f}")
+    try:
+        text = read_text(path, "captions file")
+        rows = _read_csv(path, text) if path.suffix.lower() == ".csv" else \
+            _read_jsonl(path, text)
+        for line, f, caption in rows:
+            where = f"{path}:{line}"
+            if not f:
+                raise DatasetError(f"{where}: empty 'file'")
+            if not caption:
+                raise DatasetError(f"{where}: empty 'text' for {f}")
+            check_name(f, where, "file name")
+            check_text(caption, where)
+    except DatasetError:
+        raise
+    except MotionlangError as exc:
+        raise DatasetError(str(exc)) from None
     return rows
 
 

@@ -17,8 +17,21 @@ from collections.abc import Iterable, Sequence
 from importlib import resources
 from pathlib import Path
 
-from motionlang.errors import DatasetError
+from motionlang.errors import DatasetError, MotionlangError
+from motionlang.utils import limits
 from motionlang.utils.atomic import atomic_write
+from motionlang.utils.sidecar import load_json
+
+#: control characters: never part of a word
+_CONTROL = re.compile(r"[\x00-\x1f\x7f]")
+
+
+def _check_size(words: int, what: str) -> None:
+    """Refuse a vocabulary beyond ``max_vocabulary`` words: its embedding and softmax
+    matrices grow with it (a million words of 512 units is 2 GB per matrix)."""
+    msg = limits.message("max_vocabulary", words, "the vocabulary size")
+    if msg:
+        raise DatasetError(f"{what}: {msg}")
 
 PAD, SOS, EOS, UNK = "<pad>", "<sos>", "<eos>", "<unk>"
 SPECIALS = (PAD, SOS, EOS, UNK)  # ids 0, 1, 2, 3
@@ -133,6 +146,8 @@ class Vocabulary:
         counts = Counter(tok for s in sentences for tok in tokenize(s))
         words = sorted((w for w, c in counts.items() if c >= min_count),
                        key=lambda w: (-counts[w], w))
+        _check_size(len(words), f"the sentences hold {len(words):,} distinct words seen at "
+                                f"least {min_count} times (raise min_count)")
         return cls(w for w in words if w not in SPECIALS)
 
     def encode(self, sentence: str | Sequence[str], *, add_sos_eos: bool = True,
@@ -163,10 +178,15 @@ class Vocabulary:
     @classmethod
     def from_dict(cls, d: dict) -> Vocabulary:
         """Inverse of :meth:`to_dict`; DatasetError on a malformed entry."""
-        itos = d.get("itos")
+        itos = d.get("itos") if isinstance(d, dict) else None
         if not isinstance(itos, list) or list(itos[:4]) != list(SPECIALS):
             raise DatasetError("vocabulary: 'itos' must be a list starting with "
                                f"{list(SPECIALS)}")
+        _check_size(len(itos), f"vocabulary: {len(itos):,} words")
+        for w in itos:
+            if not isinstance(w, str) or not w or _CONTROL.search(w):
+                raise DatasetError(f"vocabulary: the word {w!r} is not a word (empty, not "
+                                   "text, or with control characters)")
         return cls(itos[4:])
 
     def save(self, path: str | Path) -> None:
@@ -178,9 +198,9 @@ class Vocabulary:
     def load(cls, path: str | Path) -> Vocabulary:
         """Read a file written by :meth:`save`."""
         try:
-            d = json.loads(Path(path).read_text(encoding="utf-8"))
-        except (OSError, ValueError) as exc:
-            raise DatasetError(f"{path}: cannot read vocabulary: {exc}") from None
+            d = load_json(path, "vocabulary")
+        except MotionlangError as exc:
+            raise DatasetError(str(exc)) from None
         try:
             return cls.from_dict(d)
         except DatasetError as exc:

@@ -44,6 +44,7 @@ from motionlang.errors import MotionlangError, SkeletonError
 from motionlang.features.rig_maps import RIG_MAPS, SMPL_JOINT_NAMES, RigMap, Spec
 from motionlang.kinematics.motion import Motion
 from motionlang.kinematics.skeleton import Skeleton
+from motionlang.utils.sidecar import check_name
 
 KIT21_NAMES: tuple[str, ...] = (
     "root", "BP", "BT", "BLN", "BUN", "LS", "LE", "LW", "RS", "RE", "RW",
@@ -249,7 +250,7 @@ def _check_spec(body: str, v, where: str) -> Spec:
     if isinstance(v, str):
         if not v.strip():
             raise bad('is not filled in (""); give one of the rig\'s joints')
-        return v.strip()
+        return check_name(v.strip(), where, f"joint name of {body!r}")
     ok = isinstance(v, (list, tuple)) and (
         (len(v) == 3 and v[0] == "mid") or
         (len(v) == 4 and v[0] == "lerp" and isinstance(v[3], (int, float))
@@ -257,7 +258,8 @@ def _check_spec(body: str, v, where: str) -> Spec:
     if not ok or not all(isinstance(x, str) and x.strip() for x in v[1:3]):
         raise bad(f'must be a joint name, ["mid", a, b] or ["lerp", a, b, t]; got '
                   f"{json.dumps(v)[:80]}")
-    return (v[0], v[1].strip(), v[2].strip(), *[float(t) for t in v[3:]])
+    a, b = (check_name(x.strip(), where, f"joint name of {body!r}") for x in v[1:3])
+    return (v[0], a, b, *[float(t) for t in v[3:]])
 
 
 def check_joint_map(d, where: str = "joint map") -> dict:
@@ -281,16 +283,10 @@ def check_joint_map(d, where: str = "joint map") -> dict:
 
 def load_joint_map(path: str | Path) -> dict:
     """Read and check a joint map JSON file (see the module docstring)."""
+    from motionlang.formats import read_joint_map  # the one reader of the file
     path = Path(path)
-    try:
-        d = json.loads(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        why = exc.strerror or exc
-        raise MotionlangError(f"{path}: cannot read joint map: {why}") from None
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise MotionlangError(f"{path}: joint map is not valid JSON: {exc}") from None
-    if isinstance(d, dict):
-        d = {**d, "name": d.get("name") or path.stem, "source": str(path)}
+    d = read_joint_map(path)
+    d = {**d, "name": d.get("name") or path.stem, "source": str(path)}
     return check_joint_map(d, str(path))
 
 

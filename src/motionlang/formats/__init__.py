@@ -54,18 +54,13 @@ def read_joint_map(path: str | Path) -> dict:
     but not yet checked against a skeleton.
 
     Raises:
-        MotionFormatError: the file is missing or not a JSON object.
+        MotionlangError: the file is missing, not a regular file, too big, not JSON
+            within the bounds of :mod:`motionlang.utils.sidecar`, or not a JSON object.
     """
-    import json
+    from motionlang.utils.sidecar import load_json
 
     path = Path(path)
-    try:
-        with open(path, encoding="utf-8") as fh:
-            spec = json.load(fh)
-    except OSError as exc:
-        raise MotionFormatError(path, f"cannot read joint map: {exc.strerror or exc}") from None
-    except ValueError as exc:
-        raise MotionFormatError(path, f"joint map is not valid JSON: {exc}") from None
+    spec = load_json(path, "joint map")   # a regular file, bounded; one line naming it
     if not isinstance(spec, dict):
         raise MotionFormatError(path, "joint map must be a JSON object")
     spec.setdefault("name", path.stem)

@@ -25,6 +25,9 @@ import numpy as np
 
 from motionlang.errors import SkeletonError
 
+#: NUL and control characters: never part of a joint name
+_CONTROL = re.compile(r"[\x00-\x1f\x7f]")
+
 
 @dataclass
 class Joint:
@@ -92,6 +95,10 @@ class Skeleton:
         self.root_axes = np.asarray(self.root_axes, dtype=float).reshape(-1, 3)
         self.mirror = np.asarray(self.mirror, dtype=float)
         names = [j.name for j in self.joints]
+        for n in names:   # names are written back out: files, terminals, reports
+            if not isinstance(n, str) or _CONTROL.search(n):
+                raise SkeletonError(f"joint name {n!r}: names must be text without NUL or "
+                                    f"control characters")
         if len(set(names)) != len(names):
             dup = sorted({n for n in names if names.count(n) > 1})
             raise SkeletonError(f"duplicate joint names: {dup}")

@@ -24,6 +24,7 @@ import numpy as np
 import torch
 
 from motionlang.errors import MotionlangError
+from motionlang.models.schema import check_config, check_entries, wrap
 from motionlang.models.versions import (
     DAMAGE,
     FORMAT_VERSION,
@@ -34,6 +35,7 @@ from motionlang.models.versions import (
     damaged,
     unreadable,
 )
+from motionlang.utils import limits
 from motionlang.utils.atomic import atomic_path
 
 
@@ -104,9 +106,14 @@ def unpack_features(d: dict | None) -> Any:
 
 
 def write_checkpoint(payload: dict, path: str | Path) -> None:
-    """torch.save through an atomic rename (a crash never leaves a torn file)."""
-    with atomic_path(path) as tmp:
-        torch.save(payload, tmp)
+    """torch.save through an atomic rename (a crash never leaves a torn file).
+
+    Saved through a file object: torch names the archive's root folder after the file it
+    is given, and the temporary file's name holds the host and process id; a file object
+    gives every checkpoint the same root (``archive/``), so one model saved twice is the
+    same bytes, wherever and by whom."""
+    with atomic_path(path) as tmp, open(tmp, "wb") as fh:
+        torch.save(payload, fh)
 
 
 def load_checkpoint(path: str | Path) -> Any:
@@ -166,6 +173,44 @@ def _check_options(cls: type[Checkpointed], kw: dict[str, Any]) -> None:
                         f"{', '.join(unknown)}")
 
 
+def check_weights(path: str | Path, cls: Any, config: Any, d: dict, kw: dict) -> None:
+    """The file's ``state_dict`` against the model its config describes, before the model
+    is built: the model is made on the ``meta`` device (shapes, no memory), its size held
+    to ``max_memory_bytes``, and every stored tensor must be one of its own, of its shape.
+
+    Raises:
+        MotionlangError: ``PATH: a damaged KIND checkpoint (state_dict...: ...)``.
+    """
+    def bad(why: str) -> MotionlangError:
+        return MotionlangError(f"{path}: a damaged {cls.kind} checkpoint ({why})")
+
+    stored = d.get("state_dict")
+    if not isinstance(stored, dict):
+        raise bad("state_dict: missing" if stored is None else
+                  f"state_dict: expected a dict of tensors, got {type(stored).__name__}")
+    for name, value in stored.items():
+        if not isinstance(value, torch.Tensor):
+            raise bad(f"state_dict.{name}: expected a tensor, got {type(value).__name__}")
+    if config is None:
+        return
+    with torch.device("meta"):
+        skeleton = wrap(path, cls.kind, lambda: cls.from_state(config, d, **kw))
+    wanted = skeleton.state_dict()
+    tensors = [*skeleton.parameters(), *skeleton.buffers()]
+    need = sum(t.numel() * t.element_size() for t in tensors)
+    too_big = limits.message("max_memory_bytes", need, "memory its config asks for")
+    if too_big:
+        raise bad(f"config: {too_big}")
+    for name, value in stored.items():
+        if name not in wanted:
+            raise bad(f"state_dict.{name}: not a tensor of this {cls.kind} model")
+        if tuple(value.shape) != tuple(wanted[name].shape):
+            raise bad(f"state_dict.{name}: shape {tuple(value.shape)}, the config needs "
+                      f"{tuple(wanted[name].shape)}")
+    # a tensor the file lacks is left to load_state_dict: a family's load hook may fill
+    # in what files from before it existed lack
+
+
 class Checkpointed:
     """Mixin of every torch model family: one self-describing checkpoint file.
 
@@ -187,11 +232,16 @@ class Checkpointed:
     * :meth:`restore_state` — what is set after the weights (a training stage ...).
 
     Every failure to rebuild a file that opened (a missing entry, a wrong shape, a bad
-    value) is one line naming the file: ``PATH: a damaged KIND checkpoint (...)``.
+    value) is one line naming the file: ``PATH: a damaged KIND checkpoint (...)``. Before
+    anything is allocated, :meth:`load` checks the config's field types and values, each
+    entry of ``state_schema`` and every tensor's name and shape against a model built on
+    torch's ``meta`` device (no memory) from that config (:func:`check_weights`).
     """
 
     kind: ClassVar[str]
     config_cls: ClassVar[type]
+    #: the schema of each extra entry (:mod:`motionlang.models.schema`), checked on load
+    state_schema: ClassVar[dict[str, Any]] = {}
     config: Any
 
     # -- hooks --------------------------------------------------------------------------
@@ -242,7 +292,10 @@ class Checkpointed:
         """
         _check_options(cls, kw)
         d = read_model_dict(path, cls.kind)
+        config = check_config(path, cls.kind, cls.config_cls, d.get("config"))
         check_config_fields(cls.config_cls, d.get("config"), path, cls.kind)
+        check_entries(path, cls.kind, d, cls.state_schema)
+        check_weights(path, cls, config, d, kw)
         try:
             return cls.from_checkpoint(d, **kw)
         except (*DAMAGE, MotionlangError) as exc:

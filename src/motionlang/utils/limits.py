@@ -19,6 +19,11 @@ limit                  default     environment variable              what it bou
                                                                      byte (beyond 64 MiB)
 ``max_archive_bytes``  64 GiB      ``MOTIONLANG_MAX_ARCHIVE_BYTES``  bytes extracted from one
                                                                      archive
+``max_json_bytes``     64 MiB      ``MOTIONLANG_MAX_JSON_BYTES``     size of one JSON sidecar
+                                                                     (joint map, metadata)
+``max_caption_chars``  10,000      ``MOTIONLANG_MAX_CAPTION_CHARS``  characters of one caption
+``max_vocabulary``     200,000     ``MOTIONLANG_MAX_VOCABULARY``     distinct words a
+                                                                     vocabulary keeps
 =====================  ==========  ================================  ==========================
 
 Byte values take an optional binary suffix: ``MOTIONLANG_MAX_MEMORY=16G``, ``500M``, ``2T``.
@@ -32,6 +37,7 @@ from __future__ import annotations
 import dataclasses
 import os
 import re
+import stat
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -56,12 +62,18 @@ class Limits:
     max_memory_bytes: int = 4 * GiB
     max_archive_ratio: float = 100.0
     max_archive_bytes: int = 64 * GiB
+    max_json_bytes: int = 64 << 20
+    max_caption_chars: int = 10_000
+    max_vocabulary: int = 200_000
 
 
 ENV = {"max_file_bytes": "MOTIONLANG_MAX_FILE_BYTES", "max_joints": "MOTIONLANG_MAX_JOINTS",
        "max_frames": "MOTIONLANG_MAX_FRAMES", "max_memory_bytes": "MOTIONLANG_MAX_MEMORY",
        "max_archive_ratio": "MOTIONLANG_MAX_ARCHIVE_RATIO",
-       "max_archive_bytes": "MOTIONLANG_MAX_ARCHIVE_BYTES"}
+       "max_archive_bytes": "MOTIONLANG_MAX_ARCHIVE_BYTES",
+       "max_json_bytes": "MOTIONLANG_MAX_JSON_BYTES",
+       "max_caption_chars": "MOTIONLANG_MAX_CAPTION_CHARS",
+       "max_vocabulary": "MOTIONLANG_MAX_VOCABULARY"}
 _SUFFIX = {"": 1, "k": 1 << 10, "m": 1 << 20, "g": 1 << 30, "t": 1 << 40}
 _VALUE = re.compile(r"^\s*(\d+(?:\.\d*)?(?:e\d+)?)\s*([kmgt]?)(?:i?b)?\s*$", re.IGNORECASE)
 
@@ -118,15 +130,34 @@ def check(path: str | Path | None, name: str, value: float, what: str,
         raise MotionFormatError(path, msg, line=line)
 
 
+def not_regular(mode: int) -> str | None:
+    """What a file of ``st_mode`` is when it is not a regular file ("a FIFO", "a folder"),
+    None for a regular one. Reading a FIFO or a terminal blocks for ever and a device may
+    never end, so readers refuse them before opening."""
+    if stat.S_ISREG(mode):
+        return None
+    for test, what in ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a FIFO (named pipe)"),
+                       (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
+                       (stat.S_ISSOCK, "a socket")):
+        if test(mode):
+            return what
+    return "not a regular file"
+
+
 def check_file(path: str | Path, parse_factor: float = 1.0) -> int:
-    """Size in bytes of a file about to be read; MotionFormatError if it is missing, too
-    big, or would take more than the memory limit to parse (``parse_factor`` x its size:
-    a reader that holds the file's lines or XML tree as Python objects needs 5-10x).
+    """Size in bytes of a file about to be read; MotionFormatError if it is missing, not a
+    regular file (a FIFO, device or folder), too big, or would take more than the memory
+    limit to parse (``parse_factor`` x its size: a reader that holds the file's lines or XML
+    tree as Python objects needs 5-10x).
     """
     try:
-        size = os.stat(path).st_size
+        st = os.stat(path)
     except OSError as exc:
         raise MotionFormatError(path, f"cannot read file: {exc.strerror or exc}") from None
+    what = not_regular(st.st_mode)
+    if what:
+        raise MotionFormatError(path, f"{what}, not a file: only regular files are read")
+    size = st.st_size
     lim = current()
     check(path, "max_file_bytes", size, "file size", lim)
     check(path, "max_memory_bytes", int(size * parse_factor), "memory needed to parse it", lim)
@@ -149,4 +180,4 @@ def check_motion(path: str | Path | None, frames: int, joints: int, channels: in
 
 
 __all__ = ["Limits", "ENV", "current", "human", "message", "check", "check_file",
-           "check_motion", "motion_bytes"]
+           "check_motion", "motion_bytes", "not_regular"]

@@ -16,11 +16,11 @@ from pathlib import Path
 import numpy as np
 
 from motionlang.errors import MotionFormatError, MotionlangError
+from motionlang.models.crbm.checkpoint import arrays, open_npz, read_config, read_meta
 from motionlang.models.crbm.sequences import check_sequences, chunk_index, gather_past
 from motionlang.models.versions import (
     DAMAGE,
     FORMAT_VERSION,
-    check_config_fields,
     check_format,
     load_problem,
 )
@@ -120,15 +120,17 @@ class ARModel:
     @classmethod
     def load(cls, path: str | Path) -> ARModel:
         try:
-            with np.load(path, allow_pickle=False) as z:
-                meta = json.loads(str(z["meta"]))
+            with open_npz(path) as z:
+                meta = read_meta(path, z, "meta", "ar")
                 if meta.get("kind") != "ar":
                     raise MotionFormatError(path, f"not an AR checkpoint (kind={meta.get('kind')!r})")
                 check_format(path, meta.get("version", 0))
-                check_config_fields(ARConfig, meta.get("config"), path, "ar")
-                model = cls(ARConfig(**meta["config"]), meta["n_visible"])
+                config, D = read_config(path, meta, "ar", ARConfig)
+                stored = arrays(path, z, "ar", {"A": (config.order * D, D), "a": (D,),
+                                                "mean": (D,), "std": (D,)})
+                model = cls(config, D)
                 for k in ("A", "a", "mean", "std"):
-                    setattr(model, k, z[k].astype(np.float64))
+                    setattr(model, k, stored[k].astype(np.float64))
         except (OSError, *DAMAGE) as exc:
             raise MotionFormatError(path, load_problem("ar", exc)) from exc
         return model

@@ -29,13 +29,19 @@ from pathlib import Path
 import numpy as np
 
 from motionlang.errors import MotionFormatError
-from motionlang.models.crbm.config import PARAMS, CRBMConfig, config_from_dict
+from motionlang.models.crbm.checkpoint import (
+    arrays,
+    crbm_shapes,
+    open_npz,
+    read_config,
+    read_meta,
+)
+from motionlang.models.crbm.config import PARAMS, CRBMConfig
 from motionlang.models.crbm.generation import CRBMGeneration
 from motionlang.models.crbm.training import CRBMTraining
 from motionlang.models.versions import (
     DAMAGE,
     FORMAT_VERSION,
-    check_config_fields,
     check_format,
     load_problem,
 )
@@ -108,18 +114,21 @@ class CRBM(CRBMTraining, CRBMGeneration):
     @classmethod
     def load(cls, path: str | Path) -> CRBM:
         try:
-            with np.load(path, allow_pickle=False) as z:
-                meta = json.loads(str(z["meta"]))
+            with open_npz(path) as z:
+                meta = read_meta(path, z, "meta", "crbm")
                 if meta.get("kind") != "crbm":
                     raise MotionFormatError(path, f"not a CRBM checkpoint (kind={meta.get('kind')!r})")
                 check_format(path, meta.get("version", 0))
-                check_config_fields(CRBMConfig, meta.get("config"), path, "crbm")
-                model = cls(config_from_dict(meta["config"]), meta["n_visible"])
+                config, n_visible = read_config(path, meta, "crbm", CRBMConfig)
+                stored = arrays(path, z, "crbm", crbm_shapes(config, n_visible))
+                history = arrays(path, z, "crbm", {"history": z["history"].shape}
+                                 if "history" in z.files else {"history": (0,)})["history"]
+                model = cls(config, n_visible)
                 for k in PARAMS:
-                    setattr(model, k, z[k].astype(model.config.dtype))
+                    setattr(model, k, stored[k].astype(model.config.dtype))
                 for k in ("mean", "std"):
-                    setattr(model, k, z[k].astype(np.float64))
-                model.history = z["history"].tolist()
+                    setattr(model, k, stored[k].astype(np.float64))
+                model.history = history.reshape(-1).tolist()
         except (OSError, *DAMAGE) as exc:
             raise MotionFormatError(path, load_problem("crbm", exc)) from exc
         return model

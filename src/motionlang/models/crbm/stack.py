@@ -15,13 +15,13 @@ from pathlib import Path
 import numpy as np
 
 from motionlang.errors import MotionFormatError
-from motionlang.models.crbm.config import CRBMConfig, config_from_dict
+from motionlang.models.crbm.checkpoint import arrays, crbm_shapes, open_npz, read_config, read_meta
+from motionlang.models.crbm.config import CRBMConfig
 from motionlang.models.crbm.model import CRBM
 from motionlang.models.crbm.sequences import check_sequences
 from motionlang.models.versions import (
     DAMAGE,
     FORMAT_VERSION,
-    check_config_fields,
     check_format,
     load_problem,
 )
@@ -89,19 +89,21 @@ class CRBMStack:
     @classmethod
     def load(cls, path: str | Path) -> CRBMStack:
         try:
-            with np.load(path, allow_pickle=False) as z:
+            with open_npz(path) as z:
                 if str(z["kind"]) != "crbm_stack":
                     raise MotionFormatError(path, "not a two-level CRBM checkpoint")
                 check_format(path, int(z["format"]) if "format" in z.files else 0)
                 levels = []
                 for name in ("l1", "l2"):
-                    meta = json.loads(str(z[f"{name}_meta"]))
-                    check_config_fields(CRBMConfig, meta.get("config"), path, "crbm_stack")
-                    m = CRBM(config_from_dict(meta["config"]), meta["n_visible"])
+                    meta = read_meta(path, z, f"{name}_meta", "crbm_stack")
+                    config, n_visible = read_config(path, meta, "crbm_stack", CRBMConfig)
+                    stored = arrays(path, z, "crbm_stack", crbm_shapes(config, n_visible),
+                                    prefix=f"{name}_")
+                    m = CRBM(config, n_visible)
                     for k in ("W", "A", "B", "a", "b"):
-                        setattr(m, k, z[f"{name}_{k}"].astype(m.config.dtype))
+                        setattr(m, k, stored[k].astype(m.config.dtype))
                     for k in ("mean", "std"):
-                        setattr(m, k, z[f"{name}_{k}"].astype(np.float64))
+                        setattr(m, k, stored[k].astype(np.float64))
                     levels.append(m)
         except (OSError, *DAMAGE) as exc:
             raise MotionFormatError(path, load_problem("crbm_stack", exc)) from exc

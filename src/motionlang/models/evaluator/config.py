@@ -79,7 +79,7 @@ class EvaluatorConfig:
 
     def __post_init__(self):
         check_numbers("EvaluatorConfig", self,
-                      positive_ints=("motion_dim", "word_dim", "n_pos", "max_words"),
+                      positive_ints=("n_pos", "max_words"), dims=("motion_dim", "word_dim"),
                       sizes=SIZES,
                       nonneg_ints=("drop_last",), positive=("margin", "temperature"),
                       unit=("dropout",))

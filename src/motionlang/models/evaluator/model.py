@@ -34,6 +34,7 @@ from motionlang.models.checkpoint import Checkpointed, load_checkpoint, unpack_n
 from motionlang.models.evaluator.config import EvaluatorConfig
 from motionlang.models.evaluator.layers import MotionEncoder, MovementEncoder, TextEncoder
 from motionlang.models.evaluator.text import caption_tokens, glove_50d, text_inputs
+from motionlang.models.schema import NORMALIZER
 
 #: the public checkpoint's entry of each module
 OFFICIAL_KEYS = ("movement_encoder", "motion_encoder", "text_encoder")
@@ -201,6 +202,8 @@ class TextMotionEvaluator(Checkpointed, nn.Module):
         return torch.cat(out).double().numpy() if out else np.zeros((0, self.config.embed_dim))
 
     # -- checkpoints --------------------------------------------------------------------
+    state_schema = {"normalizer": NORMALIZER, "features": (None, dict)}
+
     def checkpoint_state(self) -> dict[str, Any]:
         return {"normalizer": {"type": "dict", "data": {"mean": self.mean.tolist(),
                                                         "std": self.std.tolist()}},

@@ -59,8 +59,9 @@ class JudgeConfig:
     bones: list[float] | None = None
 
     def __post_init__(self):
-        check_numbers("JudgeConfig", self, unit=("dropout",), positive=("fps",), positive_ints=(
-            "n_features", "hidden", "embed", "layers", "kernel", "window"))
+        check_numbers("JudgeConfig", self, unit=("dropout",), positive=("fps",),
+                      dims=("n_features",),
+                      positive_ints=("hidden", "embed", "layers", "kernel", "window"))
         for name, top in AT_MOST.items():
             if getattr(self, name) > top:
                 raise MotionlangError(f"JudgeConfig.{name} must be <= {top}, got "

@@ -35,6 +35,7 @@ from motionlang.models.checkpoint import (
     unpack_normalizer,
 )
 from motionlang.models.judge.config import JudgeConfig
+from motionlang.models.schema import FEATURES, NORMALIZER
 
 
 def resample_positions(p21: np.ndarray, fps: float, to: float) -> np.ndarray:
@@ -166,6 +167,8 @@ class MotionJudge(Checkpointed, nn.Module):
         return fs
 
     # -- checkpoint ----------------------------------------------------------------------
+    state_schema = {"normalizer": NORMALIZER, "features": FEATURES}
+
     def checkpoint_state(self) -> dict[str, Any]:
         return {"normalizer": pack_normalizer(self.normalizer),
                 "features": pack_features(self.features)}

@@ -73,7 +73,7 @@ class RetrievalConfig:
                                "encoded)")
 
     def __post_init__(self) -> None:
-        check_numbers("RetrievalConfig", self, positive_ints=("n_features",),
+        check_numbers("RetrievalConfig", self, dims=("n_features",),
                       nonneg_ints=("text_dim", "text_layer"), sizes=SIZES,
                       layers=("layers", "heads"), positive=("fps", "temperature", "window"),
                       unit=("dropout",))

@@ -38,6 +38,7 @@ from motionlang.features.positions import PositionFeatures
 from motionlang.models.checkpoint import Checkpointed, pack_features, unpack_features
 from motionlang.models.retrieval.config import RetrievalConfig
 from motionlang.models.retrieval.text import SentenceVectors, sentence_vectors
+from motionlang.models.schema import FEATURES
 
 
 def positional(T: int, dim: int) -> torch.Tensor:
@@ -210,6 +211,8 @@ class RetrievalModel(Checkpointed, nn.Module):
         return {"loss": nce, "nce": nce.detach()}
 
     # -- checkpoints --------------------------------------------------------------------
+    state_schema = {"features": FEATURES}
+
     def checkpoint_state(self) -> dict[str, Any]:
         fitted = self.features is not None and self.features.fitted
         return {"features": pack_features(self.features) if fitted else None}

@@ -12,6 +12,7 @@ from motionlang.models.checkpoint import (
     unpack_normalizer,
     unpack_vocab,
 )
+from motionlang.models.schema import FEATURES, NORMALIZER, VOCAB
 
 
 class Seq2SeqCheckpointed(Checkpointed):
@@ -22,6 +23,7 @@ class Seq2SeqCheckpointed(Checkpointed):
     vocab: Any
     normalizer: Any
     features: Any
+    state_schema = {"vocab": VOCAB, "normalizer": NORMALIZER, "features": FEATURES}
 
     def checkpoint_state(self) -> dict[str, Any]:
         return {"vocab": pack_vocab(self.vocab), "normalizer": pack_normalizer(self.normalizer),

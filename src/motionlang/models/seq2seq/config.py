@@ -23,6 +23,15 @@ _SIZES = {"enc_hidden": "encoder LSTM units", "enc_layers": "encoder LSTM layers
           "attention": "additive attention variant"}
 
 
+def _check_ids(owner: str, cfg, names: tuple[str, ...]) -> None:
+    """Special token ids inside the vocabulary (an embedding row each)."""
+    for name in names:
+        v = getattr(cfg, name)
+        if not (isinstance(v, int) and not isinstance(v, bool) and 0 <= v < cfg.vocab_size):
+            raise MotionlangError(f"{owner}.{name} must be a token id in 0..{cfg.vocab_size - 1}"
+                                  f", got {v!r}")
+
+
 @dataclass
 class M2LConfig:
     """Sizes of the motion-to-language model; paper defaults except the data-given ones.
@@ -47,10 +56,11 @@ class M2LConfig:
     max_len: int = 40          # decoding cap in tokens, EOS included
 
     def __post_init__(self):
-        check_numbers("M2LConfig", self, unit=("dropout",), positive_ints=(
-            "n_features", "vocab_size", "max_len"), sizes=("enc_hidden", "dec_hidden",
+        check_numbers("M2LConfig", self, unit=("dropout",), positive_ints=("max_len",),
+            dims=("n_features",), vocab=("vocab_size",), sizes=("enc_hidden", "dec_hidden",
                                                            "embed_dim", "attn_dim"),
             layers=("enc_layers", "dec_layers"))
+        _check_ids("M2LConfig", self, ("pad_id", "sos_id", "eos_id"))
 
 
 @dataclass
@@ -148,12 +158,13 @@ class L2MConfig:
 
     def __post_init__(self):
         check_numbers("L2MConfig", self, unit=("dropout",), positive_ints=(
-            "vocab_size", "n_features", "max_frames", "energy_window"),
+            "max_frames", "energy_window"), dims=("n_features",), vocab=("vocab_size",),
             sizes=("embed_dim", "enc_hidden", "dec_hidden", "n_components", "attn_dim",
                    "plan_hidden"), layers=("enc_layers", "dec_layers"),
             nonneg_ints=("rollout_warmup", "plan_parts"),
             nonneg=("end_weight", "input_noise", "energy_weight", "plan_weight", "plan_noise",
                     "foot_weight", "mean_weight"))
+        _check_ids("L2MConfig", self, ("pad_id",))
         if not 0 <= self.rollout <= 1:
             raise MotionlangError(f"L2MConfig.rollout must be in [0, 1], got {self.rollout!r}")
         if self.foot_step not in ("expected", "input"):
@@ -162,6 +173,9 @@ class L2MConfig:
         if self.foot_down not in ("reference", "own"):
             raise MotionlangError(f"L2MConfig.foot_down must be 'reference' or 'own', not "
                                   f"{self.foot_down!r}")
+        if not self.plan_parts and (self.plan_weight != 1.0 or self.plan_noise != 0.0):
+            raise MotionlangError("L2MConfig.plan_weight and plan_noise apply to a plan: set "
+                                  "L2MConfig.plan_parts too")
         if self.plan_parts and not self.progress_input:
             raise MotionlangError("L2MConfig.plan_parts needs L2MConfig.progress_input")
         if self.foot_down == "own" and self.foot_step == "input":

@@ -60,6 +60,7 @@ from torch import nn
 
 from motionlang.errors import MotionlangError
 from motionlang.models.length import SentenceLength
+from motionlang.models.schema import LENGTH_MODEL
 from motionlang.models.seq2seq import mdn
 from motionlang.models.seq2seq.checkpoint import Seq2SeqCheckpointed
 from motionlang.models.seq2seq.config import L2MConfig  # noqa: F401 (re-exported)
@@ -356,6 +357,8 @@ class LanguageToMotion(Seq2SeqCheckpointed, nn.Module):
             out["loss"] = out["loss"] + self.config.plan_weight * plan_mse
             out["plan"] = plan_mse.detach()
         return out
+
+    state_schema = {**Seq2SeqCheckpointed.state_schema, "length_model": LENGTH_MODEL}
 
     def checkpoint_state(self) -> dict:
         return {**super().checkpoint_state(), "length_model": (

@@ -190,7 +190,7 @@ class TwoStreamConfig:
     def __post_init__(self):
         self.lambdas = _lambdas(self.lambdas)
         self.text_layers = _layers(self.text_layers)
-        check_numbers(_OWNER, self, nonneg_ints=("text_dim",), positive_ints=("n_features",),
+        check_numbers(_OWNER, self, nonneg_ints=("text_dim",), dims=("n_features",),
                       sizes=("h1", "h2", "h", "disc_hidden"), layers=("lstm_layers",))
         if set(self.parts) != set(PART_NAMES):
             raise MotionlangError(f"parts must be exactly {PART_NAMES}, got {sorted(self.parts)}")

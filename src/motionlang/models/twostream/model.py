@@ -40,6 +40,7 @@ from motionlang.models.checkpoint import (
     unpack_normalizer,
 )
 from motionlang.models.length import SentenceLength
+from motionlang.models.schema import FEATURES, LENGTH_MODEL, NORMALIZER
 from motionlang.models.twostream import losses as L
 from motionlang.models.twostream.config import TwoStreamConfig
 from motionlang.models.twostream.discriminator import PoseDiscriminator
@@ -351,6 +352,9 @@ class TwoStreamModel(Checkpointed, nn.Module):
         return self._fitted_features("features").encode_positions(p21)
 
     # ------------------------------------------------------------------ persistence
+    state_schema = {"stage": str, "features": FEATURES, "normalizer": NORMALIZER,
+                    "length_model": LENGTH_MODEL}
+
     def checkpoint_state(self) -> dict[str, Any]:
         fitted = self.features.fitted
         return {"stage": self.stage,
