@@ -17,9 +17,9 @@ without building anything.
 from __future__ import annotations
 
 import functools
+import hashlib
 import importlib
-import json
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -114,12 +114,14 @@ NON_COMMERCIAL = ("CC BY-NC 4.0: trained on the Bandai Namco Research Motion Dat
 
 @dataclass(frozen=True)
 class Packaged:
-    """A model shipped in the package: its file, kind, licence and model card (Markdown)."""
+    """A model shipped in the package: its file, kind, licence, model card (Markdown) and
+    the SHA-256 of its file (checked on load: :func:`verify_packaged`)."""
 
     name: str
     kind: str
     summary: str
     licence: str = MIT
+    sha256: str = ""
 
     @property
     def commercial(self) -> bool:
@@ -135,7 +137,19 @@ class Packaged:
         return card.read_text(encoding="utf-8") if card.is_file() else ""
 
 
-PACKAGED: dict[str, Packaged] = {
+#: SHA-256 of each packaged file, kept in step by ``scripts/packaged_digests.py`` (a test
+#: fails when they differ): a packaged model is checked against it on first use
+PACKAGED_SHA256: dict[str, str] = {
+    "m2l": "644963b4e696933fb7d86318905093468f658a2dc1a2a6d9fda4b13d29e1428d",
+    "l2m": "e2ca8ae530b370f1245ed7506d757a25683af29c781df7cf98b3353b62b42a3a",
+    "twostream": "3b03eeb81ebd415ae1cdb4b6fb1fbc38b6679b6b289574dae073c46af69d048a",
+    "m2l-procedural": "f1c0da99bc3a90ac9bbb40616cc027cb490dbb61115c75316afc4fe372925eef",
+    "l2m-procedural": "75e9dca9b55abc02b251158048b4903aca9f68af1d2c40c1c4c2cfc1964d1ae8",
+    "retrieval": "c4a589d890161d0923f59ac502ee28d9376239204b3d582c91b4f17e80e67f8a",
+    "judge": "53e34ff070150aa1f7926a6e4ce62e3a87fd29c10fb0d576631337c70b801e74",
+}
+
+PACKAGED: dict[str, Packaged] = {k: replace(p, sha256=PACKAGED_SHA256.get(k, "")) for k, p in {
     "m2l": Packaged("m2l", "m2l", "motion -> English (seq2seq, Plappert et al. 2018), "
                     "21-joint body, procedural corpus + Bandai Namco takes", NON_COMMERCIAL),
     "l2m": Packaged("l2m", "l2m", "English -> motion (seq2seq with a mixture density output, "
@@ -155,12 +169,52 @@ PACKAGED: dict[str, Packaged] = {
                           "--bank", NON_COMMERCIAL),
     "judge": Packaged("judge", "judge", "action and style classifier of real motion "
                       "(evaluate-judge), Bandai Namco takes", NON_COMMERCIAL),
-}
+}.items()}
 
 
 def model_class(kind: str) -> ModelClass:
     """The class that reads checkpoints of ``kind``."""
     return load_object(family(kind).model)
+
+
+#: packaged files already checked by this process: (path, size, mtime); a file changed
+#: since is checked again
+_VERIFIED: set[tuple[str, int, int]] = set()
+
+
+def file_sha256(path: str | Path) -> str:
+    """The SHA-256 of a file, hex."""
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def verify_packaged(p: Packaged) -> None:
+    """Refuse a packaged model whose file is not the one shipped (its SHA-256 differs from
+    :data:`PACKAGED_SHA256`): changed on disk, damaged, or swapped. Checked once per
+    process and file.
+
+    Raises:
+        MotionlangError: one line naming the file and both digests' first characters.
+    """
+    path = p.path
+    try:
+        st = path.stat()
+        key = (str(path), st.st_size, st.st_mtime_ns)
+        if key in _VERIFIED:
+            return
+        got = file_sha256(path)
+    except OSError as exc:
+        raise MotionlangError(f"{path}: cannot read the packaged {p.name} model: "
+                              f"{exc.strerror or exc}") from None
+    if got != p.sha256:
+        want = f"{p.sha256[:12]}..." if p.sha256 else "none recorded"
+        raise MotionlangError(f"{path}: the packaged {p.name} model is not the file it "
+                              f"shipped as (SHA-256 {got[:12]}..., expected {want}): damaged "
+                              f"or changed; reinstall motionlang")
+    _VERIFIED.add(key)
 
 
 def resolve(name_or_path: str | Path) -> Path:
@@ -174,6 +228,7 @@ def resolve(name_or_path: str | Path) -> Path:
         if not path.is_file():
             raise MotionlangError(f"{path}: the packaged {name_or_path} model is missing "
                                   "from this installation")
+        verify_packaged(PACKAGED[name_or_path])
         return path
     path = Path(name_or_path)
     if path.is_dir():
@@ -190,14 +245,20 @@ def resolve(name_or_path: str | Path) -> Path:
 
 
 def _npz_kind(path: Path) -> str:
+    import zipfile
+
     import numpy as np
+
+    from motionlang.utils.sidecar import parse_json
     try:
         with np.load(path, allow_pickle=False) as z:
             if "kind" in z.files:
                 return str(z["kind"])
             if "meta" in z.files:
-                return str(json.loads(str(z["meta"])).get("kind"))
-    except (OSError, ValueError, KeyError, json.JSONDecodeError) as exc:
+                meta = parse_json(str(z["meta"]), f"{path}: meta")
+                if isinstance(meta, dict):
+                    return str(meta.get("kind"))
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as exc:
         raise MotionlangError(f"{path}: not a readable model file ({type(exc).__name__})"
                               ) from exc
     raise MotionlangError(f"{path}: an .npz without a model kind")
