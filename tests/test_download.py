@@ -200,3 +200,33 @@ def _dead_pid() -> int:
     proc = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
                           capture_output=True, text=True)
     return int(proc.stdout)
+
+
+def test_a_part_file_that_is_a_link_is_never_written_through(tmp_path):
+    """A planted ``.part`` link (to a file the user owns) is refused and left alone; the
+    file it points to keeps every byte (issue 44, item 0)."""
+    victim = tmp_path / "precious.txt"
+    victim.write_bytes(b"keep me")
+    (tmp_path / "a.zip.part").symlink_to(victim)
+    with serve(PAYLOAD) as srv:
+        with pytest.raises(DatasetError, match="a symbolic link, not a partial download"):
+            download_file(srv.url, tmp_path / "a.zip")
+        assert srv.requests == []                       # refused before any request
+    assert victim.read_bytes() == b"keep me"
+    assert (tmp_path / "a.zip.part").is_symlink() and not (tmp_path / "a.zip").exists()
+
+
+def test_a_part_file_is_opened_without_following_links(tmp_path):
+    from motionlang.datasets.download import _open_part
+    victim = tmp_path / "precious.txt"
+    victim.write_bytes(b"keep me")
+    link = tmp_path / "x.part"
+    link.symlink_to(victim)
+    for append in (True, False):                        # a link put there meanwhile
+        with pytest.raises(DatasetError, match="replaced by a link"):
+            _open_part(link, append=append)
+    assert victim.read_bytes() == b"keep me"
+    new = tmp_path / "new.part"
+    with _open_part(new, append=False) as fh:
+        fh.write(b"abc")
+    assert new.read_bytes() == b"abc"

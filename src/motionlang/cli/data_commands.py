@@ -35,6 +35,10 @@ def cmd_info(args: argparse.Namespace) -> int:
 
 def cmd_split(args: argparse.Namespace) -> int:
     from motionlang.datasets.folders import split_folder
+    from motionlang.utils.folder_lock import check_no_clash
+    if not args.overwrite:
+        names = ("train", "val", "test") if len(args.fractions) == 3 else ("train", "test")
+        check_no_clash(args.out, {f"{n}.txt" for n in names}, "--out")
     written = split_folder(args.dir, args.out, args.fractions, seed=args.seed,
                            max_seconds=args.max_seconds)
     for path, n in written.items():
@@ -48,6 +52,8 @@ def cmd_export_h3d(args: argparse.Namespace) -> int:
 
     from motionlang.datasets.humanml3d_export import export_h3d
     from motionlang.datasets.seq2seq_pairs import load_records
+    from motionlang.utils.folder_lock import check_new_output
+    check_new_output(args.out, "--out", "an export goes into a new or empty folder")
     t0 = time.perf_counter()
     records = load_records(args.data, args.max_seconds, args.joint_map)
     print(f"export-h3d: {len(records)} motions from {args.data} "
@@ -130,6 +136,8 @@ def register(subparsers) -> None:
                    help="KIT-ML: split only motions shorter than this")
     s.add_argument("--out", required=True, type=output_dir,
                    help="folder for train.txt, val.txt, test.txt")
+    s.add_argument("--overwrite", action="store_true",
+                   help="replace split files already in --out (default: refused)")
     s.set_defaults(func=cmd_split)
 
     _register_export_h3d(sub)

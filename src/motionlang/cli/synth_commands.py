@@ -20,12 +20,26 @@ def register_synth(data_subparsers) -> None:
                    help="index of the first sample (to extend a corpus; default 0)")
     p.add_argument("--workers", type=positive_int, default=None,
                    help="worker processes (default: min(2, CPUs))")
+    p.add_argument("--overwrite", action="store_true",
+                   help="write into a folder that holds files already, replacing the samples "
+                        "of the same ids (default: a non-empty --out is refused, and with "
+                        "--start only the files of the new ids must be absent)")
     p.set_defaults(func=_run)
 
 
 def _run(args) -> int:
     from motionlang.datasets.synth.corpus import write_corpus
+    from motionlang.utils.folder_lock import check_new_output, check_no_clash
 
+    if not args.overwrite:   # an existing dataset is never overwritten unasked
+        if args.start:
+            check_no_clash(args.out, {f"{i + 1:05d}_{part}"
+                                      for i in range(args.start, args.start + args.n)
+                                      for part in ("mmm.xml", "annotations.json",
+                                                   "meta.json")}, "--out")
+        else:
+            check_new_output(args.out, "--out", "give --overwrite to write over it, "
+                                                "--start N to extend it, or another folder")
     t0 = time.perf_counter()
     ids = write_corpus(args.out, args.n, args.seed, start=args.start, workers=args.workers)
     print(f"wrote {len(ids)} motions ({ids[0]}..{ids[-1]}) to {args.out} "

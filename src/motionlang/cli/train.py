@@ -76,7 +76,11 @@ def _register_recipe(train_sub, kind: str) -> None:
     if recipe.trainer:   # the shared trainer's options, with the recipe's defaults
         add_config_options(p, TrainConfig, defaults=recipe.train_defaults)
         p.add_argument("--resume", action="store_true",
-                       help="continue the run in --out from its last.pt")
+                       help="continue the run in --out from its last.pt (with the run's "
+                            "data, seed and data options)")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace the run already in --out (its model, checkpoints, history "
+                        "and splits are removed first; default: a non-empty --out is refused)")
     model_cls = fam.config_class()
     if model_cls is not None:
         add_config_options(p, model_cls, defaults=recipe.model_defaults)
@@ -90,7 +94,7 @@ def cmd_train(args: argparse.Namespace) -> int:
 
     from motionlang.cli.config_options import option_fields
     from motionlang.models.registry import family
-    from motionlang.recipes import recipe_of
+    from motionlang.recipes import recipe_of, run_recipe
     from motionlang.training.config import TrainConfig
     kind = args.model_kind
     recipe, model_cls = recipe_of(kind), family(kind).config_class()
@@ -101,8 +105,9 @@ def cmd_train(args: argparse.Namespace) -> int:
         f.name: getattr(args, f.name) for f in option_fields(model_cls)}
     sources = args.data if isinstance(args.data, list) else [args.data]
     try:
-        recipe.run(sources, Path(args.out), model_cfg, train_cfg, data_cfg,
-                   resume=recipe.trainer and args.resume, options=vars(args))
+        run_recipe(kind, sources, Path(args.out), model_cfg, train_cfg, data_cfg,
+                   resume=recipe.trainer and args.resume, overwrite=args.overwrite,
+                   options=vars(args))
     except MotionlangError as exc:   # a config's field names -> the options
         message = str(exc)
         for cls in filter(None, (model_cls, TrainConfig if recipe.trainer else None,

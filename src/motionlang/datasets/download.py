@@ -10,6 +10,7 @@ archives that expand beyond the limits of :mod:`motionlang.utils.limits`
 from __future__ import annotations
 
 import contextlib
+import errno
 import hashlib
 import http.client
 import lzma
@@ -104,7 +105,7 @@ def _still_good(target: Path, expected: str | None) -> bool:
 def _fetch(url: str, part: Path, timeout: float, desc: str) -> int | None:
     """Append the rest of ``url`` to ``part`` (or write it afresh when the server cannot
     resume); the file's full size when the server told it, else None."""
-    offset = part.stat().st_size if part.exists() else 0
+    offset = _part_size(part)
     try:
         resp, offset = _open_resuming(url, part, offset, timeout)
         with resp:
@@ -114,7 +115,7 @@ def _fetch(url: str, part: Path, timeout: float, desc: str) -> int | None:
                 offset = 0  # Range ignored: the body is the whole file
             length = resp.headers.get("Content-Length")
             total = offset + int(length) if length and length.isdigit() else None
-            with open(part, "ab" if offset else "wb") as fh, \
+            with _open_part(part, append=bool(offset)) as fh, \
                     progress(desc=desc, total=total, unit="B", unit_scale=True,
                              unit_divisor=1024, initial=offset) as bar:
                 for block in iter(lambda: resp.read(CHUNK), b""):
@@ -125,10 +126,51 @@ def _fetch(url: str, part: Path, timeout: float, desc: str) -> int | None:
     except urllib.error.URLError as exc:
         raise DatasetError(f"{url}: cannot connect ({exc.reason}); are you offline?") from None
     except (http.client.HTTPException, OSError) as exc:
-        kept = part.stat().st_size if part.exists() else 0
+        kept = _part_size(part)
         raise DatasetError(f"{url}: transfer interrupted ({exc!r}); {kept} bytes kept in "
                            f"{part}, run again to resume") from None
     return total
+
+
+def _part_size(part: Path) -> int:
+    """Bytes already in ``part`` (0 when absent), read without following a link.
+
+    Raises:
+        DatasetError: ``part`` is a symbolic link or not a regular file: writing through
+            it would change another file (a planted link), or hang (a FIFO).
+    """
+    try:
+        st = os.lstat(part)
+    except FileNotFoundError:
+        return 0
+    if not stat.S_ISREG(st.st_mode):
+        what = "a symbolic link" if stat.S_ISLNK(st.st_mode) else "not a regular file"
+        raise DatasetError(f"{part}: {what}, not a partial download; it is left as it is: "
+                           "remove it to download afresh")
+    return st.st_size
+
+
+def _open_part(part: Path, append: bool):
+    """``part`` opened for writing without following links: appended to, truncated, or
+    created new (``O_EXCL``, so a link or file put there meanwhile fails instead)."""
+    flags = os.O_WRONLY | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_BINARY", 0)
+    if append:
+        flags |= os.O_APPEND
+    elif os.path.lexists(part):
+        flags |= os.O_TRUNC
+    else:
+        flags |= os.O_CREAT | os.O_EXCL
+    try:
+        fd = os.open(part, flags, 0o644)
+    except OSError as exc:
+        if exc.errno in (errno.ELOOP, errno.EEXIST):
+            raise DatasetError(f"{part}: replaced by a link or another file during the "
+                               "download; it is left as it is") from None
+        raise
+    if not stat.S_ISREG(os.fstat(fd).st_mode):
+        os.close(fd)
+        raise DatasetError(f"{part}: not a regular file, not a partial download")
+    return os.fdopen(fd, "ab" if append else "wb")
 
 
 def _open_resuming(url: str, part: Path, offset: int, timeout: float):

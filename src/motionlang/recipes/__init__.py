@@ -45,6 +45,11 @@ class Recipe:
             included, and another kind is refused.
         description: what ``train KIND -h`` says after the family's summary (the data's
             terms, how it is split).
+        resume_may_change: data options a ``--resume`` may change (they change what an
+            epoch trains on or how, never the vocabulary, features or split); every other
+            data option, the data and the seed must be the run's (``training.run_guard``).
+        extra_files: what ``--overwrite`` removes besides the trainer's files and the model
+            file (stage folders, a second model file).
     """
 
     run: Callable[..., Path]
@@ -57,6 +62,8 @@ class Recipe:
     run_files: str | None = None
     source_kind: str | None = None
     description: str = ""
+    resume_may_change: tuple[str, ...] = ()
+    extra_files: tuple[str, ...] = ()
 
 
 def recipe_of(kind: str) -> Recipe:
@@ -95,13 +102,14 @@ def split_options(kind: str, options: dict[str, Any]) -> tuple[dict, dict, dict]
 
 
 def train(kind: str, data: str | Path | Sequence[str | Path], out: str | Path, *,
-          resume: bool = False, **options: Any) -> Path:
+          resume: bool = False, overwrite: bool = False, **options: Any) -> Path:
     """Train a ``kind`` model on ``data`` (one ``--data`` value or several, e.g.
     ``"corpus@1"``, ``"bandai:DIR@1"``) into the run folder ``out``; ``options`` are fields
     of the model's config, of ``TrainConfig`` (where the recipe uses the shared trainer) or
     of the recipe's data options, as the command line's ``train KIND`` options
-    (``enc_hidden=32``, ``epochs=2``, ``features="positions"``). Returns the trained model's
-    path."""
+    (``enc_hidden=32``, ``epochs=2``, ``features="positions"``). ``out`` must be new or
+    empty unless ``resume`` (continue the run there) or ``overwrite`` (replace it):
+    :func:`run_recipe`. Returns the trained model's path."""
     from motionlang.datasets.sources import parse_source
     from motionlang.training.config import TrainConfig
     recipe = recipe_of(kind)
@@ -112,5 +120,61 @@ def train(kind: str, data: str | Path | Sequence[str | Path], out: str | Path, *
     train_cfg = (TrainConfig(**{**recipe.train_defaults, **train_kw, "out_dir": str(out)})
                  if recipe.trainer else None)
     data_cfg = recipe.data_config(**data_kw)
-    return recipe.run(sources, Path(out), {**recipe.model_defaults, **model_kw}, train_cfg,
-                      data_cfg, resume=resume)
+    return run_recipe(kind, sources, Path(out), {**recipe.model_defaults, **model_kw},
+                      train_cfg, data_cfg, resume=resume, overwrite=overwrite)
+
+
+def run_recipe(kind: str, sources: Sequence, out: Path, model_cfg: dict, train_cfg: Any,
+               data_cfg: Any, *, resume: bool = False, overwrite: bool = False,
+               options: dict | None = None) -> Path:
+    """``recipe.run`` inside the run folder's guard (``training.run_guard``): a new run
+    refuses a non-empty ``out`` unless ``overwrite`` (which first removes the previous
+    run's files); the folder is locked against a second process for the whole run; a
+    ``resume`` whose data, seed or data options differ from the run's is refused before
+    anything is written. Under torchrun only the lead process checks and locks (the
+    others write nothing)."""
+    import dataclasses
+
+    from motionlang.datasets.sources import LICENCE_FILE
+    from motionlang.models.registry import family
+    from motionlang.training.run_guard import (
+        check_identity,
+        check_run_folder,
+        clear_run,
+        run_identity,
+        write_identity,
+    )
+    from motionlang.training.run_log import lead_process
+    from motionlang.utils.folder_lock import folder_lock
+    recipe = recipe_of(kind)
+
+    def go() -> Path:
+        return recipe.run(sources, out, model_cfg, train_cfg, data_cfg, resume=resume,
+                          options=options)
+
+    if not lead_process():
+        return go()
+    check_run_folder(out, resume=resume, overwrite=overwrite)
+    data_options = (dataclasses.asdict(data_cfg) if dataclasses.is_dataclass(data_cfg)
+                    and not isinstance(data_cfg, type) else {})
+    identity = run_identity(kind, list(sources), getattr(train_cfg, "seed", None),
+                            data_options)
+    if resume and recipe.trainer and not any(
+            p.is_file() for p in (out / "last.pt", *out.glob("*/last.pt"))):
+        raise MotionlangError(f"--resume: no checkpoint {out / 'last.pt'} to continue from")
+    with folder_lock(out):
+        if resume and recipe.trainer:
+            check_identity(out, identity, recipe.resume_may_change)
+        elif overwrite:
+            clear_run(out, family(kind).model_file, (LICENCE_FILE, *recipe.extra_files))
+        fresh = not (out / "run.json").exists()
+        if fresh:
+            write_identity(out, identity)
+        try:
+            return go()
+        except BaseException:
+            # a run that failed before writing anything leaves no run.json behind alone
+            if fresh and [p.name for p in out.iterdir()
+                          if not p.name.startswith(".")] == ["run.json"]:
+                (out / "run.json").unlink()
+            raise

@@ -112,4 +112,4 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
 
 CRBM = Recipe(run=run, data_config=CRBMRunOptions, model_defaults=MODEL_DEFAULTS,
               several_sources=False, trainer=False, data_help=DATA_HELP,
-              run_files=f"{STACK_FILE} (with --level2)")
+              run_files=f"{STACK_FILE} (with --level2)", extra_files=(STACK_FILE,))

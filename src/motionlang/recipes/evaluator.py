@@ -99,11 +99,11 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg,
     """
     import torch
 
-    from motionlang.datasets.splits import save_splits
     from motionlang.evaluation.t2m.yardstick import r_precision_miss
     from motionlang.models.evaluator import TextMotionEvaluator
     from motionlang.models.registry import family
     from motionlang.training.evaluator_train import build_evaluator_data, train_evaluator
+    from motionlang.training.run_guard import keep_splits
     from motionlang.training.run_log import lead_process, log_command, write_licence
 
     if len(sources) != 1:
@@ -122,8 +122,8 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg,
                                 max_seconds=data_cfg.max_seconds, bones=bones)
     config.bones = data.bones
     if lead:
-        save_splits({s: list(dict.fromkeys(it["id"] for it in items))
-                     for s, items in data.items.items()}, out / "splits")
+        keep_splits({s: list(dict.fromkeys(it["id"] for it in items))
+                     for s, items in data.items.items()}, out / "splits", resume)
         write_licence(out, sources, "evaluator")
     log_command(out / "commands.jsonl", options if options is not None else
                 {"model": "evaluator", "data": [str(s) for s in sources], "resume": resume,
@@ -152,4 +152,5 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg,
 
 
 EVALUATOR = Recipe(run=run, data_config=EvaluatorDataOptions, several_sources=False,
+                   resume_may_change=("as_given",),   # a resume keeps the run's body
                    train_defaults={"epochs": 30, "batch_size": 32, "grad_clip": 0.5})

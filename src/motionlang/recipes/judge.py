@@ -199,7 +199,7 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
 JUDGE = Recipe(run=run, data_config=JudgeOptions,
                train_defaults={"epochs": 30, "batch_size": 32, "lr": 1e-3,
                                "optimizer": "adamw", "weight_decay": 1e-4},
-               several_sources=False, source_kind="bandai",
+               several_sources=False, source_kind="bandai", resume_may_change=("verbose",),
                run_files=f"best.pt and last.pt (checkpoints), history.json, loss_curve.png, "
                          f"{LICENCE_FILE} (the non-commercial licence)",
                description=f"{NON_COMMERCIAL} Splits: dataset 2's takes numbered 0 mod 5 are "

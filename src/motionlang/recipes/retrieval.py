@@ -154,13 +154,13 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
     import torch
 
     from motionlang.datasets.mixing import source_weights
-    from motionlang.datasets.splits import save_splits
     from motionlang.datasets.twostream_items import build_twostream_data
     from motionlang.models.registry import family
     from motionlang.models.retrieval.model import RetrievalModel
     from motionlang.models.retrieval.text import sentence_vectors
     from motionlang.recipes.seq2seq import mix_training
     from motionlang.training.run_files import check_resume
+    from motionlang.training.run_guard import keep_splits
     from motionlang.training.run_log import lead_process, log_command, write_licence
 
     out = Path(out_dir)
@@ -176,7 +176,7 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
     train_items = mix_training(sources, data.items["train"], data.sources, train_cfg.seed)
     lead = lead_process()
     if lead:
-        save_splits(data.splits, out / "splits")
+        keep_splits(data.splits, out / "splits", resume)
     note = write_licence(out, sources, "retrieval model")
     log_command(out / "commands.jsonl", options if options is not None else
                 {"model": "retrieval", "data": [str(s) for s in sources], "resume": resume,
@@ -216,7 +216,7 @@ RETRIEVAL = Recipe(run=run, data_config=RetrievalOptions,
                    train_defaults={"epochs": 20, "batch_size": 64, "lr": 3e-4,
                                    "optimizer": "adamw", "weight_decay": 1e-4,
                                    "grad_clip": 1.0},
-                   run_files=RUN_FILES,
+                   run_files=RUN_FILES, resume_may_change=("mirror",),
                    description="Pairs of each motion with each of its captions; captions "
                                "that are the same, or near-duplicates, are not each other's "
                                "negatives. The kept epoch is the best validation text -> "

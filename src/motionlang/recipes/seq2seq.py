@@ -122,8 +122,10 @@ def mix_training(sources: Sequence, train_items: list[dict], source_of: dict[str
 
 def _config_check(kind: str, model_cfg: dict) -> None:
     """The model options checked by the config itself before any data is read."""
+    from motionlang.datasets.text import SPECIALS
     from motionlang.models.seq2seq.config import L2MConfig, M2LConfig
-    (M2LConfig if kind == "m2l" else L2MConfig)(1, 1, **model_cfg)
+    # the smallest sizes the data could give: one feature, the special tokens
+    (M2LConfig if kind == "m2l" else L2MConfig)(1, len(SPECIALS), **model_cfg)
 
 
 def new_model(kind: str, model_cfg: dict, data, data_cfg: Seq2SeqData, seed: int):
@@ -168,10 +170,10 @@ def run(kind: str, sources: Sequence, out: Path, model_cfg: dict, train_cfg,
     log in ``commands.jsonl`` (default: the configs). Returns ``out/model.pt``."""
     from motionlang.datasets.mixing import source_weights
     from motionlang.datasets.seq2seq_pairs import balance_repeats, build_pairs, oversample
-    from motionlang.datasets.splits import save_splits
     from motionlang.features.frames import model_dim
     from motionlang.training.collate import collate_pairs
-    from motionlang.training.run_files import check_resume
+    from motionlang.training.run_files import check_resume, check_resume_data
+    from motionlang.training.run_guard import keep_splits
     from motionlang.training.run_log import log_command, write_licence
     from motionlang.training.trainer import Trainer
 
@@ -195,8 +197,10 @@ def run(kind: str, sources: Sequence, out: Path, model_cfg: dict, train_cfg,
               f"(motions repeated up to {data_cfg.balance} times)")
     train_items = mix_training(sources, train_items, data.sources, train_cfg.seed)
     model = new_model(kind, model_cfg, data, data_cfg, train_cfg.seed)   # checks root options
+    if resume:   # the run's vocabulary and features, checked before anything is written
+        check_resume_data(out, model)
+    keep_splits(data.splits, out / "splits", resume)
     write_licence(out, sources, kind.upper())
-    save_splits(data.splits, out / "splits")
     log_command(out / "commands.jsonl", options if options is not None else
                 {"model": kind, "data": [str(s) for s in sources], "resume": resume,
                  **model_cfg, **vars(data_cfg), **vars(train_cfg)})
@@ -228,6 +232,10 @@ def _run_l2m(*args: Any, **kw: Any) -> Path:
     return run("l2m", *args, **kw)
 
 
-M2L = Recipe(run=_run_m2l, data_config=Seq2SeqData, train_defaults={"epochs": 20})
+#: data options that change what an epoch trains on, never the vocabulary or the split
+RESUMABLE = ("offsets", "mirror", "balance")
+M2L = Recipe(run=_run_m2l, data_config=Seq2SeqData, train_defaults={"epochs": 20},
+             resume_may_change=RESUMABLE)
 L2M = Recipe(run=_run_l2m, data_config=L2MData,
-             train_defaults={"epochs": 20, "grad_clip": 25.0})
+             train_defaults={"epochs": 20, "grad_clip": 25.0},
+             resume_may_change=(*RESUMABLE, "root_weight", "hide_root_input", "plan_means"))

@@ -85,13 +85,13 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg,
     import torch
 
     from motionlang.datasets.mixing import source_weights
-    from motionlang.datasets.splits import save_splits
     from motionlang.datasets.twostream_items import build_twostream_data
     from motionlang.models.length import SentenceLength
     from motionlang.models.registry import family
     from motionlang.models.twostream import TwoStreamModel
     from motionlang.recipes.seq2seq import mix_training
     from motionlang.training.run_files import check_resume
+    from motionlang.training.run_guard import keep_splits
     from motionlang.training.run_log import lead_process, log_command, write_licence
     from motionlang.training.twostream_train import ForcingSchedule, train_twostream
 
@@ -110,7 +110,7 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg,
                                 max_frames=data_cfg.max_frames, mirror=data_cfg.mirror)
     train_items = mix_training(sources, data.items["train"], data.sources, train_cfg.seed)
     if lead:
-        save_splits(data.splits, out / "splits")
+        keep_splits(data.splits, out / "splits", resume)
         write_licence(out, sources, "two-stream model")
     log_command(out / "commands.jsonl", options if options is not None else
                 {"model": "twostream", "data": [str(s) for s in sources], "resume": resume,
@@ -135,4 +135,5 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg,
 
 TWOSTREAM = Recipe(run=run, data_config=TwoStreamOptions,
                    train_defaults={"epochs": 20, "batch_size": 32, "grad_clip": 5.0},
-                   run_files=RUN_FILES)
+                   run_files=RUN_FILES, resume_may_change=("forcing_steps", "mirror"),
+                   extra_files=("pose", "text"))

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import random
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import torch
@@ -37,6 +38,47 @@ def read_training_checkpoint(path: Path) -> dict:
     if not (isinstance(ck, dict) and {"model", "optimizer", "rng", "step"} <= set(ck)):
         raise MotionlangError(f"{path}: not a training checkpoint (last.pt) to resume")
     return ck
+
+
+#: checkpoint entries made from the data (``Checkpointed.checkpoint_state``) that a resumed
+#: run must find unchanged: its token ids and its fitted features (layout, normaliser)
+DATA_ENTRIES = ("vocab", "features")
+
+
+def check_same_data(path: Path, old: dict, new: dict) -> None:
+    """Refuse to resume from ``path`` (model dict ``old``) a model built with another
+    vocabulary or other fitted features (``new``): its weights would load (same sizes) and
+    read other words or other numbers. Entries either side lacks are not compared.
+
+    Raises:
+        MotionlangError: naming the entry (for a vocabulary, the first words that differ).
+    """
+    for key in DATA_ENTRIES:
+        a, b = old.get(key), new.get(key)
+        if a is None or b is None or a == b:
+            continue
+        detail = ""
+        if key == "vocab":
+            wa, wb = _words(a), _words(b)
+            moved = sum(x != y for x, y in zip(wa, wb)) + abs(len(wa) - len(wb))
+            detail = f" ({len(wa)} -> {len(wb)} words, {moved} ids mean other words)"
+        raise MotionlangError(f"{path}: the run was trained with another {key}{detail} than "
+                              "these data and options give; resume with the run's data and "
+                              "options, or train afresh in another --out")
+
+
+def check_resume_data(out_dir: str | Path, model: Any) -> None:
+    """:func:`check_same_data` of ``out_dir/last.pt`` against a model about to resume it
+    (a ``Checkpointed``), for a recipe that builds its model before writing anything."""
+    last = check_resume(out_dir, read=False)
+    check_same_data(last, read_training_checkpoint(last)["model"], model.to_checkpoint())
+
+
+def _words(packed: dict) -> list:
+    data = packed.get("data") if isinstance(packed, dict) else None
+    if isinstance(data, dict):
+        data = data.get("itos")   # a Vocabulary's to_dict
+    return list(data) if isinstance(data, (list, tuple)) else []
 
 
 def rng_state() -> dict:

@@ -40,6 +40,7 @@ from motionlang.training.config import OPTIMIZER_NAMES, TrainConfig
 from motionlang.training.distributed import init_distributed
 from motionlang.training.run_files import (
     check_resume,
+    check_same_data,
     plot_loss_curve,
     read_training_checkpoint,
     rng_state,
@@ -230,6 +231,7 @@ class Trainer:
 
     def _load(self, path: Path) -> dict:
         ck = read_training_checkpoint(path)
+        check_same_data(path, ck["model"], self._model_dict())
         try:
             self.model.load_state_dict(ck["model"]["state_dict"])
         except RuntimeError as exc:   # e.g. another vocabulary size or model size
