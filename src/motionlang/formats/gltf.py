@@ -36,7 +36,6 @@ GLTF_EXTENSIONS = (".glb", ".gltf")
 #: glTF component types and accessor kinds used here (glTF 2.0 spec, "Accessors")
 _FLOAT, _USHORT = 5126, 5123
 _ARRAY, _ELEMENTS = 34962, 34963
-_WIDTH = {"SCALAR": 1, "VEC3": 3, "VEC4": 4, "MAT4": 16}
 
 
 def _quat_xyzw(R: np.ndarray) -> np.ndarray:
