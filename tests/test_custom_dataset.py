@@ -136,10 +136,17 @@ def test_links_inside_the_folder(tmp_path):
     (tmp_path / "outside" / "x.bvh").write_text(BVH)
     (folder / "link.bvh").symlink_to(tmp_path / "outside" / "x.bvh")
     (folder / "dirlink").symlink_to(tmp_path / "outside")
-    (folder / "captions.csv").write_text("file,text\nlink.bvh,a file linked in\n"
-                                         "./sub/../link.bvh,the same, spelt oddly\n")
-    (rec,) = load_custom(folder)     # a file linked into the folder is one of its files
-    assert rec.id == "link" and len(rec.annotations) == 2
+    (folder / "inner.bvh").write_text(BVH)
+    (folder / "alias.bvh").symlink_to(folder / "inner.bvh")
+    (folder / "captions.csv").write_text("file,text\nalias.bvh,a file linked in\n"
+                                         "./sub/../alias.bvh,the same, spelt oddly\n")
+    # a link to a file of the folder is one of its files
+    rec = next(r for r in load_custom(folder) if r.id == "alias")
+    assert len(rec.annotations) == 2
+    # a file link out of the folder is refused like a folder link (issue 44, item 0)
+    (folder / "captions.csv").write_text("file,text\nlink.bvh,a file linked in\n")
+    with pytest.raises(DatasetError, match="link.bvh.*a symbolic link in .* leads outside it"):
+        load_custom(folder)
     (folder / "captions.csv").write_text("file,text\ndirlink/x.bvh,through a folder link\n")
     with pytest.raises(DatasetError, match="a symbolic link in .* leads outside it"):
         load_custom(folder)
