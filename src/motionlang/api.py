@@ -204,6 +204,9 @@ def generate_hypotheses(text: str, model: Any = None, *, width: int | None = Non
         MotionlangError: options that contradict each other or the model, checked before
             anything is generated.
     """
+    if max_frames is not None and min_frames > max_frames:
+        raise MotionlangError(f"--min-frames {min_frames} exceeds --max-frames {max_frames}: "
+                              "no length satisfies both")
     if temperature not in (None, 1.0) and method == "mean":   # before any model is read
         raise MotionlangError("temperature applies to 'sample' and 'beam'; mean decoding "
                               "draws nothing")

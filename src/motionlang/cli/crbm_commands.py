@@ -11,11 +11,11 @@ import sys
 
 from motionlang.cli.config_options import add_config_options, option_fields, option_message
 from motionlang.cli.options import (
+    count_int,
     frames_int,
     nonneg_float,
     output_dir,
     output_file,
-    positive_int,
     seed_int,
 )
 from motionlang.errors import MotionlangError
@@ -124,10 +124,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="the test trial: walking (35_29) or jogging (35_18)")
     f.add_argument("--part", choices=["leg", "upper-body"], default="leg",
                    help="what is erased and filled in")
-    f.add_argument("--repeats", type=positive_int, default=100,
+    f.add_argument("--repeats", type=count_int, default=100,
                    help="stochastic fill-ins averaged for the errors")
     for q in (g, f):
-        q.add_argument("--gibbs", type=positive_int, default=30, help="Gibbs updates per frame")
+        q.add_argument("--gibbs", type=count_int, default=30, help="Gibbs updates per frame")
         q.add_argument("--seed", type=seed_int, default=0, help="seed of the Gibbs sampling")
     f.add_argument("--sampled", dest="mean_field", action="store_false",
                    help="write/plot a fill-in with sampled hiddens (default: mean-field, the "
@@ -141,9 +141,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="use this CRBM (model.npz or its run folder) instead of training")
     # the model options of train crbm, with its defaults (the selected settings)
     add_config_options(r, CRBMConfig, defaults=MODEL_DEFAULTS)
-    r.add_argument("--repeats", type=positive_int, default=100,
+    r.add_argument("--repeats", type=count_int, default=100,
                    help="stochastic fill-ins averaged per cell")
-    r.add_argument("--gibbs", type=positive_int, default=SELECTED["n_gibbs"],
+    r.add_argument("--gibbs", type=count_int, default=SELECTED["n_gibbs"],
                    help="Gibbs updates per frame")
     r.add_argument("--plots", metavar="DIR", default=None, type=output_dir,
                    help="write Figure-4 plots and GIFs here")

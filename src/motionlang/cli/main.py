@@ -23,6 +23,8 @@ from motionlang.cli.options import threads_int
 from motionlang.cli.threads import MAX_DEFAULT, default_threads, limit_threads
 from motionlang.errors import MotionlangError
 from motionlang.training.run_log import lead_process
+from motionlang.utils.atomic import error_line
+from motionlang.utils.signals import sigterm_unwinds, stopped
 
 # Modules that register subcommands; one line each, order = order in --help.
 COMMAND_MODULES = [
@@ -117,21 +119,20 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     threads = getattr(args, "threads", None) or default_threads()
     try:
-        with limit_threads(threads), lead_output():
+        with sigterm_unwinds(), limit_threads(threads), lead_output():
             code = int(args.func(args) or 0)
             distributed = sys.modules.get("motionlang.training.distributed")
             if distributed is not None:  # only the trainer joins a process group (torchrun)
                 distributed.finish_distributed()
         return code
-    except MotionlangError as exc:
-        print(f"motionlang {args.command}: error: {exc}", file=sys.stderr)
-        return 2
     except BrokenPipeError:  # output piped into `head` and the like: not an error
         sys.stderr.close()
         return 0
-    except KeyboardInterrupt:
-        print("interrupted", file=sys.stderr)
-        return 130
+    except (MotionlangError, OSError) as exc:   # OSError: outside the checked writes
+        print(f"motionlang {args.command}: error: {error_line(exc)}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt as exc:   # Ctrl-C, or SIGTERM under sigterm_unwinds
+        return stopped(exc)
 
 
 @contextlib.contextmanager

@@ -11,9 +11,10 @@ import argparse
 import json
 from pathlib import Path
 
-from motionlang.cli.options import nonneg_float, output_file, positive_float, positive_int
+from motionlang.cli.options import int_range, output_file, positive_int, rate_float, seconds_float
 from motionlang.errors import MotionlangError
 from motionlang.kinematics import Motion
+from motionlang.rendering.scene import RENDER_MAX_FRAMES
 
 
 def add_input_args(p: argparse.ArgumentParser, many: bool = False) -> None:
@@ -22,7 +23,7 @@ def add_input_args(p: argparse.ArgumentParser, many: bool = False) -> None:
                         + ("; or several, and folders (their motion files)" if many else ""))
     p.add_argument("--asf", metavar="PATH", default=None,
                    help="ASF skeleton of an .amc input (default: <subject>.asf next to it)")
-    p.add_argument("--source-fps", type=positive_float, default=None, metavar="HZ",
+    p.add_argument("--source-fps", type=rate_float, default=None, metavar="HZ",
                    help="frame rate of an .amc input (AMC files do not store it; default 120)")
     p.add_argument("--sequence", type=positive_int, default=None, metavar="N",
                    help="which sequence of a .mat input holding several (1-based; default 1)")
@@ -52,8 +53,8 @@ def load_input(args: argparse.Namespace, path: str | None = None) -> Motion:
 
 
 def add_clip_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--start", type=nonneg_float, default=None, metavar="S", help="start, seconds")
-    p.add_argument("--end", type=nonneg_float, default=None, metavar="E", help="end, seconds")
+    p.add_argument("--start", type=seconds_float, default=None, metavar="S", help="start, seconds")
+    p.add_argument("--end", type=seconds_float, default=None, metavar="E", help="end, seconds")
 
 
 # ------------------------------------------------------------------ info
@@ -74,7 +75,7 @@ def cmd_render(args: argparse.Namespace) -> int:
     check_drawable(args.output)   # before the (slow) read
     motion = load_input(args).between(args.start, args.end)
     render(motion, args.output, title=args.title, n_poses=args.strip, fps=args.fps,
-           camera=args.camera, trajectory=args.trajectory)
+           camera=args.camera, trajectory=args.trajectory, max_frames=args.max_frames)
     print(Path(args.output))
     return 0
 
@@ -104,10 +105,12 @@ def register(subparsers) -> None:
                     "animation, .png strip of poses (or trajectory with --trajectory).")
     add_input_args(p)
     p.add_argument("output", metavar="OUT", type=output_file, help="output .gif, .mp4 or .png")
-    p.add_argument("--fps", type=positive_float, default=None,
+    p.add_argument("--fps", type=rate_float, default=None,
                    help="animation frame rate (default: min(25, source rate))")
+    p.add_argument("--max-frames", type=int_range(1, 10**7), default=RENDER_MAX_FRAMES, metavar="N",
+                   help="most animation frames to draw: a longer animation is refused")
     add_clip_args(p)
-    p.add_argument("--strip", type=positive_int, default=8, metavar="N",
+    p.add_argument("--strip", type=int_range(1, 100), default=8, metavar="N",
                    help="number of poses in a .png strip")
     p.add_argument("--trajectory", action="store_true",
                    help="for .png: top view of the root path with footsteps instead of poses")

@@ -12,7 +12,7 @@ import os
 from collections.abc import Callable
 from pathlib import Path
 
-from motionlang.utils.checks import MAX_WIDTH, SEED_MAX
+from motionlang.utils.checks import MAX_WIDTH, SEED_MAX, real_ok
 
 # caps well past any sensible value, far below what would exhaust memory
 MAX_FRAMES = 100_000
@@ -42,24 +42,27 @@ def int_range(lo: int, hi: int | None = None) -> Callable[[str], int]:
 
 def float_range(lo: float = -math.inf, hi: float = math.inf, *,
                 open_lo: bool = False) -> Callable[[str], float]:
-    """A finite number in [lo, hi] (``(lo, hi]`` with ``open_lo``)."""
+    """A number in [lo, hi] (``(lo, hi]`` with ``open_lo``), finite and within the bounds
+    of every toolkit number (``utils.checks.real_ok``: no 1e308 or 1e-300)."""
     def parse(text: str) -> float:
         v = parse_number(text, float)
-        ok = math.isfinite(v) and (v > lo if open_lo else v >= lo) and v <= hi
+        ok = real_ok(v) and (v > lo if open_lo else v >= lo) and v <= hi
         if not ok:
             bounds = []
             if lo > -math.inf:
                 bounds.append(f"{'>' if open_lo else '>='} {lo:g}")
             if hi < math.inf:
                 bounds.append(f"<= {hi:g}")
+            odd = "" if not math.isfinite(v) or real_ok(v) else " (0 or 1e-12..1e12 in size)"
             raise argparse.ArgumentTypeError(
-                f"must be a finite number {' and '.join(bounds)}".rstrip() + f", got {text}")
+                f"must be a finite number {' and '.join(bounds)}".rstrip() + f"{odd}, got {text}")
         return v
     parse.__name__ = "number"
     return parse
 
 
 positive_int = int_range(1)             # counts without a memory cost (epochs, batch size)
+count_int = int_range(1, 100_000)       # repeats of a slow step (Gibbs updates, fill-ins)
 nonneg_int = int_range(0)
 frames_int = int_range(1, MAX_FRAMES)
 width_int = int_range(1, MAX_WIDTH)
@@ -67,6 +70,7 @@ seed_int = int_range(0, SEED_MAX)
 threads_int = int_range(1, MAX_THREADS)
 nonneg_float = float_range(0.0)
 positive_float = float_range(0.0, open_lo=True)
+rate_float, seconds_float = float_range(0.01, 10_000.0), float_range(0.0, 1e7)   # Hz; s
 
 
 def _check_writable(path: Path, what: str) -> None:

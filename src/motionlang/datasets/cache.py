@@ -4,12 +4,14 @@
 ``.npz`` under ``$MOTIONLANG_CACHE`` (default ``~/.cache/motionlang``). The key is the
 sha256 of ``key_parts`` (JSON, sorted keys); put the identity of every source in it with
 ``file_identity(path)`` (resolved path, size, mtime) so that an edited file invalidates the
-entry. A corrupt or unreadable cache file is recomputed, never an error.
+entry. A corrupt or unreadable cache file is recomputed, never an error; a cache folder
+that cannot be written (read-only, a file, a full disk) is a warning, once.
 """
 from __future__ import annotations
 
 import hashlib
 import json
+import logging
 import os
 import zipfile
 from collections.abc import Callable, Iterable
@@ -18,9 +20,10 @@ from pathlib import Path
 import numpy as np
 
 from motionlang.errors import DatasetError
-from motionlang.utils.atomic import atomic_write
+from motionlang.utils.atomic import WriteError, atomic_write
 
 CACHE_ENV = "MOTIONLANG_CACHE"
+log = logging.getLogger(__name__)
 
 
 def cache_dir() -> Path:
@@ -84,6 +87,21 @@ def cached(key_parts: dict, compute: Callable[[], dict[str, np.ndarray]], *,
     if not isinstance(arrays, dict):
         raise TypeError("cached(): compute() must return a dict of arrays")
     arrays = {k: np.asarray(v) for k, v in arrays.items()}
-    with atomic_write(path, "wb") as fh:
-        np.savez(fh, **arrays)
+    try:
+        with atomic_write(path, "wb") as fh:
+            np.savez(fh, **arrays)
+    except (OSError, WriteError) as exc:   # the cache is optional: go on without it
+        _warn_once(folder, exc)
     return arrays
+
+
+_warned: set[str] = set()
+
+
+def _warn_once(folder: Path, exc: Exception) -> None:
+    """One warning per cache folder that cannot be written (read-only, a file, full)."""
+    if str(folder) in _warned:
+        return
+    _warned.add(str(folder))
+    log.warning("cache %s not used (%s); set %s to a writable folder to keep results",
+                folder, exc, CACHE_ENV)

@@ -24,7 +24,6 @@ import json
 import os
 import re
 import shutil
-import tempfile
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
@@ -47,6 +46,7 @@ from motionlang.features.h3d_vectors import (
 )
 from motionlang.features.joint_map import positions21
 from motionlang.features.rig_maps import SMPL_JOINT_NAMES
+from motionlang.utils.atomic import WriteError, make_temp
 
 INFO_NAME = "h3d_export.json"
 
@@ -185,8 +185,10 @@ def _staging(out: Path):
     if out.exists() and (not out.is_dir() or any(out.iterdir())):
         raise DatasetError(f"{out}: already exists and is not an empty folder; choose a new "
                            "output folder")
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".partial", dir=out.parent))
+    try:   # named as utils.atomic names them, so a killed export's folder is swept later
+        tmp = make_temp(out, ".partial", directory=True)
+    except OSError as exc:
+        raise WriteError(out, exc) from None
     try:
         umask = os.umask(0)
         os.umask(umask)
@@ -197,8 +199,10 @@ def _staging(out: Path):
         if out.exists():
             out.rmdir()
         os.rename(tmp, out)
-    except BaseException:
+    except BaseException as exc:
         shutil.rmtree(tmp, ignore_errors=True)
+        if isinstance(exc, OSError):
+            raise WriteError(out, exc) from None
         raise
 
 

@@ -26,7 +26,7 @@ from motionlang.datasets.cache import cached, file_identity
 from motionlang.datasets.mixing import check_distinct_ids
 from motionlang.datasets.sources import DataSource, Record, load
 from motionlang.datasets.splits import random_split
-from motionlang.datasets.text import Vocabulary
+from motionlang.datasets.text import SPECIALS, Vocabulary
 from motionlang.errors import DatasetError, MotionlangError
 from motionlang.features.base import FeatureSet, features_from_dict
 from motionlang.features.frames import motion_frames
@@ -34,6 +34,8 @@ from motionlang.kinematics.from_positions import mirror_motion
 from motionlang.utils.progress import progress
 
 CACHE_VERSION = "seq2seq-pairs-1"
+#: down-sampling start offsets per motion: a 1000 Hz take down-sampled to 10 Hz has 100
+MAX_OFFSETS = 100
 log = logging.getLogger(__name__)
 
 
@@ -216,6 +218,9 @@ def build_pairs(data: str | Path | DataSource | Sequence[str | Path | DataSource
     features are fitted on the unmirrored motions; references, sequences and the other
     splits stay unmirrored.
     """
+    if not (isinstance(offsets, int) and 1 <= offsets <= MAX_OFFSETS):
+        raise DatasetError(f"--offsets (offsets) must be an integer in 1..{MAX_OFFSETS}, "
+                           f"got {offsets!r}")
     records, splits, sources = load_sources(data, max_seconds, joint_map, fractions, seed)
     by_id = {r.id: r for r in records}
     train = [by_id[i] for i in splits["train"]]
@@ -223,6 +228,9 @@ def build_pairs(data: str | Path | DataSource | Sequence[str | Path | DataSource
         raise DatasetError(f"{data}: the training split is empty")
     fs = _fit_features(features, train)
     vocab = Vocabulary.build([s for r in train for s in r.annotations], min_count=min_count)
+    if len(vocab.itos) <= len(SPECIALS):
+        raise DatasetError(f"{data}: no word of the training sentences is seen {min_count:,} "
+                           "times or more: the vocabulary would be empty (lower --min-count)")
     if mirror:
         from motionlang.datasets.synth.augment import mirror_text
         # words only the mirrored sentences have go last: the ids of the others stay as

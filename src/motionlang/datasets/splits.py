@@ -6,13 +6,14 @@ leaks into the test set.
 """
 from __future__ import annotations
 
+import contextlib
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 
 import numpy as np
 
 from motionlang.errors import DatasetError
-from motionlang.utils.atomic import atomic_write
+from motionlang.utils.atomic import atomic_path, new_folder
 
 SPLIT_NAMES = {2: ("train", "test"), 3: ("train", "val", "test")}
 
@@ -80,12 +81,16 @@ def load_splits(folder: str | Path) -> dict[str, list[str]]:
 
 
 def save_splits(splits: dict[str, list[str]], folder: str | Path) -> list[Path]:
-    """Write ``<name>.txt`` per split (atomic writes); return the paths."""
+    """Write ``<name>.txt`` per split; return the paths.
+
+    All or nothing: every file is written to a temporary file first and renamed only when
+    all are complete, so a full disk never leaves ``train.txt`` without ``test.txt``; a
+    folder made here is removed again on failure.
+    """
     folder = Path(folder)
-    paths = []
-    for name, ids in splits.items():
-        p = folder / f"{name}.txt"
-        with atomic_write(p) as fh:
-            fh.write("".join(f"{i}\n" for i in ids))
-        paths.append(p)
+    paths = [folder / f"{name}.txt" for name in splits]
+    with new_folder(folder), contextlib.ExitStack() as stack:
+        for p, ids in zip(paths, splits.values()):   # every file complete before a rename
+            tmp = stack.enter_context(atomic_path(p, min_bytes=0))
+            tmp.write_text("".join(f"{i}\n" for i in ids), encoding="utf-8")
     return paths

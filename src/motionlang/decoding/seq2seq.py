@@ -10,6 +10,7 @@ flag (AnglesFeatures) is dropped, since L2M predicts its own end-of-motion flag.
 """
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from typing import Any
 
@@ -59,6 +60,11 @@ def describe_features(model: MotionToLanguage, features: np.ndarray, *, width: i
     model.eval()
     c = model.config
     x = torch.as_tensor(_normalize(model.normalizer, features), dtype=torch.float32)[None]
+    if not (len(features) and torch.isfinite(x).all()):   # no sentence means anything then
+        bad = "no frames" if not len(features) else \
+            f"{int((~torch.isfinite(x)).sum()):,} values that are not finite numbers"
+        raise MotionlangError(f"the motion's features hold {bad} (after normalising); "
+                              "nothing to describe")
     state = model.encode(x, torch.tensor([len(features)]))
     kw = dict(batch_size=1, sos=c.sos_id, eos=c.eos_id, max_len=max_len or c.max_len,
               banned=(c.pad_id, c.sos_id), min_len=1)
@@ -67,6 +73,8 @@ def describe_features(model: MotionToLanguage, features: np.ndarray, *, width: i
     else:
         hyps = beam_search(model.step, state, width=width, length_penalty=length_penalty, **kw)[0]
     out = [(_words(model.vocab, h.tokens), h.score) for h in hyps]
+    if not out or not all(math.isfinite(score) for _, score in out):
+        raise MotionlangError("decoding gave no sentence with a finite score")
     return mbr_rank(out) if rank == "mbr" else out
 
 

@@ -185,8 +185,13 @@ def _own_header(sk, fit: _Fit, u: float) -> list[str]:
     for i, n in enumerate(nodes[1:], start=1):
         kids[n["parent"]].append(i)
 
-    def emit(i: int, depth: int) -> None:
+    stack = [(0, 0, False)]   # depth first without recursion: chains of 2,000 joints
+    while stack:
+        i, depth, closing = stack.pop()
         n, ind = nodes[i], "\t" * depth
+        if closing:
+            header.append(ind + "}")
+            continue
         if n["end_site"]:
             head = "End Site" + (f" {n['name']}" if n["name"] else "")
         else:
@@ -194,11 +199,8 @@ def _own_header(sk, fit: _Fit, u: float) -> list[str]:
         header.extend([ind + head, ind + "{", f"{ind}\t{_own_offset(sk, fit, i, u)}"])
         if not n["end_site"]:
             header.append(f"{ind}\tCHANNELS {len(n['channels'])} {' '.join(n['channels'])}")
-        for c in kids[i]:
-            emit(c, depth + 1)
-        header.append(ind + "}")
-
-    emit(0, 0)
+        stack.append((i, depth, True))
+        stack.extend((c, depth + 1, False) for c in reversed(kids[i]))
     return header
 
 
@@ -276,24 +278,32 @@ class _PlainTree:
         self.header: list[str] = ["HIERARCHY"]
         self.columns = columns   # (T,) channel values in file order
 
-    def emit(self, j: int, depth: int) -> None:
-        """Joint ``j`` and its subtree at ``depth`` tabs."""
+    def emit(self, top: int, top_depth: int) -> None:
+        """Joint ``top`` and its subtree at ``top_depth`` tabs (depth first, without
+        recursion: a chain of 2,000 joints is a valid rig)."""
         sk, header, kids = self.motion.skeleton, self.header, self.kids
-        W, jt, ind = sk.world, sk.joints[j], "\t" * depth
-        off = " ".join(_fmt_offset(v) for v in (W @ jt.offset) / self.u)
-        if not kids[j] and jt.ndof == 0:
-            header.extend([f"{ind}End Site", f"{ind}{{", f"{ind}\tOFFSET {off}", f"{ind}}}"])
-            return
-        chans, vals = self._rotation(j)
-        self.columns.extend(vals.T)
-        header.extend([f"{ind}JOINT {self.names[j]}", f"{ind}{{", f"{ind}\tOFFSET {off}",
-                       f"{ind}\tCHANNELS {len(chans)} {' '.join(chans)}"])
-        for c in kids[j]:
-            self.emit(c, depth + 1)
-        if not kids[j]:  # a leaf with DOFs still needs an end
-            header.extend([f"{ind}\tEnd Site", f"{ind}\t{{", f"{ind}\t\tOFFSET 0 0 0",
-                           f"{ind}\t}}"])
-        header.append(f"{ind}}}")
+        stack = [(top, top_depth, False)]
+        while stack:
+            j, depth, closing = stack.pop()
+            ind = "\t" * depth
+            if closing:
+                if not kids[j]:  # a leaf with DOFs still needs an end
+                    header.extend([f"{ind}\tEnd Site", f"{ind}\t{{", f"{ind}\t\tOFFSET 0 0 0",
+                                   f"{ind}\t}}"])
+                header.append(f"{ind}}}")
+                continue
+            W, jt = sk.world, sk.joints[j]
+            off = " ".join(_fmt_offset(v) for v in (W @ jt.offset) / self.u)
+            if not kids[j] and jt.ndof == 0:
+                header.extend([f"{ind}End Site", f"{ind}{{", f"{ind}\tOFFSET {off}",
+                               f"{ind}}}"])
+                continue
+            chans, vals = self._rotation(j)
+            self.columns.extend(vals.T)
+            header.extend([f"{ind}JOINT {self.names[j]}", f"{ind}{{", f"{ind}\tOFFSET {off}",
+                           f"{ind}\tCHANNELS {len(chans)} {' '.join(chans)}"])
+            stack.append((j, depth, True))
+            stack.extend((c, depth + 1, False) for c in reversed(kids[j]))
 
     def _rotation(self, j: int) -> tuple[list[str], np.ndarray]:
         """Channel names and (T, k) degrees of joint ``j``: its own chain when that already

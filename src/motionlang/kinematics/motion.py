@@ -11,6 +11,7 @@ import numpy as np
 from motionlang.errors import MotionFormatError, MotionlangError, SkeletonError
 from motionlang.kinematics.rotations import chain
 from motionlang.kinematics.skeleton import Skeleton
+from motionlang.utils import limits
 
 _EYE = np.eye(3)
 
@@ -208,13 +209,22 @@ class Motion:
 
         The first frame is kept; the last new frame is the last one inside the original
         time span. Decimation by an integer factor returns exact original frames.
+
+        Raises:
+            MotionFormatError: the re-timed motion would exceed the frame or memory limits
+                (``utils.limits``), checked before anything is allocated.
         """
         if not (fps > 0 and np.isfinite(fps)):
             raise ValueError(f"target frame rate must be positive, got {fps}")
         if self.n_frames == 1:
             return self.replace(fps=float(fps))
         span = (self.n_frames - 1) / self.fps
-        n_new = int(np.floor(span * fps + 1e-9)) + 1
+        n_float = float(np.floor(span * fps + 1e-9) + 1)   # hours a frame: millions of them
+        limits.check(self.name, "max_frames", n_float,   # inf compares above any limit
+                     f"re-timing {span:,.3g} s to {fps:g} Hz: frame count")
+        n_new = int(n_float)
+        limits.check_motion(self.name, n_new, len(self.skeleton.joints),
+                            self.joint_angles.shape[1] + 6)
         t_new = np.arange(n_new) / fps
         src = t_new * self.fps
         i0 = np.clip(np.floor(src + 1e-9).astype(int), 0, self.n_frames - 1)

@@ -117,8 +117,8 @@ def _as_list(motions: Motion | Scene | Sequence[Motion | Scene]) -> list[Motion 
 def animation_frames(motions: Motion | Sequence[Motion], *, fps: float | None = None,
                      title: str | None = None, size: tuple[float, float] = (4.0, 4.0),
                      dpi: float = 80.0, camera: str = "auto", layout: str = "side",
-                     labels: Sequence[str] | None = None, show_progress: bool | None = None
-                     ) -> tuple[float, int, Iterator[np.ndarray]]:
+                     labels: Sequence[str] | None = None, show_progress: bool | None = None,
+                     max_frames: int | None = None) -> tuple[float, int, Iterator[np.ndarray]]:
     """Lay out an animation; its frames are drawn lazily, one at a time.
 
     Returns:
@@ -135,21 +135,25 @@ def animation_frames(motions: Motion | Sequence[Motion], *, fps: float | None = 
         layout: ``"side"`` (one panel per motion, side by side) or ``"overlay"`` (all in
             one panel, second colour scheme for every other motion).
         labels: panel titles (default: the motions' names when there are several).
+        max_frames: most frames to draw (default ``scene.RENDER_MAX_FRAMES``); more is a
+            MotionlangError before anything is drawn.
     """
     motions = _as_list(motions)
     if camera not in ("auto", "follow", "fixed"):
         raise ValueError(f"camera must be 'auto', 'follow' or 'fixed', got {camera!r}")
     if layout not in ("side", "overlay"):
         raise ValueError(f"layout must be 'side' or 'overlay', got {layout!r}")
-    # a Scene (e.g. ``scene.kit21_scene`` of a model's joint positions) is drawn as it is;
-    # fps, n_frames and name below exist on both types
-    scenes = [m if isinstance(m, Scene) else build_scene(m) for m in motions]
     src_fps = max(m.fps for m in motions)
     if fps is not None and not fps > 0:
         raise ValueError(f"fps must be positive, got {fps}")
-    out_fps = float(min(fps or MAX_OUT_FPS, src_fps))
+    # at least 1 Hz: a GIF's frame delay is a 16-bit count of centiseconds
+    out_fps = float(max(min(fps or MAX_OUT_FPS, src_fps), 1.0))
     duration = max((m.n_frames - 1) / m.fps for m in motions)
-    times = sample_times(int(round(duration * src_fps)) + 1, src_fps, out_fps) / src_fps
+    times = sample_times(int(round(duration * src_fps)) + 1, src_fps, out_fps,
+                         max_frames) / src_fps   # refused before any work if too many
+    # a Scene (e.g. ``scene.kit21_scene`` of a model's joint positions) is drawn as it is;
+    # fps, n_frames and name exist on both types
+    scenes = [m if isinstance(m, Scene) else build_scene(m) for m in motions]
     groups = [scenes] if layout == "overlay" else [[s] for s in scenes]
     if labels is None:
         labels = [m.name for m in motions] if len(groups) > 1 else [None]
@@ -185,7 +189,8 @@ def render_animation(motions: Motion | Sequence[Motion], path: str | Path, *,
                      fps: float | None = None, title: str | None = None,
                      size: tuple[float, float] = (4.0, 4.0), dpi: float = 80.0,
                      camera: str = "auto", layout: str = "side",
-                     labels: Sequence[str] | None = None) -> Path:
+                     labels: Sequence[str] | None = None, max_frames: int | None = None
+                     ) -> Path:
     """Render one or several motions as an animated stick figure.
 
     Args:
@@ -193,7 +198,7 @@ def render_animation(motions: Motion | Sequence[Motion], path: str | Path, *,
         path: ``.gif`` (Pillow) or ``.mp4`` (H.264 via imageio-ffmpeg's bundled ffmpeg).
         fps: output frame rate (frames are sampled in real time); default min(25, source).
         title: a heading over the whole figure. size, dpi: inches per panel and resolution.
-        camera, layout, labels: see :func:`animation_frames`.
+        camera, layout, labels, max_frames: see :func:`animation_frames`.
 
     Returns:
         the path written. The file appears only when complete (atomic write).
@@ -207,7 +212,8 @@ def render_animation(motions: Motion | Sequence[Motion], path: str | Path, *,
         raise MotionlangError(f"{path}: unsupported animation format {ext or '(none)'!r}; "
                               "use .gif or .mp4")
     out_fps, _, frames = animation_frames(motions, fps=fps, title=title, size=size, dpi=dpi,
-                                          camera=camera, layout=layout, labels=labels)
+                                          camera=camera, layout=layout, labels=labels,
+                                          max_frames=max_frames)
     with atomic_path(path) as tmp:
         if ext == ".gif":
             _write_gif(frames, tmp, out_fps)
@@ -230,7 +236,7 @@ def _write_mp4(frames, tmp: Path, fps: float) -> None:
 
     writer = iio.get_writer(tmp, format="FFMPEG", mode="I", fps=fps, codec="libx264",
                             quality=7, pixelformat="yuv420p", macro_block_size=16,
-                            ffmpeg_log_level="error")
+                            ffmpeg_log_level="quiet")   # its failure is ours to report
     try:
         for f in frames:
             writer.append_data(_pad16(f))

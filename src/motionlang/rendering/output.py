@@ -45,17 +45,19 @@ def check_drawable(path: str | Path) -> None:
 
 
 def render_file(motion, path: str | Path, *, title: str | None = None, n_poses: int = 8,
-                fps: float | None = None, camera: str = "auto", trajectory: bool = False
-                ) -> Path:
+                fps: float | None = None, camera: str = "auto", trajectory: bool = False,
+                max_frames: int | None = None) -> Path:
     """Draw a Motion (or a ``rendering.scene.Scene``) by ``path``'s extension: ``.gif`` /
-    ``.mp4`` animation at ``fps`` (default min(25, the motion's)) with ``camera``, or a
+    ``.mp4`` animation at ``fps`` (default min(25, the motion's)) with ``camera`` (at most
+    ``max_frames`` frames, default ``scene.RENDER_MAX_FRAMES``: more is an error), or a
     ``.png`` strip of ``n_poses`` poses (with ``trajectory``: the root's path seen from
     above, with footsteps). Atomic; returns the path.
     """
     check_drawable(path)
     if Path(path).suffix.lower() != ".png":
         from motionlang.rendering.animation import render_animation
-        return render_animation(motion, path, fps=fps, title=title, camera=camera)
+        return render_animation(motion, path, fps=fps, title=title, camera=camera,
+                                max_frames=max_frames)
     if trajectory:
         from motionlang.rendering.trajectory import plot_trajectory
         return plot_trajectory(motion, path, title=title)

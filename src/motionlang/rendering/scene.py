@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from motionlang.errors import MotionlangError
 from motionlang.kinematics import Motion
 
 # canonical (X, Y, Z) -> matplotlib (x, y, z): rows give the new axes
@@ -149,10 +150,28 @@ def view_azimuth(forward: np.ndarray, front_deg: float = 30.0) -> float:
     return float(np.degrees(np.arctan2(eye[1], eye[0])))
 
 
-def sample_times(n_frames: int, fps: float, out_fps: float) -> np.ndarray:
-    """Frame indices showing a motion at ``out_fps`` in real time (nearest frame)."""
+#: animation frames drawn without ``max_frames`` (10 minutes at 25 Hz): drawing takes tens
+#: of milliseconds a frame, so a long take would run for hours unasked
+RENDER_MAX_FRAMES = 15_000
+
+
+def sample_times(n_frames: int, fps: float, out_fps: float,
+                 max_frames: int | None = None) -> np.ndarray:
+    """Frame indices showing a motion at ``out_fps`` in real time (nearest frame).
+
+    Raises:
+        MotionlangError: more than ``max_frames`` (default :data:`RENDER_MAX_FRAMES`)
+            would be drawn; the message names the option that allows them.
+    """
     duration = (n_frames - 1) / fps
-    n_out = int(np.floor(duration * out_fps + 1e-9)) + 1
+    n_float = np.floor(duration * out_fps + 1e-9) + 1
+    limit = RENDER_MAX_FRAMES if max_frames is None else max_frames
+    if not n_float <= limit:
+        raise MotionlangError(
+            f"{n_float:,.0f} frames to draw ({duration:,.1f} s at {out_fps:g} Hz) exceed "
+            f"{limit:,}: pass --max-frames (max_frames=) to draw more, or lower --fps, or "
+            "draw a part with --start/--end")
+    n_out = int(n_float)
     return np.clip(np.rint(np.arange(n_out) * fps / out_fps).astype(int), 0, n_frames - 1)
 
 

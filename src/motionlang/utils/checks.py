@@ -53,15 +53,17 @@ def check_numbers(owner: str, cfg: Any, *, positive_ints: Iterable[str] = (),
               f"an integer in 0..{SEED_MAX}"),
              (positive_ints, lambda v: _is_int(v) and v >= 1, "an integer >= 1"),
              (nonneg_ints, lambda v: _is_int(v) and v >= 0, "an integer >= 0"),
-             (positive, lambda v: _is_real(v) and v > 0, "a finite number > 0 (1e-12..1e12)"),
-             (nonneg, lambda v: _is_real(v) and v >= 0,
-              "a finite number >= 0 (0 or 1e-12..1e12)"),
+             (positive, lambda v: _is_real(v) and v > 0, "a finite number > 0"),
+             (nonneg, lambda v: _is_real(v) and v >= 0, "a finite number >= 0"),
              (unit, lambda v: _is_real(v) and 0 <= v < 1, "a number in [0, 1)")]
     for names, ok, what in rules:
         for name in names:
             v = getattr(cfg, name)
             if v is not None and not ok(v):
-                raise MotionlangError(f"{owner}.{name} must be {what}, got {v!r}")
+                odd = isinstance(v, float) and math.isfinite(v) and not real_ok(v)
+                raise MotionlangError(f"{owner}.{name} must be {what}"
+                                      f"{' (0 or 1e-12..1e12 in size)' if odd else ''}, "
+                                      f"got {v!r}")
 
 
 def check_bones(owner: str, bones: Any) -> list[float] | None:

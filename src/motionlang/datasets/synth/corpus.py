@@ -22,11 +22,14 @@ import numpy as np
 from motionlang.datasets.synth.compose import build_motion, random_program, random_style
 from motionlang.datasets.synth.grammar import sentences
 from motionlang.datasets.synth.spec import PARAM_FIELDS, Primitive
+from motionlang.errors import MotionlangError
 from motionlang.kinematics.motion import Motion
-from motionlang.utils.atomic import atomic_path
+from motionlang.utils.atomic import atomic_path, new_folder
 from motionlang.utils.progress import progress
 
 GENERATOR = "motionlang.datasets.synth"
+#: samples of one corpus: far beyond any use, and a mistyped count fails before any work
+MAX_SAMPLES = 1_000_000
 #: Bump when the output for a given (seed, index) changes.
 GENERATOR_VERSION = "1.0"
 
@@ -97,7 +100,7 @@ def write_sample(sample: SynthSample, out: str | Path) -> None:
     # small JSON files: atomic rename without fsync (thousands of them; fsync dominated)
     for suffix, obj, kw in (("annotations", sample.annotations, {"ensure_ascii": False}),
                             ("meta", sample.meta(), {"indent": 1})):
-        with atomic_path(out / f"{sample.id}_{suffix}.json") as tmp:
+        with atomic_path(out / f"{sample.id}_{suffix}.json", sync=False) as tmp:
             tmp.write_text(json.dumps(obj, **kw), encoding="utf-8")
 
 
@@ -113,26 +116,33 @@ def write_corpus(out: str | Path, n: int, seed: int = 0, *, start: int = 0,
     """Generate samples ``start .. start+n-1`` of ``seed`` into ``out``; returns their ids.
 
     Args:
-        workers: processes (default: up to 2, the CPU count); 1 runs in this process.
+        workers: processes (default: up to 2, the CPU count; never more than the CPU
+            count, which is all they can use); 1 runs in this process.
     """
     out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
+    if not 1 <= n or start + n > MAX_SAMPLES:
+        raise MotionlangError(f"a corpus holds 1..{MAX_SAMPLES:,} samples (start + n); "
+                              f"got start {start:,} and n {n:,}")
     if workers is None:
-        workers = max(1, min(2, os.cpu_count() or 1))
-    jobs = [(int(seed), i, str(out)) for i in range(start, start + n)]
+        workers = 2
+    workers = max(1, min(workers, os.cpu_count() or 1))
+    jobs = ((int(seed), i, str(out)) for i in range(start, start + n))
     bar = progress(total=n, desc="synth", unit="motion",
                    disable=None if show_progress is None else not show_progress)
     ids = []
-    try:
-        if workers <= 1 or n < 8:
-            for j in jobs:
-                ids.append(_work(j))
-                bar.update()
-        else:
-            with ProcessPoolExecutor(max_workers=workers) as pool:
-                for sid in pool.map(_work, jobs, chunksize=max(1, min(32, n // (8 * workers)))):
-                    ids.append(sid)
+    # a stopped corpus is useless; one written into a new folder goes with it
+    with new_folder(out, remove_files=True):
+        try:
+            if workers <= 1 or n < 8:
+                for j in jobs:
+                    ids.append(_work(j))
                     bar.update()
-    finally:
-        bar.close()
+            else:
+                with ProcessPoolExecutor(max_workers=workers) as pool:
+                    chunk = max(1, min(32, n // (8 * workers)))
+                    for sid in pool.map(_work, jobs, chunksize=chunk):
+                        ids.append(sid)
+                        bar.update()
+        finally:
+            bar.close()
     return ids
