@@ -180,3 +180,15 @@ def test_length_penalty_prefers_longer_sentences():
     assert total[0].tokens == (1, EOS)
     assert len(norm[0].tokens) == 5 and norm[0].tokens[:4] == (1, 1, 1, 1)
     assert norm[0].score < total[0].score          # scores stay totals
+
+
+def test_a_forced_prefix_starts_every_hypothesis_and_is_scored():
+    # exhaustive beam (width >= every sequence) with the prefix (2, 3): the same hypotheses
+    # as brute force over all sequences that start with it, at their full scores
+    table = Table(seed=7, n_inputs=1)
+    state = torch.arange(1).unsqueeze(1)
+    got = beam_search(table.step, state, batch_size=1, width=40, sos=SOS, eos=EOS,
+                      max_len=5, banned=(SOS,), prefix=(2, 3))[0]
+    want = [h for h in brute_force(table, 0, 5) if h.tokens[:2] == (2, 3)][:40]
+    assert [h.tokens for h in got] == [h.tokens for h in want]
+    assert [h.score for h in got] == pytest.approx([h.score for h in want], abs=1e-5)

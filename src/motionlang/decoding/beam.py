@@ -55,7 +55,8 @@ def _ban(log_probs: torch.Tensor, banned: Sequence[int]) -> torch.Tensor:
 def beam_search(step: Step, state: Any, *, batch_size: int, width: int, sos: int, eos: int,
                 max_len: int, banned: Sequence[int] = (), min_len: int = 0,
                 reorder: Callable[[Any, torch.Tensor], Any] = select_state,
-                length_penalty: float = 0.0) -> list[list[Hypothesis]]:
+                length_penalty: float = 0.0, prefix: Sequence[int] = ()
+                ) -> list[list[Hypothesis]]:
     """Beam search for ``batch_size`` independent inputs.
 
     Args:
@@ -71,6 +72,8 @@ def beam_search(step: Step, state: Any, *, batch_size: int, width: int, sos: int
             choice; the total favours short sentences (every word costs log probability),
             alpha = 1 ranks by the mean per token. With alpha > 0 the search runs to
             ``max_len`` (a longer hypothesis can still overtake).
+        prefix: tokens every hypothesis starts with (fed to the decoder and scored, never
+            searched); they count towards ``max_len`` and ``min_len``.
 
     Returns:
         for each input, up to W hypotheses sorted by decreasing rank score; ``score`` is
@@ -91,9 +94,14 @@ def beam_search(step: Step, state: Any, *, batch_size: int, width: int, sos: int
     scores = torch.full((B, W), float("-inf"))
     scores[:, 0] = 0.0
     tokens = torch.empty(B, W, 0, dtype=torch.long)
+    for tok_id in prefix:
+        log_probs, state = step(state, prev)
+        scores = scores + log_probs.float()[:, tok_id].view(B, W)
+        prev = torch.full((B * W,), tok_id, dtype=torch.long)
+        tokens = torch.cat([tokens, prev.view(B, W, 1)], dim=-1)
     finished: list[list[Hypothesis]] = [[] for _ in range(B)]
     done = torch.zeros(B, dtype=torch.bool)
-    for t in range(max_len):
+    for t in range(len(prefix), max_len):
         log_probs, state = step(state, prev)
         V = log_probs.shape[-1]
         ban = tuple(banned) + ((eos,) if t < min_len and t < max_len - 1 else ())

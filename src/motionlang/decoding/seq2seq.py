@@ -42,15 +42,24 @@ def _words(vocab: Any, ids: Sequence[int]) -> str:
     return " ".join(vocab[i] for i in ids if i >= 4)  # list vocab: drop PAD/SOS/EOS/UNK
 
 
+def _ids(vocab: Any, words: Sequence[str]) -> tuple[int, ...]:
+    stoi = getattr(vocab, "stoi", None)
+    if stoi is None:
+        return ()
+    return tuple(stoi[w] for w in words if w in stoi)
+
+
 @torch.no_grad()
 def describe_features(model: MotionToLanguage, features: np.ndarray, *, width: int = 5,
                       max_len: int | None = None, length_penalty: float = 0.0,
-                      rank: str = "logp") -> list[tuple[str, float]]:
+                      rank: str = "logp", banned_words: Sequence[str] = (),
+                      prefix: Sequence[str] = ()) -> list[tuple[str, float]]:
     """features (T, F) raw -> W sentences with their total log probability, best first:
     ``rank`` "logp" (the paper's) by the total, or by total / length ** ``length_penalty``
     (see ``beam_search``); "mbr" by expected agreement with the beam (``decoding.mbr``).
 
-    width=1 uses greedy decoding.
+    width=1 uses greedy decoding. banned_words: words never generated; prefix: words every
+    sentence starts with (beam search only); words the vocabulary lacks are ignored in both.
     """
     if rank not in RANKS:
         raise MotionlangError(f"rank must be one of {', '.join(RANKS)}, got {rank!r}")
@@ -66,12 +75,14 @@ def describe_features(model: MotionToLanguage, features: np.ndarray, *, width: i
         raise MotionlangError(f"the motion's features hold {bad} (after normalising); "
                               "nothing to describe")
     state = model.encode(x, torch.tensor([len(features)]))
+    ids = _ids(model.vocab, banned_words)
     kw = dict(batch_size=1, sos=c.sos_id, eos=c.eos_id, max_len=max_len or c.max_len,
-              banned=(c.pad_id, c.sos_id), min_len=1)
-    if width == 1:
+              banned=(c.pad_id, c.sos_id, *ids), min_len=1)
+    if width == 1 and not prefix:
         hyps = greedy_search(model.step, state, **kw)
     else:
-        hyps = beam_search(model.step, state, width=width, length_penalty=length_penalty, **kw)[0]
+        hyps = beam_search(model.step, state, width=width, length_penalty=length_penalty,
+                           prefix=_ids(model.vocab, prefix), **kw)[0]
     out = [(_words(model.vocab, h.tokens), h.score) for h in hyps]
     if not out or not all(math.isfinite(score) for _, score in out):
         raise MotionlangError("decoding gave no sentence with a finite score")

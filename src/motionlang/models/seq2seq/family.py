@@ -6,7 +6,7 @@ FAMILIES = (
            summary="motion-to-language model (Plappert et al. 2018)",
            config="motionlang.models.seq2seq.config:M2LConfig",
            recipe="motionlang.recipes.seq2seq:M2L",
-           describes="motionlang.decoding.seq2seq:describe", encodes_motion="motionlang.decoding.seq2seq:embed_motion"),
+           describes="motionlang.decoding.grounded:describe", encodes_motion="motionlang.decoding.seq2seq:embed_motion"),
     Family(kind="l2m", model="motionlang.models.seq2seq.l2m:LanguageToMotion",
            summary="language-to-motion model (Plappert et al. 2018)",
            config="motionlang.models.seq2seq.config:L2MConfig",

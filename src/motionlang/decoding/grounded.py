@@ -1,0 +1,130 @@
+"""Descriptions checked against the body's physics, and honest about what the model does not know.
+
+A motion-to-language model learns which words go with which features of its training
+motion; on motion recorded elsewhere (another body, speed, floor, frame rate or rig) it can
+name the wrong gait, or, on motion unlike anything it learnt, put out fragments. Two checks
+sit between its beam and the user (:func:`describe`, what the M2L family registers as its
+describer):
+
+1. **Gait** (``features.gait``): when the feet show walking, running or jumping and the
+   model's first sentence names another of the three, the beam is searched again with the
+   contradicting words banned (a walk that the model calls a run is described without the
+   words of running: "a woman walks straight ahead"); for a jump that the model does not
+   name, or a gait for which its beam has no sentence with a verb, with its first sentence's
+   subject followed by the gait's verb as a forced start ("a person jumps ..."). The rest of
+   the sentence (direction, manner) is still the model's.
+   Motions whose feet show none of the three (gestures, dances, standing) keep the model's
+   own sentences.
+2. **Familiarity**: sentences without a verb are dropped; when none is left, or the first
+   sentence is so unlikely under the model that it is guessing (mean log probability per word
+   below ``UNFAMILIAR_LOGP``), the first line is :data:`UNFAMILIAR` and the model's remaining
+   sentences follow as the closest it has.
+"""
+from __future__ import annotations
+
+from typing import Any
+
+from motionlang.datasets.pos_tags import tag
+from motionlang.decoding.seq2seq import _features_of, describe_features
+from motionlang.features.body21 import normalise21
+from motionlang.features.frames import motion_frames
+from motionlang.features.gait import gait
+from motionlang.features.joint_map import positions21
+
+#: what :func:`describe` says of a motion the model cannot describe
+UNFAMILIAR = "the person makes an unfamiliar movement"
+#: mean log probability per word (end of sentence included) below which the model is guessing:
+#: far below what the packaged models give the sentences of any real motion they describe
+#: with words (docs/results/real-motion.md has the measured ranges)
+UNFAMILIAR_LOGP = -6.0
+
+#: the words that name each gait, in every form a caption uses
+GAIT_WORDS: dict[str, frozenset[str]] = {
+    "walk": frozenset("walk walks walking walked stroll strolls strolling march marches "
+                      "marching".split()),
+    "run": frozenset("run runs running ran jog jogs jogging dash dashes dashing sprint "
+                     "sprints sprinting".split()),
+    "jump": frozenset("jump jumps jumping jumped hop hops hopping leap leaps leaping".split()),
+}
+#: the form of each gait's verb forced after the subject when the model does not name it
+GAIT_VERB = {"walk": "walks", "run": "runs", "jump": "jumps"}
+
+
+def named_gait(text: str) -> str | None:
+    """The gait a sentence names first (by word order), or None."""
+    for word in text.lower().split():
+        for g, words in GAIT_WORDS.items():
+            if word in words:
+                return g
+    return None
+
+
+def has_verb(text: str) -> bool:
+    """Whether a sentence has a verb (``datasets.pos_tags``) or names a gait."""
+    return named_gait(text) is not None or any(t.endswith("/VERB") for t in tag(text))
+
+
+def _subject(text: str) -> list[str]:
+    """The words before a sentence's first verb ("a stage actor" of "a stage actor bows")."""
+    words = text.split()
+    tags = tag(text)
+    if len(tags) != len(words):
+        return []
+    for i, t in enumerate(tags):
+        if t.endswith("/VERB") or named_gait(words[i]):
+            return words[:i]
+    return []
+
+
+def ground(model: Any, frames, hyps: list[tuple[str, float]], action: str | None, *,
+           width: int, **beam: Any) -> list[tuple[str, float]]:
+    """The beam ``hyps`` of ``frames`` (T, F), searched again where its first sentence
+    contradicts the gait ``action`` ("walk", "run", "jump" or None; module docstring)."""
+    if action is None or not hyps:
+        return hyps
+    said = named_gait(hyps[0][0])
+    if said == action:
+        return hyps
+    if action != "jump":
+        if said is not None:    # another gait named: search again without its words
+            banned = [w for g, ws in GAIT_WORDS.items() if g != action for w in ws]
+            again = describe_features(model, frames, width=width, banned_words=banned, **beam)
+            if again and has_verb(again[0][0]):
+                return again
+        elif has_verb(hyps[0][0]):
+            return hyps         # something else named over the gait (a wave while walking)
+    # a jump the model does not name, or a gait it has no sentence for: force the verb
+    subject = _subject(hyps[0][0]) or ["a", "person"]
+    prefix = [*subject, GAIT_VERB[action]]
+    if all(w in getattr(model.vocab, "stoi", {}) for w in prefix):
+        return describe_features(model, frames, width=max(width, 2), prefix=prefix,
+                                 **beam)[:width]
+    return hyps
+
+
+def familiar(hyps: list[tuple[str, float]]) -> list[tuple[str, float]]:
+    """The beam without its verbless sentences, led by :data:`UNFAMILIAR` when nothing is
+    left or the first sentence is a guess (module docstring)."""
+    kept = [(t, s) for t, s in hyps if t.strip() and has_verb(t)]
+    if not kept:
+        return [(UNFAMILIAR, hyps[0][1] if hyps else float("-inf"))]
+    first_text, first_score = kept[0]
+    if first_score / (len(first_text.split()) + 1) < UNFAMILIAR_LOGP:
+        return [(UNFAMILIAR, first_score)] + kept
+    return kept
+
+
+def describe(model: Any, motion, *, width: int = 5, max_len: int | None = None,
+             length_penalty: float = 0.0, rank: str = "logp",
+             grounded: bool = True) -> list[tuple[str, float]]:
+    """A :class:`Motion` -> up to W sentences with their total log probability, best first
+    (as ``decoding.seq2seq.describe``), checked against the motion's gait and the model's
+    familiarity with it (module docstring); ``grounded=False``: the model's beam as it is."""
+    frames = motion_frames(_features_of(model), motion, 1)[0]
+    beam: dict[str, Any] = dict(max_len=max_len, length_penalty=length_penalty, rank=rank)
+    hyps = describe_features(model, frames, width=width, **beam)
+    if not grounded:
+        return hyps
+    body = normalise21(positions21(motion))
+    action = gait(body, motion.fps).action if len(body) > 1 else None
+    return familiar(ground(model, frames, hyps, action, width=width, **beam))

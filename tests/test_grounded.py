@@ -1,0 +1,94 @@
+"""decoding.grounded: the M2L's sentences checked against the gait the feet show, and an
+honest line for motion the model does not know (issue 41, items 2 and 3)."""
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+import motionlang.decoding.grounded as g
+from motionlang.decoding.grounded import UNFAMILIAR, familiar, ground, has_verb, named_gait
+
+
+def test_named_gait_and_verbs():
+    assert named_gait("a person walks forward then runs") == "walk"
+    assert named_gait("someone jogs") == "run"
+    assert named_gait("a man hops twice") == "jump"
+    assert named_gait("a person waves") is None
+    assert has_verb("a stage actor sprints forward")
+    assert has_verb("a person takes a bow")
+    assert not has_verb("delinquent delinquent")
+    assert not has_verb("both both hands")
+
+
+def test_familiar_drops_verbless_sentences_and_says_what_it_does_not_know():
+    assert familiar([("both both", -3.0), ("a man waves", -4.0)]) == [("a man waves", -4.0)]
+    assert familiar([("delinquent delinquent", -15.0)])[0][0] == UNFAMILIAR
+    # a sentence with a verb that the model gives almost no probability: flagged, kept second
+    out = familiar([("a person bows", -40.0)])
+    assert out[0][0] == UNFAMILIAR and out[1] == ("a person bows", -40.0)
+    assert familiar([]) == [(UNFAMILIAR, -np.inf)]
+
+
+class FakeBeam:
+    """describe_features stand-in: what the beam says with words banned or a start forced."""
+
+    def __init__(self, free, banned=None):
+        self.free, self.banned_out, self.calls = free, banned, []
+
+    def __call__(self, model, frames, *, width, banned_words=(), prefix=(), **beam):
+        self.calls.append({"banned": set(banned_words), "prefix": list(prefix)})
+        if prefix:
+            return [(" ".join(prefix) + " forward", -9.0)]
+        return self.banned_out if banned_words else self.free
+
+
+@pytest.fixture
+def model():
+    words = "a person man walks runs jumps forward".split()
+    return SimpleNamespace(vocab=SimpleNamespace(stoi={w: i for i, w in enumerate(words)}))
+
+
+def test_a_walk_called_a_run_is_searched_again_without_running(model, monkeypatch):
+    fake = FakeBeam([("a man runs forward", -5.0)], banned=[("a man walks forward", -6.0)])
+    monkeypatch.setattr(g, "describe_features", fake)
+    assert ground(model, None, fake.free, "walk", width=3) == [("a man walks forward", -6.0)]
+    assert {"run", "runs", "jogs"} <= fake.calls[0]["banned"]
+    assert "walks" not in fake.calls[0]["banned"]
+
+
+def test_an_unnamed_jump_gets_the_verb_after_the_models_subject(model, monkeypatch):
+    fake = FakeBeam([("a man takes a bow", -5.0)])
+    monkeypatch.setattr(g, "describe_features", fake)
+    assert ground(model, None, fake.free, "jump", width=3) == [("a man jumps forward", -9.0)]
+    assert fake.calls[0]["prefix"] == ["a", "man", "jumps"]
+
+
+def test_agreement_and_other_actions_are_left_alone(model, monkeypatch):
+    fake = FakeBeam(None)
+    monkeypatch.setattr(g, "describe_features", fake)
+    walk = [("a person walks forward", -5.0)]
+    wave = [("a person waves", -5.0)]
+    assert ground(model, None, walk, "walk", width=3) == walk
+    assert ground(model, None, wave, "walk", width=3) == wave      # a gesture over the walk
+    assert ground(model, None, wave, None, width=3) == wave        # no gait: the model's own
+    assert fake.calls == []
+
+
+def test_a_gait_without_a_sentence_gets_its_verb(model, monkeypatch):
+    fake = FakeBeam([("a person", -5.0)])
+    monkeypatch.setattr(g, "describe_features", fake)
+    assert ground(model, None, fake.free, "run", width=3)[0][0] == "a person runs forward"
+
+
+def test_packaged_m2l_names_a_real_jog_and_a_real_walk(shared_data):
+    import motionlang as ml
+    from motionlang.datasets.named import cmu35_walkjog
+    m2l = ml.load_model("m2l")
+    trials = cmu35_walkjog(shared_data).trials
+    jog = next(t for t in trials if t.label == "jog")
+    walk = next(t for t in trials if t.label == "walk")
+    assert named_gait(ml.describe(jog.motion, m2l, 3)[0][0]) == "run"
+    assert named_gait(ml.describe(walk.motion, m2l, 3)[0][0]) == "walk"
+    assert ml.describe(shared_data / "cmu49" / "49_20.amc", m2l, 3)[0][0] == UNFAMILIAR
