@@ -4,13 +4,15 @@ sentence encoder so that unseen words land near known ones - measure it").
 
     OMP_NUM_THREADS=1 .venv/bin/python experiments/paraphrase_judge.py \
         --model l2m --model twostream [--data ../shared/data/bandai] [--limit N]
+    (the L2M without reading unknown words as known ones: --model nomap=l2m:map_words=false)
 
 Each model generates one motion per Bandai test take from its sentence (as
 ``motionlang evaluate-judge`` does, feet locked as ``generate`` writes them) and from the same
 sentence with :data:`SYNONYMS` applied; the packaged judge says how often it sees the asked
-action and style in each. The L2M reads an unseen word as one unknown-word token; the
-two-stream model reads sentences through MiniLM (a pretrained language model), which has
-seen the synonyms. Prints a Markdown table and how many sentences the swap changed.
+action and style in each. The L2M reads an unseen word as the nearest word it knows where
+one is near enough (``models.word_map``), or with ``map_words=false`` as one unknown-word
+token; the two-stream model reads sentences through MiniLM (a pretrained language model),
+which has seen the synonyms. Prints a Markdown table and how many sentences the swap changed.
 Non-commercial: the judge and the Bandai sentences are CC BY-NC 4.0.
 """
 from __future__ import annotations
@@ -65,7 +67,8 @@ def main() -> None:
           f"{sentences[0].text!r} -> {swapped[0].text!r}")
     generated = {}
     for spec in args.model:
-        name, _, path = spec.rpartition("=")
+        # NAME=MODEL; a MODEL may carry options itself ("nomap=l2m:map_words=false")
+        name, _, path = spec.partition("=") if "=" in spec.split(":")[0] else ("", "", spec)
         name = name or path
         t2m = ml.text_to_motion(path)
         unknown = sum(bool(t2m.unknown_words(s.text)) for s in swapped)

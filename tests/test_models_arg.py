@@ -25,7 +25,7 @@ def _commands(tmp_path, spec: str) -> list[list[str]]:
 
 @pytest.mark.parametrize("spec, message", [
     ("l2m:beam=3", "unknown option beam (this model's options: method, width, temperature, "
-                   "rerank, length_norm)"),
+                   "rerank, length_norm, map_words)"),
     ("l2m:width=two", "width: 'two' is not a valid int"),
     ("l2m:method=fast", "method must be sample, beam or mean, got 'fast'"),
     ("l2m:method=mean,rerank=m2l", "rerank ranks several motions"),

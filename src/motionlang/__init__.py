@@ -13,7 +13,7 @@ __version__ = "0.1.0"
 #: the Python API (:mod:`motionlang.api`), imported on first use so that ``import
 #: motionlang`` stays light (no torch until a model is needed)
 _API = ("read_motion", "write_motion", "load_model", "describe", "describe_many", "timeline",
-        "generate",
+        "generate", "read_words",
         "generate_hypotheses", "text_to_motion", "encode", "train", "fill_in", "body21",
         "retarget", "render", "write_result", "load_rig", "index", "search")
 

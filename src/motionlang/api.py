@@ -32,6 +32,7 @@ import numpy as np
 from motionlang.errors import MotionlangError
 from motionlang.formats import read_motion, write_motion
 from motionlang.kinematics.motion import Motion
+from motionlang.models.word_map import WordsRead
 from motionlang.rendering.output import body_motion, write_result
 
 
@@ -235,9 +236,12 @@ def generate_hypotheses(text: str, model: Any = None, *, width: int | None = Non
         kw["reranker"] = rerank if not isinstance(rerank, (str, Path)) \
             else load_model(rerank, kind="m2l")
         check_same_features(t2m.model, kw["reranker"], f"rerank {rerank}")
-    unknown = t2m.unknown_words(text)
+    import warnings
+    reading = t2m.read_words(text)
+    if reading.mapped:   # shown, so that a user sees which word steered instead of theirs
+        warnings.warn(reading.message(), WordsRead, stacklevel=2)
+    unknown = reading.unknown
     if unknown:   # a warning, not an error: the rest of the sentence still steers
-        import warnings
         vocab = getattr(t2m.model, "vocab", None)
         warnings.warn(f"the model does not know {', '.join(repr(w) for w in unknown)}; each "
                       f"is read as an unknown word (its vocabulary: {len(vocab or ())} words)",
@@ -248,6 +252,14 @@ def generate_hypotheses(text: str, model: Any = None, *, width: int | None = Non
                           min_frames=min_frames, length_norm=length_norm,
                           temperature=temperature, foot_lock=foot_lock, **kw)
     return hyps, t2m.fps
+
+
+def read_words(text: str, model: Any = None):
+    """How a text-to-motion model (as :func:`text_to_motion`; None: the packaged L2M) reads
+    ``text``: a ``models.word_map.WordReading`` with ``mapped`` (each unknown word, the
+    known word read instead, their similarity), ``unknown`` (words still unknown) and
+    ``text`` (the sentence it decodes); ``message()`` is what ``generate`` prints."""
+    return text_to_motion(model).read_words(text)
 
 
 def generate(text: str, model: Any = None, *, rig: Motion | str | Path | None = None,

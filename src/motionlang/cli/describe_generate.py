@@ -72,7 +72,7 @@ def _describe_one(args: argparse.Namespace, options) -> int:
 def cmd_generate(args: argparse.Namespace) -> int:
     import warnings
 
-    from motionlang.api import generate_hypotheses, load_rig, write_result
+    from motionlang.api import WordsRead, generate_hypotheses, load_rig, write_result
     from motionlang.rendering.output import check_result_path
 
     out = Path(args.output)
@@ -88,8 +88,9 @@ def cmd_generate(args: argparse.Namespace) -> int:
             length_norm=args.length_norm, temperature=args.temperature, rerank=args.rerank,
             start_from=args.start_from, joint_map=args.joint_map,
             foot_lock=not args.no_foot_lock)
-    for w in caught:
-        print(f"motionlang generate: warning: {w.message}", file=sys.stderr)
+    for w in caught:   # what it read as what is a note, not a warning
+        note = "" if issubclass(w.category, WordsRead) else "warning: "
+        print(f"motionlang generate: {note}{w.message}", file=sys.stderr)
     for i, (result, score) in enumerate(hyps, 1):
         n = len(result.joint_angles) if hasattr(result, "joint_angles") else len(result)
         # a deterministic model (two-stream) has no likelihood to rank by

