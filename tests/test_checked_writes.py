@@ -159,3 +159,13 @@ def test_sigterm_during_a_write_removes_the_temporary_file(tmp_path):
     assert p.returncode == 128 + signal.SIGTERM and err.strip() == "terminated"
     assert time.monotonic() - t0 < 10
     assert target.read_bytes() == b"previous" and _leftovers(tmp_path) == []
+
+
+@pytest.mark.parametrize("dest", ["", "afile", "/proc/motionlang-x"])
+def test_download_dest_that_cannot_be_a_folder_is_one_line(tmp_path, capsys, monkeypatch, dest):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "afile").write_text("a file")
+    assert main(["data", "download", "kitml", "--dest", dest]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "argument --dest" in err[0]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["afile"]

@@ -112,7 +112,8 @@ def register(subparsers) -> None:
 
     d = sub.add_parser("download", help="download and extract a dataset release")
     d.add_argument("dataset", choices=["kitml"], help="the dataset to fetch")
-    d.add_argument("--dest", required=True, help="folder for the archive and extracted data")
+    d.add_argument("--dest", required=True, type=output_dir,
+                   help="folder for the archive and extracted data")
     d.add_argument("--url", help="override the release URL (default: KIT's 2016-10-10 zip)")
     d.add_argument("--sha256", help="expected sha256 of the archive (KIT publishes none)")
     d.add_argument("--include-raw", action="store_true", help="also extract *_raw.c3d files")
