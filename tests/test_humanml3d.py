@@ -298,3 +298,20 @@ def test_every_text_model_trains_and_runs_on_an_export(corpus, export, tmp_path,
                      str(tmp_path / "t.npz")]) == 0
         assert np.load(tmp_path / "t.npz")["positions"].shape[1:] == (21, 3)
     capsys.readouterr()
+
+
+def test_split_files_that_leave_out_motions_name_them(export, tmp_path):
+    """A split file missing an id is an error naming it, never a silent random split that
+    would train on published test motions (issue 44, item 0)."""
+    import shutil
+    out = shutil.copytree(export[0], tmp_path / "h3d")
+    train_ids = (out / "train.txt").read_text().split()
+    assert {r.split for r in load_h3d(out, "kit", mirrored=True)} <= {"train", "val", "test"}
+    (out / "train.txt").write_text("".join(f"{i}\n" for i in train_ids[1:]))
+    with pytest.raises(DatasetError, match=rf"do not list motion\(s\) {train_ids[0]}\b"):
+        load_h3d(out, "kit", mirrored=True)
+    with pytest.raises(DatasetError, match="do not list"):
+        build_pairs(f"kitml-h3d:{out}", offsets=1)
+    for name in ("train", "val", "test"):    # no split files at all: a random split
+        (out / f"{name}.txt").unlink(missing_ok=True)
+    assert all(r.split is None for r in load_h3d(out, "kit"))

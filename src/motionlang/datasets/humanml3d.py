@@ -225,6 +225,22 @@ def _splits(root: Path) -> dict[str, str]:
     return out
 
 
+def _check_split_covers(root: Path, ids: list[str], split: dict[str, str]) -> None:
+    """Split files that leave motions out are an error naming them: the training code
+    would otherwise fall back to a random split, which puts the published test motions in
+    training. A folder without split files is split at random, as any other."""
+    if not split:
+        return
+    missing = [i for i in ids if i not in split]
+    if missing:
+        files = ", ".join(f"{n}.txt" for n in SPLITS if (root / f"{n}.txt").is_file())
+        shown = ", ".join(missing[:10]) + (f", ... ({len(missing)} in all)"
+                                           if len(missing) > 10 else "")
+        raise DatasetError(f"{root}: the split files ({files}) do not list motion(s) {shown}; "
+                           "add them to a split file, or remove every split file for a "
+                           "random split")
+
+
 def _check_body(root: Path, mid: str, body: H3DBody) -> None:
     """Fail early, with the right prefix named, when the folder holds the other body."""
     for folder, axis, want, what in ((VECS, -1, body.dim, "numbers a row"),
@@ -299,6 +315,7 @@ def load_h3d(root: str | Path, body: str = "smpl", *, mirrored: bool = False,
         present = set(ids)
         ids = [i for i in ids if not (i[:1] == "M" and i[1:] in present)]
     split = _splits(root)
+    _check_split_covers(root, ids, split)
     records = [r for mid in ids for r in _records_of(root, mid, spec, split.get(mid))]
     if max_seconds is not None:
         records = [r for r in records if r.span is not None or
