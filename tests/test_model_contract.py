@@ -31,6 +31,8 @@ from motionlang.models.evaluator.config import EvaluatorConfig
 from motionlang.models.evaluator.model import TextMotionEvaluator
 from motionlang.models.judge.config import JudgeConfig
 from motionlang.models.judge.model import MotionJudge
+from motionlang.models.masked.config import MaskedConfig, MaskedOptions
+from motionlang.models.masked.model import MaskedModel
 from motionlang.models.retrieval.config import RetrievalConfig
 from motionlang.models.retrieval.model import RetrievalModel
 from motionlang.models.seq2seq.l2m import LanguageToMotion
@@ -112,6 +114,21 @@ def _retrieval_out(model: RetrievalModel) -> np.ndarray:
                            model.embed_texts(["a person walks", "jump"])])
 
 
+def _masked() -> MaskedModel:
+    torch.manual_seed(0)
+    return MaskedModel(MaskedConfig(width=8, depth=1, code_dim=4, codes=8, quantizers=2,
+                                    hidden=8, layers=1, res_layers=1, heads=2, max_tokens=8),
+                       text_encoder=HashTokens())
+
+
+def _masked_out(model: MaskedModel) -> torch.Tensor:
+    rows = np.random.default_rng(0).normal(size=(9, 66)).astype(np.float32)
+    tokens = model.sample_tokens(["a person walks", "jump"], [3, 2], seed=0,
+                                 options=MaskedOptions(steps=3))
+    return torch.cat([tokens.flatten().float(),
+                      torch.as_tensor(model.reconstruct(rows)).flatten()])
+
+
 def _torch_params(model) -> dict[str, Any]:
     return dict(model.state_dict())
 
@@ -158,6 +175,8 @@ KINDS = [
          lambda: {"vectors": HashVectors()}),
     Kind("judge", MotionJudge, ".pt", _judge, _torch_params, _judge_out),
     Kind("retrieval", RetrievalModel, ".pt", _retrieval, _torch_params, _retrieval_out,
+         lambda: {"text_encoder": HashTokens()}),
+    Kind("masked", MaskedModel, ".pt", _masked, _torch_params, _masked_out,
          lambda: {"text_encoder": HashTokens()}),
 ]
 BY_NAME = {k.name: k for k in KINDS}

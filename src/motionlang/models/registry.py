@@ -38,6 +38,7 @@ FAMILY_MODULES: tuple[str, ...] = (
     "motionlang.models.evaluator.family",   # evaluator (Guo et al. 2022 protocol)
     "motionlang.models.judge.family",       # judge (action and style of real motion)
     "motionlang.models.retrieval.family",   # retrieval (text-motion, TMR-style)
+    "motionlang.models.masked.family",      # masked (masked-token text-to-motion, MoMask-style)
 )
 
 

@@ -1,0 +1,129 @@
+"""Configuration and sampling options of the masked-token model, free of torch (read by
+``--help`` without it).
+
+The fields with a ``help`` are the model options of ``motionlang train masked``
+(``cli.config_options``); their checks are the config's own.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from motionlang.errors import MotionlangError
+from motionlang.features.positions import DEFAULT_FPS
+from motionlang.features.positions import DIM as POSITIONS_DIM
+from motionlang.utils.checks import check_numbers
+
+#: frames per token: two stride-2 convolutions (MoMask and T2M-GPT downsample by 4)
+DOWN = 4
+#: layer widths, bounded by ``utils.checks.MAX_SIZE`` so a mistyped size fails at once
+SIZES = ("width", "code_dim", "codes", "hidden", "max_tokens")
+
+
+def _opt(default: Any, help_: str, **meta: Any) -> Any:
+    """A field that is also a ``train masked`` option."""
+    return field(default=default, metadata={"help": help_, **meta})
+
+
+@dataclass
+class MaskedConfig:
+    """Sizes and losses of :class:`~motionlang.models.masked.model.MaskedModel`.
+
+    Attributes:
+        n_features, fps: per-frame size F and frame rate (Hz) of the position features the
+            tokenizer reads (the model's fitted features decide them).
+        text_dim, text_model, text_layer: the frozen sentence vectors (as the retrieval
+            family's: MiniLM's last hidden state, mean-pooled; 0: read off the encoder).
+        width, depth: channels and residual blocks per level of the 1-D convolutional
+            tokenizer (time downsampled by :data:`DOWN`).
+        code_dim, codes, quantizers: size of a code, codes per codebook, and codebooks of
+            the residual quantiser (the first is the base, the rest quantise what is left).
+        quantizer_dropout: probability that a training batch uses only the first k
+            codebooks (k uniform), so that coarse codes decode to a whole motion alone.
+        ema: decay of the codebooks' exponential moving averages.
+        commit, velocity: weights of the commitment loss and of the frame-difference
+            (velocity) reconstruction loss beside the frame loss.
+        window: seconds of the random crops the tokenizer is trained on.
+        hidden, layers, heads, dropout: the masked transformer's size.
+        res_layers: layers of the residual-token transformer (same width).
+        cond_drop: probability that the sentence is replaced by the null condition in
+            training (classifier-free guidance needs the unconditioned model).
+        max_tokens: the longest motion in tokens (the length estimator's classes).
+    """
+
+    n_features: int = POSITIONS_DIM
+    fps: float = DEFAULT_FPS
+    text_dim: int = 0
+    text_model: str = "minilm"
+    text_layer: int = 6
+    width: int = _opt(128, "channels of the convolutional tokenizer")
+    depth: int = _opt(2, "residual blocks per level of the tokenizer")
+    code_dim: int = _opt(64, "size of a code vector")
+    codes: int = _opt(256, "codes per codebook")
+    quantizers: int = _opt(4, "codebooks of the residual quantiser (base + finer)")
+    quantizer_dropout: float = _opt(0.2, "probability that a batch uses only the first k "
+                                         "codebooks")
+    ema: float = _opt(0.99, "decay of the EMA codebook updates")
+    commit: float = _opt(0.02, "weight of the commitment loss")
+    velocity: float = _opt(0.5, "weight of the velocity (frame difference) loss")
+    window: float = _opt(5.12, "seconds of the crops the tokenizer trains on")
+    hidden: int = _opt(256, "width of the masked and residual transformers")
+    layers: int = _opt(4, "layers of the masked transformer")
+    res_layers: int = _opt(2, "layers of the residual-token transformer")
+    heads: int = _opt(4, "attention heads (divides --hidden)")
+    dropout: float = _opt(0.1, "dropout in the transformers")
+    cond_drop: float = _opt(0.1, "probability of training without the sentence (for "
+                                 "classifier-free guidance)")
+    max_tokens: int = _opt(94, "longest motion in tokens (4 frames each)")
+
+    def __post_init__(self) -> None:
+        check_numbers("MaskedConfig", self, positive_ints=("n_features",),
+                      nonneg_ints=("text_dim", "text_layer", "depth"), sizes=SIZES,
+                      layers=("quantizers", "layers", "res_layers", "heads"),
+                      positive=("fps", "window", "commit"), nonneg=("velocity",),
+                      unit=("quantizer_dropout", "ema", "dropout", "cond_drop"))
+        if self.hidden % self.heads:
+            raise MotionlangError(f"MaskedConfig.heads ({self.heads}) must divide hidden "
+                                  f"({self.hidden})")
+        if self.codes < 2:
+            raise MotionlangError(f"MaskedConfig.codes must be at least 2, got {self.codes}")
+        if not isinstance(self.text_model, str) or not self.text_model:
+            raise MotionlangError(f"MaskedConfig.text_model must be 'minilm' or a folder, "
+                                  f"got {self.text_model!r}")
+
+    @property
+    def window_frames(self) -> int:
+        """The tokenizer's crop in frames, a whole number of tokens."""
+        return max(DOWN, round(self.window * self.fps / DOWN) * DOWN)
+
+    def to_dict(self) -> dict[str, Any]:
+        from dataclasses import asdict
+        return asdict(self)
+
+
+@dataclass
+class MaskedOptions:
+    """Sampling options (``--model masked:steps=10,guidance=4``).
+
+    Attributes:
+        steps: iterations of the masked decoding (MaskGIT/MoMask: about 10); each fixes the
+            most confident tokens and masks the rest again along the cosine schedule.
+        guidance: classifier-free guidance scale of the base tokens (1: the conditioned
+            model alone; higher follows the sentence more closely, with less variety).
+        res_guidance: the same for the residual-token transformer.
+        temperature: of the base tokens' softmax (0: the likeliest token, nothing drawn).
+        top_k: draw among the k likeliest tokens only (0: all).
+    """
+
+    steps: int = 10
+    guidance: float = 4.0
+    res_guidance: float = 2.0
+    temperature: float = 1.0
+    top_k: int = 0
+
+    def __post_init__(self) -> None:
+        check_numbers("masked options", self, positive_ints=("steps",), nonneg_ints=("top_k",),
+                      nonneg=("guidance", "res_guidance", "temperature"))
+        if self.steps > 100:
+            raise MotionlangError(f"masked options: steps must be at most 100, got "
+                                  f"{self.steps}")

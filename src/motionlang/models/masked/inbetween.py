@@ -1,0 +1,71 @@
+"""The numpy side of in-betweening: which tokens a set of kept frames fixes, and how the
+generated frames join the kept ones.
+
+A token covers 4 frames; it is kept only when all of its frames are (a token half inside
+a gap is regenerated). The decoder reproduces the kept tokens' frames only up to the
+tokenizer's error and places them where the generated root path leads, so the result
+takes the kept frames as they are and moves each generated stretch by an offset per joint
+that goes linearly from the gap's start (the last kept frame before it) to its end (the
+first kept frame after it): no jump at either side ("offset blending").
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from motionlang.models.masked.config import DOWN
+
+
+def kept_tokens(keep: np.ndarray) -> np.ndarray:
+    """Kept frames (T,) bool -> kept tokens (ceil(T / 4),) bool (all 4 frames kept; the
+    last token's missing frames count as kept)."""
+    keep = np.asarray(keep, dtype=bool)
+    pad = (-len(keep)) % DOWN
+    full = np.concatenate([keep, np.ones(pad, dtype=bool) if len(keep) else keep[:0]])
+    return np.asarray(full.reshape(-1, DOWN).all(1))
+
+
+def gaps(keep: np.ndarray) -> list[tuple[int, int]]:
+    """Kept frames (T,) bool -> the runs of frames not kept, ``[(start, end), ...]``
+    (end exclusive)."""
+    out, start = [], None
+    for t, k in enumerate(np.asarray(keep, dtype=bool)):
+        if not k and start is None:
+            start = t
+        elif k and start is not None:
+            out.append((start, t))
+            start = None
+    if start is not None:
+        out.append((start, len(keep)))
+    return out
+
+
+def blend(generated: np.ndarray, source: np.ndarray, keep: np.ndarray) -> np.ndarray:
+    """Generated (T, J, 3) and source (T, J, 3) positions, kept frames (T,) -> the source
+    on kept frames, the generated frames elsewhere shifted to meet the kept frames at
+    both ends of each gap (see module docstring)."""
+    gen = np.asarray(generated, dtype=np.float64)
+    src = np.asarray(source, dtype=np.float64)
+    keep = np.asarray(keep, dtype=bool)
+    out = np.where(keep[:, None, None], src, gen)
+    for a, b in gaps(keep):
+        if a == 0 and b == len(keep):
+            continue   # nothing kept: the generated motion as it is
+        # a gap that reaches an end of the motion is moved by its one known offset
+        before = src[a - 1] - gen[a - 1] if a > 0 else src[b] - gen[b]
+        after = src[b] - gen[b] if b < len(keep) else before
+        w = (np.arange(a, b) - (a - 1)) / (b - a + 1.0)
+        out[a:b] = gen[a:b] + (1 - w)[:, None, None] * before + w[:, None, None] * after
+    return out
+
+
+def linear_fill(source: np.ndarray, keep: np.ndarray) -> np.ndarray:
+    """The baseline: each gap filled by interpolating every joint linearly between the
+    kept frames around it (held where the gap reaches an end)."""
+    src = np.asarray(source, dtype=np.float64)
+    keep = np.asarray(keep, dtype=bool)
+    if not keep.any():
+        return src.copy()
+    t = np.arange(len(src))
+    flat = src.reshape(len(src), -1)
+    out = np.stack([np.interp(t, t[keep], flat[keep, k]) for k in range(flat.shape[1])], 1)
+    return out.reshape(src.shape)

@@ -1,0 +1,110 @@
+"""The token models of the masked family, all conditioned on a frozen sentence vector.
+
+* :class:`MaskTransformer` — bidirectional transformer over the base tokens (codebook 0),
+  some replaced by a mask token; predicts the base token at every position. The sentence
+  vector, projected, is the first element of the sequence; a learnt null vector takes its
+  place when the condition is dropped (classifier-free guidance: ``cond_drop`` in training,
+  the unconditioned pass in sampling).
+* :class:`ResidualTransformer` — predicts the tokens of codebook j (1..Q-1) at every position
+  from the sum of the embeddings of codebooks 0..j-1 there and an embedding of j (MoMask's
+  residual transformer; no masking: the coarser codes are known).
+* :class:`LengthEstimator` — the motion's length in tokens (a class in 1..max_tokens) from
+  the sentence vector.
+"""
+from __future__ import annotations
+
+import math
+
+import torch
+import torch.nn.functional as F
+from torch import nn
+
+from motionlang.models.masked.config import MaskedConfig
+
+
+def sinusoid(T: int, dim: int, device: torch.device | None = None) -> torch.Tensor:
+    """(T, dim) sinusoidal positions (Vaswani et al. 2017)."""
+    pos = torch.arange(T, dtype=torch.float32, device=device)[:, None]
+    rate = torch.exp(torch.arange(0, dim, 2, dtype=torch.float32, device=device)
+                     * (-math.log(10000.0) / dim))
+    out = torch.zeros(T, dim, device=device)
+    out[:, 0::2] = torch.sin(pos * rate)
+    out[:, 1::2] = torch.cos(pos * rate[:dim // 2])
+    return out
+
+
+class Conditioned(nn.Module):
+    """Shared body: the condition as element 0, then the token embeddings, a pre-norm
+    transformer encoder over both, the token positions' outputs (B, L, hidden)."""
+
+    def __init__(self, c: MaskedConfig, layers: int):
+        super().__init__()
+        self.cond = nn.Linear(c.text_dim, c.hidden)
+        self.null = nn.Parameter(torch.zeros(c.hidden))
+        layer = nn.TransformerEncoderLayer(c.hidden, c.heads, 4 * c.hidden, c.dropout,
+                                           activation="gelu", batch_first=True,
+                                           norm_first=True)
+        # nested tensors would make a motion's tokens depend on the batch's padding
+        self.encoder = nn.TransformerEncoder(layer, layers, enable_nested_tensor=False)
+        self.norm = nn.LayerNorm(c.hidden)
+
+    def run(self, h: torch.Tensor, text: torch.Tensor, valid: torch.Tensor,
+            drop: torch.Tensor | None) -> torch.Tensor:
+        """Token inputs (B, L, H), sentence vectors (B, D), valid positions (B, L), drop
+        (B,) bool (True: the null condition) -> (B, L, H)."""
+        c = self.cond(text)
+        if drop is not None:
+            c = torch.where(drop[:, None], self.null.expand_as(c), c)
+        x = torch.cat([c[:, None], h], 1)
+        x = x + sinusoid(x.shape[1], x.shape[2], x.device)
+        pad = torch.cat([torch.zeros_like(valid[:, :1]), ~valid], 1)
+        return self.norm(self.encoder(x, src_key_padding_mask=pad))[:, 1:]
+
+
+class MaskTransformer(Conditioned):
+    """Base tokens (B, L) with ``mask_id`` where masked -> logits (B, L, codes)."""
+
+    def __init__(self, c: MaskedConfig):
+        super().__init__(c, c.layers)
+        self.mask_id = c.codes
+        self.embed = nn.Embedding(c.codes + 1, c.hidden)
+        self.head = nn.Linear(c.hidden, c.codes)
+
+    def forward(self, tokens: torch.Tensor, text: torch.Tensor, valid: torch.Tensor,
+                drop: torch.Tensor | None = None) -> torch.Tensor:
+        return self.head(self.run(self.embed(tokens), text, valid, drop))
+
+
+class ResidualTransformer(Conditioned):
+    """Tokens of codebooks 0..j-1 (B, L, j) and j -> logits of codebook j (B, L, codes)."""
+
+    def __init__(self, c: MaskedConfig):
+        super().__init__(c, c.res_layers)
+        n = max(1, c.quantizers - 1)
+        self.embed = nn.ModuleList(nn.Embedding(c.codes, c.hidden) for _ in range(n))
+        self.level = nn.Embedding(n, c.hidden)
+        self.heads = nn.ModuleList(nn.Linear(c.hidden, c.codes) for _ in range(n))
+
+    def forward(self, tokens: torch.Tensor, j: int, text: torch.Tensor, valid: torch.Tensor,
+                drop: torch.Tensor | None = None) -> torch.Tensor:
+        h = sum(self.embed[q](tokens[..., q]) for q in range(j))
+        h = h + self.level.weight[j - 1]
+        return self.heads[j - 1](self.run(h, text, valid, drop))
+
+
+class LengthEstimator(nn.Module):
+    """Sentence vectors (B, D) -> logits (B, max_tokens) of the length 1..max_tokens."""
+
+    def __init__(self, c: MaskedConfig):
+        super().__init__()
+        self.classes = c.max_tokens
+        self.net = nn.Sequential(nn.Linear(c.text_dim, c.hidden), nn.GELU(),
+                                 nn.Dropout(c.dropout), nn.Linear(c.hidden, c.max_tokens))
+
+    def forward(self, text: torch.Tensor) -> torch.Tensor:
+        return self.net(text)
+
+    def loss(self, text: torch.Tensor, lengths: torch.Tensor) -> torch.Tensor:
+        """Cross-entropy of the true lengths (B,) in tokens (clipped to the classes)."""
+        target = lengths.clamp(1, self.classes) - 1
+        return F.cross_entropy(self(text), target)
