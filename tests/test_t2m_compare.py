@@ -366,7 +366,7 @@ def test_ranges_of_cropped_sequences(data):
 
 
 def test_model_labels_may_hold_equals_signs(tmp_path):
-    from motionlang.cli.models_arg import parse_t2m, split_label
+    from motionlang.models.options import parse_t2m, split_label
     assert split_label("full (h=128)=runs/ts.pt") == ("full (h=128)", "runs/ts.pt")
     assert split_label("runs/ts.pt") == ("ts", "runs/ts.pt")
     odd = tmp_path / "a=b.pt"

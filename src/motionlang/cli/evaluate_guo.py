@@ -72,7 +72,7 @@ def m2l_models(values: list[str] | None) -> tuple[dict, dict]:
     """``{label: model}`` and ``{label: value}`` of the ``--m2l`` values (default the
     packaged m2l; ``none`` alone: none), loaded before the data is read so that a bad one
     fails at once."""
-    from motionlang.cli.models_arg import split_label
+    from motionlang.models.options import split_label
     from motionlang.models.registry import load_model
     specs = values or ["m2l"]
     models, given = {}, {}

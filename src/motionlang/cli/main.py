@@ -40,6 +40,7 @@ COMMAND_MODULES = [
     "motionlang.cli.evaluate",            # evaluate (M2L, round trip)
     "motionlang.cli.evaluate_t2m",        # evaluate-t2m (APE, or Guo with evaluate_guo)
     "motionlang.cli.evaluate_judge",      # evaluate-judge
+    "motionlang.cli.serve",               # serve (the web app)
 ]
 
 

@@ -17,39 +17,12 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-from pathlib import Path
 from typing import Any
 
 from motionlang.errors import MotionlangError
+from motionlang.models.options import parse_t2m  # torch-free
 
 SYNTAX = "MODEL[:key=value,...]"
-
-
-def split_label(text: str) -> tuple[str, str]:
-    """``[LABEL=]PATH`` -> (label, path). An existing file is a path even if it holds "=";
-    otherwise the label ends at the *last* "=", so labels may contain "=" ("h=128")."""
-    if Path(text).is_file():
-        return Path(text).stem, text
-    label, sep, path = text.rpartition("=")
-    return (label, path) if sep and label else (Path(text).stem, text.lstrip("="))
-
-
-def parse_t2m(text: str) -> tuple[str, Any]:
-    """``[LABEL=]NAME[:key=value,...]`` -> (row label, ``ModelSpec``). Without a label the
-    row is the model's file stem, followed by its options as given (two rows of one model
-    with other options get two names).
-
-    Raises:
-        MotionlangError: a malformed option list (``models.options.parse_model_spec``).
-    """
-    from motionlang.models.options import ModelSpec, parse_model_spec
-    if Path(text).exists():   # an existing file or folder is a name, whatever it holds
-        return Path(text).stem, ModelSpec(text)
-    spec = parse_model_spec(text)
-    label, name = split_label(spec.name)
-    if name == spec.name:   # no label given: the stem and the options
-        label = str(ModelSpec(label, spec.options))
-    return label, ModelSpec(name, spec.options)
 
 
 def load_t2m(text: str, flag: str = "--model") -> tuple[str, Any]:

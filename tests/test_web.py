@@ -1,0 +1,207 @@
+"""motionlang serve over HTTP (no browser): generate, download, describe uploads, rigs,
+search, and every bad input as one line with no trace; the command line's options."""
+from __future__ import annotations
+
+import json
+import os
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from helpers.rigs import RIGS, write
+from helpers.web import SMALL, call, post_files, post_json
+from motionlang.cli.main import main
+from motionlang.formats import read_motion
+from motionlang.web.options import ServeOptions
+from motionlang.web.views import side
+
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory):
+    """The app on a free port, run from an empty folder that must stay empty."""
+    from motionlang.web.app import running
+    from motionlang.web.studio import Studio
+    cwd = tmp_path_factory.mktemp("cwd")
+    old = os.getcwd()
+    os.chdir(cwd)
+    try:
+        studio = Studio(ServeOptions(**SMALL, max_upload_mb=0.5))
+        with running(studio) as url:
+            yield url
+    finally:
+        os.chdir(old)
+    assert list(cwd.iterdir()) == [], "the server wrote into its working folder"
+
+
+def test_info_names_the_models_and_formats(server):
+    status, info = call(server + "api/info")
+    assert status == 200
+    assert [m["name"] for m in info["models"]] == ["l2m-procedural"]
+    assert {"bvh", "glb", "mp4"} <= set(info["exports"])
+    assert info["search"] is False and info["max_upload_bytes"] == 512 * 1024
+
+
+def test_the_page_and_its_scripts_are_served_from_the_package(server):
+    status, page = call(server)
+    assert status == 200 and b'<canvas id="view"' in page
+    for name in ("viewer.js", "app.js", "style.css"):
+        status, body = call(server + f"static/{name}")
+        assert status == 200 and len(body) > 500
+        assert b"http://" not in body and b"https://" not in body   # nothing from elsewhere
+    assert call(server + "static/../options.py")[0] == 404
+
+
+def test_generate_keeps_the_length_asked_for_and_downloads_bvh_and_glb(server, tmp_path):
+    status, view = post_json(server + "api/generate", {"text": "a person walks forward",
+                                                       "seconds": 4, "seed": 1})
+    assert status == 200, view
+    assert view["n_frames"] == 50 and view["fps"] == 12.5 and view["n_joints"] == 21
+    frames = np.array(view["frames"]).reshape(50, 21, 3)
+    assert abs(frames[..., 1].min() - view["floor"]) < 1e-9
+    assert np.ptp(frames[:, 0, 2]) > 0.3, "a walk forward moves the root along +Z"
+    assert view["sides"][view["names"].index("LK")] == "L"
+    status, bvh = call(server + f"api/export/{view['id']}.bvh")
+    assert status == 200
+    (tmp_path / "walk.bvh").write_bytes(bvh)
+    motion = read_motion(tmp_path / "walk.bvh")
+    assert motion.n_frames == 50 and motion.fps == pytest.approx(12.5)
+    status, glb = call(server + f"api/export/{view['id']}.glb")
+    assert status == 200 and glb[:4] == b"glTF"
+    from motionlang.formats.gltf_read import read_gltf_animation
+    (tmp_path / "walk.glb").write_bytes(glb)
+    anim = read_gltf_animation(tmp_path / "walk.glb")
+    assert anim.positions.shape[0] == 50 and anim.fps == pytest.approx(12.5)
+
+
+def test_a_rig_takes_the_generated_motion_and_its_download(server, tmp_path):
+    rig = write(RIGS["cmu-bvh"], tmp_path, T=4)
+    status, got = post_files(server + "api/rig", [(rig.name, rig.read_bytes())])
+    assert status == 200, got
+    joints = len(read_motion(rig).skeleton.joints)
+    assert got["joints"] == joints and got["name"] == "cmu-bvh"
+    status, view = post_json(server + "api/generate", {"text": "a person waves",
+                                                       "rig": got["id"]})
+    assert status == 200 and view["n_joints"] == joints and view["rig"] == got["id"]
+    status, bvh = call(server + f"api/export/{view['id']}.bvh?rig={got['id']}")
+    out = tmp_path / "out.bvh"
+    out.write_bytes(bvh)
+    assert [j.name for j in read_motion(out).skeleton.joints] == \
+        [j.name for j in read_motion(rig).skeleton.joints]
+
+
+def test_an_uploaded_bvh_is_described(server, tmp_path):
+    bvh = write(RIGS["mixamo"], tmp_path, T=40)
+    status, view = post_files(server + "api/describe", [(bvh.name, bvh.read_bytes())])
+    assert status == 200, view
+    assert view["name"] == "mixamo" and view["n_joints"] == 21
+    assert 1 <= len(view["sentences"]) <= 5 and all(s["text"] for s in view["sentences"])
+    assert view["timeline"] == []   # a short take
+
+
+@pytest.mark.parametrize("files, needle", [
+    ([("walk.txt", b"HIERARCHY")], "walk.txt: not a motion file"),
+    ([("walk.bvh", b"")], "walk.bvh: the file is empty"),
+    ([("walk.bvh", b"HIERARCHY\nROOT Hips\n{\n")], "walk.bvh"),
+    ([("01_01.amc", b":FULLY-SPECIFIED\n1\nroot 0 0 0 0 0 0\n")], "needs its .asf"),
+    ([("a.bvh", b"x"), ("b.bvh", b"y")], "upload one motion file"),
+])
+def test_a_bad_upload_is_one_line_naming_the_file(server, files, needle):
+    status, body = post_files(server + "api/describe", files)
+    assert status == 400
+    assert needle in body["error"] and "\n" not in body["error"]
+    assert "Traceback" not in body["error"] and "motionlang-serve-" not in body["error"]
+
+
+def test_an_upload_over_the_limit_is_refused_before_it_is_read(server):
+    status, body = post_files(server + "api/describe", [("big.bvh", b"0" * (600 << 10))])
+    assert status == 413 and "--max-upload-mb" in body["error"]
+
+
+def test_the_readers_limits_apply_to_uploads(server, tmp_path, monkeypatch):
+    bvh = write(RIGS["mixamo"], tmp_path, T=40)
+    monkeypatch.setenv("MOTIONLANG_MAX_FRAMES", "10")
+    status, body = post_files(server + "api/describe", [(bvh.name, bvh.read_bytes())])
+    assert status == 400 and "MOTIONLANG_MAX_FRAMES" in body["error"]
+
+
+@pytest.mark.parametrize("payload, needle", [
+    ({"text": "   "}, "type a sentence"),
+    ({"text": "a person walks", "model": "nope"}, "model 'nope' is not offered"),
+    ({"text": "a person walks", "seconds": 0}, "length must be in"),
+    ({"text": "a person walks", "seconds": 1e6}, "length must be in"),
+    ({"text": "a person walks", "method": "greedy"}, "decoding must be one of"),
+    ({"text": "a person walks", "rig": "zz"}, "no rig 'zz'"),
+    ({"text": "a person walks", "seed": "x"}, "seed"),
+    ({}, "text"),
+])
+def test_a_bad_request_is_one_line(server, payload, needle):
+    status, body = post_json(server + "api/generate", payload)
+    assert status == 400 and needle in body["error"] and "\n" not in body["error"]
+
+
+def test_a_bad_download_is_one_line(server):
+    status, body = call(server + "api/export/zz.bvh")
+    assert status == 400 and "no take 'zz'" in body["error"]
+    _, view = post_json(server + "api/generate", {"text": "a person jumps"})
+    status, body = call(server + f"api/export/{view['id']}.exe")
+    assert status == 400 and "cannot download .exe" in body["error"]
+    assert call(server + "api/search?q=walk")[1]["error"].startswith("no index was given")
+
+
+def test_search_finds_the_take_of_an_index(tmp_path):
+    pytest.importorskip("transformers", reason="the retrieval model reads MiniLM")
+    from motionlang.api import index
+    from motionlang.web.app import running
+    from motionlang.web.studio import Studio
+    folder = tmp_path / "lib"
+    folder.mkdir()
+    write(RIGS["mixamo"], folder, "walker", T=90)
+    index(folder, tmp_path / "lib.idx", show_progress=False)
+    studio = Studio(ServeOptions(**SMALL, index=str(tmp_path / "lib.idx")))
+    with running(studio) as url:
+        status, hits = call(url + "api/search?q=a%20person%20walks&k=3")
+        assert status == 200 and hits and hits[0]["file"].startswith("walker")
+        h = hits[0]
+        status, view = call(url + f"api/take?file={h['file']}&start={h['start']}&end={h['end']}")
+        assert status == 200 and view["n_joints"] == 21 and view["n_frames"] > 10
+
+
+@pytest.mark.parametrize("name, expected", [
+    ("LK", "L"), ("RMrot", "R"), ("BUN", ""), ("LeftUpLeg", "L"), ("RightHand", "R"),
+    ("l_hip", "L"), ("upperarm_r", "R"), ("joint_LeftKnee", "L"), ("lfemur", "L"),
+    ("rhumerus", "R"), ("LowerBack", ""), ("lowerback", ""), ("Hips", ""),
+    ("mixamorig:LeftArm", "L"), ("Neck1", "")])
+def test_sides_of_joint_names(name, expected):
+    assert side(name) == expected
+
+
+def test_serve_options_are_checked_as_one_line(capsys):
+    assert main(["serve", "--port", "70000"]) == 2
+    assert "--port must be in 0..65535" in capsys.readouterr().err
+    assert main(["serve", "--max-upload-mb", "0"]) == 2
+    assert "--max-upload-mb" in capsys.readouterr().err
+
+
+def test_serve_with_a_missing_index_is_one_line(capsys, tmp_path):
+    code = main(["serve", "--model", "l2m-procedural", "--describe-model", "m2l-procedural",
+                 "--index", str(tmp_path / "none.idx"), "--port", "0"])
+    err = capsys.readouterr().err
+    assert code == 2 and "none.idx" in err and err.count("\n") == 1, err
+
+
+def test_serve_help_needs_no_web_library():
+    import subprocess
+    code = ("import sys; sys.modules['fastapi'] = None; sys.modules['torch'] = None\n"
+            "from motionlang.cli.main import main; sys.exit(main(['serve', '-h']))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         cwd=Path(__file__).parent)
+    assert out.returncode == 0, out.stderr
+    assert "--index FILE" in out.stdout and "127.0.0.1" in out.stdout
+
+
+def test_generated_view_is_small_json(server):
+    _, view = post_json(server + "api/generate", {"text": "a person runs", "seconds": 10})
+    assert view["n_frames"] == 125
+    assert len(json.dumps(view)) < 200_000   # ten seconds: a few tens of kilobytes
