@@ -15,7 +15,7 @@ from helpers.web import SMALL, call, post_files, post_json
 from motionlang.cli.main import main
 from motionlang.formats import read_motion
 from motionlang.web.options import ServeOptions
-from motionlang.web.views import side
+from motionlang.web.views import VIEW_FPS, side, view_step
 
 
 @pytest.fixture(scope="module")
@@ -27,7 +27,7 @@ def server(tmp_path_factory):
     old = os.getcwd()
     os.chdir(cwd)
     try:
-        studio = Studio(ServeOptions(**SMALL, max_upload_mb=0.5))
+        studio = Studio(ServeOptions(**SMALL, max_upload_mb=2))
         with running(studio) as url:
             yield url
     finally:
@@ -40,7 +40,7 @@ def test_info_names_the_models_and_formats(server):
     assert status == 200
     assert [m["name"] for m in info["models"]] == ["l2m-procedural"]
     assert {"bvh", "glb", "mp4"} <= set(info["exports"])
-    assert info["search"] is False and info["max_upload_bytes"] == 512 * 1024
+    assert info["search"] is False and info["max_upload_bytes"] == 2 << 20
 
 
 def test_the_page_and_its_scripts_are_served_from_the_package(server):
@@ -100,6 +100,24 @@ def test_an_uploaded_bvh_is_described(server, tmp_path):
     assert view["timeline"] == []   # a short take
 
 
+def test_a_long_take_gets_a_timeline(server, tmp_path):
+    bvh = write(RIGS["mixamo"], tmp_path, "long_walk", T=390)   # 13 s at 30 Hz
+    status, view = post_files(server + "api/describe", [(bvh.name, bvh.read_bytes())])
+    assert status == 200 and view["seconds"] == 13.0
+    spans = [(s["start"], s["end"]) for s in view["timeline"]]
+    assert spans and spans[0][0] == 0.0 and spans[-1][1] == pytest.approx(13.0, abs=0.1)
+    assert all(a[1] <= b[0] + 1e-9 for a, b in zip(spans, spans[1:]))
+
+
+@pytest.mark.parametrize("rel", [("cmu35/35_01.amc", "cmu35/35.asf"), ("kitml/00001_mmm.xml",)])
+def test_real_amc_asf_and_mmm_uploads_are_described(server, shared_data, rel):
+    files = [((shared_data / r).name, (shared_data / r).read_bytes()) for r in rel]
+    status, view = post_files(server + "api/describe", files)
+    assert status == 200, view
+    assert view["n_joints"] == 21 and view["fps"] <= VIEW_FPS   # thinned for the page
+    assert view["sentences"] and view["name"] == Path(rel[0]).stem
+
+
 @pytest.mark.parametrize("files, needle", [
     ([("walk.txt", b"HIERARCHY")], "walk.txt: not a motion file"),
     ([("walk.bvh", b"")], "walk.bvh: the file is empty"),
@@ -115,7 +133,7 @@ def test_a_bad_upload_is_one_line_naming_the_file(server, files, needle):
 
 
 def test_an_upload_over_the_limit_is_refused_before_it_is_read(server):
-    status, body = post_files(server + "api/describe", [("big.bvh", b"0" * (600 << 10))])
+    status, body = post_files(server + "api/describe", [("big.bvh", b"0" * (2200 << 10))])
     assert status == 413 and "--max-upload-mb" in body["error"]
 
 
@@ -175,6 +193,11 @@ def test_search_finds_the_take_of_an_index(tmp_path):
     ("mixamorig:LeftArm", "L"), ("Neck1", "")])
 def test_sides_of_joint_names(name, expected):
     assert side(name) == expected
+
+
+@pytest.mark.parametrize("fps, step", [(12.5, 1), (30, 1), (60, 2), (100, 4), (120, 4)])
+def test_the_page_gets_at_most_view_fps(fps, step):
+    assert view_step(fps) == step and fps / step <= VIEW_FPS
 
 
 def test_serve_options_are_checked_as_one_line(capsys):

@@ -23,7 +23,7 @@ from motionlang.errors import MotionlangError
 from motionlang.kinematics.motion import Motion
 from motionlang.web.options import DEFAULT_MODELS, ServeOptions
 from motionlang.web.uploads import Upload, read_upload
-from motionlang.web.views import VIEW_FPS, body21_view, motion_view
+from motionlang.web.views import body21_view, motion_view, view_step
 
 #: takes and rigs kept for downloads (older ones are forgotten)
 KEEP = 64
@@ -174,7 +174,7 @@ class Studio:
             sentences = ml.describe(motion, self.describer, width)
             segments = ml.timeline(motion, self.describer) \
                 if motion.duration > TIMELINE_FROM_S else []
-            shown = motion[::max(1, int(motion.fps / VIEW_FPS + 1e-9))]
+            shown = motion[::view_step(motion.fps)]
             positions = ml.body21(shown)
         return body21_view(positions, shown.fps, name=motion.name,
                            seconds=round(motion.duration, 2),
@@ -199,7 +199,7 @@ class Studio:
             raise MotionlangError("no index was given (motionlang serve --index FILE)")
         with self.lock:
             motion = self.library.take(Hit(file, start, end, 0.0)).between(start, end)
-            shown = motion[::max(1, int(motion.fps / VIEW_FPS + 1e-9))]
+            shown = motion[::view_step(motion.fps)]
             return body21_view(ml.body21(shown), shown.fps, name=file)
 
     def export(self, take: str, fmt: str, rig: str | None = None) -> tuple[bytes, str, str]:

@@ -46,6 +46,11 @@ def side(name: str) -> str:
     return ""
 
 
+def view_step(fps: float) -> int:
+    """Every how many frames a take at ``fps`` Hz is shown: at most :data:`VIEW_FPS`."""
+    return max(1, int(np.ceil(fps / VIEW_FPS - 1e-9)))
+
+
 def positions_view(positions: np.ndarray, fps: float, names: Sequence[str],
                    parents: Sequence[int], **extra: Any) -> dict[str, Any]:
     """The viewer's JSON of ``positions`` (T, J, 3) metres, Y up, at ``fps`` Hz:
@@ -53,7 +58,7 @@ def positions_view(positions: np.ndarray, fps: float, names: Sequence[str],
     ``frames`` a flat list of T*J*3 numbers; ``floor`` the height of the ground (the lowest
     point any joint reaches); ``extra`` keys are added as they are."""
     p = np.asarray(positions, dtype=np.float64)
-    step = max(1, int(np.floor(fps / VIEW_FPS + 1e-9)))
+    step = view_step(fps)
     p = p[::step][:MAX_VIEW_FRAMES]
     return {"fps": fps / step, "n_frames": int(len(p)), "n_joints": int(p.shape[1]),
             "names": list(names), "parents": [int(q) for q in parents],
