@@ -86,7 +86,8 @@ def register(subparsers) -> None:
                         "beside the nearest neighbour's")
     p.add_argument("--splits", metavar="DIR", help="split files (default: M2L_DIR/splits)")
     p.add_argument("--split", default="test", help="the split to evaluate (of --splits)")
-    p.add_argument("--limit", type=nonneg_int, default=0, help="evaluate at most N motions")
+    p.add_argument("--limit", type=nonneg_int, default=0,
+                   help="evaluate N motions of the split (0: all): a random sample (seed 0)")
     p.add_argument("--max-seconds", type=positive_float, default=30.0,
                    help="drop longer motions (as in training)")
     p.add_argument("-o", "--output", type=output_file, help="report.json (+ report.md beside it)")

@@ -55,7 +55,8 @@ def register(subparsers) -> None:
     p.add_argument("--split", choices=("train", "val", "test"), default="test",
                    help="the Bandai split judged")
     p.add_argument("--limit", type=nonneg_int, default=0,
-                   help="judge at most N takes (0: all)")
+                   help="judge N takes (0: all): a sample drawn with --seed, stratified by "
+                        "the asked action")
     p.add_argument("--seed", type=seed_int, default=0,
                    help="seed of the sentences, the sampling models' draws and the FID halves")
     p.add_argument("--foot-lock", choices=FOOT_LOCK, default="on",

@@ -50,7 +50,9 @@ def register(subparsers) -> None:
     p.add_argument("--seed", type=seed_int, default=0, help="the split seed used in training")
     p.add_argument("--max-seconds", type=positive_float, default=30.0,
                    help="drop longer motions (as in training)")
-    p.add_argument("--limit", type=nonneg_int, default=0, help="evaluate at most N motions")
+    p.add_argument("--limit", type=nonneg_int, default=0,
+                   help="evaluate N motions (0: all): a sample drawn with --seed, stratified "
+                        "by the first ground-truth action where the data has one")
     p.add_argument("--autoencode", action="store_true",
                    help="also score each two-stream model decoding the test motions from their "
                         "own pose embeddings and first poses (a reference for the sentence path)")

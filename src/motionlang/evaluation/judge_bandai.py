@@ -49,7 +49,8 @@ def evaluate_on_bandai(judge: Any, models: Mapping[str, Any], data: str | Path |
     (``bandai:DIR``, or a bare folder read as one).
 
     judge: a ``MotionJudge``, or a judge file, run folder or packaged name.
-    limit: at most this many takes (0: all). seed: the sentences, the sampling models'
+    limit: at most this many takes (0: all), a sample stratified by the sentences'
+        asked content (``evaluation.sampling``) drawn with ``seed``. seed: the sentences, the sampling models'
         draws and the FID halves. foot_lock: :data:`FOOT_LOCK`; ``both`` gives each model
         a row ``NAME`` (locked) and ``NAME (raw)`` from one decoding.
     judge_name: how the title and report name the judge (default: ``judge``'s text).
@@ -59,6 +60,7 @@ def evaluate_on_bandai(judge: Any, models: Mapping[str, Any], data: str | Path |
             a judge file that is not a judge.
     """
     from motionlang.decoding.t2m import FPS
+    from motionlang.evaluation.sampling import stratified_sample
     from motionlang.features.foot_lock import lock_feet
     from motionlang.models.judge.fit import bandai_items, bandai_sentences
     from motionlang.models.registry import load_model
@@ -75,7 +77,9 @@ def evaluate_on_bandai(judge: Any, models: Mapping[str, Any], data: str | Path |
     if not real:
         raise MotionlangError(f"{source.root}: no Bandai takes in the {split} split")
     sentences = bandai_sentences(source.root, split, seed=seed)
-    real, sentences = real[:limit or None], sentences[:limit or None]
+    # a sample stratified by the asked action, never the first takes (sorted by action)
+    keep = stratified_sample(len(real), limit, [s.content for s in sentences], seed=seed)
+    real, sentences = [real[i] for i in keep], [sentences[i] for i in keep]
     generated = {}
     for name, t2m in models.items():
         kw = {} if t2m.deterministic else {"seed": seed}   # its options: how it decodes

@@ -30,7 +30,8 @@ def evaluate_seq2seq(m2l, records: Mapping[str, Any], splits: Mapping[str, Seque
             baseline's search space and the round trip's sentences) and ``split``.
         width: beam width, hypotheses per motion (ordered by ``rank``, "logp" or "mbr";
             ``length_penalty`` as in ``decoding.seq2seq.describe_features``).
-        limit: evaluate at most this many motions of the split (0: all); the baseline
+        limit: evaluate at most this many motions of the split (0: all), a random sample
+            (seed 0, ``evaluation.sampling``); the baseline
             searches the whole training split.
         t2m: a text-to-motion model (``decoding.t2m.TextToMotion``, one that gives ranked
             hypotheses in the M2L's features) whose round trip is also scored, named
@@ -58,11 +59,14 @@ def evaluate_seq2seq(m2l, records: Mapping[str, Any], splits: Mapping[str, Seque
         ids = [i for i in ids if i in records][:n]
         return {i: motion_frames(m2l.features, records[i].load_motion(), 1)[0]
                 for i in progress(ids, desc="encode", unit="motion")}
-    n_eval = len([i for i in splits[split] if i in records][:limit or None])
+    from motionlang.evaluation.sampling import stratified_sample
+    present = [i for i in splits[split] if i in records]
+    chosen = [present[k] for k in stratified_sample(len(present), limit)]   # seed 0
+    n_eval = len(chosen)
     if tsne and n_eval < 4:
         raise MotionlangError(f"--tsne needs at least 4 motions in the {split!r} split, "
                               f"it has {n_eval}")
-    test, train = frames(splits[split], limit or None), frames(splits["train"])
+    test, train = frames(chosen), frames(splits["train"])
     refs = {i: records[i].annotations for i in {**test, **train}}
     report: dict = {"split": split, "length_penalty": length_penalty, "rank": rank,
                     "m2l": ev.evaluate_m2l(m2l, test, refs, width, length_penalty, rank=rank),

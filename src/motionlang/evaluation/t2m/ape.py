@@ -31,5 +31,6 @@ def evaluate_ape(models: dict[str, Any], data: str | Path | Sequence[str | Path]
     if autoencode and not any(m.autoencodes for m in models.values()):
         raise MotionlangError("--autoencode needs a two-stream model among --model")
     dataset = build_twostream_data(data, seed=seed, max_seconds=max_seconds)
-    return compare(models, dataset, split=split, limit=limit or None, autoencode=autoencode,
+    return compare(models, dataset, split=split, limit=limit or None, seed=seed,
+                   autoencode=autoencode,
                    out_dir=out_dir, figures=figures, oracle=oracle, true_start=true_start)

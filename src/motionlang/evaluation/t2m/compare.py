@@ -72,12 +72,20 @@ def _ranges(record, n_frames: int) -> tuple[list[tuple[int, int]], list[str]]:
     return [(a, b) for a, b, _ in kept], [act for _, _, act in kept]
 
 
-def eval_items(data, split: str = "test", limit: int | None = None) -> list[T2MItem]:
-    """The evaluation items of a ``datasets.twostream_items.TwoStreamData`` split."""
+def eval_items(data, split: str = "test", limit: int | None = None, seed: int = 0
+               ) -> list[T2MItem]:
+    """The evaluation items of a ``datasets.twostream_items.TwoStreamData`` split; with
+    ``limit``, a sample of them drawn with ``seed``, stratified by each motion's first
+    ground-truth action where the data has one (``evaluation.sampling``)."""
+    from motionlang.evaluation.sampling import stratified_sample
+    ids = list(data.splits[split])
+    spans = {rid: _ranges(data.records[rid], len(data.sequences[rid])) for rid in ids}
+    labels = [spans[rid][1][0] if spans[rid][1] else None for rid in ids]
     out = []
-    for rid in data.splits[split][:limit or None]:
+    for i in stratified_sample(len(ids), limit, labels, seed=seed):
+        rid = ids[i]
         rec, seq = data.records[rid], data.sequences[rid]
-        ranges, truth = _ranges(rec, len(seq))
+        ranges, truth = spans[rid]
         out.append(T2MItem(rid, _stating_sentence(rec), data.features.decode(seq),
                            ranges, truth))
     return out
@@ -171,8 +179,8 @@ def _l2m_on_subjects(results, name, t2m, data, items, protos) -> None:
 
 def compare(models: dict[str, object], data, *, split: str = "test", limit: int | None = None,
             out_dir: str | Path | None = None, figures: int = 3, baseline: bool = True,
-            autoencode: bool = False, true_start: bool = False, oracle: int = 0
-            ) -> tuple[dict, str]:
+            autoencode: bool = False, true_start: bool = False, oracle: int = 0,
+            seed: int = 0) -> tuple[dict, str]:
     """Evaluate ``{name: model}`` on ``data`` (``TwoStreamData``). A model is a
     text-to-motion model behind ``decoding.t2m.TextToMotion`` and decodes with its own
     sampling options (``text_to_motion(model, options)``; a loaded model as it is: its
@@ -193,7 +201,7 @@ def compare(models: dict[str, object], data, *, split: str = "test", limit: int 
     trajectory figures. Returns (results, table)."""
     from motionlang.decoding.t2m import text_to_motion
     models = {name: text_to_motion(model) for name, model in models.items()}
-    items = eval_items(data, split, limit)
+    items = eval_items(data, split, limit, seed)   # a sample drawn with seed
     protos = fit_prototypes(data)
     if oracle:   # before the models run: a K no test motion meets fails at once
         from motionlang.evaluation.t2m.oracle import oracle_generations, oracle_table

@@ -179,18 +179,20 @@ class GuoRun:
                 seed: int = 0, max_seconds: float | None = 30.0, limit: int = 0,
                 options: GuoOptions | None = None) -> GuoRun:
         """Read ``data`` (anything ``build_evaluator_data`` reads) as the evaluator's rows
-        (its body, its bones), split with ``seed``; the first ``limit`` pairs (0: all).
+        (its body, its bones), split with ``seed``; ``limit`` pairs drawn with it (0: all).
 
         Raises:
             MotionlangError: unreadable data, fewer test pairs than a batch, a FID
                 reference split with fewer than 2 motions.
         """
+        from motionlang.evaluation.sampling import stratified_sample
         from motionlang.evaluation.t2m.yardstick import evaluator_body, test_pairs
         from motionlang.training.evaluator_train import build_evaluator_data
         options = options or GuoOptions()
         built = build_evaluator_data(data, evaluator_body(evaluator), seed=seed,
                                      max_seconds=max_seconds, bones=evaluator.config.bones)
-        pairs = test_pairs(built.items.get(split) or [], seed)[:limit or None]
+        pairs = test_pairs(built.items.get(split) or [], seed)
+        pairs = [pairs[i] for i in stratified_sample(len(pairs), limit, seed=seed)]
         if len(pairs) < options.rp_batch:
             raise MotionlangError(f"{data}: {len(pairs)} {split} motions, R-precision needs "
                                   f"at least GuoOptions.rp_batch {options.rp_batch}")
