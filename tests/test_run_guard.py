@@ -124,6 +124,16 @@ def test_a_busy_run_folder_refuses_a_second_process(corpus, tmp_path, capsys):
     assert (out / "model.pt").is_file() and not (out / LOCK_NAME).exists()
 
 
+def test_a_run_in_progress_is_named_busy_not_just_non_empty(corpus, run, capsys):
+    from motionlang.utils.atomic import _host
+    (run / LOCK_NAME).write_text(json.dumps({"pid": os.getppid(), "host": _host()}))
+    before = digests(run)
+    for extra in ([], ["--resume", "--epochs", "2"], ["--overwrite"]):
+        assert train(corpus, run, *extra) == 2
+        one_line(capsys, f"in use by process {os.getppid()}")
+    assert digests(run) == before
+
+
 def test_another_hosts_lock_is_never_guessed_stale(tmp_path):
     (tmp_path / LOCK_NAME).write_text(json.dumps({"pid": 1, "host": "elsewhere"}))
     with pytest.raises(MotionlangError, match="process 1 on elsewhere"), folder_lock(tmp_path):

@@ -154,7 +154,8 @@ def run_recipe(kind: str, sources: Sequence, out: Path, model_cfg: dict, train_c
 
     if not lead_process():
         return go()
-    check_run_folder(out, resume=resume, overwrite=overwrite)
+    if out.exists() and not out.is_dir():
+        raise MotionlangError(f"--out {out}: a file, not a folder")
     data_options = (dataclasses.asdict(data_cfg) if dataclasses.is_dataclass(data_cfg)
                     and not isinstance(data_cfg, type) else {})
     identity = run_identity(kind, list(sources), getattr(train_cfg, "seed", None),
@@ -162,7 +163,8 @@ def run_recipe(kind: str, sources: Sequence, out: Path, model_cfg: dict, train_c
     if resume and recipe.trainer and not any(
             p.is_file() for p in (out / "last.pt", *out.glob("*/last.pt"))):
         raise MotionlangError(f"--resume: no checkpoint {out / 'last.pt'} to continue from")
-    with folder_lock(out):
+    with folder_lock(out):   # a busy folder is named as such before its content is
+        check_run_folder(out, resume=resume, overwrite=overwrite)
         if resume and recipe.trainer:
             check_identity(out, identity, recipe.resume_may_change)
         elif overwrite:
