@@ -84,11 +84,22 @@ def test_a_rig_takes_the_generated_motion_and_its_download(server, tmp_path):
     status, view = post_json(server + "api/generate", {"text": "a person waves",
                                                        "rig": got["id"]})
     assert status == 200 and view["n_joints"] == joints and view["rig"] == got["id"]
+    names = [j.name for j in read_motion(rig).skeleton.joints]
     status, bvh = call(server + f"api/export/{view['id']}.bvh?rig={got['id']}")
     out = tmp_path / "out.bvh"
     out.write_bytes(bvh)
-    assert [j.name for j in read_motion(out).skeleton.joints] == \
-        [j.name for j in read_motion(rig).skeleton.joints]
+    assert [j.name for j in read_motion(out).skeleton.joints] == names
+    from motionlang.formats.gltf_read import read_gltf_animation
+    status, glb = call(server + f"api/export/{view['id']}.glb?rig={got['id']}")
+    (tmp_path / "out.glb").write_bytes(glb)
+    anim = read_gltf_animation(tmp_path / "out.glb")
+    assert set(names) <= set(anim.names) and anim.positions.shape[0] == view["n_frames"]
+
+
+def test_an_mp4_download_is_a_video(server):
+    _, view = post_json(server + "api/generate", {"text": "a person bows", "seconds": 1})
+    status, mp4 = call(server + f"api/export/{view['id']}.mp4")
+    assert status == 200 and mp4[4:8] == b"ftyp"   # an ISO media file
 
 
 def test_an_uploaded_bvh_is_described(server, tmp_path):
@@ -198,6 +209,14 @@ def test_sides_of_joint_names(name, expected):
 @pytest.mark.parametrize("fps, step", [(12.5, 1), (30, 1), (60, 2), (100, 4), (120, 4)])
 def test_the_page_gets_at_most_view_fps(fps, step):
     assert view_step(fps) == step and fps / step <= VIEW_FPS
+
+
+@pytest.mark.parametrize("host, local", [("127.0.0.1", True), ("127.0.0.2", True),
+                                         ("::1", True), ("localhost", True),
+                                         ("0.0.0.0", False), ("192.168.1.20", False),
+                                         ("example.org", False)])
+def test_only_loopback_hosts_count_as_local(host, local):
+    assert ServeOptions(host=host).local is local
 
 
 def test_serve_options_are_checked_as_one_line(capsys):

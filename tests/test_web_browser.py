@@ -73,11 +73,12 @@ def test_the_page_generates_plays_describes_and_downloads(page, tmp_path):
              what="the generated motion")
     text, error = status_of(browser, "gen-status")
     assert not error and "75 frames" in text, text
+    wait_for(lambda: browser.execute_script("return window.mlTimings.length") == 1,
+             what="the first frame drawn")
     first = canvas_pixels(browser)
     browser.save_screenshot(str(shots / "1-generated.png"))
     assert colour_count(first, BLUE) > 150 and colour_count(first, ORANGE) > 150, \
         "no figure with left and right limbs on the canvas"
-    assert browser.execute_script("return window.mlTimings.length") == 1
 
     # it moves: pixels differ between frames
     later = wait_for(lambda: changed(browser, first), timeout=5, what="the figure to move")[0]

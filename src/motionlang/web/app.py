@@ -154,6 +154,9 @@ def serve(options: ServeOptions, *, ready=None) -> None:
     """Load the models, then serve until interrupted; ``ready(url)`` is called once the
     server listens (the CLI prints the address)."""
     import uvicorn
+    if not options.local:
+        log.warning("motionlang serve: listening on %s: anyone who reaches this machine "
+                    "can use the app (it has no login)", options.host)
     studio = Studio(options)
     config = uvicorn.Config(create_app(studio), host=options.host, port=options.port,
                             log_level="warning", access_log=False)

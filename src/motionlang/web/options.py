@@ -4,6 +4,7 @@ Each field with a ``help`` is an option (``cli.config_options``); the checks are
 """
 from __future__ import annotations
 
+import ipaddress
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -59,6 +60,14 @@ class ServeOptions:
             raise MotionlangError(f"ServeOptions.port must be in 0..65535, got {self.port}")
         if not self.host.strip():
             raise MotionlangError("ServeOptions.host is empty")
+
+    @property
+    def local(self) -> bool:
+        """Whether ``host`` is a loopback address (only this machine can connect)."""
+        try:
+            return ipaddress.ip_address(self.host).is_loopback
+        except ValueError:   # a host name
+            return self.host == "localhost"
 
     @property
     def max_upload_bytes(self) -> int:

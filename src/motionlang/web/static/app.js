@@ -69,7 +69,7 @@ async function generate() {
   const body = {
     text: $("text").value, model: $("model").value || null,
     seconds: seconds === "" ? null : Number(seconds), seed: Number($("seed").value || 0),
-    method: $("method").value || null, rig: state.rig,
+    method: $("method").disabled ? null : $("method").value || null, rig: state.rig,
   };
   status("gen-status", "generating...");
   $("generate").disabled = true;
@@ -198,8 +198,18 @@ async function start() {
     const opt = document.createElement("option");
     opt.value = m.name;
     opt.textContent = m.name;
+    opt.dataset.deterministic = m.deterministic ? "1" : "";
     $("model").appendChild(opt);
   }
+  // a deterministic model draws nothing: its decoding and seed would change nothing
+  const fixed = () => {
+    const opt = $("model").selectedOptions[0];
+    const off = Boolean(opt && opt.dataset.deterministic);
+    $("method").disabled = off;
+    $("seed").disabled = off;
+  };
+  $("model").onchange = fixed;
+  fixed();
   for (const m of info.methods) {
     const opt = document.createElement("option");
     opt.value = m;
