@@ -28,6 +28,7 @@ from motionlang.datasets.cache import cache_dir
 from motionlang.datasets.download import safe_extract_tar, sha256_file
 from motionlang.datasets.sources import KINDS
 from motionlang.errors import DatasetError
+from motionlang.utils.paths import check_inside
 
 LICENSE = KINDS["bandai"].notice   # the attribution line, kept with the source registry
 ARCHIVE = re.compile(r"^(Bandai-Namco-Research-Motiondataset-\d+)\.tar(\.xz|\.gz|\.bz2)?$")
@@ -162,7 +163,9 @@ def load_bandai(source: str | Path, split: str | None = None) -> list[BandaiReco
     records = []
     for folder in bandai_folders(source):
         contents, styles = _labels(folder, "content_label.txt"), _labels(folder, "style_label.txt")
-        for path in sorted((folder / "data").glob("*.bvh")):
+        takes = sorted((folder / "data").glob("*.bvh"))
+        check_inside(takes, folder)
+        for path in takes:
             m = TAKE.match(path.stem)
             if not m:
                 continue

@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING
 
 from motionlang.errors import DatasetError, MotionlangError
 from motionlang.utils import limits
+from motionlang.utils.paths import leads_outside
 from motionlang.utils.sidecar import check_name, check_text, parse_json, read_text
 
 if TYPE_CHECKING:
@@ -180,7 +181,9 @@ def load_custom(folder: str | Path, captions: str | Path | None = None, *,
     records: dict[str, CustomRecord] = {}  # by path in the folder, not by resolved path
     real = folder.resolve()
     for p in sorted(folder.rglob("*")):
-        if p.suffix.lower() in MOTION_EXTENSIONS and p.is_file() and _stays_inside(p, real):
+        # a file link out of the folder is left out like a folder link (never descended
+        # into), so a caption naming it is an error, not a read of a file elsewhere
+        if p.suffix.lower() in MOTION_EXTENSIONS and p.is_file() and not leads_outside(p, real):
             rel = p.relative_to(folder)
             if p.suffix.lower() == ".xml" and not p.name.endswith("_mmm.xml"):
                 continue  # only MMM motions; other XML (model files) is not a motion
@@ -196,13 +199,6 @@ def load_custom(folder: str | Path, captions: str | Path | None = None, *,
         rec.annotations.append(text)
         rec.meta["captions_lines"].append(line)
     return sorted(records.values(), key=lambda r: r.id)
-
-
-def _stays_inside(path: Path, real_folder: Path) -> bool:
-    """Whether ``path`` (found in the folder) is no link that leads out of it: a file link
-    to elsewhere is left out as a folder link is (never descended into), so a caption naming
-    it is an error, not a read of a file outside the dataset."""
-    return not path.is_symlink() or real_folder in path.resolve().parents
 
 
 def _why_unknown(folder: Path, rel: str) -> str:

@@ -34,6 +34,7 @@ import numpy as np
 from motionlang.errors import DatasetError, MotionlangError
 from motionlang.features.h3d_vectors import H3D_BODIES, H3DBody, vectors_to_joints
 from motionlang.utils.limits import check, check_file, check_motion
+from motionlang.utils.paths import check_inside
 
 VECS, JOINTS, TEXTS = "new_joint_vecs", "new_joints", "texts"
 SPLITS = ("train", "val", "test")
@@ -210,9 +211,9 @@ def _text(path: Path) -> str:
 
 
 def _ids(root: Path) -> list[str]:
-    found = {p.stem for d in (VECS, JOINTS) if (root / d).is_dir()
-             for p in (root / d).glob("*.npy")}
-    return sorted(found)
+    files = [p for d in (VECS, JOINTS) if (root / d).is_dir() for p in (root / d).glob("*.npy")]
+    check_inside(files, root)
+    return sorted({p.stem for p in files})
 
 
 def _splits(root: Path) -> dict[str, str]:

@@ -23,6 +23,7 @@ from urllib.parse import urlparse
 
 from motionlang.datasets.download import download_file, safe_extract
 from motionlang.errors import DatasetError
+from motionlang.utils.paths import check_inside
 from motionlang.utils.progress import progress
 
 if TYPE_CHECKING:
@@ -158,7 +159,9 @@ def load_kitml(root: str | Path, max_seconds: float | None = 30.0, *,
             empty annotation list when ``require_annotations``.
     """
     folder = find_kitml_root(root)
-    ids = sorted(m.group(1) for p in folder.iterdir() if (m := _ID.match(p.name)))
+    listed = [(p, m) for p in folder.iterdir() if (m := _ID.match(p.name))]
+    check_inside((p for p, _ in listed), folder)
+    ids = sorted(m.group(1) for _, m in listed)
     records = []
     for mid in progress(ids, desc="KIT-ML", unit="motion"):
         rec = read_record(folder, mid)
