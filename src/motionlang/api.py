@@ -14,13 +14,10 @@
     (128,)
 
 Any motion file whose rig maps onto the 21-joint body works in place of ``walk``
-(``ml.describe("walk.bvh")``; ``joint_map=`` for rigs no built-in map fits), and
-``ml.generate(text, rig="my_character.bvh")`` returns the motion on your own skeleton.
-(``render`` draws a motion; ``motionlang.rendering`` is the drawing package.)
-Packaged models are named ``"m2l"`` and ``"l2m"`` (``motionlang.models.registry.PACKAGED``,
-each with a model card); anything else is a checkpoint file or a training run folder.
-Generated motions come back as :class:`Motion` objects: on the 21-joint body (joint angles
-fitted to the generated positions) or, with ``rig=``, retargeted onto the user's skeleton.
+(``joint_map=`` for rigs no built-in map fits). Generated motions are :class:`Motion`
+objects on the 21-joint body (joint angles fitted to the positions) or, with
+``rig="my_character.bvh"``, on your own skeleton. Models are packaged names
+(``models.registry.PACKAGED``, each with a card), checkpoint files or run folders.
 """
 from __future__ import annotations
 
@@ -183,8 +180,8 @@ def generate_hypotheses(text: str, model: Any = None, *, width: int | None = Non
                         max_frames: int | None = None, min_frames: int = 5,
                         temperature: float | None = None, length_norm: bool | None = None,
                         rerank: Any = None, start_from: Motion | str | Path | None = None,
-                        joint_map: dict | str | Path | None = None,
-                        foot_lock: bool = True) -> tuple[list[tuple[Any, float]], float]:
+                        joint_map: dict | str | Path | None = None, foot_lock: bool = True,
+                        keep: Any = None) -> tuple[list[tuple[Any, float]], float]:
     """Every hypothesis ``motionlang generate`` makes for ``text``, best first, and their
     frame rate: ``([(result, score), ...], fps)``; a result is a Motion (joint-angle
     models) or global 21-joint positions (T, 21, 3) metres; the score is the log likelihood
@@ -199,7 +196,8 @@ def generate_hypotheses(text: str, model: Any = None, *, width: int | None = Non
     mixture when sampling. length_norm: rank by log likelihood per frame. rerank: an M2L
     (loaded, a name or a path) ranking the ``width`` motions. start_from: a Motion or file
     whose first pose begins every motion (``joint_map``: its map, if no built-in map fits).
-    foot_lock: move the body with its planted feet and hold them (position models).
+    foot_lock: move the body with its planted feet and hold them (position models). keep:
+    ``"FILE:0-2s,8-10s"`` or ``(motion, [(t0, t1), ...])``: in-betweening of those seconds.
 
     Raises:
         MotionlangError: options that contradict each other or the model, checked before
@@ -246,6 +244,9 @@ def generate_hypotheses(text: str, model: Any = None, *, width: int | None = Non
         warnings.warn(f"the model does not know {', '.join(repr(w) for w in unknown)}; each "
                       f"is read as an unknown word (its vocabulary: {len(vocab or ())} words)",
                       UserWarning, stacklevel=2)
+    if keep is not None:   # the kept seconds of a motion, the rest from the text
+        from motionlang.decoding.inbetween import fill_between
+        return fill_between(t2m, text, keep, lambda m: _motion(m, joint_map), seed=seed), t2m.fps
     if start_from is not None:
         kw["first_frame"] = first_frame(t2m, start_from, joint_map)
     hyps = t2m.hypotheses(text, width=width, method=method, seed=seed, max_frames=max_frames,

@@ -87,7 +87,7 @@ def cmd_generate(args: argparse.Namespace) -> int:
             max_frames=args.max_frames, min_frames=args.min_frames,
             length_norm=args.length_norm, temperature=args.temperature, rerank=args.rerank,
             start_from=args.start_from, joint_map=args.joint_map,
-            foot_lock=not args.no_foot_lock)
+            foot_lock=not args.no_foot_lock, keep=args.keep)
     for w in caught:   # what it read as what is a note, not a warning
         note = "" if issubclass(w.category, WordsRead) else "warning: "
         print(f"motionlang generate: {note}{w.message}", file=sys.stderr)
@@ -166,22 +166,22 @@ def register(subparsers) -> None:
     p.add_argument("--rerank", metavar="M2L", help="rank the W motions by this M2L model's "
                    "log P(text | motion) instead of their own likelihood (L2M, sample or beam)")
     p.add_argument("--no-foot-lock", action="store_true",
-                   help="keep the model's frames as decoded (default: the body moves "
-                        "with the feet that are down instead of sliding over them, those "
-                        "feet are held in place where the leg can reach and the knees "
-                        "follow, and a foot under the floor is raised onto it; "
-                        "joint-position models such as the packaged ones)")
+                   help="keep the model's frames as decoded (default: the body moves with "
+                        "the feet that are down instead of sliding over them, those feet are "
+                        "held in place where the leg can reach and the knees follow, and a "
+                        "foot under the floor is raised onto it; joint-position models)")
     p.add_argument("--all", action="store_true", help="write every hypothesis (OUT_2, ...)")
     p.add_argument("--rig", metavar="FILE.bvh", default=None,
-                   help="write the .bvh / .glb on this rig (a BVH file of yours: its "
-                        "skeleton, joint names, units, rest pose and channel layout), "
-                        "retargeted from "
-                        "the 21-joint body (default: the 21-joint body itself). Needs joints "
-                        "that turn about 3 axes, as BVH rigs have; not ASF or MMM hinges")
+                   help="write the .bvh / .glb on this rig (a BVH file of yours: its skeleton, "
+                        "joint names, units, rest pose and channel layout), retargeted from the "
+                        "21-joint body (default: the 21-joint body itself). Needs joints that "
+                        "turn about 3 axes, as BVH rigs have; not ASF or MMM hinges")
     p.add_argument("--rig-joint-map", metavar="MAP.json", default=None,
                    help="how the --rig maps onto the 21-joint body, if no built-in map fits")
     p.add_argument("--start-from", metavar="FILE", default=None,
                    help="begin every motion with the first pose of this motion file (any "
                         "rig that maps onto the 21-joint body; L2M models)")
-    add_joint_map_arg(p)   # for --start-from
+    p.add_argument("--keep", metavar="FILE:RANGES", help="keep these seconds of a motion file "
+                   "(walk.bvh:0-2s,8-10s; 8- to its end), generate the rest (masked models)")
+    add_joint_map_arg(p)   # for --start-from and --keep
     p.set_defaults(func=cmd_generate)
