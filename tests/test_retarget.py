@@ -251,3 +251,21 @@ def test_bandai_round_trip(tmp_path):
     travel = _wave_travel(rig, W, tmp_path / "wave.bvh")
     assert KIT21_NAMES[int(np.argmax(travel))] == "RW"
     assert set(rig.skeleton.names) <= set(read_bvh(tmp_path / "wave.bvh").skeleton.names)
+
+
+@pytest.mark.parametrize("name", ["cmu-bvh", "cmu-bvh-max"])
+def test_a_long_neck_link_still_points_the_head_up(name, tmp_path):
+    """CMU BVH rigs put Neck at the shoulders and reach the head through Neck1: their link is
+    longer than the body's whole BLN -> BUN segment, so aiming from the rig's offset alone
+    started beyond the head and hung it upside down. The head now takes the body's
+    direction."""
+    from helpers.mocap import synthetic_mmm
+    from helpers.rigs import RIGS, write
+    src = synthetic_mmm(T=40)                      # MMM proportions: a short neck
+    rig = read_motion(write(RIGS[name], tmp_path, T=4))
+    out = retarget(positions21(src), src.fps, rig, weights=kit21_weights(rig.skeleton)[1])
+    head = out.skeleton.names.index("Head")
+    P, p = out.positions(), positions21(src)
+    bone = P[:, head] - P[:, out.skeleton.joints[head].parent]
+    assert (bone[:, 1] > 0).all(), "the head hangs below its parent"
+    assert np.degrees(_angle(bone, p[:, K["BUN"]] - p[:, K["BLN"]])).max() < 15

@@ -14,7 +14,10 @@ bones all lie along local X).
   template frame, with those in-between joints at their template rotation. They are aimed
   at from where the body has the joint (the rig's joint moved by its offset from the
   body's nearest mapped joint), so bones take the body's directions and keep the rig's
-  lengths instead of bending to reach the body's absolute positions.
+  lengths instead of bending to reach the body's absolute positions. An unmapped joint's
+  offset is shortened where the body's segment to its targets is shorter than the rig's,
+  so that a long in-between link (CMU BVH's Neck -> Neck1 -> Head) never aims from beyond
+  its target.
 * Targets with no free joint in between ("direct") are matched first: Kabsch on them when
   they span two directions; else the smallest swing of the template-relative orientation
   onto the longest one, then the twist about it that best fits the other targets. The
@@ -166,6 +169,21 @@ def _fit(rest: np.ndarray, target: np.ndarray, direct: np.ndarray, base: np.ndar
     return _keep_twist(G, has & loose & ~ok, base, L, rest[i], target[:, i])
 
 
+def _unmapped_origin(origin: np.ndarray, P: np.ndarray, start: np.ndarray,
+                     rig_reach: np.ndarray, ks: np.ndarray) -> np.ndarray:
+    """Where an unmapped joint aims from (T, 3): ``origin``, the body's point ``start``
+    (T, 3) of its nearest mapped ancestor plus the rig's offset to the joint, drawn towards
+    ``start`` where the body's segments from ``start`` to the joint's targets ``ks`` are
+    shorter than the rig's (``rig_reach`` (n, 3), template). Without that, a rig whose
+    in-between link is longer than the body's whole segment (CMU BVH: Neck -> Neck1 ->
+    Head against the body's short BLN -> BUN) aims from beyond its target and points the
+    bone backwards. A body as long as the rig, its own motion included, keeps ``origin``."""
+    body = np.linalg.norm(P[:, ks] - start[:, None], axis=-1)          # (T, n)
+    rig = np.linalg.norm(rig_reach, axis=-1)                             # (n,)
+    ratio = np.min(body / np.maximum(rig, 1e-9), axis=1, initial=1.0)   # (T,)
+    return start + np.minimum(ratio, 1.0)[:, None] * (origin - start)
+
+
 def _solve(P: np.ndarray, W: np.ndarray, sk: Skeleton, plan: list, Gt: np.ndarray,
            Xt: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
     """World rotations (T, J, 3, 3), positions (T, J, 3) in the source frame, and the body
@@ -177,6 +195,9 @@ def _solve(P: np.ndarray, W: np.ndarray, sk: Skeleton, plan: list, Gt: np.ndarra
         if np.count_nonzero(row) == 1:
             at.setdefault(int(np.flatnonzero(row)[0]), k)
     eye, anchor = np.broadcast_to(np.eye(3), (T, 3, 3)), 0
+    above = np.full(J, -1)                                    # nearest mapped ancestor
+    for j, jt in enumerate(sk.joints[1:], start=1):
+        above[j] = jt.parent if jt.parent in at else above[jt.parent]
     for j, jt in enumerate(sk.joints):
         base = G[:, jt.parent] if j else eye
         L = Gt[jt.parent].T @ Gt[j] if j else Gt[0]          # template local rotation
@@ -192,7 +213,11 @@ def _solve(P: np.ndarray, W: np.ndarray, sk: Skeleton, plan: list, Gt: np.ndarra
         ks, direct = plan[j]
         rest = (W[ks] @ Xt - Xt[j]) @ Gt[j]                   # in the joint's frame
         if j:
-            G[:, j] = _fit(rest, P[:, ks] - (X[:, j] - E[:, j])[:, None], direct, base, L)
+            origin = X[:, j] - E[:, j]
+            if j not in at and above[j] >= 0:
+                origin = _unmapped_origin(origin, P, P[:, at[int(above[j])]],
+                                          W[ks] @ Xt - Xt[above[j]], ks)
+            G[:, j] = _fit(rest, P[:, ks] - origin[:, None], direct, base, L)
             continue
         i0 = int(np.argmax(ks == 0)) if 0 in ks else 0         # body point 0: the root
         keep = np.arange(len(ks)) != i0
