@@ -18,6 +18,7 @@ def test_named_gait_and_verbs():
     assert named_gait("a person waves") is None
     assert has_verb("a stage actor sprints forward")
     assert has_verb("a person takes a bow")
+    assert has_verb("a person shows the way") and has_verb("a man beckons")
     assert not has_verb("delinquent delinquent")
     assert not has_verb("both both hands")
 
@@ -92,3 +93,15 @@ def test_packaged_m2l_names_a_real_jog_and_a_real_walk(shared_data):
     assert named_gait(ml.describe(jog.motion, m2l, 3)[0][0]) == "run"
     assert named_gait(ml.describe(walk.motion, m2l, 3)[0][0]) == "walk"
     assert ml.describe(shared_data / "cmu49" / "49_20.amc", m2l, 3)[0][0] == UNFAMILIAR
+
+
+def test_raw_gives_the_models_own_beam(shared_data, capsys):
+    import motionlang as ml
+    from motionlang.cli.main import main
+    path = shared_data / "cmu49" / "49_20.amc"
+    raw = ml.describe(path, "m2l", 2, raw=True)
+    assert raw[0][0] != UNFAMILIAR and len(raw) == 2
+    assert main(["describe", str(path), "-w", "2", "--raw"]) == 0
+    assert UNFAMILIAR not in capsys.readouterr().out
+    assert main(["describe", str(path), "-w", "2"]) == 0
+    assert UNFAMILIAR in capsys.readouterr().out

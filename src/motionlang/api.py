@@ -131,14 +131,16 @@ def first_frame(model, start: Motion | str | Path,
 
 def describe(motion: Motion | str | Path, model: Any = None, width: int = 5, *,
              joint_map: dict | str | Path | None = None,
-             length_penalty: float = 0.0, rank: str = "mbr") -> list[tuple[str, float]]:
+             length_penalty: float = 0.0, rank: str = "mbr",
+             raw: bool = False) -> list[tuple[str, float]]:
     """Sentences for a motion (a Motion or a file), best first: ``[(text, log P), ...]``.
 
     model: a loaded model whose family describes motion (``Family.describes``: the M2L), a
     packaged name, a checkpoint path, or None for the packaged M2L. width: beam width
     and number of sentences (as ``motionlang describe -w``). rank: "mbr" (as ``describe``)
     puts first the sentence the beam agrees on most (``decoding.mbr``), "logp" the
-    likeliest (the paper's)."""
+    likeliest (the paper's). raw: the beam as it is (``describe --raw``), without the check
+    against the motion's gait and the "unfamiliar movement" line (``decoding.grounded``)."""
     from motionlang.models.registry import describer, kinds_with
     if width < 1:
         raise MotionlangError(f"width must be >= 1, got {width}")
@@ -148,7 +150,7 @@ def describe(motion: Motion | str | Path, model: Any = None, width: int = 5, *,
     if model is None or isinstance(model, (str, Path)):
         model = load_model(model or "m2l", kind=kinds_with("describes"))
     return describer(model)(model, _motion(motion, joint_map), width=width,
-                            length_penalty=length_penalty, rank=rank)
+                            length_penalty=length_penalty, rank=rank, grounded=not raw)
 
 
 def describe_many(paths: Any, model: Any = None, *, joint_map: dict | str | Path | None = None,

@@ -64,6 +64,9 @@ class DescribeOptions:
                                metavar="FILE")
     workers: int = _option(1, "processes describing files, each loading the model once "
                            "(at most the CPU count)", metavar="N")
+    raw: bool = _option(False, "the model's sentences as its beam ranks them: not checked "
+                        "against the gait the feet show (walk, run, jump), verbless ones "
+                        "kept, no 'unfamiliar movement' line")
 
     def __post_init__(self) -> None:
         check_numbers("DescribeOptions", self, positive_ints=("workers", "width"),
@@ -162,7 +165,8 @@ class Describer:
             return self.bank.nearest(self.model.motion(motion), o.width)
         from motionlang.models.registry import describer
         return describer(self.model)(self.model, motion, width=o.width,
-                                     length_penalty=o.length_penalty, rank=o.rank)
+                                     length_penalty=o.length_penalty, rank=o.rank,
+                                     grounded=not o.raw)
 
     def timeline(self, motion) -> list[Segment]:
         """The take as segments (``library.timeline``) of its windows' first sentences."""
