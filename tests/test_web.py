@@ -84,6 +84,10 @@ def test_a_rig_takes_the_generated_motion_and_its_download(server, tmp_path):
     status, view = post_json(server + "api/generate", {"text": "a person waves",
                                                        "rig": got["id"]})
     assert status == 200 and view["n_joints"] == joints and view["rig"] == got["id"]
+    frames = np.array(view["frames"]).reshape(view["n_frames"], joints, 3)
+    head = view["names"].index("Head")
+    up = frames[:, head, 1] - frames[:, view["parents"][head], 1]
+    assert (up > 0).all(), "the rig's head hangs below its neck"
     names = [j.name for j in read_motion(rig).skeleton.joints]
     status, bvh = call(server + f"api/export/{view['id']}.bvh?rig={got['id']}")
     out = tmp_path / "out.bvh"
