@@ -38,9 +38,12 @@ from fuzzing.seeds import (  # noqa: E402
     pack_h3d,
     write_mit,
 )
+from fuzzing.sidecars import SIDECARS, sidecar_seeds  # noqa: E402
 
 pytest.importorskip("resource")  # the sandbox needs Unix
-MUTATED, CRAFTED = 150, 60  # inputs per format: 210, a couple of minutes in all
+MUTATED, CRAFTED = 150, 60  # inputs per motion format: 210, a couple of minutes in all
+SIDE_MUTATED, SIDE_CRAFTED = 20, 10  # per sidecar format (captions, models, indexes, GLB)
+MOTION_FORMATS = tuple(f for f in FORMATS if f not in SIDECARS)
 FUZZ = dict(derandomize=True, database=None, deadline=None, print_blob=True,
             suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 SEEDS = {fmt: seeds(fmt, SHARED if SHARED.is_dir() else None) for fmt in FORMATS}
@@ -60,7 +63,7 @@ def _chooser(data):
     return lambda n: data.draw(st.integers(0, n - 1))
 
 
-@pytest.mark.parametrize("fmt", FORMATS)
+@pytest.mark.parametrize("fmt", MOTION_FORMATS)
 @settings(max_examples=MUTATED, **FUZZ)
 @given(data=st.data())
 def test_mutated_files(sandbox, fmt, data):
@@ -69,10 +72,26 @@ def test_mutated_files(sandbox, fmt, data):
     _ok(sandbox.run(fmt, mutate(base, choose, fmt), skeleton))
 
 
-@pytest.mark.parametrize("fmt", FORMATS)
+@pytest.mark.parametrize("fmt", MOTION_FORMATS)
 @settings(max_examples=CRAFTED, **FUZZ)
 @given(data=st.data())
 def test_crafted_files(sandbox, fmt, data):
+    _ok(sandbox.run(fmt, *crafted(fmt, _chooser(data))))
+
+
+@pytest.mark.parametrize("fmt", SIDECARS)
+@settings(max_examples=SIDE_MUTATED, **FUZZ)
+@given(data=st.data())
+def test_mutated_sidecars(sandbox, fmt, data):
+    choose = _chooser(data)
+    base, _ = SEEDS[fmt][choose(len(SEEDS[fmt]))]
+    _ok(sandbox.run(fmt, mutate(base, choose, fmt)))
+
+
+@pytest.mark.parametrize("fmt", SIDECARS)
+@settings(max_examples=SIDE_CRAFTED, **FUZZ)
+@given(data=st.data())
+def test_crafted_sidecars(sandbox, fmt, data):
     _ok(sandbox.run(fmt, *crafted(fmt, _chooser(data))))
 
 
@@ -135,7 +154,34 @@ def _npy_unterminated() -> bytes:
     return head + b" " * (end - len(head)) + good[end:]
 
 
+def _zip_member(fmt: str, member_suffix: str, body: bytes) -> bytes:
+    """A seed of ``fmt`` (an npz-based file) with the member ending ``member_suffix``
+    replaced by ``body`` (its CRC recomputed, so that the content checks are reached)."""
+    import zipfile
+    src = zipfile.ZipFile(io.BytesIO(sidecar_seeds(fmt)[0]))
+    out = io.BytesIO()
+    with zipfile.ZipFile(out, "w") as dst:
+        for info in src.infolist():
+            data = body if info.filename.endswith(member_suffix) else src.read(info)
+            dst.writestr(info, data)
+    return out.getvalue()
+
+
+def _glb_zero_quaternion() -> bytes:
+    import struct
+    data = bytearray(sidecar_seeds("glb")[0])
+    one = struct.pack("<f", 1.0)   # every w = 1 of a unit rotation becomes 0
+    return bytes(data).replace(b"\x00" * 12 + one, b"\x00" * 16)
+
+
 FINDINGS = [
+    ("captions", lambda: b"file,text\na.bvh,walks\n", None, "VALID"),   # read(2 GiB) once
+    ("npz", lambda: _zip_member("npz", "W.npy", b"not an npy member"), None, "not an array"),
+    ("npz", lambda: _zip_member("npz", "W.npy", _npy_unterminated()), None, "a damaged"),
+    ("index", lambda: _zip_member("index", "vectors.npy", b"raw"), None, "is not an array"),
+    ("index", lambda: _zip_member("index", "spans.npy", _npy_unterminated()), None,
+     "an array does not read"),
+    ("glb", _glb_zero_quaternion, None, "no unit quaternion"),
     ("mit", _mat_double_tag_as_8, None, "number data of element type 8"),
     ("mit", lambda: _mit_with("parent", "text"), None, "parent must be numbers"),
     ("mit", lambda: _mit_with("or", "abc"), None, "or must be numbers"),
@@ -173,11 +219,16 @@ FINDINGS = [
                          ids=[f"{f[0]}-{f[3][:20]}" for f in FINDINGS])
 def test_findings_are_clean_errors(sandbox, fmt, make, skeleton, words):
     out = sandbox.run(fmt, make(), skeleton)
-    assert out.kind == "error" and words in out.detail, out
+    if words == "VALID":
+        assert out.kind == "valid", out
+    else:
+        assert out.kind == "error" and words in out.detail, out
 
 
 def test_h3d_split_files_naming_missing_ids_and_paths(sandbox):
-    data = _h3d_with("train.txt", b"../x\n/etc/passwd\nmissing\n000001\n" + b"a" * 100_000)
+    # every motion listed (one left out is an error naming it), the rest odd names
+    data = _h3d_with("train.txt", b"../x\n/etc/passwd\nmissing\n000001\nM000001\n"
+                     + b"a" * 100_000)
     assert sandbox.run("h3d", data).kind == "valid"
 
 

@@ -30,8 +30,9 @@ import numpy as np
 from .edits import SPECIAL, Choose, edit, edit_dtd, edit_encoding, pick
 from .h3d_inputs import crafted_h3d, mutate_h3d
 from .seeds import TINY_ASF, mit_sequence, mit_tree, write_mit
+from .sidecars import SIDECARS, crafted_sidecar, mutate_sidecar
 
-FORMATS = ("mmm", "asf", "amc", "bvh", "mit", "h3d")
+FORMATS = ("mmm", "asf", "amc", "bvh", "mit", "h3d") + SIDECARS
 
 
 # ------------------------------------------------------------------------ mutations
@@ -40,6 +41,8 @@ def mutate(data: bytes, choose: Choose, fmt: str = "") -> bytes:
     ``fmt="h3d"``: edits of the files of the folder it packs)."""
     if fmt == "h3d":
         return mutate_h3d(data, choose)
+    if fmt in SIDECARS:
+        return mutate_sidecar(data, choose, fmt)
     ops = ["truncate", "flip", "delete", "duplicate", "swap", "number", "number", "token",
            "garbage", "repeat"] + (["encoding", "dtd", "dtd"] if fmt == "mmm" else []) \
         + (["mat-tag"] * 4 if fmt == "mit" else [])
@@ -172,6 +175,8 @@ def _mit(choose: Choose):
 
 def crafted(fmt: str, choose: Choose) -> tuple[bytes, bytes | None]:
     """A file crafted to stress the ``fmt`` reader, and the ASF an AMC is read with."""
+    if fmt in SIDECARS:
+        return crafted_sidecar(fmt, choose), None
     return {"asf": _asf, "amc": _amc, "bvh": _bvh, "mmm": _mmm, "mit": _mit,
             "h3d": crafted_h3d}[fmt](choose)
 

@@ -291,6 +291,9 @@ def _real(fmt: str, shared: Path) -> list[tuple[bytes, bytes | None]]:
 
 def seeds(fmt: str, shared: str | Path | None = None) -> list[tuple[bytes, bytes | None]]:
     """Hand-made and (if ``shared`` is the real-data folder) real seeds of format ``fmt``."""
+    from .sidecars import SIDECARS, sidecar_seeds
+    if fmt in SIDECARS:
+        return [(data, None) for data in sidecar_seeds(fmt)]
     hand = {"asf": [(TINY_ASF, None)], "amc": [(tiny_amc(), TINY_ASF)],
             "bvh": [(TINY_BVH, None)], "mmm": [(tiny_mmm(), None)],
             "mit": [(write_mit(mit_tree(), [mit_sequence(), mit_sequence(3)]), None)],

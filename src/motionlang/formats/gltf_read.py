@@ -151,6 +151,9 @@ def read_gltf_animation(path: str | Path, animation: int = 0) -> GltfAnimation:
             raise MotionFormatError(path, f"node {j}: an animated node with a matrix")
         trans[:, j] = tracks.get((j, "translation"), np.asarray(node.translation or [0, 0, 0]))
         q = tracks.get((j, "rotation"), np.asarray(node.rotation or [0, 0, 0, 1.0]))
+        norm = np.linalg.norm(np.broadcast_to(q, (T, 4)), axis=-1)
+        if not np.all(np.isfinite(norm) & (norm > 1e-6)):   # glTF's are unit quaternions
+            raise MotionFormatError(path, f"node {j}: a rotation that is no unit quaternion")
         rots[:, j] = _quat_matrix(np.broadcast_to(q, (T, 4)))
         scale[:, j] = tracks.get((j, "scale"), np.asarray(node.scale or [1, 1, 1.0]))
     world_R = np.empty((T, J, 3, 3))

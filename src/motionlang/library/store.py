@@ -17,6 +17,7 @@ damaged or foreign file is one line naming it. Writing is atomic (``utils.atomic
 from __future__ import annotations
 
 import json
+import tokenize
 import zipfile
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -123,9 +124,14 @@ def _arrays(path: Path) -> dict[str, np.ndarray]:
                  "memory needed to read the index")
     try:
         with np.load(path, allow_pickle=False) as npz:
-            return {k: npz[k] for k in ("vectors", "spans", "meta")}
-    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
+            out = {k: npz[k] for k in ("vectors", "spans", "meta")}
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile, SyntaxError,
+            tokenize.TokenError) as exc:   # the last two: a garbled .npy header
         raise _damaged(path, f"an array does not read: {exc}") from None
+    for k, v in out.items():   # numpy gives the raw bytes of a member that is no .npy
+        if not isinstance(v, np.ndarray):
+            raise _damaged(path, f"{k}.npy is not an array")
+    return out
 
 
 def load_index(path: str | Path) -> IndexData:

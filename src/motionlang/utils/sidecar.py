@@ -75,7 +75,11 @@ def read_bytes(path: str | Path, what: str = "file", limit: str = "max_file_byte
         try:
             size = os.fstat(fh.fileno()).st_size
             if size <= cap:
-                data = fh.read(cap + 1)   # +1: a file that grew while being read is caught
+                # read(n) allocates n bytes at once: ask for the size, then follow a file
+                # that grew while being read a megabyte at a time, up to the cap
+                data = fh.read(size + 1)
+                while size < len(data) <= cap and (more := fh.read(1 << 20)):
+                    data += more
         except OSError as exc:
             raise MotionlangError(f"{path}: cannot read {what}: {exc.strerror or exc}"
                                   ) from None

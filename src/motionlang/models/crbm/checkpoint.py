@@ -19,11 +19,36 @@ from motionlang.utils.sidecar import parse_json
 
 
 def open_npz(path: str | Path) -> Any:
-    """``np.load`` of a model file whose zip members all pass their CRC check."""
+    """``np.load`` of a model file whose zip members all pass their CRC check; a member
+    that is no ``.npy`` array is an error naming it when read (:class:`_Members`)."""
     if not Path(path).is_file():
         raise FileNotFoundError(path)
     check_archive(path)
-    return np.load(path, allow_pickle=False)
+    return _Members(path, np.load(path, allow_pickle=False))
+
+
+class _Members:
+    """The members of an ``.npz`` as arrays: numpy hands back raw bytes for a member that
+    lacks the ``.npy`` magic, and a tokenizer error for a garbled ``.npy`` header."""
+
+    def __init__(self, path: str | Path, z: Any):
+        self.path, self.z, self.files = path, z, z.files
+
+    def __enter__(self) -> _Members:
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.z.close()
+
+    def __getitem__(self, key: str) -> np.ndarray:
+        try:
+            a = self.z[key]
+        except Exception as exc:   # noqa: BLE001 - ValueError, SyntaxError, TokenError...
+            raise MotionlangError(f"{self.path}: a damaged checkpoint ({key}: "
+                                  f"{type(exc).__name__})") from None
+        if not isinstance(a, np.ndarray):
+            raise MotionlangError(f"{self.path}: a damaged checkpoint ({key}: not an array)")
+        return a
 
 
 def read_meta(path: str | Path, z: Any, key: str, kind: str) -> dict:
