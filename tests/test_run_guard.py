@@ -134,6 +134,29 @@ def test_a_run_in_progress_is_named_busy_not_just_non_empty(corpus, run, capsys)
     assert digests(run) == before
 
 
+def test_sigterm_releases_the_lock(corpus, tmp_path):
+    import signal
+    import time
+    out = tmp_path / "term"
+    env = {**os.environ, "MOTIONLANG_CACHE": str(tmp_path / "cache"), "OMP_NUM_THREADS": "1"}
+    proc = subprocess.Popen([sys.executable, "-m", "motionlang.cli.main", "train", "m2l",
+                             "--data", str(corpus), "--out", str(out), *TINY, "--epochs",
+                             "1000"], env=env, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE)
+    try:
+        deadline = time.monotonic() + 120
+        while not (out / LOCK_NAME).exists() and proc.poll() is None \
+                and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert (out / LOCK_NAME).exists(), proc.stderr.read() if proc.poll() is not None else ""
+        proc.send_signal(signal.SIGTERM)
+        assert proc.wait(timeout=120) == 128 + signal.SIGTERM
+    finally:
+        proc.kill()
+        proc.wait()
+    assert not (out / LOCK_NAME).exists()
+
+
 def test_another_hosts_lock_is_never_guessed_stale(tmp_path):
     (tmp_path / LOCK_NAME).write_text(json.dumps({"pid": 1, "host": "elsewhere"}))
     with pytest.raises(MotionlangError, match="process 1 on elsewhere"), folder_lock(tmp_path):
