@@ -202,12 +202,10 @@ def generate_hypotheses(text: str, model: Any = None, *, width: int | None = Non
     ``"FILE:0-2s,8-10s"`` or ``(motion, [(t0, t1), ...])``: in-betweening of those seconds.
 
     Raises:
-        MotionlangError: options that contradict each other or the model, checked before
-            anything is generated.
+        MotionlangError: options that contradict each other or the model (checked first).
     """
     if max_frames is not None and min_frames > max_frames:
-        raise MotionlangError(f"--min-frames {min_frames} exceeds --max-frames {max_frames}: "
-                              "no length satisfies both")
+        raise MotionlangError(f"--min-frames {min_frames} exceeds --max-frames {max_frames}")
     if temperature not in (None, 1.0) and method == "mean":   # before any model is read
         raise MotionlangError("temperature applies to 'sample' and 'beam'; mean decoding "
                               "draws nothing")
