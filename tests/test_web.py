@@ -152,6 +152,33 @@ def test_an_upload_over_the_limit_is_refused_before_it_is_read(server):
     assert status == 413 and "--max-upload-mb" in body["error"]
 
 
+def test_a_chunked_upload_is_counted_and_stopped_at_the_limit(server):
+    import http.client
+    from urllib.parse import urlsplit
+    where = urlsplit(server)
+    conn = http.client.HTTPConnection(where.hostname, where.port, timeout=60)
+    boundary = "b0undary"
+    head = (f'--{boundary}\r\nContent-Disposition: form-data; name="files"; '
+            'filename="big.bvh"\r\n\r\n').encode()
+
+    def body():   # no Content-Length: the server counts what arrives
+        yield head
+        for _ in range(40):
+            yield b"0" * (64 << 10)
+        yield f"\r\n--{boundary}--\r\n".encode()
+
+    conn.request("POST", "/api/describe", body=body(), encode_chunked=True,
+                 headers={"Content-Type": f"multipart/form-data; boundary={boundary}"})
+    res = conn.getresponse()
+    assert res.status == 413 and b"--max-upload-mb" in res.read()
+    conn.close()
+
+
+def test_an_unknown_route_is_one_line(server):
+    status, body = call(server + "api/nothing")
+    assert status == 404 and body == {"error": "Not Found"}
+
+
 def test_the_readers_limits_apply_to_uploads(server, tmp_path, monkeypatch):
     bvh = write(RIGS["mixamo"], tmp_path, T=40)
     monkeypatch.setenv("MOTIONLANG_MAX_FRAMES", "10")
@@ -213,6 +240,28 @@ def test_sides_of_joint_names(name, expected):
 @pytest.mark.parametrize("fps, step", [(12.5, 1), (30, 1), (60, 2), (100, 4), (120, 4)])
 def test_the_page_gets_at_most_view_fps(fps, step):
     assert view_step(fps) == step and fps / step <= VIEW_FPS
+
+
+def test_a_fault_of_the_server_is_one_line_without_a_trace(tmp_path):
+    from motionlang.web.app import running
+    from motionlang.web.studio import Studio
+    studio = Studio(ServeOptions(**SMALL))
+
+    def broken(*args, **kwargs):
+        raise RuntimeError("a bug with a secret path /home/someone")
+
+    studio.generate = broken
+    with running(studio) as url:
+        status, body = post_json(url + "api/generate", {"text": "a person walks"})
+    assert status == 500 and body["error"].startswith("internal error (RuntimeError)")
+    assert "/home/someone" not in body["error"]
+
+
+def test_a_describe_model_that_does_not_describe_is_refused_at_start():
+    from motionlang.errors import MotionlangError
+    from motionlang.web.studio import Studio
+    with pytest.raises(MotionlangError, match="l2m"):
+        Studio(ServeOptions(**{**SMALL, "describe_model": "l2m-procedural"}))
 
 
 @pytest.mark.parametrize("host, local", [("127.0.0.1", True), ("127.0.0.2", True),

@@ -20,8 +20,10 @@ from fastapi import FastAPI, File, Request, UploadFile
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import HTMLResponse, JSONResponse, Response
 from pydantic import BaseModel
+from starlette.exceptions import HTTPException as StarletteHTTPException
 
 from motionlang.errors import MotionlangError
+from motionlang.web.body_limit import BodyLimit
 from motionlang.web.options import ServeOptions
 from motionlang.web.studio import Studio
 
@@ -68,19 +70,13 @@ def create_app(studio: Studio) -> FastAPI:
     app = FastAPI(title="motionlang", docs_url=None, redoc_url=None, openapi_url=None)
     limit = studio.options.max_upload_bytes
 
-    @app.middleware("http")
-    async def upload_limit(request: Request, call_next):
-        # before the multipart parser spools the body anywhere
-        size = request.headers.get("content-length")
-        if size is not None and size.isdigit() and int(size) > limit + FORM_SLACK:
-            # read and drop the body: a reply sent before it is read resets the connection
-            # under the client, which then sees no reply at all
-            async for _chunk in request.stream():
-                pass
-            return _error(413, f"the upload is {int(size) / (1 << 20):.1f} MiB; the largest "
-                               f"this server takes is {limit / (1 << 20):.1f} MiB "
-                               "(motionlang serve --max-upload-mb)")
-        return await call_next(request)
+    app.add_middleware(BodyLimit, limit=limit + FORM_SLACK, message=lambda size: (
+        f"the upload is {size / (1 << 20):.1f} MiB; the largest this server takes is "
+        f"{limit / (1 << 20):.1f} MiB (motionlang serve --max-upload-mb)"))
+
+    @app.exception_handler(StarletteHTTPException)
+    async def http_error(_request: Request, exc: StarletteHTTPException):
+        return _error(exc.status_code, str(exc.detail))
 
     @app.exception_handler(MotionlangError)
     async def one_line(_request: Request, exc: MotionlangError):

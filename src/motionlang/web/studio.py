@@ -82,7 +82,8 @@ class Studio:
         self.takes: _Recent = _Recent()
         self.rigs: _Recent = _Recent()
         self.models = models if models is not None else self._load_models()
-        self.describer = ml.load_model(options.describe_model)
+        from motionlang.models.registry import kinds_with
+        self.describer = ml.load_model(options.describe_model, kind=kinds_with("describes"))
         self.library = None
         if options.index is not None:
             from motionlang.library.search import Library
