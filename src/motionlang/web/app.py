@@ -159,7 +159,10 @@ def serve(options: ServeOptions, *, ready=None) -> None:
     server = uvicorn.Server(config)
     if ready is not None:
         _announce(server, ready)
-    server.run()
+    try:
+        server.run()
+    except KeyboardInterrupt:   # Ctrl-C is how a user stops the app: not a failure
+        pass
 
 
 def _announce(server, ready) -> None:
