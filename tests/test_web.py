@@ -300,3 +300,26 @@ def test_generated_view_is_small_json(server):
     _, view = post_json(server + "api/generate", {"text": "a person runs", "seconds": 10})
     assert view["n_frames"] == 125
     assert len(json.dumps(view)) < 200_000   # ten seconds: a few tens of kilobytes
+
+
+def test_the_command_serves_until_ctrl_c(tmp_path):
+    """``motionlang serve --port 0`` prints where it listens, answers there, and Ctrl-C
+    stops it with exit 0 and nothing written where it ran."""
+    import signal
+    import subprocess
+    code = "import sys; from motionlang.cli.main import main; sys.exit(main(sys.argv[1:]))"
+    proc = subprocess.Popen(
+        [sys.executable, "-c", code, "serve", "--port", "0", "--model", "l2m-procedural",
+         "--describe-model", "m2l-procedural"], cwd=tmp_path, text=True,
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    try:
+        line = proc.stdout.readline()
+        assert line.startswith("motionlang serve: open http://127.0.0.1:"), line
+        url = line.split()[3]
+        status, info = call(url + "api/info")
+        assert status == 200 and info["models"][0]["name"] == "l2m-procedural"
+    finally:
+        proc.send_signal(signal.SIGINT)
+        out, err = proc.communicate(timeout=30)
+    assert proc.returncode == 0, err
+    assert list(tmp_path.iterdir()) == []
