@@ -21,6 +21,7 @@ import numpy as np
 import motionlang.api as ml
 from motionlang.errors import MotionlangError
 from motionlang.kinematics.motion import Motion
+from motionlang.models.registry import PACKAGED, kinds_with
 from motionlang.web.options import DEFAULT_MODELS, ServeOptions
 from motionlang.web.uploads import Upload, read_upload
 from motionlang.web.views import body21_view, motion_view, view_step
@@ -81,13 +82,12 @@ class Studio:
         self._ids = itertools.count(1)
         self.takes: _Recent = _Recent()
         self.rigs: _Recent = _Recent()
-        self.models = models if models is not None else self._load_models()
-        from motionlang.models.registry import kinds_with
-        self.describer = ml.load_model(options.describe_model, kind=kinds_with("describes"))
         self.library = None
-        if options.index is not None:
+        if options.index is not None:   # a bad index is named before any model loads
             from motionlang.library.search import Library
             self.library = Library.open(options.index)
+        self.describer = ml.load_model(options.describe_model, kind=kinds_with("describes"))
+        self.models = models if models is not None else self._load_models()
         if options.warm:
             for name in self.models:
                 for text in WARM_UP:
@@ -95,7 +95,6 @@ class Studio:
             self.takes.clear()
 
     def _load_models(self) -> dict[str, Any]:
-        from motionlang.models.registry import PACKAGED
         names = self.options.model or [n for n in DEFAULT_MODELS if PACKAGED[n].path.is_file()]
         if not names:
             raise MotionlangError("no text-to-motion model is installed; name one with --model")
