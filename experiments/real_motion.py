@@ -1,7 +1,7 @@
 """How `describe` names the action of real motion from another lab (issue #41).
 
     OMP_NUM_THREADS=1 .venv/bin/python experiments/real_motion.py [--model m2l ...]
-        [--data ../shared/data] [--cmudev /tmp/cmudev] [-o rows.tsv]
+        [--data ../shared/data] [--cmudev /tmp/cmudev] [-o rows.tsv] [--raw]
 
 Motions: the 59 files of ``cmu_dev`` (56 CMU trials of subjects 05, 06, 08, 12, 13 in the
 iClone, Second-Life and MakeHuman rigs; extracted from ``cmu_dev/cmu-dev.tar.xz`` to
@@ -106,6 +106,8 @@ def main() -> None:
     ap.add_argument("--cmudev", default="/tmp/cmudev")
     ap.add_argument("-w", "--width", type=int, default=5)
     ap.add_argument("-o", "--out", help="write one row per motion and model (TSV)")
+    ap.add_argument("--raw", action="store_true", help="the models' beams as they are "
+                    "(describe --raw), without the gait check")
     args = ap.parse_args()
 
     import torch
@@ -123,7 +125,7 @@ def main() -> None:
         print(f"== {spec}")
         for name, trial, rig, asked, src in items:
             try:
-                text = ml.describe(src, model, args.width)[0][0]
+                text = ml.describe(src, model, args.width, raw=args.raw)[0][0]
             except Exception as e:  # a motion no reader takes counts as missed, and is shown
                 text = f"ERROR {e}"
             said = said_action(text)

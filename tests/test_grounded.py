@@ -105,3 +105,12 @@ def test_raw_gives_the_models_own_beam(shared_data, capsys):
     assert UNFAMILIAR not in capsys.readouterr().out
     assert main(["describe", str(path), "-w", "2"]) == 0
     assert UNFAMILIAR in capsys.readouterr().out
+
+
+def test_standing_still_contradicts_a_gait(model, monkeypatch):
+    fake = FakeBeam([("the subject is standing still", -5.0)],
+                    banned=[("a person walks forward", -7.0)])
+    monkeypatch.setattr(g, "describe_features", fake)
+    assert named_gait("the subject is standing still") == "stand"
+    assert ground(model, None, fake.free, "walk", width=3) == [("a person walks forward", -7.0)]
+    assert {"standing", "still", "runs"} <= fake.calls[0]["banned"]

@@ -7,8 +7,8 @@ sit between its beam and the user (:func:`describe`, what the M2L family registe
 describer):
 
 1. **Gait** (``features.gait``): when the feet show walking, running or jumping and the
-   model's first sentence names another of the three, the beam is searched again with the
-   contradicting words banned (a walk that the model calls a run is described without the
+   model's first sentence names another of the three (or says the body stands still), the
+   beam is searched again with the contradicting words banned (a walk that the model calls a run is described without the
    words of running: "a woman walks straight ahead"); for a jump that the model does not
    name, or a gait for which its beam has no sentence with a verb, with its first sentence's
    subject followed by the gait's verb as a forced start ("a person jumps ..."). The rest of
@@ -45,6 +45,8 @@ GAIT_WORDS: dict[str, frozenset[str]] = {
     "run": frozenset("run runs running ran jog jogs jogging dash dashes dashing sprint "
                      "sprints sprinting".split()),
     "jump": frozenset("jump jumps jumping jumped hop hops hopping leap leaps leaping".split()),
+    # not a gait, but what contradicts one: "the subject is standing still" of a walk
+    "stand": frozenset("stand stands standing still".split()),
 }
 #: the form of each gait's verb forced after the subject when the model does not name it
 GAIT_VERB = {"walk": "walks", "run": "runs", "jump": "jumps"}
