@@ -323,3 +323,26 @@ def test_the_command_serves_until_ctrl_c(tmp_path):
         out, err = proc.communicate(timeout=30)
     assert proc.returncode == 0, err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_rig_no_map_fits_is_told_to_bring_its_joint_map_and_then_works(server, tmp_path):
+    robot = write(RIGS["mixamo"], tmp_path, "robot", T=40)
+    text = robot.read_text().replace("mixamorig:", "part_")   # names no map knows
+    text = text.replace("part_Left", "part_A").replace("part_Right", "part_B")
+    robot.write_text(text)
+    status, body = post_files(server + "api/describe", [(robot.name, robot.read_bytes())])
+    assert status == 400 and "upload its joint map (.json) with the file" in body["error"]
+    assert "--joint-map" not in body["error"]
+    side = {"L": "A", "R": "B"}
+    joints = {"root": "Hips", "BP": "Spine", "BT": "Spine1", "BLN": "Neck", "BUN": "Head"}
+    for s in "LR":
+        joints |= {f"{s}S": f"{side[s]}Arm", f"{s}E": f"{side[s]}ForeArm",
+                   f"{s}W": f"{side[s]}Hand", f"{s}H": f"{side[s]}UpLeg",
+                   f"{s}K": f"{side[s]}Leg", f"{s}A": f"{side[s]}Foot",
+                   f"{s}MRot": f"{side[s]}ToeBase", f"{s}F": f"{side[s]}Toe_End"}
+    joint_map = {"joints": {k.replace("MRot", "Mrot"): "part_" + v for k, v in joints.items()}}
+    files = [(robot.name, robot.read_bytes()), ("robot.json", json.dumps(joint_map).encode())]
+    status, view = post_files(server + "api/describe", files)
+    assert status == 200 and view["sentences"], view
+    status, got = post_files(server + "api/rig", files)
+    assert status == 200 and got["name"] == "robot", got

@@ -7,6 +7,7 @@ Every answer for the viewer is a dict of :mod:`.views`; every failure a
 """
 from __future__ import annotations
 
+import contextlib
 import itertools
 import tempfile
 import threading
@@ -23,7 +24,7 @@ from motionlang.errors import MotionlangError
 from motionlang.kinematics.motion import Motion
 from motionlang.models.registry import PACKAGED, kinds_with
 from motionlang.web.options import DEFAULT_MODELS, ServeOptions
-from motionlang.web.uploads import Upload, read_upload
+from motionlang.web.uploads import Upload, page_message, read_upload
 from motionlang.web.views import body21_view, motion_view, view_step
 
 #: takes and rigs kept for downloads (older ones are forgotten)
@@ -66,6 +67,15 @@ class _Recent(OrderedDict):
             raise MotionlangError(f"no {what} {key!r} here (the server keeps the {KEEP} most "
                                   "recent; generate or upload it again)")
         return self[key]
+
+
+@contextlib.contextmanager
+def _for_page():
+    """A MotionlangError raised inside, worded for the page (``uploads.page_message``)."""
+    try:
+        yield
+    except MotionlangError as exc:
+        raise MotionlangError(page_message(exc)) from None
 
 
 class Studio:
@@ -159,7 +169,7 @@ class Studio:
         """An uploaded rig (a BVH-like skeleton) to retarget takes onto: ``{"id", "name",
         "joints"}``."""
         motion = read_upload(files, self.options.max_upload_bytes)
-        with self.lock:
+        with self.lock, _for_page():
             rig = ml.load_rig(motion[:1])
         key = self.rigs.add(rig, self._ids)
         return {"id": key, "name": motion.name, "joints": len(rig.skeleton.joints)}
@@ -170,7 +180,7 @@ class Studio:
         take longer than :data:`TIMELINE_FROM_S`, ``timeline`` ([{"start", "end",
         "text"}])."""
         motion = read_upload(files, self.options.max_upload_bytes)
-        with self.lock:
+        with self.lock, _for_page():
             sentences = ml.describe(motion, self.describer, width)
             segments = ml.timeline(motion, self.describer) \
                 if motion.duration > TIMELINE_FROM_S else []

@@ -1,7 +1,7 @@
 """Uploaded motion files, read as the command line reads them.
 
 An upload is a list of ``(file name, bytes)``: one motion file (``.bvh``, ``.xml`` MMM,
-``.mat``), or an ``.amc`` with its ``.asf``. The bytes go to a private temporary folder
+``.mat``), or an ``.amc`` with its ``.asf``, and optionally its joint map (``.json``). The bytes go to a private temporary folder
 (never a user's folder) under their own base name, are read with :func:`motionlang.api.
 read_mapped` (so every ``MOTIONLANG_MAX_*`` limit of ``utils.limits`` applies, as for the
 CLI) and the folder is removed before the answer goes back. A reader's error comes back as
@@ -18,8 +18,11 @@ from motionlang.errors import MotionlangError
 from motionlang.formats import READ_EXTENSIONS
 from motionlang.kinematics.motion import Motion
 
-#: what an upload may hold besides motion files: the skeleton of an ``.amc``
-SKELETON_EXTENSIONS = (".asf",)
+#: what an upload may hold besides motion files: the skeleton of an ``.amc``, and a joint
+#: map (``motionlang rig template``) for a rig that no built-in map fits
+SKELETON_EXTENSIONS = (".asf", ".json")
+#: the readers' advice for the command line, and what a page's user does instead
+_CLI_ADVICE = ("pass --joint-map FILE", "upload its joint map (.json) with the file")
 _UNSAFE = re.compile(r"[^A-Za-z0-9._ -]+")
 
 Upload = tuple[str, bytes]
@@ -61,9 +64,18 @@ def check_upload(files: Sequence[Upload], max_bytes: int) -> None:
     skeletons = exts.count(".asf")
     if skeletons > 1 or (skeletons and ".amc" not in exts):
         raise MotionlangError("an .asf skeleton goes with one .amc motion")
+    if exts.count(".json") > 1:
+        raise MotionlangError("upload one joint map (.json) with the motion file")
     if ".amc" in exts and not skeletons:
         raise MotionlangError(f"{safe_name(motions[0])}: an .amc motion needs its .asf "
                               "skeleton: upload both files together")
+
+
+def page_message(exc: Exception, folder: Path | None = None) -> str:
+    """An error's line as the page shows it: without the temporary ``folder``, and with
+    the command line's advice about joint maps said as the page's."""
+    text = str(exc).replace(f"{folder}/", "") if folder is not None else str(exc)
+    return text.replace(*_CLI_ADVICE)
 
 
 def read_upload(files: Sequence[Upload], max_bytes: int) -> Motion:
@@ -82,11 +94,12 @@ def read_upload(files: Sequence[Upload], max_bytes: int) -> Motion:
             path.write_bytes(data)
             paths.append(path)
         motion_path = next(p for p in paths if p.suffix.lower() in READ_EXTENSIONS)
-        asf = next((p for p in paths if p.suffix.lower() == ".asf"), None)
+        extra = {".asf": "skeleton", ".json": "joint_map"}
+        kw = {extra[p.suffix.lower()]: p for p in paths if p.suffix.lower() in extra}
         try:
-            motion = read_mapped(motion_path, **({"skeleton": asf} if asf else {}))
+            motion = read_mapped(motion_path, **kw)
         except MotionlangError as exc:   # the reader names the file by its temporary path
-            raise MotionlangError(str(exc).replace(f"{folder}/", "")) from None
+            raise MotionlangError(page_message(exc, folder)) from None
         except (ValueError, OSError) as exc:   # a reader's slip: still one line, no trace
             raise MotionlangError(f"{motion_path.name}: cannot read it ({exc})") from None
     motion.meta.pop("path", None)
