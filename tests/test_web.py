@@ -194,6 +194,8 @@ def test_the_readers_limits_apply_to_uploads(server, tmp_path, monkeypatch):
     ({"text": "a person walks", "method": "greedy"}, "decoding must be one of"),
     ({"text": "a person walks", "rig": "zz"}, "no rig 'zz'"),
     ({"text": "a person walks", "seed": "x"}, "seed"),
+    ({"text": "a person walks", "seed": -1}, "seed must be an integer in 0.."),
+    ({"text": "a person walks", "seed": 2**70, "method": "sample"}, "seed must be"),
     ({}, "text"),
 ])
 def test_a_bad_request_is_one_line(server, payload, needle):

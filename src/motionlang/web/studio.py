@@ -23,6 +23,7 @@ import motionlang.api as ml
 from motionlang.errors import MotionlangError
 from motionlang.kinematics.motion import Motion
 from motionlang.models.registry import PACKAGED, kinds_with
+from motionlang.utils.checks import SEED_MAX
 from motionlang.web.options import DEFAULT_MODELS, ServeOptions
 from motionlang.web.uploads import Upload, page_message, read_upload
 from motionlang.web.views import body21_view, motion_view, view_step
@@ -146,6 +147,8 @@ class Studio:
                 raise MotionlangError(f"length must be in (0, {MAX_SECONDS:g}] seconds, got "
                                       f"{seconds:g}")
             frames = max(1, round(seconds * t2m.fps))
+        if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= SEED_MAX:
+            raise MotionlangError(f"seed must be an integer in 0..{SEED_MAX}, got {seed}")
         if method is not None and method not in METHODS:
             raise MotionlangError(f"decoding must be one of {', '.join(METHODS)}")
         rig_motion = None if rig is None else self.rigs.find(rig, "rig")
