@@ -19,6 +19,7 @@ def test_named_gait_and_verbs():
     assert has_verb("a stage actor sprints forward")
     assert has_verb("a person takes a bow")
     assert has_verb("a person shows the way") and has_verb("a man beckons")
+    assert has_verb("a woman hesitantly shows the way")
     assert not has_verb("delinquent delinquent")
     assert not has_verb("both both hands")
 

@@ -63,8 +63,9 @@ def named_gait(text: str) -> str | None:
 
 def has_verb(text: str) -> bool:
     """Whether a sentence has a verb: one the tagger (``datasets.pos_tags``) knows, a gait
-    word, or a third-person form right after the subject ("a man beckons", "a stage actor
-    sprints": the tagger's lexicon is small and reads such words as plural nouns)."""
+    word, or a third-person form right after the subject, adverbs aside ("a man beckons", "a
+    stage actor sprints", "a woman hesitantly shows": the tagger's lexicon is small and reads
+    such words as plural nouns)."""
     if named_gait(text) is not None:
         return True
     words, tags = text.lower().split(), [t.rsplit("/", 1)[1] for t in tag(text)]
@@ -73,7 +74,8 @@ def has_verb(text: str) -> bool:
     for i, (w, t) in enumerate(zip(words, tags)):
         if t == "VERB":
             return True
-        if (i and t == "NOUN" and tags[i - 1] in ("NOUN", "PRON") and w.endswith("s")
+        before = [x for x in tags[:i] if x != "ADV"]      # "a woman hesitantly shows"
+        if (before and t == "NOUN" and before[-1] in ("NOUN", "PRON") and w.endswith("s")
                 and not w.endswith("ss")):
             return True
     return False
