@@ -169,3 +169,15 @@ def test_download_dest_that_cannot_be_a_folder_is_one_line(tmp_path, capsys, mon
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "argument --dest" in err[0]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["afile"]
+
+
+def test_a_resume_whose_checkpoint_does_not_read_writes_nothing(tmp_path, capsys):
+    from motionlang.datasets.synth.corpus import write_corpus
+    write_corpus(tmp_path / "c", 3, workers=1, show_progress=False)
+    run = tmp_path / "old"
+    run.mkdir()
+    (run / "last.pt").write_bytes(b"PK\x03\x04" + b"\0" * 60)   # a run from before run.json
+    assert main(["train", "m2l", "--data", str(tmp_path / "c"), "--out", str(run),
+                 "--resume"]) == 2
+    assert "last.pt" in capsys.readouterr().err
+    assert sorted(p.name for p in run.iterdir()) == ["last.pt"]

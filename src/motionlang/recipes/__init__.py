@@ -124,6 +124,15 @@ def train(kind: str, data: str | Path | Sequence[str | Path], out: str | Path, *
                       train_cfg, data_cfg, resume=resume, overwrite=overwrite)
 
 
+def _files(out: Path) -> set[tuple[str, int]]:
+    """(name, mtime) of the visible entries of a run folder but run.json: what a run has
+    written."""
+    if not out.is_dir():
+        return set()
+    return {(p.name, p.stat().st_mtime_ns) for p in out.iterdir()
+            if not p.name.startswith(".") and p.name != "run.json"}
+
+
 def run_recipe(kind: str, sources: Sequence, out: Path, model_cfg: dict, train_cfg: Any,
                data_cfg: Any, *, resume: bool = False, overwrite: bool = False,
                options: dict | None = None) -> Path:
@@ -170,13 +179,14 @@ def run_recipe(kind: str, sources: Sequence, out: Path, model_cfg: dict, train_c
         elif overwrite:
             clear_run(out, family(kind).model_file, (LICENCE_FILE, *recipe.extra_files))
         fresh = not (out / "run.json").exists()
+        before = _files(out)
         if fresh:
             write_identity(out, identity)
         try:
             return go()
         except BaseException:
-            # a run that failed before writing anything leaves no run.json behind alone
-            if fresh and [p.name for p in out.iterdir()
-                          if not p.name.startswith(".")] == ["run.json"]:
-                (out / "run.json").unlink()
+            # a run that failed before writing anything (a fresh one, or a resume of a
+            # folder from before run.json whose checkpoint does not read) leaves no run.json
+            if fresh and _files(out) == before:
+                (out / "run.json").unlink(missing_ok=True)
             raise
