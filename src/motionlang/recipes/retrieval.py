@@ -11,6 +11,7 @@ is read, and nothing is written before it is read. Torch-free until :func:`run` 
 from __future__ import annotations
 
 import dataclasses
+import re
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -25,6 +26,12 @@ if TYPE_CHECKING:
     from motionlang.models.retrieval.model import RetrievalModel
     from motionlang.training.config import TrainConfig
 
+#: alternative verbs of the Bandai captions' grammar (``datasets.bandai_text.CONTENTS``):
+#: each names an action that other captions name in other words ("jogs" / "runs", "lifts" /
+#: "raises", "makes a left turn" / "turns left"), so captions with them, left out of
+#: training, measure how far the text side carries a wording it never trained on
+HOLDOUT_WORDS = ("jogs", "lifts", "makes", "bearing", "sprints", "throws", "swings",
+                 "gestures", "shouts")
 #: the model config fields the data decides, never the user
 FROM_DATA = ("n_features", "fps", "text_dim")
 RUN_FILES = ("best.pt and last.pt (checkpoints), history.json, loss_curve.png, splits/, "
@@ -42,6 +49,10 @@ class RetrievalOptions:
     max_seconds: float = _opt(30.0, "drop longer motions")
     mirror: bool = _opt(False, "also train on every training motion mirrored left/right, its "
                                "captions' sides swapped")
+    holdout_words: bool = _opt(False, "leave out of training every caption with one of the "
+                                      "Bandai grammar's alternative verbs (jogs, lifts, ...); "
+                                      "the validation captions with them are also scored on "
+                                      "their own, and count in the choice of epoch")
 
     def __post_init__(self) -> None:
         check_numbers("RetrievalOptions", self, positive=("max_seconds",))
@@ -86,37 +97,53 @@ def retrieval_set(items: Sequence[dict]) -> tuple[list[str], list, Any]:
     return [str(it["sentence"]) for it in items], motions, hits
 
 
-def scorer(items: Sequence[dict]) -> Callable[[Any], dict[str, float]]:
+def uses_holdout(sentence: str) -> bool:
+    """Whether a caption has a word of :data:`HOLDOUT_WORDS` (whole words, any case)."""
+    return any(w in HOLDOUT_WORDS for w in re.findall(r"[a-z]+", sentence.lower()))
+
+
+def scorer(items: Sequence[dict], holdout: bool = False
+           ) -> Callable[[Any], dict[str, float]]:
     """A function ``model -> retrieval_scores`` (R@1/2/3/5/10, MedR, both directions) of
-    ``items``' captions among their motions (:func:`retrieval_set`)."""
+    ``items``' captions among their motions (:func:`retrieval_set`). ``holdout``: also the
+    text -> motion scores of the captions with a held-out word (:func:`uses_holdout`),
+    among the same motions, under ``holdout/``."""
     import numpy as np
 
     from motionlang.evaluation.metrics.t2m import retrieval_scores as scores
     captions, motions, hits = retrieval_set(items)
+    held = np.array([holdout and uses_holdout(c) for c in captions], dtype=bool)
 
     def score(model: Any) -> dict[str, float]:
-        sims = model.embed_texts(captions) @ model.embed_motions(motions).T
-        return scores(np.asarray(sims, dtype=np.float64), hits)
+        sims = np.asarray(model.embed_texts(captions) @ model.embed_motions(motions).T,
+                          dtype=np.float64)
+        out = scores(sims, hits)
+        if held.any():
+            out.update({f"holdout/{k}": v for k, v in scores(sims[held], hits[held]).items()
+                        if k.startswith("t2m/")})
+        return out
     return score
 
 
 def train_on_items(train: Sequence[dict], val: Sequence[dict], model: RetrievalModel,
-                   train_cfg: TrainConfig, *, resume: bool = False,
+                   train_cfg: TrainConfig, *, resume: bool = False, holdout: bool = False,
                    log: Callable[[str], None] | None = print) -> RetrievalModel:
     """Train ``model`` on ``train`` into the run folder ``train_cfg.out_dir``; ``val`` picks
-    the epoch (``best.pt``: the highest text -> motion R@1 + R@5); without it the last
-    epoch's weights are kept. ``log`` gets one line per epoch. Returns the model kept."""
+    the epoch (``best.pt``: the highest text -> motion R@1 + R@5, plus that of the captions
+    with a held-out word where ``holdout``); without it the last epoch's weights are kept.
+    ``log`` gets one line per epoch. Returns the model kept."""
     from motionlang.models.retrieval.model import RetrievalModel
     from motionlang.training.run_log import lead_process
     from motionlang.training.trainer import Trainer
 
     measured: dict[str, float] = {}
-    score = scorer(val) if val else None
+    score = scorer(val, holdout) if val else None
 
     def select(m: Any) -> float:   # lower is better
         assert score is not None
         measured.update(score(m))
-        return -(measured["t2m/R01"] + measured["t2m/R05"])
+        return -sum(measured.get(f"{p}t2m/R0{k}", 0.0) for p in ("", "holdout/")
+                    for k in (1, 5))
 
     clock = [time.perf_counter()]
 
@@ -127,6 +154,9 @@ def train_on_items(train: Sequence[dict], val: Sequence[dict], model: RetrievalM
             return
         part = (f"validation t2m R@1 {measured['t2m/R01']:.1f} %, R@5 "
                 f"{measured['t2m/R05']:.1f} %, " if measured else "")
+        if "holdout/t2m/R01" in measured:
+            part += (f"held-out words R@1 {measured['holdout/t2m/R01']:.1f} %, R@5 "
+                     f"{measured['holdout/t2m/R05']:.1f} %, ")
         log(f"epoch {record['epoch']}/{train_cfg.epochs}: {part}training loss "
             f"{record['train'].get('loss', float('nan')):.3f}, {seconds:.0f} s")
 
@@ -174,6 +204,8 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
     data = build_twostream_data(paths if len(paths) > 1 else paths[0], seed=train_cfg.seed,
                                 max_seconds=data_cfg.max_seconds, mirror=data_cfg.mirror)
     train_items = mix_training(sources, data.items["train"], data.sources, train_cfg.seed)
+    if data_cfg.holdout_words:
+        train_items = [it for it in train_items if not uses_holdout(str(it["sentence"]))]
     lead = lead_process()
     if lead:
         keep_splits(data.splits, out / "splits", resume)
@@ -192,20 +224,24 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
     torch.manual_seed(train_cfg.seed)
     config = dataclasses.replace(config, n_features=data.features.dim, fps=data.features.fps)
     model = RetrievalModel(config, data.features, text)
+    model.fit_text(text.vectors(sorted({str(it["sentence"]) for it in train_items})))
     if lead:
         print(f"retrieval: {len(train_items)} training pairs ({len(data.splits['train'])} "
               f"motions), {sum(p.numel() for p in model.parameters()):,} parameters")
     model = train_on_items(train_items, data.items.get("val") or [], model, train_cfg,
-                           resume=resume)
+                           resume=resume, holdout=data_cfg.holdout_words)
     path = out / family("retrieval").model_file
     if lead:
         model.save(path)
         line = f"{path}"
         test = data.items.get("test") or []
         if test:
-            s = scorer(test)(model)
+            s = scorer(test, data_cfg.holdout_words)(model)
             line += (f": on {len(test)} test captions, text -> motion R@1 {s['t2m/R01']:.1f} "
                      f"%, R@5 {s['t2m/R05']:.1f} %, MedR {s['t2m/MedR']:g}")
+            if "holdout/t2m/R01" in s:
+                line += (f"; its captions with a held-out word R@1 "
+                         f"{s['holdout/t2m/R01']:.1f} %, R@5 {s['holdout/t2m/R05']:.1f} %")
         print(line)
         if note:
             print(note.splitlines()[0])

@@ -16,6 +16,7 @@ from motionlang.utils.checks import check_numbers
 
 #: layer widths, bounded by ``utils.checks.MAX_SIZE`` so a mistyped size fails at once
 SIZES = ("hidden", "embed", "text_hidden")
+TEXT_ANCHORS = ("none", "pca")
 
 
 def _opt(default: Any, help_: str, **meta: Any) -> Any:
@@ -51,6 +52,14 @@ class RetrievalConfig:
             "... the right hand") almost as close as rewordings of one caption, and those
             are the negatives that teach left from right.
         window: seconds of the random crops trained on (whole motions are encoded).
+        text_anchor: ``"pca"``: the text embedding is a fixed projection of the frozen
+            sentence vector onto the training captions' principal directions plus the
+            learned projection as a residual that starts at zero, so that sentences the
+            sentence encoder finds alike start alike; ``"none"``: the learned projection
+            alone.
+        text_noise: Gaussian noise added to the frozen sentence vectors in training, in
+            units of each dimension's spread over the training captions (0: none), so that
+            the projection is smooth around the training captions' wordings.
     """
 
     n_features: int = POSITIONS_DIM
@@ -71,12 +80,22 @@ class RetrievalConfig:
                                  "identical captions)")
     window: float = _opt(10.0, "seconds of the random crops trained on (whole motions are "
                                "encoded)")
+    text_anchor: str = _opt("none", "'pca': the text embedding is a fixed principal-direction "
+                                    "projection of the frozen sentence vector plus the learned "
+                                    "projection as a residual starting at zero; 'none': the "
+                                    "learned projection alone", choices=TEXT_ANCHORS)
+    text_noise: float = _opt(0.0, "Gaussian noise on the frozen sentence vectors in training, "
+                                  "in units of each dimension's spread over the training "
+                                  "captions (0: none)")
 
     def __post_init__(self) -> None:
         check_numbers("RetrievalConfig", self, dims=("n_features",),
                       nonneg_ints=("text_dim", "text_layer"), sizes=SIZES,
                       layers=("layers", "heads"), positive=("fps", "temperature", "window"),
-                      unit=("dropout",))
+                      unit=("dropout",), nonneg=("text_noise",))
+        if self.text_anchor not in TEXT_ANCHORS:
+            raise MotionlangError(f"RetrievalConfig.text_anchor must be one of "
+                                  f"{', '.join(TEXT_ANCHORS)}, got {self.text_anchor!r}")
         if not (isinstance(self.duplicate, (int, float)) and not isinstance(self.duplicate, bool)
                 and -1.0 <= self.duplicate <= 1.0):
             raise MotionlangError(f"RetrievalConfig.duplicate must be a cosine in [-1, 1], "

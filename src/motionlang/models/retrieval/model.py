@@ -8,7 +8,11 @@ motions it describes and a motion near its captions.
   layer to the embedding. Trained on random crops of ``config.window`` seconds; whole
   motions are encoded.
 * Text: a frozen pretrained sentence encoder (MiniLM, ``text.sentence_vectors``: mean-pooled
-  token states, cached per sentence), then a trainable two-layer projection.
+  token states, cached per sentence), then a trainable two-layer projection. Options:
+  ``text_anchor="pca"`` adds a fixed projection of the centred frozen vector onto the
+  training captions' first ``embed`` principal directions, the learned projection then a
+  residual that starts at zero; ``text_noise`` adds Gaussian noise to the frozen vectors in
+  training (``fit_text`` keeps the statistics both read, as buffers of the checkpoint).
 
 Loss: InfoNCE over cosine similarities / temperature, text -> motion and motion -> text
 averaged. Pairs that describe the same thing are not negatives of each other (their logits
@@ -87,6 +91,10 @@ class RetrievalModel(Checkpointed, nn.Module):
 
     kind = "retrieval"
     config_cls = RetrievalConfig
+    #: buffers of the text-side options (``fit_text``), present only where they are used
+    text_mean: torch.Tensor
+    text_spread: torch.Tensor
+    text_basis: torch.Tensor
 
     def __init__(self, config: RetrievalConfig, features: PositionFeatures | None = None,
                  text_encoder: Any = None):
@@ -108,6 +116,20 @@ class RetrievalModel(Checkpointed, nn.Module):
         self.text_projection = nn.Sequential(
             nn.Linear(config.text_dim, config.text_hidden), nn.GELU(),
             nn.Dropout(config.dropout), nn.Linear(config.text_hidden, config.embed))
+        if config.text_anchor == "pca" and config.embed > config.text_dim:
+            raise MotionlangError(f"a 'pca' text anchor projects the {config.text_dim} values "
+                                  f"of a sentence vector, fewer than the embedding's "
+                                  f"{config.embed}")
+        if config.text_anchor == "pca" or config.text_noise > 0:
+            # the training captions' statistics (fit_text); in the checkpoint with the weights
+            self.register_buffer("text_mean", torch.zeros(config.text_dim))
+            self.register_buffer("text_spread", torch.ones(config.text_dim))
+        if config.text_anchor == "pca":
+            self.register_buffer("text_basis", torch.zeros(config.text_dim, config.embed))
+            last = self.text_projection[-1]
+            assert isinstance(last, nn.Linear)
+            nn.init.zeros_(last.weight)   # the residual starts at zero: the anchor alone
+            nn.init.zeros_(last.bias)
 
     @property
     def text(self) -> SentenceVectors:
@@ -121,12 +143,35 @@ class RetrievalModel(Checkpointed, nn.Module):
         """Frame rate of the frames the motion encoder reads, Hz."""
         return float(self.config.fps)
 
+    @torch.no_grad()
+    def fit_text(self, vectors: torch.Tensor) -> None:
+        """Keep the training captions' statistics that ``text_anchor`` and ``text_noise``
+        read: from their frozen vectors (N, text_dim), the mean, each dimension's standard
+        deviation and (``"pca"``) the first ``embed`` principal directions, scaled so that
+        an anchor has a root-mean-square length of 1 over the captions."""
+        if not hasattr(self, "text_mean"):
+            return
+        v = torch.as_tensor(vectors, dtype=torch.float32)
+        if v.ndim != 2 or v.shape[1] != self.config.text_dim or len(v) < 2:
+            raise MotionlangError(f"fit_text needs (N >= 2, {self.config.text_dim}) sentence "
+                                  f"vectors, got {tuple(v.shape)}")
+        self.text_mean.copy_(v.mean(0))
+        self.text_spread.copy_(v.std(0).clamp_min(1e-6))
+        if hasattr(self, "text_basis"):
+            centred = v - self.text_mean
+            basis = torch.linalg.svd(centred, full_matrices=True).Vh[:self.config.embed].T
+            rms = (centred @ basis).pow(2).sum(1).mean().sqrt().clamp_min(1e-6)
+            self.text_basis.copy_(basis / rms)
+
     # -- encoders -----------------------------------------------------------------------
     def encode_text(self, sentences: Sequence[str], vectors: torch.Tensor | None = None
                     ) -> torch.Tensor:
         """B sentences (or their frozen vectors (B, text_dim)) -> (B, embed), unit rows."""
         v = self.text.vectors(list(sentences)) if vectors is None else vectors
-        return F.normalize(self.text_projection(v), dim=-1)
+        out = self.text_projection(v)
+        if hasattr(self, "text_basis"):
+            out = out + (v - self.text_mean) @ self.text_basis
+        return F.normalize(out, dim=-1)
 
     def encode_motion(self, motion: torch.Tensor, lengths: torch.Tensor) -> torch.Tensor:
         """Normalised feature rows (B, T, F), lengths (B,) -> (B, embed), unit rows."""
@@ -201,7 +246,12 @@ class RetrievalModel(Checkpointed, nn.Module):
     def loss(self, batch: dict) -> dict[str, torch.Tensor]:
         """``{"loss", "nce"}``: symmetric InfoNCE of a batch (:meth:`collate`), the pairs
         ``batch["alike"]`` marks left out of each other's softmax."""
-        t = self.encode_text(batch["sentences"], batch.get("text"))
+        v = batch.get("text")
+        if self.training and self.config.text_noise > 0:
+            if v is None:
+                v = self.text.vectors(batch["sentences"])
+            v = v + self.config.text_noise * self.text_spread * torch.randn_like(v)
+        t = self.encode_text(batch["sentences"], v)
         m = self.encode_motion(batch["motion"], batch["lengths"])
         logits = t @ m.T / self.config.temperature
         eye = torch.eye(len(t), dtype=torch.bool)

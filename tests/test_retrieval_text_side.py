@@ -1,0 +1,121 @@
+"""The retrieval model's text-side options: the principal-direction anchor (the embedding
+starts as the frozen vectors' own geometry), noise on the frozen vectors in training only,
+their statistics in the checkpoint, and the held-out-word validation of the recipe. Fake
+sentence features (``HashTokens``): no language model needed."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+
+from helpers.twostream import HashTokens  # fake token features, no language model
+from motionlang.errors import MotionlangError
+from motionlang.models.retrieval.config import RetrievalConfig
+from motionlang.models.retrieval.model import RetrievalModel
+from motionlang.recipes.retrieval import scorer, uses_holdout
+
+torch.set_num_threads(1)
+CAPTIONS = ["a person walks forward", "someone jumps twice", "a man waves his left hand",
+            "a person runs in a circle", "a person kicks", "a person sits down",
+            "somebody bows", "a woman claps", "a child hops on one foot"]
+TINY = {"hidden": 16, "layers": 1, "heads": 2, "text_hidden": 16, "embed": 8, "window": 2.0}
+
+
+def tiny(**kw) -> RetrievalModel:
+    torch.manual_seed(0)
+    return RetrievalModel(RetrievalConfig(**{**TINY, **kw}), None, text_encoder=HashTokens())
+
+
+def unit(x: np.ndarray) -> np.ndarray:
+    return x / np.linalg.norm(x, axis=1, keepdims=True)
+
+
+@pytest.mark.parametrize("bad", [{"text_anchor": "svd"}, {"text_noise": -0.5},
+                                 {"text_noise": float("nan")}])
+def test_config_refuses_bad_text_options_by_name(bad):
+    with pytest.raises(MotionlangError, match=f"RetrievalConfig.{next(iter(bad))}"):
+        RetrievalConfig(**bad)
+
+
+def test_pca_anchor_needs_an_embedding_no_wider_than_the_sentence_vector():
+    with pytest.raises(MotionlangError, match="'pca' text anchor projects the 8 values"):
+        tiny(text_anchor="pca", embed=16)
+
+
+def test_pca_anchor_starts_with_the_frozen_vectors_cosines():
+    """The embedding is as wide as the sentence vectors (8): a full rotation of the centred
+    vectors, so before training the captions' cosines are those of the centred vectors."""
+    model = tiny(text_anchor="pca")
+    v = model.text.vectors(CAPTIONS)
+    model.fit_text(v)
+    got = model.embed_texts(CAPTIONS)
+    centred = unit((v - v.mean(0)).numpy().astype(np.float64))
+    np.testing.assert_allclose(got @ got.T, centred @ centred.T, atol=1e-5)
+    # the anchor's scale: root-mean-square length 1 over the fitted captions
+    anchor = (v - model.text_mean) @ model.text_basis
+    assert float(anchor.pow(2).sum(1).mean()) == pytest.approx(1.0, rel=1e-4)
+    with pytest.raises(MotionlangError, match="fit_text needs"):
+        model.fit_text(v[:1])
+
+
+def test_text_noise_only_in_training():
+    """Motions shorter than the window (no random crop) and no dropout: the loss is random
+    only through the noise on the sentence vectors, and only in training."""
+    rng = np.random.default_rng(0)
+    items = [{"motion": rng.normal(size=(10, 66)).astype(np.float32), "sentence": s}
+             for s in CAPTIONS]
+
+    def two_losses(model: RetrievalModel, train: bool) -> tuple[float, float]:
+        model.fit_text(model.text.vectors(CAPTIONS))
+        model.train(train)
+        batch = model.collate(items)
+        return float(model.loss(batch)["nce"]), float(model.loss(batch)["nce"])
+    a, b = two_losses(tiny(text_noise=1.0, dropout=0.0), True)
+    assert a != b
+    a, b = two_losses(tiny(text_noise=1.0, dropout=0.0), False)
+    assert a == b
+    a, b = two_losses(tiny(dropout=0.0), True)
+    assert a == b
+
+
+def test_text_statistics_travel_in_the_checkpoint(tmp_path):
+    model = tiny(text_anchor="pca", text_noise=0.5)
+    model.fit_text(model.text.vectors(CAPTIONS))
+    path = tmp_path / "r.pt"
+    model.save(path)
+    loaded = RetrievalModel.load(path, text_encoder=HashTokens())
+    for name in ("text_mean", "text_spread", "text_basis"):
+        assert torch.equal(getattr(loaded, name), getattr(model, name))
+    assert np.array_equal(loaded.embed_texts(CAPTIONS), model.embed_texts(CAPTIONS))
+    # without these options the model has no such buffers (older checkpoints load as they are)
+    assert not [k for k in tiny().state_dict() if k in ("text_mean", "text_basis")]
+
+
+class Fixed:
+    """A stand-in model whose embeddings are given."""
+
+    def __init__(self, texts: np.ndarray, motions: np.ndarray):
+        self.texts, self.motions = texts, motions
+
+    def embed_texts(self, captions):
+        return self.texts
+
+    def embed_motions(self, motions):
+        return self.motions
+
+
+def test_holdout_words_and_their_scores_by_hand():
+    assert uses_holdout("Someone JOGS forward") and uses_holdout("a man lifts his left hand")
+    assert not uses_holdout("a person jogged") and not uses_holdout("a person raises a hand")
+    items = [{"id": "a", "motion": 0, "sentence": "a person runs"},
+             {"id": "a", "motion": 0, "sentence": "a person jogs"},
+             {"id": "b", "motion": 1, "sentence": "a person waves"},
+             {"id": "b", "motion": 1, "sentence": "a person lifts a hand"}]
+    # captions 0 and 2 find their motions first, 1 and 3 (the held-out words) the other one
+    texts = np.array([[1.0, 0], [0, 1], [0, 1], [1, 0]])
+    motions = np.eye(2)
+    plain = scorer(items)(Fixed(texts, motions))
+    assert "holdout/t2m/R01" not in plain and plain["t2m/R01"] == 50.0
+    held = scorer(items, holdout=True)(Fixed(texts, motions))
+    assert held["holdout/t2m/R01"] == 0.0 and held["holdout/t2m/R02"] == 100.0
+    assert held["t2m/R01"] == 50.0 and not [k for k in held if k.startswith("holdout/m2t")]
