@@ -226,11 +226,11 @@ def build_pairs(data: str | Path | DataSource | Sequence[str | Path | DataSource
     train = [by_id[i] for i in splits["train"]]
     if not train:
         raise DatasetError(f"{data}: the training split is empty")
-    fs = _fit_features(features, train)
     vocab = Vocabulary.build([s for r in train for s in r.annotations], min_count=min_count)
-    if len(vocab.itos) <= len(SPECIALS):
-        raise DatasetError(f"{data}: no word of the training sentences is seen {min_count:,} "
-                           "times or more: the vocabulary would be empty (lower --min-count)")
+    if len(vocab.itos) <= len(SPECIALS):   # before the features are fitted
+        raise DatasetError(f"no word of the training sentences is seen {min_count:,} times or "
+                           "more: the vocabulary would be empty (lower --min-count)")
+    fs = _fit_features(features, train)
     if mirror:
         from motionlang.datasets.synth.augment import mirror_text
         # words only the mirrored sentences have go last: the ids of the others stay as
