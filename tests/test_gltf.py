@@ -87,3 +87,24 @@ def test_a_broken_glb_is_one_error_naming_the_file(tmp_path):
     bad.write_bytes(b"glTF\x02\x00\x00\x00garbage")
     with pytest.raises(MotionFormatError, match="broken.glb"):
         read_gltf_animation(bad)
+
+
+def test_convert_onto_a_users_rig(tmp_path, capsys):
+    # a walk on the Bandai rig retargeted onto a Mixamo-named character, as GLB and BVH
+    walk = write(RIGS["bandai"], tmp_path, T=12)
+    rig = write(RIGS["mixamo"], tmp_path, T=2)
+    rig_names = read_motion(rig).skeleton.names
+    assert main(["convert", str(walk), str(tmp_path / "on_rig.glb"), "--rig", str(rig)]) == 0
+    back = read_gltf_animation(tmp_path / "on_rig.glb")
+    assert back.names[:len(rig_names)] == rig_names and back.positions.shape[0] == 12
+    assert main(["convert", str(walk), str(tmp_path / "on_rig.bvh"), "--rig", str(rig)]) == 0
+    moved = read_motion(tmp_path / "on_rig.bvh")
+    assert moved.skeleton.names == rig_names
+    # the body's path survives the retargeting
+    a, b = positions21(read_motion(walk)), positions21(moved)
+    assert np.abs((a[-1, 0] - a[0, 0]) - (b[-1, 0] - b[0, 0]))[[0, 2]].max() < 0.05
+    capsys.readouterr()
+    assert main(["convert", str(walk), str(tmp_path / "x.bvh"), "--rig-joint-map",
+                 str(tmp_path / "m.json")]) == 2
+    assert capsys.readouterr().err.strip().endswith("--rig-joint-map needs --rig")
+    assert not (tmp_path / "x.bvh").exists()

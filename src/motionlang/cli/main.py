@@ -12,17 +12,14 @@ prints to stdout and logs below warnings.
 from __future__ import annotations
 
 import argparse
-import contextlib
 import importlib
-import logging
-import os
 import sys
 
 from motionlang import __version__
 from motionlang.cli.options import threads_int
 from motionlang.cli.threads import MAX_DEFAULT, default_threads, limit_threads
 from motionlang.errors import MotionlangError
-from motionlang.training.run_log import lead_process
+from motionlang.training.run_log import lead_output
 from motionlang.utils.atomic import error_line
 from motionlang.utils.signals import sigterm_unwinds, stopped
 
@@ -134,24 +131,6 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     except KeyboardInterrupt as exc:   # Ctrl-C, or SIGTERM under sigterm_unwinds
         return stopped(exc)
-
-
-@contextlib.contextmanager
-def lead_output():
-    """Under torchrun, ranks other than 0 print nothing to stdout and log only warnings and
-    errors (each line would otherwise come once per process); rank 0 and single processes
-    are untouched."""
-    if lead_process():
-        yield
-        return
-    package = logging.getLogger("motionlang")   # the level basicConfig leaves alone
-    level = package.level
-    package.setLevel(logging.WARNING)
-    try:
-        with open(os.devnull, "w") as devnull, contextlib.redirect_stdout(devnull):
-            yield
-    finally:
-        package.setLevel(level)
 
 
 if __name__ == "__main__":

@@ -82,12 +82,17 @@ def cmd_render(args: argparse.Namespace) -> int:
 
 # ------------------------------------------------------------------ convert
 def cmd_convert(args: argparse.Namespace) -> int:
+    from motionlang.api import load_rig, retarget
     from motionlang.formats import write_motion
 
     out = Path(args.output)
     if out.resolve() == Path(args.input).resolve():
         raise MotionlangError(f"{out}: output would overwrite the input")
-    write_motion(load_input(args).between(args.start, args.end), out)
+    if args.rig_joint_map and not args.rig:
+        raise MotionlangError("--rig-joint-map needs --rig")
+    rig = None if args.rig is None else load_rig(args.rig, args.rig_joint_map)  # before reading
+    motion = load_input(args).between(args.start, args.end)
+    write_motion(motion if rig is None else retarget(motion, rig), out)
     print(out)
     return 0
 
@@ -121,9 +126,13 @@ def register(subparsers) -> None:
 
     p = subparsers.add_parser(
         "convert", help="convert a motion file (e.g. MMM or AMC to BVH)",
-        description="Read IN and write OUT in the format of OUT's extension (.bvh for any "
-                    "skeleton; .xml for MMM and .amc for ASF skeletons).")
+        description="Read IN and write OUT in the format of OUT's extension (.bvh, .glb or "
+                    ".gltf for any skeleton; .xml for MMM and .amc for ASF skeletons).")
     add_input_args(p)
     p.add_argument("output", metavar="OUT", type=output_file, help="output file, e.g. out.bvh")
     add_clip_args(p)
+    p.add_argument("--rig", metavar="RIG", help="retarget onto this character's skeleton "
+                   "(a BVH file of it) through the 21-joint body; OUT then has its joints")
+    p.add_argument("--rig-joint-map", metavar="MAP.json", help="how RIG maps onto the body, "
+                   "for rigs no built-in or automatic map fits")
     p.set_defaults(func=cmd_convert)

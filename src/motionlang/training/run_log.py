@@ -3,7 +3,9 @@ checkpoints (torch-free: the command line reads it at start-up)."""
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
+import logging
 import os
 from pathlib import Path
 
@@ -40,3 +42,21 @@ def write_licence(run: Path, sources, what: str) -> str | None:
         with atomic_write(run / LICENCE_FILE) as fh:
             fh.write(note)
     return note
+
+
+@contextlib.contextmanager
+def lead_output():
+    """Under torchrun, ranks other than 0 print nothing to stdout and log only warnings and
+    errors (each line would otherwise come once per process); rank 0 and single processes
+    are untouched."""
+    if lead_process():
+        yield
+        return
+    package = logging.getLogger("motionlang")   # the level basicConfig leaves alone
+    level = package.level
+    package.setLevel(logging.WARNING)
+    try:
+        with open(os.devnull, "w") as devnull, contextlib.redirect_stdout(devnull):
+            yield
+    finally:
+        package.setLevel(level)
