@@ -117,3 +117,21 @@ def test_real_walks_and_jogs_of_cmu_subject_35(shared_data):
     jogs = [a for label, a in said if label == "jog"]
     assert walks.count("walk") >= 0.9 * len(walks)
     assert jogs.count("run") >= 0.9 * len(jogs)
+
+
+def _hop(stand, fps, *, lift_left_first: float, flight: float):
+    """Standing, then (optionally) the left foot lifted for a while, then the whole body in
+    the air for ``flight`` s, then standing again: (T, 21, 3)."""
+    n1, n2, n3 = int(0.6 * fps), int(lift_left_first * fps), int(flight * fps)
+    p = np.repeat(stand[None], n1 + n2 + n3 + int(0.6 * fps), axis=0)
+    p[n1:n1 + n2, [13, 14, 15], 1] += 0.2               # the left ankle, heel and toe
+    p[n1 + n2:n1 + n2 + n3, :, 1] += 0.3                # everything off the floor
+    return p
+
+
+def test_a_long_flight_from_one_foot_is_a_leap(walk):
+    p, fps, _ = walk
+    stand = p[0]
+    assert gait(_hop(stand, fps, lift_left_first=0.0, flight=0.2), fps).jumps == 1
+    assert gait(_hop(stand, fps, lift_left_first=0.3, flight=0.2), fps).jumps == 0
+    assert gait(_hop(stand, fps, lift_left_first=0.3, flight=0.45), fps).jumps == 1

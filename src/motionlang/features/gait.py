@@ -7,7 +7,8 @@ gaits in the locomotion of vertebrates"): **walking** keeps a foot on the ground
 moment and has double support, both feet down, at each step; **running** has a flight
 phase, no foot down, between alternate single-foot stances, and no double support; a
 **jump** leaves the ground from both feet at once (the flight starts right after both feet
-were down), where a running stride leaves from one.
+were down), where a running stride leaves from one; a leap from one foot is a jump too when
+its flight outlasts any running stride's.
 
 Contacts (:func:`foot_contacts`): a foot is down when its lowest joint (ankle, heel or toe)
 is within ``height`` leg lengths of the *local* floor and the foot moves slower than
@@ -47,6 +48,8 @@ FOOT_OFFSET = 0.1         # leg lengths: most one foot's floor may lie above the
 TRAVEL_SPEED = 0.5        # leg lengths / s: slower than this is not locomotion
 JUMP_FLIGHT = 0.12        # s: shortest flight counted as a jump
 JUMP_TAKEOFF = 0.08       # s: both feet down within this before a jump's flight
+LEAP_FLIGHT = 0.35        # s: a flight this long is a jump from any take-off (a leap): longer
+                          # than any running stride's
 
 
 @dataclass(frozen=True)
@@ -61,7 +64,8 @@ class Gait:
         flight: share of the travelling frames with no foot down.
         double: share of the travelling frames with both feet down.
         bounce: :func:`vault_bounce` (NaN for a take under a second).
-        jumps: flights of at least ``JUMP_FLIGHT`` s that start from both feet.
+        jumps: flights of at least ``JUMP_FLIGHT`` s that start from both feet, or of at
+            least ``LEAP_FLIGHT`` s from one (leaps), within the take.
         run_score: :func:`_run_score`, above 0 running, below walking (-3..3).
         action: ``"jump"`` (two-footed take-offs, at least one per 10 s), else ``"run"`` or
             ``"walk"`` (by ``run_score``) for locomotion (travelling in at least 40 % of the
@@ -148,7 +152,8 @@ def gait(p21, fps: float) -> Gait:
     jumps = 0
     before = _odd(JUMP_TAKEOFF * fps)
     for a, b in _runs(none):
-        if (b - a) / fps >= JUMP_FLIGHT and a > 0 and both[max(0, a - before):a].any():
+        two_footed = a > 0 and both[max(0, a - before):a].any()
+        if (b - a) / fps >= (JUMP_FLIGHT if two_footed else LEAP_FLIGHT) and 0 < a and b < T:
             jumps += 1
     bounce = vault_bounce(p, fps)
     score = _run_score(flight, double, bounce, speed ** 2 / (GRAVITY * leg))
