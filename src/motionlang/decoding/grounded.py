@@ -104,8 +104,8 @@ def ground(model: Any, frames, hyps: list[tuple[str, float]], action: str | None
         return hyps
     if action != "jump":
         if said is not None:    # another gait named: search again without its words
-            banned = [w for g, ws in GAIT_WORDS.items() if g != action for w in ws]
-            again = describe_features(model, frames, width=width, banned_words=banned, **beam)
+            again = describe_features(model, frames, width=width,
+                                      banned_words=_others(action), **beam)
             if again and has_verb(again[0][0]):
                 return again
         elif has_verb(hyps[0][0]):
@@ -115,8 +115,13 @@ def ground(model: Any, frames, hyps: list[tuple[str, float]], action: str | None
     prefix = [*subject, GAIT_VERB[action]]
     if all(w in getattr(model.vocab, "stoi", {}) for w in prefix):
         return describe_features(model, frames, width=max(width, 2), prefix=prefix,
-                                 **beam)[:width]
+                                 banned_words=_others(action), **beam)[:width]
     return hyps
+
+
+def _others(action: str) -> list[str]:
+    """The words of every gait but ``action`` (and of standing still)."""
+    return [w for g, ws in GAIT_WORDS.items() if g != action for w in ws]
 
 
 def familiar(hyps: list[tuple[str, float]]) -> list[tuple[str, float]]:
