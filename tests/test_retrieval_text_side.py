@@ -110,12 +110,15 @@ def test_holdout_words_and_their_scores_by_hand():
     items = [{"id": "a", "motion": 0, "sentence": "a person runs"},
              {"id": "a", "motion": 0, "sentence": "a person jogs"},
              {"id": "b", "motion": 1, "sentence": "a person waves"},
-             {"id": "b", "motion": 1, "sentence": "a person lifts a hand"}]
-    # captions 0 and 2 find their motions first, 1 and 3 (the held-out words) the other one
-    texts = np.array([[1.0, 0], [0, 1], [0, 1], [1, 0]])
-    motions = np.eye(2)
+             {"id": "b", "motion": 1, "sentence": "a person lifts a hand"},
+             {"id": "c", "motion": 2, "sentence": "a person sits"}]
+    # captions 0, 2 and 4 find their motions first; 1 and 3 (the held-out words) rank
+    # another motion first and their own second; motion c has no held-out caption
+    texts = np.array([[1.0, 0, 0], [0.5, 1, 0], [0, 1, 0], [1, 0.5, 0], [0, 0, 1]])
+    motions = np.eye(3)
     plain = scorer(items)(Fixed(texts, motions))
-    assert "holdout/t2m/R01" not in plain and plain["t2m/R01"] == 50.0
+    assert "holdout/t2m/R01" not in plain and plain["t2m/R01"] == 60.0
     held = scorer(items, holdout=True)(Fixed(texts, motions))
     assert held["holdout/t2m/R01"] == 0.0 and held["holdout/t2m/R02"] == 100.0
-    assert held["t2m/R01"] == 50.0 and not [k for k in held if k.startswith("holdout/m2t")]
+    assert held["holdout/t2m/MedR"] == 2.0 and held["t2m/R01"] == 60.0
+    assert not [k for k in held if k.startswith("holdout/m2t")]
