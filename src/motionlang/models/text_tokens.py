@@ -66,6 +66,16 @@ class CachedTokens:
             out.append(f)
         return out
 
+    def prepare(self, sentences: Sequence[str], chunk: int = 64) -> None:
+        """Compute and cache the features of ``sentences`` ahead of use, in batches of
+        ``chunk`` in sorted order. A transformer's output for a sentence differs in its last
+        bits with the batch it is computed in (padding, matrix shapes); prepared this way
+        each sentence's features depend only on the set of sentences, so a training run
+        resumed in another process reads the very numbers of an uninterrupted one."""
+        todo = sorted(set(sentences) - set(self._cache))
+        for a in range(0, len(todo), chunk):
+            self.many(todo[a:a + chunk])
+
     def batch(self, sentences: Sequence[str]) -> tuple[torch.Tensor, torch.Tensor]:
         """-> padded features (B, L_max, D) and lengths (B,) long."""
         feats = self.many(sentences)

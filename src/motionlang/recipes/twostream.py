@@ -118,6 +118,9 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg,
     torch.manual_seed(train_cfg.seed)
     model = TwoStreamModel(config, data.features.normalizer)
     model.length_model = SentenceLength.from_items(data.items["train"])
+    # every sentence's token features once, in a fixed order (the same numbers on a resume)
+    model.text_encoder.prepare([it["sentence"] for items in (train_items,
+                                data.items.get("val") or []) for it in items])
     if lead:
         print(f"twostream ({data_cfg.ablation}): {len(data.items['train'])} training pairs "
               f"({len(data.splits['train'])} motions), "

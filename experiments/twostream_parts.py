@@ -1,0 +1,112 @@
+"""The two-stream recipe (``experiments/twostream_recipe.sh``: 20 epochs at the full rate,
+then 4 with the learning rate decayed) trained in parts of a few epochs each, one part per
+session, on a fresh checkout: run folders are not kept between sessions, so each part
+starts from a state committed to the repository and ends by replacing it.
+
+    OMP_NUM_THREADS=1 .venv/bin/python experiments/twostream_parts.py PART
+        [--epochs-per-part 5] [--data SOURCE ...] [--threads 1]
+
+Part 1 starts the run; part N continues from the state the part before committed, in
+``experiments/state/twostream_recipe/`` (``training.run_state``: the trainer's ``last.pt``
+with the optimiser's moments and the RNG states, ``run.json``, ``splits/``,
+``history.json``, ``commands.jsonl``, ``state.json``; about 37 MB at h = 128). Parts
+1..4 (5 epochs each) reach epoch 20, part 5 runs the 4 decayed epochs; the last part also
+puts ``model.pt`` there. The parts give the model of one uninterrupted run
+(``tests/test_run_state.py``). A part rebuilds the corpus (``data synth``, seed 0) and the
+features from it first (minutes; the features through the on-disk cache) and checks them
+against the saved split and normaliser. Printed at the end: what to commit. Run a part again
+after an interruption in the same session: it continues from the run folder's own
+``last.pt`` (checkpoints every 50 steps).
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "src"))
+
+STATE = Path("experiments/state/twostream_recipe")   # relative to ROOT: committed
+WORK = Path("runs/twostream_parts")                   # relative to ROOT: not kept
+RECIPE = {"h": 128, "batch_size": 32, "length_buckets": 20, "z_every_step": True,
+          "progress_input": True, "lambdas": {"energy": 10.0}, "checkpoint_every": 50}
+FULL_EPOCHS, DECAY_EPOCHS = 20, 4
+
+
+def plan(part: int, per_part: int) -> tuple[int, int, int]:
+    """Part ``part`` -> (epoch it starts from, epoch it ends at, decayed epochs of the run
+    it resumes: 0 until the decay part)."""
+    full_parts = math.ceil(FULL_EPOCHS / per_part)
+    if part < 1 or part > full_parts + 1:
+        raise SystemExit(f"PART must be 1..{full_parts + 1} with --epochs-per-part {per_part}")
+    if part <= full_parts:
+        return (part - 1) * per_part, min(part * per_part, FULL_EPOCHS), 0
+    return FULL_EPOCHS, FULL_EPOCHS + DECAY_EPOCHS, DECAY_EPOCHS
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("part", type=int)
+    ap.add_argument("--epochs-per-part", type=int, default=5)
+    ap.add_argument("--data", nargs="*", default=[],
+                    help="sources beside the procedural corpus, e.g. bandai:DIR@1")
+    ap.add_argument("--threads", type=int, default=1)
+    a = ap.parse_args(argv)
+    start, end, decay = plan(a.part, a.epochs_per_part)
+    os.chdir(ROOT)          # the run records its --data as given: the same text every part
+    import torch
+
+    import motionlang as ml
+    from motionlang.errors import MotionlangError
+    from motionlang.training.run_files import read_training_checkpoint
+    from motionlang.training.run_state import read_state, restore_state, save_state
+    torch.set_num_threads(a.threads)
+    corpus = WORK / "corpus"
+    if not (corpus / ".done").is_file():
+        subprocess.run([str(Path(sys.executable).with_name("motionlang")), "data", "synth",
+                        "--out", str(corpus), "--n", "6000", "--seed", "0"], check=True)
+        (corpus / ".done").touch()
+    run = WORK / "run"
+    try:
+        if (run / "last.pt").is_file():
+            epoch = read_training_checkpoint(run / "last.pt")["epoch"]
+            if not start <= epoch <= end:
+                raise MotionlangError(f"{run}: at epoch {epoch}, outside part {a.part} "
+                                      f"(epochs {start}..{end}): remove it or run that part")
+            print(f"{run}: continuing this session's run folder (epoch {epoch})")
+        elif start:
+            about = restore_state(STATE, run)
+            if about["epoch"] != start or about["batch"]:
+                raise MotionlangError(f"{STATE}: saved at epoch {about['epoch']} batch "
+                                      f"{about['batch']}, part {a.part} starts at epoch "
+                                      f"{start}: run the part that ends there first")
+        elif (STATE / "state.json").is_file():
+            raise MotionlangError(f"{STATE}: a state is saved at epoch "
+                                  f"{read_state(STATE)['epoch']}: part 1 would start over")
+        model = ml.train("twostream", [str(corpus), *a.data], run,
+                         resume=(run / "last.pt").is_file(), epochs=end,
+                         decay_epochs=decay, **RECIPE)
+        about = save_state(run, STATE, part=a.part, data=[str(corpus), *a.data])
+        if decay:
+            (STATE / "model.pt").write_bytes(model.read_bytes())
+    except MotionlangError as exc:
+        print(f"twostream_parts.py: {exc}", file=sys.stderr)
+        return 2
+    size = sum(p.stat().st_size for p in STATE.rglob("*") if p.is_file())
+    print(f"part {a.part} done: epoch {about['epoch']}, step {about['step']}; "
+          f"{STATE} holds {size / 1e6:.1f} MB. Commit it:\n"
+          f"  git add {STATE} && git commit -m 'twostream recipe: part {a.part} "
+          f"(epoch {about['epoch']})' -- {STATE}")
+    if end == FULL_EPOCHS:
+        print(f"the 20-epoch model is {run / 'model.pt'} (this session only): "
+              f"motionlang evaluate-t2m --data {corpus} --model ts20={run / 'model.pt'} "
+              f"--autoencode --true-start --oracle 3 -o {WORK / 't2m_20'}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
