@@ -167,6 +167,14 @@ def _zip_member(fmt: str, member_suffix: str, body: bytes) -> bytes:
     return out.getvalue()
 
 
+def _npy_shape(shape: tuple) -> bytes:
+    """A .npy header declaring ``shape`` (beyond a C long: numpy's OverflowError)."""
+    buf = io.BytesIO()
+    np.lib.format.write_array_header_1_0(
+        buf, {"descr": "<f4", "fortran_order": False, "shape": shape})
+    return buf.getvalue() + bytes(16)
+
+
 def _glb_zero_quaternion() -> bytes:
     import struct
     data = bytearray(sidecar_seeds("glb")[0])
@@ -182,6 +190,9 @@ FINDINGS = [
     ("index", lambda: _zip_member("index", "spans.npy", _npy_unterminated()), None,
      "an array does not read"),
     ("glb", _glb_zero_quaternion, None, "no unit quaternion"),
+    ("index", lambda: _zip_member("index", "vectors.npy", _npy_shape((2 ** 70, 8))), None,
+     "an array does not read"),
+    ("npz", lambda: _zip_member("npz", "W.npy", _npy_shape((2 ** 70, 4))), None, "a damaged"),
     ("mit", _mat_double_tag_as_8, None, "number data of element type 8"),
     ("mit", lambda: _mit_with("parent", "text"), None, "parent must be numbers"),
     ("mit", lambda: _mit_with("or", "abc"), None, "or must be numbers"),

@@ -75,12 +75,12 @@ def _accessor(gltf, buffers: list[bytes], index: int, path: Path) -> np.ndarray:
         dtype = np.dtype(_DTYPES[acc.componentType])
         width = _WIDTH[acc.type]
         data = buffers[view.buffer]
-    except (IndexError, KeyError, TypeError) as exc:
+        start = (view.byteOffset or 0) + (acc.byteOffset or 0)
+        row = dtype.itemsize * width
+        stride = view.byteStride or row
+        end = start + stride * (acc.count - 1) + row if acc.count else start
+    except (IndexError, KeyError, TypeError) as exc:   # TypeError: a field that is null
         raise MotionFormatError(path, f"accessor {index} is malformed ({exc})") from None
-    start = (view.byteOffset or 0) + (acc.byteOffset or 0)
-    row = dtype.itemsize * width
-    stride = view.byteStride or row
-    end = start + stride * (acc.count - 1) + row if acc.count else start
     if acc.count < 0 or stride < row or end > (view.byteOffset or 0) + view.byteLength \
             or end > len(data):
         raise MotionFormatError(path, f"accessor {index} runs past its buffer")
@@ -137,8 +137,13 @@ def read_gltf_animation(path: str | Path, animation: int = 0) -> GltfAnimation:
             times = t
         elif len(t) != len(times) or np.abs(t - times).max() > 1e-6:
             raise MotionFormatError(path, "animation channels have different key times")
-        tracks[(ch.target.node, ch.target.path)] = \
-            _accessor(gltf, buffers, sampler.output, path).astype(float)
+        values = _accessor(gltf, buffers, sampler.output, path).astype(float)
+        width = 4 if ch.target.path == "rotation" else 3
+        if values.shape != (len(t), width):
+            raise MotionFormatError(path, f"{ch.target.path} of node {ch.target.node}: "
+                                          f"{values.shape} values for {len(t)} keys of "
+                                          f"{width}")
+        tracks[(ch.target.node, ch.target.path)] = values
     if times is None or not len(times):
         raise MotionFormatError(path, f"animation {animation} has no keys")
     T = len(times)

@@ -126,7 +126,8 @@ def _arrays(path: Path) -> dict[str, np.ndarray]:
         with np.load(path, allow_pickle=False) as npz:
             out = {k: npz[k] for k in ("vectors", "spans", "meta")}
     except (OSError, ValueError, EOFError, zipfile.BadZipFile, SyntaxError,
-            tokenize.TokenError) as exc:   # the last two: a garbled .npy header
+            tokenize.TokenError, OverflowError, NotImplementedError) as exc:
+        # a garbled .npy header, a size beyond C's, a zip flag numpy does not read
         raise _damaged(path, f"an array does not read: {exc}") from None
     for k, v in out.items():   # numpy gives the raw bytes of a member that is no .npy
         if not isinstance(v, np.ndarray):

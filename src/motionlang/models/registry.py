@@ -246,6 +246,7 @@ def resolve(name_or_path: str | Path) -> Path:
 
 
 def _npz_kind(path: Path) -> str:
+    import tokenize
     import zipfile
 
     import numpy as np
@@ -259,7 +260,9 @@ def _npz_kind(path: Path) -> str:
                 meta = parse_json(str(z["meta"]), f"{path}: meta")
                 if isinstance(meta, dict):
                     return str(meta.get("kind"))
-    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as exc:
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile, SyntaxError,
+            tokenize.TokenError, OverflowError, NotImplementedError) as exc:
+        # the last four: a garbled .npy header, a size beyond C's, a zip flag numpy lacks
         raise MotionlangError(f"{path}: not a readable model file ({type(exc).__name__})"
                               ) from exc
     raise MotionlangError(f"{path}: an .npz without a model kind")
