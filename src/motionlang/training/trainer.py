@@ -38,7 +38,6 @@ from motionlang.errors import MotionlangError
 from motionlang.models.checkpoint import Checkpointed, write_checkpoint
 from motionlang.training.config import OPTIMIZER_NAMES, TrainConfig
 from motionlang.training.distributed import init_distributed
-from motionlang.training.nadam import ChunkedNAdam
 from motionlang.training.run_files import (
     check_resume,
     check_same_data,
@@ -52,7 +51,7 @@ from motionlang.utils.atomic import atomic_write
 from motionlang.utils.progress import progress
 
 log = logging.getLogger(__name__)
-OPTIMIZERS = dict(zip(OPTIMIZER_NAMES, (ChunkedNAdam, torch.optim.Adam,
+OPTIMIZERS = dict(zip(OPTIMIZER_NAMES, (torch.optim.NAdam, torch.optim.Adam,
                                          torch.optim.AdamW, torch.optim.SGD)))
 
 

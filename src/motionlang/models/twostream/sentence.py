@@ -4,8 +4,8 @@ from __future__ import annotations
 import torch
 from torch import nn
 
+from motionlang.models.seq2seq.layers import last_valid_output
 from motionlang.models.twostream.config import TwoStreamConfig
-from motionlang.models.twostream.scan import lstm_last_valid
 
 
 class SentenceEncoder(nn.Module):
@@ -19,6 +19,6 @@ class SentenceEncoder(nn.Module):
                             batch_first=True)
 
     def forward(self, tokens: torch.Tensor, lengths: torch.Tensor) -> dict[str, torch.Tensor]:
-        z = lstm_last_valid(self.lstm, tokens, lengths)
+        z = last_valid_output(self.lstm, tokens, lengths)
         streams = list(self.config.streams())
         return dict(zip(streams, z.split(self.config.stream_size, dim=-1)))
