@@ -285,8 +285,9 @@ class MaskedModel(Checkpointed, nn.Module):
         kept = torch.as_tensor(kept_tokens(keep), device=self.device)[None]
         tokens = self.sample_tokens([text], [n_tok], seed=seed, options=options,
                                     known=known, kept=kept)
+        # decoded whole (kept tokens too), so that the generated frames join their decoded
+        # neighbours smoothly; ``blend`` then puts the kept frames back exactly
         gen = self.tokenizer.decode(tokens)[0, :len(rows)].cpu().numpy()
-        gen = np.where(keep[:, None], rows, gen)   # the kept rows exactly, root steps included
         from motionlang.features.positions import positions_to_rows
         start = positions_to_rows(p21[:1])[1]
         return blend(self._positions(gen, start), p21, keep)
