@@ -39,23 +39,33 @@ def test_kitml_positions_hit_and_misses(tmp_path, cache):
     reads = []
     recs = [Counting(KitMLRecord("00001", src, ["a person walks"]), reads)]
     first = dataset_features(recs, "positions", {"fps": 12.5})
-    assert len(reads) == 2  # once to fit, once to encode
+    assert len(reads) == 1  # read once: its rows fit the features and are encoded
     (x,) = first.sequences["00001"]
     assert x.shape == (len(np.arange(0, 378, 8)), first.features.dim)
+    # the very numbers of fitting on the motion and encoding it, reading it twice
+    from motionlang.features.positions import PositionFeatures
+    motion = recs[0].load_motion()
+    ref = PositionFeatures(fps=12.5).fit([motion])
+    assert np.array_equal(ref.encode(motion), x)
+    assert ref.to_dict() == first.features.to_dict()
+    reads.clear()
     second = dataset_features(recs, "positions", {"fps": 12.5})
-    assert len(reads) == 2  # a hit: no motion read again
+    assert len(reads) == 0  # a hit: no motion read again
     assert np.array_equal(second.sequences["00001"][0], x)
     assert second.features.to_dict() == first.features.to_dict()
     assert len(list(cache.glob("*.npz"))) == 2
 
     dataset_features(recs, "positions", {"fps": 25.0})  # an option changed
-    assert len(reads) == 4
+    assert len(reads) == 1
     st = src.stat()
     os.utime(src, ns=(st.st_atime_ns, st.st_mtime_ns + 10**9))  # the source touched
     dataset_features(recs, "positions", {"fps": 12.5})
-    assert len(reads) == 6
+    assert len(reads) == 2
     dataset_features(recs, "positions", {"fps": 12.5}, refresh=True)
-    assert len(reads) == 8
+    assert len(reads) == 3
+    # mirrored: the fit is the unmirrored one's (a hit), each motion read to be mirrored
+    dataset_features(recs, "positions", {"fps": 12.5}, mirror=True)
+    assert len(reads) == 4
 
 
 def test_angles_keep_every_offset(tmp_path, cache):

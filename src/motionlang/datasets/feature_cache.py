@@ -96,10 +96,20 @@ def dataset_features(records: Sequence, kind: str, options: dict[str, Any] | Non
     options = dict(options or {})
     make_features(kind, options)  # fail on a bad kind or option before touching the cache
 
+    # rows of every record read while fitting, for encoding without reading them again
+    # (feature sets whose encoding is normalise(rows); never for the mirrored pass)
+    read: dict[str, np.ndarray] = {}
+
     def fit():
         fs = make_features(kind, options)
-        fs.fit(r.load_motion() for r in progress(fit_records, desc=f"fit {kind}",
-                                                 unit="motion"))
+        by_id = {str(r.id): r for r in fit_records}
+        if mirror or not fs.encodes_rows or not by_id.keys() <= set(ids):
+            fs.fit(r.load_motion() for r in progress(fit_records, desc=f"fit {kind}",
+                                                     unit="motion"))
+        else:   # each motion read once: all records now, the fit on the training ones
+            for r in progress(records, desc=f"read {kind}", unit="motion"):
+                read[str(r.id)] = fs.rows(r.load_motion())
+            fs.fit_rows([read[str(r.id)] for r in fit_records])
         return {"json": np.frombuffer(json.dumps(fs.to_dict()).encode("utf-8"), np.uint8)}
 
     key = {"v": CACHE_VERSION, "stage": "fit", "kind": kind, "options": options,
@@ -109,6 +119,10 @@ def dataset_features(records: Sequence, kind: str, options: dict[str, Any] | Non
 
     def encode():
         out = {}
+        if read:
+            for i, rid in enumerate(ids):
+                out[f"{i}_0"] = fs.encode_rows(read.pop(rid))
+            return out
         for i, r in enumerate(progress(records, desc=f"encode {kind}", unit="motion")):
             motion = r.load_motion()
             motion = mirror_motion(motion) if mirror else motion

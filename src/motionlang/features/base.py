@@ -8,6 +8,7 @@ normaliser. :func:`features_from_dict` rebuilds any of them from a checkpoint en
 from __future__ import annotations
 
 import json
+from collections.abc import Sequence
 from dataclasses import asdict, fields
 from pathlib import Path
 from typing import Any, ClassVar
@@ -50,6 +51,10 @@ class FeatureSet:
 
     kind: ClassVar[str] = ""
     Config: ClassVar[type] = object
+    #: whether the whole encoding is ``encode_rows(rows(motion))`` and ``fit`` is
+    #: ``fit_rows`` of those rows, small arrays at the features' rate: a dataset reader
+    #: then keeps them and reads each motion once
+    encodes_rows: ClassVar[bool] = False
 
     def __init_subclass__(cls, **kw):
         super().__init_subclass__(**kw)
@@ -78,6 +83,19 @@ class FeatureSet:
     @property
     def fitted(self) -> bool:
         return self.normalizer is not None
+
+    def rows(self, motion: Motion) -> np.ndarray:  # pragma: no cover
+        """The un-normalised features of ``motion`` that :meth:`fit` reads and
+        :meth:`encode_rows` normalises (where :attr:`encodes_rows`)."""
+        raise NotImplementedError
+
+    def fit_rows(self, rows: Sequence[np.ndarray]) -> FeatureSet:  # pragma: no cover
+        """:meth:`fit` from :meth:`rows` of the motions (where :attr:`encodes_rows`)."""
+        raise NotImplementedError
+
+    def encode_rows(self, rows: np.ndarray) -> np.ndarray:  # pragma: no cover
+        """:meth:`encode` from the motion's :meth:`rows` (where :attr:`encodes_rows`)."""
+        raise NotImplementedError
 
     def _require_fit(self) -> None:
         if self.normalizer is None:

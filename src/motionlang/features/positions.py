@@ -18,7 +18,7 @@ moved vertically so that the feet stand on y = 0) exactly.
 """
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -125,6 +125,7 @@ class PositionFeatures(FeatureSet):
     """Local 21-joint positions + root trajectory; ``encode`` -> (T, 66) at 12.5 Hz."""
 
     kind = "positions"
+    encodes_rows = True
     Config = PositionsConfig
 
     @property
@@ -147,11 +148,23 @@ class PositionFeatures(FeatureSet):
     def fit(self, motions: Iterable[Motion]) -> PositionFeatures:
         """Fit the normaliser on the (T, 66) raw features of ``motions`` (any mappable
         skeleton: MMM, CMU-ASF, BVH)."""
-        motions = list(motions)
-        if not motions:
+        return self.fit_rows([self._raw(m)[0] for m in motions])
+
+    def rows(self, motion: Motion) -> np.ndarray:
+        """(T, 66) un-normalised features of ``motion`` at ``fps``."""
+        return self._raw(motion)[0]
+
+    def fit_rows(self, rows: Sequence[np.ndarray]) -> PositionFeatures:
+        """Fit the normaliser on motions' :meth:`rows`."""
+        if not rows:
             raise MotionlangError("PositionFeatures.fit: no motions")
-        self.normalizer = Normalizer(names=self.names).fit([self._raw(m)[0] for m in motions])
+        self.normalizer = Normalizer(names=self.names).fit(list(rows))
         return self
+
+    def encode_rows(self, rows: np.ndarray) -> np.ndarray:
+        """A motion's :meth:`rows` -> (T, 66) normalised features (what :meth:`encode` gives)."""
+        self._require_fit()
+        return self._out(self.normalizer.transform(rows))
 
     @classmethod
     def from_dict(cls, d: dict) -> PositionFeatures:
@@ -161,8 +174,7 @@ class PositionFeatures(FeatureSet):
 
     def encode(self, motion: Motion) -> np.ndarray:
         """Motion (any supported skeleton, any fps) -> (T, 66) normalised features."""
-        self._require_fit()
-        return self._out(self.normalizer.transform(self._raw(motion)[0]))
+        return self.encode_rows(self._raw(motion)[0])
 
     def encode_positions(self, p21) -> np.ndarray:
         """Global positions (T, 21, 3) metres, already at ``fps``, -> (T, 66) normalised
