@@ -12,7 +12,8 @@
 # Time: 24 epochs over 4,800 motions at h = 128 on one core: many hours (6 epochs on 8 s crops
 # took 45 min with the code before 2026-11-23; a training step is about 2x faster since).
 # Usage: experiments/twostream_recipe.sh [OUT]   (default runs/twostream_recipe; CORPUS=DIR
-# reuses a corpus)
+# reuses a corpus). Sessions too short for the whole run: experiments/twostream_parts.py PART
+# trains it in parts from a state committed to the repository.
 set -euo pipefail
 source "$(dirname "$0")/common.sh"
 OUT=${1:-runs/twostream_recipe}
