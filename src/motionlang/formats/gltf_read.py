@@ -79,10 +79,11 @@ def _accessor(gltf, buffers: list[bytes], index: int, path: Path) -> np.ndarray:
         row = dtype.itemsize * width
         stride = view.byteStride or row
         end = start + stride * (acc.count - 1) + row if acc.count else start
+        past = acc.count < 0 or stride < row or end > (view.byteOffset or 0) + \
+            view.byteLength or end > len(data)
     except (IndexError, KeyError, TypeError) as exc:   # TypeError: a field that is null
         raise MotionFormatError(path, f"accessor {index} is malformed ({exc})") from None
-    if acc.count < 0 or stride < row or end > (view.byteOffset or 0) + view.byteLength \
-            or end > len(data):
+    if past:
         raise MotionFormatError(path, f"accessor {index} runs past its buffer")
     raw = np.frombuffer(data, np.uint8, count=end - start, offset=start)
     if stride != row:

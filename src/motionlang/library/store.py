@@ -114,7 +114,7 @@ def _arrays(path: Path) -> dict[str, np.ndarray]:
     try:
         with zipfile.ZipFile(path) as zf:
             infos = {i.filename: i for i in zf.infolist()}
-    except (OSError, zipfile.BadZipFile, ValueError) as exc:
+    except (OSError, zipfile.BadZipFile, ValueError, NotImplementedError) as exc:
         raise _damaged(path, f"not an npz archive: {exc}") from None
     names = {"vectors.npy", "spans.npy", "meta.npy"}
     if set(infos) != names:
