@@ -1,5 +1,5 @@
 """A run folder's resumable state, apart from the run folder: what a long training run
-needs to go on in another session, on a fresh checkout, where the run folder is gone.
+needs to go on later, on a fresh checkout, where the run folder is gone.
 
 ``save_state(run, state)`` copies into ``state`` only what ``--resume`` reads (the trainer's
 ``last.pt``: model, optimiser moments, RNG states, position and history; ``run.json``: the
