@@ -4,14 +4,15 @@ session, on a fresh checkout: run folders are not kept between sessions, so each
 starts from a state committed to the repository and ends by replacing it.
 
     OMP_NUM_THREADS=1 .venv/bin/python experiments/twostream_parts.py PART
-        [--epochs-per-part 5] [--data SOURCE ...] [--threads 1]
+        [--epochs-per-part 4] [--data SOURCE ...] [--threads 1]
 
 Part 1 starts the run; part N continues from the state the part before committed, in
 ``experiments/state/twostream_recipe/`` (``training.run_state``: the trainer's ``last.pt``
 with the optimiser's moments and the RNG states, ``run.json``, ``splits/``,
 ``history.json``, ``commands.jsonl``, ``state.json``; about 37 MB at h = 128). Parts
-1..4 (5 epochs each) reach epoch 20, part 5 runs the 4 decayed epochs; the last part also
-puts ``model.pt`` there. The parts give the model of one uninterrupted run
+1..5 (4 epochs each: an epoch took 15-19 minutes on one shared core, the data preparation
+about 10 more) reach epoch 20, part 6 runs the 4 decayed epochs; the last part also puts
+``model.pt`` there. The parts give the model of one uninterrupted run
 (``tests/test_run_state.py``). A part rebuilds the corpus (``data synth``, seed 0) and the
 features from it first (minutes; the features through the on-disk cache) and checks them
 against the saved split and normaliser. Printed at the end: what to commit. Run a part again
@@ -40,9 +41,12 @@ FULL_EPOCHS, DECAY_EPOCHS = 20, 4
 def plan(part: int, per_part: int) -> tuple[int, int, int]:
     """Part ``part`` -> (epoch it starts from, epoch it ends at, decayed epochs of the run
     it resumes: 0 until the decay part)."""
+    if per_part < 1:
+        raise ValueError(f"--epochs-per-part must be at least 1, got {per_part}")
     full_parts = math.ceil(FULL_EPOCHS / per_part)
     if part < 1 or part > full_parts + 1:
-        raise SystemExit(f"PART must be 1..{full_parts + 1} with --epochs-per-part {per_part}")
+        raise ValueError(f"PART must be 1..{full_parts + 1} with --epochs-per-part {per_part}, "
+                         f"got {part}")
     if part <= full_parts:
         return (part - 1) * per_part, min(part * per_part, FULL_EPOCHS), 0
     return FULL_EPOCHS, FULL_EPOCHS + DECAY_EPOCHS, DECAY_EPOCHS
@@ -51,12 +55,16 @@ def plan(part: int, per_part: int) -> tuple[int, int, int]:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("part", type=int)
-    ap.add_argument("--epochs-per-part", type=int, default=5)
+    ap.add_argument("--epochs-per-part", type=int, default=4)
     ap.add_argument("--data", nargs="*", default=[],
                     help="sources beside the procedural corpus, e.g. bandai:DIR@1")
     ap.add_argument("--threads", type=int, default=1)
     a = ap.parse_args(argv)
-    start, end, decay = plan(a.part, a.epochs_per_part)
+    try:
+        start, end, decay = plan(a.part, a.epochs_per_part)
+    except ValueError as exc:
+        print(f"twostream_parts.py: {exc}", file=sys.stderr)
+        return 2
     os.chdir(ROOT)          # the run records its --data as given: the same text every part
     import torch
 

