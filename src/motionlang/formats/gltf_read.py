@@ -131,20 +131,24 @@ def read_gltf_animation(path: str | Path, animation: int = 0) -> GltfAnimation:
     anim = gltf.animations[animation]
     times = None
     tracks: dict[tuple[int, str], np.ndarray] = {}
-    for ch in anim.channels:
-        sampler = anim.samplers[ch.sampler]
+    for ch in anim.channels or []:
+        try:   # a null sampler, target or index
+            sampler = anim.samplers[ch.sampler]
+            node, what = int(ch.target.node), str(ch.target.path)
+        except (AttributeError, IndexError, TypeError) as exc:
+            raise MotionFormatError(path, f"an animation channel is malformed ({exc})"
+                                    ) from None
         t = _accessor(gltf, buffers, sampler.input, path)[:, 0].astype(float)
         if times is None:
             times = t
         elif len(t) != len(times) or np.abs(t - times).max() > 1e-6:
             raise MotionFormatError(path, "animation channels have different key times")
         values = _accessor(gltf, buffers, sampler.output, path).astype(float)
-        width = 4 if ch.target.path == "rotation" else 3
+        width = 4 if what == "rotation" else 3
         if values.shape != (len(t), width):
-            raise MotionFormatError(path, f"{ch.target.path} of node {ch.target.node}: "
-                                          f"{values.shape} values for {len(t)} keys of "
-                                          f"{width}")
-        tracks[(ch.target.node, ch.target.path)] = values
+            raise MotionFormatError(path, f"{what} of node {node}: {values.shape} values for "
+                                          f"{len(t)} keys of {width}")
+        tracks[(node, what)] = values
     if times is None or not len(times):
         raise MotionFormatError(path, f"animation {animation} has no keys")
     T = len(times)
