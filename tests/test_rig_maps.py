@@ -246,8 +246,8 @@ def test_template_filled_in_maps_the_rig(rigify, tmp_path):
 
 
 @pytest.mark.parametrize("content,message", [
-    ("{", "not valid JSON"),
-    ("[]", 'a "joints" object'),
+    ("{", "invalid JSON"),
+    ("[]", "joint map must be a JSON object"),
     (json.dumps({"joints": {"root": "torso"}}), "missing body joints"),
     (json.dumps({"joints": {**FILL, "LT": "toe.L"}}), r"unknown body joints \['LT'\]"),
     (json.dumps({"joints": {**FILL, "LE": ["mid", "forearm.L"]}}),
