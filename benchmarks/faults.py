@@ -293,6 +293,51 @@ def existing_rows(base: Path) -> list[Row]:
     return rows
 
 
+def resume_rows(base: Path) -> list[Row]:
+    """A training run stopped by a full disk (its run folder on a small tmpfs), its folder
+    copied to a disk with room and resumed: the same model as a run that never stopped. The
+    tmpfs is sized by trial, the smallest that holds the first epoch's ``last.pt``."""
+    import torch
+    args = ["train", "m2l", "--data", "corpus", "--offsets", "1", "--epochs", "3"]
+    code, err = run([*args, "--out", "ref"], base)
+    if code != 0:
+        return [Row("disk full mid-train, then --resume", code, stderr_kind(err), [], True,
+                    False, err.strip().splitlines()[-1] if err.strip() else "")]
+    total = sum(f.stat().st_size for f in (base / "ref").rglob("*") if f.is_file())
+    stopped = None
+    for frac in (0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9):
+        spot = base / "spot"
+        with tmpfs(spot, f"{int(total * frac) // 1024}k"):
+            code, err = run([*args, "--out", str(spot / "run")], base)
+            if code == 2 and (spot / "run" / "last.pt").is_file():
+                left = temps(spot)
+                shutil.copytree(spot / "run", base / "resumed")
+                stopped = (code, err, left)
+        if stopped:
+            break
+    if stopped is None:
+        return [Row("disk full mid-train, then --resume", "none", "", [], True, False,
+                    "no tmpfs size stopped the run after its first checkpoint")]
+    code, err, left = stopped
+    at = torch.load(base / "resumed" / "last.pt", map_location="cpu", weights_only=False)
+    epochs_done = int(at["epoch"])    # an epoch's last.pt holds the next one's index
+    rcode, rerr = run([*args, "--out", "resumed", "--resume"], base)
+
+    def weights(run_dir: str) -> dict:
+        ckpt = torch.load(base / run_dir / "model.pt", map_location="cpu", weights_only=False)
+        return ckpt.get("state_dict", ckpt.get("model", ckpt))
+
+    ref, resumed = (list(weights(d).values()) for d in ("ref", "resumed"))
+    same = (rcode == 0 and len(ref) == len(resumed) > 0 and epochs_done < 3
+            and all(torch.equal(a, b) for a, b in zip(ref, resumed)))
+    row = judge("disk full mid-train, then --resume", code, err, base, digest(base), 2)
+    row.temps, row.intact = left, same
+    row.ok = row.ok and not left and same
+    row.line = (f"stopped after {epochs_done} of 3 epochs; resumed elsewhere: exit {rcode}, "
+                f"weights {'equal' if same else 'DIFFER'} | {row.line}")
+    return [row]
+
+
 def download_over_link(base: Path) -> Row:
     """``data download`` where ``DEST/<archive>.part`` is a link to a file of the user's:
     that file must stay as it is, whatever becomes of the download."""
@@ -321,7 +366,7 @@ def download_over_link(base: Path) -> Row:
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--only", default=None, help="run only the groups whose name has this "
-                    "(disk, read-only, signal, concurrent, cache, existing)")
+                    "(disk, read-only, signal, concurrent, cache, existing, resume)")
     ap.add_argument("--show", action="store_true", help="print each row's last stderr line")
     opts = ap.parse_args()
     root = hasattr(os, "geteuid") and os.geteuid() == 0 and shutil.which("mount") is not None
@@ -329,14 +374,15 @@ def main() -> int:
     groups: list[tuple[str, Callable[[], list[Row]]]] = [
         ("disk", lambda: disk_rows(base, False)), ("read-only", lambda: disk_rows(base, True)),
         ("signal", lambda: signal_rows(base)), ("concurrent", lambda: concurrent_rows(base)),
-        ("cache", lambda: cache_rows(base, root)), ("existing", lambda: existing_rows(base))]
+        ("cache", lambda: cache_rows(base, root)), ("existing", lambda: existing_rows(base)),
+        ("resume", lambda: resume_rows(base))]
     rows: list[Row] = []
     try:
         fixtures(base)
         for name, make in groups:
             if opts.only and opts.only not in name:
                 continue
-            if name in ("disk", "read-only") and not root:
+            if name in ("disk", "read-only", "resume") and not root:
                 print(f"({name}: skipped, needs root to mount a tmpfs)")
                 continue
             t0 = time.perf_counter()
