@@ -75,8 +75,10 @@ def run(args: list[str], cwd: Path, env: dict | None = None, timeout: float = 30
         signal_after: float | None = None, sig: int = signal.SIGTERM) -> tuple[int | str, str]:
     env = {**os.environ, "OMP_NUM_THREADS": "1", "MOTIONLANG_CACHE": str(cwd / ".cache"),
            **(env or {})}
+    # a shell's background job inherits SIGINT ignored, and so would the command: restore it
     p = subprocess.Popen([EXE, *args], cwd=cwd, env=env, stdout=subprocess.PIPE,
-                         stderr=subprocess.PIPE, text=True)
+                         stderr=subprocess.PIPE, text=True,
+                         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     if signal_after is not None:
         time.sleep(signal_after)
         p.send_signal(sig)
