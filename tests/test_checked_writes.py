@@ -181,3 +181,29 @@ def test_a_resume_whose_checkpoint_does_not_read_writes_nothing(tmp_path, capsys
                  "--resume"]) == 2
     assert "last.pt" in capsys.readouterr().err
     assert sorted(p.name for p in run.iterdir()) == ["last.pt"]
+
+
+def test_an_interrupt_a_library_turns_into_its_own_error_still_stops_the_command(
+        capsys, monkeypatch):
+    # matplotlib's C code can turn the KeyboardInterrupt of a Ctrl-C into a ValueError
+    # ("Invalid affine transformation matrix"): the command must still end as interrupted
+    import motionlang.cli.motion_commands as mc
+
+    def masked(args):
+        try:
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(1)
+        except KeyboardInterrupt:
+            raise ValueError("Invalid affine transformation matrix") from None
+        return 0
+
+    monkeypatch.setattr(mc, "cmd_info", masked)
+    assert main(["info", "x.bvh"]) == 130
+    assert capsys.readouterr().err.strip() == "interrupted"
+
+    def broken(args):
+        raise ValueError("a real bug")
+
+    monkeypatch.setattr(mc, "cmd_info", broken)
+    with pytest.raises(ValueError, match="a real bug"):   # no signal: not hidden
+        main(["info", "x.bvh"])

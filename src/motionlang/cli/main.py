@@ -21,7 +21,7 @@ from motionlang.cli.threads import MAX_DEFAULT, default_threads, limit_threads
 from motionlang.errors import MotionlangError
 from motionlang.training.run_log import lead_output
 from motionlang.utils.atomic import error_line
-from motionlang.utils.signals import sigterm_unwinds, stopped
+from motionlang.utils.signals import received, sigterm_unwinds, stopped
 
 # Modules that register subcommands; one line each, order = order in --help.
 COMMAND_MODULES = [
@@ -131,6 +131,10 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     except KeyboardInterrupt as exc:   # Ctrl-C, or SIGTERM under sigterm_unwinds
         return stopped(exc)
+    except Exception as exc:
+        if received() is None:
+            raise
+        return stopped(exc)   # the interrupt, turned into another error by a library's C code
 
 
 if __name__ == "__main__":

@@ -22,6 +22,17 @@ class Terminated(KeyboardInterrupt):
     """Raised in the main thread when the process receives SIGTERM."""
 
 
+#: the stop signals this process received under :func:`sigterm_unwinds`, in order
+_RECEIVED: list[int] = []
+
+
+def received() -> int | None:
+    """The last stop signal (SIGTERM or SIGINT) received under :func:`sigterm_unwinds`: a
+    library's C code can turn the interrupt it raises into an error of its own (matplotlib's
+    "Invalid affine transformation matrix"), and the command still stopped because of it."""
+    return _RECEIVED[-1] if _RECEIVED else None
+
+
 @contextlib.contextmanager
 def sigterm_unwinds() -> Iterator[None]:
     """Within the block, SIGTERM raises :class:`Terminated` in this process (nothing is
@@ -31,24 +42,37 @@ def sigterm_unwinds() -> Iterator[None]:
         yield
         return
     owner = os.getpid()
+    _RECEIVED.clear()
 
     def handler(signum, frame):
         if os.getpid() != owner:   # a forked child: die as it would have without us
             signal.signal(signal.SIGTERM, signal.SIG_DFL)
             os.kill(os.getpid(), signal.SIGTERM)
             return
+        _RECEIVED.append(signal.SIGTERM)
         raise Terminated()
 
+    def interrupt(signum, frame):
+        _RECEIVED.append(signal.SIGINT)
+        signal.default_int_handler(signum, frame)
+
     signal.signal(signal.SIGTERM, handler)
+    own_int = signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    if own_int:
+        signal.signal(signal.SIGINT, interrupt)
     try:
         yield
     finally:
         signal.signal(signal.SIGTERM, signal.SIG_DFL)
+        if own_int:
+            signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
-def stopped(exc: KeyboardInterrupt) -> int:
+def stopped(exc: BaseException) -> int:
     """Say why a command stopped (on stderr) and return its exit status as a shell
-    reports a signal: 128 + its number."""
-    term = isinstance(exc, Terminated)
+    reports a signal: 128 + its number (``exc``: the interrupt, or the error a library made
+    of it, see :func:`received`)."""
+    term = isinstance(exc, Terminated) or (not isinstance(exc, KeyboardInterrupt)
+                                           and received() == signal.SIGTERM)
     print("terminated" if term else "interrupted", file=sys.stderr)
     return 128 + (signal.SIGTERM if term else signal.SIGINT)
