@@ -149,8 +149,11 @@ def test_sigterm_during_a_write_removes_the_temporary_file(tmp_path):
             "except KeyboardInterrupt as exc:\n"
             "    sys.exit(stopped(exc))\n")
     env = {**os.environ, "PYTHONPATH": str(SRC)}
+    # SIGTERM at its default in the child, whatever the test runner's process inherited
+    # (an ignored SIGTERM is inherited, and sigterm_unwinds leaves a set disposition alone)
     p = subprocess.Popen([sys.executable, "-c", code, str(target)], stdout=subprocess.PIPE,
-                         stderr=subprocess.PIPE, text=True, env=env)
+                         stderr=subprocess.PIPE, text=True, env=env,
+                         preexec_fn=lambda: signal.signal(signal.SIGTERM, signal.SIG_DFL))
     assert p.stdout.readline().strip() == "ready"
     assert len(_leftovers(tmp_path)) == 1
     t0 = time.monotonic()
