@@ -15,7 +15,6 @@ names the same gait (walk / run / jump, or none) as the original's, and each dis
 from __future__ import annotations
 
 import argparse
-import subprocess
 import sys
 import tempfile
 from collections import defaultdict
@@ -50,15 +49,11 @@ def main() -> None:
     import torch
 
     import motionlang as ml
-    from motionlang.datasets.named import cmu35_walkjog
+    from motionlang.datasets.named import cmu35_walkjog, cmu_dev_folder
     from motionlang.decoding.grounded import named_gait
     torch.set_num_threads(1)
     data, cmudev = Path(args.data), Path(args.cmudev)
-    if not (cmudev / "cmu-dev").is_dir():
-        cmudev.mkdir(parents=True, exist_ok=True)
-        subprocess.run(["tar", "-xJf", str(data / "cmu_dev" / "cmu-dev.tar.xz"), "-C",
-                        str(cmudev)], check=True)
-    dev = cmudev / "cmu-dev"
+    dev = cmu_dev_folder(data, cmudev)
     sources: list[tuple[str, object]] = []
     with open(data / "cmu_dev" / "trials.tsv", newline="") as f:
         for row in csv.DictReader(f, delimiter="\t"):

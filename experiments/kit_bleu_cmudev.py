@@ -16,7 +16,6 @@ import argparse
 import csv
 import json
 import re
-import subprocess
 import sys
 from pathlib import Path
 
@@ -39,12 +38,10 @@ def main() -> None:
     from nltk.translate.bleu_score import SmoothingFunction, corpus_bleu
 
     import motionlang as ml
+    from motionlang.datasets.named import cmu_dev_folder
     torch.set_num_threads(1)
     data, cmudev = Path(args.data), Path(args.cmudev)
-    if not (cmudev / "cmu-dev").is_dir():
-        cmudev.mkdir(parents=True, exist_ok=True)
-        subprocess.run(["tar", "-xJf", str(data / "cmu_dev" / "cmu-dev.tar.xz"), "-C",
-                        str(cmudev)], check=True)
+    cmu_dev_folder(data, cmudev)
     kit = json.loads((data / "kitml" / "annotations_tmr.json").read_text())
     trials = []
     with open(data / "cmu_dev" / "trials.tsv", newline="") as f:

@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import argparse
 import csv
-import subprocess
 import sys
 from collections import Counter, defaultdict
 from pathlib import Path
@@ -80,11 +79,8 @@ def has_verb(text: str) -> bool:
 
 def motions(data: Path, cmudev: Path):
     """``(name, trial, rig, asked, Motion or path)`` for every measured motion."""
-    from motionlang.datasets.named import cmu35_walkjog
-    if not (cmudev / "cmu-dev").is_dir():
-        cmudev.mkdir(parents=True, exist_ok=True)
-        subprocess.run(["tar", "-xJf", str(data / "cmu_dev" / "cmu-dev.tar.xz"), "-C",
-                        str(cmudev)], check=True)
+    from motionlang.datasets.named import cmu35_walkjog, cmu_dev_folder
+    cmu_dev_folder(data, cmudev)
     with open(data / "cmu_dev" / "trials.tsv", newline="") as f:
         for row in csv.DictReader(f, delimiter="\t"):
             yield (row["file"], row["trial"], row["rig"], asked_action(row["cmu_description"]),

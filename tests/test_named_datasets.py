@@ -68,3 +68,15 @@ def test_mit_walk(shared_data):
     seqs = mit_walk(shared_data)
     assert [m.n_frames for m in seqs] == [438, 260, 3128]
     assert all(m.fps == 30.0 for m in seqs)
+
+
+def test_cmu_dev_is_extracted_once_outside_the_data(shared_data, tmp_path):
+    from motionlang.datasets.named import cmu_dev_folder
+    if not (shared_data / "cmu_dev" / "cmu-dev.tar.xz").is_file():
+        pytest.skip("no cmu_dev archive")
+    folder = cmu_dev_folder(shared_data, tmp_path)
+    assert folder == tmp_path / "cmu-dev"
+    assert len(list(folder.glob("*/*.bvh"))) == 59
+    stamp = (folder / "iclone").stat().st_mtime_ns
+    assert cmu_dev_folder(shared_data, tmp_path) == folder     # not extracted again
+    assert (folder / "iclone").stat().st_mtime_ns == stamp

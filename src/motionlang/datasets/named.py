@@ -171,3 +171,19 @@ def mit_walk(data_dir: str | Path | None = None) -> list[Motion]:
     except ImportError:
         raise DatasetError("the MIT reader (motionlang.formats.mit) is not available") from None
     return read_mit(path)
+
+
+def cmu_dev_folder(data_dir: str | Path, dest: str | Path) -> Path:
+    """The ``cmu-dev`` folder of the shared ``cmu_dev/cmu-dev.tar.xz`` (56 CMU trials of other
+    subjects in three rigs), extracted under ``dest`` the first time (never into the data
+    folder)."""
+    import tarfile
+    folder = Path(dest) / "cmu-dev"
+    if not folder.is_dir():
+        archive = Path(data_dir) / "cmu_dev" / "cmu-dev.tar.xz"
+        if not archive.is_file():
+            raise DatasetError(f"{archive}: not found")
+        Path(dest).mkdir(parents=True, exist_ok=True)
+        with tarfile.open(archive) as tar:
+            tar.extractall(dest, filter="data")
+    return folder
