@@ -90,10 +90,17 @@ def test_iterative_decoding_follows_the_schedule_and_keeps_given_tokens():
 
 
 def test_guidance_mixes_the_conditioned_and_unconditioned_logits():
-    def fn(drop):
-        return torch.zeros(1, 2, 3) if drop is not None else torch.ones(1, 2, 3)
-    assert torch.equal(sampling.guided(fn, 4.0), torch.full((1, 2, 3), 4.0))
-    assert torch.equal(sampling.guided(fn, 1.0), torch.ones(1, 2, 3))
+    calls = []
+
+    def fn(tokens, drop):   # conditioned rows give 1, unconditioned 0
+        calls.append(len(tokens))
+        if drop is None:
+            return torch.ones(len(tokens), 2, 3)
+        return (~drop).float()[:, None, None].expand(len(tokens), 2, 3)
+    tokens = torch.zeros(1, 2, dtype=torch.long)
+    assert torch.equal(sampling.guided(fn, tokens, 4.0), torch.full((1, 2, 3), 4.0))
+    assert torch.equal(sampling.guided(fn, tokens, 1.0), torch.ones(1, 2, 3))
+    assert calls == [2, 1]   # guidance: both halves in one pass of 2B rows
     logits = torch.tensor([[[0.0, 1.0, 5.0, 2.0]]])
     codes, probs = sampling.pick(logits, 1.0, 1, torch.Generator().manual_seed(0))
     assert int(codes) == 2 and float(probs) == pytest.approx(1.0)    # top-1: no choice

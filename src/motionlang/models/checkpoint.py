@@ -266,8 +266,10 @@ class Checkpointed:
     def to_checkpoint(self) -> dict[str, Any]:
         """The checkpoint dict (what the trainer stores under ``"model"``)."""
         module: Any = self   # an nn.Module: the family lists this mixin before it
+        # on the CPU whatever the model trained on: a file from a GPU run reads anywhere
+        weights = {k: v.detach().cpu() for k, v in module.state_dict().items()}
         return {"kind": self.kind, "format": FORMAT_VERSION, "config": self.config_dict(),
-                **self.checkpoint_state(), "state_dict": module.state_dict()}
+                **self.checkpoint_state(), "state_dict": weights}
 
     @classmethod
     def from_checkpoint(cls, d: dict[str, Any], **kw: Any) -> Any:

@@ -159,15 +159,11 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
         MotionlangError: a bad option, ``resume`` with nothing to continue, weights on some
             sources only, unreadable data, no sentence encoder, no CUDA for ``cuda``.
     """
-    import torch
 
     from motionlang.datasets.mixing import source_weights
     from motionlang.datasets.splits import save_splits
     from motionlang.datasets.twostream_items import build_twostream_data
-    from motionlang.models.masked.model import MaskedModel
-    from motionlang.models.registry import family
     from motionlang.models.text_tokens import TransformerTokens
-    from motionlang.recipes.seq2seq import mix_training
     from motionlang.training.run_log import lead_process, log_command, write_licence
 
     out = Path(out_dir)
@@ -196,6 +192,29 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
     for i in range(0, len(captions), 256):   # every caption through the encoder once
         text.many(captions[i:i + 256])
     log(f"sentence vectors of {len(captions)} captions: {time.perf_counter() - started:.0f} s")
+    path = train_stages(data, text, sources, out, config, train_cfg, data_cfg,
+                        resume=resume, device=device, log=log)
+    if lead and note:
+        log(note.splitlines()[0])
+    return path
+
+
+def train_stages(data: Any, text: Any, sources: Sequence, out: Path, config: Any,
+                 train_cfg: TrainConfig, data_cfg: MaskedTrainOptions, *, resume: bool,
+                 device: str, log: Callable[[str], None] = print) -> Path:
+    """Both stages of :func:`run` on prepared data: ``data`` a ``TwoStreamData``, ``text``
+    the sentence encoder (anything with ``dim`` and ``many``, the captions' vectors already
+    in it), ``config`` the user's ``MaskedConfig``; returns ``out/model.pt``."""
+    import torch
+
+    from motionlang.models.masked.model import MaskedModel
+    from motionlang.models.registry import family
+    from motionlang.recipes.seq2seq import mix_training
+    from motionlang.training.run_log import lead_process
+
+    out = Path(out)
+    lead = lead_process()
+    done_tokenizer = out / "tokenizer.pt"
     max_tokens = -(-round(data_cfg.max_seconds * data.features.fps) // 4)
     config = dataclasses.replace(config, n_features=data.features.dim, fps=data.features.fps,
                                  text_dim=int(text.dim),
@@ -232,8 +251,6 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
     if lead:
         model.save(path)
         log(str(path))
-        if note:
-            log(note.splitlines()[0])
     return path
 
 

@@ -67,7 +67,7 @@ class MaskedConfig:
     commit: float = _opt(0.02, "weight of the commitment loss")
     velocity: float = _opt(0.5, "weight of the velocity (frame difference) loss")
     window: float = _opt(5.12, "seconds of the crops the tokenizer trains on")
-    hidden: int = _opt(256, "width of the masked and residual transformers")
+    hidden: int = _opt(192, "width of the masked and residual transformers")
     layers: int = _opt(4, "layers of the masked transformer")
     res_layers: int = _opt(2, "layers of the residual-token transformer")
     heads: int = _opt(4, "attention heads (divides --hidden)")
@@ -103,7 +103,7 @@ class MaskedConfig:
 
 @dataclass
 class MaskedOptions:
-    """Sampling options (``--model masked:steps=10,guidance=4``).
+    """Sampling options (``--model masked:steps=10,guidance=2``).
 
     Attributes:
         steps: iterations of the masked decoding (MaskGIT/MoMask: about 10); each fixes the
@@ -116,7 +116,7 @@ class MaskedOptions:
     """
 
     steps: int = 10
-    guidance: float = 4.0
+    guidance: float = 2.0
     res_guidance: float = 2.0
     temperature: float = 1.0
     top_k: int = 0

@@ -233,13 +233,18 @@ class MaskedModel(Checkpointed, nn.Module):
             list(n_tokens), device=self.device)[:, None]
         text = self.sentence_vectors(texts)
         g = torch.Generator().manual_seed(int(seed))
+        def rows(x: torch.Tensor, n: int) -> torch.Tensor:   # the batch, once or twice
+            return x if n == len(x) else torch.cat([x] * (n // len(x)))
+
         base = sampling.decode_base(
-            lambda tok, drop: self.generator(tok, text, valid, drop), valid,
+            lambda tok, drop: self.generator(tok, rows(text, len(tok)), rows(valid, len(tok)),
+                                             drop), valid,
             self.generator.mask_id, steps=options.steps, guidance=options.guidance,
             temperature=options.temperature, top_k=options.top_k, generator=g,
             known=None if known is None else known[..., 0], kept=kept)
         return sampling.decode_residual(
-            lambda tok, j, drop: self.residual(tok, j, text, valid, drop), base,
+            lambda tok, j, drop: self.residual(tok, j, rows(text, len(tok)),
+                                               rows(valid, len(tok)), drop), base,
             self.config.quantizers, guidance=options.res_guidance, known=known, kept=kept)
 
     def _positions(self, rows: np.ndarray, start: Any = (0.0, 0.0, 0.0)) -> np.ndarray:

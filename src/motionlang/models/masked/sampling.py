@@ -46,15 +46,18 @@ def corrupt(tokens: torch.Tensor, masked: torch.Tensor, codes: int, mask_id: int
     return out
 
 
-def guided(logits_fn: Callable[[torch.Tensor | None], torch.Tensor], scale: float
-           ) -> torch.Tensor:
+def guided(logits_fn: Callable[[torch.Tensor, torch.Tensor | None], torch.Tensor],
+           tokens: torch.Tensor, scale: float) -> torch.Tensor:
     """Classifier-free guidance: ``uncond + scale * (cond - uncond)`` of the logits;
-    ``logits_fn(drop)`` runs the model with the condition dropped where ``drop`` is True
-    (None: kept). Scale 1 is the conditioned model alone (one pass)."""
-    cond = logits_fn(None)
+    ``logits_fn(tokens, drop)`` runs the model on a batch with the condition dropped where
+    ``drop`` is True (None: kept). Both halves go through the model as one batch of 2B
+    rows (one pass, not two); scale 1 is the conditioned model alone."""
     if scale == 1.0:
-        return cond
-    uncond = logits_fn(torch.ones(cond.shape[0], dtype=torch.bool, device=cond.device))
+        return logits_fn(tokens, None)
+    B = tokens.shape[0]
+    drop = torch.arange(2 * B, device=tokens.device) >= B
+    both = logits_fn(torch.cat([tokens, tokens]), drop)
+    cond, uncond = both[:B], both[B:]
     return uncond + scale * (cond - uncond)
 
 
@@ -85,7 +88,8 @@ def decode_base(predict: Callable[[torch.Tensor, torch.Tensor | None], torch.Ten
     """Iterative masked decoding of base tokens (B, L) (see module docstring).
 
     Args:
-        predict: ``(tokens (B, L), drop) -> logits (B, L, K)``.
+        predict: ``(tokens (B', L), drop (B',) or None) -> logits (B', L, K)``; B' is B,
+            or 2B under guidance (the rows twice: conditioned, then not).
         valid: (B, L) positions inside each motion.
         known, kept: tokens (B, L) and where they are given (in-betweening); None: none.
     """
@@ -100,9 +104,7 @@ def decode_base(predict: Callable[[torch.Tensor, torch.Tensor | None], torch.Ten
         masked = free & (tokens == mask_id)
         if not masked.any():
             break
-        def step(drop: torch.Tensor | None, t: torch.Tensor = tokens) -> torch.Tensor:
-            return predict(t, drop)
-        logits = guided(step, guidance)
+        logits = guided(predict, tokens, guidance)
         chosen, conf = pick(logits, temperature, top_k, generator)
         chosen, conf = chosen.to(device), conf.to(device)
         tokens = torch.where(masked, chosen, tokens)
@@ -123,10 +125,9 @@ def decode_residual(predict: Callable[[torch.Tensor, int, torch.Tensor | None], 
     (B, L) as in :func:`decode_base`."""
     tokens = base[..., None]
     for j in range(1, n_q):
-        def level(drop: torch.Tensor | None, t: torch.Tensor = tokens, j: int = j
-                  ) -> torch.Tensor:
+        def level(t: torch.Tensor, drop: torch.Tensor | None, j: int = j) -> torch.Tensor:
             return predict(t, j, drop)
-        logits = guided(level, guidance)
+        logits = guided(level, tokens, guidance)
         nxt = logits.argmax(-1)
         if known is not None and kept is not None:
             nxt = torch.where(kept, known[..., j].to(nxt.device), nxt)
