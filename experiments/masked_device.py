@@ -113,6 +113,20 @@ def pack(args: argparse.Namespace) -> None:
         print(f"{out / f}: {(out / f).stat().st_size / 2**20:.1f} MiB")
 
 
+def _vectors(p: Path, slim: dict) -> VectorTable:
+    """The pack's caption vectors (stored in float16) as a sentence encoder."""
+    table = np.frombuffer(lzma.decompress((p / "vectors.xz").read_bytes()), dtype=np.float16)
+    table = table.reshape(len(slim["captions"]), -1)
+    return VectorTable(dict(zip(slim["captions"], table.astype(np.float32))))
+
+
+def _split(path: Path, mb: float) -> None:
+    """``PATH.part0``, ``PATH.part1`` ... of at most ``mb`` MiB each (``cat`` joins them)."""
+    blob, step = path.read_bytes(), int(mb * 2**20)
+    for k in range(0, len(blob), step):
+        path.with_name(f"{path.name}.part{k // step}").write_bytes(blob[k:k + step])
+
+
 def _read_pack(p: Path, args: argparse.Namespace) -> tuple:
     """``(TwoStreamData, VectorTable, meta)`` of a pack (``--limit``: every k-th motion)."""
     import torch
@@ -125,9 +139,7 @@ def _read_pack(p: Path, args: argparse.Namespace) -> tuple:
         d = flat[at:at + n * F].reshape(F, n).T.astype(np.int32)
         sequences[i] = (np.cumsum(d, axis=0) / slim["scale"]).astype(np.float32)
         at += n * F
-    table = np.frombuffer(lzma.decompress((p / "vectors.xz").read_bytes()), dtype=np.float16)
-    table = table.reshape(len(slim["captions"]), -1)
-    text = VectorTable(dict(zip(slim["captions"], table.astype(np.float32))))
+    text = _vectors(p, slim)
     splits = slim["splits"]
     if args.limit:   # a smoke test: every k-th motion of each split
         splits = {k: v[::max(1, len(v) // args.limit)] for k, v in splits.items()}
@@ -216,10 +228,7 @@ def train(args: argparse.Namespace) -> None:
     (out / "device_summary.json").write_text(json.dumps(summary, indent=1))
     log(json.dumps(summary))
     if args.split_mb:
-        blob = path.read_bytes()
-        step = int(args.split_mb * 2**20)
-        for k in range(0, len(blob), step):
-            (out / f"model.pt.part{k // step}").write_bytes(blob[k:k + step])
+        _split(path, args.split_mb)
     log(f"{path} ({path.stat().st_size / 2**20:.1f} MiB); history {hist}")
 
 
@@ -251,9 +260,7 @@ def more(args: argparse.Namespace) -> None:
 
     p = Path(args.pack)
     slim = torch.load(p / "meta.pt", weights_only=False)
-    table = np.frombuffer(lzma.decompress((p / "vectors.xz").read_bytes()), dtype=np.float16)
-    table = table.reshape(len(slim["captions"]), -1)
-    text = VectorTable(dict(zip(slim["captions"], table.astype(np.float32))))
+    text = _vectors(p, slim)
     toks = torch.load(p / "tokens.pt", weights_only=False)
     device = recipe.pick_device(args.device)
     model = MaskedModel.load(args.model, text_encoder=text).to(device)
@@ -274,10 +281,7 @@ def more(args: argparse.Namespace) -> None:
     print(json.dumps({"epochs": args.epochs, "seconds": time.perf_counter() - started,
                       "device": device}))
     if args.split_mb:
-        blob = path.read_bytes()
-        step = int(args.split_mb * 2**20)
-        for k in range(0, len(blob), step):
-            (out / f"model.pt.part{k // step}").write_bytes(blob[k:k + step])
+        _split(path, args.split_mb)
 
 
 def main() -> None:
