@@ -73,7 +73,9 @@ def main() -> None:
     methods = {"linear": lambda p21, keep, s: linear_fill(p21, keep),
                "crbm": lambda p21, keep, s: crbm_fill(p21, keep),
                "masked": lambda p21, keep, s: model.inbetween(s, p21, keep, seed=args.seed,
-                                                              options=t2m.options)}
+                                                              options=t2m.options),
+               "masked, feet locked": lambda p21, keep, s: model.inbetween(
+                   s, p21, keep, seed=args.seed, options=t2m.options, foot_lock=True)}
     shown = None
     TOE = KIT21_NAMES.index("RF")
     print(f"\n{len(test)} Bandai test takes, model {args.model}, options "

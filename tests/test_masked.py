@@ -74,7 +74,8 @@ def test_shapes_of_both_stages(features):
     assert batch["motion"].shape == (2, 32, 66)                  # crops of 2.56 s
     assert batch["frames"].sum(1).tolist() == [32, 10]
     out = model.loss(batch)
-    assert set(out) == {"loss", "recon", "velocity", "commit"} and out["loss"].requires_grad
+    assert set(out) == {"loss", "recon", "velocity", "commit", "path_m"}
+    assert out["loss"].requires_grad
     toks = model.tokenize(rows)
     assert [t.shape for t in toks] == [(13, 3), (3, 3)]        # ceil(T / 4) tokens, Q codebooks
     assert toks[0].dtype == np.int64 and toks[0].max() < 16
@@ -162,6 +163,8 @@ def test_inbetweening_keeps_the_kept_frames(features, motion21):
     assert out.shape == p21.shape
     assert np.array_equal(out[keep], p21[keep])
     assert not np.allclose(out[~keep], p21[~keep])               # the gap is generated
+    locked = model.inbetween("a person walks", p21, keep, seed=0, foot_lock=True)
+    assert np.array_equal(locked[keep], p21[keep]) and np.isfinite(locked).all()
     with pytest.raises(MotionlangError, match="in-betweening"):
         model.inbetween("a person walks", p21, keep[:-1])
     with pytest.raises(MotionlangError, match="at most"):

@@ -62,6 +62,14 @@ def test_the_api_fills_between_with_the_kept_frames_kept(tmp_path):
     ml.write_motion(motion, path)
     again, _ = ml.generate_hypotheses("a person walks", model, seed=1, keep=f"{path}:0-1,3-")
     assert again[0][0].shape == out.shape
+    asked = []   # the API's foot lock (on by default) reaches the model's in-betweening
+    real = model.inbetween
+    model.inbetween = lambda *a, **kw: asked.append(kw["foot_lock"]) or real(*a, **kw)
+    for lock in (True, False):
+        ml.generate_hypotheses("a person walks", model, seed=1, keep=f"{path}:0-1,3-",
+                               foot_lock=lock)
+    ml.generate_hypotheses("a person walks", model, seed=1, keep=f"{path}:0-1,3-")
+    assert asked == [True, False, True]
 
 
 def test_generate_keep_on_the_command_line_is_one_line_on_bad_input(tmp_path, capsys):

@@ -246,7 +246,8 @@ def generate_hypotheses(text: str, model: Any = None, *, width: int | None = Non
                       UserWarning, stacklevel=2)
     if keep is not None:   # the kept seconds of a motion, the rest from the text
         from motionlang.decoding.inbetween import fill_between
-        return fill_between(t2m, text, keep, lambda m: _motion(m, joint_map), seed=seed), t2m.fps
+        return fill_between(t2m, text, keep, lambda m: _motion(m, joint_map), seed=seed,
+                            foot_lock=foot_lock), t2m.fps
     if start_from is not None:
         kw["first_frame"] = first_frame(t2m, start_from, joint_map)
     hyps = t2m.hypotheses(text, width=width, method=method, seed=seed, max_frames=max_frames,

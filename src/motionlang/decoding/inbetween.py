@@ -21,15 +21,16 @@ Spans = list[tuple[float, float | None]]
 
 @runtime_checkable
 class Inbetweening(Protocol):
-    """A model that fills in motion: ``inbetween(text, p21, keep, *, seed, options)`` with
-    global positions (T, 21, 3) metres at ``fps`` and kept frames (T,) bool -> (T, 21, 3),
-    the kept frames as given."""
+    """A model that fills in motion: ``inbetween(text, p21, keep, *, seed, options,
+    foot_lock)`` with global positions (T, 21, 3) metres at ``fps`` and kept frames (T,)
+    bool -> (T, 21, 3), the kept frames as given (``foot_lock``: the generated frames'
+    planted feet held)."""
 
     @property
     def fps(self) -> float: ...
 
     def inbetween(self, text: str, p21: np.ndarray, keep: np.ndarray, *, seed: int,
-                  options: Any) -> np.ndarray: ...
+                  options: Any, foot_lock: bool) -> np.ndarray: ...
 
 
 def _seconds(text: str, spec: str) -> float:
@@ -91,12 +92,13 @@ def keep_frames(n_frames: int, fps: float, spans: Sequence[tuple[float, float | 
 
 
 def fill_between(t2m: Any, text: str, keep: Any, read: Callable[[Any], Any], *,
-                 seed: int = 0) -> list[tuple[np.ndarray, float]]:
+                 seed: int = 0, foot_lock: bool = False) -> list[tuple[np.ndarray, float]]:
     """The kept spans of a motion (``keep``: as :func:`parse_keep` reads it; ``read`` turns
     its motion or file into a ``Motion`` of any rig the 21-joint body maps) with the rest
     generated for ``text`` by ``t2m`` (a ``decoding.t2m.TextToMotion``): one hypothesis
     ``[(positions (T, 21, 3) metres at the model's fps, NaN)]``, placed where the motion
-    is.
+    is. ``foot_lock``: the generated frames' planted feet held before they are joined to
+    the kept ones.
 
     Raises:
         MotionlangError: a model that cannot fill in, a sentence without words, spans that
@@ -118,5 +120,5 @@ def fill_between(t2m: Any, text: str, keep: Any, read: Callable[[Any], Any], *,
     name = getattr(motion, "name", None) or (str(motion) if isinstance(motion, Path) else "")
     if not keep.any():
         raise MotionlangError(f"--keep: no frame of {name or 'the motion'} is in the ranges")
-    out = model.inbetween(text, p21, keep, seed=seed, options=t2m.options)
+    out = model.inbetween(text, p21, keep, seed=seed, options=t2m.options, foot_lock=foot_lock)
     return [(np.asarray(out, dtype=np.float64), float("nan"))]

@@ -43,6 +43,11 @@ class MaskedConfig:
         ema: decay of the codebooks' exponential moving averages.
         commit, velocity: weights of the commitment loss and of the frame-difference
             (velocity) reconstruction loss beside the frame loss.
+        path: weight of the global-position loss: the mean distance in metres between
+            the joints placed along the root path integrated over the crop from the
+            reconstructed rows and from the true ones (``path.global_joints``). The frame
+            loss weighs the root's per-frame step like any coordinate; on a travelling
+            motion its small errors add up to a body far off its path.
         window: seconds of the random crops the tokenizer is trained on.
         hidden, layers, heads, dropout: the masked transformer's size.
         res_layers: layers of the residual-token transformer (same width).
@@ -66,6 +71,8 @@ class MaskedConfig:
     ema: float = _opt(0.99, "decay of the EMA codebook updates")
     commit: float = _opt(0.02, "weight of the commitment loss")
     velocity: float = _opt(0.5, "weight of the velocity (frame difference) loss")
+    path: float = _opt(1.0, "weight of the global-position loss (metres, along the "
+                            "integrated root path)")
     window: float = _opt(5.12, "seconds of the crops the tokenizer trains on")
     hidden: int = _opt(192, "width of the masked and residual transformers")
     layers: int = _opt(4, "layers of the masked transformer")
@@ -80,7 +87,7 @@ class MaskedConfig:
         check_numbers("MaskedConfig", self, positive_ints=("n_features",),
                       nonneg_ints=("text_dim", "text_layer", "depth"), sizes=SIZES,
                       layers=("quantizers", "layers", "res_layers", "heads"),
-                      positive=("fps", "window", "commit"), nonneg=("velocity",),
+                      positive=("fps", "window", "commit"), nonneg=("velocity", "path"),
                       unit=("quantizer_dropout", "ema", "dropout", "cond_drop"))
         if self.hidden % self.heads:
             raise MotionlangError(f"MaskedConfig.heads ({self.heads}) must divide hidden "

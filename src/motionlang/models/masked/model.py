@@ -7,9 +7,10 @@ Zhang et al. 2023), on motionlang's 21-joint position features.
   ResidualTransformer` for codebooks 1..Q-1, :class:`~.transformer.LengthEstimator`; all read
   a frozen sentence vector (MiniLM's last hidden state, mean-pooled; cached per sentence).
 
-Two training stages, one model: ``stage = "tokenizer"`` trains the tokenizer (frame and
-velocity reconstruction, commitment; codebooks by EMA); ``stage = "generator"`` freezes it
-and trains the three token models on the training motions' tokens. ``loss`` and ``collate``
+Two training stages, one model: ``stage = "tokenizer"`` trains the tokenizer (frame,
+velocity and global-position reconstruction, commitment; codebooks by EMA); ``stage =
+"generator"`` freezes it and trains the three token models on the training motions' tokens.
+``stage = "decoder"`` retrains the tokenizer's decoder alone, encoder and codebooks frozen. ``loss`` and ``collate``
 follow the stage, so the shared trainer runs both.
 
 Sampling (:meth:`MaskedModel.sample`, the ``decoding.t2m.SamplingModel`` protocol): the
@@ -38,6 +39,7 @@ from motionlang.models.checkpoint import Checkpointed, pack_features, unpack_fea
 from motionlang.models.masked import sampling
 from motionlang.models.masked.config import DOWN, MaskedConfig, MaskedOptions
 from motionlang.models.masked.inbetween import blend, kept_tokens
+from motionlang.models.masked.path import global_joints
 from motionlang.models.masked.tokenizer import Tokenizer, pad_frames
 from motionlang.models.masked.transformer import (
     LengthEstimator,
@@ -45,7 +47,10 @@ from motionlang.models.masked.transformer import (
     ResidualTransformer,
 )
 
-STAGES = ("tokenizer", "generator")
+#: "decoder" retrains the tokenizer's decoder alone: the tokens, and a generator trained on
+#: them, stay valid
+STAGES = ("tokenizer", "decoder", "generator")
+MOTION_STAGES = ("tokenizer", "decoder")
 
 
 class MaskedModel(Checkpointed, nn.Module):
@@ -105,12 +110,14 @@ class MaskedModel(Checkpointed, nn.Module):
         return float(self.config.fps)
 
     def set_stage(self, stage: str) -> MaskedModel:
-        """Train the tokenizer, or (frozen tokenizer) the token models."""
+        """Train the tokenizer, its decoder alone, or (frozen tokenizer) the token models."""
         if stage not in STAGES:
             raise MotionlangError(f"stage must be one of {', '.join(STAGES)}, got {stage!r}")
         self.stage = stage
         for p in self.tokenizer.parameters():
             p.requires_grad_(stage == "tokenizer")
+        for p in self.tokenizer.decoder.parameters():
+            p.requires_grad_(stage in MOTION_STAGES)
         for part in (self.generator, self.residual, self.length):
             for p in part.parameters():
                 p.requires_grad_(stage == "generator")
@@ -123,7 +130,7 @@ class MaskedModel(Checkpointed, nn.Module):
         ``{"tokens": (L, Q) ints, "sentence": str}``."""
         if not items:
             raise MotionlangError("cannot collate an empty batch")
-        if self.stage == "tokenizer":
+        if self.stage in MOTION_STAGES:
             return self._collate_motion(items)
         toks = [torch.as_tensor(np.asarray(it["tokens"]), dtype=torch.long) for it in items]
         L = max(len(t) for t in toks)
@@ -152,22 +159,30 @@ class MaskedModel(Checkpointed, nn.Module):
 
     def loss(self, batch: dict) -> dict[str, torch.Tensor]:
         """Named loss terms of a batch of the current stage; ``"loss"`` is minimised."""
-        if self.stage == "tokenizer":
+        if self.stage in MOTION_STAGES:
             return self._tokenizer_loss(batch)
         return self._generator_loss(batch)
 
     def _tokenizer_loss(self, batch: dict) -> dict[str, torch.Tensor]:
         x, frames = batch["motion"], batch["frames"]
         tokens = frames.reshape(len(x), -1, DOWN).any(-1)
-        out = self.tokenizer(x, tokens)
+        out = self.tokenizer(x, tokens, frozen=self.stage == "decoder")
         recon = F.smooth_l1_loss(out["recon"][frames], x[frames])
         both = frames[:, 1:] & frames[:, :-1]
         dx, dr = x[:, 1:] - x[:, :-1], out["recon"][:, 1:] - out["recon"][:, :-1]
         vel = F.smooth_l1_loss(dr[both], dx[both]) if both.any() else recon * 0
         c = self.config
         total = recon + c.velocity * vel + c.commit * out["commit"]
-        return {"loss": total, "recon": recon.detach(), "velocity": vel.detach(),
-                "commit": out["commit"].detach()}
+        terms = {"recon": recon.detach(), "velocity": vel.detach(),
+                 "commit": out["commit"].detach()}
+        if c.path > 0 and self.features is not None and self.features.normalizer is not None:
+            # integrated forwards: the padding after a motion's end cannot move its frames
+            norm = self.features.normalizer
+            miss = (global_joints(norm.inverse(out["recon"]))
+                    - global_joints(norm.inverse(x))).norm(dim=-1).mean(-1)
+            where = (miss * frames).sum() / frames.sum()
+            total, terms["path_m"] = total + c.path * where, where.detach()
+        return {"loss": total, **terms}
 
     def _generator_loss(self, batch: dict) -> dict[str, torch.Tensor]:
         tokens, valid, text = batch["tokens"], batch["valid"], batch["text"]
@@ -269,10 +284,13 @@ class MaskedModel(Checkpointed, nn.Module):
         return out
 
     def inbetween(self, text: str, p21: np.ndarray, keep: np.ndarray, *, seed: int = 0,
-                  options: MaskedOptions | None = None) -> np.ndarray:
+                  options: MaskedOptions | None = None, foot_lock: bool = False
+                  ) -> np.ndarray:
         """Global positions (T, 21, 3) at :attr:`fps` and the frames to keep (T,) bool ->
         a motion of T frames that has the kept frames and, elsewhere, frames generated
-        for ``text`` (only the tokens of frames not kept are masked)."""
+        for ``text`` (only the tokens of frames not kept are masked). ``foot_lock``: the
+        generated motion's planted feet held (``features.foot_lock.lock_feet``) before it
+        is joined to the kept frames."""
         options = options or MaskedOptions()
         p21 = np.asarray(p21, dtype=np.float64)
         keep = np.asarray(keep, dtype=bool)
@@ -295,7 +313,11 @@ class MaskedModel(Checkpointed, nn.Module):
         gen = self.tokenizer.decode(tokens)[0, :len(rows)].cpu().numpy()
         from motionlang.features.positions import positions_to_rows
         start = positions_to_rows(p21[:1])[1]
-        return blend(self._positions(gen, start), p21, keep)
+        moved = self._positions(gen, start)
+        if foot_lock:
+            from motionlang.features.foot_lock import lock_feet
+            moved = lock_feet(moved, self.fps)
+        return blend(moved, p21, keep)
 
     # -- checkpoints --------------------------------------------------------------------
     def checkpoint_state(self) -> dict[str, Any]:

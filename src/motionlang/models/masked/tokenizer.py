@@ -137,13 +137,15 @@ class ResidualQuantizer(nn.Module):
             self.counts[q][dead] = 1.0
         self.codebooks[q] = self.sums[q] / self.counts[q][:, None]
 
-    def forward(self, z: torch.Tensor, mask: torch.Tensor, n_q: int | None = None
-                ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+    def forward(self, z: torch.Tensor, mask: torch.Tensor, n_q: int | None = None,
+                learn: bool | None = None) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
         """Latents (B, L, D) and their mask (B, L) -> (quantised latents with straight-through
         gradients (B, L, D), indices (B, L, k), commitment loss); ``n_q``: use the first
-        k codebooks (None: all, or fewer under quantiser dropout in training)."""
+        k codebooks (None: all, or fewer under quantiser dropout in training); ``learn``:
+        update the codebooks (None: in training)."""
+        learn = self.training if learn is None else learn
         rows = z[mask]
-        if self.training and not bool(self.ready) and len(rows):
+        if learn and not bool(self.ready) and len(rows):
             self._seed(rows.detach())
         k = self.n_q if n_q is None else n_q
         if n_q is None and self.training and float(torch.rand(())) < self.dropout:
@@ -154,7 +156,7 @@ class ResidualQuantizer(nn.Module):
         for q in range(k):
             flat = residual.reshape(-1, residual.shape[-1])
             idx = self.nearest(q, flat).reshape(residual.shape[:-1])
-            if self.training and len(rows):
+            if learn and len(rows):
                 self._update(q, residual[mask], idx[mask])
             code = self.codebooks[q][idx]
             if mask.any():
@@ -175,9 +177,16 @@ class Tokenizer(nn.Module):
         self.quantizer = ResidualQuantizer(c.quantizers, c.codes, c.code_dim, c.ema,
                                            c.quantizer_dropout)
 
-    def forward(self, x: torch.Tensor, mask: torch.Tensor) -> dict[str, Any]:
+    def forward(self, x: torch.Tensor, mask: torch.Tensor, frozen: bool = False
+                ) -> dict[str, Any]:
         """Frames (B, T, F) (T a multiple of 4), token mask (B, T / 4) -> ``{"recon" (B, T,
-        F), "indices" (B, T / 4, k), "commit"}``."""
+        F), "indices" (B, T / 4, k), "commit"}``. ``frozen``: the encoder and codebooks as
+        they are (no gradient, no codebook update), only the decoder learns: the tokens
+        stay those a trained generator was trained on."""
+        if frozen:
+            with torch.no_grad():
+                quantised, indices, commit = self.quantizer(self.encoder(x), mask, learn=False)
+            return {"recon": self.decoder(quantised), "indices": indices, "commit": commit}
         z = self.encoder(x)
         quantised, indices, commit = self.quantizer(z, mask)
         return {"recon": self.decoder(quantised), "indices": indices, "commit": commit}

@@ -1,0 +1,143 @@
+"""Does a masked model's tokenizer keep the root's path? And retrain its decoder so it does.
+
+    # measure: test motions of each source through the tokens and back
+    OMP_NUM_THREADS=2 .venv/bin/python experiments/masked_root_path.py measure \\
+        experiments/state/masked --data /tmp/corpus --data bandai:../shared/data/bandai
+
+    # retrain the decoder alone (encoder and codebooks frozen, so the tokens and the
+    # generator trained on them stay valid) with the global-position loss
+    OMP_NUM_THREADS=2 .venv/bin/python experiments/masked_root_path.py decoder \\
+        experiments/state/masked --data /tmp/corpus --data bandai:../shared/data/bandai \\
+        --out runs/masked_path --epochs 20
+
+``measure`` decodes each test motion's rows, and the same rows through the tokenizer, to
+global positions from the same start (``features.decode(..., pin_root=True)``) and prints,
+per source, the mean root position error, the mean global joint error (mm), the body-frame
+joint error (MPJPE, mm; what ``recipes.masked.tokenizer_report`` prints) and the motions'
+start-to-end travel. The data is read, split and featurised as the model's run did (same
+sources, seed and features; the split is checked against the run's ``splits/``).
+
+``decoder`` trains the tokenizer's decoder alone (``MaskedModel`` stage ``"decoder"``) with
+the frame, velocity and global-position losses on the run's training motions, keeping the
+epoch of the lowest validation loss, and writes ``OUT/model.pt``: the same model with the
+new decoder. Then ``measure`` it.
+"""
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import sys
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "src"))
+
+
+def _load(args: argparse.Namespace):
+    """(model, TwoStreamData) of the run folder and sources."""
+    from motionlang.datasets.sources import parse_source
+    from motionlang.datasets.splits import load_splits
+    from motionlang.datasets.twostream_items import build_twostream_data
+    from motionlang.models.masked.model import MaskedModel
+
+    run = Path(args.model)
+    model = MaskedModel.load(run / "model.pt" if run.is_dir() else run).eval()
+    paths = [parse_source(s).path for s in args.data]
+    data = build_twostream_data(paths if len(paths) > 1 else paths[0], seed=args.seed,
+                                max_seconds=args.max_seconds)
+    splits_dir = (run if run.is_dir() else run.parent) / "splits"
+    if splits_dir.is_dir():
+        saved = load_splits(splits_dir)
+        for name, ids in saved.items():
+            if sorted(map(str, ids)) != sorted(map(str, data.splits.get(name, []))):
+                sys.exit(f"{splits_dir}: the {name} split differs from this data's "
+                         "(other sources, seed or corpus?)")
+    # the model's own features normalise: the rows are re-derived with them
+    norm, mine = model.features.normalizer, data.features.normalizer
+    if not (np.allclose(norm.mean, mine.mean) and np.allclose(norm.std, mine.std)):
+        sys.exit("the model's features were fitted on other data than these sources")
+    return model, data
+
+
+def root_errors(model, rows: list[np.ndarray]) -> dict[str, float]:
+    """Mean root, global-joint and body-frame joint errors (mm), and travel (m), of motions'
+    rows (T, 66) through the tokenizer and back."""
+    from motionlang.features.positions import local_joints
+    feats, norm = model.features, model.features.normalizer
+    out: dict[str, list[float]] = {"root_mm": [], "global_mm": [], "mpjpe_mm": [],
+                                   "travel_m": []}
+    for x in rows:
+        back = model.reconstruct(x)
+        truth, got = (feats.decode(r, (0.0, 0.0, 0.0), pin_root=True) for r in (x, back))
+        out["root_mm"].append(1000 * float(np.linalg.norm(got[:, 0] - truth[:, 0], axis=-1)
+                                           .mean()))
+        out["global_mm"].append(1000 * float(np.linalg.norm(got - truth, axis=-1).mean()))
+        local = [local_joints(norm.inverse(r.astype(np.float64))) for r in (x, back)]
+        out["mpjpe_mm"].append(1000 * float(np.linalg.norm(local[0] - local[1], axis=-1)
+                                            .mean()))
+        out["travel_m"].append(float(np.linalg.norm(truth[-1, 0, [0, 2]]
+                                                    - truth[0, 0, [0, 2]])))
+    return {k: float(np.mean(v)) for k, v in out.items()}
+
+
+def measure(args: argparse.Namespace) -> None:
+    model, data = _load(args)
+    rng = np.random.default_rng(0)
+    test = data.splits["test"]
+    for source in sorted({data.sources[i] for i in test}):
+        ids = [i for i in test if data.sources[i] == source]
+        ids = [ids[k] for k in sorted(rng.choice(len(ids), min(args.limit, len(ids)),
+                                                 replace=False))]
+        r = root_errors(model, [data.sequences[i] for i in ids])
+        print(f"{args.data[source]}: {len(ids)} test motions: root {r['root_mm']:.0f} mm, global joints "
+              f"{r['global_mm']:.0f} mm, body-frame MPJPE {r['mpjpe_mm']:.1f} mm, travel "
+              f"{r['travel_m']:.2f} m", flush=True)
+
+
+def decoder(args: argparse.Namespace) -> None:
+    import torch
+
+    from motionlang.recipes.masked import _stage
+    from motionlang.training.config import TrainConfig
+    torch.set_num_threads(args.threads)
+    model, data = _load(args)
+    model.config = dataclasses.replace(model.config, path=args.path)
+    motions = {name: [{"motion": data.sequences[i]} for i in ids]
+               for name, ids in data.splits.items()}
+    cfg = TrainConfig(out_dir=str(Path(args.out) / "decoder"), epochs=args.epochs,
+                      batch_size=args.batch, lr=args.lr, optimizer="adamw", grad_clip=1.0,
+                      seed=args.seed, decay_epochs=args.epochs / 2)
+    model = _stage(model, "decoder", motions["train"], motions["val"], cfg, args.resume,
+                   lambda s: print(s, flush=True))
+    model.set_stage("generator")
+    out = Path(args.out) / "model.pt"
+    model.save(out)
+    print(out)
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    sub = p.add_subparsers(dest="cmd", required=True)
+    for name in ("measure", "decoder"):
+        a = sub.add_parser(name)
+        a.add_argument("model", help="a masked run folder or model.pt")
+        a.add_argument("--data", action="append", required=True)
+        a.add_argument("--seed", type=int, default=0)
+        a.add_argument("--max-seconds", type=float, default=30.0)
+        a.add_argument("--limit", type=int, default=60, help="test motions per source")
+    d = sub.choices["decoder"]
+    d.add_argument("--out", required=True)
+    d.add_argument("--epochs", type=int, default=20)
+    d.add_argument("--batch", type=int, default=64)
+    d.add_argument("--lr", type=float, default=2e-4)
+    d.add_argument("--path", type=float, default=1.0, help="weight of the path loss")
+    d.add_argument("--threads", type=int, default=2)
+    d.add_argument("--resume", action="store_true")
+    args = p.parse_args()
+    {"measure": measure, "decoder": decoder}[args.cmd](args)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,88 @@
+"""The masked tokenizer's root path: the torch integration matches the features' own
+decoding, the global-position loss sees a root that drifts while the frame loss barely
+does, and the decoder stage trains the decoder alone (tokens and codebooks unchanged)."""
+from __future__ import annotations
+
+import numpy as np
+import torch
+
+from helpers.mocap import synthetic_mmm
+from helpers.twostream import HashTokens
+from motionlang.features.positions import (
+    N_LOCAL,
+    PositionFeatures,
+    join_global,
+    local_joints,
+    root_step,
+    root_turn,
+)
+from motionlang.models.masked.config import MaskedConfig
+from motionlang.models.masked.model import MaskedModel
+from motionlang.models.masked.path import global_joints, root_path
+
+torch.set_num_threads(1)
+TINY = {"width": 16, "depth": 1, "code_dim": 8, "codes": 16, "quantizers": 2, "hidden": 16,
+        "layers": 1, "res_layers": 1, "heads": 2, "max_tokens": 30, "window": 2.56}
+
+
+def test_global_joints_match_the_features_decoding():
+    rng = np.random.default_rng(0)
+    raw = rng.normal(size=(3, 40, 66)) * 0.2
+    want = np.stack([join_global(local_joints(r), root_step(r), root_turn(r)) for r in raw])
+    got = global_joints(torch.tensor(raw)).numpy()
+    assert np.allclose(got, want, atol=1e-12)
+    ground, yaw = root_path(torch.tensor(raw))
+    assert ground.shape == (3, 40, 2) and yaw.shape == (3, 40)
+    assert float(ground[:, 0].abs().max()) == 0.0 and float(yaw[:, 0].abs().max()) == 0.0
+
+
+def test_a_constant_step_error_grows_along_the_path():
+    raw = torch.zeros(1, 50, 66)
+    raw[..., N_LOCAL + 1] = 0.05                  # 5 cm a frame forward
+    off = raw.clone()
+    off[..., N_LOCAL + 1] += 0.005                # 10 % too long a stride
+    miss = (global_joints(off) - global_joints(raw)).norm(dim=-1)[0, :, 0]
+    assert float(miss[-1]) > 0.24 and float(miss[1]) < 0.006
+    assert torch.all(miss[1:] > miss[:-1])
+
+
+def _model(path: float) -> MaskedModel:
+    features = PositionFeatures().fit([synthetic_mmm(T=401)])
+    torch.manual_seed(0)
+    return MaskedModel(MaskedConfig(**TINY, path=path), features, HashTokens())
+
+
+def test_path_term_follows_its_weight():
+    with_path, without = _model(1.0), _model(0.0)
+    rows = with_path.features.encode(synthetic_mmm(T=401))
+    for m in (with_path, without):
+        m.set_stage("tokenizer").eval()
+    batch = with_path.collate([{"motion": rows}])
+    a, b = with_path.loss(batch), without.loss(batch)
+    assert "path_m" in a and "path_m" not in b
+    assert float(a["path_m"]) > 0
+    assert torch.isclose(a["loss"], b["loss"] + a["path_m"], rtol=1e-5)
+
+
+def test_decoder_stage_trains_the_decoder_alone():
+    model = _model(1.0)
+    rows = model.features.encode(synthetic_mmm(T=401))
+    model.set_stage("tokenizer").train()
+    model.loss(model.collate([{"motion": rows}]))          # seeds the codebooks
+    before = {k: v.clone() for k, v in model.tokenizer.state_dict().items()}
+    tokens = model.tokenize([rows])[0]
+    model.set_stage("decoder").train()
+    trainable = {n for n, p in model.named_parameters() if p.requires_grad}
+    assert trainable and all(n.startswith("tokenizer.decoder.") for n in trainable)
+    opt = torch.optim.Adam([p for p in model.parameters() if p.requires_grad], lr=1e-2)
+    batch = model.collate([{"motion": rows}])
+    first = model.loss(batch)["loss"].item()
+    for _ in range(30):
+        opt.zero_grad()
+        model.loss(batch)["loss"].backward()
+        opt.step()
+    assert model.loss(batch)["loss"].item() < first
+    after = model.tokenizer.state_dict()
+    changed = {k for k in before if not torch.equal(before[k], after[k])}
+    assert changed and all(k.startswith("decoder.") for k in changed)
+    assert np.array_equal(model.tokenize([rows])[0], tokens)
