@@ -13,12 +13,13 @@
 ``measure`` decodes each test motion's rows, and the same rows through the tokenizer, to
 global positions from the same start (``features.decode(..., pin_root=True)``) and prints,
 per source, the mean root position error, the mean global joint error (mm), the body-frame
-joint error (MPJPE, mm; what ``recipes.masked.tokenizer_report`` prints) and the motions'
-start-to-end travel. The data is read, split and featurised as the model's run did (same
+joint error (MPJPE, mm; what ``recipes.masked.tokenizer_report`` prints), the foot skating
+through the tokens and of the motions themselves (m/s), and the motions' start-to-end
+travel. The data is read, split and featurised as the model's run did (same
 sources, seed and features; the split is checked against the run's ``splits/``).
 
 ``decoder`` trains the tokenizer's decoder alone (``MaskedModel`` stage ``"decoder"``) with
-the frame, velocity and global-position losses on the run's training motions, keeping the
+the frame, velocity, global-position and (``--foot``) foot-velocity losses on the run's training motions, keeping the
 epoch of the lowest validation loss, and writes ``OUT/model.pt``: the same model with the
 new decoder. Then ``measure`` it.
 """
@@ -64,10 +65,11 @@ def _load(args: argparse.Namespace):
 def root_errors(model, rows: list[np.ndarray]) -> dict[str, float]:
     """Mean root, global-joint and body-frame joint errors (mm), and travel (m), of motions'
     rows (T, 66) through the tokenizer and back."""
+    from motionlang.evaluation.metrics.physics import foot_skating
     from motionlang.features.positions import local_joints
     feats, norm = model.features, model.features.normalizer
     out: dict[str, list[float]] = {"root_mm": [], "global_mm": [], "mpjpe_mm": [],
-                                   "travel_m": []}
+                                   "travel_m": [], "skate": [], "skate_real": []}
     for x in rows:
         back = model.reconstruct(x)
         truth, got = (feats.decode(r, (0.0, 0.0, 0.0), pin_root=True) for r in (x, back))
@@ -77,9 +79,11 @@ def root_errors(model, rows: list[np.ndarray]) -> dict[str, float]:
         local = [local_joints(norm.inverse(r.astype(np.float64))) for r in (x, back)]
         out["mpjpe_mm"].append(1000 * float(np.linalg.norm(local[0] - local[1], axis=-1)
                                             .mean()))
+        out["skate"].append(foot_skating(got, model.fps))
+        out["skate_real"].append(foot_skating(truth, model.fps))
         out["travel_m"].append(float(np.linalg.norm(truth[-1, 0, [0, 2]]
                                                     - truth[0, 0, [0, 2]])))
-    return {k: float(np.mean(v)) for k, v in out.items()}
+    return {k: float(np.nanmean(v)) for k, v in out.items()}
 
 
 def measure(args: argparse.Namespace) -> None:
@@ -92,7 +96,8 @@ def measure(args: argparse.Namespace) -> None:
                                                  replace=False))]
         r = root_errors(model, [data.sequences[i] for i in ids])
         print(f"{args.data[source]}: {len(ids)} test motions: root {r['root_mm']:.0f} mm, global joints "
-              f"{r['global_mm']:.0f} mm, body-frame MPJPE {r['mpjpe_mm']:.1f} mm, travel "
+              f"{r['global_mm']:.0f} mm, body-frame MPJPE {r['mpjpe_mm']:.1f} mm, foot "
+              f"skating {r['skate']:.3f} m/s (the motions' own {r['skate_real']:.3f}), travel "
               f"{r['travel_m']:.2f} m", flush=True)
 
 
@@ -103,7 +108,7 @@ def decoder(args: argparse.Namespace) -> None:
     from motionlang.training.config import TrainConfig
     torch.set_num_threads(args.threads)
     model, data = _load(args)
-    model.config = dataclasses.replace(model.config, path=args.path)
+    model.config = dataclasses.replace(model.config, path=args.path, foot=args.foot)
     motions = {name: [{"motion": data.sequences[i]} for i in ids]
                for name, ids in data.splits.items()}
     cfg = TrainConfig(out_dir=str(Path(args.out) / "decoder"), epochs=args.epochs,
@@ -133,6 +138,7 @@ def main() -> None:
     d.add_argument("--batch", type=int, default=64)
     d.add_argument("--lr", type=float, default=2e-4)
     d.add_argument("--path", type=float, default=1.0, help="weight of the path loss")
+    d.add_argument("--foot", type=float, default=0.0, help="weight of the foot-velocity loss")
     d.add_argument("--threads", type=int, default=2)
     d.add_argument("--resume", action="store_true")
     args = p.parse_args()

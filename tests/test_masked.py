@@ -52,7 +52,7 @@ def test_config_refuses_bad_values_by_name(bad):
 
 
 @pytest.mark.parametrize("bad", [{"steps": 0}, {"steps": 101}, {"guidance": -1.0},
-                                 {"top_k": -1}])
+                                 {"top_k": -1}, {"drafts": 0}, {"drafts": 65}])
 def test_options_refuse_bad_values_by_name(bad):
     with pytest.raises(MotionlangError, match=next(iter(bad))):
         MaskedOptions(**bad)
@@ -74,7 +74,7 @@ def test_shapes_of_both_stages(features):
     assert batch["motion"].shape == (2, 32, 66)                  # crops of 2.56 s
     assert batch["frames"].sum(1).tolist() == [32, 10]
     out = model.loss(batch)
-    assert set(out) == {"loss", "recon", "velocity", "commit", "path_m"}
+    assert set(out) == {"loss", "recon", "velocity", "commit", "path_m", "foot_ms"}
     assert out["loss"].requires_grad
     toks = model.tokenize(rows)
     assert [t.shape for t in toks] == [(13, 3), (3, 3)]        # ceil(T / 4) tokens, Q codebooks
@@ -163,7 +163,8 @@ def test_inbetweening_keeps_the_kept_frames(features, motion21):
     assert out.shape == p21.shape
     assert np.array_equal(out[keep], p21[keep])
     assert not np.allclose(out[~keep], p21[~keep])               # the gap is generated
-    locked = model.inbetween("a person walks", p21, keep, seed=0, foot_lock=True)
+    locked = model.inbetween("a person walks", p21, keep, seed=0, foot_lock=True,
+                             options=MaskedOptions(drafts=3))
     assert np.array_equal(locked[keep], p21[keep]) and np.isfinite(locked).all()
     with pytest.raises(MotionlangError, match="in-betweening"):
         model.inbetween("a person walks", p21, keep[:-1])

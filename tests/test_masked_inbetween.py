@@ -32,6 +32,20 @@ def test_parse_keep_by_hand():
         assert str(err.value).startswith("--keep") and len(str(err.value).splitlines()) == 1
 
 
+def test_arrival_miss_by_hand():
+    from motionlang.models.masked.inbetween import arrival_miss
+    src = np.zeros((10, 2, 3))
+    keep = np.ones(10, dtype=bool)
+    keep[3:6] = False
+    assert arrival_miss(src + [1.0, 0.0, 2.0], src, keep) == 0.0    # moved whole: no change
+    late = src.copy()
+    late[6:, :, 2] -= 0.3                 # arrives 30 cm short: the offset grows by 0.3 m
+    assert np.isclose(arrival_miss(late, src, keep), 0.3)
+    keep[:] = True
+    keep[7:] = False                      # a gap that runs to the end constrains nothing
+    assert arrival_miss(late + np.arange(10)[:, None, None], src, keep) == 0.0
+
+
 def test_keep_frames_by_hand():
     keep = keep_frames(10, 2.0, [(0.0, 1.0), (4.0, None)])     # frames at 0, 0.5, ... 4.5 s
     assert keep.tolist() == [True, True, True, False, False, False, False, False, True, True]

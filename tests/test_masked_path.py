@@ -1,6 +1,6 @@
 """The masked tokenizer's root path: the torch integration matches the features' own
 decoding, the global-position loss sees a root that drifts while the frame loss barely
-does, and the decoder stage trains the decoder alone (tokens and codebooks unchanged)."""
+does, the foot term a foot that slides, and the decoder stage trains the decoder alone (tokens and codebooks unchanged)."""
 from __future__ import annotations
 
 import numpy as np
@@ -9,6 +9,7 @@ import torch
 from helpers.mocap import synthetic_mmm
 from helpers.twostream import HashTokens
 from motionlang.features.positions import (
+    FOOT,
     N_LOCAL,
     PositionFeatures,
     join_global,
@@ -18,7 +19,7 @@ from motionlang.features.positions import (
 )
 from motionlang.models.masked.config import MaskedConfig
 from motionlang.models.masked.model import MaskedModel
-from motionlang.models.masked.path import global_joints, root_path
+from motionlang.models.masked.path import global_errors, global_joints, root_path
 
 torch.set_num_threads(1)
 TINY = {"width": 16, "depth": 1, "code_dim": 8, "codes": 16, "quantizers": 2, "hidden": 16,
@@ -46,22 +47,36 @@ def test_a_constant_step_error_grows_along_the_path():
     assert torch.all(miss[1:] > miss[:-1])
 
 
-def _model(path: float) -> MaskedModel:
+def test_a_sliding_foot_by_hand():
+    truth = torch.zeros(1, 11, 66)
+    slid = truth.clone()
+    for j in FOOT:                                  # the feet move 1 cm a frame sideways
+        slid[0, :, 3 * j] = 0.01 * torch.arange(11)
+    frames = torch.ones(1, 11, dtype=torch.bool)
+    path, foot = global_errors(slid, truth, frames, fps=10.0)
+    assert torch.isclose(foot, torch.tensor(0.1))   # 0.01 m x 10 Hz
+    assert torch.isclose(path, torch.tensor(0.05 * 6 / 21))   # mean over 0..0.1 m, 6 joints
+    frames[0, 6:] = False                           # only the first 6 frames count
+    assert torch.isclose(global_errors(slid, truth, frames, 10.0)[0],
+                         torch.tensor(0.025 * 6 / 21))
+
+
+def _model(path: float, foot: float = 0.0) -> MaskedModel:
     features = PositionFeatures().fit([synthetic_mmm(T=401)])
     torch.manual_seed(0)
-    return MaskedModel(MaskedConfig(**TINY, path=path), features, HashTokens())
+    return MaskedModel(MaskedConfig(**TINY, path=path, foot=foot), features, HashTokens())
 
 
-def test_path_term_follows_its_weight():
-    with_path, without = _model(1.0), _model(0.0)
+def test_global_terms_follow_their_weights():
+    with_path, without = _model(1.0, 0.5), _model(0.0, 0.0)
     rows = with_path.features.encode(synthetic_mmm(T=401))
     for m in (with_path, without):
         m.set_stage("tokenizer").eval()
     batch = with_path.collate([{"motion": rows}])
     a, b = with_path.loss(batch), without.loss(batch)
     assert "path_m" in a and "path_m" not in b
-    assert float(a["path_m"]) > 0
-    assert torch.isclose(a["loss"], b["loss"] + a["path_m"], rtol=1e-5)
+    assert float(a["path_m"]) > 0 and float(a["foot_ms"]) > 0
+    assert torch.isclose(a["loss"], b["loss"] + a["path_m"] + 0.5 * a["foot_ms"], rtol=1e-5)
 
 
 def test_decoder_stage_trains_the_decoder_alone():

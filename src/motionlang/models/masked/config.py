@@ -48,6 +48,9 @@ class MaskedConfig:
             reconstructed rows and from the true ones (``path.global_joints``). The frame
             loss weighs the root's per-frame step like any coordinate; on a travelling
             motion its small errors add up to a body far off its path.
+        foot: weight of the foot-velocity loss: the mean error (m/s) of the foot joints'
+            ground-plane velocity, placed as for ``path`` (a foot planted in the motion
+            should not slide in its reconstruction).
         window: seconds of the random crops the tokenizer is trained on.
         hidden, layers, heads, dropout: the masked transformer's size.
         res_layers: layers of the residual-token transformer (same width).
@@ -73,6 +76,7 @@ class MaskedConfig:
     velocity: float = _opt(0.5, "weight of the velocity (frame difference) loss")
     path: float = _opt(1.0, "weight of the global-position loss (metres, along the "
                             "integrated root path)")
+    foot: float = _opt(1.0, "weight of the feet's ground-velocity loss (m/s)")
     window: float = _opt(5.12, "seconds of the crops the tokenizer trains on")
     hidden: int = _opt(192, "width of the masked and residual transformers")
     layers: int = _opt(4, "layers of the masked transformer")
@@ -87,7 +91,7 @@ class MaskedConfig:
         check_numbers("MaskedConfig", self, positive_ints=("n_features",),
                       nonneg_ints=("text_dim", "text_layer", "depth"), sizes=SIZES,
                       layers=("quantizers", "layers", "res_layers", "heads"),
-                      positive=("fps", "window", "commit"), nonneg=("velocity", "path"),
+                      positive=("fps", "window", "commit"), nonneg=("velocity", "path", "foot"),
                       unit=("quantizer_dropout", "ema", "dropout", "cond_drop"))
         if self.hidden % self.heads:
             raise MotionlangError(f"MaskedConfig.heads ({self.heads}) must divide hidden "
@@ -120,6 +124,8 @@ class MaskedOptions:
         res_guidance: the same for the residual-token transformer.
         temperature: of the base tokens' softmax (0: the likeliest token, nothing drawn).
         top_k: draw among the k likeliest tokens only (0: all).
+        drafts: in-betweening draws this many motions in one batch and keeps the one that
+            arrives closest to the kept frames after each gap (``inbetween.arrival_miss``).
     """
 
     steps: int = 10
@@ -127,10 +133,13 @@ class MaskedOptions:
     res_guidance: float = 2.0
     temperature: float = 1.0
     top_k: int = 0
+    drafts: int = 8
 
     def __post_init__(self) -> None:
-        check_numbers("masked options", self, positive_ints=("steps",), nonneg_ints=("top_k",),
+        check_numbers("masked options", self, positive_ints=("steps", "drafts"),
+                      nonneg_ints=("top_k",),
                       nonneg=("guidance", "res_guidance", "temperature"))
-        if self.steps > 100:
-            raise MotionlangError(f"masked options: steps must be at most 100, got "
-                                  f"{self.steps}")
+        for name, most in (("steps", 100), ("drafts", 64)):
+            if getattr(self, name) > most:
+                raise MotionlangError(f"masked options: {name} must be at most {most}, got "
+                                      f"{getattr(self, name)}")

@@ -6,7 +6,9 @@ a gap is regenerated). The decoder reproduces the kept tokens' frames only up to
 tokenizer's error and places them where the generated root path leads, so the result
 takes the kept frames as they are and moves each generated stretch by an offset per joint
 that goes linearly from the gap's start (the last kept frame before it) to its end (the
-first kept frame after it): no jump at either side ("offset blending").
+first kept frame after it): no jump at either side ("offset blending"). Of several drafts,
+the one that arrives closest to the kept frames after each gap (:func:`arrival_miss`) needs
+the least of that offset, and so slides least.
 """
 from __future__ import annotations
 
@@ -56,6 +58,23 @@ def blend(generated: np.ndarray, source: np.ndarray, keep: np.ndarray) -> np.nda
         w = (np.arange(a, b) - (a - 1)) / (b - a + 1.0)
         out[a:b] = gen[a:b] + (1 - w)[:, None, None] * before + w[:, None, None] * after
     return out
+
+
+def arrival_miss(generated: np.ndarray, source: np.ndarray, keep: np.ndarray) -> float:
+    """How far a generated motion (T, J, 3) misses the kept frames of ``source`` across its
+    gaps, in metres: per gap that has kept frames on both sides, the mean over joints of
+    the change in the offset :func:`blend` would apply from the gap's start to its end (what
+    the blend must spread over the gap, and so what planted feet would slide by), summed
+    over the gaps. Tokens carry no absolute position, so a draft can take the gap at
+    another pace than the motion and arrive elsewhere."""
+    gen = np.asarray(generated, dtype=np.float64)
+    src = np.asarray(source, dtype=np.float64)
+    miss = 0.0
+    for a, b in gaps(keep):
+        if a > 0 and b < len(keep):
+            change = (src[b] - gen[b]) - (src[a - 1] - gen[a - 1])
+            miss += float(np.linalg.norm(change, axis=-1).mean())
+    return miss
 
 
 def linear_fill(source: np.ndarray, keep: np.ndarray) -> np.ndarray:

@@ -38,8 +38,8 @@ from motionlang.features.positions import PositionFeatures
 from motionlang.models.checkpoint import Checkpointed, pack_features, unpack_features
 from motionlang.models.masked import sampling
 from motionlang.models.masked.config import DOWN, MaskedConfig, MaskedOptions
-from motionlang.models.masked.inbetween import blend, kept_tokens
-from motionlang.models.masked.path import global_joints
+from motionlang.models.masked.inbetween import arrival_miss, blend, kept_tokens
+from motionlang.models.masked.path import global_errors
 from motionlang.models.masked.tokenizer import Tokenizer, pad_frames
 from motionlang.models.masked.transformer import (
     LengthEstimator,
@@ -175,13 +175,13 @@ class MaskedModel(Checkpointed, nn.Module):
         total = recon + c.velocity * vel + c.commit * out["commit"]
         terms = {"recon": recon.detach(), "velocity": vel.detach(),
                  "commit": out["commit"].detach()}
-        if c.path > 0 and self.features is not None and self.features.normalizer is not None:
-            # integrated forwards: the padding after a motion's end cannot move its frames
+        if (c.path > 0 or c.foot > 0) and self.features is not None \
+                and self.features.normalizer is not None:
             norm = self.features.normalizer
-            miss = (global_joints(norm.inverse(out["recon"]))
-                    - global_joints(norm.inverse(x))).norm(dim=-1).mean(-1)
-            where = (miss * frames).sum() / frames.sum()
-            total, terms["path_m"] = total + c.path * where, where.detach()
+            path, foot = global_errors(norm.inverse(out["recon"]), norm.inverse(x), frames,
+                                       c.fps)
+            total = total + c.path * path + c.foot * foot
+            terms.update(path_m=path.detach(), foot_ms=foot.detach())
         return {"loss": total, **terms}
 
     def _generator_loss(self, batch: dict) -> dict[str, torch.Tensor]:
@@ -288,7 +288,8 @@ class MaskedModel(Checkpointed, nn.Module):
                   ) -> np.ndarray:
         """Global positions (T, 21, 3) at :attr:`fps` and the frames to keep (T,) bool ->
         a motion of T frames that has the kept frames and, elsewhere, frames generated
-        for ``text`` (only the tokens of frames not kept are masked). ``foot_lock``: the
+        for ``text`` (only the tokens of frames not kept are masked; of ``options.drafts``
+        drafts, the one that arrives closest to the kept frames). ``foot_lock``: the
         generated motion's planted feet held (``features.foot_lock.lock_feet``) before it
         is joined to the kept frames."""
         options = options or MaskedOptions()
@@ -304,16 +305,18 @@ class MaskedModel(Checkpointed, nn.Module):
         if n_tok > self.config.max_tokens:
             raise MotionlangError(f"in-betweening: the motion is {len(rows)} frames, this "
                                   f"model generates at most {self.config.max_tokens * DOWN}")
+        n = options.drafts
         known = torch.as_tensor(self.tokenize([rows])[0], device=self.device)[None]
         kept = torch.as_tensor(kept_tokens(keep), device=self.device)[None]
-        tokens = self.sample_tokens([text], [n_tok], seed=seed, options=options,
-                                    known=known, kept=kept)
+        tokens = self.sample_tokens([text] * n, [n_tok] * n, seed=seed, options=options,
+                                    known=known.expand(n, -1, -1), kept=kept.expand(n, -1))
         # decoded whole (kept tokens too), so that the generated frames join their decoded
         # neighbours smoothly; ``blend`` then puts the kept frames back exactly
-        gen = self.tokenizer.decode(tokens)[0, :len(rows)].cpu().numpy()
         from motionlang.features.positions import positions_to_rows
         start = positions_to_rows(p21[:1])[1]
-        moved = self._positions(gen, start)
+        drafts = [self._positions(g[:len(rows)], start)
+                  for g in self.tokenizer.decode(tokens).cpu().numpy()]
+        moved = min(drafts, key=lambda d: arrival_miss(d, p21, keep))
         if foot_lock:
             from motionlang.features.foot_lock import lock_feet
             moved = lock_feet(moved, self.fps)

@@ -6,13 +6,15 @@ reconstructs each increment with a small error places a travelling body far off 
 once the errors add up, while a loss on the rows alone weighs those 3 of the 66 values like
 any joint coordinate. :func:`global_joints` integrates the increments the way
 ``features.root.integrate`` does (differentiably) and places the local joints on the path,
-so a loss can be taken on where the body ends up in metres.
+so a loss can be taken on where the body ends up in metres (:func:`global_errors`), and on
+how fast the feet move over the floor (a decoder that gets the root's step and the legs'
+swing each nearly right can still slide a planted foot).
 """
 from __future__ import annotations
 
 import torch
 
-from motionlang.features.positions import N_LOCAL
+from motionlang.features.positions import FOOT, N_LOCAL
 
 
 def root_path(raw: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
@@ -39,3 +41,19 @@ def global_joints(raw: torch.Tensor) -> torch.Tensor:
     x, y, z = local[..., 0], local[..., 1], local[..., 2]
     return torch.stack([c * x + s * z + ground[..., :1], y, -s * x + c * z + ground[..., 1:]],
                        dim=-1)
+
+
+def global_errors(recon: torch.Tensor, truth: torch.Tensor, frames: torch.Tensor,
+                  fps: float) -> tuple[torch.Tensor, torch.Tensor]:
+    """Un-normalised rows (B, T, 66) reconstructed and true, valid frames (B, T) bool ->
+    (mean joint distance in metres along the integrated path, mean error of the six foot
+    joints' ground-plane velocity in m/s over the valid frame steps). Integrated forwards,
+    so the padding after a motion's end cannot move its frames."""
+    got, want = global_joints(recon), global_joints(truth)
+    w = frames.to(got.dtype)
+    path = ((got - want).norm(dim=-1).mean(-1) * w).sum() / w.sum().clamp(min=1.0)
+    feet = list(FOOT)
+    step = (got[:, 1:, feet] - got[:, :-1, feet]) - (want[:, 1:, feet] - want[:, :-1, feet])
+    both = w[:, 1:] * w[:, :-1]
+    slide = (step[..., [0, 2]].norm(dim=-1).mean(-1) * both).sum() * fps
+    return path, slide / both.sum().clamp(min=1.0)
