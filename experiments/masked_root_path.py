@@ -21,7 +21,8 @@ sources, seed and features; the split is checked against the run's ``splits/``).
 ``decoder`` trains the tokenizer's decoder alone (``MaskedModel`` stage ``"decoder"``) with
 the frame, velocity, global-position and (``--foot``) foot-velocity losses on the run's training motions, keeping the
 epoch of the lowest validation loss, and writes ``OUT/model.pt``: the same model with the
-new decoder. Then ``measure`` it.
+new decoder. Then ``measure`` it. ``half MODEL OUT`` stores a model file's weights in float16
+(how ``experiments/state/masked/model.pt`` is kept).
 """
 from __future__ import annotations
 
@@ -122,6 +123,20 @@ def decoder(args: argparse.Namespace) -> None:
     print(out)
 
 
+def half(args: argparse.Namespace) -> None:
+    """The model file with its floating-point weights stored in float16 (half the size, for
+    committed state; they load back into the float32 model)."""
+    import torch
+
+    from motionlang.utils.atomic import atomic_write
+    state = torch.load(args.model, map_location="cpu", weights_only=False)
+    state["state_dict"] = {k: v.half() if v.is_floating_point() else v
+                           for k, v in state["state_dict"].items()}
+    with atomic_write(args.out, "wb") as f:
+        torch.save(state, f)
+    print(args.out)
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     sub = p.add_subparsers(dest="cmd", required=True)
@@ -141,8 +156,11 @@ def main() -> None:
     d.add_argument("--foot", type=float, default=0.0, help="weight of the foot-velocity loss")
     d.add_argument("--threads", type=int, default=2)
     d.add_argument("--resume", action="store_true")
+    h = sub.add_parser("half")
+    h.add_argument("model", help="a model.pt")
+    h.add_argument("out")
     args = p.parse_args()
-    {"measure": measure, "decoder": decoder}[args.cmd](args)
+    {"measure": measure, "decoder": decoder, "half": half}[args.cmd](args)
 
 
 if __name__ == "__main__":
