@@ -21,13 +21,15 @@ sources, seed and features; the split is checked against the run's ``splits/``).
 ``decoder`` trains the tokenizer's decoder alone (``MaskedModel`` stage ``"decoder"``) with
 the frame, velocity, global-position and (``--foot``) foot-velocity losses on the run's training motions, keeping the
 epoch of the lowest validation loss, and writes ``OUT/model.pt``: the same model with the
-new decoder. Then ``measure`` it. ``half MODEL OUT`` stores a model file's weights in float16
-(how ``experiments/state/masked/model.pt`` is kept).
+new decoder (and the run's ``splits/`` and licence beside it). Then ``measure`` it.
+``half MODEL OUT`` stores a model file's weights in float16 (how
+``experiments/state/masked/model.pt`` is kept).
 """
 from __future__ import annotations
 
 import argparse
 import dataclasses
+import shutil
 import sys
 from pathlib import Path
 
@@ -115,12 +117,17 @@ def decoder(args: argparse.Namespace) -> None:
     cfg = TrainConfig(out_dir=str(Path(args.out) / "decoder"), epochs=args.epochs,
                       batch_size=args.batch, lr=args.lr, optimizer="adamw", grad_clip=1.0,
                       seed=args.seed, decay_epochs=args.epochs / 2)
-    model = _stage(model, "decoder", motions["train"], motions["val"], cfg, args.resume,
-                   lambda s: print(s, flush=True))
+    model = _stage(model, "decoder", motions["train"], motions.get("val") or [], cfg,
+                   args.resume, lambda s: print(s, flush=True))
     model.set_stage("generator")
-    out = Path(args.out) / "model.pt"
-    model.save(out)
-    print(out)
+    run, out = Path(args.model), Path(args.out)
+    run = run if run.is_dir() else run.parent
+    for name in ("splits", "LICENSE.txt"):   # so that ``measure`` checks the split
+        if (run / name).exists() and not (out / name).exists():
+            copy = shutil.copytree if (run / name).is_dir() else shutil.copy2
+            copy(run / name, out / name)
+    model.save(out / "model.pt")
+    print(out / "model.pt")
 
 
 def half(args: argparse.Namespace) -> None:
@@ -153,7 +160,7 @@ def main() -> None:
     d.add_argument("--batch", type=int, default=64)
     d.add_argument("--lr", type=float, default=2e-4)
     d.add_argument("--path", type=float, default=1.0, help="weight of the path loss")
-    d.add_argument("--foot", type=float, default=0.0, help="weight of the foot-velocity loss")
+    d.add_argument("--foot", type=float, default=1.0, help="weight of the foot-velocity loss")
     d.add_argument("--threads", type=int, default=2)
     d.add_argument("--resume", action="store_true")
     h = sub.add_parser("half")

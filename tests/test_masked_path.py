@@ -101,3 +101,44 @@ def test_decoder_stage_trains_the_decoder_alone():
     changed = {k for k in before if not torch.equal(before[k], after[k])}
     assert changed and all(k.startswith("decoder.") for k in changed)
     assert np.array_equal(model.tokenize([rows])[0], tokens)
+
+
+def test_files_from_before_the_terms_read_back_without_them(tmp_path):
+    model = _model(1.0, 1.0)
+    path = tmp_path / "m.pt"
+    model.save(path)
+    d = torch.load(path, weights_only=False)
+    del d["config"]["path"], d["config"]["foot"]
+    torch.save(d, path)
+    old = MaskedModel.load(path, text_encoder=HashTokens())
+    assert (old.config.path, old.config.foot) == (0.0, 0.0)
+    assert MaskedModel.load(tmp_path / "m.pt", text_encoder=HashTokens()).config.path == 0.0
+    model.save(path)
+    assert MaskedModel.load(path, text_encoder=HashTokens()).config.foot == 1.0
+
+
+def test_inbetweening_keeps_the_draft_that_arrives_closest(monkeypatch):
+    import motionlang.models.masked.model as masked_model
+    from motionlang.models.masked.config import MaskedOptions
+    model = _model(1.0)
+    model.set_stage("tokenizer").train()   # seeds the codebooks (all zero until then)
+    model.loss(model.collate([{"motion": model.features.encode(synthetic_mmm(T=401))}]))
+    model.set_stage("generator").eval()
+    p21 = model.features.body(synthetic_mmm(T=401))[:48]
+    keep = np.ones(len(p21), dtype=bool)
+    keep[16:32] = False
+    seen, chosen = [], []
+    misses = iter([0.5, 0.2, 0.9, 0.4])          # the second draft arrives closest
+
+    def miss(draft, source, kept):
+        seen.append(draft)
+        return next(misses)
+
+    def blend(generated, source, kept):
+        chosen.append(generated)
+        return generated
+    monkeypatch.setattr(masked_model, "arrival_miss", miss)
+    monkeypatch.setattr(masked_model, "blend", blend)
+    model.inbetween("a person walks", p21, keep, seed=0, options=MaskedOptions(drafts=4))
+    assert len(seen) == 4 and chosen[0] is seen[1]
+    assert not all(np.array_equal(seen[0], s) for s in seen[1:])   # drafts differ

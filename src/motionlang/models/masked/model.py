@@ -7,11 +7,12 @@ Zhang et al. 2023), on motionlang's 21-joint position features.
   ResidualTransformer` for codebooks 1..Q-1, :class:`~.transformer.LengthEstimator`; all read
   a frozen sentence vector (MiniLM's last hidden state, mean-pooled; cached per sentence).
 
-Two training stages, one model: ``stage = "tokenizer"`` trains the tokenizer (frame,
-velocity and global-position reconstruction, commitment; codebooks by EMA); ``stage =
-"generator"`` freezes it and trains the three token models on the training motions' tokens.
-``stage = "decoder"`` retrains the tokenizer's decoder alone, encoder and codebooks frozen. ``loss`` and ``collate``
-follow the stage, so the shared trainer runs both.
+Training stages, one model: ``stage = "tokenizer"`` trains the tokenizer (frame, velocity,
+global-position and foot-velocity reconstruction, commitment; codebooks by EMA); ``stage =
+"generator"`` freezes it and trains the three token models on the training motions' tokens;
+``stage = "decoder"`` retrains the tokenizer's decoder alone, encoder and codebooks frozen
+(quantiser dropout still applies, so it keeps decoding coarse codes alone). ``loss`` and
+``collate`` follow the stage, so the shared trainer runs each.
 
 Sampling (:meth:`MaskedModel.sample`, the ``decoding.t2m.SamplingModel`` protocol): the
 length from the caller or the estimator, base tokens by iterative masked decoding with
@@ -289,9 +290,9 @@ class MaskedModel(Checkpointed, nn.Module):
         """Global positions (T, 21, 3) at :attr:`fps` and the frames to keep (T,) bool ->
         a motion of T frames that has the kept frames and, elsewhere, frames generated
         for ``text`` (only the tokens of frames not kept are masked; of ``options.drafts``
-        drafts, the one that arrives closest to the kept frames). ``foot_lock``: the
-        generated motion's planted feet held (``features.foot_lock.lock_feet``) before it
-        is joined to the kept frames."""
+        drafts, the one that arrives closest to the kept frames as decoded). ``foot_lock``:
+        the chosen draft's planted feet held (``features.foot_lock.lock_feet``) before it is
+        joined to the kept frames."""
         options = options or MaskedOptions()
         p21 = np.asarray(p21, dtype=np.float64)
         keep = np.asarray(keep, dtype=bool)
@@ -327,6 +328,13 @@ class MaskedModel(Checkpointed, nn.Module):
         fitted = self.features is not None and self.features.fitted
         return {"features": pack_features(self.features) if fitted else None,
                 "stage": self.stage}
+
+    @classmethod
+    def from_checkpoint(cls, d: dict[str, Any], **kw: Any) -> MaskedModel:
+        # files from before the path and foot terms were trained without them
+        model: MaskedModel = super().from_checkpoint(
+            {**d, "config": {"path": 0.0, "foot": 0.0, **d["config"]}}, **kw)
+        return model
 
     @classmethod
     def from_state(cls, config: MaskedConfig, state: dict[str, Any],

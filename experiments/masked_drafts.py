@@ -1,0 +1,95 @@
+"""Where in-betweening's foot skating comes from: how far a masked model's drafts arrive from
+the kept frames after a gap, and what choosing among more drafts does to it.
+
+    OMP_NUM_THREADS=1 .venv/bin/python experiments/masked_drafts.py --model experiments/state/masked \\
+        [--data /tmp/bandai] [--takes 30] [--gap 2] [--drafts 1 8 32]
+
+For ``--takes`` Bandai test takes (drawn with seed 0 among those long enough) the middle
+``--gap`` seconds are regenerated from the take's sentence, as
+``MaskedModel.inbetween`` does: N drafts (seeds 0..N-1), the one with the smallest
+``inbetween.arrival_miss`` kept and offset-blended onto the kept frames, as decoded and
+with its feet locked. Prints, per N: the mean arrival miss (m: the offset change that the
+blend spreads over the gap), the joint error in the gap (mm) and the foot skating over the
+gap and a frame either side (m/s), beside the real takes' skating there. One take's drafts
+are drawn one at a time here (``inbetween`` draws them in one batch, so its draws differ).
+Non-commercial: Bandai data (CC BY-NC 4.0).
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "src"))
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    p.add_argument("--model", required=True, help="a masked model (file or run folder)")
+    p.add_argument("--data", default=str(ROOT.parent / "shared" / "data" / "bandai"))
+    p.add_argument("--takes", type=int, default=30)
+    p.add_argument("--gap", type=float, default=2.0, help="seconds")
+    p.add_argument("--drafts", type=int, nargs="+", default=[1, 8, 32])
+    args = p.parse_args()
+
+    import numpy as np
+    import torch
+    torch.set_num_threads(1)
+    import motionlang as ml
+    from motionlang.evaluation.metrics.physics import foot_skating
+    from motionlang.features.foot_lock import lock_feet
+    from motionlang.features.positions import positions_to_rows
+    from motionlang.models.judge.fit import bandai_items, bandai_sentences
+    from motionlang.models.masked.inbetween import arrival_miss, blend, kept_tokens
+
+    model = ml.load_model(args.model, kind="masked")
+    fps, options = model.fps, ml.text_to_motion(model).options
+    test = bandai_items(args.data, "test", fps=fps)
+    sentences = bandai_sentences(args.data, "test", seed=0)
+    n_gap = round(args.gap * fps)
+    takes = [i for i, it in enumerate(test) if len(it.positions) >= n_gap + round(2 * fps)]
+    takes = sorted(np.random.default_rng(0).permutation(takes)[:args.takes])
+    most = max(args.drafts)
+    rows = {n: {"miss": [], "err": [], "skate": [], "locked_err": [], "locked_skate": []}
+            for n in args.drafts}
+    real_skate = []
+    for i in takes:
+        p21 = test[i].positions
+        a = (len(p21) - n_gap) // 2
+        keep = np.ones(len(p21), dtype=bool)
+        keep[a:a + n_gap] = False
+        span = slice(a - 1, a + n_gap + 1)
+        real_skate.append(foot_skating(p21[span], fps))
+        x = model.features.encode_positions(p21)
+        start = positions_to_rows(p21[:1])[1]
+        known = torch.as_tensor(model.tokenize([x])[0])[None]
+        kept = torch.as_tensor(kept_tokens(keep))[None]
+        drafts = []
+        for seed in range(most):
+            tok = model.sample_tokens([sentences[i].text], [known.shape[1]], seed=seed,
+                                      options=options, known=known, kept=kept)
+            gen = model.tokenizer.decode(tok)[0, :len(x)].numpy()
+            drafts.append(model._positions(gen, start))
+        misses = [arrival_miss(d, p21, keep) for d in drafts]
+        for n in args.drafts:
+            k = int(np.argmin(misses[:n]))
+            out, locked = blend(drafts[k], p21, keep), blend(lock_feet(drafts[k], fps), p21, keep)
+            r = rows[n]
+            r["miss"].append(misses[k])
+            for tag, o in (("", out), ("locked_", locked)):
+                r[tag + "err"].append(1000 * np.linalg.norm(o[~keep] - p21[~keep], axis=-1).mean())
+                r[tag + "skate"].append(foot_skating(o[span], fps))
+    print(f"{len(takes)} Bandai test takes, {args.gap:g} s gaps, model {args.model}\n")
+    print("| drafts | arrival miss (m) | error (mm) | skating (m/s) | feet locked: error | "
+          "skating | real takes' skating |")
+    print("|---|---|---|---|---|---|---|")
+    for n, r in rows.items():
+        m = {k: float(np.nanmean(v)) for k, v in r.items()}
+        print(f"| {n} | {m['miss']:.3f} | {m['err']:.1f} | {m['skate']:.3f} | "
+              f"{m['locked_err']:.1f} | {m['locked_skate']:.3f} | "
+              f"{np.nanmean(real_skate):.3f} |")
+
+
+if __name__ == "__main__":
+    main()
