@@ -123,8 +123,9 @@ def outputs(name: str, kind: str, motion, p21: np.ndarray) -> dict[str, np.ndarr
         walk = ml.generate(GENERATE_TEXT, model=name, seed=GENERATE_SEED)
         out["generate_positions"] = walk.positions()
         # the middle second of the M2L's input motion filled in from a sentence
-        (filled, _), = ml.generate_hypotheses(GENERATE_TEXT, name, seed=GENERATE_SEED,
-                                              keep=(motion, [(0.0, 1.5), (2.5, None)]))
+        hyps, _ = ml.generate_hypotheses(GENERATE_TEXT, name, seed=GENERATE_SEED,
+                                         keep=(motion, [(0.0, 1.5), (2.5, None)]))
+        (filled, _), = hyps
         out["inbetween_positions"] = np.asarray(filled)
     else:  # pragma: no cover - MODELS names only the kinds above
         raise AssertionError(kind)
