@@ -1,7 +1,7 @@
 """Where in-betweening's foot skating comes from: how far a masked model's drafts arrive from
 the kept frames after a gap, and what choosing among more drafts does to it.
 
-    OMP_NUM_THREADS=1 .venv/bin/python experiments/masked_drafts.py --model experiments/state/masked \\
+    OMP_NUM_THREADS=1 .venv/bin/python experiments/masked_drafts.py --model masked \\
         [--data /tmp/bandai] [--takes 30] [--gap 2] [--drafts 1 8 32]
 
 For ``--takes`` Bandai test takes (drawn with seed 0 among those long enough) the middle

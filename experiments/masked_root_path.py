@@ -22,8 +22,8 @@ sources, seed and features; the split is checked against the run's ``splits/``).
 the frame, velocity, global-position and (``--foot``) foot-velocity losses on the run's training motions, keeping the
 epoch of the lowest validation loss, and writes ``OUT/model.pt``: the same model with the
 new decoder (and the run's ``splits/`` and licence beside it). Then ``measure`` it.
-``half MODEL OUT`` stores a model file's weights in float16 (how
-``experiments/state/masked/model.pt`` is kept).
+``half MODEL OUT`` stores a model file's weights in float16 (how the packaged
+``masked.pt`` is kept). MODEL: a run folder, a model file or a packaged name.
 """
 from __future__ import annotations
 
@@ -44,14 +44,15 @@ def _load(args: argparse.Namespace):
     from motionlang.datasets.sources import parse_source
     from motionlang.datasets.splits import load_splits
     from motionlang.datasets.twostream_items import build_twostream_data
-    from motionlang.models.masked.model import MaskedModel
+    from motionlang.models.registry import load_model
 
-    run = Path(args.model)
-    model = MaskedModel.load(run / "model.pt" if run.is_dir() else run).eval()
+    model = load_model(args.model, kind="masked").eval()   # a file, run folder or "masked"
     paths = [parse_source(s).path for s in args.data]
     data = build_twostream_data(paths if len(paths) > 1 else paths[0], seed=args.seed,
                                 max_seconds=args.max_seconds)
-    splits_dir = (run if run.is_dir() else run.parent) / "splits"
+    run = Path(args.model)
+    splits_dir = Path(args.splits) if args.splits else (
+        run if run.is_dir() else run.parent) / "splits"
     if splits_dir.is_dir():
         saved = load_splits(splits_dir)
         for name, ids in saved.items():
@@ -122,10 +123,12 @@ def decoder(args: argparse.Namespace) -> None:
     model.set_stage("generator")
     run, out = Path(args.model), Path(args.out)
     run = run if run.is_dir() else run.parent
-    for name in ("splits", "LICENSE.txt"):   # so that ``measure`` checks the split
-        if (run / name).exists() and not (out / name).exists():
-            copy = shutil.copytree if (run / name).is_dir() else shutil.copy2
-            copy(run / name, out / name)
+    found = {"splits": Path(args.splits) if args.splits else run / "splits",
+             "LICENSE.txt": run / "LICENSE.txt"}
+    for name, where in found.items():   # so that ``measure`` checks the split
+        if where.exists() and not (out / name).exists():
+            copy = shutil.copytree if where.is_dir() else shutil.copy2
+            copy(where, out / name)
     model.save(out / "model.pt")
     print(out / "model.pt")
 
@@ -154,6 +157,8 @@ def main() -> None:
         a.add_argument("--seed", type=int, default=0)
         a.add_argument("--max-seconds", type=float, default=30.0)
         a.add_argument("--limit", type=int, default=60, help="test motions per source")
+        a.add_argument("--splits", help="the model's splits folder, checked against the "
+                                        "data's (default: MODEL/splits where it exists)")
     d = sub.choices["decoder"]
     d.add_argument("--out", required=True)
     d.add_argument("--epochs", type=int, default=20)
