@@ -201,8 +201,7 @@ def generate_hypotheses(text: str, model: Any = None, *, width: int | None = Non
     foot_lock: move the body with its planted feet and hold them (position models). keep:
     ``"FILE:0-2s,8-10s"`` or ``(motion, [(t0, t1), ...])``: in-betweening of those seconds.
 
-    Raises:
-        MotionlangError: options that contradict each other or the model (checked first).
+    Raises: MotionlangError: options that contradict each other or the model (checked first).
     """
     if max_frames is not None and min_frames > max_frames:
         raise MotionlangError(f"--min-frames {min_frames} exceeds --max-frames {max_frames}")

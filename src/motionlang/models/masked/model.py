@@ -330,15 +330,11 @@ class MaskedModel(Checkpointed, nn.Module):
                 "stage": self.stage}
 
     @classmethod
-    def from_checkpoint(cls, d: dict[str, Any], **kw: Any) -> MaskedModel:
-        # files from before the path and foot terms were trained without them
-        model: MaskedModel = super().from_checkpoint(
-            {**d, "config": {"path": 0.0, "foot": 0.0, **d["config"]}}, **kw)
-        return model
-
-    @classmethod
     def from_state(cls, config: MaskedConfig, state: dict[str, Any],
                    text_encoder: Any = None) -> MaskedModel:
+        # files from before the path and foot terms were trained without them
+        written = state.get("config") or {}
+        config = replace(config, **{k: 0.0 for k in ("path", "foot") if k not in written})
         return cls(config, unpack_features(state.get("features")), text_encoder)
 
     def restore_state(self, state: dict[str, Any]) -> None:
