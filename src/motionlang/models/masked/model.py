@@ -334,7 +334,8 @@ class MaskedModel(Checkpointed, nn.Module):
                    text_encoder: Any = None) -> MaskedModel:
         # files from before the path and foot terms were trained without them
         written = state.get("config") or {}
-        config = replace(config, **{k: 0.0 for k in ("path", "foot") if k not in written})
+        off: dict[str, Any] = {k: 0.0 for k in ("path", "foot") if k not in written}
+        config = replace(config, **off)
         return cls(config, unpack_features(state.get("features")), text_encoder)
 
     def restore_state(self, state: dict[str, Any]) -> None:
