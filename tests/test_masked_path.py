@@ -142,3 +142,18 @@ def test_inbetweening_keeps_the_draft_that_arrives_closest(monkeypatch):
     model.inbetween("a person walks", p21, keep, seed=0, options=MaskedOptions(drafts=4))
     assert len(seen) == 4 and chosen[0] is seen[1]
     assert not all(np.array_equal(seen[0], s) for s in seen[1:])   # drafts differ
+
+
+def test_a_frozen_part_keeps_no_gradient_for_the_optimiser_to_decay():
+    model = _model(1.0)
+    model.set_stage("tokenizer").train()
+    model.loss(model.collate([{"motion": model.features.encode(synthetic_mmm(T=401))}]))[
+        "loss"].backward()
+    assert any(p.grad is not None for p in model.tokenizer.parameters())
+    model.set_stage("generator")
+    assert all(p.grad is None for p in model.tokenizer.parameters())
+    opt = torch.optim.AdamW(model.parameters(), lr=1e-3, weight_decay=0.5)
+    before = [p.detach().clone() for p in model.tokenizer.parameters()]
+    opt.zero_grad(set_to_none=False)      # as the trainer does
+    opt.step()
+    assert all(torch.equal(a, p) for a, p in zip(before, model.tokenizer.parameters()))

@@ -122,6 +122,11 @@ class MaskedModel(Checkpointed, nn.Module):
         for part in (self.generator, self.residual, self.length):
             for p in part.parameters():
                 p.requires_grad_(stage == "generator")
+        for p in self.parameters():
+            if not p.requires_grad:
+                # the trainer zeroes gradients rather than dropping them, and AdamW decays
+                # every parameter that has one: a frozen part must have none
+                p.grad = None
         return self
 
     # -- training -----------------------------------------------------------------------
