@@ -12,6 +12,7 @@ with its feet locked. Prints, per N: the mean arrival miss (m: the offset change
 blend spreads over the gap), the joint error in the gap (mm) and the foot skating over the
 gap and a frame either side (m/s), beside the real takes' skating there. One take's drafts
 are drawn one at a time here (``inbetween`` draws them in one batch, so its draws differ).
+Progress (a line a take) goes to standard error.
 Non-commercial: Bandai data (CC BY-NC 4.0).
 """
 from __future__ import annotations
@@ -36,6 +37,8 @@ def main() -> None:
     import numpy as np
     import torch
     torch.set_num_threads(1)
+    from masked_inbetween import gap_cases  # the same takes and gaps (this folder)
+
     import motionlang as ml
     from motionlang.evaluation.metrics.physics import foot_skating
     from motionlang.features.foot_lock import lock_feet
@@ -47,19 +50,13 @@ def main() -> None:
     fps, options = model.fps, ml.text_to_motion(model).options
     test = bandai_items(args.data, "test", fps=fps)
     sentences = bandai_sentences(args.data, "test", seed=0)
-    n_gap = round(args.gap * fps)
-    takes = [i for i, it in enumerate(test) if len(it.positions) >= n_gap + round(2 * fps)]
-    takes = sorted(np.random.default_rng(0).permutation(takes)[:args.takes])
     most = max(args.drafts)
     rows = {n: {"miss": [], "err": [], "skate": [], "locked_err": [], "locked_skate": []}
             for n in args.drafts}
     real_skate = []
-    for i in takes:
-        p21 = test[i].positions
-        a = (len(p21) - n_gap) // 2
-        keep = np.ones(len(p21), dtype=bool)
-        keep[a:a + n_gap] = False
-        span = slice(a - 1, a + n_gap + 1)
+    cases = list(gap_cases(test, round(args.gap * fps), fps, args.takes, 0))
+    for k, (i, p21, _, keep, span) in enumerate(cases, 1):
+        print(f"take {k}/{len(cases)}", file=sys.stderr, flush=True)
         real_skate.append(foot_skating(p21[span], fps))
         x = model.features.encode_positions(p21)
         start = positions_to_rows(p21[:1])[1]
@@ -80,7 +77,7 @@ def main() -> None:
             for tag, o in (("", out), ("locked_", locked)):
                 r[tag + "err"].append(1000 * np.linalg.norm(o[~keep] - p21[~keep], axis=-1).mean())
                 r[tag + "skate"].append(foot_skating(o[span], fps))
-    print(f"{len(takes)} Bandai test takes, {args.gap:g} s gaps, model {args.model}\n")
+    print(f"{len(cases)} Bandai test takes, {args.gap:g} s gaps, model {args.model}\n")
     print("| drafts | arrival miss (m) | error (mm) | skating (m/s) | feet locked: error | "
           "skating | real takes' skating |")
     print("|---|---|---|---|---|---|---|")

@@ -28,6 +28,23 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 
 
+def gap_cases(test: list, n_gap: int, fps: float, limit: int, seed: int):
+    """The test takes at least ``n_gap`` frames + 2 s long (``limit`` > 0: that many drawn
+    with ``seed``, in order; the takes are ordered by content), each with its middle
+    ``n_gap`` frames cut: yields ``(index, positions (T, 21, 3), first gap frame, kept
+    frames (T,) bool, the gap and a frame either side as a slice)``."""
+    import numpy as np
+    takes = [i for i, it in enumerate(test) if len(it.positions) >= n_gap + round(2 * fps)]
+    if limit:
+        takes = sorted(np.random.default_rng(seed).permutation(takes)[:limit])
+    for i in takes:
+        p21 = test[i].positions
+        a = (len(p21) - n_gap) // 2
+        keep = np.ones(len(p21), dtype=bool)
+        keep[a:a + n_gap] = False
+        yield i, p21, a, keep, slice(a - 1, a + n_gap + 1)
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--model", required=True, help="a masked model (file or run folder)")
@@ -92,18 +109,11 @@ def main() -> None:
     print("|---|---|---|---|---|---|")
     for gap in args.gaps:
         n_gap = round(gap * fps)
-        takes = [i for i, it in enumerate(test) if len(it.positions) >= n_gap + round(2 * fps)]
-        if args.limit:   # a random sample: the takes are ordered by content
-            takes = sorted(np.random.default_rng(args.seed).permutation(takes)[:args.limit])
         err = {m: [] for m in methods}
         skate = {m: [] for m in methods}
         real_skate = []
-        for i in takes:
-            p21 = test[i].positions
-            a = (len(p21) - n_gap) // 2
-            keep = np.ones(len(p21), dtype=bool)
-            keep[a:a + n_gap] = False
-            span = slice(a - 1, a + n_gap + 1)
+        cases = list(gap_cases(test, n_gap, fps, args.limit, args.seed))
+        for i, p21, a, keep, span in cases:
             real_skate.append(foot_skating(p21[span], fps))
             outs = {name: fill(p21, keep, sentences[i].text) for name, fill in methods.items()}
             for name, out in outs.items():
@@ -114,7 +124,7 @@ def main() -> None:
             if gap == args.gaps[0] and (shown is None or travel > shown[0]):
                 shown = (travel, i, keep, outs)
         for name in methods:
-            print(f"| {gap:g} s | {len(takes)} | {name} | {np.mean(err[name]):.1f} | "
+            print(f"| {gap:g} s | {len(cases)} | {name} | {np.mean(err[name]):.1f} | "
                   f"{np.nanmean(skate[name]):.3f} | {np.nanmean(real_skate):.3f} |")
     if args.figure and shown is not None:
         import matplotlib
