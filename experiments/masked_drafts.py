@@ -2,15 +2,17 @@
 the kept frames after a gap, and what choosing among more drafts does to it.
 
     OMP_NUM_THREADS=1 .venv/bin/python experiments/masked_drafts.py --model masked \\
-        [--data /tmp/bandai] [--takes 30] [--gap 2] [--drafts 1 8 32]
+        [--data /tmp/bandai] [--takes 30] [--gap 2] [--drafts 1 8 32] [--no-goal]
 
 For ``--takes`` Bandai test takes (drawn with seed 0 among those long enough) the middle
 ``--gap`` seconds are regenerated from the take's sentence, as
-``MaskedModel.inbetween`` does: N drafts (seeds 0..N-1), the one with the smallest
+``MaskedModel.inbetween`` does (``inbetween_drafts``: a model with goals is told where
+the gap ends): N drafts (seeds 0..N-1), the one with the smallest
 ``inbetween.arrival_miss`` kept and offset-blended onto the kept frames, as decoded and
-with its feet locked. Prints, per N: the mean arrival miss (m: the offset change that the
+with its feet locked (``inbetween.join``, as ``generate --keep`` does). Prints, per N: the mean arrival miss (m: the offset change that the
 blend spreads over the gap), the joint error in the gap (mm) and the foot skating over the
-gap and a frame either side (m/s), beside the real takes' skating there. One take's drafts
+gap and a frame either side (m/s), beside the real takes' skating there; and the same
+for the take's own tokens decoded (what a generator that drew the true tokens would get). One take's drafts
 are drawn one at a time here (``inbetween`` draws them in one batch, so its draws differ).
 Progress (a line a take) goes to standard error.
 Non-commercial: Bandai data (CC BY-NC 4.0).
@@ -32,7 +34,12 @@ def main() -> None:
     p.add_argument("--takes", type=int, default=30)
     p.add_argument("--gap", type=float, default=2.0, help="seconds")
     p.add_argument("--drafts", type=int, nargs="+", default=[1, 8, 32])
+    p.add_argument("--no-goal", action="store_true",
+                   help="a model with goals (config.goal) told none: its goal projection "
+                        "zeroed, so the same weights can be compared with and without")
     args = p.parse_args()
+
+    from dataclasses import replace
 
     import numpy as np
     import torch
@@ -41,12 +48,12 @@ def main() -> None:
 
     import motionlang as ml
     from motionlang.evaluation.metrics.physics import foot_skating
-    from motionlang.features.foot_lock import lock_feet
-    from motionlang.features.positions import positions_to_rows
     from motionlang.models.judge.fit import bandai_items, bandai_sentences
-    from motionlang.models.masked.inbetween import arrival_miss, blend, kept_tokens
+    from motionlang.models.masked.inbetween import arrival_miss, blend, join
 
     model = ml.load_model(args.model, kind="masked")
+    if args.no_goal and model.generator.goal is not None:
+        model.generator.goal.weight.data.zero_()
     fps, options = model.fps, ml.text_to_motion(model).options
     test = bandai_items(args.data, "test", fps=fps)
     sentences = bandai_sentences(args.data, "test", seed=0)
@@ -54,24 +61,26 @@ def main() -> None:
     rows = {n: {"miss": [], "err": [], "skate": [], "locked_err": [], "locked_skate": []}
             for n in args.drafts}
     real_skate = []
+    oracle: dict[str, list] = {"miss": [], "err": [], "skate": []}
     cases = list(gap_cases(test, round(args.gap * fps), fps, args.takes, 0))
     for k, (i, p21, _, keep, span) in enumerate(cases, 1):
         print(f"take {k}/{len(cases)}", file=sys.stderr, flush=True)
         real_skate.append(foot_skating(p21[span], fps))
-        x = model.features.encode_positions(p21)
-        start = positions_to_rows(p21[:1])[1]
-        known = torch.as_tensor(model.tokenize([x])[0])[None]
-        kept = torch.as_tensor(kept_tokens(keep))[None]
-        drafts = []
-        for seed in range(most):
-            tok = model.sample_tokens([sentences[i].text], [known.shape[1]], seed=seed,
-                                      options=options, known=known, kept=kept)
-            gen = model.tokenizer.decode(tok)[0, :len(x)].numpy()
-            drafts.append(model._positions(gen, start))
+        drafts = [model.inbetween_drafts(sentences[i].text, p21, keep, seed=seed,
+                                         options=replace(options, drafts=1))[0]
+                  for seed in range(most)]
         misses = [arrival_miss(d, p21, keep) for d in drafts]
+        # the floor: the take's own tokens through the decoder, placed the same way
+        own = model.decode_placed(model.reconstruct(model.features.encode_positions(p21)),
+                                  p21, keep)
+        oracle["miss"].append(arrival_miss(own, p21, keep))
+        out = blend(own, p21, keep)
+        oracle["err"].append(1000 * np.linalg.norm(out[~keep] - p21[~keep], axis=-1).mean())
+        oracle["skate"].append(foot_skating(out[span], fps))
         for n in args.drafts:
             k = int(np.argmin(misses[:n]))
-            out, locked = blend(drafts[k], p21, keep), blend(lock_feet(drafts[k], fps), p21, keep)
+            out, locked = blend(drafts[k], p21, keep), join(drafts[k], p21, keep, fps,
+                                                            foot_lock=True)
             r = rows[n]
             r["miss"].append(misses[k])
             for tag, o in (("", out), ("locked_", locked)):
@@ -86,6 +95,9 @@ def main() -> None:
         print(f"| {n} | {m['miss']:.3f} | {m['err']:.1f} | {m['skate']:.3f} | "
               f"{m['locked_err']:.1f} | {m['locked_skate']:.3f} | "
               f"{np.nanmean(real_skate):.3f} |")
+    m = {k: float(np.nanmean(v)) for k, v in oracle.items()}
+    print(f"| the take's own tokens | {m['miss']:.3f} | {m['err']:.1f} | {m['skate']:.3f} | "
+          f"| | {np.nanmean(real_skate):.3f} |")
 
 
 if __name__ == "__main__":

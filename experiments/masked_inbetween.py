@@ -4,7 +4,7 @@ linear interpolation and a CRBM fill-in (Taylor et al. 2006) on held-out Bandai 
 
     OMP_NUM_THREADS=1 .venv/bin/python experiments/masked_inbetween.py --model runs/masked \
         [--data ../shared/data/bandai] [--gaps 2 4] [--limit 100] [--crbm-takes 200] \
-        [--figure runs/masked_inbetween.png]
+        [--drafts N] [--figure runs/masked_inbetween.png]
 
 Each Bandai test take at least ``gap + 2`` seconds long loses the ``gap`` seconds at its
 middle; each method fills them: ``linear`` (every joint on a straight line between the
@@ -55,6 +55,8 @@ def main() -> None:
     p.add_argument("--crbm-epochs", type=int, default=30)
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--figure", default=None)
+    p.add_argument("--drafts", type=int, default=None, help="drafts of the masked rows "
+                                                             "(default: the model's option)")
     args = p.parse_args()
 
     from dataclasses import replace
@@ -74,6 +76,8 @@ def main() -> None:
     model = ml.load_model(args.model, kind="masked")
     fps, feats = model.fps, model.features
     t2m = ml.text_to_motion(model)
+    if args.drafts is not None:
+        t2m.options = replace(t2m.options, drafts=args.drafts)
     test = bandai_items(args.data, "test", fps=fps)
     sentences = bandai_sentences(args.data, "test", seed=0)
     rng = np.random.default_rng(args.seed)

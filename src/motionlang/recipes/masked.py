@@ -240,9 +240,7 @@ def train_stages(data: Any, text: Any, sources: Sequence, out: Path, config: Any
             tokenizer_report(model, held)))
         if lead:
             model.save(done_tokenizer)
-    tokens = dict(zip(data.sequences, model.tokenize(list(data.sequences.values()))))
-    items = {name: [{"tokens": tokens[it["id"]][:config.max_tokens], "sentence": it["sentence"],
-                     "id": it["id"]} for it in part] for name, part in data.items.items()}
+    items = generator_items(model, data)
     train_items = mix_training(sources, items["train"], data.sources, train_cfg.seed)
     gen_cfg = dataclasses.replace(train_cfg, out_dir=str(out / "generator"))
     model = _stage(model, "generator", train_items, items.get("val") or [], gen_cfg, resume,
@@ -252,6 +250,26 @@ def train_stages(data: Any, text: Any, sources: Sequence, out: Path, config: Any
         model.save(path)
         log(str(path))
     return path
+
+
+def generator_items(model: Any, data: Any) -> dict[str, list[dict]]:
+    """The generator stage's items of a ``TwoStreamData`` per split: ``{"tokens" (L, Q),
+    "sentence", "id"}`` and, for a model that reads goals, the root's ``"track"`` (T, 3)
+    (``models.masked.goal.root_track``) its gaps are measured on."""
+    import numpy as np
+
+    from motionlang.models.masked.goal import root_track
+
+    cap = model.config.max_tokens
+    tokens = dict(zip(data.sequences, model.tokenize(list(data.sequences.values()))))
+    tracks = {}
+    if model.generator.goal is not None:
+        norm = model.features.normalizer
+        tracks = {i: root_track(norm.inverse(np.asarray(rows, dtype=np.float64)))
+                  for i, rows in data.sequences.items()}
+    return {name: [{"tokens": tokens[it["id"]][:cap], "sentence": it["sentence"],
+                    "id": it["id"], **({"track": tracks[it["id"]]} if tracks else {})}
+                   for it in part] for name, part in data.items.items()}
 
 
 MASKED = Recipe(run=run, data_config=MaskedTrainOptions,

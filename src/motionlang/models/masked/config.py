@@ -57,6 +57,11 @@ class MaskedConfig:
         cond_drop: probability that the sentence is replaced by the null condition in
             training (classifier-free guidance needs the unconditioned model).
         max_tokens: the longest motion in tokens (the length estimator's classes).
+        goal: fraction of the training motions that are a gap to fill, told where the gap
+            must arrive (``goal.gap_goal``); above 0 the masked transformer reads goals and
+            in-betweening gives them. Off by default: a packaged model fine-tuned with
+            goals did not learn to use them (``docs/results/masked.md``). Checkpoints
+            written before it read back as 0.
     """
 
     n_features: int = POSITIONS_DIM
@@ -86,13 +91,19 @@ class MaskedConfig:
     cond_drop: float = _opt(0.1, "probability of training without the sentence (for "
                                  "classifier-free guidance)")
     max_tokens: int = _opt(94, "longest motion in tokens (4 frames each)")
+    goal: float = _opt(0.0, "fraction of training motions that are a gap to fill, told "
+                            "where it must arrive (experimental, for in-betweening; 0: "
+                            "no goals)")
 
     def __post_init__(self) -> None:
         check_numbers("MaskedConfig", self, positive_ints=("n_features",),
                       nonneg_ints=("text_dim", "text_layer", "depth"), sizes=SIZES,
                       layers=("quantizers", "layers", "res_layers", "heads"),
-                      positive=("fps", "window", "commit"), nonneg=("velocity", "path", "foot"),
+                      positive=("fps", "window", "commit"), nonneg=("velocity", "path", "foot", "goal"),
                       unit=("quantizer_dropout", "ema", "dropout", "cond_drop"))
+        if self.goal > 1:
+            raise MotionlangError(f"MaskedConfig.goal must be a fraction in [0, 1], got "
+                                  f"{self.goal}")
         if self.hidden % self.heads:
             raise MotionlangError(f"MaskedConfig.heads ({self.heads}) must divide hidden "
                                   f"({self.hidden})")

@@ -8,7 +8,8 @@ takes the kept frames as they are and moves each generated stretch by an offset 
 that goes linearly from the gap's start (the last kept frame before it) to its end (the
 first kept frame after it): no jump at either side ("offset blending"). Of several drafts,
 the one that arrives closest to the kept frames after each gap (:func:`arrival_miss`) needs
-the least of that offset, and so slides least.
+the least of that offset, and so slides least. The offset still moves planted feet with
+the body; :func:`join` with ``foot_lock`` holds them again afterwards.
 """
 from __future__ import annotations
 
@@ -58,6 +59,22 @@ def blend(generated: np.ndarray, source: np.ndarray, keep: np.ndarray) -> np.nda
         w = (np.arange(a, b) - (a - 1)) / (b - a + 1.0)
         out[a:b] = gen[a:b] + (1 - w)[:, None, None] * before + w[:, None, None] * after
     return out
+
+
+def join(generated: np.ndarray, source: np.ndarray, keep: np.ndarray, fps: float, *,
+         foot_lock: bool = False) -> np.ndarray:
+    """A chosen draft (T, J, 3) joined to the kept frames (T,) of ``source``: :func:`blend`;
+    with ``foot_lock``, the draft's planted feet held first (``features.foot_lock.
+    lock_feet``), then, after the blend, held again where they are down with the root's
+    path left as blended (the lock's root step would take back the blend's offset and miss
+    the kept frames), and the kept frames put back exactly."""
+    if not foot_lock:
+        return blend(generated, source, keep)
+    from motionlang.features.foot_lock import lock_feet
+    joined = blend(lock_feet(generated, fps), source, keep)
+    held = lock_feet(joined, fps, anchor=False)
+    keep = np.asarray(keep, dtype=bool)
+    return np.where(keep[:, None, None], np.asarray(source, dtype=np.float64), held)
 
 
 def arrival_miss(generated: np.ndarray, source: np.ndarray, keep: np.ndarray) -> float:

@@ -37,9 +37,10 @@ from torch import nn
 from motionlang.errors import MotionlangError
 from motionlang.features.positions import PositionFeatures
 from motionlang.models.checkpoint import Checkpointed, pack_features, unpack_features
+from motionlang.models.masked import goal as goals
 from motionlang.models.masked import sampling
 from motionlang.models.masked.config import DOWN, MaskedConfig, MaskedOptions
-from motionlang.models.masked.inbetween import arrival_miss, blend, kept_tokens
+from motionlang.models.masked.inbetween import arrival_miss, gaps, join, kept_tokens
 from motionlang.models.masked.path import global_errors
 from motionlang.models.masked.tokenizer import Tokenizer, pad_frames
 from motionlang.models.masked.transformer import (
@@ -144,8 +145,14 @@ class MaskedModel(Checkpointed, nn.Module):
         valid = torch.zeros(len(toks), L, dtype=torch.bool)
         for i, t in enumerate(toks):
             tokens[i, :len(t)], valid[i, :len(t)] = t, True
-        return {"tokens": tokens.to(self.device), "valid": valid.to(self.device),
-                "text": self.sentence_vectors([str(it["sentence"]) for it in items])}
+        batch = {"tokens": tokens.to(self.device), "valid": valid.to(self.device),
+                 "text": self.sentence_vectors([str(it["sentence"]) for it in items])}
+        if self.generator.goal is not None:
+            goal, gap = goals.batch_goals([it.get("track") for it in items],
+                                          [len(t) for t in toks], L, self.config.goal,
+                                          self.fps)
+            batch.update(goal=goal.to(self.device), gap=gap.to(self.device))
+        return batch
 
     def _collate_motion(self, items: Sequence[dict]) -> dict[str, Any]:
         window = self.config.window_frames
@@ -195,9 +202,12 @@ class MaskedModel(Checkpointed, nn.Module):
         c = self.config
         drop = torch.rand(len(tokens), device=tokens.device) < c.cond_drop if self.training \
             else None
-        masked = sampling.training_mask(valid)
+        # a motion given a gap is masked inside it only, as in-betweening sees it
+        gap = batch.get("gap")
+        region = valid if gap is None else torch.where(gap.any(1, keepdim=True), gap, valid)
+        masked = sampling.training_mask(region)
         seen = sampling.corrupt(tokens[..., 0], masked, c.codes, self.generator.mask_id)
-        logits = self.generator(seen, text, valid, drop)
+        logits = self.generator(seen, text, valid, drop, batch.get("goal"))
         base = F.cross_entropy(logits[masked], tokens[..., 0][masked])
         total, out = base, {"base": base.detach()}
         if c.quantizers > 1:
@@ -244,10 +254,11 @@ class MaskedModel(Checkpointed, nn.Module):
     @torch.no_grad()
     def sample_tokens(self, texts: Sequence[str], n_tokens: Sequence[int], *, seed: int,
                       options: MaskedOptions, known: torch.Tensor | None = None,
-                      kept: torch.Tensor | None = None) -> torch.Tensor:
+                      kept: torch.Tensor | None = None, goal: torch.Tensor | None = None
+                      ) -> torch.Tensor:
         """Tokens (B, L, Q) of every codebook for ``texts``, ``n_tokens`` long (positions
         past a motion's length are padding); ``known`` (B, L, Q) / ``kept`` (B, L) fix
-        tokens (in-betweening)."""
+        tokens, ``goal`` (B, L, GOAL_DIM) says where each gap arrives (in-betweening)."""
         self.eval()
         L = max(n_tokens)
         valid = torch.arange(L, device=self.device)[None] < torch.tensor(
@@ -258,8 +269,9 @@ class MaskedModel(Checkpointed, nn.Module):
             return x if n == len(x) else torch.cat([x] * (n // len(x)))
 
         base = sampling.decode_base(
-            lambda tok, drop: self.generator(tok, rows(text, len(tok)), rows(valid, len(tok)),
-                                             drop), valid,
+            lambda tok, drop: self.generator(
+                tok, rows(text, len(tok)), rows(valid, len(tok)), drop,
+                None if goal is None else rows(goal.to(self.device), len(tok))), valid,
             self.generator.mask_id, steps=options.steps, guidance=options.guidance,
             temperature=options.temperature, top_k=options.top_k, generator=g,
             known=None if known is None else known[..., 0], kept=kept)
@@ -294,10 +306,23 @@ class MaskedModel(Checkpointed, nn.Module):
                   ) -> np.ndarray:
         """Global positions (T, 21, 3) at :attr:`fps` and the frames to keep (T,) bool ->
         a motion of T frames that has the kept frames and, elsewhere, frames generated
-        for ``text`` (only the tokens of frames not kept are masked; of ``options.drafts``
-        drafts, the one that arrives closest to the kept frames as decoded). ``foot_lock``:
-        the chosen draft's planted feet held (``features.foot_lock.lock_feet``) before it is
-        joined to the kept frames."""
+        for ``text``: of the :meth:`inbetween_drafts`, the one that arrives closest to the
+        kept frames, joined to them by ``inbetween.join`` (``foot_lock``: planted feet held,
+        before and after the join)."""
+        p21 = np.asarray(p21, dtype=np.float64)
+        keep = np.asarray(keep, dtype=bool)
+        drafts = self.inbetween_drafts(text, p21, keep, seed=seed, options=options)
+        best = min(drafts, key=lambda d: arrival_miss(d, p21, keep))
+        return join(best, p21, keep, self.fps, foot_lock=foot_lock)
+
+    def inbetween_drafts(self, text: str, p21: np.ndarray, keep: np.ndarray, *,
+                         seed: int = 0, options: MaskedOptions | None = None
+                         ) -> list[np.ndarray]:
+        """``options.drafts`` motions (T, 21, 3), drawn in one batch, that keep the tokens
+        of the kept frames (T,) bool of ``p21`` and regenerate the others for ``text``, a
+        model with goals told where each gap must arrive (``goal.kept_goal``); decoded
+        whole from ``p21``'s first placement, not yet joined to the kept frames."""
+        from motionlang.features.positions import positions_to_rows
         options = options or MaskedOptions()
         p21 = np.asarray(p21, dtype=np.float64)
         keep = np.asarray(keep, dtype=bool)
@@ -313,20 +338,32 @@ class MaskedModel(Checkpointed, nn.Module):
                                   f"model generates at most {self.config.max_tokens * DOWN}")
         n = options.drafts
         known = torch.as_tensor(self.tokenize([rows])[0], device=self.device)[None]
-        kept = torch.as_tensor(kept_tokens(keep), device=self.device)[None]
+        kept_np = kept_tokens(keep)
+        kept = torch.as_tensor(kept_np, device=self.device)[None]
+        raw = positions_to_rows(p21)[0]
+        goal = torch.as_tensor(goals.kept_goal(goals.root_track(raw), kept_np, self.fps))
         tokens = self.sample_tokens([text] * n, [n_tok] * n, seed=seed, options=options,
-                                    known=known.expand(n, -1, -1), kept=kept.expand(n, -1))
-        # decoded whole (kept tokens too), so that the generated frames join their decoded
-        # neighbours smoothly; ``blend`` then puts the kept frames back exactly
-        from motionlang.features.positions import positions_to_rows
-        start = positions_to_rows(p21[:1])[1]
-        drafts = [self._positions(g[:len(rows)], start)
-                  for g in self.tokenizer.decode(tokens).cpu().numpy()]
-        moved = min(drafts, key=lambda d: arrival_miss(d, p21, keep))
-        if foot_lock:
-            from motionlang.features.foot_lock import lock_feet
-            moved = lock_feet(moved, self.fps)
-        return blend(moved, p21, keep)
+                                    known=known.expand(n, -1, -1), kept=kept.expand(n, -1),
+                                    goal=goal[None].expand(n, -1, -1))
+        return [self.decode_placed(g[:len(rows)], p21, keep)
+                for g in self.tokenizer.decode(tokens).cpu().numpy()]
+
+    def decode_placed(self, rows: np.ndarray, p21: np.ndarray, keep: np.ndarray
+                      ) -> np.ndarray:
+        """Normalised rows (T, F) of a draft -> its global positions (T, 21, 3), decoded
+        whole (kept tokens too, so the generated frames join their decoded neighbours
+        smoothly; ``blend`` then puts the kept frames of ``p21`` back exactly). The path
+        integrated from frame 0 gathers the tokenizer's small heading errors, and a gap
+        entered a few degrees off arrives a stride off: from each gap's last kept frame on,
+        the draft is placed again from ``p21``'s own place and heading there."""
+        from motionlang.features.positions import facing_yaw, positions_to_rows
+        p21 = np.asarray(p21, dtype=np.float64)
+        out = self._positions(rows, positions_to_rows(p21[:1])[1])
+        for a, _ in gaps(keep):
+            if a > 0:
+                place = (p21[a - 1, 0, 0], p21[a - 1, 0, 2], facing_yaw(p21[a - 1:a])[0])
+                out[a - 1:] = self._positions(rows[a - 1:], place)
+        return out
 
     # -- checkpoints --------------------------------------------------------------------
     def checkpoint_state(self) -> dict[str, Any]:
@@ -337,9 +374,9 @@ class MaskedModel(Checkpointed, nn.Module):
     @classmethod
     def from_state(cls, config: MaskedConfig, state: dict[str, Any],
                    text_encoder: Any = None) -> MaskedModel:
-        # files from before the path and foot terms were trained without them
+        # files from before the path and foot terms and goals were trained without them
         written = state.get("config") or {}
-        off: dict[str, Any] = {k: 0.0 for k in ("path", "foot") if k not in written}
+        off: dict[str, Any] = {k: 0.0 for k in ("path", "foot", "goal") if k not in written}
         config = replace(config, **off)
         return cls(config, unpack_features(state.get("features")), text_encoder)
 

@@ -1,7 +1,9 @@
 """The token models of the masked family, all conditioned on a frozen sentence vector.
 
 * :class:`MaskTransformer` — bidirectional transformer over the base tokens (codebook 0),
-  some replaced by a mask token; predicts the base token at every position. The sentence
+  some replaced by a mask token; predicts the base token at every position. With
+  ``config.goal > 0`` it also reads per-token goal features (``goal.GOAL_DIM``, zero
+  outside a gap), projected and added to the token embeddings. The sentence
   vector, projected, is the first element of the sequence; a learnt null vector takes its
   place when the condition is dropped (classifier-free guidance: ``cond_drop`` in training,
   the unconditioned pass in sampling).
@@ -20,6 +22,13 @@ import torch.nn.functional as F
 from torch import nn
 
 from motionlang.models.masked.config import MaskedConfig
+from motionlang.models.masked.goal import GOAL_DIM
+
+#: the goal projection's output is scaled up: the token embeddings are about 1 a channel,
+#: and a projection grown from zero by Adam's small steps (about the learning rate each)
+#: would take thousands of steps to reach that size, so a model fine-tuned for goals
+#: barely read them
+GOAL_GAIN = 10.0
 
 
 def sinusoid(T: int, dim: int, device: torch.device | None = None) -> torch.Tensor:
@@ -69,10 +78,23 @@ class MaskTransformer(Conditioned):
         self.mask_id = c.codes
         self.embed = nn.Embedding(c.codes + 1, c.hidden)
         self.head = nn.Linear(c.hidden, c.codes)
+        self.goal: nn.Linear | None = None
+        if c.goal > 0:
+            # from zero, no bias: a goal-less token (all zeros) reads as before, and a model
+            # given goals starts as the model without them
+            self.goal = nn.Linear(GOAL_DIM, c.hidden, bias=False)
+            nn.init.zeros_(self.goal.weight)
 
     def forward(self, tokens: torch.Tensor, text: torch.Tensor, valid: torch.Tensor,
-                drop: torch.Tensor | None = None) -> torch.Tensor:
-        return self.head(self.run(self.embed(tokens), text, valid, drop))
+                drop: torch.Tensor | None = None, goal: torch.Tensor | None = None
+                ) -> torch.Tensor:
+        """Tokens (B, L), sentence vectors (B, D), valid (B, L), drop (B,) or None, goal
+        features (B, L, GOAL_DIM) or None (ignored by a model without goals) -> logits
+        (B, L, codes)."""
+        h = self.embed(tokens)
+        if self.goal is not None and goal is not None:
+            h = h + GOAL_GAIN * self.goal(goal)
+        return self.head(self.run(h, text, valid, drop))
 
 
 class ResidualTransformer(Conditioned):
