@@ -134,11 +134,11 @@ def test_inbetweening_keeps_the_draft_that_arrives_closest(monkeypatch):
         seen.append(draft)
         return next(misses)
 
-    def blend(generated, source, kept):
+    def join(generated, source, kept, fps, foot_lock=False):
         chosen.append(generated)
         return generated
     monkeypatch.setattr(masked_model, "arrival_miss", miss)
-    monkeypatch.setattr(masked_model, "blend", blend)
+    monkeypatch.setattr(masked_model, "join", join)
     model.inbetween("a person walks", p21, keep, seed=0, options=MaskedOptions(drafts=4))
     assert len(seen) == 4 and chosen[0] is seen[1]
     assert not all(np.array_equal(seen[0], s) for s in seen[1:])   # drafts differ
