@@ -5,16 +5,17 @@ the kept frames after a gap, and what choosing among more drafts does to it.
         [--data /tmp/bandai] [--takes 30] [--gap 2] [--drafts 1 8 32] [--no-goal]
 
 For ``--takes`` Bandai test takes (drawn with seed 0 among those long enough) the middle
-``--gap`` seconds are regenerated from the take's sentence, as
-``MaskedModel.inbetween`` does (``inbetween_drafts``: a model with goals is told where
-the gap ends): N drafts (seeds 0..N-1), the one with the smallest
-``inbetween.arrival_miss`` kept and offset-blended onto the kept frames, as decoded and
-with its feet locked (``inbetween.join``, as ``generate --keep`` does). Prints, per N: the mean arrival miss (m: the offset change that the
-blend spreads over the gap), the joint error in the gap (mm) and the foot skating over the
-gap and a frame either side (m/s), beside the real takes' skating there; and the same
-for the take's own tokens decoded (what a generator that drew the true tokens would get). One take's drafts
-are drawn one at a time here (``inbetween`` draws them in one batch, so its draws differ).
-Progress (a line a take) goes to standard error.
+``--gap`` seconds are regenerated from the take's sentence by
+``MaskedModel.inbetween_drafts`` (a model with goals is told where the gap ends): N drafts
+(seeds 0..N-1, drawn one at a time here, so the draws differ from ``inbetween``'s one
+batch). The one with the smallest ``inbetween.arrival_miss`` is kept (``generate --keep``
+keeps the one whose joined frames slide least, ``inbetween.choose``) and joined to the kept
+frames as decoded (``inbetween.blend``) and with its feet held (``inbetween.join``). Prints,
+per N: the mean arrival miss (m: the offset change that the blend spreads over the gap),
+the joint error in the gap (mm) and the foot skating over the gap and a frame either side
+(m/s), beside the real takes' skating there; and the same for the take's own tokens
+decoded (what a generator that drew the true tokens would get). Progress (a line a take)
+goes to standard error.
 Non-commercial: Bandai data (CC BY-NC 4.0).
 """
 from __future__ import annotations

@@ -189,3 +189,24 @@ def test_join_holds_the_feet_the_blend_would_slide(features):
     assert foot_skating(held[span], 12.5) < 0.3 * foot_skating(slid[span], 12.5)
     assert np.array_equal(held[keep], stand[keep])
     assert np.array_equal(join(draft, stand, keep, 12.5), slid)
+
+
+def test_slide_by_hand_and_a_draft_without_feet_down_is_not_preferred(features):
+    from motionlang.features.positions import FOOT
+    from motionlang.models.masked.inbetween import blend, choose, slide
+    stand = np.repeat(features.body(synthetic_mmm(T=401))[:1], 40, axis=0)
+    stand[..., 1] -= stand[:, list(FOOT), 1].min()           # both feet on the floor
+    keep = np.ones(40, dtype=bool)
+    keep[10:30] = False
+    moving = stand.copy()
+    moving[:, :, 0] += 0.01 * np.arange(40)[:, None]          # 1 cm a frame, feet down
+    assert np.isclose(slide(moving, keep, 12.5), 0.125)       # 0.01 m x 12.5 Hz
+    flying = stand.copy()
+    flying[10:30, :, 1] += 0.5                                # feet up over the whole gap
+    assert slide(flying, keep, 12.5) == float("inf")
+    sliding = stand.copy()
+    sliding[30:, :, 0] += 0.12                                # arrives 12 cm off
+    assert np.array_equal(choose([sliding, stand], stand, keep, 12.5), stand)
+    # arriving exactly does not make up for no foot ever down in the gap
+    assert np.array_equal(choose([flying, sliding], stand, keep, 12.5),
+                          blend(sliding, stand, keep))

@@ -54,7 +54,7 @@ from __future__ import annotations
 import numpy as np
 
 from motionlang.errors import MotionlangError
-from motionlang.features.joint_map import KIT21_NAMES
+from motionlang.features.joint_map import KIT21_NAMES, TOES
 
 _I = KIT21_NAMES.index
 #: (hip, knee, ankle, mid-foot, toe) of each leg, left then right
@@ -69,6 +69,20 @@ def _checked(p21, fps: float, what: str) -> np.ndarray:
     if not fps > 0:
         raise MotionlangError(f"{what}: fps must be positive, got {fps}")
     return p
+
+
+def slide_speed(p: np.ndarray, fps: float, *, feet: tuple[int, ...] = TOES,
+                height: float = 0.05, speed: float = 1.0, floor: float = 0.0) -> float:
+    """Mean horizontal speed (m/s) of the ``feet`` joints of positions (T, 21, 3) over the
+    frame steps where the foot is down: below ``height`` above ``floor`` at both frames and
+    slower than ``speed`` m/s; NaN when no foot is ever down. (The foot-skating measure,
+    ``evaluation.metrics.physics.foot_skating``, which checks its input and calls this;
+    here so that in-betweening can choose among drafts by it.)"""
+    f = np.asarray(p, dtype=np.float64)[:, list(feet)]                 # (T, k, 3)
+    v = np.linalg.norm(np.diff(f[..., [0, 2]], axis=0), axis=-1) * fps   # (T - 1, k)
+    low = f[..., 1] - floor < height
+    down = low[:-1] & low[1:] & (v < speed)
+    return float(v[down].mean()) if down.any() else float("nan")
 
 
 def contacts(toe: np.ndarray, fps: float, *, height: float = 0.05, speed: float = 1.0,
