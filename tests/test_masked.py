@@ -152,6 +152,10 @@ def test_the_text_to_motion_protocol_through_the_registry(features, tmp_path):
     assert t2m.unknown_words("zorp blick") == []
     with pytest.raises(MotionlangError, match="steps"):
         t2m.configure({"steps": "0"})
+    assert len(t2m.hypotheses("a person walks", method="sample", width=2, max_frames=8)) == 2
+    for other in ("beam", "mean"):   # another decoding is refused, not silently sampled
+        with pytest.raises(MotionlangError, match=f"method '{other}'.*'sample'"):
+            t2m.hypotheses("a person walks", method=other, max_frames=8)
 
 
 def test_inbetweening_keeps_the_kept_frames(features, motion21):

@@ -311,7 +311,12 @@ class SelfAdapter(Text2MotionAdapter):
         return list(self.model.unknown_words(sentence))
 
     def _hypotheses(self, sentence: str, *, max_frames: int | None = None, seed: int = 0,
-                    width: int = 1, **_: Any) -> list[tuple[Any, float]]:
+                    width: int = 1, method: str | None = None, **_: Any
+                    ) -> list[tuple[Any, float]]:
+        if method not in (None, self.default_method()):   # not silently another decoding
+            raise MotionlangError(f"method {method!r}: a {self.model.kind} model decodes one "
+                                  f"way, {self.default_method()!r} (beam and mean are the "
+                                  f"L2M's)")
         _check_words(sentence)
         texts = [sentence] * max(1, int(width))
         out = self.model.sample(texts, [max_frames] * len(texts), seed=seed,
