@@ -44,6 +44,8 @@ def main() -> None:
     p.add_argument("--threads", type=int, default=2)
     p.add_argument("--resume", action="store_true")
     args = p.parse_args()
+    if not args.splits and not Path(args.model).exists():   # a packaged name
+        sys.exit(f"{args.model}: a packaged model needs --splits (its run's splits folder)")
 
     import torch
     from masked_root_path import _load

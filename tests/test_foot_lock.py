@@ -57,6 +57,20 @@ def test_sliding_body_gets_planted_feet_and_keeps_its_bones():
     assert p.shape == q.shape and not np.shares_memory(p, q)
 
 
+def test_a_contact_with_pinned_frames_is_held_where_the_foot_is_on_them():
+    T = 20
+    p = standing(T)
+    p[:, :, 0] += 0.005 * np.arange(T)[:, None]              # drifts 5 cm a second
+    pinned = np.zeros(T, dtype=bool)
+    pinned[:4] = True                                         # the foot must stay here
+    q = lock_feet(p, 10.0, anchor=False, pinned=pinned)
+    assert foot_skating(q, 10.0) == pytest.approx(0.0, abs=1e-9)
+    for *_, toe in LEGS:   # held at its mean over the pinned frames, not over the contact
+        assert np.allclose(q[:, toe, [0, 2]], p[:4, toe, [0, 2]].mean(axis=0))
+    assert np.allclose(lock_feet(p, 10.0, anchor=False, pinned=np.zeros(T, dtype=bool)),
+                       lock_feet(p, 10.0, anchor=False))
+
+
 def test_lock_fades_out_where_the_foot_is_lifted():
     T = 16
     p = standing(T)

@@ -54,7 +54,7 @@ from __future__ import annotations
 import numpy as np
 
 from motionlang.errors import MotionlangError
-from motionlang.features.joint_map import KIT21_NAMES, TOES
+from motionlang.features.joint_map import KIT21_NAMES
 
 _I = KIT21_NAMES.index
 #: (hip, knee, ankle, mid-foot, toe) of each leg, left then right
@@ -69,20 +69,6 @@ def _checked(p21, fps: float, what: str) -> np.ndarray:
     if not fps > 0:
         raise MotionlangError(f"{what}: fps must be positive, got {fps}")
     return p
-
-
-def slide_speed(p: np.ndarray, fps: float, *, feet: tuple[int, ...] = TOES,
-                height: float = 0.05, speed: float = 1.0, floor: float = 0.0) -> float:
-    """Mean horizontal speed (m/s) of the ``feet`` joints of positions (T, 21, 3) over the
-    frame steps where the foot is down: below ``height`` above ``floor`` at both frames and
-    slower than ``speed`` m/s; NaN when no foot is ever down. (The foot-skating measure,
-    ``evaluation.metrics.physics.foot_skating``, which checks its input and calls this;
-    here so that in-betweening can choose among drafts by it.)"""
-    f = np.asarray(p, dtype=np.float64)[:, list(feet)]                 # (T, k, 3)
-    v = np.linalg.norm(np.diff(f[..., [0, 2]], axis=0), axis=-1) * fps   # (T - 1, k)
-    low = f[..., 1] - floor < height
-    down = low[:-1] & low[1:] & (v < speed)
-    return float(v[down].mean()) if down.any() else float("nan")
 
 
 def contacts(toe: np.ndarray, fps: float, *, height: float = 0.05, speed: float = 1.0,
@@ -107,16 +93,27 @@ def contacts(toe: np.ndarray, fps: float, *, height: float = 0.05, speed: float 
     return runs
 
 
-def _shifts(toe_xz: np.ndarray, runs: list[tuple[int, int]], blend: int) -> np.ndarray:
-    """(T, 2) horizontal shift of the foot: inside a run the shift that holds the toe at the
-    run's mean, zero farther than ``blend`` frames from every run, linear in between."""
+def _held_at(xz: np.ndarray, pinned: np.ndarray | None) -> np.ndarray:
+    """Where a contact's toe (n, 2) is held: its mean over the contact's pinned frames
+    (n,) bool where it has any, else over all of them."""
+    if pinned is not None and pinned.any():
+        return np.asarray(xz[pinned].mean(axis=0))
+    return np.asarray(xz.mean(axis=0))
+
+
+def _shifts(toe_xz: np.ndarray, runs: list[tuple[int, int]], blend: int,
+            pinned: np.ndarray | None = None) -> np.ndarray:
+    """(T, 2) horizontal shift of the foot: inside a run the shift that holds the toe where
+    :func:`_held_at` says, zero farther than ``blend`` frames from every run, linear in
+    between."""
     T = len(toe_xz)
     shift = np.zeros((T, 2))
     if not runs:
         return shift
     known = np.zeros(T, dtype=bool)
     for a, b in runs:
-        shift[a:b + 1] = toe_xz[a:b + 1].mean(axis=0) - toe_xz[a:b + 1]
+        at = _held_at(toe_xz[a:b + 1], None if pinned is None else pinned[a:b + 1])
+        shift[a:b + 1] = at - toe_xz[a:b + 1]
         known[a:b + 1] = True
     idx = np.arange(T)
     near = np.full(T, np.inf)
@@ -201,12 +198,13 @@ def _two_bone(hip: np.ndarray, knee: np.ndarray, ankle: np.ndarray, target: np.n
 
 
 def _holdable(p: np.ndarray, run: tuple[int, int], leg: tuple[int, int, int, int],
-              max_shift: float, reach: float) -> bool:
+              max_shift: float, reach: float, pinned: np.ndarray | None = None) -> bool:
     """Whether a contact is a plant that can be held: no toe pulled more than ``max_shift``
-    m to the contact's mean, and the held ankle within ``reach`` of the leg's length."""
+    m to where it is held (:func:`_held_at`), and the held ankle within ``reach`` of the
+    leg's length."""
     (a, b), (hip, knee, ankle, toe) = run, leg
     xz = p[a:b + 1, toe, [0, 2]]
-    pull = xz.mean(axis=0) - xz                                   # (n, 2)
+    pull = _held_at(xz, None if pinned is None else pinned[a:b + 1]) - xz   # (n, 2)
     if np.linalg.norm(pull, axis=-1).max() > max_shift:
         return False
     held = p[a:b + 1, ankle].copy()
@@ -245,7 +243,8 @@ def _move_leg(p: np.ndarray, frames: np.ndarray, leg: tuple[int, ...], shift: np
 
 def lock_feet(p21, fps: float, *, height: float = 0.05, speed: float = 1.0, floor: float = 0.0,
               blend: int = 2, min_frames: int = 2, max_shift: float = 0.15,
-              reach: float = 1.0, anchor: bool = True, window: float = 0.4) -> np.ndarray:
+              reach: float = 1.0, anchor: bool = True, window: float = 0.4,
+              pinned: np.ndarray | None = None) -> np.ndarray:
     """Global 21-joint positions (T, 21, 3) metres, Y up, at ``fps`` Hz -> the same motion
     moved so that its feet that are down stay put, with every foot contact held in place and
     every foot raised onto the floor where it sank under it (module docstring); a new array.
@@ -257,7 +256,9 @@ def lock_feet(p21, fps: float, *, height: float = 0.05, speed: float = 1.0, floo
     is a glide and left alone; ``reach``: the same where a held ankle would be farther from
     the hip than this fraction of the leg's length (thigh + shank); ``anchor``: step 0
     (:func:`anchor_root`, smoothed over ``window`` seconds) first, False leaves the root's
-    path as the model made it.
+    path as the model made it. ``pinned``: frames (T,) bool where the feet already are
+    where they must stay (the kept frames around an in-betweening gap): a contact that
+    takes in some of them is held where its toe is on them, not at its mean.
     """
     p = _checked(p21, fps, "lock_feet")
     if anchor:
@@ -272,9 +273,10 @@ def lock_feet(p21, fps: float, *, height: float = 0.05, speed: float = 1.0, floo
               (np.linalg.norm(p[:, ankle] - p[:, knee], axis=-1) > 1e-6)   # a collapsed leg: left
         runs = contacts(p[:, toe], fps, height=height, speed=speed, floor=floor,
                         min_frames=min_frames)
-        runs = [r for r in runs if _holdable(p, r, (hip, knee, ankle, toe), max_shift, reach)]
+        runs = [r for r in runs
+                if _holdable(p, r, (hip, knee, ankle, toe), max_shift, reach, pinned)]
         if runs:
-            s = _shifts(p[:, toe, [0, 2]], runs, blend)
+            s = _shifts(p[:, toe, [0, 2]], runs, blend, pinned)
             moved = np.flatnonzero((np.abs(s) > 0).any(axis=1) & leg)
             shift = np.zeros((len(moved), 3))
             shift[:, [0, 2]] = s[moved]

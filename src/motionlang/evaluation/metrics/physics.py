@@ -22,8 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from motionlang.errors import MotionlangError
-from motionlang.features.foot_lock import slide_speed
-from motionlang.features.joint_map import TOES
+from motionlang.features.joint_map import TOES  # noqa: F401 (re-exported: the feet measured)
 
 
 def _check(p21, name: str) -> np.ndarray:
@@ -44,7 +43,11 @@ def foot_skating(p21, fps: float, *, feet=TOES, height: float = 0.05, speed: flo
     p = _check(p21, "foot_skating")
     if not fps > 0:
         raise MotionlangError(f"foot_skating: fps must be positive, got {fps}")
-    return slide_speed(p, fps, feet=tuple(feet), height=height, speed=speed, floor=floor)
+    f = p[:, list(feet)]                                             # (T, k, 3)
+    v = np.linalg.norm(np.diff(f[..., [0, 2]], axis=0), axis=-1) * fps   # (T - 1, k)
+    low = f[..., 1] - floor < height
+    contact = low[:-1] & low[1:] & (v < speed)
+    return float(v[contact].mean()) if contact.any() else float("nan")
 
 
 def floor_penetration(p21, *, floor: float = 0.0) -> tuple[float, float]:

@@ -8,9 +8,8 @@ takes the kept frames as they are and moves each generated stretch by an offset 
 that goes linearly from the gap's start (the last kept frame before it) to its end (the
 first kept frame after it): no jump at either side ("offset blending"). Of several drafts,
 the one that arrives closest to the kept frames after each gap (:func:`arrival_miss`) needs
-the least of that offset. The offset still moves planted feet with the body; :func:`join`
-with ``foot_lock`` holds them again afterwards, and :func:`choose` keeps the draft whose
-joined frames slide least.
+the least of that offset, and so slides least. The offset still moves planted feet with
+the body; :func:`join` with ``foot_lock`` holds them again afterwards.
 """
 from __future__ import annotations
 
@@ -72,34 +71,12 @@ def join(generated: np.ndarray, source: np.ndarray, keep: np.ndarray, fps: float
     if not foot_lock:
         return blend(generated, source, keep)
     from motionlang.features.foot_lock import lock_feet
-    joined = blend(lock_feet(generated, fps), source, keep)
-    held = lock_feet(joined, fps, anchor=False)
     keep = np.asarray(keep, dtype=bool)
+    joined = blend(lock_feet(generated, fps), source, keep)
+    # a contact across a gap's edge is held where the kept frames have the foot, so that
+    # putting the kept frames back moves it little
+    held = lock_feet(joined, fps, anchor=False, pinned=keep)
     return np.where(keep[:, None, None], np.asarray(source, dtype=np.float64), held)
-
-
-def slide(joined: np.ndarray, keep: np.ndarray, fps: float) -> float:
-    """How fast the planted feet of a joined motion (T, J, 3) slide over its gaps (each gap
-    and a frame either side; ``features.foot_lock.slide_speed``, m/s), the mean over the
-    gaps that have a foot down; infinite when none has (a draft whose feet never touch
-    down there cannot be judged by it, and is not preferred for it)."""
-    from motionlang.features.foot_lock import slide_speed
-    T = len(joined)
-    speeds = [slide_speed(joined[max(a - 1, 0):min(b + 1, T)], fps) for a, b in gaps(keep)]
-    speeds = [v for v in speeds if np.isfinite(v)]
-    return float(np.mean(speeds)) if speeds else float("inf")
-
-
-def choose(drafts: list[np.ndarray], source: np.ndarray, keep: np.ndarray, fps: float, *,
-           foot_lock: bool = False) -> np.ndarray:
-    """Of several drafts (T, J, 3), the joined motion (:func:`join`) whose feet slide least
-    over the gaps (:func:`slide`), ties and drafts that cannot be judged so by how close
-    they arrive (:func:`arrival_miss`). Chosen on the joined frames, not on the drafts: the
-    join is what a draft's pace costs."""
-    joined = [join(d, source, keep, fps, foot_lock=foot_lock) for d in drafts]
-    score = [(slide(j, keep, fps), arrival_miss(d, source, keep))
-             for j, d in zip(joined, drafts, strict=True)]
-    return joined[min(range(len(joined)), key=score.__getitem__)]
 
 
 def arrival_miss(generated: np.ndarray, source: np.ndarray, keep: np.ndarray) -> float:

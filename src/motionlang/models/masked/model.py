@@ -40,7 +40,7 @@ from motionlang.models.checkpoint import Checkpointed, pack_features, unpack_fea
 from motionlang.models.masked import goal as goals
 from motionlang.models.masked import sampling
 from motionlang.models.masked.config import DOWN, MaskedConfig, MaskedOptions
-from motionlang.models.masked.inbetween import choose, gaps, kept_tokens
+from motionlang.models.masked.inbetween import arrival_miss, gaps, join, kept_tokens
 from motionlang.models.masked.path import global_errors
 from motionlang.models.masked.tokenizer import Tokenizer, pad_frames
 from motionlang.models.masked.transformer import (
@@ -306,21 +306,22 @@ class MaskedModel(Checkpointed, nn.Module):
                   ) -> np.ndarray:
         """Global positions (T, 21, 3) at :attr:`fps` and the frames to keep (T,) bool ->
         a motion of T frames that has the kept frames and, elsewhere, frames generated
-        for ``text``: the :meth:`inbetween_drafts` joined to the kept frames by
-        ``inbetween.join`` (``foot_lock``: planted feet held, before and after the join),
-        the one whose feet slide least over the gaps (``inbetween.choose``)."""
+        for ``text``: of the :meth:`inbetween_drafts`, the one that arrives closest to the
+        kept frames, joined to them by ``inbetween.join`` (``foot_lock``: planted feet held,
+        before and after the join)."""
         p21 = np.asarray(p21, dtype=np.float64)
         keep = np.asarray(keep, dtype=bool)
         drafts = self.inbetween_drafts(text, p21, keep, seed=seed, options=options)
-        return choose(drafts, p21, keep, self.fps, foot_lock=foot_lock)
+        best = min(drafts, key=lambda d: arrival_miss(d, p21, keep))
+        return join(best, p21, keep, self.fps, foot_lock=foot_lock)
 
     def inbetween_drafts(self, text: str, p21: np.ndarray, keep: np.ndarray, *,
                          seed: int = 0, options: MaskedOptions | None = None
                          ) -> list[np.ndarray]:
         """``options.drafts`` motions (T, 21, 3), drawn in one batch, that keep the tokens
         of the kept frames (T,) bool of ``p21`` and regenerate the others for ``text``, a
-        model with goals told where each gap must arrive (``goal.kept_goal``); decoded
-        whole from ``p21``'s first placement, not yet joined to the kept frames."""
+        model with goals told where each gap must arrive (``goal.kept_goal``); decoded by
+        :meth:`decode_placed`, not yet joined to the kept frames."""
         from motionlang.features.positions import positions_to_rows
         options = options or MaskedOptions()
         p21 = np.asarray(p21, dtype=np.float64)
