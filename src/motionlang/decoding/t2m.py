@@ -29,10 +29,9 @@ from motionlang.features.positions import PositionsConfig
 #: frame rate of the comparison: the positions features' rate
 FPS = PositionsConfig.fps
 
-#: optional capabilities a text-to-motion model may have: "start_pose" (``hypotheses`` and
-#: ``positions21`` take ``first_frame``, a frame of its own features), "positions_start"
-#: (:meth:`start_from21`), "reconstruct" (:meth:`reconstruct21`), "hypotheses" (several
-#: ranked results for one sentence)
+#: optional capabilities: "start_pose" (``hypotheses`` and ``positions21`` take
+#: ``first_frame``, a frame of its own features), "positions_start" (:meth:`start_from21`),
+#: "reconstruct" (:meth:`reconstruct21`), "hypotheses" (several ranked results per sentence)
 CAPABILITIES = ("start_pose", "positions_start", "reconstruct", "hypotheses")
 
 
@@ -91,9 +90,7 @@ class SamplingModel(Protocol):
     """What a family's model implements to generate through :class:`SelfAdapter` (its
     registry entry says ``text_to_motion="self"``): the rest of :class:`TextToMotion`
     (options checked once, foot lock, re-timing to 12.5 Hz, the comparison's anchoring)
-    comes from the adapter.
-
-    ``sample`` returns global 21-joint positions (T, 21, 3) metres at ``fps`` for each
+    comes from the adapter. ``sample`` returns global 21-joint positions (T, 21, 3) metres at ``fps`` for each
     sentence, ``lengths`` in frames at ``fps`` (None: the length it plans); ``options`` is
     an instance of its ``Options`` dataclass (its sampling options, e.g. top-k, guidance)."""
 
@@ -311,12 +308,10 @@ class SelfAdapter(Text2MotionAdapter):
         return list(self.model.unknown_words(sentence))
 
     def _hypotheses(self, sentence: str, *, max_frames: int | None = None, seed: int = 0,
-                    width: int = 1, method: str | None = None, **_: Any
-                    ) -> list[tuple[Any, float]]:
+                    width: int = 1, method: str | None = None, **_: Any) -> list:
         if method not in (None, self.default_method()):   # not silently another decoding
-            raise MotionlangError(f"method {method!r}: a {self.model.kind} model decodes one "
-                                  f"way, {self.default_method()!r} (beam and mean are the "
-                                  f"L2M's)")
+            raise MotionlangError(f"method {method!r}: a {self.model.kind} model decodes "
+                                  f"only by {self.default_method()!r}")
         _check_words(sentence)
         texts = [sentence] * max(1, int(width))
         out = self.model.sample(texts, [max_frames] * len(texts), seed=seed,
@@ -398,8 +393,7 @@ def generate_positions21(model, sentence: str, n_frames: int, **kw) -> np.ndarra
     ``reranker`` (an M2L model) the one under which it finds the sentence likeliest
     (``decoding.rerank``). ``first_frame`` (L2M only): its motion starts with this frame of
     its own features (``decoding.seq2seq.generate_features``); an L2M told its length runs to
-    it (its end flag is not read before). ``foot_lock`` (default off:
-    the model's own frames): the body moved with its planted feet, which are held in place
-    (``features.foot_lock``).
+    it (its end flag is not read before). ``foot_lock`` (default off: the model's own
+    frames): the body moved with its planted feet, held in place (``features.foot_lock``).
     """
     return text_to_motion(model).positions21(sentence, n_frames, **kw)
