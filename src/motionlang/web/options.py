@@ -15,7 +15,7 @@ from motionlang.utils.checks import check_numbers
 SUMMARY = ("a local web app: sentences to motion played in 3D, downloads (BVH, GLB, MP4) on "
            "your own rig, motion files described, an index searched; models load once")
 #: text-to-motion models the page offers unless ``--model`` names others
-DEFAULT_MODELS = ("l2m", "twostream", "l2m-procedural")
+DEFAULT_MODELS = ("l2m", "masked", "twostream", "l2m-procedural")
 
 
 def _opt(default: Any, help_: str, **meta: Any) -> Any:
