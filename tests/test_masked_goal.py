@@ -200,3 +200,25 @@ def test_join_holds_the_feet_the_blend_would_slide(features):
     assert np.array_equal(held[keep], stand[keep])
     assert np.array_equal(join(draft, stand, keep, 12.5), slid)
 
+
+
+def test_blend_moves_a_gap_at_an_end_rigidly(features):
+    from motionlang.models.masked.inbetween import POSE_FADE, blend
+    src = features.body(synthetic_mmm(T=401))             # 50 frames
+    keep = np.ones(len(src), dtype=bool)
+    keep[30:] = False                                     # the last 20 frames generated
+    gen = src.copy()
+    gen[..., 0] += 0.5                                    # half a metre aside
+    gen[:, 7, 1] += 0.3                                   # and its left wrist higher
+    out = blend(gen, src, keep)
+    assert np.array_equal(out[keep], src[keep])
+    moved = out[30 + POSE_FADE:] - gen[30 + POSE_FADE:]   # beyond the pose fade:
+    assert np.allclose(moved, [-0.5, 0.0, 0.0])           # one ground move for every joint
+    steps = np.abs(np.diff(out[28:, 7, 1] - src[28:, 7, 1]))   # the wrist's offset fades in
+    assert steps.max() <= 0.3 / (POSE_FADE + 1) + 1e-9
+    start = keep[::-1].copy()                             # the same at the start
+    first = blend(gen, src, start)[:20 - POSE_FADE] - gen[:20 - POSE_FADE]
+    assert np.allclose(first, [-0.5, 0.0, 0.0])
+    inner = np.ones(len(src), dtype=bool)
+    inner[10:40] = False                                  # two sides: per joint, linearly
+    assert np.allclose(blend(gen, src, inner)[10:40], src[10:40])

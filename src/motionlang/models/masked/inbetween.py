@@ -6,7 +6,8 @@ a gap is regenerated). The decoder reproduces the kept tokens' frames only up to
 tokenizer's error and places them where the generated root path leads, so the result
 takes the kept frames as they are and moves each generated stretch by an offset per joint
 that goes linearly from the gap's start (the last kept frame before it) to its end (the
-first kept frame after it): no jump at either side ("offset blending"). Of several drafts,
+first kept frame after it): no jump at either side ("offset blending"; a gap that reaches
+an end of the motion moves rigidly, see :func:`blend`). Of several drafts,
 the one that arrives closest to the kept frames after each gap (:func:`arrival_miss`) needs
 the least of that offset, and so slides least. The offset still moves planted feet with
 the body; :func:`join` with ``foot_lock`` holds them again afterwards.
@@ -16,6 +17,9 @@ from __future__ import annotations
 import numpy as np
 
 from motionlang.models.masked.config import DOWN
+
+#: frames over which the pose part of a one-sided gap's offset fades out (:func:`blend`)
+POSE_FADE = 6
 
 
 def kept_tokens(keep: np.ndarray) -> np.ndarray:
@@ -42,10 +46,16 @@ def gaps(keep: np.ndarray) -> list[tuple[int, int]]:
     return out
 
 
-def blend(generated: np.ndarray, source: np.ndarray, keep: np.ndarray) -> np.ndarray:
+def blend(generated: np.ndarray, source: np.ndarray, keep: np.ndarray, *,
+          fade: int = POSE_FADE) -> np.ndarray:
     """Generated (T, J, 3) and source (T, J, 3) positions, kept frames (T,) -> the source
-    on kept frames, the generated frames elsewhere shifted to meet the kept frames at
-    both ends of each gap (see module docstring)."""
+    on kept frames, the generated frames elsewhere moved to meet the kept frames at both
+    ends of each gap (see module docstring): by an offset per joint (kept frame minus
+    generated frame there) going linearly from one side to the other. A gap that reaches
+    an end of the motion has one side only: its root's ground-plane offset moves the whole
+    body throughout, and what is left of it joint by joint (the pose and height the
+    generated frame has differently) fades out over ``fade`` frames from that side, so that
+    the body is not held in the kept frame's pose difference, bones stretched, to the end."""
     gen = np.asarray(generated, dtype=np.float64)
     src = np.asarray(source, dtype=np.float64)
     keep = np.asarray(keep, dtype=bool)
@@ -53,11 +63,16 @@ def blend(generated: np.ndarray, source: np.ndarray, keep: np.ndarray) -> np.nda
     for a, b in gaps(keep):
         if a == 0 and b == len(keep):
             continue   # nothing kept: the generated motion as it is
-        # a gap that reaches an end of the motion is moved by its one known offset
-        before = src[a - 1] - gen[a - 1] if a > 0 else src[b] - gen[b]
-        after = src[b] - gen[b] if b < len(keep) else before
-        w = (np.arange(a, b) - (a - 1)) / (b - a + 1.0)
-        out[a:b] = gen[a:b] + (1 - w)[:, None, None] * before + w[:, None, None] * after
+        t = np.arange(a, b)
+        if a > 0 and b < len(keep):
+            before, after = src[a - 1] - gen[a - 1], src[b] - gen[b]
+            w = ((t - (a - 1)) / (b - a + 1.0))[:, None, None]
+            out[a:b] = gen[a:b] + (1 - w) * before + w * after
+            continue
+        off, k = (src[a - 1] - gen[a - 1], t - (a - 1)) if a > 0 else (src[b] - gen[b], b - t)
+        ground = off[0] * np.array([1.0, 0.0, 1.0])
+        left = np.clip(1.0 - k / (fade + 1.0), 0.0, 1.0)[:, None, None]
+        out[a:b] = gen[a:b] + ground + left * (off - ground)
     return out
 
 
