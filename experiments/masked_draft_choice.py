@@ -13,6 +13,7 @@ than 1 m/s, the project's measure) or by the same with steps up to 3 m/s counted
 per choice: the joint error in the gap (mm) and the kept motion's skating counted up to
 1 m/s, 3 m/s and at any speed, beside the real takes'; and the largest toe step at the
 gap's edges. A choice by the 1 m/s measure can prefer feet that drag faster than that.
+Progress (a line a take) goes to standard error.
 Non-commercial: Bandai data (CC BY-NC 4.0).
 """
 from __future__ import annotations
@@ -38,20 +39,14 @@ def main() -> None:
     args = p.parse_args()
 
     import numpy as np
-    import torch
-    torch.set_num_threads(1)
-    from masked_inbetween import gap_cases  # the same takes and gaps (this folder)
+    from masked_inbetween import gap_cases, test_takes  # the same takes (this folder)
 
-    import motionlang as ml
     from motionlang.evaluation.metrics.physics import foot_skating
     from motionlang.features.joint_map import TOES
-    from motionlang.models.judge.fit import bandai_items, bandai_sentences
     from motionlang.models.masked.inbetween import arrival_miss, gaps, join
 
-    model = ml.load_model(args.model, kind="masked")
-    fps, options = model.fps, ml.text_to_motion(model).options
-    test = bandai_items(args.data, "test", fps=fps)
-    sentences = bandai_sentences(args.data, "test", seed=0)
+    model, options, test, sentences = test_takes(args.model, args.data)
+    fps = model.fps
 
     def skating(p21: np.ndarray, cap: float) -> float:
         return foot_skating(p21, fps, speed=cap)
@@ -65,7 +60,9 @@ def main() -> None:
     rows: dict[str, dict[str, list[float]]] = {
         c: {k: [] for k in ("err", *CAPS, "edge")} for c in choices}
     real: dict[str, list[float]] = {k: [] for k in CAPS}
-    for i, p21, _, keep, span in gap_cases(test, round(args.gap * fps), fps, args.takes, 0):
+    cases = list(gap_cases(test, round(args.gap * fps), fps, args.takes, 0))
+    for n, (i, p21, _, keep, span) in enumerate(cases, 1):
+        print(f"take {n}/{len(cases)}", file=sys.stderr, flush=True)
         for k, cap in CAPS.items():
             real[k].append(skating(p21[span], cap))
         drafts = model.inbetween_drafts(sentences[i].text, p21, keep, seed=0, options=options)

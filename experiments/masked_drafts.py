@@ -43,21 +43,15 @@ def main() -> None:
     from dataclasses import replace
 
     import numpy as np
-    import torch
-    torch.set_num_threads(1)
-    from masked_inbetween import gap_cases  # the same takes and gaps (this folder)
+    from masked_inbetween import gap_cases, test_takes  # the same takes (this folder)
 
-    import motionlang as ml
     from motionlang.evaluation.metrics.physics import foot_skating
-    from motionlang.models.judge.fit import bandai_items, bandai_sentences
     from motionlang.models.masked.inbetween import arrival_miss, blend, join
 
-    model = ml.load_model(args.model, kind="masked")
+    model, options, test, sentences = test_takes(args.model, args.data)
+    fps = model.fps
     if args.no_goal and model.generator.goal is not None:
         model.generator.goal.weight.data.zero_()
-    fps, options = model.fps, ml.text_to_motion(model).options
-    test = bandai_items(args.data, "test", fps=fps)
-    sentences = bandai_sentences(args.data, "test", seed=0)
     most = max(args.drafts)
     rows = {n: {"miss": [], "err": [], "skate": [], "locked_err": [], "locked_skate": []}
             for n in args.drafts}

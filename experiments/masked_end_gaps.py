@@ -10,7 +10,8 @@ joined to the kept frames by ``inbetween.blend`` and by the blend of the thirtee
 session (an offset per joint, for a gap at an end the kept side's offset throughout:
 ``per_joint`` below). Printed per case and join: over the generated frames, the mean and
 the largest deviation of the worst bone from the take's own mean bone lengths (m), beside
-the draft's own. Non-commercial: Bandai data (CC BY-NC 4.0).
+the draft's own. Progress (a line a take) goes to standard error. Non-commercial: Bandai
+data (CC BY-NC 4.0).
 """
 from __future__ import annotations
 
@@ -49,23 +50,19 @@ def main() -> None:
     args = p.parse_args()
 
     import numpy as np
-    import torch
-    torch.set_num_threads(1)
-    from masked_inbetween import gap_cases  # the same takes and gaps (this folder)
+    from masked_inbetween import gap_cases, test_takes  # the same takes (this folder)
 
-    import motionlang as ml
     from motionlang.features.joint_map import bone_lengths21
-    from motionlang.models.judge.fit import bandai_items, bandai_sentences
     from motionlang.models.masked.inbetween import arrival_miss, blend
 
-    model = ml.load_model(args.model, kind="masked")
-    fps, options = model.fps, ml.text_to_motion(model).options
-    test = bandai_items(args.data, "test", fps=fps)
-    sentences = bandai_sentences(args.data, "test", seed=0)
+    model, options, test, sentences = test_takes(args.model, args.data)
+    fps = model.fps
     n_gap = round(args.gap * fps)
     rows: dict[tuple[str, str], list[tuple[float, float]]] = {}
+    cases = list(gap_cases(test, n_gap, fps, args.takes, 0))
     for case in ("middle", "end"):
-        for i, p21, _, keep, _ in gap_cases(test, n_gap, fps, args.takes, 0):
+        for n, (i, p21, _, keep, _) in enumerate(cases, 1):
+            print(f"{case} gaps: take {n}/{len(cases)}", file=sys.stderr, flush=True)
             if case == "end":
                 keep = np.ones(len(p21), dtype=bool)
                 keep[-n_gap:] = False
@@ -76,7 +73,7 @@ def main() -> None:
                               ("per_joint", per_joint(draft, p21, keep))):
                 worst = np.abs(bone_lengths21(out[~keep]) - own).max(axis=1)
                 rows.setdefault((case, name), []).append((worst.mean(), worst.max()))
-    print(f"{args.takes} Bandai test takes, {args.gap:g} s gaps, model {args.model}\n")
+    print(f"{len(cases)} Bandai test takes, {args.gap:g} s gaps, model {args.model}\n")
     print("| gap | frames | worst bone off its length, mean (m) | largest (m) |")
     print("|---|---|---|---|")
     for (case, name), v in rows.items():

@@ -45,6 +45,19 @@ def gap_cases(test: list, n_gap: int, fps: float, limit: int, seed: int):
         yield i, p21, a, keep, slice(a - 1, a + n_gap + 1)
 
 
+def test_takes(model_spec: str, data: str):
+    """The masked model (loaded, one torch thread), its sampling options, and the Bandai test
+    takes at its frame rate with one sentence each (seed 0): what the in-betweening
+    experiments of this folder share. Returns ``(model, options, takes, sentences)``."""
+    import torch
+    torch.set_num_threads(1)
+    import motionlang as ml
+    from motionlang.models.judge.fit import bandai_items, bandai_sentences
+    model = ml.load_model(model_spec, kind="masked")
+    return (model, ml.text_to_motion(model).options,
+            bandai_items(data, "test", fps=model.fps), bandai_sentences(data, "test", seed=0))
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--model", required=True, help="a masked model (file or run folder)")
