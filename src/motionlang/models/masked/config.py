@@ -139,7 +139,8 @@ class MaskedOptions:
         top_k: draw among the k likeliest tokens only (0: all).
         drafts: in-betweening draws this many motions in one batch and keeps the one that
             arrives closest to the kept frames after each gap (``inbetween.arrival_miss``);
-            more drafts arrive closer and slide less, at about 30 ms each for 10 s.
+            more drafts arrive closer and slide less, at about 30 ms each for 10 s
+            (``benchmarks/bench_masked_inbetween.py``).
     """
 
     steps: int = 6
