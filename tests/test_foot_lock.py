@@ -154,6 +154,20 @@ def test_a_hold_the_leg_cannot_reach_is_left_alone():
     assert np.array_equal(lock_feet(p, 10.0, reach=0.5, anchor=False), p)
 
 
+def test_a_straight_stance_leg_is_held_within_a_reach_tolerance():
+    T = 12
+    p = standing(T)
+    for leg in LEGS:
+        p[:, leg[1], 2] = 0.0                              # knees straight: reach exactly used
+    p[:, [j for leg in LEGS for j in leg[2:]], 0] += 0.004 * np.arange(T)[:, None]
+    assert foot_skating(p, 10.0) == pytest.approx(0.04)    # feet slide 4 cm/s under the hips
+    assert np.array_equal(lock_feet(p, 10.0, anchor=False), p)   # just out of reach: a glide
+    q = lock_feet(p, 10.0, anchor=False, reach=1.05)
+    # held: the IK stops the ankle at 99.9 % of the leg, and the toe slides by what is left
+    assert foot_skating(q, 10.0) < 0.1 * foot_skating(p, 10.0)
+    assert np.allclose(bone_lengths21(q), bone_lengths21(p))
+
+
 def test_a_foot_under_the_floor_is_raised_onto_it_and_the_lift_fades():
     T = 16
     p = standing(T)

@@ -46,6 +46,24 @@ def test_arrival_miss_by_hand():
     assert arrival_miss(late + np.arange(10)[:, None, None], src, keep) == 0.0
 
 
+def test_join_holds_feet_a_little_out_of_reach(monkeypatch):
+    import motionlang.features.foot_lock as fl
+    from motionlang.models.masked.inbetween import JOIN_REACH, join
+    seen = []
+
+    def spy(p21, fps, **kw):
+        seen.append(kw.get("reach"))
+        return np.asarray(p21, dtype=np.float64)
+
+    monkeypatch.setattr(fl, "lock_feet", spy)
+    src = np.zeros((10, 21, 3))
+    keep = np.ones(10, dtype=bool)
+    keep[3:6] = False
+    out = join(src + 1.0, src, keep, 10.0, foot_lock=True)
+    assert seen == [JOIN_REACH, JOIN_REACH] and JOIN_REACH > 1.0      # both locks
+    assert np.array_equal(out[keep], src[keep])
+
+
 def test_keep_frames_by_hand():
     keep = keep_frames(10, 2.0, [(0.0, 1.0), (4.0, None)])     # frames at 0, 0.5, ... 4.5 s
     assert keep.tolist() == [True, True, True, False, False, False, False, False, True, True]

@@ -20,6 +20,11 @@ from motionlang.models.masked.config import DOWN
 
 #: frames over which the pose part of a one-sided gap's offset fades out (:func:`blend`)
 POSE_FADE = 6
+#: how far past the leg's length (a fraction of it) a held ankle may be for :func:`join` to
+#: hold the contact: a stance leg is nearly straight, so a pull of a centimetre or two puts
+#: its ankle just out of reach, and the lock's default would leave the whole slide; held,
+#: the IK stops the ankle at the leg's reach and the foot slides only by what is left
+JOIN_REACH = 1.05
 
 
 def kept_tokens(keep: np.ndarray) -> np.ndarray:
@@ -82,15 +87,16 @@ def join(generated: np.ndarray, source: np.ndarray, keep: np.ndarray, fps: float
     with ``foot_lock``, the draft's planted feet held first (``features.foot_lock.
     lock_feet``), then, after the blend, held again where they are down with the root's
     path left as blended (the lock's root step would take back the blend's offset and miss
-    the kept frames), and the kept frames put back exactly."""
+    the kept frames), and the kept frames put back exactly. Both locks hold a contact whose
+    ankle is a little out of the leg's reach (:data:`JOIN_REACH`)."""
     if not foot_lock:
         return blend(generated, source, keep)
     from motionlang.features.foot_lock import lock_feet
     keep = np.asarray(keep, dtype=bool)
-    joined = blend(lock_feet(generated, fps), source, keep)
+    joined = blend(lock_feet(generated, fps, reach=JOIN_REACH), source, keep)
     # a contact across a gap's edge is held where the kept frames have the foot, so that
     # putting the kept frames back moves it little
-    held = lock_feet(joined, fps, anchor=False, pinned=keep)
+    held = lock_feet(joined, fps, anchor=False, pinned=keep, reach=JOIN_REACH)
     return np.where(keep[:, None, None], np.asarray(source, dtype=np.float64), held)
 
 

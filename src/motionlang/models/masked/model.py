@@ -259,7 +259,8 @@ class MaskedModel(Checkpointed, nn.Module):
         """Tokens (B, L, Q) of every codebook for ``texts``, ``n_tokens`` long (positions
         past a motion's length are padding); ``known`` (B, L, Q) / ``kept`` (B, L) fix
         tokens, ``goal`` (B, L, GOAL_DIM) says where each gap arrives (in-betweening)."""
-        self.eval()
+        if self.training:   # eval() walks every submodule: not on each call
+            self.eval()
         L = max(n_tokens)
         valid = torch.arange(L, device=self.device)[None] < torch.tensor(
             list(n_tokens), device=self.device)[:, None]

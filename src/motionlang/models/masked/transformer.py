@@ -15,6 +15,7 @@
 """
 from __future__ import annotations
 
+import functools
 import math
 
 import torch
@@ -31,8 +32,10 @@ from motionlang.models.masked.goal import GOAL_DIM
 GOAL_GAIN = 10.0
 
 
+@functools.lru_cache(maxsize=64)
 def sinusoid(T: int, dim: int, device: torch.device | None = None) -> torch.Tensor:
-    """(T, dim) sinusoidal positions (Vaswani et al. 2017)."""
+    """(T, dim) sinusoidal positions (Vaswani et al. 2017). Cached (every decoding step asks
+    for the same): the tensor is shared, so callers must not change it in place."""
     pos = torch.arange(T, dtype=torch.float32, device=device)[:, None]
     rate = torch.exp(torch.arange(0, dim, 2, dtype=torch.float32, device=device)
                      * (-math.log(10000.0) / dim))
@@ -66,7 +69,10 @@ class Conditioned(nn.Module):
             c = torch.where(drop[:, None], self.null.expand_as(c), c)
         x = torch.cat([c[:, None], h], 1)
         x = x + sinusoid(x.shape[1], x.shape[2], x.device)
-        pad = torch.cat([torch.zeros_like(valid[:, :1]), ~valid], 1)
+        # no mask when nothing is padded (one motion at a time): the same result, and the
+        # attention skips applying it
+        pad = None if bool(valid.all()) else torch.cat([torch.zeros_like(valid[:, :1]),
+                                                        ~valid], 1)
         return self.norm(self.encoder(x, src_key_padding_mask=pad))[:, 1:]
 
 
