@@ -4,20 +4,28 @@ session, on a fresh checkout: run folders are not kept between sessions, so each
 starts from a state committed to the repository and ends by replacing it.
 
     OMP_NUM_THREADS=1 .venv/bin/python experiments/twostream_parts.py PART
-        [--epochs-per-part 4] [--data SOURCE ...] [--threads 1]
+        [--epochs-per-part 4] [--data SOURCE ...] [--mirror] [--threads 1] [--full-state]
+
+The packaged model's data (``scripts/train_shipped_models.sh``): ``--data
+bandai:../shared/data/bandai@1 --mirror`` (the corpus then gets ``@1`` too: half of each
+epoch each).
 
 Part 1 starts the run; part N continues from the state the part before committed, in
 ``experiments/state/twostream_recipe/`` (``training.run_state``: the trainer's ``last.pt``
 with the optimiser's moments and the RNG states, ``run.json``, ``splits/``,
-``history.json``, ``commands.jsonl``, ``state.json``; about 37 MB at h = 128). Parts
+``history.json``, ``commands.jsonl``, ``state.json``; about 37 MB at h = 128, and so by
+default stored compact: ``save_state(compact=True)``, ``last.pt.xz`` with the weights in
+float16 and the moments in bfloat16, about 14 MB, small enough to commit beside the
+package; ``--full-state`` keeps it exact). Parts
 1..5 (4 epochs each: an epoch took 15-19 minutes on one shared core, the data preparation
 about 10 more) reach epoch 20, part 6 runs the 4 decayed epochs; the last part also puts
-``model.pt`` there. The parts give the model of one uninterrupted run
-(``tests/test_run_state.py``). A part rebuilds the corpus (``data synth``, seed 0) and the
-features from it first (minutes; the features through the on-disk cache) and checks them
-against the saved split and normaliser. Printed at the end: what to commit. Run a part again
-after an interruption in the same session: it continues from the run folder's own
-``last.pt`` (checkpoints every 50 steps).
+``model.pt`` there. With ``--full-state`` the parts give the model of one uninterrupted
+run bit for bit (``tests/test_run_state.py``). A part rebuilds the corpus (``data synth``,
+seed 0) and the features from it first (minutes; the features through the on-disk cache) and checks them
+against the saved split and normaliser. Printed at the end: what to commit. A compact state
+resumes the run up to the rounding of its weights and moments (``training.run_state``).
+Run a part again after an interruption in the same session: it continues from the run
+folder's own ``last.pt`` (checkpoints every 50 steps).
 """
 from __future__ import annotations
 
@@ -58,7 +66,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--epochs-per-part", type=int, default=4)
     ap.add_argument("--data", nargs="*", default=[],
                     help="sources beside the procedural corpus, e.g. bandai:DIR@1")
+    ap.add_argument("--mirror", action="store_true",
+                    help="also train on the motions mirrored left/right (as the package)")
     ap.add_argument("--threads", type=int, default=1)
+    ap.add_argument("--full-state", action="store_true",
+                    help="save the exact state (about 37 MB) instead of the compact one")
     a = ap.parse_args(argv)
     try:
         start, end, decay = plan(a.part, a.epochs_per_part)
@@ -95,10 +107,11 @@ def main(argv: list[str] | None = None) -> int:
         elif (STATE / "state.json").is_file():
             raise MotionlangError(f"{STATE}: a state is saved at epoch "
                                   f"{read_state(STATE)['epoch']}: part 1 would start over")
-        model = ml.train("twostream", [str(corpus), *a.data], run,
-                         resume=(run / "last.pt").is_file(), epochs=end,
-                         decay_epochs=decay, **RECIPE)
-        about = save_state(run, STATE, part=a.part, data=[str(corpus), *a.data])
+        data = [f"{corpus}@1" if a.data else str(corpus), *a.data]
+        recipe = {**RECIPE, "mirror": True} if a.mirror else RECIPE
+        model = ml.train("twostream", data, run, resume=(run / "last.pt").is_file(),
+                         epochs=end, decay_epochs=decay, **recipe)
+        about = save_state(run, STATE, part=a.part, data=data, compact=not a.full_state)
         if decay:
             (STATE / "model.pt").write_bytes(model.read_bytes())
     except MotionlangError as exc:

