@@ -39,8 +39,22 @@ def test_info_names_the_models_and_formats(server):
     status, info = call(server + "api/info")
     assert status == 200
     assert [m["name"] for m in info["models"]] == ["l2m-procedural"]
+    assert info["models"][0]["methods"] == ["sample", "beam", "mean"]
     assert {"bvh", "glb", "mp4"} <= set(info["exports"])
     assert info["search"] is False and info["max_upload_bytes"] == 2 << 20
+
+
+def test_a_model_that_samples_by_itself_is_offered_its_own_decoding_only():
+    import motionlang as ml
+    from helpers.twostream import HashTokens
+    from motionlang.models.masked.config import MaskedConfig
+    from motionlang.models.masked.model import MaskedModel
+    from motionlang.web.studio import model_methods
+    masked = ml.text_to_motion(MaskedModel(MaskedConfig(width=8, depth=1, code_dim=4, codes=8,
+                                                        quantizers=2, hidden=16, heads=2,
+                                                        layers=1, res_layers=1), None,
+                                           HashTokens()))
+    assert model_methods(masked) == ["sample"]
 
 
 def test_the_page_and_its_scripts_are_served_from_the_package(server):

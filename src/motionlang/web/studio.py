@@ -44,6 +44,14 @@ METHODS = ("sample", "beam", "mean")
 WARM_UP = ("a person walks forward", "a person pirouettes")
 
 
+def model_methods(t2m: Any) -> list[str]:
+    """The decodings the page offers for a text-to-motion model: every one of
+    :data:`METHODS`, but only its own for a model that samples by itself (``SelfAdapter``,
+    e.g. the masked-token model: it refuses the others)."""
+    from motionlang.decoding.t2m import SelfAdapter
+    return [t2m.default_method()] if isinstance(t2m, SelfAdapter) else list(METHODS)
+
+
 @dataclass
 class Take:
     """A generated motion: the model's result (positions (T, 21, 3) or a Motion) at fps."""
@@ -116,6 +124,7 @@ class Studio:
         """What the page offers: models (with their decoding), exports, search."""
         from motionlang.rendering.output import RESULT_OUT
         return {"models": [{"name": n, "method": t.default_method(),
+                            "methods": model_methods(t),
                             "deterministic": bool(t.deterministic), "fps": t.fps}
                            for n, t in self.models.items()],
                 "methods": list(METHODS), "max_seconds": MAX_SECONDS,

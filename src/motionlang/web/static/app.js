@@ -201,21 +201,25 @@ async function start() {
     opt.dataset.deterministic = m.deterministic ? "1" : "";
     $("model").appendChild(opt);
   }
-  // a deterministic model draws nothing: its decoding and seed would change nothing
+  // a deterministic model draws nothing: its decoding and seed would change nothing;
+  // the decoding menu lists only what the chosen model accepts
   const fixed = () => {
     const opt = $("model").selectedOptions[0];
     const off = Boolean(opt && opt.dataset.deterministic);
-    $("method").disabled = off;
+    const own = info.models.find((m) => opt && m.name === opt.value);
+    const menu = $("method");
+    while (menu.options.length > 1) menu.remove(1);   // keep "the model's own"
+    for (const m of (own && own.methods) || info.methods) {
+      const o = document.createElement("option");
+      o.value = m;
+      o.textContent = m;
+      menu.appendChild(o);
+    }
+    menu.disabled = off;
     $("seed").disabled = off;
   };
   $("model").onchange = fixed;
   fixed();
-  for (const m of info.methods) {
-    const opt = document.createElement("option");
-    opt.value = m;
-    opt.textContent = m;
-    $("method").appendChild(opt);
-  }
   $("seconds").max = String(info.max_seconds);
   state.maxUpload = info.max_upload_bytes;
   for (const fmt of info.exports) {
