@@ -2,7 +2,8 @@
 the tokenizer and back, beside the model's own motions (docs/results/masked.md, fifth stage).
 
     OMP_NUM_THREADS=1 .venv/bin/python experiments/masked_token_ceiling.py --model masked \
-        [--data ../shared/data/bandai] [--split val] [--limit 0] [--evaluator E]
+        [--data ../shared/data/bandai] [--split val] [--limit 0] [--evaluator E] \
+        [--no-generated]
 
 Rows: the real takes (the judge's own accuracy; FID between two halves), each take
 tokenized and decoded with all codebooks and with the base codebook alone (placed where the
@@ -65,6 +66,8 @@ def main() -> None:
     p.add_argument("--limit", type=int, default=0, help="takes (0: all)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--evaluator", default=None)
+    p.add_argument("--no-generated", action="store_true",
+                   help="leave out the model's own motions (a run with a tokenizer only)")
     args = p.parse_args()
     if args.evaluator:
         return guo_ceiling(args)
@@ -100,10 +103,11 @@ def main() -> None:
         f"tokens and back, {model.config.quantizers} codebooks":
             [through_tokens(it.positions, None) for it in real],
         "tokens and back, base codebook": [through_tokens(it.positions, 1) for it in real],
-        f"{args.model} (generated)": [
-            lock_feet(t2m.positions21(s.text, max(2, len(it.positions)), seed=args.seed), FPS)
-            for s, it in zip(sentences, real, strict=True)],
     }
+    if not args.no_generated:
+        generated[f"{args.model} (generated)"] = [
+            lock_feet(t2m.positions21(s.text, max(2, len(it.positions)), seed=args.seed), FPS)
+            for s, it in zip(sentences, real, strict=True)]
     rows = judge_table(judge, [it.positions for it in real],
                        [(it.content, it.style) for it in real], FPS, generated,
                        asked_labels(sentences), FPS, rng=args.seed)
