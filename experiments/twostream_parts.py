@@ -25,7 +25,9 @@ seed 0) and the features from it first (minutes; the features through the on-dis
 against the saved split and normaliser. Printed at the end: what to commit. A compact state
 resumes the run up to the rounding of its weights and moments (``training.run_state``).
 Run a part again after an interruption in the same session: it continues from the run
-folder's own ``last.pt`` (checkpoints every 50 steps).
+folder's own ``last.pt`` (checkpoints every 50 steps). A part that a session's end would cut
+short: stop it, ``PART --save-only`` saves where it stopped (the last checkpoint) as the
+state to commit, and the next session runs the same PART again to finish it.
 """
 from __future__ import annotations
 
@@ -71,6 +73,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--full-state", action="store_true",
                     help="save the exact state (about 37 MB) instead of the compact one")
+    ap.add_argument("--save-only", action="store_true",
+                    help="train nothing: save the run folder's last checkpoint as the state "
+                         "(a part the session's end interrupts; the same part resumes it)")
     a = ap.parse_args(argv)
     try:
         start, end, decay = plan(a.part, a.epochs_per_part)
@@ -91,38 +96,50 @@ def main(argv: list[str] | None = None) -> int:
                         "--out", str(corpus), "--n", "6000", "--seed", "0"], check=True)
         (corpus / ".done").touch()
     run = WORK / "run"
+    data = [f"{corpus}@1" if a.data else str(corpus), *a.data]
     try:
-        if (run / "last.pt").is_file():
+        if a.save_only:
+            about = save_state(run, STATE, part=a.part, data=data, compact=not a.full_state)
+            print(f"part {a.part} saved where it stopped: epoch {about['epoch']}, batch "
+                  f"{about['batch']}; run part {a.part} again to finish it")
+        elif (run / "last.pt").is_file():
             epoch = read_training_checkpoint(run / "last.pt")["epoch"]
             if not start <= epoch <= end:
                 raise MotionlangError(f"{run}: at epoch {epoch}, outside part {a.part} "
                                       f"(epochs {start}..{end}): remove it or run that part")
             print(f"{run}: continuing this session's run folder (epoch {epoch})")
-        elif start:
-            about = restore_state(STATE, run)
-            if about["epoch"] != start or about["batch"]:
-                raise MotionlangError(f"{STATE}: saved at epoch {about['epoch']} batch "
-                                      f"{about['batch']}, part {a.part} starts at epoch "
-                                      f"{start}: run the part that ends there first")
         elif (STATE / "state.json").is_file():
-            raise MotionlangError(f"{STATE}: a state is saved at epoch "
-                                  f"{read_state(STATE)['epoch']}: part 1 would start over")
-        data = [f"{corpus}@1" if a.data else str(corpus), *a.data]
-        recipe = {**RECIPE, "mirror": True} if a.mirror else RECIPE
-        model = ml.train("twostream", data, run, resume=(run / "last.pt").is_file(),
-                         epochs=end, decay_epochs=decay, **recipe)
-        about = save_state(run, STATE, part=a.part, data=data, compact=not a.full_state)
-        if decay:
-            (STATE / "model.pt").write_bytes(model.read_bytes())
+            # a part resumes the state its predecessor saved at its start, or its own,
+            # saved where a session's end stopped it (--save-only)
+            saved = read_state(STATE)
+            at = f"saved at epoch {saved['epoch']} batch {saved['batch']}"
+            if not start <= saved["epoch"] < end:
+                raise MotionlangError(
+                    f"{STATE}: {at}, outside part {a.part} (epochs {start}..{end}): " + (
+                        "part 1 would start over" if not start else
+                        f"run the part that ends at epoch {start} first"
+                        if saved["epoch"] < start else "this part is done: run the next"))
+            restore_state(STATE, run)
+        elif start:
+            read_state(STATE)   # no saved state: one line saying so
+        if not a.save_only:
+            recipe = {**RECIPE, "mirror": True} if a.mirror else RECIPE
+            model = ml.train("twostream", data, run, resume=(run / "last.pt").is_file(),
+                             epochs=end, decay_epochs=decay, **recipe)
+            about = save_state(run, STATE, part=a.part, data=data,
+                               compact=not a.full_state)
+            if decay:
+                (STATE / "model.pt").write_bytes(model.read_bytes())
     except MotionlangError as exc:
         print(f"twostream_parts.py: {exc}", file=sys.stderr)
         return 2
     size = sum(p.stat().st_size for p in STATE.rglob("*") if p.is_file())
-    print(f"part {a.part} done: epoch {about['epoch']}, step {about['step']}; "
+    print(f"part {a.part} {'saved' if a.save_only else 'done'}: epoch {about['epoch']}, "
+          f"step {about['step']}; "
           f"{STATE} holds {size / 1e6:.1f} MB. Commit it:\n"
           f"  git add {STATE} && git commit -m 'twostream recipe: part {a.part} "
           f"(epoch {about['epoch']})' -- {STATE}")
-    if end == FULL_EPOCHS:
+    if end == FULL_EPOCHS and not a.save_only:
         print(f"the 20-epoch model is {run / 'model.pt'} (this session only): "
               f"motionlang evaluate-t2m --data {corpus} --model ts20={run / 'model.pt'} "
               f"--autoencode --true-start --oracle 3 -o {WORK / 't2m_20'}")

