@@ -283,3 +283,19 @@ def test_select_score_picks_best_pt_instead_of_the_validation_loss(tmp_path):
     assert best["epoch"] == 2 and best["best"] == 0.1
     for k, v in best["model"]["state_dict"].items():
         assert torch.equal(v, kept[0.1][k]), k
+
+
+def test_weight_decay_leaves_a_part_frozen_after_an_earlier_stage_alone(tmp_path):
+    torch.manual_seed(0)
+    model = TinyReg()
+    first = Trainer(model, make_data(), collate, config(tmp_path / "a", 1))
+    first.fit()
+    assert model.net[0].weight.grad is not None          # the first stage left gradients
+    for p in model.net[0].parameters():                   # the second stage freezes layer 0
+        p.requires_grad_(False)
+    frozen = [p.detach().clone() for p in model.net[0].parameters()]
+    second = Trainer(model, make_data(), collate,
+                     config(tmp_path / "b", 2, optimizer="adamw", weight_decay=0.5))
+    second.fit()
+    assert all(torch.equal(a, b) for a, b in zip(frozen, model.net[0].parameters()))
+    assert model.net[0].weight.grad is None

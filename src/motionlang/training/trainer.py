@@ -157,6 +157,11 @@ class Trainer:
         mine = self._share(idx)
         self.model.train()
         self.optimizer.zero_grad(set_to_none=False)
+        for p in self.model.parameters():
+            if not p.requires_grad:
+                # a part frozen after an earlier stage keeps a zeroed gradient, and AdamW
+                # decays every parameter that has one: a frozen parameter must have none
+                p.grad = None
         terms: dict[str, float] = {}
         if mine:
             out = self._loss(self.collate([self.train_set[i] for i in mine]))
