@@ -5,6 +5,7 @@ starts from a state committed to the repository and ends by replacing it.
 
     OMP_NUM_THREADS=1 .venv/bin/python experiments/twostream_parts.py PART
         [--epochs-per-part 4] [--data SOURCE ...] [--mirror] [--threads 1] [--full-state]
+        [--select-evaluator EVALUATOR --select-data SOURCE]
 
 The packaged model's data (``scripts/train_shipped_models.sh``): ``--data
 bandai:../shared/data/bandai@1 --mirror`` (the corpus then gets ``@1`` too: half of each
@@ -28,6 +29,11 @@ Run a part again after an interruption in the same session: it continues from th
 folder's own ``last.pt`` (checkpoints every 50 steps). A part that a session's end would cut
 short: stop it, ``PART --save-only`` saves where it stopped (the last checkpoint) as the
 state to commit, and the next session runs the same PART again to finish it.
+
+``--select-evaluator`` scores every epoch's motions on validation pairs and the model is the
+epoch with the highest R-precision (``evaluation.t2m.selection``), not the last: the
+state then also keeps that epoch's ``best.pt`` (weights only, about 6 MB compact), since a
+later part may not beat it. Give it (with ``--select-data``) to every part.
 """
 from __future__ import annotations
 
@@ -73,6 +79,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--full-state", action="store_true",
                     help="save the exact state (about 37 MB) instead of the compact one")
+    ap.add_argument("--select-evaluator", default=None,
+                    help="keep the epoch of the highest validation R-precision under this "
+                         "evaluator (its best.pt travels with the state)")
+    ap.add_argument("--select-data", default=None,
+                    help="the source whose validation pairs it scores, e.g. "
+                         "bandai:../shared/data/bandai")
     ap.add_argument("--save-only", action="store_true",
                     help="train nothing: save the run folder's last checkpoint as the state "
                          "(a part the session's end interrupts; the same part resumes it)")
@@ -90,6 +102,7 @@ def main(argv: list[str] | None = None) -> int:
     from motionlang.training.run_files import read_training_checkpoint
     from motionlang.training.run_state import read_state, restore_state, save_state
     torch.set_num_threads(a.threads)
+    keep_best = bool(a.select_evaluator)   # the best epoch may be an earlier part's
     corpus = WORK / "corpus"
     if not (corpus / ".done").is_file():
         subprocess.run([str(Path(sys.executable).with_name("motionlang")), "data", "synth",
@@ -99,7 +112,8 @@ def main(argv: list[str] | None = None) -> int:
     data = [f"{corpus}@1" if a.data else str(corpus), *a.data]
     try:
         if a.save_only:
-            about = save_state(run, STATE, part=a.part, data=data, compact=not a.full_state)
+            about = save_state(run, STATE, part=a.part, data=data, compact=not a.full_state,
+                               keep_best=keep_best)
             print(f"part {a.part} saved where it stopped: epoch {about['epoch']}, batch "
                   f"{about['batch']}; run part {a.part} again to finish it")
         elif (run / "last.pt").is_file():
@@ -123,11 +137,13 @@ def main(argv: list[str] | None = None) -> int:
         elif start:
             read_state(STATE)   # no saved state: one line saying so
         if not a.save_only:
-            recipe = {**RECIPE, "mirror": True} if a.mirror else RECIPE
+            recipe = {**RECIPE, "mirror": True} if a.mirror else dict(RECIPE)
+            if a.select_evaluator:
+                recipe.update(select_evaluator=a.select_evaluator, select_data=a.select_data)
             model = ml.train("twostream", data, run, resume=(run / "last.pt").is_file(),
                              epochs=end, decay_epochs=decay, **recipe)
             about = save_state(run, STATE, part=a.part, data=data,
-                               compact=not a.full_state)
+                               compact=not a.full_state, keep_best=keep_best)
             if decay:
                 (STATE / "model.pt").write_bytes(model.read_bytes())
     except MotionlangError as exc:

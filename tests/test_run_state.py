@@ -113,6 +113,38 @@ def test_a_compact_state_is_narrower_and_resumes_to_nearly_the_same_run(
         restore_state(small, tmp_path / "part3")
 
 
+@pytest.mark.parametrize("compact", [False, True])
+def test_a_state_may_keep_the_best_epoch_weights_only(tmp_path, monkeypatch, compact):
+    """``keep_best``: best.pt travels with the state (its weights, not the optimiser's
+    moments) and comes back readable; without it, it is left out."""
+    import motionlang.training.run_state as rs
+    from helpers.trainer_tiny import TinyReg, collate, make_data
+    from motionlang.training.run_files import read_training_checkpoint
+    from motionlang.training.trainer import TrainConfig, Trainer
+    monkeypatch.setattr(rs, "COMPACT_MIN", 1)
+    torch.manual_seed(0)
+    scores = iter([0.1, 0.5])              # epoch 1 stays the best
+    run = tmp_path / "run"
+    Trainer(TinyReg(), make_data(), collate,
+            TrainConfig(epochs=2, batch_size=8, out_dir=str(run), plot=False, progress=False),
+            val_set=make_data(12, 1), select=lambda m: next(scores)).fit()
+    save_state(run, tmp_path / "no")
+    assert "best.pt" not in read_state(tmp_path / "no")["files"]
+    about = save_state(run, tmp_path / "state", compact=compact, keep_best=True)
+    assert "best.pt" in about["files"]
+    stored = tmp_path / "state" / ("best.pt.xz" if compact else "best.pt")
+    assert stored.is_file()
+    restore_state(tmp_path / "state", tmp_path / "again")
+    want = read_training_checkpoint(run / "best.pt")
+    got = read_training_checkpoint(tmp_path / "again" / "best.pt")
+    assert got["epoch"] == want["epoch"] == 1 and got["optimizer"]["state"] == {}
+    assert read_training_checkpoint(tmp_path / "again" / "last.pt")["optimizer"]["state"]
+    for k, v in want["model"]["state_dict"].items():
+        w = got["model"]["state_dict"][k]
+        assert w.dtype == v.dtype and (torch.allclose(w, v, rtol=1e-3, atol=1e-3)
+                                       if compact else torch.equal(w, v)), k
+
+
 def test_saved_state_errors(tmp_path):
     (tmp_path / "run").mkdir()
     with pytest.raises(MotionlangError, match="no last.pt to save"):

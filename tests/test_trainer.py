@@ -285,6 +285,41 @@ def test_select_score_picks_best_pt_instead_of_the_validation_loss(tmp_path):
         assert torch.equal(v, kept[0.1][k]), k
 
 
+def test_select_may_record_measures_beside_its_score(tmp_path):
+    """A dict from ``select``: its "select" ranks best.pt, every number is recorded."""
+    scores = iter([(0.2, 3.0), (0.6, 1.0)])
+
+    def select(model):
+        top3, fid = next(scores)
+        return {"select": -top3, "top3": top3, "FID": fid}
+
+    torch.manual_seed(0)
+    hist = Trainer(TinyReg(), make_data(), collate, config(tmp_path, 2),
+                   val_set=make_data(12, 1), select=select).fit()
+    assert [(h["val"]["top3"], h["val"]["FID"]) for h in hist] == [(0.2, 3.0), (0.6, 1.0)]
+    assert torch.load(tmp_path / "best.pt", weights_only=True)["epoch"] == 2
+    with pytest.raises(MotionlangError, match="no 'select' score"):
+        Trainer(TinyReg(), make_data(), collate, config(tmp_path / "b", 1),
+                val_set=make_data(12, 1), select=lambda m: {"top3": 1.0}).fit()
+
+
+def test_resume_that_starts_selecting_ranks_best_afresh(tmp_path, caplog):
+    """best.pt ranked by the loss, resumed with a score of another scale (or the other way):
+    the old best is not compared with the new scores."""
+    def fit(epochs, select, resume):
+        torch.manual_seed(0)
+        return Trainer(TinyReg(), make_data(), collate, config(tmp_path, epochs),
+                       val_set=make_data(12, 1), select=select).fit(resume=resume)
+
+    fit(1, lambda m: -1e9, False)           # a score no loss could beat
+    assert torch.load(tmp_path / "last.pt", weights_only=True)["best_by"] == "select"
+    with caplog.at_level("WARNING"):
+        hist = fit(2, None, True)
+    assert "ranked best.pt by select, this run by loss" in caplog.text
+    best = torch.load(tmp_path / "best.pt", weights_only=True)
+    assert best["epoch"] == 2 and best["best"] == hist[-1]["val"]["loss"]
+
+
 def test_weight_decay_leaves_a_part_frozen_after_an_earlier_stage_alone(tmp_path):
     torch.manual_seed(0)
     model = TinyReg()

@@ -3,9 +3,11 @@
 ``TwoStreamModel`` (the full model or one of the paper's ablations) -> the shared trainer
 with annealed teacher forcing (``training.twostream_train``) -> ``model.pt``.
 
-The model file holds the final weights, not ``best.pt``: the trainer ranks epochs by the
-total loss, which includes the discriminator's own term, and early epochs are still
-teacher-forced. The "no-joint-training" ablation trains in two stages, each with its own
+The model file holds the final weights, unless ``--select-evaluator`` scores every epoch's
+motions on validation pairs (``evaluation.t2m.selection``): then it holds the epoch with the
+highest R-precision (``best.pt``). The loss does not choose: it includes the discriminator's
+own term, early epochs are still teacher-forced, and it keeps falling while the motions made
+from sentences get worse. The "no-joint-training" ablation trains in two stages, each with its own
 checkpoints in ``OUT/pose`` and ``OUT/text``. Several sources are mixed by their ``@W``
 weights; a run trained on a non-commercial source gets the licence file. The options are
 checked before the data preparation, and nothing is written before the data is read.
@@ -45,10 +47,20 @@ class TwoStreamOptions:
     max_seconds: float = _opt(30.0, "drop longer motions")
     mirror: bool = _opt(False, "also train on every training motion mirrored left/right, its "
                                "sentences' sides swapped (beyond the paper)")
+    select_evaluator: str | None = _opt(
+        None, "a text-motion evaluator (file, run folder or packaged name): keep the epoch "
+              "whose motions have the highest validation R-precision top-3 under it")
+    select_data: str | None = _opt(
+        None, "the source whose validation pairs --select-evaluator scores (default: the "
+              "only --data source)")
+    select_pairs: int = _opt(256, "how many validation pairs to score each epoch (0: all)")
 
     def __post_init__(self) -> None:
         check_numbers("TwoStreamOptions", self, positive_ints=("max_frames",),
-                      nonneg_ints=("forcing_steps",), positive=("max_seconds",))
+                      nonneg_ints=("forcing_steps", "select_pairs"), positive=("max_seconds",))
+        if self.select_data and not self.select_evaluator:
+            raise MotionlangError("TwoStreamOptions.select_data needs "
+                                  "TwoStreamOptions.select_evaluator")
         if self.ablation not in ABLATIONS:
             raise MotionlangError(f"TwoStreamOptions.ablation must be one of "
                                   f"{', '.join(ABLATIONS)}, got {self.ablation!r}")
@@ -62,11 +74,27 @@ def model_config(model_cfg: dict[str, Any], ablation: str = "full") -> Any:
 
 
 def summary(path: Path, history: list[dict]) -> str:
-    """One line for a finished run: the model file, its last epoch and losses."""
-    last = history[-1] if history else {}
-    return (f"{path}: epoch {last.get('epoch')}, train loss "
-            f"{last.get('train', {}).get('loss', float('nan')):.4g}, "
+    """One line for a finished run: the model file, its epoch (the selected one, with its
+    validation scores, where epochs were scored; else the last) and losses."""
+    from motionlang.evaluation.t2m.selection import format_scores, selected_epoch
+    chosen = selected_epoch(history)
+    last = chosen or (history[-1] if history else {})
+    scores = format_scores(last.get("val") or {})
+    return (f"{path}: epoch {last.get('epoch')}{' (selected: ' + scores + ')' if chosen else ''}"
+            f", train loss {last.get('train', {}).get('loss', float('nan')):.4g}, "
             f"val loss {last.get('val', {}).get('loss', float('nan')):.4g}")
+
+
+def selection_source(sources: Sequence, data_cfg: TwoStreamOptions) -> str | None:
+    """The data source whose validation pairs pick the epoch (None: no selection)."""
+    if not data_cfg.select_evaluator:
+        return None
+    if data_cfg.select_data:
+        return data_cfg.select_data
+    if len(sources) != 1:
+        raise MotionlangError("--select-evaluator with several --data sources needs "
+                              "--select-data: the source whose validation pairs it scores")
+    return str(sources[0].path)
 
 
 def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg,
@@ -101,6 +129,12 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg,
     if resume:   # the run's first (or only) stage's checkpoint
         check_resume(out if (out / "last.pt").is_file() else out / "pose")
     source_weights(sources)   # all weighted or none
+    select = None
+    scored = selection_source(sources, data_cfg)
+    if scored is not None:   # its evaluator and data read before the long data preparation
+        from motionlang.evaluation.t2m.selection import guo_selector
+        select = guo_selector(data_cfg.select_evaluator, scored, pairs=data_cfg.select_pairs,
+                              seed=train_cfg.seed)
     # one line per epoch from the trainer (the progress bar only shows on a terminal)
     logging.basicConfig(level=logging.INFO, format="%(message)s")
     lead = lead_process()   # under torchrun only rank 0 writes files and prints
@@ -128,7 +162,7 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg,
     model, history = train_twostream(
         model, train_items, train_cfg, val_items=data.items.get("val") or None,
         first_frames=data.first_frames(), resume=resume,
-        schedule=ForcingSchedule(1.0, 0.0, data_cfg.forcing_steps))
+        schedule=ForcingSchedule(1.0, 0.0, data_cfg.forcing_steps), select=select)
     path = out / family("twostream").model_file
     if lead:
         model.save(path)
@@ -138,5 +172,6 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg,
 
 TWOSTREAM = Recipe(run=run, data_config=TwoStreamOptions,
                    train_defaults={"epochs": 20, "batch_size": 32, "grad_clip": 5.0},
-                   run_files=RUN_FILES, resume_may_change=("forcing_steps", "mirror"),
+                   run_files=RUN_FILES, resume_may_change=("forcing_steps", "mirror", "select_evaluator",
+                                                    "select_data", "select_pairs"),
                    extra_files=("pose", "text"))

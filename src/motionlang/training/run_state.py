@@ -4,8 +4,9 @@ needs to go on later, on a fresh checkout, where the run folder is gone.
 ``save_state(run, state)`` copies into ``state`` only what ``--resume`` reads (the trainer's
 ``last.pt``: model, optimiser moments, RNG states, position and history; ``run.json``: the
 run's data and options; ``splits/``: its split) and its record (``history.json``,
-``commands.jsonl``), leaving out what a run rebuilds or never reads again (``best.pt``, the
-loss plot, the model file). ``restore_state(state, run)`` puts them back into an empty run
+``commands.jsonl``), leaving out what a run rebuilds or never reads again (the loss plot,
+the model file, and ``best.pt`` unless told to keep it: where a ``select`` score ranks the
+epochs, the best so far may be an earlier part's, and the recipe's model is that one). ``restore_state(state, run)`` puts them back into an empty run
 folder, and ``train ... --resume`` then continues exactly where the saved run stopped: the
 data and features are rebuilt from the same data (checked against the saved split and
 features), and the step, RNG streams and schedules come from ``last.pt``. A recipe that
@@ -38,6 +39,9 @@ from motionlang.utils.folder_lock import entries
 STATE_FILES = ("last.pt", "run.json", "splits", "history.json", "commands.jsonl")
 #: written by :func:`save_state` beside them: the saved position, for people and scripts
 STATE_INFO = "state.json"
+#: kept too where ``save_state(..., keep_best=True)``: the epoch a ``select`` score chose
+#: (``training.trainer.Trainer``), which a later part may not beat; its model only
+BEST = "best.pt"
 
 
 #: a compact state narrows tensors of at least this many elements (weight matrices and their
@@ -66,17 +70,26 @@ def _recast(ck: dict, model: Any, moments: Any) -> dict:
 
 def _stored(name: str, compact: bool) -> str:
     """The name under which a state holds the run folder's file ``name``."""
-    return name + ".xz" if compact and name.endswith("last.pt") else name
+    return name + ".xz" if compact and name.endswith((STATE_FILES[0], BEST)) else name
+
+
+def _read(path: Path) -> dict:
+    """A training checkpoint; a ``best.pt`` without the optimiser's moments, which nothing
+    reads back from it (a resume reads ``last.pt``), so that a state holds its weights only."""
+    ck = read_training_checkpoint(path)
+    if path.name == BEST:
+        ck["optimizer"] = {**ck["optimizer"], "state": {}}
+    return ck
 
 
 def _write_compact(last: Path, dst: Path) -> None:
-    """``last.pt`` narrowed and xz-compressed into ``dst``."""
+    """``last.pt`` (or ``best.pt``) narrowed and xz-compressed into ``dst``."""
     import io
     import lzma
 
     import torch
     buf = io.BytesIO()
-    torch.save(_recast(read_training_checkpoint(last), torch.float16, torch.bfloat16), buf)
+    torch.save(_recast(_read(last), torch.float16, torch.bfloat16), buf)
     dst.write_bytes(lzma.compress(buf.getvalue()))
 
 
@@ -105,16 +118,18 @@ def _copy(src: Path, dst: Path) -> None:
         shutil.copy2(src, dst)
 
 
-def _names(folder: Path, stages: Sequence[str]) -> list[str]:
-    names = [n for n in STATE_FILES if (folder / n).exists()]
-    names += [f"{s}/{n}" for s in stages for n in STATE_FILES if (folder / s / n).exists()]
+def _names(folder: Path, stages: Sequence[str], keep_best: bool = False) -> list[str]:
+    files = (*STATE_FILES, BEST) if keep_best else STATE_FILES
+    names = [n for n in files if (folder / n).exists()]
+    names += [f"{s}/{n}" for s in stages for n in files if (folder / s / n).exists()]
     return names
 
 
 def save_state(run_dir: str | Path, state_dir: str | Path, stages: Sequence[str] = (),
-               *, compact: bool = False, **info) -> dict:
+               *, compact: bool = False, keep_best: bool = False, **info) -> dict:
     """Replace ``state_dir`` with the resumable state of the run folder ``run_dir``
-    (``compact``: its ``last.pt`` files narrowed, see the module docstring).
+    (``compact``: its ``last.pt`` files narrowed, see the module docstring; ``keep_best``:
+    its ``best.pt`` too, weights only, for a run whose epochs a ``select`` score ranks).
 
     ``info`` (JSON values) is stored in ``state.json`` with the checkpoint's epoch and
     step. The new state is written beside the old one and swapped in by renames: an
@@ -127,8 +142,8 @@ def save_state(run_dir: str | Path, state_dir: str | Path, stages: Sequence[str]
         MotionlangError: ``run_dir`` has no readable ``last.pt`` (in it or in a stage).
     """
     run, state = Path(run_dir), Path(state_dir)
-    names = _names(run, stages)
-    lasts = [n for n in names if n.endswith("last.pt")]
+    names = _names(run, stages, keep_best)
+    lasts = [n for n in names if n.endswith(STATE_FILES[0])]
     if not lasts:
         raise MotionlangError(f"{run}: no last.pt to save (nothing has been trained there)")
     ck = read_training_checkpoint(run / lasts[-1])   # the latest stage's
@@ -140,6 +155,8 @@ def save_state(run_dir: str | Path, state_dir: str | Path, stages: Sequence[str]
             (tmp / name).parent.mkdir(parents=True, exist_ok=True)
             if _stored(name, compact) != name:
                 _write_compact(run / name, tmp / _stored(name, compact))
+            elif name.endswith(BEST):
+                write_checkpoint(_read(run / name), tmp / name)
             else:
                 _copy(run / name, tmp / name)
         (tmp / STATE_INFO).write_text(json.dumps(about, indent=1) + "\n", encoding="utf-8")

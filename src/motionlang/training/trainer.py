@@ -75,6 +75,16 @@ def check_finite(terms: dict[str, float], model: torch.nn.Module, step: int) -> 
                           f"or check the data); the last good checkpoint is kept")
 
 
+def select_record(scored: float | dict) -> dict[str, float]:
+    """What a ``select`` returned -> the validation record's entries: ``{"select": score}``
+    and, from a dict, its other measures (numbers)."""
+    if not isinstance(scored, dict):
+        return {"select": float(scored)}
+    if "select" not in scored:
+        raise MotionlangError(f"select returned {sorted(scored)}: no 'select' score")
+    return {k: float(v) for k, v in scored.items()}
+
+
 def _fmt(terms: dict[str, float]) -> str:
     return " ".join(f"{k} {v:.4g}" for k, v in terms.items())
 
@@ -93,11 +103,12 @@ class Trainer:
     def __init__(self, model: torch.nn.Module, train_set: Sequence, collate: Callable[[list], Any],
                  config: TrainConfig, val_set: Sequence | None = None,
                  length_of: Callable[[Any], int] | None = None,
-                 select: Callable[[torch.nn.Module], float] | None = None,
+                 select: Callable[[torch.nn.Module], float | dict] | None = None,
                  on_epoch: Callable[[dict], None] | None = None):
         """``select``: model -> a validation score, lower is better, that picks ``best.pt``
         instead of the validation loss (recorded as ``val["select"]``; e.g. the evaluator's
-        R-precision, which its contrastive loss follows badly on templated captions).
+        R-precision, which its contrastive loss follows badly on templated captions), or a
+        dict with that score under ``"select"`` and other measures to record beside it.
         ``on_epoch``: called on every rank with each epoch's history record, once its
         checkpoints are written (e.g. a recipe's own progress line)."""
         if len(train_set) == 0:
@@ -299,7 +310,12 @@ class Trainer:
             epoch, start_batch, step = ck["epoch"], ck["batch"], ck["step"]
             sums, count, best = dict(ck["epoch_sums"]), ck["epoch_count"], ck["best"]
             self._check_batching(ck, last)
-            if self._config_changed(ck["model"].get("config")):
+            if ck.get("best_by", "loss") != self._best_by():
+                log.warning("%s ranked best.pt by %s, this run by %s: best.pt is chosen "
+                            "among the epochs from here on", last, ck.get("best_by", "loss"),
+                            self._best_by())
+                best = math.inf
+            elif self._config_changed(ck["model"].get("config")):
                 # e.g. resumed with other loss weights: the old best score measured another
                 # loss, so best.pt is ranked afresh from here on
                 log.warning("%s: the model's config differs from the checkpoint's; best.pt "
@@ -331,13 +347,15 @@ class Trainer:
                                 seq_s=f"{seen / max(time.perf_counter() - t0, 1e-9):.0f}")
                 if c.checkpoint_every and step % c.checkpoint_every == 0 and b + 1 < len(batches):
                     self._save("last.pt", {"epoch": epoch, "batch": b + 1, "step": step,
-                                           "epoch_sums": sums, "epoch_count": count, "best": best})
+                                           "epoch_sums": sums, "epoch_count": count, "best": best,
+                                           "best_by": self._best_by()})
             bar.close()
             rate = seen / max(time.perf_counter() - t0, 1e-9)
             train, val = self._reduce(sums, count), self.validate()
             if val and self.select is not None:   # every rank: the same weights, same score
                 with torch.no_grad():
-                    val["select"] = float(self.select(self.model.eval()))
+                    scored = self.select(self.model.eval())
+                val.update(select_record(scored))
             self.history.append({"epoch": epoch + 1, "step": step, "train": train, "val": val,
                                  "seq_per_s": rate, "lr": lr})
             log.info("epoch %d/%d: train %s | val %s | %.0f seq/s | lr %.3g", epoch + 1,
@@ -345,7 +363,8 @@ class Trainer:
             epoch, start_batch, sums, count = epoch + 1, 0, {}, 0
             score = (val or train).get("select" if "select" in (val or {}) else "loss",
                                        math.inf)
-            pos = {"epoch": epoch, "batch": 0, "step": step, "epoch_sums": {}, "epoch_count": 0}
+            pos = {"epoch": epoch, "batch": 0, "step": step, "epoch_sums": {}, "epoch_count": 0,
+                   "best_by": self._best_by()}
             if score < best:
                 best = score
                 self._save("best.pt", {**pos, "best": best})
@@ -355,6 +374,10 @@ class Trainer:
             if self.on_epoch is not None:
                 self.on_epoch(self.history[-1])
         return self.history
+
+    def _best_by(self) -> str:
+        """What ranks ``best.pt``: the ``select`` score, else the (validation) loss."""
+        return "select" if self.select is not None and self.val_set else "loss"
 
     def _write_history(self) -> None:
         with atomic_write(self.out_dir / "history.json") as fh:

@@ -72,7 +72,8 @@ def make_config(ablation: str = "full", **fields):
 
 def train_twostream(model, train_items: Sequence[dict], config: TrainConfig, *,
                     val_items: Sequence[dict] | None = None, first_frames=None,
-                    schedule: ForcingSchedule | None = None, resume: bool = False):
+                    schedule: ForcingSchedule | None = None, resume: bool = False,
+                    select=None):
     """Train ``model`` (a ``TwoStreamModel``) and return it with ``history``.
 
     Joint training: one run in ``config.out_dir``. Without joint training
@@ -81,7 +82,9 @@ def train_twostream(model, train_items: Sequence[dict], config: TrainConfig, *,
     pose embedding) in ``OUT/text``, each for ``config.epochs`` epochs with a fresh
     optimiser and its own forcing schedule. The returned model holds the final weights, in
     eval mode (not ``best.pt``: the trainer ranks epochs by the total loss, which includes
-    the discriminator's own term, and early epochs are still teacher-forced).
+    the discriminator's own term, and early epochs are still teacher-forced), unless
+    ``select`` (``evaluation.t2m.selection.guo_selector``) scores the epochs of the stage
+    that makes motions from sentences (the last): then it holds that stage's ``best.pt``.
 
     Returns:
         (model, history) — history is a list of per-epoch dicts with a ``stage`` key.
@@ -96,12 +99,17 @@ def train_twostream(model, train_items: Sequence[dict], config: TrainConfig, *,
     for stage in stages:
         model.set_stage(stage)
         cfg = config if len(stages) == 1 else replace(config, out_dir=str(out / stage))
+        scored = select if stage == stages[-1] else None   # the pose stage makes none
         trainer = TwoStreamTrainer(model, list(train_items), TwoStreamModel.collate, cfg,
                                    val_set=list(val_items) if val_items else None,
-                                   schedule=schedule)
+                                   schedule=schedule, select=scored)
         # a later stage resumes only if it had begun (the first must have a checkpoint)
         begun = stage == stages[0] or (Path(cfg.out_dir) / "last.pt").is_file()
         history += [{**h, "stage": stage} for h in trainer.fit(resume=resume and begun)]
+    best = Path(cfg.out_dir) / "best.pt"
+    if select is not None and val_items and best.is_file():
+        from motionlang.training.run_files import read_training_checkpoint
+        model.load_state_dict(read_training_checkpoint(best)["model"]["state_dict"])
     model.teacher_forcing = 0.0
     return model.eval(), history
 
