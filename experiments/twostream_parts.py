@@ -91,6 +91,8 @@ def main(argv: list[str] | None = None) -> int:
     a = ap.parse_args(argv)
     try:
         start, end, decay = plan(a.part, a.epochs_per_part)
+        if a.select_data and not a.select_evaluator:
+            raise ValueError("--select-data needs --select-evaluator")
     except ValueError as exc:
         print(f"twostream_parts.py: {exc}", file=sys.stderr)
         return 2
@@ -156,7 +158,8 @@ def main(argv: list[str] | None = None) -> int:
           f"  git add {STATE} && git commit -m 'twostream recipe: part {a.part} "
           f"(epoch {about['epoch']})' -- {STATE}")
     if end == FULL_EPOCHS and not a.save_only:
-        print(f"the 20-epoch model is {run / 'model.pt'} (this session only): "
+        print(f"the model of the first 20 epochs (the selected one, with "
+              f"--select-evaluator) is {run / 'model.pt'} (this session only): "
               f"motionlang evaluate-t2m --data {corpus} --model ts20={run / 'model.pt'} "
               f"--autoencode --true-start --oracle 3 -o {WORK / 't2m_20'}")
     return 0

@@ -16,7 +16,6 @@ from motionlang.evaluation.t2m.selection import (
     TOP3,
     format_scores,
     guo_selector,
-    selected_epoch,
 )
 from motionlang.training.run_files import read_training_checkpoint
 from motionlang.training.trainer import TrainConfig
@@ -44,14 +43,9 @@ def evaluator(corpus, tmp_path_factory):
     mp.undo()
 
 
-def test_selected_epoch_and_its_line():
-    hist = [{"epoch": 1, "val": {"loss": 1.0}},
-            {"epoch": 2, "val": {TOP3: 0.5, FID: 3.0, DIVERSITY: 2.0}},
-            {"epoch": 3, "val": {TOP3: 0.7, FID: 9.0, DIVERSITY: 1.0}},
-            {"epoch": 4, "val": {TOP3: 0.7, FID: 1.0, DIVERSITY: 1.0}}]
-    assert selected_epoch(hist)["epoch"] == 3          # the earliest of the best
-    assert selected_epoch(hist[:1]) is None
-    assert format_scores(hist[2]["val"]) == "top-3 0.700, FID 9.0, diversity 1.0"
+def test_the_scores_line():
+    assert format_scores({TOP3: 0.7, FID: 9.0, DIVERSITY: 1.0}) == \
+        "top-3 0.700, FID 9.0, diversity 1.0"
     assert format_scores({"loss": 1.0}) == ""
 
 
@@ -74,12 +68,24 @@ def test_the_run_keeps_the_epoch_of_the_best_validation_r_precision(corpus, eval
     model, hist = train_twostream(model, data.items["train"], cfg,
                                   val_items=data.items["val"], select=select)
     assert all(TOP3 in h["val"] and FID in h["val"] for h in hist)
-    chosen = selected_epoch(hist)
-    assert chosen is not None and chosen["val"][TOP3] == max(h["val"][TOP3] for h in hist)
+    chosen = [h for h in hist if h.get("selected")]
+    assert len(chosen) == 1 and chosen[0]["val"][TOP3] == max(h["val"][TOP3] for h in hist)
+    assert chosen[0]["epoch"] == min(h["epoch"] for h in hist      # the first of equals
+                                     if h["val"][TOP3] == chosen[0]["val"][TOP3])
     best = read_training_checkpoint(tmp_path / "run" / "best.pt")
-    assert best["epoch"] == chosen["epoch"] and best["best_by"] == "select"
+    assert best["epoch"] == chosen[0]["epoch"] and best["best_by"] == select.key
+    assert f"of {len(data.splits['val'])} val pairs of {corpus}" in select.key
     for k, v in model.state_dict().items():            # the model returned is that epoch's
         assert torch.equal(v, best["model"]["state_dict"][k]), k
+    # resumed with another selector and nothing left to train: no epoch was scored by it,
+    # so the final weights stay (best.pt was ranked by the first)
+    other = guo_selector(evaluator, str(corpus), batch_size=4, repeats=2, seed=1)
+    final = read_training_checkpoint(tmp_path / "run" / "last.pt")["model"]["state_dict"]
+    again, hist2 = train_twostream(model, data.items["train"], cfg,
+                                   val_items=data.items["val"], select=other, resume=True)
+    assert not any(h.get("selected") for h in hist2)
+    for k, v in again.state_dict().items():
+        assert torch.equal(v, final[k]), k
 
 
 @pytest.mark.parametrize("extra, message", [

@@ -320,6 +320,31 @@ def test_resume_that_starts_selecting_ranks_best_afresh(tmp_path, caplog):
     assert best["epoch"] == 2 and best["best"] == hist[-1]["val"]["loss"]
 
 
+def test_a_resume_without_its_best_pt_ranks_afresh(tmp_path, caplog):
+    scores = iter([0.1, 0.5])                 # the second epoch is worse than the first
+
+    def fit(epochs, resume):
+        torch.manual_seed(0)
+        return Trainer(TinyReg(), make_data(), collate, config(tmp_path, epochs),
+                       val_set=make_data(12, 1), select=lambda m: next(scores)
+                       ).fit(resume=resume)
+
+    fit(1, False)
+    (tmp_path / "best.pt").unlink()           # e.g. a saved state that left it out
+    with caplog.at_level("WARNING"):
+        fit(2, True)
+    assert "best.pt is missing" in caplog.text
+    assert torch.load(tmp_path / "best.pt", weights_only=True)["epoch"] == 2
+
+
+def test_what_ranked_an_older_checkpoint():
+    from motionlang.training.run_files import ranked_by
+    assert ranked_by({"best_by": "top-3 of x"}) == "top-3 of x"
+    # written before best_by was recorded: its history says whether a select score ranked it
+    assert ranked_by({"history": [{"val": {"loss": 1.0, "select": -0.5}}]}) == "select"
+    assert ranked_by({"history": [{"val": {"loss": 1.0}}, {"val": None}]}) == "loss"
+
+
 def test_weight_decay_leaves_a_part_frozen_after_an_earlier_stage_alone(tmp_path):
     torch.manual_seed(0)
     model = TinyReg()

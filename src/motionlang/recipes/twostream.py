@@ -76,8 +76,8 @@ def model_config(model_cfg: dict[str, Any], ablation: str = "full") -> Any:
 def summary(path: Path, history: list[dict]) -> str:
     """One line for a finished run: the model file, its epoch (the selected one, with its
     validation scores, where epochs were scored; else the last) and losses."""
-    from motionlang.evaluation.t2m.selection import format_scores, selected_epoch
-    chosen = selected_epoch(history)
+    from motionlang.evaluation.t2m.selection import format_scores
+    chosen = next((h for h in history if h.get("selected")), None)
     last = chosen or (history[-1] if history else {})
     scores = format_scores(last.get("val") or {})
     return (f"{path}: epoch {last.get('epoch')}{' (selected: ' + scores + ')' if chosen else ''}"
@@ -134,7 +134,7 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg,
     if scored is not None:   # its evaluator and data read before the long data preparation
         from motionlang.evaluation.t2m.selection import guo_selector
         select = guo_selector(data_cfg.select_evaluator, scored, pairs=data_cfg.select_pairs,
-                              seed=train_cfg.seed)
+                              seed=train_cfg.seed, max_seconds=data_cfg.max_seconds)
     # one line per epoch from the trainer (the progress bar only shows on a terminal)
     logging.basicConfig(level=logging.INFO, format="%(message)s")
     lead = lead_process()   # under torchrun only rank 0 writes files and prints

@@ -40,6 +40,15 @@ def read_training_checkpoint(path: Path) -> dict:
     return ck
 
 
+def ranked_by(ck: dict) -> str:
+    """What ranked a training checkpoint's ``best.pt`` (``Trainer._best_by``); one from
+    before that was recorded: "select" if its history has select scores, else "loss"."""
+    if "best_by" in ck:
+        return str(ck["best_by"])
+    scored = any("select" in (h.get("val") or {}) for h in ck.get("history") or [])
+    return "select" if scored else "loss"
+
+
 #: checkpoint entries made from the data (``Checkpointed.checkpoint_state``) that a resumed
 #: run must find unchanged: its token ids and its fitted features (layout, normaliser)
 DATA_ENTRIES = ("vocab", "features")

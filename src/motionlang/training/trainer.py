@@ -42,6 +42,7 @@ from motionlang.training.run_files import (
     check_resume,
     check_same_data,
     plot_loss_curve,
+    ranked_by,
     read_training_checkpoint,
     rng_state,
     set_rng_state,
@@ -310,10 +311,14 @@ class Trainer:
             epoch, start_batch, step = ck["epoch"], ck["batch"], ck["step"]
             sums, count, best = dict(ck["epoch_sums"]), ck["epoch_count"], ck["best"]
             self._check_batching(ck, last)
-            if ck.get("best_by", "loss") != self._best_by():
+            ranked = ranked_by(ck)
+            if ranked != self._best_by():
                 log.warning("%s ranked best.pt by %s, this run by %s: best.pt is chosen "
-                            "among the epochs from here on", last, ck.get("best_by", "loss"),
-                            self._best_by())
+                            "among the epochs from here on", last, ranked, self._best_by())
+                best = math.inf
+            elif math.isfinite(best) and not (self.out_dir / "best.pt").is_file():
+                log.warning("%s: its best.pt is missing; best.pt is chosen among the epochs "
+                            "from here on", self.out_dir)
                 best = math.inf
             elif self._config_changed(ck["model"].get("config")):
                 # e.g. resumed with other loss weights: the old best score measured another
@@ -376,8 +381,12 @@ class Trainer:
         return self.history
 
     def _best_by(self) -> str:
-        """What ranks ``best.pt``: the ``select`` score, else the (validation) loss."""
-        return "select" if self.select is not None and self.val_set else "loss"
+        """What ranks ``best.pt``: the ``select`` score (its ``key`` where it has one: what
+        it scores, on what, so that the scores of another selector are not compared with
+        it), else the (validation) loss."""
+        if self.select is None or not self.val_set:
+            return "loss"
+        return str(getattr(self.select, "key", "select"))
 
     def _write_history(self) -> None:
         with atomic_write(self.out_dir / "history.json") as fh:

@@ -84,10 +84,12 @@ def train_twostream(model, train_items: Sequence[dict], config: TrainConfig, *,
     eval mode (not ``best.pt``: the trainer ranks epochs by the total loss, which includes
     the discriminator's own term, and early epochs are still teacher-forced), unless
     ``select`` (``evaluation.t2m.selection.guo_selector``) scores the epochs of the stage
-    that makes motions from sentences (the last): then it holds that stage's ``best.pt``.
+    that makes motions from sentences (the last) on ``val_items``: then it holds that
+    stage's ``best.pt``, the epoch of the best score.
 
     Returns:
-        (model, history) — history is a list of per-epoch dicts with a ``stage`` key.
+        (model, history) — history is a list of per-epoch dicts with a ``stage`` key; the
+        selected epoch's also has ``"selected": True``.
     """
     from motionlang.models.twostream import TwoStreamModel
 
@@ -106,12 +108,31 @@ def train_twostream(model, train_items: Sequence[dict], config: TrainConfig, *,
         # a later stage resumes only if it had begun (the first must have a checkpoint)
         begun = stage == stages[0] or (Path(cfg.out_dir) / "last.pt").is_file()
         history += [{**h, "stage": stage} for h in trainer.fit(resume=resume and begun)]
-    best = Path(cfg.out_dir) / "best.pt"
-    if select is not None and val_items and best.is_file():
-        from motionlang.training.run_files import read_training_checkpoint
-        model.load_state_dict(read_training_checkpoint(best)["model"]["state_dict"])
+    if select is not None and val_items:
+        epoch = _load_selected(model, Path(cfg.out_dir) / "best.pt",
+                               str(getattr(select, "key", "select")))
+        for h in history:   # the record of the epoch the model now holds
+            if h["stage"] == stages[-1] and h["epoch"] == epoch:
+                h["selected"] = True
     model.teacher_forcing = 0.0
     return model.eval(), history
+
+
+def _load_selected(model, best: Path, key: str) -> int | None:
+    """``best``'s weights into ``model`` if ``key``'s scores ranked it, and its epoch; else
+    (no epoch was scored since the selection began, e.g. a finished run resumed with it) a
+    warning, the final weights stay, and None."""
+    import logging
+
+    from motionlang.training.run_files import ranked_by, read_training_checkpoint
+    ck = read_training_checkpoint(best) if best.is_file() else None
+    if ck is None or ranked_by(ck) != key:
+        logging.getLogger(__name__).warning(
+            "%s: no epoch was scored by the selection (no epoch trained since it was "
+            "given?): the model keeps the final weights", best.parent)
+        return None
+    model.load_state_dict(ck["model"]["state_dict"])
+    return int(ck["epoch"])
 
 
 def refit_sentence_encoder(model, train_items: Sequence[dict], config: TrainConfig, *,

@@ -3,7 +3,7 @@ motions under a text-motion evaluator (Guo et al. 2022), on validation pairs.
 
 A generator's training loss is a poor guide to that. The two-stream model's losses keep
 falling while the motions it makes from sentences drift towards one another
-(``docs/results/twostream.md``, Training in parts), so a recipe that keeps the epoch of the
+(``docs/results/twostream.md``, Choosing the epoch), so a recipe that keeps the epoch of the
 lowest loss keeps a worse model. :func:`guo_selector` makes the trainer's ``select``
 (``training.trainer.Trainer``): every epoch the model generates one motion for each of a
 fixed set of validation captions, and the epoch with the highest top-3 R-precision is kept
@@ -20,8 +20,8 @@ TOP3, FID, DIVERSITY = "R-precision top-3", "FID", "Diversity"
 
 
 def guo_selector(evaluator: Any, data: str | Path, *, split: str = "val", pairs: int = 256,
-                 seed: int = 0, repeats: int = 5, batch_size: int = 32
-                 ) -> Callable[[Any], dict[str, float]]:
+                 seed: int = 0, repeats: int = 5, batch_size: int = 32,
+                 max_seconds: float | None = 30.0) -> Callable[[Any], dict[str, float]]:
     """A ``select`` for the shared trainer: model -> ``{"select": -top-3, TOP3, FID, DIVERSITY}``.
 
     Args:
@@ -30,20 +30,27 @@ def guo_selector(evaluator: Any, data: str | Path, *, split: str = "val", pairs:
         data: the data source whose ``split`` pairs are scored (anything
             ``training.evaluator_train.build_evaluator_data`` reads, e.g.
             ``bandai:DIR``), read on the evaluator's body; one caption per motion.
-        pairs: how many of them (a stratified sample drawn with ``seed``; 0: all).
+        pairs: how many of them (drawn with ``seed``, spread evenly over the split's
+            order; 0: all).
         repeats, batch_size: R-precision is the mean over ``repeats`` shuffles into batches
             of ``batch_size`` (the field's 32).
+        max_seconds: longer motions are left out, as the training data leaves them out (a
+            randomly split source splits the motions it keeps).
 
     The motions are generated at the real motions' lengths with the model's defaults and
-    ``seed``; FID is against the same real motions. The data is read once, here.
+    ``seed``; FID is against the same real motions. The data is read once, here. The
+    function's ``key`` names what it scores, on what: the trainer does not compare its
+    scores with another selector's.
 
     Raises:
-        MotionlangError: an unreadable evaluator or data, fewer pairs than a batch.
+        MotionlangError: an unreadable evaluator or data, an SMPL-body evaluator (the
+            models make 21-joint motions), fewer pairs than a batch.
     """
-    from motionlang.evaluation.t2m.guo import GuoOptions, GuoRun, load_evaluator
+    from motionlang.evaluation.t2m.guo import GuoOptions, GuoRun, load_evaluator, model_specs
     from motionlang.evaluation.t2m.yardstick import generated_rows, guo_metrics
     ev = evaluator if hasattr(evaluator, "embed_motions") else load_evaluator(evaluator)
-    run = GuoRun.prepare(ev, data, split=split, seed=seed, limit=pairs,
+    model_specs(ev, ["the model"])   # a kit-body evaluator, or one line saying why not
+    run = GuoRun.prepare(ev, data, split=split, seed=seed, limit=pairs, max_seconds=max_seconds,
                          options=GuoOptions(rp_batch=batch_size))
     captions = [p["caption"] for p in run.pairs]
     frames = [len(p["motion"]) + 1 for p in run.pairs]   # rows are steps between frames
@@ -57,14 +64,10 @@ def guo_selector(evaluator: Any, data: str | Path, *, split: str = "val", pairs:
                         batch_size=batch_size)
         top3 = float(m[TOP3][0])
         return {"select": -top3, **{k: float(m[k][0]) for k in (TOP3, FID, DIVERSITY)}}
+    name = evaluator if isinstance(evaluator, (str, Path)) else type(evaluator).__name__
+    key = f"top-3 under {name} of {len(run.pairs)} {split} pairs of {data} (seed {seed})"
+    select.key = key   # type: ignore[attr-defined]
     return select
-
-
-def selected_epoch(history: list[dict]) -> dict | None:
-    """The history record of the epoch a selector chose (the highest validation top-3;
-    the earliest of equals), or None when no epoch was scored."""
-    scored = [h for h in history if TOP3 in (h.get("val") or {})]
-    return max(scored, key=lambda h: (h["val"][TOP3], -h["epoch"])) if scored else None
 
 
 def format_scores(val: dict) -> str:
