@@ -10,30 +10,24 @@ import numpy as np
 import pytest
 import torch
 
+from helpers.evaluator import TINY, tiny_corpus, tiny_evaluator
 from motionlang.cli.main import main
 from motionlang.errors import MotionlangError
 
-TINY = ["--embed-dim", "8", "--text-hidden", "8", "--motion-hidden", "8",
-        "--movement-hidden", "8", "--movement-latent", "8"]
 # 38 of the 48 motions train, 5 test: R-precision in batches of 4, a few shuffles
 GUO = ["--protocol", "guo", "--rp-batch", "4", "--repeats", "2"]
 
 
 @pytest.fixture(scope="module")
 def corpus(tmp_path_factory):
-    out = tmp_path_factory.mktemp("corpus") / "c"
-    assert main(["data", "synth", "--out", str(out), "--n", "48", "--workers", "1"]) == 0
-    return out
+    return tiny_corpus(tmp_path_factory.mktemp("corpus"))
 
 
 @pytest.fixture(scope="module")
 def run(corpus, tmp_path_factory):
     mp = pytest.MonkeyPatch()
     mp.setenv("MOTIONLANG_CACHE", str(tmp_path_factory.mktemp("cache")))
-    out = tmp_path_factory.mktemp("runs") / "evaluator"
-    assert main(["train", "evaluator", "--data", str(corpus), "--out", str(out),
-                 "--epochs", "1", "--batch-size", "16", *TINY]) == 0
-    yield out
+    yield tiny_evaluator(corpus, tmp_path_factory.mktemp("runs") / "evaluator")
     mp.undo()
 
 

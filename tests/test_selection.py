@@ -8,6 +8,7 @@ import math
 import pytest
 import torch
 
+from helpers.evaluator import tiny_corpus, tiny_evaluator
 from helpers.twostream import HashTokens
 from motionlang.cli.main import main
 from motionlang.evaluation.t2m.selection import (
@@ -25,21 +26,14 @@ torch.set_num_threads(1)
 
 @pytest.fixture(scope="module")
 def corpus(tmp_path_factory):
-    out = tmp_path_factory.mktemp("corpus") / "c"
-    assert main(["data", "synth", "--out", str(out), "--n", "48", "--workers", "1"]) == 0
-    return out
+    return tiny_corpus(tmp_path_factory.mktemp("corpus"))
 
 
 @pytest.fixture(scope="module")
 def evaluator(corpus, tmp_path_factory):
     mp = pytest.MonkeyPatch()
     mp.setenv("MOTIONLANG_CACHE", str(tmp_path_factory.mktemp("cache")))
-    out = tmp_path_factory.mktemp("runs") / "evaluator"
-    assert main(["train", "evaluator", "--data", str(corpus), "--out", str(out),
-                 "--epochs", "1", "--batch-size", "16", "--embed-dim", "8",
-                 "--text-hidden", "8", "--motion-hidden", "8", "--movement-hidden", "8",
-                 "--movement-latent", "8"]) == 0
-    yield out
+    yield tiny_evaluator(corpus, tmp_path_factory.mktemp("runs") / "evaluator")
     mp.undo()
 
 
