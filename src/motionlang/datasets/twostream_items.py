@@ -9,7 +9,9 @@ and encodes every motion once through the on-disk feature cache
 (``datasets.feature_cache.dataset_features``). Each motion is paired with each of its
 descriptions: items ``{"motion": (T, 66) float32 normalised, "sentence": str, "id": str}``,
 the input of ``TwoStreamModel.collate``. With ``mirror`` the training items also hold
-every training motion mirrored left/right with its sentences' sides swapped.
+every training motion mirrored left/right with its sentences' sides swapped. With
+``by_source`` each source's motions are normalised by that source's own training motions
+(:func:`normalise_by_source`).
 """
 from __future__ import annotations
 
@@ -57,7 +59,7 @@ class TwoStreamData:
 def build_twostream_data(data: str | Path | Sequence[str | Path], *, fractions: Sequence[float] = (0.8, 0.1, 0.1),
                          seed: int = 0, max_seconds: float | None = 30.0,
                          max_frames: int | None = None, cache_dir: str | Path | None = None,
-                         mirror: bool = False) -> TwoStreamData:
+                         mirror: bool = False, by_source: int | None = None) -> TwoStreamData:
     """Read ``data``, split by motion, fit + encode positions features (cached), make items.
 
     Args:
@@ -74,6 +76,10 @@ def build_twostream_data(data: str | Path | Sequence[str | Path], *, fractions: 
             items (marked ``"mirrored": True``, same ``id``): twice the items, both sides
             equally often. Features are fitted on the unmirrored motions; ``sequences`` and
             the other splits stay unmirrored.
+        by_source: several datasets: normalise each by its own training motions, and give
+            ``features`` the normaliser of dataset ``by_source`` (an index into ``data``;
+            negative from the end): :func:`normalise_by_source`. None: one normaliser
+            fitted on all training motions.
     """
     from motionlang.datasets.seq2seq_pairs import load_sources
 
@@ -96,7 +102,59 @@ def build_twostream_data(data: str | Path | Sequence[str | Path], *, fractions: 
         items["train"] += [{"motion": flipped[i], "sentence": mirror_text(s), "id": i,
                             "mirrored": True}
                            for i in splits["train"] for s in by_id[i].annotations]
-    return TwoStreamData(df.features, splits, by_id, seqs, items, sources)
+    data = TwoStreamData(df.features, splits, by_id, seqs, items, sources)
+    if by_source is None:
+        return data
+    # fitted on the whole motions, as the shared normaliser is, not on their crops
+    return normalise_by_source(data, by_source, whole=_first_sequences(df, None))
+
+
+def normalise_by_source(data: TwoStreamData, output: int,
+                        whole: dict[str, np.ndarray] | None = None) -> TwoStreamData:
+    """``data`` with every motion z-normalised by the mean and spread of its own source's
+    training motions (mirrored copies by their source's too), and ``features`` carrying the
+    normaliser of source ``output`` (negative: from the end), so a model trained on it makes
+    motions in that source's statistics. ``whole``: the training motions to fit on, where
+    ``data.sequences`` holds crops of them (default ``data.sequences``).
+
+    Why: one normaliser over sources of unlike spread weighs their movements unequally. The
+    procedural corpus has bodies of many sizes, the Bandai actors nearly one: over both, the
+    joints' heights spread several times as much as over the Bandai takes, so in the squared
+    loss a Bandai motion's vertical movement counts for a fraction of what it does when
+    trained on them alone. Normalised by source, each source's movements weigh as they
+    would alone.
+
+    Raises:
+        DatasetError: ``output`` names no source, or a source has no training motion.
+    """
+    import copy
+
+    from motionlang.features.normalizer import Normalizer
+    ids = sorted(set(data.sources.values()))
+    n = (max(ids) + 1) if ids else 1
+    if not -n <= output < n:
+        raise DatasetError(f"by_source: {output} names none of the {n} data sources")
+    shared = data.features.normalizer
+    fitted = {}
+    for s in range(n):
+        rows = [shared.inverse(np.asarray((whole or data.sequences)[i], dtype=np.float64))
+                for i in data.splits["train"] if data.sources.get(i, 0) == s]
+        if not rows:
+            raise DatasetError(f"by_source: data source {s} has no training motion")
+        fitted[s] = Normalizer(names=shared.names, min_std=shared.min_std).fit(rows)
+
+    def renorm(rid: str, x: np.ndarray) -> np.ndarray:
+        back = shared.inverse(np.asarray(x, dtype=np.float64))
+        return fitted[data.sources.get(rid, 0)].transform(back).astype(np.float32)
+
+    data.sequences = {i: renorm(i, x) for i, x in data.sequences.items()}
+    for part in data.items.values():
+        for it in part:   # an item's motion is its sequence, or its mirrored copy
+            it["motion"] = (renorm(it["id"], it["motion"]) if it.get("mirrored")
+                            else data.sequences[it["id"]])
+    data.features = copy.deepcopy(data.features)
+    data.features.normalizer = fitted[output % n]
+    return data
 
 
 def _first_sequences(df, max_frames: int | None) -> dict[str, np.ndarray]:

@@ -31,6 +31,10 @@ RUN_FILES = ("best.pt and last.pt (checkpoints; in pose/ and text/ for the two-s
              "ablation), history.json, loss_curve.png, splits/")
 
 
+#: how several sources' motions are normalised (``TwoStreamOptions.normalise``)
+NORMALISE = ("together", "by-source")
+
+
 def _opt(default: Any, help_: str, **meta: Any) -> Any:
     return field(default=default, metadata={"help": help_, **meta})
 
@@ -54,6 +58,13 @@ class TwoStreamOptions:
         None, "the source whose validation pairs --select-evaluator scores (default: the "
               "only --data source)")
     select_pairs: int = _opt(256, "how many validation pairs to score each epoch (0: all)")
+    normalise: str = _opt("together", "several --data sources: fit the feature normaliser on "
+                                      "their training motions together, or on each source's "
+                                      "own (by-source: each weighs in the loss as it would "
+                                      "alone; beyond the paper)", choices=NORMALISE)
+    output_source: int = _opt(-1, "with --normalise by-source: the --data source whose "
+                                  "statistics the model's motions come out in (0 the first, "
+                                  "-1 the last)")
 
     def __post_init__(self) -> None:
         check_numbers("TwoStreamOptions", self, positive_ints=("max_frames",),
@@ -61,6 +72,9 @@ class TwoStreamOptions:
         if self.select_data and not self.select_evaluator:
             raise MotionlangError("TwoStreamOptions.select_data needs "
                                   "TwoStreamOptions.select_evaluator")
+        if self.normalise not in NORMALISE:
+            raise MotionlangError(f"TwoStreamOptions.normalise must be one of "
+                                  f"{', '.join(NORMALISE)}, got {self.normalise!r}")
         if self.ablation not in ABLATIONS:
             raise MotionlangError(f"TwoStreamOptions.ablation must be one of "
                                   f"{', '.join(ABLATIONS)}, got {self.ablation!r}")
@@ -83,6 +97,20 @@ def summary(path: Path, history: list[dict]) -> str:
     return (f"{path}: epoch {last.get('epoch')}{' (selected: ' + scores + ')' if chosen else ''}"
             f", train loss {last.get('train', {}).get('loss', float('nan')):.4g}, "
             f"val loss {last.get('val', {}).get('loss', float('nan')):.4g}")
+
+
+def output_source(sources: Sequence, data_cfg: TwoStreamOptions) -> int | None:
+    """The index of the source whose normaliser the model keeps (None: one normaliser for
+    all), checked against the sources before the data is read."""
+    if data_cfg.normalise != "by-source":
+        return None
+    n = len(sources)
+    if n < 2:
+        raise MotionlangError("--normalise by-source needs several --data sources")
+    if not -n <= data_cfg.output_source < n:
+        raise MotionlangError(f"--output-source {data_cfg.output_source}: there are {n} "
+                              f"--data sources (0 to {n - 1}, or -1 for the last)")
+    return data_cfg.output_source
 
 
 def selection_source(sources: Sequence, data_cfg: TwoStreamOptions) -> str | None:
@@ -129,6 +157,7 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg,
     if resume:   # the run's first (or only) stage's checkpoint
         check_resume(out if (out / "last.pt").is_file() else out / "pose")
     source_weights(sources)   # all weighted or none
+    by_source = output_source(sources, data_cfg)
     select = None
     scored = selection_source(sources, data_cfg)
     if scored is not None:   # its evaluator and data read before the long data preparation
@@ -141,7 +170,8 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg,
     paths = [s.path for s in sources]
     data = build_twostream_data(paths if len(paths) > 1 else paths[0], seed=train_cfg.seed,
                                 max_seconds=data_cfg.max_seconds,
-                                max_frames=data_cfg.max_frames, mirror=data_cfg.mirror)
+                                max_frames=data_cfg.max_frames, mirror=data_cfg.mirror,
+                                by_source=by_source)
     train_items = mix_training(sources, data.items["train"], data.sources, train_cfg.seed)
     if lead:
         keep_splits(data.splits, out / "splits", resume)
