@@ -207,14 +207,6 @@ def test_twostream_items_normalised_by_source(corpus, bandai, tmp_path):
                                    one.features.normalizer.inverse(a["motion"]), atol=1e-4)
     with pytest.raises(DatasetError, match="names none of the 2"):
         build_twostream_data([corpus, spec], cache_dir=cache, by_source=2)
-    # scaled by source: the shared space, each item's errors measured in its source's spread
-    scaled = build_twostream_data([corpus, spec], cache_dir=cache, mirror=True,
-                                  scale_sources=True)
-    np.testing.assert_array_equal(scaled.features.normalizer.mean, one.features.normalizer.mean)
-    for a, b in zip(scaled.items["train"], by.items["train"], strict=True):
-        assert a["id"] == b["id"] and a["scale"].shape == (one.features.dim,)
-        offset = a["motion"] * a["scale"] - b["motion"]   # the means' difference, in that spread
-        np.testing.assert_allclose(offset, np.broadcast_to(offset[:1], offset.shape), atol=1e-3)
 
 
 @pytest.mark.parametrize("sources, extra, message", [

@@ -102,28 +102,6 @@ def test_mirrored_training_items(data, corpus, tmp_path):
     np.testing.assert_allclose(pos[:, lw, 0], -orig[:, rw, 0], atol=1e-3)  # sideways flips
 
 
-def test_frame_losses_in_each_items_scale(data):
-    """An item's ``scale`` multiplies its errors in the frame terms: all ones changes
-    nothing, a larger scale on every item raises the pose term, and items without one count
-    as ones beside items with one."""
-    model = tiny(data).eval()
-    items = data.items["train"][:4]
-    batch = model.collate(items)
-    assert "scale" not in batch
-    ones = np.ones(data.features.dim, dtype=np.float32)
-    with torch.no_grad():
-        plain = model.loss(batch)
-        same = model.loss(model.collate([{**it, "scale": ones} for it in items]))
-        double = model.loss(model.collate([{**it, "scale": 2 * ones} for it in items]))
-        mixed = model.collate([{**items[0], "scale": 2 * ones}, *items[1:]])
-    for term in ("pose", "velocity", "energy"):
-        if term in plain:
-            assert float(same[term]) == pytest.approx(float(plain[term]), rel=1e-6)
-    assert float(double["pose"]) > 1.5 * float(plain["pose"])
-    assert mixed["scale"].shape == (4, 1, data.features.dim)
-    assert torch.equal(mixed["scale"][1:], torch.ones(3, 1, data.features.dim))
-
-
 def test_forcing_schedule():
     s = ForcingSchedule(1.0, 0.0, 4)
     assert [s(k) for k in range(6)] == [1.0, 0.75, 0.5, 0.25, 0.0, 0.0]

@@ -4,9 +4,7 @@ each source's motions z-normalised with the mean and spread of that source's own
 motions (``train twostream --normalise by-source``: ``datasets.twostream_items.
 normalise_by_source``); the model keeps the Bandai normaliser (the last source), so its
 motions come out in the Bandai takes' statistics. Every epoch is scored on the Bandai
-validation pairs (``--select-evaluator``). ``--normalise loss-by-source`` instead keeps
-the one normaliser and measures each source's frame losses in its own spread
-(``twostream_items.scale_by_source``): the same weights in the loss, one output space.
+validation pairs (``--select-evaluator``).
 
     OMP_NUM_THREADS=1 .venv/bin/python experiments/probes/twostream_by_source.py RUN \
         --corpus runs/twostream_parts/corpus --evaluator runs/evaluator_bandai [--epochs 3]
@@ -35,7 +33,6 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--evaluator", required=True)
     ap.add_argument("--epochs", type=int, default=3)
     ap.add_argument("--threads", type=int, default=1)
-    ap.add_argument("--normalise", default="by-source", choices=("by-source", "loss-by-source"))
     a = ap.parse_args(argv)
     import torch
 
@@ -49,7 +46,7 @@ def main(argv: list[str] | None = None) -> int:
         resume = (a.run / "last.pt").is_file()
         model = ml.train("twostream", [f"{a.corpus}@1", f"{bandai}@1"], a.run, resume=resume,
                          epochs=a.epochs, mirror=True, select_evaluator=a.evaluator,
-                         select_data=bandai, normalise=a.normalise, **RECIPE)
+                         select_data=bandai, normalise="by-source", **RECIPE)
     except MotionlangError as exc:
         print(f"twostream_by_source.py: {exc}", file=sys.stderr)
         return 2

@@ -59,8 +59,7 @@ class TwoStreamData:
 def build_twostream_data(data: str | Path | Sequence[str | Path], *, fractions: Sequence[float] = (0.8, 0.1, 0.1),
                          seed: int = 0, max_seconds: float | None = 30.0,
                          max_frames: int | None = None, cache_dir: str | Path | None = None,
-                         mirror: bool = False, by_source: int | None = None,
-                         scale_sources: bool = False) -> TwoStreamData:
+                         mirror: bool = False, by_source: int | None = None) -> TwoStreamData:
     """Read ``data``, split by motion, fit + encode positions features (cached), make items.
 
     Args:
@@ -81,8 +80,6 @@ def build_twostream_data(data: str | Path | Sequence[str | Path], *, fractions: 
             ``features`` the normaliser of dataset ``by_source`` (an index into ``data``;
             negative from the end): :func:`normalise_by_source`. None: one normaliser
             fitted on all training motions.
-        scale_sources: several datasets, one normaliser: give every item the scale of its
-            source (:func:`scale_by_source`). Not with ``by_source``.
     """
     from motionlang.datasets.seq2seq_pairs import load_sources
 
@@ -106,30 +103,10 @@ def build_twostream_data(data: str | Path | Sequence[str | Path], *, fractions: 
                             "mirrored": True}
                            for i in splits["train"] for s in by_id[i].annotations]
     data = TwoStreamData(df.features, splits, by_id, seqs, items, sources)
-    if by_source is None and not scale_sources:
+    if by_source is None:
         return data
     # fitted on the whole motions, as the shared normaliser is, not on their crops
-    whole = _first_sequences(df, None)
-    if by_source is not None:
-        return normalise_by_source(data, by_source, whole=whole)
-    return scale_by_source(data, whole=whole)
-
-
-def _source_normalisers(data: TwoStreamData, whole: dict[str, np.ndarray] | None
-                        ) -> dict[int, Any]:
-    """``{source index: Normalizer}`` fitted on each source's training motions (``whole``,
-    default ``data.sequences``, read back through the shared normaliser)."""
-    from motionlang.features.normalizer import Normalizer
-    shared = data.features.normalizer
-    ids = sorted(set(data.sources.values()))
-    fitted = {}
-    for s in range((max(ids) + 1) if ids else 1):
-        rows = [shared.inverse(np.asarray((whole or data.sequences)[i], dtype=np.float64))
-                for i in data.splits["train"] if data.sources.get(i, 0) == s]
-        if not rows:
-            raise DatasetError(f"by source: data source {s} has no training motion")
-        fitted[s] = Normalizer(names=shared.names, min_std=shared.min_std).fit(rows)
-    return fitted
+    return normalise_by_source(data, by_source, whole=_first_sequences(df, None))
 
 
 def normalise_by_source(data: TwoStreamData, output: int,
@@ -140,22 +117,32 @@ def normalise_by_source(data: TwoStreamData, output: int,
     motions in that source's statistics. ``whole``: the training motions to fit on, where
     ``data.sequences`` holds crops of them (default ``data.sequences``).
 
-    Why: one normaliser over sources of unlike spread weighs their movements unequally. The
-    procedural corpus has bodies of many sizes, the Bandai actors nearly one: over both, the
-    joints' heights spread several times as much as over the Bandai takes, so in the loss a
-    Bandai motion's vertical movement counts for a fraction of what it does when trained on
-    them alone. Normalised by source, each source's movements weigh as they would alone. The
-    cost: every motion the model makes comes out in one source's statistics, whatever the
-    sentence (:func:`scale_by_source` keeps one space instead).
+    Why: one normaliser over sources of unlike spread squeezes the narrower one. The
+    procedural corpus has bodies of many sizes, the Bandai actors one: over both, the joints'
+    heights spread several times as much as over the Bandai takes, so the Bandai motions
+    fill a small part of the model's input and output range. Normalised by source, each
+    fills it as it would alone. (Weighing each source's errors by its own spread in the loss,
+    with one normaliser, does not do it: ``docs/results/twostream.md``.) The cost: the
+    model's motions come out in one source's statistics, whatever the sentence.
 
     Raises:
         DatasetError: ``output`` names no source, or a source has no training motion.
     """
     import copy
-    shared, fitted = data.features.normalizer, _source_normalisers(data, whole)
-    n = len(fitted)
+
+    from motionlang.features.normalizer import Normalizer
+    ids = sorted(set(data.sources.values()))
+    n = (max(ids) + 1) if ids else 1
     if not -n <= output < n:
         raise DatasetError(f"by_source: {output} names none of the {n} data sources")
+    shared = data.features.normalizer
+    fitted = {}
+    for s in range(n):
+        rows = [shared.inverse(np.asarray((whole or data.sequences)[i], dtype=np.float64))
+                for i in data.splits["train"] if data.sources.get(i, 0) == s]
+        if not rows:
+            raise DatasetError(f"by_source: data source {s} has no training motion")
+        fitted[s] = Normalizer(names=shared.names, min_std=shared.min_std).fit(rows)
 
     def renorm(rid: str, x: np.ndarray) -> np.ndarray:
         back = shared.inverse(np.asarray(x, dtype=np.float64))
@@ -168,24 +155,6 @@ def normalise_by_source(data: TwoStreamData, output: int,
                             else data.sequences[it["id"]])
     data.features = copy.deepcopy(data.features)
     data.features.normalizer = fitted[output % n]
-    return data
-
-
-def scale_by_source(data: TwoStreamData, whole: dict[str, np.ndarray] | None = None
-                    ) -> TwoStreamData:
-    """``data`` as it is (one normaliser, one space for every motion), each training and
-    validation item given a ``"scale"`` (F,) float32: the shared spread over its source's
-    own (``std_shared / std_source`` per feature), by which the two-stream model's frame
-    losses multiply its errors, so that each source's movements weigh in them as they
-    would if it were trained alone (:func:`normalise_by_source`'s aim), while the motions
-    made come out in the shared space. ``whole``: as for :func:`normalise_by_source`.
-    """
-    shared, fitted = data.features.normalizer, _source_normalisers(data, whole)
-    scales = {s: (np.asarray(shared.std) / np.asarray(n.std)).astype(np.float32)
-              for s, n in fitted.items()}
-    for part in data.items.values():
-        for it in part:
-            it["scale"] = scales[data.sources.get(it["id"], 0)]
     return data
 
 

@@ -32,7 +32,7 @@ RUN_FILES = ("best.pt and last.pt (checkpoints; in pose/ and text/ for the two-s
 
 
 #: how several sources' motions are normalised (``TwoStreamOptions.normalise``)
-NORMALISE = ("together", "by-source", "loss-by-source")
+NORMALISE = ("together", "by-source")
 
 
 def _opt(default: Any, help_: str, **meta: Any) -> Any:
@@ -59,12 +59,9 @@ class TwoStreamOptions:
               "only --data source)")
     select_pairs: int = _opt(256, "how many validation pairs to score each epoch (0: all)")
     normalise: str = _opt("together", "several --data sources: fit the feature normaliser on "
-                                      "their training motions together; or on each source's "
+                                      "their training motions together, or on each source's "
                                       "own (by-source: each weighs in the loss as it would "
-                                      "alone, the motions come out in --output-source's "
-                                      "statistics); or together, with each source's frame "
-                                      "losses measured in its own spread (loss-by-source). "
-                                      "Beyond the paper", choices=NORMALISE)
+                                      "alone; beyond the paper)", choices=NORMALISE)
     output_source: int = _opt(-1, "with --normalise by-source: the --data source whose "
                                   "statistics the model's motions come out in (0 the first, "
                                   "-1 the last)")
@@ -105,11 +102,11 @@ def summary(path: Path, history: list[dict]) -> str:
 def output_source(sources: Sequence, data_cfg: TwoStreamOptions) -> int | None:
     """The index of the source whose normaliser the model keeps (None: one normaliser for
     all), checked against the sources before the data is read."""
-    n = len(sources)
-    if data_cfg.normalise != "together" and n < 2:
-        raise MotionlangError(f"--normalise {data_cfg.normalise} needs several --data sources")
     if data_cfg.normalise != "by-source":
         return None
+    n = len(sources)
+    if n < 2:
+        raise MotionlangError("--normalise by-source needs several --data sources")
     if not -n <= data_cfg.output_source < n:
         raise MotionlangError(f"--output-source {data_cfg.output_source}: there are {n} "
                               f"--data sources (0 to {n - 1}, or -1 for the last)")
@@ -174,8 +171,7 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg,
     data = build_twostream_data(paths if len(paths) > 1 else paths[0], seed=train_cfg.seed,
                                 max_seconds=data_cfg.max_seconds,
                                 max_frames=data_cfg.max_frames, mirror=data_cfg.mirror,
-                                by_source=by_source,
-                                scale_sources=data_cfg.normalise == "loss-by-source")
+                                by_source=by_source)
     train_items = mix_training(sources, data.items["train"], data.sources, train_cfg.seed)
     if lead:
         keep_splits(data.splits, out / "splits", resume)

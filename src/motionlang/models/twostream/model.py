@@ -168,21 +168,14 @@ class TwoStreamModel(Checkpointed, nn.Module):
     def collate(items: Sequence[dict]) -> dict:
         """Items ``{"motion": (T_i, F) normalised features, "sentence": str}`` -> the batch
         :meth:`loss` takes: ``motion`` (B, T, F) float32 zero-padded, ``lengths`` (B,),
-        ``sentences``; and ``scale`` (B, 1, F) where items carry a ``"scale"`` (F,): what
-        the frame losses multiply each item's errors by (``twostream_items.
-        scale_by_source``; 1 for items without one)."""
+        ``sentences``."""
         from motionlang.features.collate import pad_batch
         if not items:
             raise MotionlangError("cannot collate an empty batch")
         motion, mask = pad_batch([torch.as_tensor(np.asarray(it["motion"]), dtype=torch.float32)
                                   for it in items])
-        batch = {"motion": motion, "lengths": mask.sum(dim=1),
-                 "sentences": [str(it["sentence"]) for it in items]}
-        if any("scale" in it for it in items):
-            ones = np.ones(motion.shape[-1], dtype=np.float32)
-            batch["scale"] = torch.as_tensor(np.stack([np.asarray(it.get("scale", ones))
-                                                       for it in items]))[:, None].float()
-        return batch
+        return {"motion": motion, "lengths": mask.sum(dim=1),
+                "sentences": [str(it["sentence"]) for it in items]}
 
     def _disc(self, poses, lengths, frozen: bool) -> torch.Tensor:
         if not frozen:
@@ -242,29 +235,24 @@ class TwoStreamModel(Checkpointed, nn.Module):
         if decode_s:
             todo["sentence"] = zs
         q = self._unroll(todo, x, lengths) if todo else {}
-        # the frame terms in each item's own scale (its source's spread), where it has one
-        scale = batch.get("scale")
-        xs = x if scale is None else x * scale
         fake = None
         if "pose" in q:
             qp = fake = q["pose"]
-            qps = qp if scale is None else qp * scale
-            terms["pose"] = L.masked_smooth_l1(qps, xs, mask)
+            terms["pose"] = L.masked_smooth_l1(qp, x, mask)
             if extra:
                 terms["manifold"] = L.embedding_loss(self.pose_encoder(qp, lengths), zp)
-                terms["velocity"] = L.velocity_loss(qps, xs, mask)
+                terms["velocity"] = L.velocity_loss(qp, x, mask)
             if energy:
-                terms["energy"] = L.energy_loss(qps, xs, mask)
+                terms["energy"] = L.energy_loss(qp, x, mask)
             if foot:
                 terms["foot"] = self._foot_term(qp, x, mask)
         if "sentence" in q:
             qs = fake = q["sentence"]   # what generation produces
-            qss = qs if scale is None else qs * scale
-            terms["pose"] = terms.get("pose", 0.0) + L.masked_smooth_l1(qss, xs, mask)
+            terms["pose"] = terms.get("pose", 0.0) + L.masked_smooth_l1(qs, x, mask)
             if extra and stage == "joint":  # the text stage fits embeddings + poses only
-                terms["velocity"] = terms.get("velocity", 0.0) + L.velocity_loss(qss, xs, mask)
+                terms["velocity"] = terms.get("velocity", 0.0) + L.velocity_loss(qs, x, mask)
             if energy:
-                terms["energy"] = terms.get("energy", 0.0) + L.energy_loss(qss, xs, mask)
+                terms["energy"] = terms.get("energy", 0.0) + L.energy_loss(qs, x, mask)
             if foot:
                 terms["foot"] = terms.get("foot", 0.0) + self._foot_term(qs, x, mask)
         if extra and stage != "text":
