@@ -60,8 +60,10 @@ class TwoStreamOptions:
     select_pairs: int = _opt(256, "how many validation pairs to score each epoch (0: all)")
     normalise: str = _opt("together", "several --data sources: fit the feature normaliser on "
                                       "their training motions together, or on each source's "
-                                      "own (by-source: each weighs in the loss as it would "
-                                      "alone; beyond the paper)", choices=NORMALISE)
+                                      "own (by-source: each fills the model's range as it "
+                                      "would alone, and the motions come out in "
+                                      "--output-source's statistics; beyond the paper)",
+                          choices=NORMALISE)
     output_source: int = _opt(-1, "with --normalise by-source: the --data source whose "
                                   "statistics the model's motions come out in (0 the first, "
                                   "-1 the last)")
