@@ -17,11 +17,10 @@ twostream.md``, "A normaliser per source").
 """
 from __future__ import annotations
 
-import argparse
 import sys
-from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[2]
+from twostream_mix_run import run_probe
+
 CHAIN = (("LH", "LK"), ("LK", "LA"), ("root", "BT"), ("BT", "BLN"), ("BLN", "BUN"))
 
 
@@ -69,40 +68,16 @@ def body_scaled(data, reference_source: int = 1):
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("run", type=Path)
-    ap.add_argument("--corpus", required=True, help="the procedural corpus (6,000, seed 0)")
-    ap.add_argument("--bandai", default=str(ROOT.parent / "shared" / "data" / "bandai"))
-    ap.add_argument("--evaluator", required=True)
-    ap.add_argument("--epochs", type=int, default=3)
-    ap.add_argument("--threads", type=int, default=1)
-    a = ap.parse_args(argv)
-    import torch
+    def patch(items) -> None:
+        built = items.build_twostream_data
 
-    import motionlang as ml
-    import motionlang.datasets.twostream_items as items
-    from motionlang.errors import MotionlangError
-    sys.path.insert(0, str(ROOT / "experiments"))
-    from twostream_parts import RECIPE
-    torch.set_num_threads(a.threads)
-    built = items.build_twostream_data
+        def build(*args, **kw):
+            data = built(*args, **kw)
+            return body_scaled(data) if len(set(data.sources.values())) > 1 else data
 
-    def build(*args, **kw):
-        data = built(*args, **kw)
-        return body_scaled(data) if len(set(data.sources.values())) > 1 else data
+        items.build_twostream_data = build
 
-    items.build_twostream_data = build
-    bandai = f"bandai:{a.bandai}"
-    try:
-        resume = (a.run / "last.pt").is_file()
-        model = ml.train("twostream", [f"{a.corpus}@1", f"{bandai}@1"], a.run, resume=resume,
-                         epochs=a.epochs, mirror=True, select_evaluator=a.evaluator,
-                         select_data=bandai, **RECIPE)
-    except MotionlangError as exc:
-        print(f"twostream_body_scaled.py: {exc}", file=sys.stderr)
-        return 2
-    print(model)
-    return 0
+    return run_probe(__doc__, "twostream_body_scaled.py", argv, patch)
 
 
 if __name__ == "__main__":

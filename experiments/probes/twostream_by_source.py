@@ -10,48 +10,20 @@ validation pairs (``--select-evaluator``).
         --corpus runs/twostream_parts/corpus --evaluator runs/evaluator_bandai [--epochs 3]
 
 Why: the mix's one normaliser has the spread of the procedural bodies (many sizes), several
-times the Bandai takes' in the joints' heights, so a Bandai motion's vertical movement
-weighs a fraction as much in the squared loss as it does when the model is trained on the
-Bandai takes alone, which meets the evaluator's bars (``docs/results/twostream.md``).
-Fitting one normaliser on the Bandai takes alone was the wrong test (the procedural heights
+times the Bandai takes' in the joints' heights, so the Bandai motions fill a small part of
+the model's range; trained on the Bandai takes alone, the model meets the evaluator's bars
+(``docs/results/twostream.md``). Fitting one normaliser on the Bandai takes alone was the wrong test (the procedural heights
 then span tens of units and dominate the loss: ``twostream_normaliser.py``).
 """
 from __future__ import annotations
 
-import argparse
 import sys
-from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[2]
+from twostream_mix_run import run_probe
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("run", type=Path)
-    ap.add_argument("--corpus", required=True, help="the procedural corpus (6,000, seed 0)")
-    ap.add_argument("--bandai", default=str(ROOT.parent / "shared" / "data" / "bandai"))
-    ap.add_argument("--evaluator", required=True)
-    ap.add_argument("--epochs", type=int, default=3)
-    ap.add_argument("--threads", type=int, default=1)
-    a = ap.parse_args(argv)
-    import torch
-
-    import motionlang as ml
-    from motionlang.errors import MotionlangError
-    sys.path.insert(0, str(ROOT / "experiments"))
-    from twostream_parts import RECIPE
-    torch.set_num_threads(a.threads)
-    bandai = f"bandai:{a.bandai}"
-    try:
-        resume = (a.run / "last.pt").is_file()
-        model = ml.train("twostream", [f"{a.corpus}@1", f"{bandai}@1"], a.run, resume=resume,
-                         epochs=a.epochs, mirror=True, select_evaluator=a.evaluator,
-                         select_data=bandai, normalise="by-source", **RECIPE)
-    except MotionlangError as exc:
-        print(f"twostream_by_source.py: {exc}", file=sys.stderr)
-        return 2
-    print(model)
-    return 0
+    return run_probe(__doc__, "twostream_by_source.py", argv, normalise="by-source")
 
 
 if __name__ == "__main__":
