@@ -243,7 +243,8 @@ def test_train_twostream_on_two_datasets(corpus, bandai, tmp_path, capsys):
     assert abs(a / (a + b) - 0.75) <= 1 / (a + b), lines   # the @3 : @1 shares, rounded
     assert "dataset-2_walk_normal_005" in (out / "splits" / "test.txt").read_text().split()
     assert "non-commercial" in (out / "LICENSE.txt").read_text()
-    # --normalise by-source: the model's motions come out in the last source's statistics
+    # --normalise by-source: the model's features keep the last source's normaliser, and
+    # each sentence's motion is decoded with its source's (the sources' in source order)
     import numpy as np
 
     import motionlang as ml
@@ -252,3 +253,7 @@ def test_train_twostream_on_two_datasets(corpus, bandai, tmp_path, capsys):
     alone = build_twostream_data([corpus, f"bandai:{bandai}"], by_source=-1, cache_dir=tmp_path)
     np.testing.assert_allclose(np.asarray(model.normalizer.mean),
                                alone.features.normalizer.mean, rtol=1e-6, atol=1e-9)
+    assert model.sources is not None
+    for s, norm in enumerate(alone.normalizers):
+        np.testing.assert_allclose(model.sources.means[s], norm.mean, rtol=1e-6, atol=1e-9)
+        np.testing.assert_allclose(model.sources.stds[s], norm.std, rtol=1e-6, atol=1e-9)

@@ -42,6 +42,8 @@ class TwoStreamData:
         items: per split, ``[{"motion", "sentence", "id"}]`` (one per description; with
             ``mirror`` the mirrored training items also carry ``"mirrored": True``).
         sources: ``{id: index of its dataset}`` (several datasets: ``datasets.mixing``).
+        normalizers: normalised by source, each source's normaliser in source order
+            (:func:`normalise_by_source`); else empty.
     """
 
     features: Any
@@ -50,6 +52,7 @@ class TwoStreamData:
     sequences: dict[str, np.ndarray]
     items: dict[str, list[dict]]
     sources: dict[str, int] = field(default_factory=dict)
+    normalizers: list = field(default_factory=list)
 
     def first_frames(self, split: str = "train") -> np.ndarray:
         """(N, 66) first frames of the split's motions (for ``TwoStreamModel.set_rest_pose``)."""
@@ -155,6 +158,7 @@ def normalise_by_source(data: TwoStreamData, output: int,
                             else data.sequences[it["id"]])
     data.features = copy.deepcopy(data.features)
     data.features.normalizer = fitted[output % n]
+    data.normalizers = [fitted[s] for s in range(n)]
     return data
 
 

@@ -61,12 +61,13 @@ class TwoStreamOptions:
     normalise: str = _opt("together", "several --data sources: fit the feature normaliser on "
                                       "their training motions together, or on each source's "
                                       "own (by-source: each fills the model's range as it "
-                                      "would alone, and the motions come out in "
-                                      "--output-source's statistics; beyond the paper)",
+                                      "would alone, and each sentence's motion comes out in "
+                                      "the statistics of the source it reads like; beyond "
+                                      "the paper)",
                           choices=NORMALISE)
     output_source: int = _opt(-1, "with --normalise by-source: the --data source whose "
-                                  "statistics the model's motions come out in (0 the first, "
-                                  "-1 the last)")
+                                  "normaliser the model's features keep, for the motions it "
+                                  "reads (0 the first, -1 the last)")
 
     def __post_init__(self) -> None:
         check_numbers("TwoStreamOptions", self, positive_ints=("max_frames",),
@@ -195,6 +196,12 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg,
         model, train_items, train_cfg, val_items=data.items.get("val") or None,
         first_frames=data.first_frames(), resume=resume,
         schedule=ForcingSchedule(1.0, 0.0, data_cfg.forcing_steps), select=select)
+    if by_source is not None:   # each sentence's motion in its source's statistics
+        from motionlang.models.twostream.sources import fit_source_output
+        own = [it for it in data.items["train"] if not it.get("mirrored")]
+        model.sources = fit_source_output(model, [it["sentence"] for it in own],
+                                          [data.sources.get(it["id"], 0) for it in own],
+                                          data.normalizers, seed=train_cfg.seed)
     path = out / family("twostream").model_file
     if lead:
         model.save(path)

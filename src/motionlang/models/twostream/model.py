@@ -46,6 +46,8 @@ from motionlang.models.twostream.config import TwoStreamConfig
 from motionlang.models.twostream.discriminator import PoseDiscriminator
 from motionlang.models.twostream.pose import PoseDecoder, PoseEncoder
 from motionlang.models.twostream.sentence import SentenceEncoder
+from motionlang.models.twostream.sources import SCHEMA as SOURCES
+from motionlang.models.twostream.sources import SourceOutput
 from motionlang.models.twostream.text import build_text_encoder
 
 STAGES = ("joint", "pose", "text")
@@ -104,6 +106,8 @@ class TwoStreamModel(Checkpointed, nn.Module):
         #: sentence -> frames for generation without a given length (``SentenceLength``,
         #: fitted by the trainer; None: :data:`DEFAULT_SECONDS`)
         self.length_model: SentenceLength | None = None
+        #: trained with one normaliser per source: each sentence's source (``sources``)
+        self.sources: SourceOutput | None = None
         self.set_stage("joint" if config.joint_training else "pose")
 
     # ------------------------------------------------------------------ parts
@@ -307,7 +311,13 @@ class TwoStreamModel(Checkpointed, nn.Module):
             raise MotionlangError(f"start pose must be ({self.config.n_features},) or "
                                   f"({len(sentences)}, {self.config.n_features}), got "
                                   f"{tuple(x0.shape)}")
-        out = self.decoder(z, x0, n_frames)
+        if self.sources is None:
+            out = self.decoder(z, x0, n_frames)
+        else:   # decoded in the sentences' sources' statistics, returned in the model's
+            p, norm = self.sources.probabilities(self.joint(z)), self.normalizer
+            if start is not None:
+                x0 = self.sources.from_output(x0[:, None], p, norm)[:, 0].float()
+            out = self.sources.to_output(self.decoder(z, x0, n_frames), p, norm).float()
         return out[0] if single else out
 
     @torch.no_grad()
@@ -353,7 +363,7 @@ class TwoStreamModel(Checkpointed, nn.Module):
 
     # ------------------------------------------------------------------ persistence
     state_schema = {"stage": str, "features": FEATURES, "normalizer": NORMALIZER,
-                    "length_model": LENGTH_MODEL}
+                    "length_model": LENGTH_MODEL, "sources": SOURCES}
 
     def checkpoint_state(self) -> dict[str, Any]:
         fitted = self.features.fitted
@@ -362,7 +372,8 @@ class TwoStreamModel(Checkpointed, nn.Module):
                 # the features' normaliser again: what releases before features were stored read
                 "normalizer": pack_normalizer(self.normalizer) if fitted else None,
                 "length_model": (None if self.length_model is None
-                                 else self.length_model.to_dict())}
+                                 else self.length_model.to_dict()),
+                "sources": None if self.sources is None else self.sources.to_dict()}
 
     @classmethod
     def from_state(cls, config: TwoStreamConfig, state: dict[str, Any],
@@ -377,4 +388,6 @@ class TwoStreamModel(Checkpointed, nn.Module):
         self.set_stage(state.get("stage", "joint"))
         if state.get("length_model"):   # checkpoints before it have none
             self.length_model = SentenceLength.from_dict(state["length_model"])
+        if state.get("sources"):
+            self.sources = SourceOutput.from_dict(state["sources"])
 
