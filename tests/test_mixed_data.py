@@ -253,7 +253,7 @@ def test_train_twostream_on_two_datasets(corpus, bandai, tmp_path, capsys):
     alone = build_twostream_data([corpus, f"bandai:{bandai}"], by_source=-1, cache_dir=tmp_path)
     np.testing.assert_allclose(np.asarray(model.normalizer.mean),
                                alone.features.normalizer.mean, rtol=1e-6, atol=1e-9)
-    assert model.sources is not None
+    assert model.sources is not None and model.start_pose is not None
     for s, norm in enumerate(alone.normalizers):
         np.testing.assert_allclose(model.sources.means[s], norm.mean, rtol=1e-6, atol=1e-9)
         np.testing.assert_allclose(model.sources.stds[s], norm.std, rtol=1e-6, atol=1e-9)

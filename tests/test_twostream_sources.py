@@ -1,6 +1,6 @@
-"""Each sentence's motion in its source's statistics (``models.twostream.sources``): the
-regression, the change of normaliser and its inverse, the model's generation with it, and the
-checkpoint."""
+"""Each sentence's motion in its source's statistics (``models.twostream.sources``: the
+regression, the change of normaliser and its inverse) and from a first pose read from the
+sentence (``models.twostream.start``): the model's generation with them, and the checkpoint."""
 from __future__ import annotations
 
 import numpy as np
@@ -12,6 +12,7 @@ from motionlang.errors import MotionlangError
 from motionlang.features.normalizer import Normalizer
 from motionlang.models.twostream import TwoStreamModel
 from motionlang.models.twostream.sources import SourceOutput, fit_source_output
+from motionlang.models.twostream.start import StartPose, fit_start_pose
 
 torch.set_num_threads(1)
 
@@ -88,3 +89,47 @@ def test_model_generates_in_each_sentences_source_and_saves_it(tmp_path):
     torch.testing.assert_close(m2.generate(sentences, 6), got, rtol=0, atol=0)
     m.sources = None   # models trained with one normaliser generate as before
     torch.testing.assert_close(m.generate(sentences, 6), plain)
+
+
+def test_start_pose_fits_a_linear_map_and_predicts_its_shape():
+    rng = np.random.default_rng(1)
+    z = rng.normal(size=(60, 5))
+    a, b = rng.normal(size=(5, 66)), rng.normal(size=66)
+    fit = StartPose.fit(z, z @ a + b, ridge=1e-9)
+    got = fit.predict(torch.as_tensor(z[:3]))
+    np.testing.assert_allclose(got.numpy(), z[:3] @ a + b, atol=1e-6)
+    # the penalty shrinks the weights, never the bias
+    flat = StartPose.fit(z, np.tile(b, (60, 1)), ridge=1e3)
+    np.testing.assert_allclose(flat.weights[-1], b, atol=1e-6)
+    np.testing.assert_allclose(StartPose.from_dict(fit.to_dict()).weights, fit.weights)
+    with pytest.raises(MotionlangError, match=r"reads \(5,\)"):
+        fit.predict(torch.zeros(1, 4))
+    with pytest.raises(MotionlangError, match="need"):
+        StartPose.fit(z, z[:10])
+
+
+def test_generation_starts_from_the_sentences_pose_unless_given_one(tmp_path):
+    m = tiny()
+    m.normalizer = normalizers()[1]
+    m.eval()
+    sentences = ["a person walks forward", "someone waves twice", "she turns left"]
+    rng = np.random.default_rng(2)
+    poses = rng.normal(size=(3, 66))
+    m.start_pose = fit_start_pose(m, sentences, poses)
+    assert m.start_pose.weights.shape == (33, 66)   # 2h + 1 rows
+    out = m.generate(sentences, 5)
+    z = m.joint(m.encode_text(sentences))
+    torch.testing.assert_close(out[:, 0], m.start_pose.predict(z))
+    # sentences' poses differ as their embeddings do (not one rest pose for all)
+    assert not torch.allclose(out[0, 0], out[1, 0])
+    given = torch.randn(66)
+    torch.testing.assert_close(m.generate(sentences[0], 4, start=given)[0], given)
+    m.save(tmp_path / "ts.pt")
+    m2 = TwoStreamModel.load(tmp_path / "ts.pt", text_encoder=HashTokens())
+    torch.testing.assert_close(m2.generate(sentences, 5), out, rtol=0, atol=0)
+    # with sources, the pose is read in the sentence's source's normalisation
+    m.sources = fit_source_output(m, sentences * 2, [0, 0, 1, 0, 0, 1], normalizers())
+    p = m.sources.probabilities(z)
+    first = m.generate(sentences, 5)[:, 0]
+    torch.testing.assert_close(first, m.sources.to_output(
+        m.start_pose.predict(z)[:, None].double(), p, m.normalizer)[:, 0].float())

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from collections import Counter
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -75,10 +76,13 @@ def main(argv: list[str] | None = None) -> int:
         motions[name] = [lock_feet(t2m.positions21(s.text, max(2, len(it.positions))), FPS)
                          for s, it in zip(sentences, real)]
         print(f"{name}: {len(motions[name])} motions", file=sys.stderr, flush=True)
-    table = {}
+    table, answers = {}, {}
     for name, ps in motions.items():
         got = judge.judge(ps, FPS)["style"]
-        right = [judge.config.styles[int(np.argmax(g))] == s for g, s in zip(got, asked)]
+        said = [judge.config.styles[int(np.argmax(g))] for g in got]
+        right = [a == s for a, s in zip(said, asked)]
+        answers[name] = {s: Counter(a for a, x in zip(said, asked) if x == s).most_common(2)
+                         for s in styles}
         m = np.array([measures(p, FPS) for p in ps])
         # against the mean of the same content's motions: what the style adds to the action
         for c in set(contents):
@@ -98,6 +102,10 @@ def main(argv: list[str] | None = None) -> int:
         cells = [f"{100 * table[k][s][0]:.0f}" for k in names]
         cells += [f"{table[k][s][1][j]:.3f}" for j in range(len(MEASURES)) for k in names]
         print(f"| {s} | {n} | " + " | ".join(cells) + " |")
+    print("\nthe judge's two most frequent answers per asked style:")
+    for k in names[1:]:
+        print(f"  {k}: " + "; ".join(f"{s} -> " + ", ".join(f"{a} {n}" for a, n in answers[k][s])
+                                     for s in styles))
     print("\nover the styles, each model's per-style means against the real takes': their "
           "correlation r and their spread (std) as a multiple of the real takes'")
     for k in names[1:]:

@@ -141,6 +141,7 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg,
         MotionlangError: a bad config value, ``resume`` without a checkpoint, weights on
             some sources only, unreadable data.
     """
+    import numpy as np
     import torch
 
     from motionlang.datasets.mixing import source_weights
@@ -148,6 +149,8 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg,
     from motionlang.models.length import SentenceLength
     from motionlang.models.registry import family
     from motionlang.models.twostream import TwoStreamModel
+    from motionlang.models.twostream.sources import fit_source_output
+    from motionlang.models.twostream.start import fit_start_pose
     from motionlang.recipes.seq2seq import mix_training
     from motionlang.training.run_files import check_resume
     from motionlang.training.run_guard import keep_splits
@@ -196,9 +199,11 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg,
         model, train_items, train_cfg, val_items=data.items.get("val") or None,
         first_frames=data.first_frames(), resume=resume,
         schedule=ForcingSchedule(1.0, 0.0, data_cfg.forcing_steps), select=select)
+    own = [it for it in data.items["train"] if not it.get("mirrored")]
+    model.start_pose = fit_start_pose(model, [it["sentence"] for it in own],
+                                      np.stack([it["motion"][0] for it in own]),
+                                      seed=train_cfg.seed)
     if by_source is not None:   # each sentence's motion in its source's statistics
-        from motionlang.models.twostream.sources import fit_source_output
-        own = [it for it in data.items["train"] if not it.get("mirrored")]
         model.sources = fit_source_output(model, [it["sentence"] for it in own],
                                           [data.sources.get(it["id"], 0) for it in own],
                                           data.normalizers, seed=train_cfg.seed)

@@ -48,6 +48,8 @@ from motionlang.models.twostream.pose import PoseDecoder, PoseEncoder
 from motionlang.models.twostream.sentence import SentenceEncoder
 from motionlang.models.twostream.sources import SCHEMA as SOURCES
 from motionlang.models.twostream.sources import SourceOutput
+from motionlang.models.twostream.start import SCHEMA as START_POSE
+from motionlang.models.twostream.start import StartPose, decoder_start
 from motionlang.models.twostream.text import build_text_encoder
 
 STAGES = ("joint", "pose", "text")
@@ -108,6 +110,8 @@ class TwoStreamModel(Checkpointed, nn.Module):
         self.length_model: SentenceLength | None = None
         #: trained with one normaliser per source: each sentence's source (``sources``)
         self.sources: SourceOutput | None = None
+        #: the first pose from the sentence (``start``); None: ``rest_pose`` for all
+        self.start_pose: StartPose | None = None
         self.set_stage("joint" if config.joint_training else "pose")
 
     # ------------------------------------------------------------------ parts
@@ -298,26 +302,18 @@ class TwoStreamModel(Checkpointed, nn.Module):
                  start: torch.Tensor | None = None) -> torch.Tensor:
         """Sentence(s) -> normalised features (T, F), or (B, T, F) for a list.
 
-        ``start`` (F,) or (B, F) is the initial pose (normalised); default ``rest_pose``.
+        ``start`` (F,) or (B, F) is the initial pose (normalised); default the one
+        ``start_pose`` reads from each sentence, else ``rest_pose`` (``start.decoder_start``).
         """
         if n_frames < 1:
             raise MotionlangError(f"n_frames must be >= 1, got {n_frames}")
         single = isinstance(sentence, str)
         sentences = [sentence] if isinstance(sentence, str) else list(sentence)
         z = self.encode_text(sentences)
-        x0 = self.rest_pose if start is None else torch.as_tensor(start, dtype=torch.float32)
-        x0 = x0.expand(len(sentences), -1) if x0.ndim == 1 else x0
-        if x0.shape != (len(sentences), self.config.n_features):
-            raise MotionlangError(f"start pose must be ({self.config.n_features},) or "
-                                  f"({len(sentences)}, {self.config.n_features}), got "
-                                  f"{tuple(x0.shape)}")
-        if self.sources is None:
-            out = self.decoder(z, x0, n_frames)
-        else:   # decoded in the sentences' sources' statistics, returned in the model's
-            p, norm = self.sources.probabilities(self.joint(z)), self.normalizer
-            if start is not None:
-                x0 = self.sources.from_output(x0[:, None], p, norm)[:, 0].float()
-            out = self.sources.to_output(self.decoder(z, x0, n_frames), p, norm).float()
+        p = None if self.sources is None else self.sources.probabilities(self.joint(z))
+        out = self.decoder(z, decoder_start(self, z, start, p), n_frames)
+        if self.sources is not None and p is not None:   # written in the model's one space
+            out = self.sources.to_output(out, p, self.normalizer).float()
         return out[0] if single else out
 
     @torch.no_grad()
@@ -363,7 +359,8 @@ class TwoStreamModel(Checkpointed, nn.Module):
 
     # ------------------------------------------------------------------ persistence
     state_schema = {"stage": str, "features": FEATURES, "normalizer": NORMALIZER,
-                    "length_model": LENGTH_MODEL, "sources": SOURCES}
+                    "length_model": LENGTH_MODEL, "sources": SOURCES,
+                    "start_pose": START_POSE}
 
     def checkpoint_state(self) -> dict[str, Any]:
         fitted = self.features.fitted
@@ -373,7 +370,8 @@ class TwoStreamModel(Checkpointed, nn.Module):
                 "normalizer": pack_normalizer(self.normalizer) if fitted else None,
                 "length_model": (None if self.length_model is None
                                  else self.length_model.to_dict()),
-                "sources": None if self.sources is None else self.sources.to_dict()}
+                "sources": None if self.sources is None else self.sources.to_dict(),
+                "start_pose": None if self.start_pose is None else self.start_pose.to_dict()}
 
     @classmethod
     def from_state(cls, config: TwoStreamConfig, state: dict[str, Any],
@@ -390,4 +388,6 @@ class TwoStreamModel(Checkpointed, nn.Module):
             self.length_model = SentenceLength.from_dict(state["length_model"])
         if state.get("sources"):
             self.sources = SourceOutput.from_dict(state["sources"])
+        if state.get("start_pose"):
+            self.start_pose = StartPose.from_dict(state["start_pose"])
 
