@@ -133,3 +133,22 @@ def test_generation_starts_from_the_sentences_pose_unless_given_one(tmp_path):
     first = m.generate(sentences, 5)[:, 0]
     torch.testing.assert_close(first, m.sources.to_output(
         m.start_pose.predict(z)[:, None].double(), p, m.normalizer)[:, 0].float())
+
+
+@pytest.mark.parametrize("entry, value, message", [
+    ("start_pose", {"weights": [[0.0] * 66] * 10}, "do not fit the model's"),
+    ("start_pose", {"weights": [[1.0, 2.0]]}, r"must be \(D \+ 1, F\)"),
+    ("sources", {"means": [[0.0] * 66] * 2, "stds": [[1.0] * 66] * 2,
+                 "weights": [[0.0] * 5] * 2, "bias": [0.0, 0.0]}, "do not fit the model's"),
+    ("sources", {"means": [[0.0] * 66] * 2, "stds": [[1.0] * 66] * 2,
+                 "weights": [[0.0] * 32] * 2, "bias": [0.0]}, "2 sources need"),
+])
+def test_a_damaged_start_pose_or_sources_entry_is_named_on_load(tmp_path, entry, value, message):
+    m = tiny()
+    m.normalizer = normalizers()[1]
+    m.save(tmp_path / "ts.pt")
+    state = torch.load(tmp_path / "ts.pt", weights_only=False)
+    state[entry] = value
+    torch.save(state, tmp_path / "bad.pt")
+    with pytest.raises(MotionlangError, match=f"bad.pt: a damaged twostream checkpoint.*{message}"):
+        TwoStreamModel.load(tmp_path / "bad.pt", text_encoder=HashTokens())

@@ -386,8 +386,9 @@ class TwoStreamModel(Checkpointed, nn.Module):
         self.set_stage(state.get("stage", "joint"))
         if state.get("length_model"):   # checkpoints before it have none
             self.length_model = SentenceLength.from_dict(state["length_model"])
+        d, f = 2 * self.config.h, self.config.n_features   # the joint embedding is 2h
         if state.get("sources"):
-            self.sources = SourceOutput.from_dict(state["sources"])
+            self.sources = SourceOutput.from_dict(state["sources"]).checked(d, f)
         if state.get("start_pose"):
-            self.start_pose = StartPose.from_dict(state["start_pose"])
+            self.start_pose = StartPose.from_dict(state["start_pose"]).checked(d, f)
 

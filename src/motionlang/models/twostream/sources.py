@@ -85,6 +85,14 @@ class SourceOutput:
                    np.stack([np.asarray(m.std) for m in normalizers]),
                    w.detach().numpy(), b.detach().numpy())
 
+    def checked(self, d: int, f: int) -> SourceOutput:
+        """Itself, if it reads (D = ``d``,) embeddings and normalises F = ``f`` features."""
+        if self.weights.shape[1] != d or self.means.shape[1] != f:
+            raise MotionlangError(f"source output: weights {self.weights.shape} and means "
+                                  f"{self.means.shape} do not fit the model's ({d},) sentence "
+                                  f"embeddings and {f} features")
+        return self
+
     def probabilities(self, z: torch.Tensor) -> torch.Tensor:
         """(B, D) sentence embeddings -> (B, S) each sentence's source probabilities."""
         if z.ndim != 2 or z.shape[1] != self.weights.shape[1]:

@@ -51,6 +51,13 @@ class StartPose:
         penalty = ridge * np.diag([1.0] * z.shape[1] + [0.0])
         return cls(np.linalg.solve(x.T @ x + penalty, x.T @ first))
 
+    def checked(self, d: int, f: int) -> StartPose:
+        """Itself, if it reads (D = ``d``,) embeddings into (F = ``f``,) poses."""
+        if self.weights.shape != (d + 1, f):
+            raise MotionlangError(f"start pose: weights {self.weights.shape} do not fit the "
+                                  f"model's ({d},) sentence embeddings and {f} features")
+        return self
+
     def predict(self, z: torch.Tensor) -> torch.Tensor:
         """(B, D) sentence embeddings -> (B, F) first poses (normalised, z's dtype)."""
         if z.ndim != 2 or z.shape[1] != len(self.weights) - 1:
