@@ -26,6 +26,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--bandai", default=str(ROOT.parent / "shared" / "data" / "bandai"))
     ap.add_argument("--no-start-pose", action="store_true", help="no first pose from the "
                     "sentence (the rest pose, as before)")
+    ap.add_argument("--ridge", type=float, default=1.0, help="the first pose's penalty")
     ap.add_argument("--no-sources", action="store_true", help="a by-source model: all its "
                     "motions in its features' source's statistics, as before")
     a = ap.parse_args(argv)
@@ -49,7 +50,7 @@ def main(argv: list[str] | None = None) -> int:
     own = [it for it in data.items["train"] if not it.get("mirrored")]
     sentences = [it["sentence"] for it in own]
     model.start_pose = None if a.no_start_pose else fit_start_pose(
-        model, sentences, np.stack([it["motion"][0] for it in own]))
+        model, sentences, np.stack([it["motion"][0] for it in own]), ridge=a.ridge)
     if data.normalizers and not a.no_sources:
         model.sources = fit_source_output(model, sentences, [data.sources[it["id"]] for it in own],
                                           data.normalizers)

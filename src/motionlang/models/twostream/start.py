@@ -76,16 +76,16 @@ class StartPose:
 
 
 def fit_start_pose(model, sentences: Sequence[str], first: np.ndarray, *, seed: int = 0,
-                   batch: int = 256) -> StartPose:
-    """:meth:`StartPose.fit` on ``model``'s embeddings of (at most :data:`FIT_PAIRS` of) the
-    training ``sentences`` and their motions' first frames ``first`` (N, F), normalised as
-    the model's decoder reads them."""
+                   ridge: float = 1.0, batch: int = 256) -> StartPose:
+    """:meth:`StartPose.fit` (penalty ``ridge``) on ``model``'s embeddings of (at most
+    :data:`FIT_PAIRS` of) the training ``sentences`` and their motions' first frames
+    ``first`` (N, F), normalised as the model's decoder reads them."""
     keep = np.random.default_rng(seed).permutation(len(sentences))[:FIT_PAIRS]
     with torch.no_grad():
         z = np.concatenate([model.joint(model.encode_text(
             [sentences[j] for j in keep[i:i + batch]])).double().numpy()
             for i in range(0, len(keep), batch)])
-    return StartPose.fit(z, np.asarray(first)[keep])
+    return StartPose.fit(z, np.asarray(first)[keep], ridge)
 
 
 def decoder_start(model, z: dict[str, torch.Tensor], start, p: torch.Tensor | None
