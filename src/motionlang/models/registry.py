@@ -159,8 +159,8 @@ PACKAGED: dict[str, Packaged] = {k: replace(p, sha256=PACKAGED_SHA256.get(k, "")
                     "takes", NON_COMMERCIAL),
     "twostream": Packaged("twostream", "twostream", "English -> motion (hierarchical two-stream "
                           "model, Ghosh et al. 2021; MiniLM sentence encoder), 21-joint body, "
-                          "procedural corpus + Bandai Namco takes; 4 epochs: weak on Bandai "
-                          "sentences (see its card)", NON_COMMERCIAL),
+                          "procedural corpus + Bandai Namco takes (each normalised by its own "
+                          "motions); its first pose read from the sentence", NON_COMMERCIAL),
     "m2l-procedural": Packaged("m2l-procedural", "m2l", "the M2L of the procedural corpus "
                                "alone, free of the Bandai Namco licence"),
     "l2m-procedural": Packaged("l2m-procedural", "l2m", "the L2M of the procedural corpus "
