@@ -133,6 +133,19 @@ def test_generation_starts_from_the_sentences_pose_unless_given_one(tmp_path):
     first = m.generate(sentences, 5)[:, 0]
     torch.testing.assert_close(first, m.sources.to_output(
         m.start_pose.predict(z)[:, None].double(), p, m.normalizer)[:, 0].float())
+    # first poses given per sentence (B, F), in the model's normalisation, come back as given
+    given = torch.randn(3, 66)
+    torch.testing.assert_close(m.generate(sentences, 4, start=given)[:, 0], given,
+                               atol=1e-4, rtol=1e-4)
+    # without a start pose the rest pose goes to the decoder as it is (the decoder's space)
+    m.start_pose = None
+    torch.testing.assert_close(m.generate(sentences, 3)[:, 0], m.sources.to_output(
+        m.rest_pose.expand(3, -1)[:, None].double(), p, m.normalizer)[:, 0].float())
+    # the fits read the embeddings in eval mode and leave the model's mode as it was
+    m.train()
+    again = fit_start_pose(m, sentences, poses)
+    assert m.training
+    np.testing.assert_allclose(again.weights, m2.start_pose.weights, atol=1e-6)
 
 
 @pytest.mark.parametrize("entry, value, message", [
@@ -142,6 +155,8 @@ def test_generation_starts_from_the_sentences_pose_unless_given_one(tmp_path):
                  "weights": [[0.0] * 5] * 2, "bias": [0.0, 0.0]}, "do not fit the model's"),
     ("sources", {"means": [[0.0] * 66] * 2, "stds": [[1.0] * 66] * 2,
                  "weights": [[0.0] * 32] * 2, "bias": [0.0]}, "2 sources need"),
+    ("sources", {"means": [[0.0] * 66] * 2, "stds": [[1.0] * 65 + [0.0]] * 2,
+                 "weights": [[0.0] * 32] * 2, "bias": [0.0, 0.0]}, "positive spreads"),
 ])
 def test_a_damaged_start_pose_or_sources_entry_is_named_on_load(tmp_path, entry, value, message):
     m = tiny()

@@ -199,6 +199,8 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg,
         model, train_items, train_cfg, val_items=data.items.get("val") or None,
         first_frames=data.first_frames(), resume=resume,
         schedule=ForcingSchedule(1.0, 0.0, data_cfg.forcing_steps), select=select)
+    # fitted on the kept epoch's model; its choice (``select``) scored motions decoded
+    # without them (the rest pose; by source, every motion in the output source's statistics)
     own = [it for it in data.items["train"] if not it.get("mirrored")]
     model.start_pose = fit_start_pose(model, [it["sentence"] for it in own],
                                       np.stack([it["motion"][0] for it in own]),

@@ -100,7 +100,8 @@ class TwoStreamModel(Checkpointed, nn.Module):
         self.sentence_encoder = SentenceEncoder(config)
         self.decoder = PoseDecoder(config)
         self.discriminator = PoseDiscriminator(config.n_features, config.disc_hidden)
-        # where generation starts when no initial pose is given (normalised features)
+        # where generation starts when no initial pose is given and no start_pose: normalised
+        # as the decoder reads (by source in a by-source model, not by ``normalizer``)
         self.register_buffer("rest_pose", torch.zeros(config.n_features))
         #: probability of feeding the true previous frame while training (a schedule,
         #: e.g. annealed to 0 by the training loop; never used in eval mode)

@@ -52,9 +52,10 @@ class SourceOutput:
                                                       self.bias))
         s = len(self.means)
         if (s < 2 or self.stds.shape != self.means.shape or self.weights.ndim != 2
-                or len(self.weights) != s or self.bias.shape != (s,)):
-            raise MotionlangError(f"source output: {s} sources need (S, F) means and spreads, "
-                                  f"(S, D) weights and (S,) biases, got "
+                or len(self.weights) != s or self.bias.shape != (s,)
+                or not (self.stds > 0).all()):
+            raise MotionlangError(f"source output: {s} sources need (S, F) means and positive "
+                                  f"spreads, (S, D) weights and (S,) biases, got "
                                   f"{self.means.shape}, {self.stds.shape}, "
                                   f"{self.weights.shape}, {self.bias.shape}")
 
@@ -98,28 +99,29 @@ class SourceOutput:
         if z.ndim != 2 or z.shape[1] != self.weights.shape[1]:
             raise MotionlangError(f"source output reads ({self.weights.shape[1]},) sentence "
                                   f"embeddings, got {tuple(z.shape)}")
-        w = torch.as_tensor(self.weights, dtype=z.dtype)
-        return torch.softmax(z @ w.T + torch.as_tensor(self.bias, dtype=z.dtype), dim=-1)
+        w = torch.as_tensor(self.weights, dtype=z.dtype, device=z.device)
+        b = torch.as_tensor(self.bias, dtype=z.dtype, device=z.device)
+        return torch.softmax(z @ w.T + b, dim=-1)
 
     def _mixed(self, p: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         """(B, S) -> each sentence's (B, 1, F) mean and spread."""
-        mean = p @ torch.as_tensor(self.means, dtype=p.dtype)
-        std = p @ torch.as_tensor(self.stds, dtype=p.dtype)
+        mean = p @ torch.as_tensor(self.means, dtype=p.dtype, device=p.device)
+        std = p @ torch.as_tensor(self.stds, dtype=p.dtype, device=p.device)
         return mean[:, None], std[:, None]
 
     def to_output(self, x: torch.Tensor, p: torch.Tensor, out) -> torch.Tensor:
         """(B, T, F) frames normalised by the sentences' sources (probabilities ``p`` (B, S))
         -> the same frames normalised by ``out`` (a ``Normalizer``: the model's features')."""
         mean, std = self._mixed(p.to(x.dtype))
-        om = torch.as_tensor(np.asarray(out.mean), dtype=x.dtype)
-        os_ = torch.as_tensor(np.asarray(out.std), dtype=x.dtype)
+        om = torch.as_tensor(np.asarray(out.mean), dtype=x.dtype, device=x.device)
+        os_ = torch.as_tensor(np.asarray(out.std), dtype=x.dtype, device=x.device)
         return (x * std + mean - om) / os_
 
     def from_output(self, x: torch.Tensor, p: torch.Tensor, out) -> torch.Tensor:
         """The inverse of :meth:`to_output`, for (B, T, F) frames."""
         mean, std = self._mixed(p.to(x.dtype))
-        om = torch.as_tensor(np.asarray(out.mean), dtype=x.dtype)
-        os_ = torch.as_tensor(np.asarray(out.std), dtype=x.dtype)
+        om = torch.as_tensor(np.asarray(out.mean), dtype=x.dtype, device=x.device)
+        os_ = torch.as_tensor(np.asarray(out.std), dtype=x.dtype, device=x.device)
         return (x * os_ + om - mean) / std
 
     def to_dict(self) -> dict:
@@ -142,9 +144,19 @@ def fit_source_output(model, sentences: Sequence[str], labels: Sequence[int],
     lab = np.asarray(labels)
     keep = np.concatenate([rng.permutation(np.flatnonzero(lab == s))[:FIT_PER_SOURCE]
                            for s in range(len(normalizers))])
-    z = []
-    with torch.no_grad():
-        for i in range(0, len(keep), batch):
-            chunk = [sentences[j] for j in keep[i:i + batch]]
-            z.append(model.joint(model.encode_text(chunk)).double().numpy())
-    return SourceOutput.fit(normalizers, np.concatenate(z), lab[keep])
+    return SourceOutput.fit(normalizers, embed(model, [sentences[j] for j in keep], batch),
+                            lab[keep])
+
+
+def embed(model, sentences: Sequence[str], batch: int = 256) -> np.ndarray:
+    """``model``'s sentence embeddings (``joint(encode_text(...))``), (N, D) float64, read
+    in eval mode (the model's mode is restored)."""
+    was = model.training
+    model.eval()
+    try:
+        with torch.no_grad():
+            return np.concatenate([model.joint(model.encode_text(list(sentences[i:i + batch])))
+                                   .double().cpu().numpy()
+                                   for i in range(0, len(sentences), batch)])
+    finally:
+        model.train(was)

@@ -59,11 +59,13 @@ class StartPose:
         return self
 
     def predict(self, z: torch.Tensor) -> torch.Tensor:
-        """(B, D) sentence embeddings -> (B, F) first poses (normalised, z's dtype)."""
+        """(B, D) sentence embeddings -> (B, F) first poses (z's dtype), normalised as the
+        decoder reads them: by the sentence's source's normaliser in a by-source model, else
+        by the model's features'."""
         if z.ndim != 2 or z.shape[1] != len(self.weights) - 1:
             raise MotionlangError(f"start pose reads ({len(self.weights) - 1},) sentence "
                                   f"embeddings, got {tuple(z.shape)}")
-        w = torch.as_tensor(self.weights, dtype=z.dtype)
+        w = torch.as_tensor(self.weights, dtype=z.dtype, device=z.device)
         return z @ w[:-1] + w[-1]
 
     def to_dict(self) -> dict:
@@ -80,11 +82,9 @@ def fit_start_pose(model, sentences: Sequence[str], first: np.ndarray, *, seed: 
     """:meth:`StartPose.fit` (penalty ``ridge``) on ``model``'s embeddings of (at most
     :data:`FIT_PAIRS` of) the training ``sentences`` and their motions' first frames
     ``first`` (N, F), normalised as the model's decoder reads them."""
+    from motionlang.models.twostream.sources import embed
     keep = np.random.default_rng(seed).permutation(len(sentences))[:FIT_PAIRS]
-    with torch.no_grad():
-        z = np.concatenate([model.joint(model.encode_text(
-            [sentences[j] for j in keep[i:i + batch]])).double().numpy()
-            for i in range(0, len(keep), batch)])
+    z = embed(model, [sentences[j] for j in keep], batch)
     return StartPose.fit(z, np.asarray(first)[keep], ridge)
 
 
@@ -102,7 +102,7 @@ def decoder_start(model, z: dict[str, torch.Tensor], start, p: torch.Tensor | No
     if start is None:
         return (model.rest_pose.expand(n, -1) if model.start_pose is None
                 else model.start_pose.predict(model.joint(z)))
-    x0 = torch.as_tensor(start, dtype=torch.float32)
+    x0 = torch.as_tensor(start, dtype=torch.float32, device=model.rest_pose.device)
     x0 = x0.expand(n, -1) if x0.ndim == 1 else x0
     f = model.config.n_features
     if x0.shape != (n, f):
