@@ -99,3 +99,18 @@ def test_several_sources_need_the_selection_source(corpus, evaluator, tmp_path, 
     assert main(["train", "twostream", "--data", f"{corpus}@1", "--data", f"{corpus}@1", "--out",
                  str(out), "--select-evaluator", str(evaluator)]) == 2
     assert "needs --select-data" in capsys.readouterr().err and not out.exists()
+
+
+def test_the_two_stream_recipe_scores_each_epoch_with_its_first_pose_fitted():
+    from motionlang.recipes.twostream import WithHeads
+    calls = []
+
+    def select(model):
+        calls.append(("select", model))
+        return {"select": -0.5}
+
+    select.key = "top-3 of 256 val pairs"   # type: ignore[attr-defined]
+    scored = WithHeads(select, lambda model: calls.append(("fit", model)))
+    assert scored("m") == {"select": -0.5} and calls == [("fit", "m"), ("select", "m")]
+    # a resumed run does not rank its epochs against the bare selector's scores
+    assert scored.key != select.key and scored.key.startswith(select.key)

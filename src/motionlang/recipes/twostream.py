@@ -16,7 +16,7 @@ Torch-free until :func:`run` is called.
 from __future__ import annotations
 
 import logging
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -195,25 +195,49 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg,
         print(f"twostream ({data_cfg.ablation}): {len(data.items['train'])} training pairs "
               f"({len(data.splits['train'])} motions), "
               f"{sum(p.numel() for p in model.parameters()):,} parameters")
+    own = [it for it in data.items["train"] if not it.get("mirrored")]
+
+    def fit_heads(model) -> None:
+        """The first pose read from the sentence, and by source each sentence's source,
+        fitted on ``model`` as it stands: what its generation uses."""
+        model.start_pose = fit_start_pose(model, [it["sentence"] for it in own],
+                                          np.stack([it["motion"][0] for it in own]),
+                                          seed=train_cfg.seed)
+        if by_source is not None:
+            model.sources = fit_source_output(model, [it["sentence"] for it in own],
+                                              [data.sources.get(it["id"], 0) for it in own],
+                                              data.normalizers, seed=train_cfg.seed)
+
     model, history = train_twostream(
         model, train_items, train_cfg, val_items=data.items.get("val") or None,
         first_frames=data.first_frames(), resume=resume,
-        schedule=ForcingSchedule(1.0, 0.0, data_cfg.forcing_steps), select=select)
-    # fitted on the kept epoch's model; its choice (``select``) scored motions decoded
-    # without them (the rest pose; by source, every motion in the output source's statistics)
-    own = [it for it in data.items["train"] if not it.get("mirrored")]
-    model.start_pose = fit_start_pose(model, [it["sentence"] for it in own],
-                                      np.stack([it["motion"][0] for it in own]),
-                                      seed=train_cfg.seed)
-    if by_source is not None:   # each sentence's motion in its source's statistics
-        model.sources = fit_source_output(model, [it["sentence"] for it in own],
-                                          [data.sources.get(it["id"], 0) for it in own],
-                                          data.normalizers, seed=train_cfg.seed)
+        schedule=ForcingSchedule(1.0, 0.0, data_cfg.forcing_steps),
+        select=None if select is None else WithHeads(select, fit_heads))
+    fit_heads(model)   # on the kept epoch's weights
     path = out / family("twostream").model_file
     if lead:
         model.save(path)
         print(summary(path, history))
     return path
+
+
+@dataclass
+class WithHeads:
+    """A ``select`` that scores each epoch's model as it will generate: ``fit`` (its first
+    pose and sources read from the sentence) first, then ``select``."""
+
+    select: Callable[[Any], dict[str, float]]
+    fit: Callable[[Any], None]
+
+    def __call__(self, model) -> dict[str, float]:
+        self.fit(model)
+        return self.select(model)
+
+    @property
+    def key(self) -> str:
+        # another key from the bare selector's: a resumed run does not rank its epochs
+        # against scores made without the fitted first pose
+        return f"{getattr(self.select, 'key', 'select')}, with its first pose fitted"
 
 
 TWOSTREAM = Recipe(run=run, data_config=TwoStreamOptions,
