@@ -35,7 +35,7 @@ def main(argv: list[str] | None = None) -> int:
 
     import motionlang as ml
     from motionlang.datasets.twostream_items import build_twostream_data
-    from motionlang.models.twostream.sources import fit_source_output
+    from motionlang.models.twostream.sources import embed, fit_source_output
     from motionlang.models.twostream.start import fit_start_pose
     torch.set_num_threads(1)
     model = ml.load_model(a.model)
@@ -56,10 +56,8 @@ def main(argv: list[str] | None = None) -> int:
                                           data.normalizers)
         for split in ("val", "test"):
             items = data.items[split]
-            with torch.no_grad():
-                p = torch.cat([model.sources.probabilities(model.joint(model.encode_text(
-                    [it["sentence"] for it in items[i:i + 256]])))
-                    for i in range(0, len(items), 256)])
+            p = model.sources.probabilities(torch.as_tensor(
+                embed(model, [it["sentence"] for it in items])))
             truth = np.array([data.sources[it["id"]] for it in items])
             for s, name in enumerate(("procedural", "Bandai")):
                 mine = truth == s
