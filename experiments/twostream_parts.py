@@ -1,39 +1,41 @@
-"""The two-stream recipe (``experiments/twostream_recipe.sh``: 20 epochs at the full rate,
-then 4 with the learning rate decayed) trained in parts of a few epochs each, one part per
-session, on a fresh checkout: run folders are not kept between sessions, so each part
-starts from a state committed to the repository and ends by replacing it.
+"""The packaged two-stream recipe (``scripts/train_shipped_models.sh``) trained in parts,
+one part per session, on a fresh checkout: run folders are not kept between sessions, so
+each part starts from a state committed to the repository and ends by replacing it.
 
     OMP_NUM_THREADS=1 .venv/bin/python experiments/twostream_parts.py PART
-        [--epochs-per-part 4] [--data SOURCE ...] [--mirror] [--threads 1] [--full-state]
+        [--data SOURCE ...] [--threads 1] [--full-state] [--save-only]
         [--select-evaluator EVALUATOR --select-data SOURCE]
 
-The packaged model's data (``scripts/train_shipped_models.sh``): ``--data
-bandai:../shared/data/bandai@1 --mirror`` (the corpus then gets ``@1`` too: half of each
-epoch each).
+The package's data and selection: ``--data bandai:../shared/data/bandai@1
+--select-evaluator runs/evaluator_bandai --select-data bandai:../shared/data/bandai`` (the
+corpus then gets ``@1`` too: half of each epoch each; the evaluator from ``motionlang
+train evaluator --data bandai:... --epochs 10``). Give the same options to every part.
 
-Part 1 starts the run; part N continues from the state the part before committed, in
-``experiments/state/twostream_recipe/`` (``training.run_state``: the trainer's ``last.pt``
-with the optimiser's moments and the RNG states, ``run.json``, ``splits/``,
-``history.json``, ``commands.jsonl``, ``state.json``; about 37 MB at h = 128, and so by
-default stored compact: ``save_state(compact=True)``, ``last.pt.xz`` with the weights in
-float16 and the moments in bfloat16, about 14 MB, small enough to commit beside the
-package; ``--full-state`` keeps it exact). Parts
-1..5 (4 epochs each: an epoch took 15-19 minutes on one shared core, the data preparation
-about 10 more) reach epoch 20, part 6 runs the 4 decayed epochs; the last part also puts
-``model.pt`` there. With ``--full-state`` the parts give the model of one uninterrupted
+The recipe is a table of phases (``PHASES``: the epoch a phase ends at, its learning rate,
+and how many of its last epochs decay the rate), one part each. Each part fits in about two
+hours on one core of the 2-core machine: an epoch of the package's data takes 11-13 minutes,
+the data preparation about 10 more. Part 1 starts the run; part N continues from the state
+the part before committed, in ``experiments/state/twostream_recipe/``
+(``training.run_state``: the trainer's ``last.pt`` with the optimiser's moments and the RNG
+states, ``run.json``, ``splits/``, ``history.json``, ``commands.jsonl``, ``state.json``;
+about 37 MB at h = 128, and so by default stored compact: ``save_state(compact=True)``,
+``last.pt.xz`` with the weights in float16 and the moments in bfloat16, about 14 MB, small
+enough to commit beside the package; ``--full-state`` keeps it exact). The last part also
+puts ``model.pt`` there. With ``--full-state`` the parts give the model of one uninterrupted
 run bit for bit (``tests/test_run_state.py``). A part rebuilds the corpus (``data synth``,
-seed 0) and the features from it first (minutes; the features through the on-disk cache) and checks them
-against the saved split and normaliser. Printed at the end: what to commit. A compact state
-resumes the run up to the rounding of its weights and moments (``training.run_state``).
-Run a part again after an interruption in the same session: it continues from the run
-folder's own ``last.pt`` (checkpoints every 50 steps). A part that a session's end would cut
-short: stop it, ``PART --save-only`` saves where it stopped (the last checkpoint) as the
-state to commit, and the next session runs the same PART again to finish it.
+seed 0) and the features from it first (minutes; the features through the on-disk cache)
+and checks them against the saved split and normaliser. Printed at the end: what to commit.
+A compact state resumes the run up to the rounding of its weights and moments
+(``training.run_state``). Run a part again after an interruption in the same session: it
+continues from the run folder's own ``last.pt`` (checkpoints every 50 steps). A part that a
+session's end would cut short: stop it, ``PART --save-only`` saves where it stopped (the
+last checkpoint) as the state to commit, and the next session runs the same PART again to
+finish it.
 
-``--select-evaluator`` scores every epoch's motions on validation pairs and the model is the
-epoch with the highest R-precision (``evaluation.t2m.selection``), not the last: the
-state then also keeps that epoch's ``best.pt`` (weights only, about 6 MB compact), since a
-later part may not beat it. Give it (with ``--select-data``) to every part.
+``--select-evaluator`` scores every epoch's motions on validation pairs (each with its first
+pose and source fitted, as it will generate) and the model is the epoch with the highest
+R-precision (``evaluation.t2m.selection``), not the last: the state then also keeps that
+epoch's ``best.pt`` (weights only, about 6 MB compact), since a later part may not beat it.
 """
 from __future__ import annotations
 
@@ -50,32 +52,27 @@ sys.path.insert(0, str(ROOT / "src"))
 STATE = Path("experiments/state/twostream_recipe")   # relative to ROOT: committed
 WORK = Path("runs/twostream_parts")                   # relative to ROOT: not kept
 RECIPE = {"h": 128, "batch_size": 32, "length_buckets": 20, "z_every_step": True,
-          "progress_input": True, "lambdas": {"energy": 10.0}, "checkpoint_every": 50}
-FULL_EPOCHS, DECAY_EPOCHS = 20, 4
+          "progress_input": True, "lambdas": {"energy": 10.0}, "checkpoint_every": 50,
+          "mirror": True, "normalise": "by-source"}
+# (epoch the phase ends at, learning rate, decayed epochs at its end): one part each
+PHASES: tuple[tuple[int, float, float], ...] = ((6, 1e-3, 2), (12, 5e-4, 3))
 
 
-def plan(part: int, per_part: int) -> tuple[int, int, int]:
-    """Part ``part`` -> (epoch it starts from, epoch it ends at, decayed epochs of the run
-    it resumes: 0 until the decay part)."""
-    if per_part < 1:
-        raise ValueError(f"--epochs-per-part must be at least 1, got {per_part}")
-    full_parts = math.ceil(FULL_EPOCHS / per_part)
-    if part < 1 or part > full_parts + 1:
-        raise ValueError(f"PART must be 1..{full_parts + 1} with --epochs-per-part {per_part}, "
-                         f"got {part}")
-    if part <= full_parts:
-        return (part - 1) * per_part, min(part * per_part, FULL_EPOCHS), 0
-    return FULL_EPOCHS, FULL_EPOCHS + DECAY_EPOCHS, DECAY_EPOCHS
+def plan(part: int) -> tuple[int, int, float, float]:
+    """Part ``part`` -> (epoch it starts from, epoch it ends at, its learning rate, the
+    epochs at its end whose rate decays)."""
+    if not 1 <= part <= len(PHASES):
+        raise ValueError(f"PART must be 1..{len(PHASES)}, got {part}")
+    start = PHASES[part - 2][0] if part > 1 else 0
+    end, lr, decay = PHASES[part - 1]
+    return start, end, lr, decay
 
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("part", type=int)
-    ap.add_argument("--epochs-per-part", type=int, default=4)
     ap.add_argument("--data", nargs="*", default=[],
                     help="sources beside the procedural corpus, e.g. bandai:DIR@1")
-    ap.add_argument("--mirror", action="store_true",
-                    help="also train on the motions mirrored left/right (as the package)")
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--full-state", action="store_true",
                     help="save the exact state (about 37 MB) instead of the compact one")
@@ -90,7 +87,7 @@ def main(argv: list[str] | None = None) -> int:
                          "(a part the session's end interrupts; the same part resumes it)")
     a = ap.parse_args(argv)
     try:
-        start, end, decay = plan(a.part, a.epochs_per_part)
+        start, end, lr, decay = plan(a.part)
         if a.select_data and not a.select_evaluator:
             raise ValueError("--select-data needs --select-evaluator")
     except ValueError as exc:
@@ -139,14 +136,14 @@ def main(argv: list[str] | None = None) -> int:
         elif start:
             read_state(STATE)   # no saved state: one line saying so
         if not a.save_only:
-            recipe = {**RECIPE, "mirror": True} if a.mirror else dict(RECIPE)
+            recipe = dict(RECIPE)
             if a.select_evaluator:
                 recipe.update(select_evaluator=a.select_evaluator, select_data=a.select_data)
             model = ml.train("twostream", data, run, resume=(run / "last.pt").is_file(),
-                             epochs=end, decay_epochs=decay, **recipe)
+                             epochs=end, lr=lr, decay_epochs=decay, **recipe)
             about = save_state(run, STATE, part=a.part, data=data,
                                compact=not a.full_state, keep_best=keep_best)
-            if decay:
+            if a.part == len(PHASES):
                 (STATE / "model.pt").write_bytes(model.read_bytes())
     except MotionlangError as exc:
         print(f"twostream_parts.py: {exc}", file=sys.stderr)
@@ -157,11 +154,8 @@ def main(argv: list[str] | None = None) -> int:
           f"{STATE} holds {size / 1e6:.1f} MB. Commit it:\n"
           f"  git add {STATE} && git commit -m 'twostream recipe: part {a.part} "
           f"(epoch {about['epoch']})' -- {STATE}")
-    if end == FULL_EPOCHS and not a.save_only:
-        print(f"the model of the first 20 epochs (the selected one, with "
-              f"--select-evaluator) is {run / 'model.pt'} (this session only): "
-              f"motionlang evaluate-t2m --data {corpus} --model ts20={run / 'model.pt'} "
-              f"--autoencode --true-start --oracle 3 -o {WORK / 't2m_20'}")
+    if a.part == len(PHASES) and not a.save_only:
+        print(f"the model (the selected epoch, with --select-evaluator) is {STATE / 'model.pt'}")
     return 0
 
 

@@ -160,15 +160,11 @@ def test_saved_state_errors(tmp_path):
 
 def test_the_parts_of_the_recipe(capsys):
     parts = load_script(ROOT / "experiments" / "twostream_parts.py")
-    assert [parts.plan(n, 5) for n in (1, 2, 4, 5)] == [(0, 5, 0), (5, 10, 0), (15, 20, 0),
-                                                        (20, 24, 4)]
-    assert parts.plan(3, 8) == (16, 20, 0) and parts.plan(4, 8) == (20, 24, 4)
-    with pytest.raises(ValueError, match="PART must be 1..5"):
-        parts.plan(6, 5)
-    assert parts.main(["7"]) == 2 and parts.main(["1", "--epochs-per-part", "0"]) == 2
-    err = capsys.readouterr().err
-    assert "PART must be 1..6 with --epochs-per-part 4, got 7" in err
-    assert "--epochs-per-part must be at least 1, got 0" in err
+    assert [parts.plan(n) for n in (1, 2)] == [(0, 6, 1e-3, 2), (6, 12, 5e-4, 3)]
+    with pytest.raises(ValueError, match="PART must be 1..2"):
+        parts.plan(3)
+    assert parts.main(["3"]) == 2 and parts.main(["0"]) == 2
+    assert "PART must be 1..2, got 3" in capsys.readouterr().err
 
 
 @needs_minilm
@@ -186,22 +182,27 @@ def test_the_parts_script_on_a_tiny_recipe(corpus, tmp_path, monkeypatch, capsys
     monkeypatch.setattr(parts, "WORK", work)
     monkeypatch.setattr(parts, "STATE", tmp_path / "state")
     monkeypatch.setattr(parts, "RECIPE", {**recipe, "progress": False})
-    monkeypatch.setattr(parts, "FULL_EPOCHS", 2)
-    monkeypatch.setattr(parts, "DECAY_EPOCHS", 1)
-    assert parts.main(["2", "--epochs-per-part", "1"]) == 2   # nothing saved yet
+    # the rate changes between parts, and the last part decays it
+    monkeypatch.setattr(parts, "PHASES", ((1, 1e-3, 0), (2, 5e-4, 0), (3, 5e-4, 1)))
+    assert parts.main(["2"]) == 2   # nothing saved yet
     assert "no saved run state" in capsys.readouterr().err
     for n in (1, 2, 3):
-        assert parts.main([str(n), "--epochs-per-part", "1", "--full-state"]) == 0
+        assert parts.main([str(n), "--full-state"]) == 0
         printed = capsys.readouterr().out
         assert f"git add {tmp_path / 'state'}" in printed and f"part {n} done" in printed
         shutil.rmtree(work / "run")               # the next session has no run folder
     assert read_state(tmp_path / "state")["epoch"] == 3
-    whole = ml.train("twostream", str(work / "corpus"), tmp_path / "whole", epochs=3,
-                     decay_epochs=1, **TINY)
-    a = torch.load(whole, weights_only=True)["state_dict"]
+    whole = tmp_path / "whole"
+    ml.train("twostream", str(work / "corpus"), whole, epochs=1, lr=1e-3, **TINY)
+    ml.train("twostream", str(work / "corpus"), whole, epochs=2, lr=5e-4, resume=True, **TINY)
+    model = ml.train("twostream", str(work / "corpus"), whole, epochs=3, lr=5e-4,
+                     decay_epochs=1, resume=True, **TINY)
+    a = torch.load(model, weights_only=True)["state_dict"]
     b = torch.load(tmp_path / "state" / "model.pt", weights_only=True)["state_dict"]
     assert all(torch.equal(a[k], b[k]) for k in a)
-    assert parts.main(["1", "--epochs-per-part", "1"]) == 2   # would start over
+    history = json.loads((tmp_path / "state" / "history.json").read_text())
+    assert [e["lr"] for e in history] == pytest.approx([1e-3, 5e-4, 5e-6])  # decayed to 1 %
+    assert parts.main(["1"]) == 2   # would start over
     assert "part 1 would start over" in capsys.readouterr().err
 
 
@@ -219,17 +220,16 @@ def test_a_part_cut_short_is_saved_and_finished_by_the_same_part(corpus, tmp_pat
     monkeypatch.setattr(parts, "WORK", work)
     monkeypatch.setattr(parts, "STATE", tmp_path / "state")
     monkeypatch.setattr(parts, "RECIPE", recipe)
-    monkeypatch.setattr(parts, "FULL_EPOCHS", 2)
-    monkeypatch.setattr(parts, "DECAY_EPOCHS", 1)
+    monkeypatch.setattr(parts, "PHASES", ((2, 1e-3, 0), (3, 1e-3, 1)))
     # part 1 (epochs 0..2) stopped after its first epoch, as a session's end would stop it
     ml.train("twostream", str(work / "corpus"), work / "run", epochs=1, **recipe)
-    assert parts.main(["1", "--epochs-per-part", "2", "--save-only", "--full-state"]) == 0
+    assert parts.main(["1", "--save-only", "--full-state"]) == 0
     assert "saved where it stopped: epoch 1" in capsys.readouterr().out
     shutil.rmtree(work / "run")                   # the next session
-    assert parts.main(["2", "--epochs-per-part", "2"]) == 2   # part 1 is not done
+    assert parts.main(["2"]) == 2   # part 1 is not done
     assert "run the part that ends at epoch 2 first" in capsys.readouterr().err
     assert not (work / "run").exists()            # refused before anything was restored
-    assert parts.main(["1", "--epochs-per-part", "2", "--full-state"]) == 0
+    assert parts.main(["1", "--full-state"]) == 0
     assert read_state(tmp_path / "state")["epoch"] == 2
     whole = ml.train("twostream", str(work / "corpus"), tmp_path / "whole", epochs=2,
                      **recipe)
@@ -237,5 +237,5 @@ def test_a_part_cut_short_is_saved_and_finished_by_the_same_part(corpus, tmp_pat
     b = torch.load(work / "run" / "model.pt", weights_only=True)["state_dict"]
     assert all(torch.equal(a[k], b[k]) for k in a)
     shutil.rmtree(work / "run")
-    assert parts.main(["1", "--epochs-per-part", "2"]) == 2   # done: would start over
+    assert parts.main(["1"]) == 2   # done: would start over
     assert "part 1 would start over" in capsys.readouterr().err
