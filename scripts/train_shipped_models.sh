@@ -12,9 +12,9 @@
 # two models side by side: corpus ~2 min; procedural + Bandai: data preparation ~25 min per
 # run (fitting and encoding 6,750 training motions and their mirror images; cached by
 # MOTIONLANG_CACHE), M2L ~7-10 min an epoch (8 epochs), L2M ~28 min a teacher-forced epoch and
-# ~35 min an epoch on its own frames (1 + 1 + 1 + 1), judge ~10 min, two-stream ~20 min an epoch
-# (4 epochs, after the M2L); procedural alone: M2L ~30 min (12 epochs),
-# L2M ~90 min (3 + 3 + 1 + 1).
+# ~35 min an epoch on its own frames (1 + 1 + 1 + 1), judge ~10 min, Bandai evaluator ~10 min,
+# two-stream ~11-13 min an epoch and ~2 min to score it (12 epochs, after the M2L);
+# procedural alone: M2L ~30 min (12 epochs), L2M ~90 min (3 + 3 + 1 + 1).
 # Every --out is a run folder: the final model is its model.pt (beside best.pt, last.pt,
 # history.json, loss_curve.png, splits/ and commands.jsonl; LICENSE.txt for Bandai runs).
 # OMP_NUM_THREADS=1: one thread per model as the two run side by side.
@@ -104,14 +104,19 @@ if [ "$MODELS" = all ] || [ "$MODELS" = bandai ]; then
   "$ML" train judge --data "bandai:$BANDAI" --out "$WORK/judge" --epochs 30
   # the two-stream model (Ghosh et al. 2021 with the recipe's additions, docs/results/
   # twostream.md): each source normalised by its own motions, every epoch scored on the
-  # Bandai validation pairs by a Bandai evaluator and the best kept (epoch 5 of 6, the last 2
-  # decayed); the run's end fits the first pose and the source read from the sentence;
-  # stored in float16
+  # Bandai validation pairs by a Bandai evaluator (with its first pose and source fitted)
+  # and the best kept; 6 epochs (the last 2 decayed), then 6 more at half the rate (the last
+  # 3 decayed): epoch 9 of 12 was kept; stored in float16
   "$ML" train evaluator --data "bandai:$BANDAI" --out "$WORK/evaluator_bandai" --epochs 10
-  "$ML" train twostream "${MIX[@]}" --out "$WORK/twostream" --h 128 --batch-size 32 \
-      --length-buckets 20 --z-every-step --progress-input --weight energy=10 --threads 1 \
-      --normalise by-source --select-evaluator "$WORK/evaluator_bandai" \
-      --select-data "bandai:$BANDAI" --epochs 6 --decay-epochs 2 --checkpoint-every 100 $RESUME
+  TS=(train twostream "${MIX[@]}" --out "$WORK/twostream" --h 128 --batch-size 32
+      --length-buckets 20 --z-every-step --progress-input --weight energy=10 --threads 1
+      --normalise by-source --select-evaluator "$WORK/evaluator_bandai"
+      --select-data "bandai:$BANDAI" --checkpoint-every 100)
+  if [ ! -f "$WORK/twostream/.stage1" ]; then
+    "$ML" "${TS[@]}" --epochs 6 --decay-epochs 2 $RESUME
+    touch "$WORK/twostream/.stage1"
+  fi
+  "$ML" "${TS[@]}" --resume --epochs 12 --lr 5e-4 --decay-epochs 3
   wait $L2M   # (set -e) a failed run stops the script before anything is shipped
   cp "$WORK/m2l/model.pt" "$SHIP/m2l.pt"
   cp "$WORK/l2m/planned.pt" "$SHIP/l2m.pt"
