@@ -143,7 +143,7 @@ class Packaged:
 PACKAGED_SHA256: dict[str, str] = {
     "m2l": "644963b4e696933fb7d86318905093468f658a2dc1a2a6d9fda4b13d29e1428d",
     "l2m": "e2ca8ae530b370f1245ed7506d757a25683af29c781df7cf98b3353b62b42a3a",
-    "twostream": "2c658a9adb4b0f1b3e6ff4550cbefdbf6be2492536838f9efa7ce0345420eccc",
+    "twostream": "a2b392a7803614d9c595896583af873b3b26e37069c374b08131f85ba731aa8c",
     "m2l-procedural": "f1c0da99bc3a90ac9bbb40616cc027cb490dbb61115c75316afc4fe372925eef",
     "l2m-procedural": "75e9dca9b55abc02b251158048b4903aca9f68af1d2c40c1c4c2cfc1964d1ae8",
     "retrieval": "c4a589d890161d0923f59ac502ee28d9376239204b3d582c91b4f17e80e67f8a",
