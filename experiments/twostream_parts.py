@@ -40,7 +40,6 @@ epoch's ``best.pt`` (weights only, about 6 MB compact), since a later part may n
 from __future__ import annotations
 
 import argparse
-import math
 import os
 import subprocess
 import sys
