@@ -89,6 +89,9 @@ def main(argv: list[str] | None = None) -> int:
         start, end, lr, decay = plan(a.part)
         if a.select_data and not a.select_evaluator:
             raise ValueError("--select-data needs --select-evaluator")
+        if RECIPE.get("normalise") == "by-source" and not a.data:
+            raise ValueError("the recipe normalises each source by its own motions: give "
+                             "--data (e.g. bandai:../shared/data/bandai@1) beside the corpus")
     except ValueError as exc:
         print(f"twostream_parts.py: {exc}", file=sys.stderr)
         return 2

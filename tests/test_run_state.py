@@ -165,6 +165,8 @@ def test_the_parts_of_the_recipe(capsys):
         parts.plan(3)
     assert parts.main(["3"]) == 2 and parts.main(["0"]) == 2
     assert "PART must be 1..2, got 3" in capsys.readouterr().err
+    assert parts.main(["1"]) == 2   # by source, and only the corpus: refused before any work
+    assert "give --data" in capsys.readouterr().err
 
 
 @needs_minilm
