@@ -288,6 +288,59 @@ def more(args: argparse.Namespace) -> None:
         _split(path, args.split_mb)
 
 
+def mirror(args: argparse.Namespace) -> None:
+    """Here: a copy of the pack for ``more`` (no rows) whose training items also hold each
+    training motion mirrored left/right (``build_twostream_data(mirror=True)``), tokenized by
+    MODEL, under id ``"M" + id``, its sentences' sides swapped, their MiniLM vectors added."""
+    import torch
+
+    from motionlang.datasets.sources import parse_source
+    from motionlang.datasets.twostream_items import build_twostream_data
+    from motionlang.models.masked.model import MaskedModel
+    from motionlang.models.text_tokens import TransformerTokens
+
+    p, out = Path(args.pack), Path(args.out)
+    slim = torch.load(p / "meta.pt", weights_only=False)
+    sources = [parse_source(s) for s in slim["source_args"]]
+    paths = [s.path for s in sources]
+    data = build_twostream_data(paths if len(paths) > 1 else paths[0], seed=args.seed,
+                                max_seconds=args.max_seconds, mirror=True)
+    if data.splits["train"] != slim["splits"]["train"]:
+        sys.exit("mirror: the data's training split differs from the pack's")
+    # the tokenizer reads rows normalised as the pack's were
+    for a, b in ((data.features.normalizer.mean, slim["features"].normalizer.mean),
+                 (data.features.normalizer.std, slim["features"].normalizer.std)):
+        if not np.allclose(a, b, rtol=1e-5, atol=1e-6):
+            sys.exit("mirror: the data's normaliser differs from the pack's")
+    flipped = [it for it in data.items["train"] if it.get("mirrored")]
+    motions = {}
+    for it in flipped:
+        motions.setdefault(it["id"], it["motion"])
+    model = MaskedModel.load(args.model, text_encoder=_vectors(p, slim))
+    ids = sorted(motions)
+    toks = torch.load(p / "tokens.pt", weights_only=False)
+    toks.update({"M" + i: t.astype(np.int16)
+                 for i, t in zip(ids, model.tokenize([motions[i] for i in ids]))})
+    old = _vectors(p, slim).vectors
+    new = sorted({str(it["sentence"]) for it in flipped} - set(old))
+    text = TransformerTokens("minilm", (6,))
+    for i in range(0, len(new), 256):
+        feats = text.many(new[i:i + 256])
+        old.update({c: f.mean(0) for c, f in zip(new[i:i + 256], feats)})
+    names = sorted(old)
+    table = np.stack([np.asarray(old[c], dtype=np.float32) for c in names]).astype(np.float16)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "vectors.xz").write_bytes(lzma.compress(table.tobytes()))
+    items = dict(slim["items"])
+    items["train"] = items["train"] + [{"sentence": it["sentence"], "id": "M" + it["id"]}
+                                       for it in flipped]
+    srcs = dict(slim["sources"])
+    srcs.update({"M" + i: srcs[i] for i in ids})
+    torch.save({**slim, "captions": names, "items": items, "sources": srcs}, out / "meta.pt")
+    torch.save(toks, out / "tokens.pt")
+    print(f"{len(ids)} mirrored motions, {len(flipped)} items, {len(new)} new captions -> {out}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     sub = ap.add_subparsers(dest="cmd", required=True)
@@ -328,8 +381,15 @@ def main() -> None:
     d.add_argument("--lr", type=float, default=1e-4)
     d.add_argument("--seed", type=int, default=1)
     d.add_argument("--split-mb", type=float, default=0)
+    e = sub.add_parser("mirror")
+    e.add_argument("pack")
+    e.add_argument("model")
+    e.add_argument("--out", default=".packm")
+    e.add_argument("--seed", type=int, default=0)
+    e.add_argument("--max-seconds", type=float, default=30.0)
     args = ap.parse_args()
-    {"pack": pack, "train": train, "tokens": tokens, "more": more}[args.cmd](args)
+    {"pack": pack, "train": train, "tokens": tokens, "more": more,
+     "mirror": mirror}[args.cmd](args)
 
 
 if __name__ == "__main__":
