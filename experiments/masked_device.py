@@ -267,7 +267,14 @@ def more(args: argparse.Namespace) -> None:
     text = _vectors(p, slim)
     toks = torch.load(p / "tokens.pt", weights_only=False)
     device = recipe.pick_device(args.device)
-    model = MaskedModel.load(args.model, text_encoder=text).to(device)
+    model = MaskedModel.load(args.model, text_encoder=text)
+    if args.fresh_hidden:   # the tokenizer kept, the token transformers new at this width
+        torch.manual_seed(args.seed)
+        fresh = MaskedModel(dataclasses.replace(model.config, hidden=args.fresh_hidden),
+                            model.features, text)
+        fresh.tokenizer.load_state_dict(model.tokenizer.state_dict())
+        model = fresh
+    model = model.to(device)
     n = model.config.max_tokens
     items = {k: [{"tokens": toks[it["id"]][:n].astype(np.int64), "sentence": it["sentence"],
                   "id": it["id"]} for it in v] for k, v in slim["items"].items()}
@@ -381,6 +388,8 @@ def main() -> None:
     d.add_argument("--lr", type=float, default=1e-4)
     d.add_argument("--seed", type=int, default=1)
     d.add_argument("--split-mb", type=float, default=0)
+    d.add_argument("--fresh-hidden", type=int, default=0,
+                   help="keep MODEL's tokenizer only: new token transformers this wide")
     e = sub.add_parser("mirror")
     e.add_argument("pack")
     e.add_argument("model")
