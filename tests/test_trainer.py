@@ -94,10 +94,15 @@ def test_trains_a_seq2seq_model_and_checkpoint_loads(tmp_path):
 
 def test_two_process_ddp_matches_single_process(tmp_path):
     worker = Path(__file__).parent / "helpers" / "trainer_tiny.py"
-    proc = subprocess.run(
-        [sys.executable, "-m", "torch.distributed.run", "--standalone", "--nproc_per_node", "2",
-         str(worker), str(tmp_path)], capture_output=True, text=True, timeout=120,
-        env={**__import__("os").environ, "OMP_NUM_THREADS": "1"})
+    for _ in range(2):
+        proc = subprocess.run(
+            [sys.executable, "-m", "torch.distributed.run", "--standalone", "--nproc_per_node",
+             "2", str(worker), str(tmp_path)], capture_output=True, text=True, timeout=120,
+            env={**__import__("os").environ, "OMP_NUM_THREADS": "1"})
+        # gloo can abort a rank while tearing its connections down after the run (rarely,
+        # despite finish_distributed's barrier): that, and only that, is tried once more
+        if proc.returncode == 0 or "SIGABRT" not in proc.stderr:
+            break
     assert proc.returncode == 0, proc.stderr[-3000:]
     r0 = torch.load(tmp_path / "rank0.pt", weights_only=True)
     r1 = torch.load(tmp_path / "rank1.pt", weights_only=True)
