@@ -54,7 +54,8 @@ RECIPE = {"h": 128, "batch_size": 32, "length_buckets": 20, "z_every_step": True
           "progress_input": True, "lambdas": {"energy": 10.0}, "checkpoint_every": 50,
           "mirror": True, "normalise": "by-source"}
 # (epoch the phase ends at, learning rate, decayed epochs at its end): one part each
-PHASES: tuple[tuple[int, float, float], ...] = ((6, 1e-3, 2), (12, 5e-4, 3))
+PHASES: tuple[tuple[int, float, float], ...] = ((6, 1e-3, 2), (12, 5e-4, 3),
+                                                 (18, 2.5e-4, 3))
 
 
 def plan(part: int) -> tuple[int, int, float, float]:

@@ -105,8 +105,8 @@ if [ "$MODELS" = all ] || [ "$MODELS" = bandai ]; then
   # the two-stream model (Ghosh et al. 2021 with the recipe's additions, docs/results/
   # twostream.md): each source normalised by its own motions, every epoch scored on the
   # Bandai validation pairs by a Bandai evaluator (with its first pose and source fitted)
-  # and the best kept; 6 epochs (the last 2 decayed), then 6 more at half the rate (the last
-  # 3 decayed): epoch 9 of 12 was kept; stored in float16
+  # and the best kept; 6 epochs (the last 2 decayed), 6 more at half the rate (the last 3
+  # decayed), 6 more at a quarter (the last 3 decayed): epoch 18 was kept; stored in float16
   "$ML" train evaluator --data "bandai:$BANDAI" --out "$WORK/evaluator_bandai" --epochs 10
   TS=(train twostream "${MIX[@]}" --out "$WORK/twostream" --h 128 --batch-size 32
       --length-buckets 20 --z-every-step --progress-input --weight energy=10 --threads 1
@@ -116,7 +116,11 @@ if [ "$MODELS" = all ] || [ "$MODELS" = bandai ]; then
     "$ML" "${TS[@]}" --epochs 6 --decay-epochs 2 $RESUME
     touch "$WORK/twostream/.stage1"
   fi
-  "$ML" "${TS[@]}" --resume --epochs 12 --lr 5e-4 --decay-epochs 3
+  if [ ! -f "$WORK/twostream/.stage2" ]; then
+    "$ML" "${TS[@]}" --resume --epochs 12 --lr 5e-4 --decay-epochs 3
+    touch "$WORK/twostream/.stage2"
+  fi
+  "$ML" "${TS[@]}" --resume --epochs 18 --lr 2.5e-4 --decay-epochs 3
   wait $L2M   # (set -e) a failed run stops the script before anything is shipped
   cp "$WORK/m2l/model.pt" "$SHIP/m2l.pt"
   cp "$WORK/l2m/planned.pt" "$SHIP/l2m.pt"

@@ -160,11 +160,12 @@ def test_saved_state_errors(tmp_path):
 
 def test_the_parts_of_the_recipe(capsys):
     parts = load_script(ROOT / "experiments" / "twostream_parts.py")
-    assert [parts.plan(n) for n in (1, 2)] == [(0, 6, 1e-3, 2), (6, 12, 5e-4, 3)]
-    with pytest.raises(ValueError, match="PART must be 1..2"):
-        parts.plan(3)
-    assert parts.main(["3"]) == 2 and parts.main(["0"]) == 2
-    assert "PART must be 1..2, got 3" in capsys.readouterr().err
+    assert [parts.plan(n) for n in (1, 2, 3)] == [(0, 6, 1e-3, 2), (6, 12, 5e-4, 3),
+                                                  (12, 18, 2.5e-4, 3)]
+    with pytest.raises(ValueError, match="PART must be 1..3"):
+        parts.plan(4)
+    assert parts.main(["4"]) == 2 and parts.main(["0"]) == 2
+    assert "PART must be 1..3, got 4" in capsys.readouterr().err
     assert parts.main(["1"]) == 2   # by source, and only the corpus: refused before any work
     assert "give --data" in capsys.readouterr().err
 
