@@ -57,14 +57,26 @@ class VectorTable:
         return [self.vectors[s][None] for s in sentences]
 
 
+def _encode(captions: list[str]) -> dict:
+    """Each caption's MiniLM vector (D,), as ``MaskedModel.sentence_vectors`` computes it
+    (the default config's encoder and layer, token features mean-pooled), in batches."""
+    from motionlang.models.masked.config import MaskedConfig
+    from motionlang.models.text_tokens import TransformerTokens
+    config = MaskedConfig()
+    text = TransformerTokens(config.text_model, (config.text_layer,))
+    vectors = {}
+    for i in range(0, len(captions), 256):
+        feats = text.many(captions[i:i + 256])
+        vectors.update({c: f.mean(0).numpy() for c, f in zip(captions[i:i + 256], feats)})
+    return vectors
+
+
 def pack(args: argparse.Namespace) -> None:
     import torch
 
     from motionlang.datasets.sources import parse_source
     from motionlang.datasets.splits import save_splits
     from motionlang.datasets.twostream_items import build_twostream_data
-    from motionlang.models.masked.config import MaskedConfig
-    from motionlang.models.text_tokens import TransformerTokens
     from motionlang.training.run_log import log_command, write_licence
 
     sources = [parse_source(s) for s in args.data]
@@ -74,13 +86,8 @@ def pack(args: argparse.Namespace) -> None:
                                 max_seconds=args.max_seconds)
     print(f"data: {len(data.sequences)} motions, {time.perf_counter() - started:.0f} s",
           flush=True)
-    config = MaskedConfig()
-    text = TransformerTokens(config.text_model, (config.text_layer,))
     captions = sorted({str(it["sentence"]) for part in data.items.values() for it in part})
-    vectors = {}
-    for i in range(0, len(captions), 256):
-        feats = text.many(captions[i:i + 256])
-        vectors.update({c: f.mean(0).numpy() for c, f in zip(captions[i:i + 256], feats)})
+    vectors = _encode(captions)
     print(f"{len(captions)} caption vectors, {time.perf_counter() - started:.0f} s", flush=True)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -304,7 +311,6 @@ def mirror(args: argparse.Namespace) -> None:
     from motionlang.datasets.sources import parse_source
     from motionlang.datasets.twostream_items import build_twostream_data
     from motionlang.models.masked.model import MaskedModel
-    from motionlang.models.text_tokens import TransformerTokens
 
     p, out = Path(args.pack), Path(args.out)
     slim = torch.load(p / "meta.pt", weights_only=False)
@@ -330,10 +336,7 @@ def mirror(args: argparse.Namespace) -> None:
                  for i, t in zip(ids, model.tokenize([motions[i] for i in ids]))})
     old = _vectors(p, slim).vectors
     new = sorted({str(it["sentence"]) for it in flipped} - set(old))
-    text = TransformerTokens("minilm", (6,))
-    for i in range(0, len(new), 256):
-        feats = text.many(new[i:i + 256])
-        old.update({c: f.mean(0) for c, f in zip(new[i:i + 256], feats)})
+    old.update(_encode(new))
     names = sorted(old)
     table = np.stack([np.asarray(old[c], dtype=np.float32) for c in names]).astype(np.float16)
     out.mkdir(parents=True, exist_ok=True)
