@@ -19,7 +19,8 @@ from motionlang.rendering.scene import RENDER_MAX_FRAMES
 
 def add_input_args(p: argparse.ArgumentParser, many: bool = False) -> None:
     p.add_argument("input", metavar="IN", nargs="+" if many else None,
-                   help="motion file: .xml (KIT MMM), .bvh, .amc or .mat (MIT walking data)"
+                   help="motion file: .xml (KIT MMM), .bvh, .amc, .mat (MIT walking data) "
+                        "or .txt (DeepMimic)"
                         + ("; or several, and folders (their motion files)" if many else ""))
     p.add_argument("--asf", metavar="PATH", default=None,
                    help="ASF skeleton of an .amc input (default: <subject>.asf next to it)")

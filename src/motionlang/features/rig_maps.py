@@ -171,6 +171,25 @@ RIG_MAPS: tuple[RigMap, ...] = (
                    "BT": "thorax", "BLN": "lclavicle",
                    "BUN": ("lerp", "thorax", "lclavicle", 1.18)},
            "MIT walking data, Taylor's 18-node tree (pelvis, thorax, lclavicle)"),
+    # The DeepMimic humanoid3d character (formats.deepmimic): its root sits on the hip line
+    # as MMM's does; chest is the thorax joint (BT) and neck the base of the neck (BLN),
+    # at shoulder height. The lumbar joint is put 40 % of the way from the root to the chest
+    # (MMM: 0.040 of 0.100 stature from the hip line to BT), the head base 14 % of the
+    # chest-to-neck span above the neck (MMM: BLN to BUN 0.030, BT to BLN 0.210 of stature).
+    # It has no toe joints: its foot tip (the front of the sole) stands where MIT's toes node
+    # does, so the toe joint and mid-foot are put as there (75 % and 28 % of the way). The
+    # alternatives are the names a BVH written from it gives its end points.
+    RigMap("deepmimic", {**_sided({"LS": "{s}_shoulder", "LE": "{s}_elbow",
+                                   "LW": "{s}_wrist|{s}_elbow_end",
+                                   "LH": "{s}_hip", "LK": "{s}_knee", "LA": "{s}_ankle",
+                                   "LMrot": ("lerp", "{s}_ankle", "{s}_foot_tip|{s}_ankle_end",
+                                             0.28),
+                                   "LF": ("lerp", "{s}_ankle", "{s}_foot_tip|{s}_ankle_end",
+                                          0.75)}, s=("left", "right")),
+                         "root": ("mid", "left_hip", "right_hip"),
+                         "BP": ("lerp", "root", "chest", 0.4), "BT": "chest", "BLN": "neck",
+                         "BUN": ("lerp", "chest", "neck", 1.14)},
+           "DeepMimic humanoid3d character (root, chest, neck, right_hip, left_foot_tip)"),
     # 3ds Max Character Studio / Biovision naming (also Xsens MVN BVH exports): here
     # LeftShoulder is the shoulder joint and LeftCollar the clavicle.
     _rig("biped", "3ds Max Biped / Biovision naming (Chest, Chest2, LeftCollar, LeftElbow)",

@@ -9,6 +9,9 @@
 * ``.mat`` — the MIT walking data as Taylor distributed it (:mod:`motionlang.formats.mit`;
   read only, one sequence at a time), through a strict MAT-file reader of our own
   (:mod:`motionlang.formats.matfile`: scipy's can be crashed by a crafted file)
+* ``.txt`` — a DeepMimic clip of its humanoid3d character, JSON with a ``"Frames"`` list
+  (:mod:`motionlang.formats.deepmimic`; read only). Known by its content: a folder scan
+  (:func:`is_motion_file`) takes a ``.txt`` file only when it starts as such a clip does.
 
 Every reader turns a bad file into one :class:`MotionFormatError` naming the file (and the
 line or frame), never another exception, and checks what a file asks for (size, joints,
@@ -24,6 +27,8 @@ from motionlang.kinematics.motion import Motion
 from motionlang.kinematics.skeleton import Skeleton
 
 READ_EXTENSIONS = (".xml", ".bvh", ".amc", ".mat")
+#: extensions read when the content is a motion's: DeepMimic clips are ``.txt`` files
+CONTENT_EXTENSIONS = (".txt",)
 WRITE_EXTENSIONS = (".bvh", ".xml", ".amc", ".glb", ".gltf")
 
 
@@ -47,6 +52,16 @@ def find_asf(amc_path: str | Path) -> Path:
     why = "none" if not found else f"{len(found)} ({', '.join(p.name for p in found[:4])})"
     raise MotionFormatError(amc_path, f"cannot choose the ASF skeleton: no {subject}.asf and "
                                       f"{why} .asf files in {folder}; pass skeleton=")
+
+
+def is_motion_file(path: str | Path) -> bool:
+    """Whether a folder scan takes ``path``: an extension of :data:`READ_EXTENSIONS`, or a
+    ``.txt`` file that starts as a DeepMimic clip does."""
+    ext = Path(path).suffix.lower()
+    if ext in READ_EXTENSIONS:
+        return True
+    from motionlang.formats.deepmimic import looks_like_deepmimic
+    return ext in CONTENT_EXTENSIONS and looks_like_deepmimic(path)
 
 
 def read_joint_map(path: str | Path) -> dict:
@@ -74,7 +89,8 @@ def read_motion(path: str | Path, *, skeleton: Skeleton | str | Path | None = No
     """Read a motion file, choosing the reader from the extension.
 
     Args:
-        path: ``.xml`` (MMM), ``.bvh``, ``.amc`` or ``.mat`` (MIT walking data).
+        path: ``.xml`` (MMM), ``.bvh``, ``.amc``, ``.mat`` (MIT walking data) or ``.txt``
+            (a DeepMimic clip).
         skeleton: for ``.amc``: a ``Skeleton`` or the path of its ``.asf`` (found next to
             the AMC when omitted).
         fps: for ``.amc`` (default 120); for other formats, the motion is resampled to
@@ -96,9 +112,10 @@ def read_motion(path: str | Path, *, skeleton: Skeleton | str | Path | None = No
         motion.meta["joint_map"] = spec
         return motion
     ext = path.suffix.lower()
-    if ext not in READ_EXTENSIONS:
+    if ext not in READ_EXTENSIONS + CONTENT_EXTENSIONS:
         raise MotionFormatError(path, f"unknown motion file extension {ext or '(none)'!r}; "
-                                      f"expected one of {', '.join(READ_EXTENSIONS)}")
+                                      f"expected one of {', '.join(READ_EXTENSIONS)} or .txt "
+                                      "(DeepMimic)")
     if not path.is_file():
         raise MotionFormatError(path, "file not found")
     if ext == ".amc":
@@ -111,6 +128,9 @@ def read_motion(path: str | Path, *, skeleton: Skeleton | str | Path | None = No
     if ext == ".bvh":
         from motionlang.formats.bvh import read_bvh
         motion = read_bvh(path)
+    elif ext == ".txt":
+        from motionlang.formats.deepmimic import read_deepmimic
+        motion = read_deepmimic(path)
     elif ext == ".mat":
         from motionlang.formats.mit import read_mit
         motions = read_mit(path)
@@ -202,4 +222,4 @@ def info_text(info: dict) -> str:
 
 
 __all__ = ["read_motion", "write_motion", "motion_info", "info_text", "find_asf",
-           "read_joint_map"]
+           "is_motion_file", "read_joint_map"]

@@ -15,14 +15,15 @@ from pathlib import Path
 
 from motionlang.datasets.download import sha256_file
 from motionlang.errors import MotionlangError
-from motionlang.formats import READ_EXTENSIONS, find_asf, read_motion
+from motionlang.formats import find_asf, is_motion_file, read_motion
 from motionlang.kinematics.motion import Motion
 
 
 def motion_files(root: str | Path) -> list[Path]:
-    """Every file under ``root`` (recursively) with an extension a reader knows, sorted by
-    relative path. Hidden files and folders (a name starting with ".": version control,
-    the temporary files of atomic writes) are left out.
+    """Every file under ``root`` (recursively) with an extension a reader knows (``.txt``:
+    a DeepMimic clip, known by its content), sorted by relative path. Hidden files and
+    folders (a name starting with ".": version control, the temporary files of atomic
+    writes) are left out.
 
     Raises:
         MotionlangError: ``root`` is not a folder.
@@ -34,7 +35,7 @@ def motion_files(root: str | Path) -> list[Path]:
     for folder, dirs, names in os.walk(root):
         dirs[:] = [d for d in dirs if not d.startswith(".")]
         found += [Path(folder) / n for n in names
-                  if not n.startswith(".") and Path(n).suffix.lower() in READ_EXTENSIONS]
+                  if not n.startswith(".") and is_motion_file(Path(folder) / n)]
     return sorted(found, key=lambda p: p.relative_to(root).as_posix())
 
 
