@@ -7,6 +7,7 @@ The packaged models describe (m2l) and embed (twostream): the tests read what a 
 from __future__ import annotations
 
 import json
+import math
 import re
 from pathlib import Path
 
@@ -104,7 +105,9 @@ def test_a_take_that_walks_then_squats_is_two_segments_in_order(long_take, capsy
     assert starts[0] == 0.0 and starts[1:] == ends[:-1]    # the segments tile the take
     assert ends[-1] == pytest.approx(ml.read_motion(path).duration, abs=0.1)
     actions = [action_of(text) for _, _, text in segments]
-    assert actions[0] == "walk" and actions[-1] == "squat", lines
+    # standing still before and after the squats is said where the body does it
+    moving = [a for a in actions if a != "stand"]
+    assert moving[0] == "walk" and moving[-1] == "squat", lines
     squat_starts = done[1].start / 100   # frames at 100 Hz
     walk_ends = [e for e, a in zip(ends, actions) if a == "walk"]
     assert abs(walk_ends[-1] - squat_starts) <= 1.5, (lines, squat_starts)
@@ -116,7 +119,9 @@ def test_the_api_gives_what_the_command_line_writes(library, described, long_tak
     path, _ = long_take
     printed = _run(["describe", str(path), "--segments", *WIDTH, "--json"], capsys)
     segments = ml.timeline(path, width=2)
-    assert [{"start": s.start, "end": s.end, "text": s.text, "log_p": round(s.score, 4)}
+    # a segment the grounded analysis says has no model score: null
+    assert [{"start": s.start, "end": s.end, "text": s.text,
+             "log_p": None if math.isnan(s.score) else round(s.score, 4)}
             for s in segments] == json.loads(printed)
 
 

@@ -93,7 +93,12 @@ def test_packaged_m2l_names_a_real_jog_and_a_real_walk(shared_data):
     walk = next(t for t in trials if t.label == "walk")
     assert named_gait(ml.describe(jog.motion, m2l, 3)[0][0]) == "run"
     assert named_gait(ml.describe(walk.motion, m2l, 3)[0][0]) == "walk"
-    assert ml.describe(shared_data / "cmu49" / "49_20.amc", m2l, 3)[0][0] == UNFAMILIAR
+    # KIT-ML: "A human balances on one foot."; the model alone cannot say it (its beam is
+    # the unfamiliar line), the grounded analysis can
+    assert ml.describe(shared_data / "cmu49" / "49_20.amc", m2l, 3, raw=False)[0][0] != \
+        UNFAMILIAR
+    assert "balances on the left leg" in ml.describe(shared_data / "cmu49" / "49_20.amc",
+                                                     m2l, 3)[0][0]
 
 
 def test_raw_gives_the_models_own_beam(shared_data, capsys):
@@ -105,7 +110,8 @@ def test_raw_gives_the_models_own_beam(shared_data, capsys):
     assert main(["describe", str(path), "-w", "2", "--raw"]) == 0
     assert UNFAMILIAR not in capsys.readouterr().out
     assert main(["describe", str(path), "-w", "2"]) == 0
-    assert UNFAMILIAR in capsys.readouterr().out
+    # checked, the first line is what the body does (it balances on one leg)
+    assert "grounded  a person" in capsys.readouterr().out
 
 
 def test_standing_still_contradicts_a_gait(model, monkeypatch):

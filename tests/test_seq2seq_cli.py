@@ -275,7 +275,8 @@ def test_describe_ranks_its_hypotheses_by_log_p(runs, train_motion, capsys):
     hyps = json.loads(capsys.readouterr().out)
     assert [h["rank"] for h in hyps] == [1, 2, 3]
     assert all(h["text"] for h in hyps)                       # no empty sentence
-    assert hyps[0]["log_p"] >= hyps[1]["log_p"] >= hyps[2]["log_p"]
+    scored = [h["log_p"] for h in hyps if h["log_p"] is not None]   # null: grounded
+    assert scored == sorted(scored, reverse=True) and len(scored) >= 2
 
 
 def test_describe_with_a_length_penalty(runs, train_motion, capsys):
@@ -460,7 +461,7 @@ def test_custom_bvh_folder_with_position_features(corpus, tmp_path, capsys):
     assert main(["describe", str(folder / "00001.bvh"), "--model", str(out),   # the run folder
                  "-w", "2"]) == 0
     lines = capsys.readouterr().out.strip().splitlines()
-    assert len(lines) == 2 and lines[0].startswith("1. log P =")
+    assert len(lines) == 2 and re.match(r"1\. +(log P =|grounded)", lines[0])
     # no ground-truth primitives to balance on: a clear error, not a silent no-op
     assert main(["train", "m2l", "--data", str(folder), "--out", str(tmp_path / "bal"),
                  "--features", "positions", "--balance", "2", *TINY]) == 2

@@ -19,13 +19,28 @@ describer):
    sentence is so unlikely under the model that it is guessing (mean log probability per word
    below ``UNFAMILIAR_LOGP``), the first line is :data:`UNFAMILIAR` and the model's remaining
    sentences follow as the closest it has.
+3. **What the body does** (``motionlang.analysis``, :func:`reconcile`): the model's first
+   sentence stays first only where the actions it names agree with the main action the
+   analysis finds (or the analysis finds none), the model is not guessing, and, where it
+   names a style or mood, the model is confident (mean log probability per word of at least
+   ``STYLE_LOGP``: its own training motion, not another lab's). Otherwise the grounded
+   sentence comes first (its score NaN: no model gave it) and the model's follow as
+   alternatives. Every sentence loses words or phrases said twice in a row.
 """
 from __future__ import annotations
 
+import re
 from typing import Any
 
+import numpy as np
+
+from motionlang.analysis import Analysis, analyse_positions, tidy
+from motionlang.analysis.words import actions_named, agrees
+from motionlang.datasets.bandai_text import STYLES, styles_named
 from motionlang.datasets.pos_tags import tag
 from motionlang.decoding.seq2seq import _features_of, describe_features
+from motionlang.decoding.seq2seq_io import normalize
+from motionlang.errors import MotionlangError
 from motionlang.features.body21 import normalise21
 from motionlang.features.frames import motion_frames
 from motionlang.features.gait import gait
@@ -37,6 +52,15 @@ UNFAMILIAR = "the person makes an unfamiliar movement"
 #: far below what the packaged models give the sentences of any real motion they describe
 #: with words (docs/results/real-motion.md has the measured ranges)
 UNFAMILIAR_LOGP = -6.0
+#: mean log probability per word at or above which the model may name a style or mood: the
+#: level its first sentences reach on its own held-out training motion and seldom elsewhere
+#: (docs/results/grounded-describe.md has the measured ranges)
+STYLE_LOGP = -0.6
+#: root mean square of the model's normalised input features (1 on its training motion):
+#: above ``FAMILIAR_RMS`` the motion is unlike what the model learnt from, and its sentence
+#: does not lead unless nothing else can be said; above ``STYLE_RMS`` it may not name a style
+FAMILIAR_RMS = 1.6
+STYLE_RMS = 1.2
 
 #: the words that name each gait, in every form a caption uses
 GAIT_WORDS: dict[str, frozenset[str]] = {
@@ -149,4 +173,76 @@ def describe(model: Any, motion, *, width: int = 5, max_len: int | None = None,
         return hyps
     body = normalise21(positions21(motion))
     action = gait(body, motion.fps).action if len(body) > 1 else None
-    return familiar(ground(model, frames, hyps, action, width=width, **beam))
+    checked = familiar(ground(model, frames, hyps, action, width=width, **beam))
+    try:
+        analysis: Analysis | None = analyse_positions(body, motion.fps)
+    except MotionlangError:
+        analysis = None
+    return reconcile(checked, analysis, familiarity(model, frames))[:max(width, 1)]
+
+
+def familiarity(model: Any, frames) -> float:
+    """Root mean square of ``frames`` (T, F) after the model's own normaliser: near 1 on
+    motion like its training motion, larger the further a motion lies outside it."""
+    x = normalize(model.normalizer, frames)
+    return float(np.sqrt(np.mean(np.square(x)))) if np.size(x) else float("inf")
+
+
+_ARTICLE = re.compile(r"\ban (?=[^aeiou\s])")
+_STYLE_SUBJECTS = sorted({s for st in STYLES.values() for s, _ in st.subjects}, key=len,
+                         reverse=True)
+_STYLE_PHRASES = sorted({p for st in STYLES.values() for p in (*st.phrases, *st.synonyms)
+                         if " " in p}, key=len, reverse=True)
+_STYLE_WORDS = {w for st in STYLES.values() for w in (*st.adverbs, *st.synonyms)
+                if " " not in w}
+
+
+def without_style(text: str) -> str:
+    """A sentence with its style and mood words taken out ("an insecure woman jumps ahead"
+    -> "a woman jumps ahead", "walks forward in a rage" -> "walks forward")."""
+    low = f" {' '.join(text.lower().split())} "
+    for phrase in _STYLE_PHRASES:
+        if phrase not in _STYLE_SUBJECTS:
+            low = low.replace(f" {phrase} ", " ")
+    for subject in _STYLE_SUBJECTS:
+        low = low.replace(f" {subject} ", " a person ")
+    words = [w for w in low.split() if w not in _STYLE_WORDS]
+    # "in a way", "like a": the frame of a style phrase whose words are gone
+    out = " ".join(words)
+    for frame in (" in a way", " in an way", " like a", " like an", " with a", " at speed"):
+        if out.endswith(frame):
+            out = out[:-len(frame)]
+    return _ARTICLE.sub("a ", out).strip()
+
+
+def per_word(text: str, score: float) -> float:
+    """Mean log probability per word, the end of the sentence counted."""
+    return score / (len(text.split()) + 1)
+
+
+def reconcile(hyps: list[tuple[str, float]], analysis: Analysis | None,
+              rms: float = 1.0) -> list[tuple[str, float]]:
+    """The checked beam ``hyps`` against what the body does (module docstring, 3), ``rms``
+    the model's :func:`familiarity` with the motion: the model's first sentence kept, or the
+    grounded sentence (score NaN) put first; style words only where the model knows the
+    motion well and is confident."""
+    out = []
+    for t, s in hyps:
+        if t != UNFAMILIAR and styles_named(t) and not (
+                rms <= STYLE_RMS and per_word(t, s) >= STYLE_LOGP):
+            t = without_style(t)
+            if styles_named(t) or not has_verb(t):
+                continue
+        out.append((tidy(t), s))
+    hyps = list({t: (t, s) for t, s in reversed(out)}.values())[::-1]   # each once
+    if analysis is None:
+        return hyps or [(UNFAMILIAR, float("nan"))]
+    grounded = analysis.sentence()
+    if not hyps:
+        return [(grounded, float("nan"))]
+    first, _ = hyps[0]
+    main = analysis.main_action()
+    agree = main is None or agrees(actions_named(first), main)
+    if first != UNFAMILIAR and agree and (rms <= FAMILIAR_RMS or main is None):
+        return hyps + [(grounded, float("nan"))]
+    return [(grounded, float("nan"))] + [(t, s) for t, s in hyps if t != UNFAMILIAR]

@@ -17,16 +17,18 @@ from __future__ import annotations
 
 import copy
 import json
+import math
 import os
 from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from motionlang.analysis import analyse
 from motionlang.errors import MotionlangError
 from motionlang.library.bank import SentenceBank
 from motionlang.library.timeline import MERGES, Segment, merge_windows
-from motionlang.library.windows import motion_windows, span
+from motionlang.library.windows import Window, cut, motion_windows, span
 from motionlang.utils.checks import MAX_WIDTH, check_numbers
 
 RANKS = ("mbr", "logp")   # decoding.seq2seq.RANKS, named here without importing torch
@@ -64,6 +66,9 @@ class DescribeOptions:
                                metavar="FILE")
     workers: int = _option(1, "processes describing files, each loading the model once "
                            "(at most the CPU count)", metavar="N")
+    explain: bool = _option(False, "after the sentences, the evidence of each phrase of the "
+                            "grounded sentence: time span, what was measured, against which "
+                            "threshold, with what confidence (motionlang.analysis)")
     raw: bool = _option(False, "the model's sentences as its beam ranks them: not checked "
                         "against the gait the feet show (walk, run, jump), verbless ones "
                         "kept, no 'unfamiliar movement' line")
@@ -169,8 +174,23 @@ class Describer:
                                      grounded=not o.raw)
 
     def timeline(self, motion) -> list[Segment]:
-        """The take as segments (``library.timeline``) of its windows' first sentences."""
+        """The take as segments (``library.timeline``): cut where the grounded analysis sees
+        the action change, each segment described on its own; with a bank, raw, or where
+        the analysis cannot read the body, its windows' first sentences merged."""
         o = self.options
+        if self.bank is None and not o.raw and motion.n_frames > 1:
+            try:
+                cuts = analyse(motion).timeline()
+            except MotionlangError:
+                cuts = []
+            if cuts:
+                end = span(motion)
+                segs = []
+                for a, b, _ in cuts:
+                    part = cut(motion, Window(a, min(b, end)))
+                    text, score = self.sentences(part)[0]
+                    segs.append(Segment(a, min(b, end), text, score))
+                return segs
         parts = motion_windows(motion, o.window, o.hop)
         labels = [self.sentences(part)[0] for _, part in parts]
         return merge_windows([w for w, _ in parts], labels, end=span(motion), merge=o.merge,
@@ -178,7 +198,7 @@ class Describer:
 
     def segment_dicts(self, segments: Sequence[Segment]) -> list[dict]:
         return [{"start": s.start, "end": s.end, "text": s.text,
-                 self.score_key: round(s.score, 4)} for s in segments]
+                 self.score_key: _rounded(s.score)} for s in segments]
 
     def record(self, path: str | Path) -> dict:
         """The record of one file (module docstring); its failure is its record."""
@@ -188,8 +208,10 @@ class Describer:
             if self.options.segments:
                 out["segments"] = self.segment_dicts(self.timeline(motion))
             else:
-                out["sentences"] = [{"text": t, self.score_key: round(s, 4)}
+                out["sentences"] = [{"text": t, self.score_key: _rounded(s)}
                                     for t, s in self.sentences(motion)]
+                if self.options.explain:
+                    out["evidence"] = evidence(motion)
         except MotionlangError as exc:
             out["error"] = " ".join(str(exc).split())
         except Exception as exc:   # noqa: BLE001 - one odd take must not end a long run
@@ -217,6 +239,25 @@ def describer(model: Any = None, options: DescribeOptions | None = None, *,
     return Describer(loaded, options, bank, read)
 
 
+def _rounded(score: float) -> float | None:
+    """A score for a record: 4 decimals, None for a sentence no model scored (NaN)."""
+    return None if math.isnan(score) else round(score, 4)
+
+
+def evidence(motion) -> list[dict]:
+    """``[{"phrase", **finding}, ...]``: each phrase of the grounded sentence with the
+    finding behind it (``analysis.Finding.as_dict``); empty where nothing was found."""
+    try:
+        return [{"phrase": text, **f.as_dict()} for text, f in analyse(motion).explain()]
+    except MotionlangError:
+        return []
+
+
+def _score_text(label: str, score: float) -> str:
+    return f"{'grounded':>{len(label) + 11}}" if math.isnan(score) else \
+        f"{label} = {score:8.3f}"
+
+
 def printed(d: Describer, motion, *, as_json: bool = False) -> str:
     """What ``motionlang describe FILE`` prints of one motion: ``1. log P =   -3.210  a
     person walks`` lines (a bank's: ``cos =``), or with segments ``0.0-4.0 s  a person
@@ -227,10 +268,21 @@ def printed(d: Describer, motion, *, as_json: bool = False) -> str:
             "\n".join(s.line() for s in segments)
     hyps, label = d.sentences(motion), "log P" if d.bank is None else "cos"
     if as_json:
-        return json.dumps([{"rank": i + 1, "text": t, d.score_key: s}
-                           for i, (t, s) in enumerate(hyps)], indent=1)
-    return "\n".join(f"{i}. {label} = {score:8.3f}  {text}"
-                     for i, (text, score) in enumerate(hyps, 1))
+        rows: Any = [{"rank": i + 1, "text": t, d.score_key: _rounded(s)}
+                     for i, (t, s) in enumerate(hyps)]
+        if d.options.explain:
+            rows = {"sentences": rows, "evidence": evidence(motion)}
+        return json.dumps(rows, indent=1)
+    lines = [f"{i}. {_score_text(label, score)}  {text}"
+             for i, (text, score) in enumerate(hyps, 1)]
+    if d.options.explain:
+        found = evidence(motion)
+        lines.append("evidence:" if found else "evidence: the analysis found nothing it is "
+                     "sure of")
+        lines += [f"  {e['phrase']}: {e['start']:.2f}-{e['end']:.2f} s, {e['measure']} "
+                  f"{e['value']:g} (threshold {e['threshold']:g}), confidence "
+                  f"{e['confidence']:.2f}" for e in found]
+    return "\n".join(lines)
 
 
 _WORKER: Describer | None = None

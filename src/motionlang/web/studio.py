@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import itertools
+import math
 import tempfile
 import threading
 import warnings
@@ -200,8 +201,9 @@ class Studio:
             positions = ml.body21(shown)
         return body21_view(positions, shown.fps, name=motion.name,
                            seconds=round(motion.duration, 2),
-                           sentences=[{"text": t, "log_p": round(float(s), 3)}
-                                      for t, s in sentences],
+                           # a grounded sentence has no model score: null
+                           sentences=[{"text": t, "log_p": None if math.isnan(s) else
+                                       round(float(s), 3)} for t, s in sentences],
                            timeline=[{"start": round(s.start, 2), "end": round(s.end, 2),
                                       "text": s.text} for s in segments])
 

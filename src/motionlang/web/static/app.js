@@ -153,7 +153,7 @@ async function describe() {
     for (const s of view.sentences) {
       const li = document.createElement("li");
       li.textContent = s.text;
-      li.title = `log P = ${s.log_p}`;
+      li.title = s.log_p === null ? "grounded: what the body does (motionlang.analysis)" : `log P = ${s.log_p}`;
       $("sentences").appendChild(li);
     }
     for (const seg of view.timeline) {

@@ -1,0 +1,29 @@
+"""What the body does, from physics and geometry alone: posture and support, locomotion,
+turns, changes of level and limb actions, each with its evidence, for any motion of any rig
+(pure numpy/scipy on the 21-joint body; no model, no training).
+
+    >>> from motionlang.analysis import analyse
+    >>> a = analyse(motion)              # a Motion (any rig)
+    >>> a.sentence()                     # "a person walks forward and then sits down"
+    >>> a.timeline()                     # [(0.0, 4.2, "a person walks forward"), ...]
+    >>> for text, finding in a.explain(): print(text, "<-", finding.evidence())
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+from motionlang.analysis.analyse import ACTION, Analysis, analyse_positions, salience
+from motionlang.analysis.body import Body
+from motionlang.analysis.evidence import Finding
+from motionlang.analysis.sentences import CANNOT_TELL, repeats, tidy
+from motionlang.features.joint_map import positions21
+from motionlang.kinematics.motion import Motion
+
+__all__ = ["ACTION", "CANNOT_TELL", "Analysis", "Body", "Finding", "analyse",
+           "analyse_positions", "repeats", "salience", "tidy"]
+
+
+def analyse(motion: Motion, *, joint_map: dict | str | Path | None = None) -> Analysis:
+    """A :class:`Motion` of any rig -> its :class:`Analysis` (the body map of
+    ``features.joint_map``, the one every command uses)."""
+    return analyse_positions(positions21(motion, joint_map=joint_map), motion.fps)

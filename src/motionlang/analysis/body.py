@@ -1,0 +1,220 @@
+"""The body the detectors read: 21 joints on the floor at one analysis rate, with the signals
+every detector shares computed once, all in body units.
+
+Every threshold of :mod:`motionlang.analysis` is in leg lengths (hip to ankle, ``L``), the
+body's stature or seconds, never in metres or frames, so that a child and an adult, a file in
+centimetres and one in inches, 30 Hz and 120 Hz compare alike. The positions are resampled to
+about :data:`RATE` frames a second (every n-th frame, n chosen from the file's rate): the
+fastest action read here (a punch, a clap) lasts a tenth of a second and more, and a 10-minute
+120 Hz take then stays cheap.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+from scipy.ndimage import percentile_filter, uniform_filter1d
+
+from motionlang.errors import MotionlangError
+from motionlang.features.body21 import leg_length21, normalise21, stature21
+from motionlang.features.joint_map import KIT21_NAMES, bone_lengths21
+from motionlang.features.positions import facing_yaw
+
+#: frames a second the detectors work at (at least; a slower file keeps its own rate)
+RATE = 30.0
+#: seconds of the light smoothing applied before anything is read (marker jitter)
+SMOOTH = 0.07
+#: the local floor's window, seconds: longer than any flight, short enough for a ramp
+FLOOR_WINDOW = 1.5
+#: seconds over which horizontal speeds are taken (a stride's half-cycle and more)
+SPEED_SPAN = 0.5
+#: a foot whose lowest joint is within this (leg lengths) of the local floor and moves
+#: slower than :data:`CONTACT_SPEED` carries weight (``features.gait``'s values)
+CONTACT_HEIGHT = 0.1
+CONTACT_SPEED = 1.3
+
+J = {n: i for i, n in enumerate(KIT21_NAMES)}
+FOOT_JOINTS = ((J["LA"], J["LMrot"], J["LF"]), (J["RA"], J["RMrot"], J["RF"]))
+SIDES = ("left", "right")
+#: (shoulder, elbow, wrist) and (hip, knee, ankle), left then right
+ARMS = ((J["LS"], J["LE"], J["LW"]), (J["RS"], J["RE"], J["RW"]))
+LEGS = ((J["LH"], J["LK"], J["LA"]), (J["RH"], J["RK"], J["RA"]))
+MIN_FRAMES = 2
+
+
+def _odd(n: float) -> int:
+    return max(1, int(round(n)) | 1)
+
+
+@dataclass(frozen=True, eq=False)
+class Body:
+    """A motion as the detectors read it.
+
+    Attributes:
+        p: (T, 21, 3) metres, Y up, floor at y = 0, frame 0 facing +Z, at :attr:`fps`.
+        fps: the analysis rate (frames a second).
+        leg: leg length (hip-knee-ankle), metres.
+        stature: standing height, metres (``features.body21.stature21``).
+    """
+
+    p: np.ndarray
+    fps: float
+    leg: float
+    stature: float
+
+    @classmethod
+    def from_positions(cls, p21, fps: float) -> Body:
+        """(T, 21, 3) Y-up positions of any unit at ``fps`` -> a :class:`Body`.
+
+        Raises:
+            MotionlangError: wrong shape, non-finite values, no body (legs of no length).
+        """
+        p = np.asarray(p21, dtype=np.float64)
+        if p.ndim != 3 or p.shape[1:] != (len(KIT21_NAMES), 3):
+            raise MotionlangError(f"analysis: positions must be (T, 21, 3), got {p.shape}")
+        if not (np.isfinite(fps) and fps > 0):
+            raise MotionlangError(f"analysis: the frame rate must be a positive number, "
+                                  f"got {fps}")
+        if len(p) < MIN_FRAMES:
+            raise MotionlangError(f"analysis: the motion has {len(p)} frame(s); at least "
+                                  f"{MIN_FRAMES} are needed to see any movement")
+        if not np.isfinite(p).all():
+            raise MotionlangError("analysis: positions are not all finite")
+        step = max(1, int(round(fps / RATE)))
+        p = p[::step] if len(p[::step]) >= MIN_FRAMES else p[:MIN_FRAMES]
+        fps = fps / step
+        leg = leg_length21(bone_lengths21(p))
+        if not (np.isfinite(leg) and leg > 1e-9):
+            raise MotionlangError("analysis: the body's legs have no length (all joints at "
+                                  "one point?)")
+        p = normalise21(p)
+        if len(p) >= 3:
+            p = uniform_filter1d(p, _odd(SMOOTH * fps), axis=0, mode="nearest")
+        stature = stature21(p)
+        return cls(p=p, fps=float(fps), leg=float(leg), stature=float(stature))
+
+    # ------------------------------------------------------------------ basics
+    @property
+    def n(self) -> int:
+        return len(self.p)
+
+    @property
+    def duration(self) -> float:
+        return self.n / self.fps
+
+    def t(self, i: int) -> float:
+        """Seconds of frame ``i``."""
+        return i / self.fps
+
+    def frames(self, seconds: float) -> int:
+        """A span in seconds as a whole number of frames (at least 1)."""
+        return max(1, int(round(seconds * self.fps)))
+
+    def joint(self, name: str) -> np.ndarray:
+        """(T, 3) one joint's path."""
+        return self.p[:, J[name]]
+
+    def speed_of(self, x: np.ndarray) -> np.ndarray:
+        """(T, k) positions -> (T,) speed, metres a second (central differences)."""
+        if len(x) < 2:
+            return np.zeros(len(x))
+        return np.linalg.norm(np.gradient(x, axis=0), axis=-1) * self.fps
+
+    # ------------------------------------------------------------------ shared signals
+    @cached_property
+    def yaw(self) -> np.ndarray:
+        """(T,) facing, radians about +Y, unwrapped (positive turns are to the left)."""
+        return np.unwrap(facing_yaw(self.p))
+
+    @cached_property
+    def forward(self) -> np.ndarray:
+        """(T, 2) unit facing direction in the (x, z) ground plane."""
+        return np.stack([np.sin(self.yaw), np.cos(self.yaw)], axis=1)
+
+    @cached_property
+    def ground_velocity(self) -> np.ndarray:
+        """(T, 2) the root's horizontal velocity, m/s, over :data:`SPEED_SPAN` spans."""
+        root = self.p[:, 0, [0, 2]]
+        k = self.frames(SPEED_SPAN / 2)
+        ahead = np.concatenate([root[k:], np.repeat(root[-1:], k, axis=0)])
+        behind = np.concatenate([np.repeat(root[:1], k, axis=0), root[:-k]])
+        span = np.clip(np.arange(self.n) + k, 0, self.n - 1) - np.clip(
+            np.arange(self.n) - k, 0, self.n - 1)
+        return (ahead - behind) * self.fps / np.maximum(span, 1)[:, None]
+
+    @cached_property
+    def ground_speed(self) -> np.ndarray:
+        """(T,) horizontal root speed in leg lengths a second."""
+        return np.linalg.norm(self.ground_velocity, axis=1) / self.leg
+
+    @cached_property
+    def foot_low(self) -> np.ndarray:
+        """(2, T) height of each foot's lowest joint, metres."""
+        return np.stack([self.p[:, list(f), 1].min(axis=1) for f in FOOT_JOINTS])
+
+    @cached_property
+    def local_floor(self) -> np.ndarray:
+        """(T,) the floor under the body, metres: a rolling low percentile of the lowest foot
+        over :data:`FLOOR_WINDOW` s, so that ramps, steps and drifting captures carry it."""
+        size = _odd(FLOOR_WINDOW * self.fps)
+        return percentile_filter(self.foot_low.min(axis=0), 5, size=size, mode="nearest")
+
+    @cached_property
+    def foot_speed(self) -> np.ndarray:
+        """(2, T) horizontal speed of each foot's slowest joint, leg lengths a second."""
+        out = []
+        for f in FOOT_JOINTS:
+            v = np.gradient(self.p[:, list(f)][:, :, [0, 2]], axis=0) * self.fps if \
+                self.n > 1 else np.zeros((self.n, 3, 2))
+            out.append(np.linalg.norm(v, axis=-1).min(axis=1))
+        return uniform_filter1d(np.stack(out), _odd(0.1 * self.fps), axis=1,
+                                mode="nearest") / self.leg
+
+    @cached_property
+    def contacts(self) -> np.ndarray:
+        """(2, T) bool: each foot carries weight (near the local floor and nearly still)."""
+        near = self.foot_low - self.local_floor[None] < CONTACT_HEIGHT * self.leg
+        return near & (self.foot_speed < CONTACT_SPEED)
+
+    @cached_property
+    def standing_pelvis(self) -> float:
+        """Pelvis height above the floor of this body standing upright, metres: the legs
+        straight under it (leg length) plus the ankle's height over the sole."""
+        ankle = np.median(self.p[:, [J["LA"], J["RA"]], 1] - self.foot_low.T, axis=0).mean()
+        return float(self.leg + max(ankle, 0.0))
+
+    @cached_property
+    def pelvis_height(self) -> np.ndarray:
+        """(T,) pelvis over the local floor, in standing pelvis heights (1 = upright)."""
+        return (self.p[:, 0, 1] - self.local_floor) / self.standing_pelvis
+
+    @cached_property
+    def trunk_tilt(self) -> np.ndarray:
+        """(T,) angle of pelvis-to-neck from the vertical, degrees (0 upright, 90 level)."""
+        v = self.p[:, J["BLN"]] - self.p[:, 0]
+        n = np.linalg.norm(v, axis=1)
+        return np.degrees(np.arccos(np.clip(v[:, 1] / np.maximum(n, 1e-9), -1.0, 1.0)))
+
+    @cached_property
+    def chest_normal(self) -> np.ndarray:
+        """(T, 3) unit vector out of the chest (the way the torso faces, tilt included)."""
+        across = (self.p[:, J["RS"]] - self.p[:, J["LS"]]) + (self.p[:, J["RH"]] -
+                                                              self.p[:, J["LH"]])
+        up = self.p[:, J["BLN"]] - self.p[:, 0]
+        f = np.cross(up, across)
+        return f / np.maximum(np.linalg.norm(f, axis=1, keepdims=True), 1e-9)
+
+    def arm_length(self, side: int) -> float:
+        s, e, w = ARMS[side]
+        b = [np.median(np.linalg.norm(self.p[:, a] - self.p[:, c], axis=1))
+             for a, c in ((s, e), (e, w))]
+        return float(sum(b))
+
+    def to_body_frame(self, v: np.ndarray) -> np.ndarray:
+        """(T, 3) world vectors -> (T, 3) in the body's heading frame: x to the body's
+        left, y up, z forward."""
+        c, s = np.cos(self.yaw), np.sin(self.yaw)
+        x = c * v[:, 0] - s * v[:, 2]
+        z = s * v[:, 0] + c * v[:, 2]
+        return np.stack([x, v[:, 1], z], axis=1)

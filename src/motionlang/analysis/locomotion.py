@@ -1,0 +1,252 @@
+"""Locomotion, turns and changes of level: where the body goes and how.
+
+- **Travel** is a span in which the root moves faster than :data:`TRAVEL` leg lengths a
+  second for at least :data:`MIN_TRAVEL` s. Its gait comes from the feet
+  (``features.gait``: a walk always has a foot down and double support, a run has flights;
+  the Froude number decides where the feet are unclear), its speed word from the Froude
+  number ``v^2 / (g L)`` (people walk near 0.15-0.25 and change to running near 0.5;
+  Alexander 1989), its direction from the angle between travel and facing (forward,
+  backwards, sideways left or right), and its path from how much the direction of travel
+  turns (straight, curving left or right, a circle).
+- **Jumps** are flights from both feet (or long flights from one), forward, up or down by
+  where they land; **hops** are repeated flights from one and the same foot.
+- **Turns** are changes of facing of at least :data:`MIN_TURN` degrees within a few seconds,
+  their angle rounded to 45 degrees; :data:`SPIN_TURN` degrees or more fast is a spin.
+- **Level changes**: the height of the supporting feet moves up or down by a step or more
+  (steps or climbs up, steps or jumps down).
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy.ndimage import median_filter, uniform_filter1d
+
+from motionlang.analysis.body import Body
+from motionlang.analysis.evidence import MIN_CONFIDENCE, Finding, clean_mask, confidence, runs
+from motionlang.features.gait import GRAVITY, gait
+
+TRAVEL = 0.5               # L/s (``features.gait.TRAVEL_SPEED``)
+MIN_TRAVEL = 1.0           # s
+SIDEWAYS = 50.0            # deg between travel and facing beyond which it is sideways
+BACKWARDS = 130.0          # deg beyond which it is backwards
+CURVE = 45.0               # deg of turning of the path that make it curve
+CIRCLE = 300.0             # deg that make it a circle
+# Froude numbers of the speed words: walking and running each have a slow and a fast end
+WALK_SLOW, WALK_BRISK = 0.08, 0.3
+JOG_UPTO, SPRINT_FROM = 1.0, 2.5
+JUMP_FLIGHT = 0.12         # s: shortest flight from both feet counted as a jump
+LEAP_FLIGHT = 0.35         # s: a flight this long is a jump from any take-off
+TAKEOFF = 0.1              # s: both feet down this shortly before the flight
+JUMP_FORWARD = 0.35        # L of horizontal travel from take-off to landing
+JUMP_DOWN = 0.25           # L: landing this far below the take-off
+MIN_TURN = 45.0            # deg
+TURN_WINDOW = 4.0          # s: a turn is done within this
+TURN_RATE = 20.0           # deg/s: facing changing faster than this is turning
+SPIN_TURN = 270.0          # deg
+SPIN_RATE = 270.0          # deg/s
+LEVEL_STEP = 0.18          # L: a change of support height that counts (a stair is ~0.2 L)
+LEVEL_CLIMB = 0.5          # L: a rise this large is a climb
+
+
+def froude(speed_ms: float, leg: float) -> float:
+    return speed_ms ** 2 / (GRAVITY * leg)
+
+
+def speed_word(gait_label: str, fr: float) -> str | None:
+    """"slowly", "briskly", ... or None (an ordinary pace) from a Froude number."""
+    if gait_label == "walk":
+        return "slowly" if fr < WALK_SLOW else "briskly" if fr > WALK_BRISK else None
+    if gait_label == "run":
+        return "fast" if fr > SPRINT_FROM else None
+    return None
+
+
+def _direction(body: Body, a: int, b: int) -> tuple[str, float]:
+    """("forward" | "backwards" | "left" | "right", median angle of travel to facing)."""
+    v = body.ground_velocity[a:b]
+    f = body.forward[a:b]
+    ang = np.degrees(np.arctan2(f[:, 0] * v[:, 1] - f[:, 1] * v[:, 0],
+                                (f * v).sum(axis=1)))   # + : travel to the body's right
+    moving = np.linalg.norm(v, axis=1) > TRAVEL * body.leg
+    a_med = float(np.degrees(np.angle(np.mean(np.exp(1j * np.radians(ang[moving]))))) if
+                  moving.any() else 0.0)
+    if abs(a_med) >= BACKWARDS:
+        return "backwards", a_med
+    if abs(a_med) >= SIDEWAYS:
+        return ("right" if a_med > 0 else "left"), a_med
+    return "forward", a_med
+
+
+def _path(body: Body, a: int, b: int) -> tuple[str, float]:
+    """("straight" | "curving left" | "curving right" | "in a circle", degrees turned)."""
+    v = body.ground_velocity[a:b]
+    moving = np.linalg.norm(v, axis=1) > TRAVEL * body.leg
+    if moving.sum() < 3:
+        return "straight", 0.0
+    heading = np.unwrap(np.arctan2(v[moving, 0], v[moving, 1]))
+    turned = float(np.degrees(heading[-1] - heading[0]))
+    if abs(turned) >= CIRCLE:
+        return "in a circle", turned
+    if abs(turned) >= CURVE:
+        return ("curving left" if turned > 0 else "curving right"), turned
+    return "straight", turned
+
+
+def travel(body: Body) -> list[Finding]:
+    """The spans of travel with gait, speed word, direction and path (module docstring)."""
+    out: list[Finding] = []
+    mask = clean_mask(body.ground_speed > TRAVEL, body.fps, min_len=MIN_TRAVEL, max_gap=0.3)
+    for a, b in runs(mask):
+        pad = body.frames(0.25)
+        lo, hi = max(0, a - pad), min(body.n, b + pad)
+        g = gait(body.p[lo:hi], body.fps)
+        speed = float(np.median(np.linalg.norm(body.ground_velocity[a:b], axis=1)))
+        fr = froude(speed, body.leg)
+        label = "run" if g.run_score > 0 else "walk"
+        direction, angle = _direction(body, a, b)
+        path, turned = _path(body, a, b)
+        steps = int(sum(len(runs(body.contacts[i, a:b])) for i in range(2)))
+        c = confidence(float(np.median(body.ground_speed[a:b])), TRAVEL, 0.5,
+                       duration=(b - a) / body.fps, full_after=MIN_TRAVEL)
+        # the gait itself is only as sure as the feet: a score near 0 is either
+        c = min(c, 0.5 + 0.5 * min(1.0, abs(g.run_score)))
+        if c < MIN_CONFIDENCE:
+            continue
+        out.append(Finding("locomotion", label, body.t(a), body.t(b), "gait score of feet, "
+                           "bounce and Froude number (run > 0)", g.run_score, 0.0, c, detail={
+                               "speed": speed_word(label, fr), "speed_ms": speed,
+                               "froude": fr,
+                               "direction": direction, "angle": angle, "path": path,
+                               "turned": turned, "steps": steps}))
+    return out
+
+
+def jumps(body: Body) -> list[Finding]:
+    """Jumps (forward, up or down) and hops, as events (module docstring)."""
+    c = body.contacts
+    none = ~c[0] & ~c[1]
+    both = c[0] & c[1]
+    before = body.frames(TAKEOFF)
+    events: list[tuple[int, int, str, str | None]] = []   # a, b, kind, take-off foot
+    for a, b in runs(none):
+        if a == 0 or b >= body.n:
+            continue
+        flight = (b - a) / body.fps
+        two = bool(both[max(0, a - before):a].any())
+        if flight >= (JUMP_FLIGHT if two else LEAP_FLIGHT):
+            events.append((a, b, "jump", None))
+        elif not two and flight >= 0.06:
+            foot = "left" if c[0, a - 1] else "right"
+            land = "left" if c[0, min(b, body.n - 1)] else "right"
+            if foot == land:                # off one foot and back onto the same: a hop
+                events.append((a, b, "hop", foot))
+    out: list[Finding] = []
+    hops = [e for e in events if e[2] == "hop"]
+    # hops count only in series (a walk's stumble is not hopping)
+    for side in ("left", "right"):
+        series = [e for e in hops if e[3] == side]
+        group: list[tuple[int, int, str, str | None]] = []
+        for e in [*series, None]:
+            if e is not None and (not group or e[0] - group[-1][1] < body.frames(0.8)):
+                group.append(e)
+                continue
+            if len(group) >= 3:
+                out.append(Finding("locomotion", "hop", body.t(group[0][0]), body.t(group[-1][1]),
+                                   "hops in a row", float(len(group)), 3.0,
+                                   confidence(len(group), 3, 2, duration=1.0), side=side,
+                                   count=len(group)))
+            group = [e] if e is not None else []
+    for a, b, kind, _ in events:
+        if kind != "jump":
+            continue
+        lo, hi = max(0, a - before), min(body.n - 1, b + before)
+        root = body.p[:, 0, [0, 2]]
+        dist = float(np.linalg.norm(root[hi] - root[lo])) / body.leg
+        drop = float(body.foot_low[:, lo].min() - body.foot_low[:, hi].min()) / body.leg
+        direction = "down" if drop > JUMP_DOWN else "forward" if dist > JUMP_FORWARD else "up"
+        flight = (b - a) / body.fps
+        out.append(Finding("locomotion", "jump", body.t(a), body.t(b), "flight (s)", flight,
+                           JUMP_FLIGHT, confidence(flight, JUMP_FLIGHT, 0.1),
+                           detail={"direction": direction, "distance": dist, "drop": drop}))
+    return [f for f in out if f.confidence >= MIN_CONFIDENCE]
+
+
+def turns(body: Body) -> list[Finding]:
+    """Turns of the facing and spins (module docstring); each turn's signed angle is in
+    ``detail["angle"]`` (positive: to the left)."""
+    if body.n < 3:
+        return []
+    yaw = np.degrees(uniform_filter1d(body.yaw, max(1, body.frames(0.3)) | 1, mode="nearest"))
+    rate = np.gradient(yaw) * body.fps
+    out: list[Finding] = []
+    for sign in (1, -1):
+        mask = clean_mask(sign * rate > TURN_RATE, body.fps, min_len=0.2, max_gap=0.3)
+        for a, b in runs(mask):
+            if (b - a) / body.fps > TURN_WINDOW * 3:
+                b = a + body.frames(TURN_WINDOW * 3)
+            angle = float(yaw[min(b, body.n - 1)] - yaw[a])
+            if sign * angle < MIN_TURN:
+                continue
+            dur = (b - a) / body.fps
+            peak = float(np.abs(rate[a:b]).max())
+            spin = abs(angle) >= SPIN_TURN and abs(angle) / max(dur, 1e-6) >= SPIN_RATE * 0.5
+            label = "spin" if spin else "turn"
+            rounded = int(45 * round(abs(angle) / 45))
+            out.append(Finding("turn", label, body.t(a), body.t(b), "facing turned (deg)",
+                               abs(angle), MIN_TURN, confidence(abs(angle), MIN_TURN, 45.0),
+                               side="left" if sign > 0 else "right",
+                               count=max(1, int(round(abs(angle) / 360))) if spin else 1,
+                               detail={"angle": angle, "rounded": rounded, "peak_rate": peak}))
+    return sorted([f for f in out if f.confidence >= MIN_CONFIDENCE], key=lambda f: f.start)
+
+
+def support_level(body: Body) -> np.ndarray:
+    """(T,) height of the supporting feet over the take's ground, metres, held through the
+    frames where no foot is down."""
+    c = body.contacts
+    low = np.where(c, body.foot_low, np.nan)
+    level = np.nanmin(np.where(c.any(axis=0), low, np.inf), axis=0)
+    level[~np.isfinite(level)] = np.nan
+    idx = np.flatnonzero(np.isfinite(level))
+    if not len(idx):
+        return np.zeros(body.n)
+    filled = np.interp(np.arange(body.n), idx, level[idx])
+    return median_filter(filled, size=body.frames(0.5) | 1, mode="nearest")
+
+
+def levels(body: Body) -> list[Finding]:
+    """Changes of the support height: "up" or "down", a step or a climb (module docstring)."""
+    if body.n < body.frames(1.0):
+        return []
+    lv = support_level(body) / body.leg
+    out: list[Finding] = []
+    # plateaus: where the level stays within half a step for 0.3 s
+    q = np.round(lv / (LEVEL_STEP / 2))
+    plateaus: list[tuple[int, int, float]] = []
+    a = 0
+    for i in range(1, body.n + 1):
+        if i == body.n or abs(q[i] - q[a]) > 1:
+            if i - a >= body.frames(0.3):
+                plateaus.append((a, i, float(np.median(lv[a:i]))))
+            a = i
+    changes = [(b0 - 1, a1 + 1, l1 - l0, l0, l1)
+               for (a0, b0, l0), (a1, b1, l1) in zip(plateaus, plateaus[1:])
+               if abs(l1 - l0) >= LEVEL_STEP / 2]
+    # one rise (or fall) of several steps within a few seconds is one change of level
+    groups: list[list[tuple[int, int, float, float, float]]] = []
+    for ch in changes:
+        if groups and np.sign(ch[2]) == np.sign(groups[-1][-1][2]) and \
+                ch[0] - groups[-1][-1][1] < body.frames(2.0):
+            groups[-1].append(ch)
+        else:
+            groups.append([ch])
+    for g in groups:
+        a, b = g[0][0], g[-1][1]
+        d = g[-1][4] - g[0][3]
+        if abs(d) < LEVEL_STEP:
+            continue
+        label = "climb" if d >= LEVEL_CLIMB else "step_up" if d > 0 else "step_down"
+        out.append(Finding("level", label, body.t(a), body.t(min(b, body.n)),
+                           "change of support height (L)", d, LEVEL_STEP,
+                           confidence(abs(d), LEVEL_STEP, LEVEL_STEP), count=len(g),
+                           detail={"from": g[0][3], "to": g[-1][4]}))
+    return [f for f in out if f.confidence >= MIN_CONFIDENCE]

@@ -1,0 +1,173 @@
+"""Findings -> English, in the style of KIT-ML's annotations: "a person walks forward, turns
+left, then sits down on the floor".
+
+Every phrase comes from one finding (:func:`phrase`), so that ``describe --explain`` can print
+the evidence beside it; a sentence joins at most :data:`MAX_CLAUSES` phrases in time order and
+never says the same phrase twice. Words of mood or style are never produced here: the
+geometry does not show them.
+"""
+from __future__ import annotations
+
+import re
+
+from motionlang.analysis.evidence import Finding
+from motionlang.analysis.locomotion import JOG_UPTO
+
+SUBJECT = "a person"
+#: what is said when the analysis finds nothing it is sure of
+CANNOT_TELL = "a person moves in a way the analysis cannot tell"
+MAX_CLAUSES = 3
+#: the detail level adds the counts and angles that the terse level leaves out
+LEVELS = ("terse", "detailed")
+
+
+def times(n: int) -> str:
+    return "" if n <= 1 else " twice" if n == 2 else f" {n} times"
+
+
+def _hand(side: str | None, limb: str = "hand") -> str:
+    if side == "both":
+        return f"both {limb}s" if limb != "foot" else "both feet"
+    return f"the {side} {limb}" if side else f"a {limb}"
+
+
+def phrase(f: Finding, *, level: str = "terse", first: bool = False,
+           last: bool = False, end: float | None = None) -> str:
+    """One verb phrase (third person, present) for a finding. ``first``/``last``: the
+    finding opens or closes the take (a posture held from the start is "sits", entered
+    later "sits down"); ``end``: the take's end, seconds."""
+    d = f.detail
+    detailed = level == "detailed"
+    lab = f.label
+    if lab in ("walk", "run"):
+        verb = "walks" if lab == "walk" else "jogs" if _froude(f) < JOG_UPTO else "runs"
+        direction = d.get("direction", "forward")
+        path = d.get("path", "straight")
+        if direction in ("left", "right"):
+            text = f"steps sideways to the {direction}" if lab == "walk" else \
+                f"{verb} sideways to the {direction}"
+        elif path == "in a circle":
+            text = f"{verb} in a circle"
+        else:
+            text = f"{verb} {direction}"
+            if path.startswith("curving"):
+                text += f" in a curve to the {path.split()[-1]}"
+        speed = d.get("speed")
+        if speed and lab == "walk":
+            text += f" {speed}"
+        if detailed and d.get("steps"):
+            text += f" ({d['steps']} steps, {d.get('speed_ms', 0):.1f} m/s)"
+        return text
+    if lab == "jump":
+        direction = d.get("direction", "up")
+        text = {"forward": "jumps forward", "up": "jumps up", "down": "jumps down"}[direction]
+        return text + times(f.count)
+    if lab == "hop":
+        return f"hops on the {f.side} leg" + times(f.count)
+    if lab == "turn":
+        angle = d.get("rounded", 90)
+        if angle >= 180 or abs(d.get("angle", 0)) >= 150:
+            return "turns around"
+        return f"turns {f.side}" + (f" about {angle} degrees" if detailed or angle != 90
+                                    else "")
+    if lab == "spin":
+        return "spins around" + times(f.count)
+    if lab == "climb":
+        return "climbs up"
+    if lab == "step_up":
+        return "steps up" + (" onto something" if f.count == 1 else "")
+    if lab == "step_down":
+        return "steps down"
+    if lab == "hang":
+        return "hangs by the hands"
+    held = first and f.start < 0.5
+    if lab == "sit":
+        where = " on the floor" if d.get("seat") == "floor" else ""
+        return ("sits" if held else "sits down") + where
+    if lab == "lie":
+        way = "on the back" if d.get("face") == "up" else "face down"
+        return ("lies " if held else "lies down ") + way
+    if lab == "kneel":
+        knee = "on both knees" if f.side == "both" else f"on the {f.side} knee"
+        return ("kneels " if held else "kneels down ") + knee
+    if lab == "squat":
+        return f"squats{times(f.count)}" if f.count > 1 else "squats" if held else \
+            "squats down"
+    if lab == "crouch":
+        return "crouches" if held else "crouches down"
+    if lab == "all_fours":
+        return "is on hands and knees" if held else "gets down on hands and knees"
+    if lab == "crawl":
+        return "crawls forward"
+    if lab == "one_leg":
+        return f"balances on the {f.side} leg"
+    if lab == "arms_out":
+        return "holds both arms out"
+    if lab == "stand":
+        return "stands still"
+    if lab == "get_up":
+        return "gets up"
+    if lab == "raise":
+        return f"raises {_hand(f.side)}"
+    if lab == "wave":
+        return f"waves with {_hand(f.side)}"
+    if lab == "punch":
+        return "punches" + (f" with {_hand(f.side)}" if f.side else "") + times(f.count)
+    if lab == "kick":
+        return "kicks" + (f" with {_hand(f.side, 'leg')}" if f.side else "") + times(f.count)
+    if lab == "reach":
+        return f"reaches forward with {_hand(f.side)}"
+    if lab == "bend":
+        return "bends over"
+    if lab == "bow":
+        return "bows" + times(f.count)
+    if lab == "touch_floor":
+        return "touches the floor"
+    if lab == "clap":
+        return "claps" + times(f.count)
+    raise ValueError(f"no phrase for the label {lab!r}")
+
+
+def _froude(f: Finding) -> float:
+    return float(f.detail.get("froude", JOG_UPTO))
+
+
+def join(phrases: list[str], subject: str = SUBJECT) -> str:
+    """"a person A", "a person A and then B", "a person A, B, then C"."""
+    phrases = list(dict.fromkeys(p for p in phrases if p))
+    if not phrases:
+        return CANNOT_TELL
+    if len(phrases) == 1:
+        body = phrases[0]
+    elif len(phrases) == 2:
+        body = f"{phrases[0]} and then {phrases[1]}"
+    else:
+        body = ", ".join(phrases[:-1]) + f", then {phrases[-1]}"
+    return tidy(f"{subject} {body}")
+
+
+def tidy(text: str) -> str:
+    """A sentence without a word or a phrase said twice in a row ("punk punk", "6 steps 6
+    steps"), spaces normalised."""
+    words = text.split()
+    changed = True
+    while changed:
+        changed = False
+        for n in range(1, 5):
+            for i in range(len(words) - 2 * n + 1):
+                if words[i:i + n] == words[i + n:i + 2 * n]:
+                    del words[i + n:i + 2 * n]
+                    changed = True
+                    break
+            if changed:
+                break
+    return " ".join(words)
+
+
+_WORD = re.compile(r"[a-z']+")
+
+
+def repeats(text: str) -> bool:
+    """Whether a sentence says a word or a phrase twice in a row (what :func:`tidy`
+    removes)."""
+    return tidy(text) != " ".join(text.split())

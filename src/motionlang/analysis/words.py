@@ -1,0 +1,67 @@
+"""Which actions a sentence names: the same coarse actions the analysis reports
+(``analysis.ACTION``), read from the words of a caption, a query or a generated sentence.
+
+One table of verbs and their forms per action, so that ``describe`` can ask whether a model's
+sentence agrees with the body, ``check`` which actions of a sentence a motion shows, and
+``generate`` whether a model ever learnt an action it is asked for.
+"""
+from __future__ import annotations
+
+import re
+
+#: coarse action -> the words that name it (every form a caption uses)
+ACTION_WORDS: dict[str, tuple[str, ...]] = {
+    "walk": ("walk", "walks", "walking", "walked", "stroll", "strolls", "strolling",
+             "march", "marches", "marching", "steps", "step", "stepping", "paces", "pacing",
+             "wanders", "wandering", "strides", "striding", "shuffles", "shuffling"),
+    "run": ("run", "runs", "running", "ran", "jog", "jogs", "jogging", "jogged", "sprint",
+            "sprints", "sprinting", "dash", "dashes", "dashing", "trot", "trots", "trotting"),
+    "jump": ("jump", "jumps", "jumping", "jumped", "hop", "hops", "hopping", "hopped", "leap",
+             "leaps", "leaping", "leapt"),
+    "climb": ("climb", "climbs", "climbing", "climbed", "hang", "hangs", "hanging", "scale",
+              "scales", "scaling", "clambers", "clambering"),
+    "punch": ("punch", "punches", "punching", "punched", "box", "boxes", "boxing", "jab",
+              "jabs", "jabbing", "strike", "strikes", "striking", "hits", "hitting"),
+    "kick": ("kick", "kicks", "kicking", "kicked"),
+    "crouch": ("crouch", "crouches", "crouching", "crouched", "squat", "squats", "squatting",
+               "squatted", "duck", "ducks", "ducking"),
+    "sit": ("sit", "sits", "sitting", "sat", "seated"),
+    "lie": ("lie", "lies", "lying", "lay", "lays", "laying"),
+    "kneel": ("kneel", "kneels", "kneeling", "knelt"),
+    "crawl": ("crawl", "crawls", "crawling", "crawled"),
+    "balance": ("balance", "balances", "balancing", "balanced"),
+    "wave": ("wave", "waves", "waving", "waved"),
+    "raise": ("raise", "raises", "raising", "raised", "lift", "lifts", "lifting", "lifted"),
+    "clap": ("clap", "claps", "clapping", "clapped"),
+    "turn": ("turn", "turns", "turning", "turned", "rotate", "rotates", "rotating"),
+    "spin": ("spin", "spins", "spinning", "spun", "pirouette", "pirouettes", "twirl",
+             "twirls", "twirling"),
+    "bow": ("bow", "bows", "bowing", "bowed"),
+    "bend": ("bend", "bends", "bending", "bent", "stoop", "stoops", "stooping", "pick",
+             "picks", "picking", "touches", "touch"),
+    "reach": ("reach", "reaches", "reaching", "reached", "grab", "grabs", "grabbing"),
+    "stand": ("stand", "stands", "standing", "stood", "still"),
+}
+_INDEX = {w: a for a, ws in ACTION_WORDS.items() for w in ws}
+_TOKEN = re.compile(r"[a-z]+")
+#: actions that answer for one another when two readers compare (a hop is a jump, a squat is
+#: a crouch, a pick-up bends over)
+COMPATIBLE = {"spin": {"turn"}, "turn": {"spin"}, "raise": {"wave", "reach"},
+              "wave": {"raise"}, "bow": {"bend"}, "bend": {"bow", "crouch"},
+              "crouch": {"bend", "kneel"}, "kneel": {"crouch"}, "climb": {"jump"},
+              "crawl": {"kneel"}}
+
+
+def actions_named(text: str) -> list[str]:
+    """The coarse actions a sentence names, in the order it names them, each once."""
+    out: list[str] = []
+    for w in _TOKEN.findall(text.lower()):
+        a = _INDEX.get(w)
+        if a is not None and a not in out:
+            out.append(a)
+    return out
+
+
+def agrees(named: list[str] | set[str], action: str) -> bool:
+    """Whether a sentence that names ``named`` names ``action`` or one answering for it."""
+    return any(a == action or action in COMPATIBLE.get(a, ()) for a in named)

@@ -1,0 +1,275 @@
+"""The grounded analysis (``motionlang.analysis``): each detector on a body the test builds,
+and each shown to say "no" where the body does not do the thing."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from motionlang.analysis import CANNOT_TELL, analyse, analyse_positions, repeats, tidy
+from motionlang.analysis.evidence import clean_mask, confidence, runs
+from motionlang.analysis.words import actions_named, agrees
+from motionlang.errors import MotionlangError
+from motionlang.features.joint_map import KIT21_NAMES
+
+FPS = 30.0
+#: a standing body facing +Z (its left at +x), metres; leg length 0.84
+STAND = {
+    "root": (0, 0.95, 0), "BP": (0, 1.05, 0), "BT": (0, 1.25, 0), "BLN": (0, 1.45, 0),
+    "BUN": (0, 1.6, 0), "LS": (0.18, 1.42, 0), "LE": (0.2, 1.14, 0), "LW": (0.2, 0.88, 0),
+    "RS": (-0.18, 1.42, 0), "RE": (-0.2, 1.14, 0), "RW": (-0.2, 0.88, 0),
+    "LH": (0.09, 0.92, 0), "LK": (0.09, 0.5, 0), "LA": (0.09, 0.08, 0),
+    "LMrot": (0.09, 0.02, -0.05), "LF": (0.09, 0.02, 0.12), "RH": (-0.09, 0.92, 0),
+    "RK": (-0.09, 0.5, 0), "RA": (-0.09, 0.08, 0), "RMrot": (-0.09, 0.02, -0.05),
+    "RF": (-0.09, 0.02, 0.12)}
+I = {n: i for i, n in enumerate(KIT21_NAMES)}
+
+
+def pose(**moved) -> np.ndarray:
+    """(21, 3) the standing body with some joints put elsewhere."""
+    p = np.array([STAND[n] for n in KIT21_NAMES], dtype=float)
+    for name, xyz in moved.items():
+        p[I[name]] = xyz
+    return p
+
+
+def hold(p: np.ndarray, seconds: float) -> np.ndarray:
+    return np.repeat(p[None], int(round(seconds * FPS)), axis=0)
+
+
+def blend(a: np.ndarray, b: np.ndarray, seconds: float) -> np.ndarray:
+    w = np.linspace(0, 1, int(round(seconds * FPS)))[:, None, None]
+    return a[None] * (1 - w) + b[None] * w
+
+
+def take(*parts: np.ndarray) -> np.ndarray:
+    return np.concatenate(parts)
+
+
+def labels(p21, fps: float = FPS) -> list[str]:
+    return [f.label for f in analyse_positions(p21, fps).findings]
+
+
+SIT = pose(root=(0, 0.5, 0), BP=(0, 0.6, 0), BT=(0, 0.8, 0), BLN=(0, 1.0, 0), BUN=(0, 1.15, 0),
+           LS=(0.18, 0.97, 0), LE=(0.2, 0.7, 0.05), LW=(0.2, 0.6, 0.3), RS=(-0.18, 0.97, 0),
+           RE=(-0.2, 0.7, 0.05), RW=(-0.2, 0.6, 0.3), LH=(0.09, 0.48, 0),
+           LK=(0.09, 0.5, 0.42), LA=(0.09, 0.08, 0.45), LMrot=(0.09, 0.02, 0.4),
+           LF=(0.09, 0.02, 0.57), RH=(-0.09, 0.48, 0), RK=(-0.09, 0.5, 0.42),
+           RA=(-0.09, 0.08, 0.45), RMrot=(-0.09, 0.02, 0.4), RF=(-0.09, 0.02, 0.57))
+
+
+def test_standing_still_is_standing_and_nothing_else():
+    rng = np.random.default_rng(0)
+    p = hold(pose(), 3.0) + rng.normal(0, 0.002, (90, 21, 3))   # marker jitter
+    a = analyse_positions(p, FPS)
+    assert [f.label for f in a.findings] == ["stand"]
+    assert a.sentence() == "a person stands still"
+
+
+def test_sits_down_on_a_seat_and_gets_up():
+    p = take(hold(pose(), 1.0), blend(pose(), SIT, 1.0), hold(SIT, 2.0), blend(SIT, pose(), 1.0),
+             hold(pose(), 1.0))
+    a = analyse_positions(p, FPS)
+    sit = [f for f in a.findings if f.label == "sit"]
+    assert len(sit) == 1 and sit[0].detail["seat"] == "seat"
+    assert 1.3 < sit[0].start < 2.2 and 3.8 < sit[0].end < 4.7
+    assert "sits down" in a.sentence()
+    assert a.main_action() == "sit"
+
+
+def test_a_squat_is_not_a_sit():
+    """Pelvis low over the feet (no thighs forward to a seat) is a squat, not sitting."""
+    sq = pose(root=(0, 0.45, 0), BP=(0, 0.55, 0.02), BT=(0, 0.75, 0.08), BLN=(0, 0.93, 0.12),
+              BUN=(0, 1.08, 0.14), LS=(0.18, 0.9, 0.12), RS=(-0.18, 0.9, 0.12),
+              LE=(0.2, 0.65, 0.2), RE=(-0.2, 0.65, 0.2), LW=(0.2, 0.5, 0.35),
+              RW=(-0.2, 0.5, 0.35), LH=(0.09, 0.43, 0), RH=(-0.09, 0.43, 0),
+              LK=(0.12, 0.45, 0.4), RK=(-0.12, 0.45, 0.4))
+    p = take(hold(pose(), 1.0), blend(pose(), sq, 0.7), hold(sq, 2.0), blend(sq, pose(), 0.7),
+             hold(pose(), 1.0))
+    got = labels(p)
+    assert "squat" in got or "crouch" in got
+    assert "sit" not in got
+
+
+def test_lying_face_up_from_the_first_frame():
+    lie = np.array([[STAND[n][0], 0.12 + 0.02 * (STAND[n][2] > 0), 1.0 - STAND[n][1]]
+                    for n in KIT21_NAMES])   # the standing body laid along +Z, face up
+    a = analyse_positions(hold(lie, 3.0), FPS)
+    found = [f for f in a.findings if f.label == "lie"]
+    assert found and found[0].detail["face"] == "up"
+    assert a.sentence().startswith("a person lies on the back")
+
+
+def test_kneeling_on_both_knees():
+    kn = pose(root=(0, 0.5, 0), BP=(0, 0.6, 0), BT=(0, 0.8, 0), BLN=(0, 1.0, 0),
+              BUN=(0, 1.15, 0), LS=(0.18, 0.97, 0), RS=(-0.18, 0.97, 0), LE=(0.2, 0.7, 0),
+              RE=(-0.2, 0.7, 0), LW=(0.2, 0.45, 0), RW=(-0.2, 0.45, 0), LH=(0.09, 0.48, 0),
+              RH=(-0.09, 0.48, 0), LK=(0.09, 0.06, 0.0), RK=(-0.09, 0.06, 0.0),
+              LA=(0.09, 0.08, -0.42), RA=(-0.09, 0.08, -0.42), LMrot=(0.09, 0.05, -0.45),
+              RMrot=(-0.09, 0.05, -0.45), LF=(0.09, 0.02, -0.3), RF=(-0.09, 0.02, -0.3))
+    p = take(hold(pose(), 1.0), blend(pose(), kn, 1.0), hold(kn, 2.0))
+    kneel = [f for f in analyse_positions(p, FPS).findings if f.label == "kneel"]
+    assert kneel and kneel[0].side == "both"
+
+
+def _punches(n: int, seconds: float) -> np.ndarray:
+    """The right fist driven straight forward ``n`` times, each taking ``seconds``."""
+    bent = pose(RE=(-0.22, 1.2, 0.15), RW=(-0.2, 1.38, 0.18))
+    straight = pose(RE=(-0.18, 1.42, 0.28), RW=(-0.18, 1.42, 0.54))
+    parts = [hold(bent, 0.5)]
+    for _ in range(n):
+        parts += [blend(bent, straight, seconds), blend(straight, bent, 0.3), hold(bent, 0.3)]
+    return take(*parts, hold(bent, 0.5))
+
+
+def test_punches_are_counted_with_their_side():
+    a = analyse_positions(_punches(3, 0.12), FPS)
+    punch = [f for f in a.findings if f.label == "punch"]
+    assert len(punch) == 1 and punch[0].side == "right" and punch[0].count == 3
+    assert a.main_action() == "punch"
+    assert "punches with the right hand 3 times" in a.sentence()
+
+
+def test_a_slow_reach_is_no_punch():
+    assert "punch" not in labels(_punches(1, 1.5))
+
+
+def test_raise_and_wave_and_their_no():
+    up = pose(RE=(-0.2, 1.7, 0), RW=(-0.2, 1.95, 0))
+    raised = take(hold(pose(), 0.5), blend(pose(), up, 0.5), hold(up, 1.5), blend(up, pose(), 0.5))
+    a = analyse_positions(raised, FPS)
+    assert [f.side for f in a.findings if f.label == "raise"] == ["right"]
+    assert "wave" not in {f.label for f in a.findings}
+    t = np.arange(int(3 * FPS)) / FPS
+    wave = hold(up, 3.0).copy()
+    wave[:, I["RW"], 0] += 0.12 * np.sin(2 * np.pi * 1.5 * t)
+    a = analyse_positions(take(hold(pose(), 0.5), wave, hold(pose(), 0.5)), FPS)
+    waves = [f for f in a.findings if f.label == "wave"]
+    assert waves and waves[0].side == "right" and waves[0].count >= 3
+    assert "raise" not in {f.label for f in a.findings}     # said by the wave
+    assert "waves with the right hand" in a.sentence()
+
+
+def _turned(p: np.ndarray, yaw: np.ndarray) -> np.ndarray:
+    c, s = np.cos(yaw)[:, None], np.sin(yaw)[:, None]
+    out = p.copy()
+    out[..., 0] = c * p[..., 0] + s * p[..., 2]
+    out[..., 2] = -s * p[..., 0] + c * p[..., 2]
+    return out
+
+
+def test_turns_left_about_90_degrees():
+    n = int(4 * FPS)
+    yaw = np.radians(90) * np.clip((np.arange(n) / FPS - 1.0) / 1.5, 0, 1)
+    a = analyse_positions(_turned(hold(pose(), 4.0), yaw), FPS)
+    turn = [f for f in a.findings if f.label == "turn"]
+    assert len(turn) == 1 and turn[0].side == "left"
+    assert turn[0].detail["rounded"] == 90
+    a = analyse_positions(_turned(hold(pose(), 4.0), -2 * yaw), FPS)
+    turn = [f for f in a.findings if f.label == "turn"]
+    assert len(turn) == 1 and turn[0].side == "right" and "turns around" in a.sentence()
+
+
+def test_a_jump_up_and_a_stand_without_one():
+    p = hold(pose(), 3.0).copy()
+    t = np.arange(len(p)) / FPS
+    flight = (t > 1.0) & (t < 1.45)
+    p[flight, :, 1] += (4.8 * (t[flight] - 1.0) * (1.45 - t[flight]))[:, None]  # 0.24 m
+    jumps = [f for f in analyse_positions(p, FPS).findings if f.label == "jump"]
+    assert len(jumps) == 1 and jumps[0].detail["direction"] == "up"
+    assert "jump" not in labels(hold(pose(), 3.0))
+
+
+def test_balancing_on_one_leg_and_not_for_a_step():
+    lifted = pose(LK=(0.09, 0.7, 0.3), LA=(0.09, 0.35, 0.25), LMrot=(0.09, 0.3, 0.2),
+                  LF=(0.09, 0.28, 0.37))
+    p = take(hold(pose(), 0.5), blend(pose(), lifted, 0.3), hold(lifted, 2.0),
+             blend(lifted, pose(), 0.3), hold(pose(), 0.5))
+    one = [f for f in analyse_positions(p, FPS).findings if f.label == "one_leg"]
+    assert one and one[0].side == "right"   # standing on the right, the left raised
+    short = take(hold(pose(), 0.5), blend(pose(), lifted, 0.2), blend(lifted, pose(), 0.2),
+                 hold(pose(), 1.0))
+    assert "one_leg" not in labels(short)
+
+
+def test_hanging_by_the_hands():
+    hangs = pose(LE=(0.2, 1.75, 0), LW=(0.2, 2.0, 0), RE=(-0.2, 1.75, 0), RW=(-0.2, 2.0, 0))
+    up = hangs + np.array([0, 0.5, 0])
+    p = take(hold(pose(), 1.0), blend(pose(), hangs, 0.5), blend(hangs, up, 1.0), hold(up, 2.0))
+    a = analyse_positions(p, FPS)
+    assert {"hang", "climb"} & {f.label for f in a.findings}
+    assert a.main_action() == "climb"
+
+
+def test_walking_from_the_procedural_generator():
+    from motionlang.datasets.synth import Primitive
+    from motionlang.datasets.synth.compose import build_motion, random_style
+    rng = np.random.default_rng(4)
+    style = random_style(rng)
+    motion, _, _ = build_motion([Primitive("walk", count=8, direction="forward")], style, rng)
+    a = analyse(motion)
+    assert a.main_action() == "walk"
+    walk = [f for f in a.findings if f.label == "walk"]
+    assert walk[0].detail["direction"] == "forward"
+    motion, _, _ = build_motion([Primitive("walk", count=8, direction="backward")], style, rng)
+    assert [f.detail["direction"] for f in analyse(motion).findings
+            if f.label == "walk"] == ["backwards"]
+
+
+def test_thresholds_are_in_body_units():
+    """The same motion in centimetres, at another frame rate, gives the same findings."""
+    p = _punches(2, 0.12)
+    a = analyse_positions(p, FPS)
+    fast = np.repeat(p, 4, axis=0)   # the same motion sampled at 120 Hz
+    b = analyse_positions(fast * 100.0, 4 * FPS)
+    assert [(f.label, f.side, f.count) for f in a.findings] == \
+        [(f.label, f.side, f.count) for f in b.findings]
+
+
+@pytest.mark.parametrize("bad, why", [
+    (np.zeros((1, 21, 3)), "1 frame"),
+    (np.zeros((10, 21, 3)), "no length"),
+    (np.zeros((10, 20, 3)), "(T, 21, 3)"),
+    (np.full((10, 21, 3), np.nan), "finite"),
+])
+def test_degenerate_motion_is_one_clear_error(bad, why):
+    with pytest.raises(MotionlangError) as e:
+        analyse_positions(bad, FPS)
+    assert why.split()[-1] in str(e.value)
+
+
+def test_absurd_speeds_give_a_sentence_not_a_traceback():
+    p = hold(pose(), 2.0).copy()
+    p += np.arange(len(p))[:, None, None] * np.array([100.0, 0, 0])   # 3 km/s
+    text = analyse_positions(p, FPS).sentence()
+    assert isinstance(text, str) and text
+
+
+def test_nothing_found_is_said_as_such():
+    jitter = np.random.default_rng(1).normal(0, 0.3, (60, 21, 3)) + pose()
+    a = analyse_positions(jitter, FPS)
+    assert a.sentence() == CANNOT_TELL or a.findings
+
+
+def test_confidence_and_masks():
+    assert confidence(1.0, 1.0, 0.5) == 0.5
+    assert confidence(1.5, 1.0, 0.5) == 1.0 and confidence(0.0, 1.0, 0.5) == 0.0
+    assert confidence(0.2, 0.5, -0.3) == 1.0           # below a threshold
+    assert confidence(2.0, 1.0, 0.5, duration=0.25, full_after=1.0) == pytest.approx(0.5)
+    m = np.array([0, 1, 1, 0, 1, 1, 1, 0, 0, 0, 1], bool)
+    assert runs(m) == [(1, 3), (4, 7), (10, 11)]
+    cleaned = clean_mask(m, 10.0, min_len=0.3, max_gap=0.1)
+    assert runs(cleaned) == [(1, 7)]
+
+
+def test_sentences_never_repeat_themselves():
+    assert tidy("a person takes 6 steps 6 steps 6 steps forward") == \
+        "a person takes 6 steps forward"
+    assert tidy("lumbering street punk punk") == "lumbering street punk"
+    assert repeats("squatting squats squats") and not repeats("a person walks forward")
+
+
+def test_actions_named_in_words():
+    assert actions_named("A man jogs forward, then sits down") == ["run", "sit"]
+    assert actions_named("someone strolls along") == ["walk"]
+    assert actions_named("someone dances a tango") == []   # a word the table lacks
+    assert agrees(["crouch"], "bend") and not agrees(["walk"], "punch")
