@@ -2,7 +2,7 @@
 (issue 41: "the packaged models keep >= 95 % of their figures").
 
     OMP_NUM_THREADS=1 .venv/bin/python experiments/grounded_bandai.py [--model m2l]
-        [--bandai /tmp/bandai] [--limit N]
+        [--bandai /tmp/bandai] [--limit N] [--every N]
 
 For each of the 556 Bandai Namco test takes (dataset 2, take numbers 0 mod 5): the model's
 first sentence as its beam ranks it (``describe --raw``) and as ``describe`` gives it
@@ -25,6 +25,7 @@ def main() -> None:
     ap.add_argument("--model", default="m2l")
     ap.add_argument("--bandai", default="/tmp/bandai")
     ap.add_argument("--limit", type=int, default=None)
+    ap.add_argument("--every", type=int, default=1, help="every N-th test take (a sample)")
     args = ap.parse_args()
 
     import torch
@@ -35,7 +36,7 @@ def main() -> None:
     from motionlang.evaluation.seq2seq import label_accuracy
     torch.set_num_threads(1)
     model = ml.load_model(args.model)
-    takes = load_bandai(args.bandai, split="test")[:args.limit]
+    takes = load_bandai(args.bandai, split="test")[::args.every][:args.limit]
     texts: dict[str, dict[str, str]] = {"raw": {}, "grounded": {}}
     labels = {}
     for i, rec in enumerate(takes):

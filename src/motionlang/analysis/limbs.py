@@ -42,6 +42,7 @@ KICK_HELD = 0.8            # s: a leg held high longer than this is a pose, not 
 KICK_HEIGHT = 0.4          # L: ankle over the floor
 KICK_SPEED = 3.0           # L/s: the foot's peak speed
 KICK_KNEE = 45.0           # deg: the knee at most this bent at the kick's height
+KICK_TILT = 100.0          # deg: a high kick leans the trunk back, but the body is not upside down
 REACH_FORWARD = 0.6        # arm lengths: wrist ahead of the shoulder
 BEND_TILT = 50.0           # deg
 BOW_TILT = 25.0            # deg: a bow leans the trunk forward at least this far...
@@ -177,7 +178,8 @@ def kicks(body: Body) -> list[Finding]:
         speed = body.speed_of(body.p[:, a]) / body.leg
         ahead = np.linalg.norm((body.p[:, a] - body.p[:, h])[:, [0, 2]], axis=1) / body.leg
         standing_on = body.contacts[1 - side]
-        cand = (height > KICK_HEIGHT) & (flex[side] < KICK_KNEE) & (ahead > 0.5)
+        cand = (height > KICK_HEIGHT) & (flex[side] < KICK_KNEE) & (ahead > 0.5) & \
+            (body.trunk_tilt < KICK_TILT)    # a cartwheel's legs are not kicks
         events = []
         for lo, hi in runs(cand):
             w = body.frames(0.3)
@@ -228,7 +230,8 @@ def reaches(body: Body) -> list[Finding]:
 
 def bends(body: Body) -> list[Finding]:
     m = clean_mask((body.trunk_tilt > BEND_TILT) & (body.pelvis_height > BEND_PELVIS) &
-                   ~lying(body), body.fps, min_len=0.4, max_gap=EVENT_GAP)
+                   _leans_forward(body) & ~lying(body), body.fps, min_len=0.4,
+                   max_gap=EVENT_GAP)
     out = []
     for a, b in runs(m):
         v = float(np.median(body.trunk_tilt[a:b]))

@@ -37,6 +37,7 @@ JUMP_FLIGHT = 0.12         # s: shortest flight from both feet counted as a jump
 LEAP_FLIGHT = 0.35         # s: a flight this long is a jump from any take-off
 TAKEOFF = 0.1              # s: both feet down this shortly before the flight
 JUMP_FORWARD = 0.35        # L of horizontal travel from take-off to landing
+JUMP_RISE = 0.05           # L: the pelvis rises at least this in the flight
 JUMP_DOWN = 0.25           # L: landing this far below the take-off
 MIN_TURN = 45.0            # deg
 TURN_WINDOW = 4.0          # s: a turn is done within this
@@ -159,6 +160,10 @@ def jumps(body: Body) -> list[Finding]:
         if kind != "jump":
             continue
         lo, hi = max(0, a - before), min(body.n - 1, b + before)
+        # a jump carries the body up and upright (getting up from the floor does not)
+        rise = (float(body.p[a:b, 0, 1].max()) - float(body.p[lo, 0, 1])) / body.leg
+        if rise < JUMP_RISE or float(body.trunk_tilt[lo:b].max()) > 50.0:
+            continue
         root = body.p[:, 0, [0, 2]]
         dist = float(np.linalg.norm(root[hi] - root[lo])) / body.leg
         drop = float(body.foot_low[:, lo].min() - body.foot_low[:, hi].min()) / body.leg

@@ -29,6 +29,7 @@ from motionlang.analysis.evidence import MIN_CONFIDENCE, Finding, clean_mask, co
 # thresholds (standing pelvis heights "sph", leg lengths "L", degrees, seconds)
 LYING_TILT = 60.0          # deg: trunk this far from vertical
 LYING_PELVIS = 0.45        # sph: pelvis at most this high
+LYING_CHEST = 0.35         # L: the chest at most this high (not held up on hands and knees)
 FOURS_TILT = 45.0          # deg
 HAND_NEAR_FLOOR = 0.25     # L: a hand this close to the local floor touches it
 KNEE_NEAR_FLOOR = 0.2      # L
@@ -81,7 +82,8 @@ def height_over_floor(body: Body, joint: int) -> np.ndarray:
 
 
 def lying(body: Body) -> np.ndarray:
-    return (body.trunk_tilt > LYING_TILT) & (body.pelvis_height < LYING_PELVIS)
+    return (body.trunk_tilt > LYING_TILT) & (body.pelvis_height < LYING_PELVIS) & \
+        (height_over_floor(body, J["BT"]) < LYING_CHEST)
 
 
 def hands_down(body: Body) -> np.ndarray:

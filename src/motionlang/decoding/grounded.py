@@ -59,7 +59,7 @@ STYLE_LOGP = -0.6
 #: root mean square of the model's normalised input features (1 on its training motion):
 #: above ``FAMILIAR_RMS`` the motion is unlike what the model learnt from, and its sentence
 #: does not lead unless nothing else can be said; above ``STYLE_RMS`` it may not name a style
-FAMILIAR_RMS = 1.6
+FAMILIAR_RMS = 2.5
 STYLE_RMS = 1.2
 
 #: the words that name each gait, in every form a caption uses
@@ -242,7 +242,8 @@ def reconcile(hyps: list[tuple[str, float]], analysis: Analysis | None,
         return [(grounded, float("nan"))]
     first, _ = hyps[0]
     main = analysis.main_action()
-    agree = main is None or agrees(actions_named(first), main)
+    # standing still is no opinion: a gesture too small for the detectors is still made
+    agree = main in (None, "stand") or agrees(actions_named(first), main)
     if first != UNFAMILIAR and agree and (rms <= FAMILIAR_RMS or main is None):
         return hyps + [(grounded, float("nan"))]
     return [(grounded, float("nan"))] + [(t, s) for t, s in hyps if t != UNFAMILIAR]
