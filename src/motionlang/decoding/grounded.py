@@ -135,7 +135,8 @@ def ground(model: Any, frames, hyps: list[tuple[str, float]], action: str | None
         elif has_verb(hyps[0][0]):
             return hyps         # something else named over the gait (a wave while walking)
     # a jump the model does not name, or a gait it has no sentence for: force the verb
-    subject = _subject(hyps[0][0]) or ["a", "person"]
+    # "a person is" + "jumps" would be no English: the subject without its auxiliary
+    subject = [w for w in _subject(hyps[0][0]) if w not in ("is", "are")] or ["a", "person"]
     prefix = [*subject, GAIT_VERB[action]]
     if all(w in getattr(model.vocab, "stoi", {}) for w in prefix):
         return describe_features(model, frames, width=max(width, 2), prefix=prefix,
@@ -189,6 +190,8 @@ def familiarity(model: Any, frames) -> float:
 
 
 _ARTICLE = re.compile(r"\ban (?=[^aeiou\s])")
+_MANNER = re.compile(r" (?:in|with) (?:a|an|the)(?: \w+){0,3} (?:way|manner) | at speed ")
+_DANGLING = re.compile(r"(?: (?:in|like|with|at|a|an|the|is|of))+$")
 _STYLE_SUBJECTS = sorted({s for st in STYLES.values() for s, _ in st.subjects}, key=len,
                          reverse=True)
 _STYLE_PHRASES = sorted({p for st in STYLES.values() for p in (*st.phrases, *st.synonyms)
@@ -207,11 +210,11 @@ def without_style(text: str) -> str:
     for subject in _STYLE_SUBJECTS:
         low = low.replace(f" {subject} ", " a person ")
     words = [w for w in low.split() if w not in _STYLE_WORDS]
-    # "in a way", "like a": the frame of a style phrase whose words are gone
     out = " ".join(words)
-    for frame in (" in a way", " in an way", " like a", " like an", " with a", " at speed"):
-        if out.endswith(frame):
-            out = out[:-len(frame)]
+    # the frame of a style phrase whose words are gone ("in an ... way", "like a"), and a
+    # sentence left ending on an article or a preposition
+    out = _MANNER.sub(" ", f" {out} ")
+    out = _DANGLING.sub("", out.strip())
     return _ARTICLE.sub("a ", out).strip()
 
 
