@@ -8,10 +8,16 @@ here), and name that checkout's sources first::
     git worktree add /tmp/base COMMIT
     PYTHONPATH=/tmp/base/src .venv/bin/python tests/data/make_packaged_outputs.py
     git worktree remove /tmp/base --force
+
+``--add-inputs`` instead stores the M2L input motion by value in an existing file whose inputs
+are pinned by a sha256 only (older fixtures): the motion is recomputed, checked against that
+sha256, written beside the outputs, and every other array is kept byte for byte (checked
+after writing).
 """
 from __future__ import annotations
 
 import argparse
+import hashlib
 import importlib.util
 import subprocess
 import sys
@@ -34,9 +40,45 @@ def source_commit(src: Path) -> str:
     return head + ("-dirty" if dirty else "")
 
 
+def motion_digest(motion) -> str:
+    """sha256 of a Motion's frame rate and float64 arrays, as older fixtures pinned their
+    input with (``input/synth_sha256``)."""
+    h = hashlib.sha256(np.float64(motion.fps).tobytes())
+    for a in (motion.root_translation, motion.root_rotation, motion.joint_angles):
+        h.update(np.ascontiguousarray(a, dtype=np.float64).tobytes())
+    return h.hexdigest()
+
+
+def add_inputs(recipe, path: Path) -> None:
+    """Store the input motion by value in the fixture ``path``, its outputs left as they are."""
+    with np.load(path, allow_pickle=False) as z:
+        old = {k: z[k] for k in z.files}
+    motion = recipe.synth_motion()
+    digest = old.pop("input/synth_sha256", None)
+    if digest is None:
+        raise SystemExit(f"{path}: no input/synth_sha256 to check the input against")
+    if motion_digest(motion) != str(digest):
+        raise SystemExit(f"{path}: datasets.synth no longer gives the pinned input motion "
+                         "(its sha256 differs); regenerate the whole file instead")
+    arrays = {**old, **recipe.synth_inputs(motion)}
+    missing = set(recipe.expected_keys()) - set(arrays)
+    if missing:
+        raise SystemExit(f"{path} lacks {sorted(missing)}")
+    np.savez_compressed(path, **arrays)
+    with np.load(path, allow_pickle=False) as z:
+        changed = [k for k, a in old.items() if not (
+            z[k].dtype == a.dtype and z[k].shape == a.shape and np.array_equal(z[k], a))]
+    if changed:
+        raise SystemExit(f"{path}: arrays changed on rewriting: {changed}")
+    print(f"{path}: input motion stored by value, {len(old)} arrays kept", file=sys.stderr)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("-o", "--out", type=Path, default=HERE / "packaged_outputs.npz")
+    parser.add_argument("--add-inputs", action="store_true",
+                        help="store the input motion by value in the existing file -o, "
+                             "keeping its outputs")
     args = parser.parse_args()
 
     import torch
@@ -48,11 +90,14 @@ def main() -> None:
     spec = importlib.util.spec_from_file_location("pinned_recipe", TEST)
     recipe = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(recipe)
+    if args.add_inputs:
+        add_inputs(recipe, args.out)
+        return
 
     motion = recipe.synth_motion()
     p21 = recipe.judge_input(motion)
     arrays: dict[str, np.ndarray] = {
-        "input/synth_sha256": np.array(recipe.motion_digest(motion)),
+        **recipe.synth_inputs(motion),
         "input/judge_p21": p21,
         "meta/commit": np.array(source_commit(src)),
         "meta/torch": np.array(torch.__version__),
