@@ -87,10 +87,12 @@ def prune(found: list[Finding]) -> list[Finding]:
             continue
         if lab == "touch_floor" and covered(("crawl", "all_fours", "lie", "kneel"), 0.1):
             continue
-        if lab == "turn" and abs(f.detail.get("angle", 0)) < 135 and any(
-                g.label in ("walk", "run") and g.detail.get("path") != "straight"
-                and overlap(f, g) >= 0.5 * f.duration for g in found):
-            continue
+        if lab in ("turn", "spin") and any(
+                g.label in ("walk", "run") and overlap(f, g) >= 0.5 * f.duration and (
+                    g.detail.get("path") == "in a circle" or (
+                        g.detail.get("path") != "straight" and
+                        abs(f.detail.get("angle", 0)) < 135)) for g in found):
+            continue    # the path of the walk says it
         if lab == "stand" and any(g.label != "stand" and g.kind != "turn" for g in found):
             continue
         if lab in ("wave", "clap") and covered(("punch",), 0.3):

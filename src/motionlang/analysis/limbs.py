@@ -39,9 +39,11 @@ PUNCH_TIME = 0.35          # s: the straightening takes at most this
 PUNCH_SPEED = 2.5          # arm lengths a second of extension at its peak
 PUNCH_LEVEL = 0.35         # arm lengths: the fist at most this far below the shoulder
 KICK_HELD = 0.8            # s: a leg held high longer than this is a pose, not a kick
-KICK_HEIGHT = 0.4          # L: ankle over the floor
+KICK_HEIGHT = 0.3          # L: ankle over the floor
+KICK_AWAY = 0.45           # L: ankle away from the hip, horizontally
+KICK_TRAVEL = 1.5          # L/s: the body moves slower than this while it kicks
 KICK_SPEED = 3.0           # L/s: the foot's peak speed
-KICK_KNEE = 45.0           # deg: the knee at most this bent at the kick's height
+KICK_KNEE = 75.0           # deg: the knee at most this bent at some moment of the kick
 KICK_TILT = 100.0          # deg: a high kick leans the trunk back, but the body is not upside down
 REACH_FORWARD = 0.6        # arm lengths: wrist ahead of the shoulder
 BEND_TILT = 50.0           # deg
@@ -178,14 +180,19 @@ def kicks(body: Body) -> list[Finding]:
         speed = body.speed_of(body.p[:, a]) / body.leg
         ahead = np.linalg.norm((body.p[:, a] - body.p[:, h])[:, [0, 2]], axis=1) / body.leg
         standing_on = body.contacts[1 - side]
-        cand = (height > KICK_HEIGHT) & (flex[side] < KICK_KNEE) & (ahead > 0.5) & \
-            (body.trunk_tilt < KICK_TILT)    # a cartwheel's legs are not kicks
+        # the foot up and away from the hip; the knee straightens at some moment of it (a
+        # kick chambers bent and extends) and the body is not upside down (a cartwheel)
+        cand = (height > KICK_HEIGHT) & (ahead > KICK_AWAY) & (body.trunk_tilt < KICK_TILT)
         events = []
         for lo, hi in runs(cand):
             w = body.frames(0.3)
             peak = float(speed[max(0, lo - w):hi].max())
             support = float(standing_on[max(0, lo - w):hi].mean())
-            if peak >= KICK_SPEED and (hi - lo) / body.fps <= KICK_HELD and support > 0.5:
+            straight = float(flex[side, lo:hi].min()) < KICK_KNEE
+            # a running stride throws the foot high too: a kick is made from a stance
+            slow = float(np.median(body.ground_speed[lo:hi])) < KICK_TRAVEL
+            if peak >= KICK_SPEED and (hi - lo) / body.fps <= KICK_HELD and support > 0.5 \
+                    and straight and slow:
                 events.append((lo, hi, peak))
         if events:
             out.extend(_series(body, "kick", events, SIDES[side], "foot speed (L/s)",

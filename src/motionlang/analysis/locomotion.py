@@ -17,6 +17,8 @@
 """
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 from scipy.ndimage import median_filter, uniform_filter1d
 
@@ -24,8 +26,10 @@ from motionlang.analysis.body import Body
 from motionlang.analysis.evidence import MIN_CONFIDENCE, Finding, clean_mask, confidence, runs
 from motionlang.features.gait import GRAVITY, gait
 
-TRAVEL = 0.5               # L/s (``features.gait.TRAVEL_SPEED``)
-MIN_TRAVEL = 1.0           # s
+TRAVEL = 0.25              # L/s: slower than this the root is not travelling
+MIN_TRAVEL = 0.8           # s
+MIN_DISTANCE = 0.5         # L: a travel covers at least this...
+MIN_LIFTS = 2              # ...and the feet leave the floor and land again this often
 SIDEWAYS = 50.0            # deg between travel and facing beyond which it is sideways
 BACKWARDS = 130.0          # deg beyond which it is backwards
 CURVE = 45.0               # deg of turning of the path that make it curve
@@ -33,11 +37,13 @@ CIRCLE = 300.0             # deg that make it a circle
 # Froude numbers of the speed words: walking and running each have a slow and a fast end
 WALK_SLOW, WALK_BRISK = 0.08, 0.3
 JOG_UPTO, SPRINT_FROM = 1.0, 2.5
+WALK_LIMIT = 1.0           # Froude number above which no gait is a walk
 JUMP_FLIGHT = 0.12         # s: shortest flight from both feet counted as a jump
 LEAP_FLIGHT = 0.35         # s: a flight this long is a jump from any take-off
 TAKEOFF = 0.1              # s: both feet down this shortly before the flight
 JUMP_FORWARD = 0.35        # L of horizontal travel from take-off to landing
 JUMP_RISE = 0.05           # L: the pelvis rises at least this in the flight
+JUMP_SERIES = 1.5          # s: jumps closer than this are one series ("jumps 3 times")
 JUMP_DOWN = 0.25           # L: landing this far below the take-off
 MIN_TURN = 45.0            # deg
 TURN_WINDOW = 4.0          # s: a turn is done within this
@@ -102,14 +108,20 @@ def travel(body: Body) -> list[Finding]:
         g = gait(body.p[lo:hi], body.fps)
         speed = float(np.median(np.linalg.norm(body.ground_velocity[a:b], axis=1)))
         fr = froude(speed, body.leg)
-        label = "run" if g.run_score > 0 else "walk"
+        # above a Froude number of 1 the body would leave the ground vaulting over a stiff
+        # leg (gravity cannot bend its path enough): no one walks that fast
+        label = "run" if g.run_score > 0 or fr >= WALK_LIMIT else "walk"
         direction, angle = _direction(body, a, b)
         path, turned = _path(body, a, b)
         steps = int(sum(len(runs(body.contacts[i, a:b])) for i in range(2)))
+        lifts = int(sum(len(runs(~body.contacts[i, a:b])) for i in range(2)))
+        distance = float(body.ground_speed[a:b].sum()) / body.fps    # path length, L
+        if distance < MIN_DISTANCE or lifts < MIN_LIFTS:
+            continue    # swaying, shuffling on the spot, a glide without steps
         c = confidence(float(np.median(body.ground_speed[a:b])), TRAVEL, 0.5,
                        duration=(b - a) / body.fps, full_after=MIN_TRAVEL)
         # the gait itself is only as sure as the feet: a score near 0 is either
-        c = min(c, 0.5 + 0.5 * min(1.0, abs(g.run_score)))
+        c = min(c, 0.5 + 0.5 * min(1.0, max(abs(g.run_score), fr - WALK_LIMIT)))
         if c < MIN_CONFIDENCE:
             continue
         out.append(Finding("locomotion", label, body.t(a), body.t(b), "gait score of feet, "
@@ -169,9 +181,18 @@ def jumps(body: Body) -> list[Finding]:
         drop = float(body.foot_low[:, lo].min() - body.foot_low[:, hi].min()) / body.leg
         direction = "down" if drop > JUMP_DOWN else "forward" if dist > JUMP_FORWARD else "up"
         flight = (b - a) / body.fps
-        out.append(Finding("locomotion", "jump", body.t(a), body.t(b), "flight (s)", flight,
-                           JUMP_FLIGHT, confidence(flight, JUMP_FLIGHT, 0.1),
-                           detail={"direction": direction, "distance": dist, "drop": drop}))
+        f = Finding("locomotion", "jump", body.t(a), body.t(b), "flight (s)", flight,
+                    JUMP_FLIGHT, confidence(flight, JUMP_FLIGHT, 0.1),
+                    detail={"direction": direction, "distance": dist, "drop": drop})
+        if f.confidence < MIN_CONFIDENCE:
+            continue
+        last = out[-1] if out and out[-1].label == "jump" else None
+        if last is not None and last.detail["direction"] == direction and \
+                f.start - last.end < JUMP_SERIES:   # jumps in a row: one finding, counted
+            out[-1] = replace(last, end=f.end, count=last.count + 1,
+                              value=max(last.value, flight))
+        else:
+            out.append(f)
     return [f for f in out if f.confidence >= MIN_CONFIDENCE]
 
 
