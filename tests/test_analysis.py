@@ -271,5 +271,15 @@ def test_sentences_never_repeat_themselves():
 def test_actions_named_in_words():
     assert actions_named("A man jogs forward, then sits down") == ["run", "sit"]
     assert actions_named("someone strolls along") == ["walk"]
-    assert actions_named("someone dances a tango") == []   # a word the table lacks
+    assert actions_named("someone does the tango") == []   # words the table lacks
     assert agrees(["crouch"], "bend") and not agrees(["walk"], "punch")
+
+
+def test_check_says_yes_no_and_cannot_tell():
+    from motionlang.analysis.check import check_sentence
+    p = take(hold(pose(), 1.0), blend(pose(), SIT, 1.0), hold(SIT, 2.0))
+    got = check_sentence("a person sits down, then punches and dances", analyse_positions(p, FPS))
+    assert [(c.action, c.shown) for c in got] == [("sit", True), ("punch", False),
+                                                 ("dance", None)]
+    assert got[0].findings[0].label == "sit" and got[0].line().startswith("sit: yes (")
+    assert got[1].line() == "punch: no" and "cannot tell" in got[2].line()

@@ -81,9 +81,11 @@ def test_a_folder_gives_one_line_per_motion_file_and_the_reason_of_a_bad_one(lib
     bad = records[2]
     assert set(bad) == {"file", "error"} and "broken.bvh" in bad["error"]
     assert "\n" not in bad["error"]
-    for r in records[:2] + records[3:]:
-        assert len(r["sentences"]) == 2
-        assert all(s["text"] and s["log_p"] < 0 for s in r["sentences"])
+    for r in records[:2] + records[3:]:   # at most W: a model sentence that repeats itself
+        assert 1 <= len(r["sentences"]) <= 2   # or contradicts the body is left out
+        # a model's log P is negative; the grounded sentence has none (null)
+        assert all(s["text"] and (s["log_p"] is None or s["log_p"] < 0)
+                   for s in r["sentences"])
 
 
 def test_two_workers_write_the_same_lines_as_one(library, described, tmp_path, capsys):
@@ -106,7 +108,7 @@ def test_a_take_that_walks_then_squats_is_two_segments_in_order(long_take, capsy
     assert ends[-1] == pytest.approx(ml.read_motion(path).duration, abs=0.1)
     actions = [action_of(text) for _, _, text in segments]
     # standing still before and after the squats is said where the body does it
-    moving = [a for a in actions if a != "stand"]
+    moving = [a for a in actions if a not in ("stand", "wait")]
     assert moving[0] == "walk" and moving[-1] == "squat", lines
     squat_starts = done[1].start / 100   # frames at 100 Hz
     walk_ends = [e for e, a in zip(ends, actions) if a == "walk"]

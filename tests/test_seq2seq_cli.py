@@ -288,7 +288,7 @@ def test_describe_with_a_length_penalty(runs, train_motion, capsys):
 
 def test_describe_refuses_a_negative_length_penalty(train_motion, capsys):
     assert main(["describe", str(train_motion), "--length-penalty", "-1"]) == 2
-    assert "argument --length-penalty: must be a finite number >= 0" in capsys.readouterr().err
+    assert "--length-penalty must be a finite number >= 0" in capsys.readouterr().err
 
 
 # ------------------------------------------------------------------ generate

@@ -15,7 +15,8 @@ __version__ = "0.1.0"
 _API = ("read_motion", "write_motion", "load_model", "describe", "describe_many", "timeline",
         "generate", "read_words",
         "generate_hypotheses", "text_to_motion", "encode", "train", "fill_in", "body21",
-        "retarget", "render", "write_result", "load_rig", "index", "search")
+        "retarget", "render", "write_result", "load_rig", "index", "search", "analyse",
+        "check")
 
 
 def __getattr__(name: str):

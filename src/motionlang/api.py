@@ -26,9 +26,12 @@ from typing import Any
 
 import numpy as np
 
+from motionlang.analysis import analyse, check  # noqa: F401  (the API's, re-exported)
+from motionlang.analysis.words import warn_never_learnt
 from motionlang.errors import MotionlangError
 from motionlang.formats import read_motion, write_motion
 from motionlang.kinematics.motion import Motion
+from motionlang.library.options import DescribeOptions
 from motionlang.models.word_map import WordsRead
 from motionlang.rendering.output import body_motion, write_result
 
@@ -139,14 +142,10 @@ def describe(motion: Motion | str | Path, model: Any = None, width: int = 5, *,
     packaged name, a checkpoint path, or None for the packaged M2L. width: beam width
     and number of sentences (as ``motionlang describe -w``). rank: "mbr" (as ``describe``)
     puts first the sentence the beam agrees on most (``decoding.mbr``), "logp" the
-    likeliest (the paper's). raw: the beam as it is (``describe --raw``), without the check
-    against the motion's gait and the "unfamiliar movement" line (``decoding.grounded``)."""
+    likeliest (the paper's). raw: the beam as it is (``describe --raw``), not checked
+    against what the body does (``decoding.grounded``: gait, familiarity, grounded analysis)."""
     from motionlang.models.registry import describer, kinds_with
-    if width < 1:
-        raise MotionlangError(f"width must be >= 1, got {width}")
-    if not (np.isfinite(length_penalty) and length_penalty >= 0):
-        raise MotionlangError(f"length_penalty must be a finite number >= 0, got "
-                              f"{length_penalty}")
+    DescribeOptions(width=width, length_penalty=length_penalty, rank=rank)   # checks them
     if model is None or isinstance(model, (str, Path)):
         model = load_model(model or "m2l", kind=kinds_with("describes"))
     return describer(model)(model, _motion(motion, joint_map), width=width,
@@ -243,6 +242,7 @@ def generate_hypotheses(text: str, model: Any = None, *, width: int | None = Non
         warnings.warn(f"the model does not know {', '.join(repr(w) for w in unknown)}; each "
                       f"is read as an unknown word (its vocabulary: {len(vocab or ())} words)",
                       UserWarning, stacklevel=2)
+    warn_never_learnt(text, t2m.model)
     if keep is not None:   # the kept seconds of a motion, the rest from the text
         from motionlang.decoding.inbetween import fill_between
         return fill_between(t2m, text, keep, lambda m: _motion(m, joint_map), seed=seed,

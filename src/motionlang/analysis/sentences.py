@@ -167,7 +167,21 @@ def tidy(text: str) -> str:
 _WORD = re.compile(r"[a-z']+")
 
 
+#: words a sentence may well say twice ("walks forward, then walks back" says "walks" twice
+#: far apart, which is English; these may also come close together)
+_FREE = frozenset("a an the and then with of to in on at his her their its is are while "
+                  "times left right both hand hands leg legs foot feet".split())
+
+
 def repeats(text: str) -> bool:
     """Whether a sentence says a word or a phrase twice in a row (what :func:`tidy`
-    removes)."""
-    return tidy(text) != " ".join(text.split())
+    removes), a pair of words twice anywhere, or one content word twice within four words
+    ("3 squats 3 times squats")."""
+    words = text.lower().replace(",", " ").split()
+    if tidy(" ".join(words)) != " ".join(words):
+        return True
+    pairs = list(zip(words, words[1:]))
+    if len(set(pairs)) < len(pairs):
+        return True
+    return any(w.isalpha() and w not in _FREE and w in words[i + 1:i + 4]
+               for i, w in enumerate(words))

@@ -8,6 +8,7 @@ sentence agrees with the body, ``check`` which actions of a sentence a motion sh
 from __future__ import annotations
 
 import re
+import warnings
 
 #: coarse action -> the words that name it (every form a caption uses)
 ACTION_WORDS: dict[str, tuple[str, ...]] = {
@@ -41,6 +42,12 @@ ACTION_WORDS: dict[str, tuple[str, ...]] = {
              "picks", "picking", "touches", "touch"),
     "reach": ("reach", "reaches", "reaching", "reached", "grab", "grabs", "grabbing"),
     "stand": ("stand", "stands", "standing", "stood", "still"),
+    # named so that a check can say it cannot tell, rather than pass over the word
+    "dance": ("dance", "dances", "dancing", "danced"),
+    "throw": ("throw", "throws", "throwing", "threw", "toss", "tosses", "tossing"),
+    "fall": ("fall", "falls", "falling", "fell", "trip", "trips", "stumble", "stumbles"),
+    "cartwheel": ("cartwheel", "cartwheels", "somersault", "somersaults", "flip", "flips",
+                  "backflip", "backflips"),
 }
 _INDEX = {w: a for a, ws in ACTION_WORDS.items() for w in ws}
 _TOKEN = re.compile(r"[a-z]+")
@@ -65,3 +72,20 @@ def actions_named(text: str) -> list[str]:
 def agrees(named: list[str] | set[str], action: str) -> bool:
     """Whether a sentence that names ``named`` names ``action`` or one answering for it."""
     return any(a == action or action in COMPATIBLE.get(a, ()) for a in named)
+
+
+def never_learnt(text: str, caption_words) -> tuple[list[str], set[str]]:
+    """``(actions text names that no caption word names, actions the captions name)``:
+    what a model whose training captions used ``caption_words`` was never shown."""
+    learnt = set(actions_named(" ".join(caption_words)))
+    return [a for a in actions_named(text) if a not in learnt], learnt
+
+
+def warn_never_learnt(text: str, model) -> None:
+    """One warning when ``text`` asks a model with a vocabulary (the words of its training
+    captions) for an action none of those words names, naming the actions it can make."""
+    never, learnt = never_learnt(text, getattr(getattr(model, "vocab", None), "itos", ()))
+    if never and learnt:
+        warnings.warn(f"this {getattr(model, 'kind', 'model')} model never learnt to "
+                      f"{' or '.join(never)} (it can make: "
+                      f"{', '.join(sorted(learnt - {'stand'}))})", UserWarning, stacklevel=3)

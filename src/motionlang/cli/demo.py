@@ -13,7 +13,6 @@ data needed.
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 import warnings
 from pathlib import Path
@@ -31,11 +30,9 @@ SYNTH_SEED = 2026
 
 
 def _print_hyps(hyps, label: str) -> None:
+    from motionlang.library.describe import score_text
     for i, (text, score) in enumerate(hyps, 1):
-        # a sentence of the grounded analysis has no model score (NaN)
-        shown = f"{'grounded':>{len(label) + 12}}" if math.isnan(score) else \
-            f"{label} = {score:9.2f}"
-        print(f"  {i}. {shown}  {text}")
+        print(f"  {i}. {score_text(label, score, '9.2f')}  {text}")
 
 
 def generate_part(out_dir: Path, sentence: str, *, width: int, seed: int,

@@ -14,7 +14,6 @@ from pathlib import Path
 
 from motionlang.cli.options import (
     frames_int,
-    nonneg_float,
     nonneg_int,
     output_file,
     positive_float,
@@ -24,27 +23,10 @@ from motionlang.cli.options import (
 from motionlang.errors import MotionlangError
 
 
-def add_beam_args(p: argparse.ArgumentParser, rank: str) -> None:
-    """``-w``, ``--length-penalty`` and ``--rank`` (default ``rank``) of a description beam
-    (the ranks are ``decoding.seq2seq.RANKS``, not imported here: that would load torch)."""
-    p.add_argument("-w", "--width", type=width_int, default=5,
-                   help="beam width = sentences a motion gets")
-    p.add_argument("--length-penalty", type=nonneg_float, default=0.0, metavar="ALPHA",
-                   help="beam search ranks by log P / length**ALPHA (default 0: total log P, "
-                        "the paper's; no effect with -w 1); with --rank mbr it only changes "
-                        "which sentences the beam keeps")
-    p.add_argument("--rank", choices=("logp", "mbr"), default=rank,
-                   help="order of the beam's sentences: mbr puts first the one the beam "
-                        "agrees on most (mean sentence BLEU against the beam, "
-                        "decoding/mbr.py), logp the likeliest (the paper's; it favours the "
-                        f"shortest phrasing) (default: {rank})")
-
-
 def cmd_describe(args: argparse.Namespace) -> int:
     from motionlang.cli.config_options import config_from_args
     from motionlang.library.describe import DescribeOptions, ReadOptions, describe_run, write_jsonl
-    options = config_from_args(DescribeOptions, args, width=args.width,
-                               length_penalty=args.length_penalty, rank=args.rank)
+    options = config_from_args(DescribeOptions, args)
     if args.output is None and len(args.input) == 1 and not Path(args.input[0]).is_dir():
         return _describe_one(args, options)
     read = ReadOptions(args.asf, args.source_fps, args.sequence or 1, args.joint_map)
@@ -118,13 +100,12 @@ def _add_model_arg(p: argparse.ArgumentParser, default: str | None, packaged: st
 def register(subparsers) -> None:
     from motionlang.cli.config_options import add_config_options
     from motionlang.cli.motion_commands import add_input_args, add_joint_map_arg
-    from motionlang.library.describe import DescribeOptions
+    from motionlang.library.options import DescribeOptions
     p = subparsers.add_parser("describe", help="describe motions in English: a file, a "
                               "library (-o captions.jsonl), long takes as timelines")
     add_input_args(p, many=True)
     _add_model_arg(p, None, "m2l", "an M2L model file (with --bank: one that encodes "
                    "sentences and motions, default the packaged one)")
-    add_beam_args(p, "mbr")
     add_config_options(p, DescribeOptions)
     p.add_argument("-o", "--output", type=output_file, metavar="FILE.jsonl",
                    help="write one JSON line a file (its sentences or segments, or why it "

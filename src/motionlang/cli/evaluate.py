@@ -12,7 +12,6 @@ import argparse
 import json
 from pathlib import Path
 
-from motionlang.cli.describe_generate import add_beam_args
 from motionlang.cli.options import nonneg_int, output_file, positive_float
 from motionlang.errors import MotionlangError
 
@@ -66,7 +65,11 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
 
 
 def register(subparsers) -> None:
+    from dataclasses import fields
+
+    from motionlang.cli.config_options import add_config_options
     from motionlang.cli.models_arg import add_model_arg
+    from motionlang.library.options import DescribeOptions
     p = subparsers.add_parser("evaluate", help="BLEU/ROUGE/CIDEr of M2L, baseline, L2M round trip")
     p.add_argument("--m2l", required=True, metavar="MODEL",
                    help="M2L model file or its run folder (train m2l --out), which holds "
@@ -93,5 +96,9 @@ def register(subparsers) -> None:
     p.add_argument("-o", "--output", type=output_file, help="report.json (+ report.md beside it)")
     p.add_argument("--tsne", metavar="PNG", type=output_file,
                    help="also plot the context vectors' t-SNE map")
-    add_beam_args(p, "logp")   # the paper's protocol; --rank mbr scores what describe shows
+    # the beam options of describe; rank logp is the paper's protocol, mbr scores what
+    # describe shows
+    add_config_options(p, DescribeOptions, defaults={"rank": "logp"},
+                       skip=tuple(f.name for f in fields(DescribeOptions)
+                                  if f.name not in ("width", "length_penalty", "rank")))
     p.set_defaults(func=cmd_evaluate)

@@ -25,7 +25,7 @@ from motionlang.utils.signals import received, sigterm_unwinds, stopped
 
 # Modules that register subcommands; one line each, order = order in --help.
 COMMAND_MODULES = [
-    "motionlang.cli.motion_commands",     # info, render, convert
+    "motionlang.cli.motion_commands",     # check, info, render, convert
     "motionlang.cli.rig_commands",        # rig show | template
     "motionlang.cli.data_commands",       # data ...
     "motionlang.cli.demo",                # demo (the main job)

@@ -98,7 +98,25 @@ def cmd_convert(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_check(args: argparse.Namespace) -> int:
+    from motionlang.analysis.check import printed
+    from motionlang.api import check
+    if not args.text.strip():
+        raise MotionlangError("TEXT: the sentence is empty")
+    print(printed(args.text, check(args.text, load_input(args)), as_json=args.json))
+    return 0
+
+
 def register(subparsers) -> None:
+    p = subparsers.add_parser(
+        "check", help="which actions of a sentence a motion shows, with evidence",
+        description="For each action TEXT names: yes (when, evidence), no, or cannot tell, "
+                    "from the grounded analysis of the body (motionlang.analysis).")
+    p.add_argument("text", metavar="TEXT", help="the sentence, e.g. 'a person sits down'")
+    add_input_args(p)
+    p.add_argument("--json", action="store_true", help="print JSON instead of text")
+    p.set_defaults(func=cmd_check)
+
     p = subparsers.add_parser("info", help="summary of a motion file",
                               description="Frames, frame rate, duration, joints and DOFs.")
     add_input_args(p)

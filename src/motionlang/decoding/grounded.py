@@ -34,7 +34,7 @@ from typing import Any
 
 import numpy as np
 
-from motionlang.analysis import Analysis, analyse_positions, tidy
+from motionlang.analysis import Analysis, analyse_positions, repeats, tidy
 from motionlang.analysis.words import actions_named, agrees
 from motionlang.datasets.bandai_text import STYLES, styles_named
 from motionlang.datasets.pos_tags import tag
@@ -236,7 +236,9 @@ def reconcile(hyps: list[tuple[str, float]], analysis: Analysis | None,
             t = without_style(t)
             if styles_named(t) or not has_verb(t):
                 continue
-        out.append((tidy(t), s))
+        t = tidy(t)
+        if not repeats(t):   # "3 squats 3 times squats": the model stumbling
+            out.append((t, s))
     hyps = list({t: (t, s) for t, s in reversed(out)}.values())[::-1]   # each once
     if analysis is None:
         return hyps or [(UNFAMILIAR, float("nan"))]

@@ -20,74 +20,16 @@ import json
 import math
 import os
 from collections.abc import Iterable, Iterator, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from motionlang.analysis import analyse
 from motionlang.errors import MotionlangError
 from motionlang.library.bank import SentenceBank
-from motionlang.library.timeline import MERGES, Segment, merge_windows
+from motionlang.library.options import DescribeOptions
+from motionlang.library.timeline import Segment, merge_windows
 from motionlang.library.windows import Window, cut, motion_windows, span
-from motionlang.utils.checks import MAX_WIDTH, check_numbers
-
-RANKS = ("mbr", "logp")   # decoding.seq2seq.RANKS, named here without importing torch
-
-
-def _option(default: Any, help_: str, **meta: Any) -> Any:
-    return field(default=default, metadata={"help": help_, **meta})
-
-
-@dataclass(frozen=True)
-class DescribeOptions:
-    """How motions are described. The fields with a help text are ``motionlang describe``
-    options (``cli/config_options.py``); ``width``, ``length_penalty`` and ``rank`` are its
-    beam options, given by hand there."""
-
-    width: int = 5
-    length_penalty: float = 0.0
-    rank: str = "mbr"
-    segments: bool = _option(False, "describe overlapping windows of each take and merge "
-                             "neighbours that say the same thing: a timeline of (start, "
-                             "end, sentence) segments")
-    window: float = _option(3.0, "--segments: window length in seconds", metavar="S")
-    hop: float = _option(1.0, "--segments: seconds between window starts (at most the "
-                         "window)", metavar="S")
-    merge: str = _option("action", "--segments: neighbours are merged when they name the "
-                         "same action (main verb and side: left, right, both, back) or the "
-                         "same sentence", choices=MERGES)
-    bridge: int = _option(1, "--segments: a run of at most N windows between two that "
-                          "agree is taken for a flicker and joins them (0: none is)",
-                          metavar="N")
-    bank: str | None = _option(None, "describe by retrieval: the nearest sentences of this "
-                               "bank (one sentence a line, captions.csv/.jsonl, or KIT-ML's "
-                               "annotations .json) in the joint space of a model that encodes "
-                               "both (--model; default: the packaged one), scored by cosine",
-                               metavar="FILE")
-    workers: int = _option(1, "processes describing files, each loading the model once "
-                           "(at most the CPU count)", metavar="N")
-    explain: bool = _option(False, "after the sentences, the evidence of each phrase of the "
-                            "grounded sentence: time span, what was measured, against which "
-                            "threshold, with what confidence (motionlang.analysis)")
-    raw: bool = _option(False, "the model's sentences as its beam ranks them: not checked "
-                        "against the gait the feet show (walk, run, jump), verbless ones "
-                        "kept, no 'unfamiliar movement' line")
-
-    def __post_init__(self) -> None:
-        check_numbers("DescribeOptions", self, positive_ints=("workers", "width"),
-                      nonneg_ints=("bridge",),
-                      positive=("window", "hop"), nonneg=("length_penalty",))
-        if self.width > MAX_WIDTH:
-            raise MotionlangError(f"DescribeOptions.width must be an integer in "
-                                  f"1..{MAX_WIDTH}, got {self.width}")
-        if self.hop > self.window:
-            raise MotionlangError(f"DescribeOptions.hop ({self.hop:g}) must not exceed "
-                                  f"DescribeOptions.window ({self.window:g}): time between "
-                                  "windows would go undescribed")
-        for name, allowed in (("rank", RANKS), ("merge", MERGES)):
-            if getattr(self, name) not in allowed:
-                raise MotionlangError(f"DescribeOptions.{name} must be one of "
-                                      f"{', '.join(allowed)}, got {getattr(self, name)!r}")
 
 
 @dataclass(frozen=True)
@@ -253,9 +195,10 @@ def evidence(motion) -> list[dict]:
         return []
 
 
-def _score_text(label: str, score: float) -> str:
-    return f"{'grounded':>{len(label) + 11}}" if math.isnan(score) else \
-        f"{label} = {score:8.3f}"
+def score_text(label: str, score: float, fmt: str = "8.3f") -> str:
+    """``log P =   -3.210``, or ``grounded`` (as wide) for a sentence no model scored."""
+    width = len(label) + 3 + int(fmt.split(".")[0])
+    return f"{'grounded':>{width}}" if math.isnan(score) else f"{label} = {score:{fmt}}"
 
 
 def printed(d: Describer, motion, *, as_json: bool = False) -> str:
@@ -273,7 +216,7 @@ def printed(d: Describer, motion, *, as_json: bool = False) -> str:
         if d.options.explain:
             rows = {"sentences": rows, "evidence": evidence(motion)}
         return json.dumps(rows, indent=1)
-    lines = [f"{i}. {_score_text(label, score)}  {text}"
+    lines = [f"{i}. {score_text(label, score)}  {text}"
              for i, (text, score) in enumerate(hyps, 1)]
     if d.options.explain:
         found = evidence(motion)

@@ -29,9 +29,9 @@ from dataclasses import dataclass
 from motionlang.datasets.pos_tags import tag
 from motionlang.datasets.text import base_tokens
 from motionlang.errors import MotionlangError
+from motionlang.library.options import MERGES
 from motionlang.library.windows import Window
 
-MERGES = ("action", "sentence")
 #: verbs that name no action of their own: the action is their object ("does 3 jumps")
 _LIGHT = set("do perform make take start begin continue keep try".split())
 #: who moves, never the action ("3 jumps" has no verb: its first other noun is the action)

@@ -1,0 +1,72 @@
+"""Which actions of a sentence a motion shows: the open-world check of generated (or any)
+motion (``motionlang check "a person sits down" motion.bvh``).
+
+The sentence's actions are read by ``analysis.words``; each is looked for among the
+analysis' findings (or those that answer for it: a hop is a jump, a squat a crouch). An action
+the analysis has no detector for is "cannot tell", never "no".
+"""
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+
+from motionlang.analysis.analyse import ACTION, Analysis
+from motionlang.analysis.evidence import Finding
+from motionlang.analysis.words import COMPATIBLE, actions_named
+
+#: the coarse actions some detector can find (others are "cannot tell")
+DETECTABLE = frozenset(ACTION.values())
+
+
+@dataclass(frozen=True)
+class ActionCheck:
+    """One action of a sentence against a motion.
+
+    Attributes:
+        action: the coarse action the sentence names (``analysis.words.ACTION_WORDS``).
+        shown: True (seen), False (a detector for it exists and saw nothing) or None
+            (no detector: the analysis cannot tell).
+        findings: the findings that show it, most confident first.
+    """
+
+    action: str
+    shown: bool | None
+    findings: tuple[Finding, ...] = ()
+
+    def line(self) -> str:
+        """``sit: yes (1.9-4.1 s, confidence 0.97)`` / ``sit: no`` / ``dance: cannot tell``."""
+        if self.shown is None:
+            return f"{self.action}: cannot tell (no detector for it)"
+        if not self.shown:
+            return f"{self.action}: no"
+        f = self.findings[0]
+        return (f"{self.action}: yes ({f.start:.1f}-{f.end:.1f} s, {f.measure} {f.value:.2f}, "
+                f"confidence {f.confidence:.2f})")
+
+    def as_dict(self) -> dict:
+        return {"action": self.action, "shown": self.shown,
+                "findings": [f.as_dict() for f in self.findings]}
+
+
+def check_sentence(text: str, analysis: Analysis) -> list[ActionCheck]:
+    """Every action ``text`` names, in its order, against ``analysis``."""
+    out = []
+    for action in actions_named(text):
+        if action not in DETECTABLE and not COMPATIBLE.get(action, set()) & DETECTABLE:
+            out.append(ActionCheck(action, None))
+            continue
+        accept = {action, *COMPATIBLE.get(action, ())}
+        hits = sorted((f for f in analysis.findings if ACTION[f.label] in accept),
+                      key=lambda f: -f.confidence)
+        out.append(ActionCheck(action, bool(hits), tuple(hits)))
+    return out
+
+
+def printed(text: str, checks: list[ActionCheck], *, as_json: bool = False) -> str:
+    """What ``motionlang check`` prints: a line per action (:meth:`ActionCheck.line`), or
+    the JSON list of :meth:`ActionCheck.as_dict`."""
+    if as_json:
+        return json.dumps([c.as_dict() for c in checks], indent=1)
+    if not checks:
+        return f"the sentence names no action motionlang can read: {text!r}"
+    return "\n".join(c.line() for c in checks)

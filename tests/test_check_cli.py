@@ -1,0 +1,51 @@
+"""``motionlang check TEXT MOTION``: the open-world check of a motion file against a sentence,
+and ``generate``'s warning for an action the model never learnt."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import motionlang as ml
+from motionlang.cli.main import main
+
+
+@pytest.fixture(scope="module")
+def walk_file(tmp_path_factory):
+    from motionlang.datasets.synth import Primitive
+    from motionlang.datasets.synth.compose import build_motion, random_style
+    rng = np.random.default_rng(4)
+    motion, _, _ = build_motion([Primitive("walk", count=8, direction="forward")],
+                                random_style(rng), rng)
+    path = tmp_path_factory.mktemp("check") / "walk.bvh"
+    ml.write_motion(motion, path)
+    return path
+
+
+def test_check_prints_each_action_of_the_sentence(walk_file, capsys):
+    assert main(["check", "a person walks forward and then sits down", str(walk_file)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0].startswith("walk: yes (") and lines[1] == "sit: no"
+    assert main(["check", "someone dances", str(walk_file), "--json"]) == 0
+    got = json.loads(capsys.readouterr().out)
+    assert got == [{"action": "dance", "shown": None, "findings": []}]
+    assert [c.shown for c in ml.check("a person walks", walk_file)] == [True]
+
+
+def test_check_bad_input_is_one_line(walk_file, tmp_path, capsys):
+    assert main(["check", "  ", str(walk_file)]) == 2
+    err = capsys.readouterr().err
+    assert "sentence is empty" in err and len(err.strip().splitlines()) == 1
+    assert main(["check", "a person walks", str(tmp_path / "missing.bvh")]) == 2
+    err = capsys.readouterr().err
+    assert "missing.bvh" in err and "Traceback" not in err
+
+
+def test_generate_warns_of_an_action_the_model_never_learnt(tmp_path):
+    pytest.importorskip("torch")
+    from motionlang.models.registry import PACKAGED
+    if not PACKAGED["l2m"].path.is_file():
+        pytest.skip("packaged l2m not installed")
+    with pytest.warns(UserWarning, match="never learnt to sit or climb.*it can make: .*walk"):
+        ml.generate_hypotheses("a person sits down and climbs", "l2m", max_frames=5)
