@@ -41,6 +41,8 @@ ACTION = {"run": "run", "walk": "walk", "jump": "jump", "hop": "jump", "climb": 
 LOW = ("sit", "lie", "kneel", "squat", "crouch", "all_fours", "crawl")
 #: a timeline segment shorter than this (s) is taken into its neighbour
 MIN_SEGMENT = 0.8
+#: seconds before and after a jump or a strike that a timeline gives to it
+EVENT_PAD = 0.6
 
 
 def salience(f: Finding) -> float:
@@ -76,9 +78,9 @@ def prune(found: list[Finding]) -> list[Finding]:
         if lab == "bow" and covered(("bend", "touch_floor", "crouch", "squat", "sit",
                                      "kneel"), 0.1):
             continue
-        if lab in ("crouch", "squat") and (covered(("kneel", "sit")) or (
+        if lab in ("crouch", "squat", "bow") and (covered(("kneel", "sit")) or (
                 f.duration < 1.5 and any(g.label in ("jump", "hop", "climb", "touch_floor")
-                                         and g.start - f.end < 0.6 and g.end > f.start
+                                         and g.start - f.end < 1.0 and g.end > f.start
                                          for g in found))):
             continue    # the dip before a jump, or the crouch of reaching down
         if lab == "one_leg" and covered(("kick", "hop", "hang", "climb"), 0.1):
@@ -187,12 +189,14 @@ class Analysis:
             chosen.append(f)
         return sorted(chosen, key=lambda f: f.start)
 
-    def sentence(self, level: str = "terse") -> str:
-        """One English sentence, or :data:`~motionlang.analysis.sentences.CANNOT_TELL`."""
+    def sentence(self, level: str = "terse", clauses: int | None = None) -> str:
+        """One English sentence, or :data:`~motionlang.analysis.sentences.CANNOT_TELL`;
+        ``clauses``: at most this many phrases (default: by ``level``)."""
         if level not in LEVELS:
             raise MotionlangError(f"sentence level must be one of {', '.join(LEVELS)}, got "
                                   f"{level!r}")
-        chosen = self.clauses(MAX_CLAUSES if level == "terse" else MAX_CLAUSES + 2)
+        chosen = self.clauses(clauses or (MAX_CLAUSES if level == "terse" else
+                                          MAX_CLAUSES + 2))
         return join([phrase(f, level=level, first=i == 0, end=self.duration)
                      for i, f in enumerate(chosen)]) if chosen else CANNOT_TELL
 
@@ -219,7 +223,11 @@ class Analysis:
         ranked = self.ranked()
         labels = [ACTION[f.label] for f in ranked]
         for i, f in enumerate(ranked):
-            a, b = int(f.start * rate), max(int(f.start * rate) + 1, int(np.ceil(f.end * rate)))
+            # a jump's or a kick's span is its flight or swing; the take-off and the landing
+            # around it belong to it too
+            pad = EVENT_PAD if f.label in ("jump", "hop", "kick", "punch") else 0.0
+            a = max(0, int((f.start - pad) * rate))
+            b = max(a + 1, int(np.ceil((f.end + pad) * rate)))
             s = salience(f)
             sl = slice(a, min(b, n))
             better = score[sl] < s
@@ -245,7 +253,8 @@ class Analysis:
         out = []
         for a, b in segs:
             t0, t1 = a / rate, min(self.duration, b / rate)
-            out.append((round(t0, 2), round(t1, 2), self.within(t0, t1).sentence()))
+            # a segment is cut where the main action changes: its sentence says that one
+            out.append((round(t0, 2), round(t1, 2), self.within(t0, t1).sentence(clauses=1)))
         # neighbours that say the same are one segment
         joined: list[tuple[float, float, str]] = []
         for seg in out:

@@ -124,7 +124,8 @@ def waves(body: Body) -> list[Finding]:
             rate = (len(t) - 1) / max((t[-1] - t[0]) / body.fps, 1e-6) / 2
             if not WAVE_RATE[0] <= rate <= WAVE_RATE[1]:
                 continue
-            spans.append((a + t[0], a + t[-1] + 1, len(t)))
+            # the wave is the whole time the hand is up: raising it is part of waving
+            spans.append((a, b, len(t)))
         per_side.append(spans)
     for side in range(2):
         for a, b, n in per_side[side]:
@@ -134,7 +135,7 @@ def waves(body: Body) -> list[Finding]:
             who = "both" if partner else SIDES[side]
             out.append(Finding("limb", "wave", body.t(a), body.t(b), "side-to-side swings",
                                float(n), WAVE_SWINGS, confidence(n, WAVE_SWINGS, 3),
-                               side=who, count=max(1, n // 2)))
+                               side=who, count=max(1, (n + 1) // 2)))  # a wave: there and back
     return [f for f in out if f.confidence >= MIN_CONFIDENCE]
 
 

@@ -38,6 +38,8 @@ CIRCLE = 300.0             # deg that make it a circle
 WALK_SLOW, WALK_BRISK = 0.08, 0.3
 JOG_UPTO, SPRINT_FROM = 1.0, 2.5
 WALK_LIMIT = 1.0           # Froude number above which no gait is a walk
+GAIT_WINDOW = 2.0          # s: the windows a long travel's gait is read in
+GAIT_HOLD = 1.5            # s: a change of gait that lasts less is not one
 JUMP_FLIGHT = 0.12         # s: shortest flight from both feet counted as a jump
 LEAP_FLIGHT = 0.35         # s: a flight this long is a jump from any take-off
 TAKEOFF = 0.1              # s: both feet down this shortly before the flight
@@ -102,7 +104,7 @@ def travel(body: Body) -> list[Finding]:
     """The spans of travel with gait, speed word, direction and path (module docstring)."""
     out: list[Finding] = []
     mask = clean_mask(body.ground_speed > TRAVEL, body.fps, min_len=MIN_TRAVEL, max_gap=0.3)
-    for a, b in runs(mask):
+    for a, b in (part for span in runs(mask) for part in _by_gait(body, *span)):
         pad = body.frames(0.25)
         lo, hi = max(0, a - pad), min(body.n, b + pad)
         g = gait(body.p[lo:hi], body.fps)
@@ -131,6 +133,31 @@ def travel(body: Body) -> list[Finding]:
                                "direction": direction, "angle": angle, "path": path,
                                "turned": turned, "steps": steps}))
     return out
+
+
+def _by_gait(body: Body, a: int, b: int) -> list[tuple[int, int]]:
+    """A span of travel cut where the gait changes (a walk that breaks into a run): the
+    gait of overlapping :data:`GAIT_WINDOW` s windows, changes that hold for
+    :data:`GAIT_HOLD` s or more."""
+    w, hop = body.frames(GAIT_WINDOW), body.frames(GAIT_WINDOW / 4)
+    if b - a < 2 * body.frames(GAIT_HOLD) or b - a < w:
+        return [(a, b)]
+    starts = list(range(a, b - w + 1, hop))
+    running = np.array([gait(body.p[s:s + w], body.fps).run_score > 0 or froude(
+        float(np.median(np.linalg.norm(body.ground_velocity[s:s + w], axis=1))),
+        body.leg) >= WALK_LIMIT for s in starts])
+    cell = np.zeros(b - a, dtype=int)
+    for s, r in zip(starts, running):            # each frame: the window centred nearest
+        centre = s + w // 2 - a
+        cell[max(0, centre - hop):centre + hop] = int(r)
+    cell[:starts[0] + w // 2 - a] = int(running[0])
+    cell[starts[-1] + w // 2 - a:] = int(running[-1])
+    cuts = [a]
+    for lo, _ in runs(np.diff(cell) != 0):
+        at = a + lo + 1
+        if at - cuts[-1] >= body.frames(GAIT_HOLD) and b - at >= body.frames(GAIT_HOLD):
+            cuts.append(at)
+    return list(zip(cuts, cuts[1:] + [b]))
 
 
 def jumps(body: Body) -> list[Finding]:

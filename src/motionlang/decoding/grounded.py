@@ -61,6 +61,9 @@ STYLE_LOGP = -0.6
 #: does not lead unless nothing else can be said; above ``STYLE_RMS`` it may not name a style
 FAMILIAR_RMS = 2.5
 STYLE_RMS = 1.2
+#: mean log probability per word below which the model's sentence does not lead: far below
+#: its sentences of motion it knows, where a forced verb left it stumbling ("jumps the way")
+LEAD_LOGP = -1.5
 
 #: the words that name each gait, in every form a caption uses
 GAIT_WORDS: dict[str, frozenset[str]] = {
@@ -245,10 +248,11 @@ def reconcile(hyps: list[tuple[str, float]], analysis: Analysis | None,
     grounded = analysis.sentence()
     if not hyps:
         return [(grounded, float("nan"))]
-    first, _ = hyps[0]
+    first, first_score = hyps[0]
     main = analysis.main_action()
     # standing still is no opinion: a gesture too small for the detectors is still made
     agree = main in (None, "stand") or agrees(actions_named(first), main)
-    if first != UNFAMILIAR and agree and (rms <= FAMILIAR_RMS or main is None):
+    sure = per_word(first, first_score) >= LEAD_LOGP
+    if first != UNFAMILIAR and agree and sure and (rms <= FAMILIAR_RMS or main is None):
         return hyps + [(grounded, float("nan"))]
     return [(grounded, float("nan"))] + [(t, s) for t, s in hyps if t != UNFAMILIAR]

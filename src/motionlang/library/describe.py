@@ -128,10 +128,12 @@ class Describer:
             if cuts:
                 end = span(motion)
                 segs = []
-                for a, b, _ in cuts:
+                for a, b, grounded in cuts:
                     part = cut(motion, Window(a, min(b, end)))
                     text, score = self.sentences(part)[0]
-                    segs.append(Segment(a, min(b, end), text, score))
+                    # where the model's sentence does not lead, the segment's own action
+                    segs.append(Segment(a, min(b, end), grounded if math.isnan(score) else
+                                        text, score))
                 return segs
         parts = motion_windows(motion, o.window, o.hop)
         labels = [self.sentences(part)[0] for _, part in parts]
