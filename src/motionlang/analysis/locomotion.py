@@ -30,6 +30,9 @@ TRAVEL = 0.25              # L/s: slower than this the root is not travelling
 MIN_TRAVEL = 0.8           # s
 MIN_DISTANCE = 0.5         # L: a travel covers at least this...
 MIN_LIFTS = 2              # ...and the feet leave the floor and land again this often
+UPRIGHT = 45.0             # deg: a walk's or run's trunk is at most this far from vertical
+UPRIGHT_PELVIS = 0.6       # standing pelvis heights: and its pelvis at least this high
+CURVE_DISTANCE = 2.0       # L: a path shorter than this is too short to curve
 SIDEWAYS = 50.0            # deg between travel and facing beyond which it is sideways
 BACKWARDS = 130.0          # deg beyond which it is backwards
 CURVE = 45.0               # deg of turning of the path that make it curve
@@ -91,6 +94,8 @@ def _path(body: Body, a: int, b: int) -> tuple[str, float]:
     moving = np.linalg.norm(v, axis=1) > TRAVEL * body.leg
     if moving.sum() < 3:
         return "straight", 0.0
+    if float(body.ground_speed[a:b].sum()) / body.fps < CURVE_DISTANCE:
+        return "straight", 0.0
     heading = np.unwrap(np.arctan2(v[moving, 0], v[moving, 1]))
     turned = float(np.degrees(heading[-1] - heading[0]))
     if abs(turned) >= CIRCLE:
@@ -120,6 +125,9 @@ def travel(body: Body) -> list[Finding]:
         distance = float(body.ground_speed[a:b].sum()) / body.fps    # path length, L
         if distance < MIN_DISTANCE or lifts < MIN_LIFTS:
             continue    # swaying, shuffling on the spot, a glide without steps
+        if float(np.median(body.trunk_tilt[a:b])) > UPRIGHT or \
+                float(np.median(body.pelvis_height[a:b])) < UPRIGHT_PELVIS:
+            continue    # walking and running are upright: a roll or a crawl travels too
         c = confidence(float(np.median(body.ground_speed[a:b])), TRAVEL, 0.5,
                        duration=(b - a) / body.fps, full_after=MIN_TRAVEL)
         # the gait itself is only as sure as the feet: a score near 0 is either
