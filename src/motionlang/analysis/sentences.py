@@ -170,7 +170,8 @@ _WORD = re.compile(r"[a-z']+")
 #: words a sentence may well say twice ("walks forward, then walks back" says "walks" twice
 #: far apart, which is English; these may also come close together)
 _FREE = frozenset("a an the and then with of to in on at his her their its is are while "
-                  "times left right both hand hands leg legs foot feet".split())
+                  "times left right both hand hands leg legs foot feet forward forwards "
+                  "backward backwards up down around sideways".split())
 
 
 def repeats(text: str) -> bool:
@@ -180,7 +181,7 @@ def repeats(text: str) -> bool:
     words = text.lower().replace(",", " ").split()
     if tidy(" ".join(words)) != " ".join(words):
         return True
-    pairs = list(zip(words, words[1:]))
+    pairs = [p for p in zip(words, words[1:]) if not set(p) & _FREE]
     if len(set(pairs)) < len(pairs):
         return True
     return any(w.isalpha() and w not in _FREE and w in words[i + 1:i + 4]
