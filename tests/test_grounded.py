@@ -2,12 +2,14 @@
 honest line for motion the model does not know (issue 41, items 2 and 3)."""
 from __future__ import annotations
 
+import math
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 import motionlang.decoding.grounded as g
+from motionlang.analysis import Analysis
 from motionlang.decoding.grounded import UNFAMILIAR, familiar, ground, has_verb, named_gait
 
 
@@ -121,3 +123,42 @@ def test_standing_still_contradicts_a_gait(model, monkeypatch):
     assert named_gait("the subject is standing still") == "stand"
     assert ground(model, None, fake.free, "walk", width=3) == [("a person walks forward", -7.0)]
     assert {"standing", "still", "runs"} <= fake.calls[0]["banned"]
+
+
+def _walking(path: str = "straight") -> Analysis:
+    from motionlang.analysis import Finding
+    walk = Finding("locomotion", "walk", 0.0, 4.0, "gait score", -2.0, 0.0, 1.0,
+                   detail={"direction": "forward", "path": path, "froude": 0.2})
+    return Analysis(findings=(walk,), duration=4.0, leg=0.9, stature=1.75)
+
+
+def test_reconcile_keeps_an_agreeing_familiar_sentence_first():
+    from motionlang.decoding.grounded import reconcile
+    got = reconcile([("a man walks forward", -2.0), ("a man walks", -2.5)], _walking(), 1.0)
+    assert [t for t, _ in got] == ["a man walks forward", "a man walks",
+                                   "a person walks forward"]
+    assert math.isnan(got[-1][1])        # the grounded sentence has no model score
+
+
+def test_reconcile_leads_with_the_body_where_the_model_contradicts_it():
+    from motionlang.decoding.grounded import reconcile
+    # another action, a path the travel does not show, an unfamiliar motion, a guess
+    for hyps, rms in (([("a person jumps forward", -2.0)], 1.0),
+                      ([("a person walks in a circle", -2.0)], 1.0),
+                      ([("a person walks forward", -2.0)], 3.0),
+                      ([("a person walks forward", -9.0)], 1.0)):
+        got = reconcile(hyps, _walking(), rms)
+        assert got[0][0] == "a person walks forward" and math.isnan(got[0][1]), hyps
+    # the circle is what the body did: the model's sentence may lead
+    got = reconcile([("a person walks in a circle", -2.0)], _walking("in a circle"), 1.0)
+    assert got[0] == ("a person walks in a circle", -2.0)
+
+
+def test_reconcile_keeps_style_words_only_where_the_model_knows_the_motion():
+    from motionlang.decoding.grounded import reconcile
+    hyps = [("an angry man walks forward in a rage", -1.0)]
+    assert reconcile(hyps, _walking(), 1.0)[0][0] == hyps[0][0]
+    assert reconcile(hyps, _walking(), 1.5)[0][0] == "a person walks forward"
+    stutter = [("a person takes 6 steps 6 steps", -1.0), ("a man walks forward", -1.5)]
+    assert [t for t, _ in reconcile(stutter, _walking(), 1.0)][:2] == [
+        "a person takes 6 steps", "a man walks forward"]

@@ -70,3 +70,24 @@ def printed(text: str, checks: list[ActionCheck], *, as_json: bool = False) -> s
     if not checks:
         return f"the sentence names no action motionlang can read: {text!r}"
     return "\n".join(c.line() for c in checks)
+
+
+#: path and direction words of a caption, and what a travel finding must show for them
+_MANNER = {"circle": ("path", "in a circle"), "circles": ("path", "in a circle"),
+           "backwards": ("direction", "backwards"), "backward": ("direction", "backwards"),
+           "sideways": ("direction", ("left", "right"))}
+
+
+def contradicted(text: str, analysis: Analysis) -> bool:
+    """Whether ``text`` says how the body travels ("in a circle", "backwards", "sideways")
+    where the analysis saw it travel otherwise; False where it saw no travel at all."""
+    travel = [f for f in analysis.findings if f.label in ("walk", "run")]
+    if not travel:
+        return False
+    for word in text.lower().replace(",", " ").split():
+        if word in _MANNER:
+            key, want = _MANNER[word]
+            allowed = want if isinstance(want, tuple) else (want,)
+            if not any(f.detail.get(key) in allowed for f in travel):
+                return True
+    return False

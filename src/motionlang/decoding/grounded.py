@@ -21,11 +21,13 @@ describer):
    sentences follow as the closest it has.
 3. **What the body does** (``motionlang.analysis``, :func:`reconcile`): the model's first
    sentence stays first only where the actions it names agree with the main action the
-   analysis finds (or the analysis finds none), the model is not guessing, and, where it
-   names a style or mood, the model is confident (mean log probability per word of at least
-   ``STYLE_LOGP``: its own training motion, not another lab's). Otherwise the grounded
-   sentence comes first (its score NaN: no model gave it) and the model's follow as
-   alternatives. Every sentence loses words or phrases said twice in a row.
+   analysis finds (or the analysis finds none), it says nothing of the path that the
+   travel contradicts (a circle, backwards), the model is not guessing (mean log
+   probability per word of at least ``LEAD_LOGP``) and the motion is like its training
+   motion (:func:`familiarity` at most ``FAMILIAR_RMS``). Otherwise the grounded sentence
+   comes first (its score NaN: no model gave it) and the model's follow as alternatives.
+   Style and mood words stay only where the model knows the motion well (``STYLE_RMS``)
+   and is confident (``STYLE_LOGP``); sentences that repeat themselves are left out.
 """
 from __future__ import annotations
 
@@ -35,6 +37,7 @@ from typing import Any
 import numpy as np
 
 from motionlang.analysis import Analysis, analyse_positions, repeats, tidy
+from motionlang.analysis.check import contradicted
 from motionlang.analysis.words import actions_named, agrees
 from motionlang.datasets.bandai_text import STYLES, styles_named
 from motionlang.datasets.pos_tags import tag
@@ -251,7 +254,8 @@ def reconcile(hyps: list[tuple[str, float]], analysis: Analysis | None,
     first, first_score = hyps[0]
     main = analysis.main_action()
     # standing still is no opinion: a gesture too small for the detectors is still made
-    agree = main in (None, "stand") or agrees(actions_named(first), main)
+    agree = (main in (None, "stand") or agrees(actions_named(first), main)) and \
+        not contradicted(first, analysis)
     sure = per_word(first, first_score) >= LEAD_LOGP
     if first != UNFAMILIAR and agree and sure and (rms <= FAMILIAR_RMS or main is None):
         return hyps + [(grounded, float("nan"))]
