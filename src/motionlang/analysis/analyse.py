@@ -89,6 +89,9 @@ def prune(found: list[Finding]) -> list[Finding]:
             continue
         if lab == "touch_floor" and covered(("crawl", "all_fours", "lie", "kneel"), 0.1):
             continue
+        if lab == "turn" and abs(f.detail.get("angle", 0)) < 135 and \
+                covered(("punch", "kick"), 0.3):
+            continue    # the trunk turns with a strike
         if lab in ("turn", "spin") and any(
                 g.label in ("walk", "run") and overlap(f, g) >= 0.5 * f.duration and (
                     g.detail.get("path") == "in a circle" or (

@@ -38,6 +38,7 @@ PUNCH_FROM, PUNCH_TO = 0.7, 0.9   # share of the arm's length, bent -> straight
 PUNCH_TIME = 0.35          # s: the straightening takes at most this
 PUNCH_SPEED = 2.5          # arm lengths a second of extension at its peak
 PUNCH_LEVEL = 0.35         # arm lengths: the fist at most this far below the shoulder
+PUNCH_OUT = 0.55           # arm lengths: the fist this far out horizontally
 KICK_HELD = 0.8            # s: a leg held high longer than this is a pose, not a kick
 KICK_HEIGHT = 0.3          # L: ankle over the floor
 KICK_AWAY = 0.45           # L: ankle away from the hip, horizontally
@@ -155,7 +156,10 @@ def punches(body: Body) -> list[Finding]:
         window = body.frames(PUNCH_TIME)
         i = 0
         while i < body.n:
-            if d[i] >= PUNCH_TO and height_ok[i] and rel[i, 2] > 0.3 * arm:
+            # out from the shoulder to the front or the side (the trunk turns with a
+            # punch, so "in front" is not asked of the facing), never behind
+            out_ok = np.hypot(rel[i, 0], rel[i, 2]) > PUNCH_OUT * arm and rel[i, 2] > -0.1 * arm
+            if d[i] >= PUNCH_TO and height_ok[i] and out_ok:
                 lo = max(0, i - window)
                 if d[lo:i + 1].min() <= PUNCH_FROM:
                     peak = float(rate[lo:i + 1].max())

@@ -55,6 +55,8 @@ TURN_WINDOW = 4.0          # s: a turn is done within this
 TURN_RATE = 20.0           # deg/s: facing changing faster than this is turning
 SPIN_TURN = 270.0          # deg
 SPIN_RATE = 270.0          # deg/s
+TWIST_GAP = 0.5            # s: a turn undone within this...
+TWIST_LEFT = 30.0          # deg: ...to within this of where it began is a twist
 LEVEL_STEP = 0.18          # L: a change of support height that counts (a stair is ~0.2 L)
 LEVEL_CLIMB = 0.5          # L: a rise this large is a climb
 
@@ -257,7 +259,15 @@ def turns(body: Body) -> list[Finding]:
                                side="left" if sign > 0 else "right",
                                count=max(1, int(round(abs(angle) / 360))) if spin else 1,
                                detail={"angle": angle, "rounded": rounded, "peak_rate": peak}))
-    return sorted([f for f in out if f.confidence >= MIN_CONFIDENCE], key=lambda f: f.start)
+    found = sorted([f for f in out if f.confidence >= MIN_CONFIDENCE], key=lambda f: f.start)
+    # a turn undone at once (left, then as far right within half a second) is a twist of
+    # the trunk, as in punching or dribbling, not a change of facing
+    twists = set()
+    for f, g in zip(found, found[1:]):
+        if f.side != g.side and g.start - f.end <= TWIST_GAP and \
+                abs(f.detail["angle"] + g.detail["angle"]) < TWIST_LEFT:
+            twists |= {id(f), id(g)}
+    return [f for f in found if id(f) not in twists]
 
 
 def support_level(body: Body) -> np.ndarray:
