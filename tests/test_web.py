@@ -362,3 +362,56 @@ def test_a_rig_no_map_fits_is_told_to_bring_its_joint_map_and_then_works(server,
     assert status == 200 and view["sentences"], view
     status, got = post_files(server + "api/rig", files)
     assert status == 200 and got["name"] == "robot", got
+
+
+# ------------------------------------------------------------------ other sites
+def test_a_foreign_host_is_refused(server):
+    """DNS rebinding: a page of attacker.example whose name resolves to 127.0.0.1."""
+    for path in ("", "api/info"):
+        status, body = call(server + path, headers={"Host": "attacker.example:8000"})
+        assert status == 400 and "attacker.example" in body["error"], body
+    port = server.rsplit(":", 1)[1].strip("/")
+    for name in (f"localhost:{port}", f"127.0.0.1:{port}", "localhost"):
+        assert call(server + "api/info", headers={"Host": name})[0] == 200, name
+
+
+def test_a_post_from_another_site_is_refused(server):
+    body = json.dumps({"text": "a person walks", "seconds": 1}).encode()
+    for headers in ({"Origin": "http://attacker.example"}, {"Origin": "null"},
+                    {"Sec-Fetch-Site": "cross-site"}):
+        status, reply = call(server + "api/generate", body,
+                             {"Content-Type": "application/json", **headers})
+        assert status == 403 and ("another site" in reply["error"] or
+                                  "cross-site" in reply["error"]), (headers, reply)
+    status, files = call(server + "api/describe", b"--x--\r\n",
+                         {"Content-Type": "multipart/form-data; boundary=x",
+                          "Origin": "http://attacker.example"})
+    assert status == 403
+    # the server's own page, and scripts that send neither header, are served
+    own = server.rstrip("/")
+    for headers in ({"Origin": own}, {"Sec-Fetch-Site": "same-origin"}, {}):
+        status, reply = call(server + "api/generate", body,
+                             {"Content-Type": "application/json", **headers})
+        assert status == 200, (headers, reply)
+
+
+def test_the_names_a_server_answers_to():
+    from motionlang.web.same_site import _host_name, hosts_for
+    assert hosts_for("127.0.0.1") == {"localhost", "127.0.0.1", "::1"}
+    assert "myhost" in hosts_for("myhost") and hosts_for("0.0.0.0") is None
+    assert "192.168.1.5" in hosts_for("192.168.1.5")
+    assert [_host_name(h) for h in ("[::1]:8000", "LocalHost:80", "::1", "a.b")] == \
+        ["::1", "localhost", "::1", "a.b"]
+
+
+def test_serve_checks_its_address_before_loading_models(capsys):
+    import socket
+    assert main(["serve", "--host", "999.1.1.1"]) == 2
+    err = capsys.readouterr().err
+    assert "--host 999.1.1.1" in err and len(err.strip().splitlines()) == 1
+    with socket.socket() as busy:
+        busy.bind(("127.0.0.1", 0))
+        busy.listen()
+        port = busy.getsockname()[1]
+        assert main(["serve", "--port", str(port)]) == 2
+        assert f"--port {port}" in capsys.readouterr().err

@@ -6,12 +6,16 @@ and pulls in two small libraries instead of gradio's tree; the routes are a smal
 (``/api/...``) that scripts can call as well. See ``docs/web.md``.
 
 Every error comes back as ``{"error": "one line"}`` with status 400 (413 for an upload over
-the limit, 500 for a bug, whose trace goes to the server's log and never to the page).
+the limit, 403 for a request from another site's page, 500 for a bug, whose trace goes to
+the server's log and never to the page). Requests whose ``Host`` is not the server's are
+refused (``same_site.py``).
 """
 from __future__ import annotations
 
 import contextlib
+import errno
 import logging
+import socket
 import threading
 from importlib import resources
 from typing import Annotated, Any
@@ -25,6 +29,7 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 from motionlang.errors import MotionlangError
 from motionlang.web.body_limit import BodyLimit
 from motionlang.web.options import ServeOptions
+from motionlang.web.same_site import SameSite, hosts_for
 from motionlang.web.studio import Studio
 
 log = logging.getLogger(__name__)
@@ -73,6 +78,9 @@ def create_app(studio: Studio) -> FastAPI:
     app.add_middleware(BodyLimit, limit=limit + FORM_SLACK, message=lambda size: (
         f"the upload is {size / (1 << 20):.1f} MiB; the largest this server takes is "
         f"{limit / (1 << 20):.1f} MiB (motionlang serve --max-upload-mb)"))
+
+    # added last, so it runs first: a foreign Host or a cross-site POST reads no body
+    app.add_middleware(SameSite, hosts=hosts_for(studio.options.host))
 
     @app.exception_handler(StarletteHTTPException)
     async def http_error(_request: Request, exc: StarletteHTTPException):
@@ -150,6 +158,7 @@ def serve(options: ServeOptions, *, ready=None) -> None:
     """Load the models, then serve until interrupted; ``ready(url)`` is called once the
     server listens (the CLI prints the address)."""
     import uvicorn
+    check_address(options.host, options.port)   # before minutes of loading models
     if not options.local:
         log.warning("motionlang serve: listening on %s: anyone who reaches this machine "
                     "can use the app (it has no login)", options.host)
@@ -163,6 +172,27 @@ def serve(options: ServeOptions, *, ready=None) -> None:
         server.run()
     except KeyboardInterrupt:   # Ctrl-C is how a user stops the app: not a failure
         pass
+
+
+def check_address(host: str, port: int) -> None:
+    """Raise :class:`MotionlangError` (naming ``--host`` or ``--port``) where the server
+    could not listen on ``host:port``: a name that does not resolve, an address this
+    machine does not have, a port in use or not allowed."""
+    try:
+        infos = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM)
+    except (socket.gaierror, UnicodeError, OverflowError) as exc:
+        raise MotionlangError(f"--host {host}: not an address or name this machine can "
+                              f"resolve ({exc})") from None
+    family, kind, proto, _, address = infos[0]
+    with socket.socket(family, kind, proto) as probe:
+        probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        try:
+            probe.bind(address)
+        except OSError as exc:
+            what = f"--port {port}" if exc.errno in (errno.EADDRINUSE, errno.EACCES) \
+                else f"--host {host}"
+            raise MotionlangError(f"{what}: cannot listen on {host}:{port} "
+                                  f"({exc.strerror or exc})") from None
 
 
 def _announce(server, ready) -> None:
