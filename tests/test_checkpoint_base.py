@@ -155,3 +155,34 @@ def test_the_evaluator_records_the_rows_it_reads(tmp_path):
     del d["features"]
     torch.save(d, tmp_path / "old.pt")
     assert TextMotionEvaluator.load(tmp_path / "old.pt").features == kit.features
+
+
+def test_the_meta_shape_check_draws_no_numbers_and_leaves_init_as_it_was():
+    import torch
+
+    from motionlang.models.checkpoint import _meta_init_skipped
+    before = torch.nn.init.normal_
+    real = torch.zeros(1000)
+    with torch.device("meta"), _meta_init_skipped():
+        emb = torch.nn.Embedding(10, 4)              # reset_parameters: normal_ on meta
+        assert emb.weight.is_meta
+    with _meta_init_skipped():
+        torch.nn.init.normal_(real)                   # a real tensor is still drawn into
+    assert real.std() > 0.5
+    assert torch.nn.init.normal_ is before
+
+
+
+def test_loading_the_packaged_m2l_does_not_import_dynamo():
+    """The point of skipping the draws: seconds of ``torch._dynamo`` on every command."""
+    import subprocess
+    import sys
+
+    from motionlang.models.registry import PACKAGED
+    if not PACKAGED["m2l"].path.is_file():
+        pytest.skip("packaged m2l not installed")
+    code = ("import sys, motionlang as ml; ml.load_model('m2l'); "
+            "print('torch._dynamo' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout.strip()
+    assert out == "False"

@@ -15,6 +15,8 @@ layout, normaliser), a length model, a training stage. The trainer wraps the dic
 """
 from __future__ import annotations
 
+import contextlib
+import functools
 import inspect
 from dataclasses import asdict
 from pathlib import Path
@@ -173,6 +175,34 @@ def _check_options(cls: type[Checkpointed], kw: dict[str, Any]) -> None:
                         f"{', '.join(unknown)}")
 
 
+@contextlib.contextmanager
+def _meta_init_skipped():
+    """``torch.nn.init``'s in-place initialisers leave ``meta`` tensors as they are while
+    the block runs. A shape check needs no values, and drawing random numbers into a meta
+    tensor goes through torch's Python reference ops, which import ``torch._dynamo``: seconds
+    that every command that loads a model would pay. Real tensors are initialised as ever."""
+    init = torch.nn.init
+    saved = {name: getattr(init, name) for name in dir(init)
+             if name.endswith("_") and not name.startswith("_")
+             and callable(getattr(init, name))}
+
+    def skipping(original):
+        @functools.wraps(original)
+        def initialise(tensor, *args, **kwargs):
+            if isinstance(tensor, torch.Tensor) and tensor.is_meta:
+                return tensor
+            return original(tensor, *args, **kwargs)
+        return initialise
+
+    for name, fn in saved.items():
+        setattr(init, name, skipping(fn))
+    try:
+        yield
+    finally:
+        for name, fn in saved.items():
+            setattr(init, name, fn)
+
+
 def check_weights(path: str | Path, cls: Any, config: Any, d: dict, kw: dict) -> None:
     """The file's ``state_dict`` against the model its config describes, before the model
     is built: the model is made on the ``meta`` device (shapes, no memory), its size held
@@ -193,7 +223,7 @@ def check_weights(path: str | Path, cls: Any, config: Any, d: dict, kw: dict) ->
             raise bad(f"state_dict.{name}: expected a tensor, got {type(value).__name__}")
     if config is None:
         return
-    with torch.device("meta"):
+    with torch.device("meta"), _meta_init_skipped():
         skeleton = wrap(path, cls.kind, lambda: cls.from_state(config, d, **kw))
     wanted = skeleton.state_dict()
     tensors = [*skeleton.parameters(), *skeleton.buffers()]
