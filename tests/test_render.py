@@ -9,7 +9,9 @@ import pytest
 
 from helpers.data import ROOT, shared_file
 from helpers.mocap import walker
+from helpers.rigs import RIGS
 from motionlang.errors import MotionlangError
+from motionlang.features.joint_map import KIT21_NAMES
 from motionlang.kinematics import Motion
 from motionlang.rendering import animation as animation_mod
 from motionlang.rendering import (
@@ -158,10 +160,10 @@ def test_real_kit_walker_scene():
     from motionlang.formats.mmm import read_mmm
 
     m = read_mmm(shared_file("kitml/00001_mmm.xml"))
-    scene = build_scene(m)
-    sides = joint_sides(m)
-    assert sorted(sides[f] for f in scene.feet) == [LEFT, RIGHT]
-    assert 1.6 < scene.height < 2.0  # a 1.82 m subject, standing upright on the floor
+    scene = build_scene(m)          # the 21-joint body: a foot of each side
+    assert sorted(KIT21_NAMES[f][0] for f in scene.feet) == [LEFT, RIGHT]
+    # a 1.82 m subject upright on the floor; the 21-joint body ends at the upper neck
+    assert 1.4 < scene.height < 1.7
     travel = scene.root[-1, :2] - scene.root[0, :2]
     assert travel @ scene.forward > 0.9 * np.linalg.norm(travel)
     # every left footstep lies left of the path (not mirrored): cross(travel, step) > 0
@@ -171,7 +173,7 @@ def test_real_kit_walker_scene():
         nearest = np.argmin(np.linalg.norm(scene.root[:, :2] - xy, axis=1))
         rel = xy - scene.root[nearest, :2]
         side = np.sign(travel[0] * rel[1] - travel[1] * rel[0])
-        assert side == (1 if sides[foot] == LEFT else -1)
+        assert side == (1 if KIT21_NAMES[foot][0] == LEFT else -1)
 
 
 def test_animation_frames_lazy_and_counted():
@@ -206,3 +208,20 @@ def test_kit21_scene_colours_sides_and_picks_one_foot_per_side(tmp_path):
         kit21_scene(pos[:, :20], 12.5)
     render_strip(scene, tmp_path / "s.png", n_frames=3)
     assert (tmp_path / "s.png").stat().st_size > 1000
+
+
+@pytest.mark.parametrize("rig", sorted(RIGS))
+def test_every_rig_is_drawn_upright_on_its_feet(rig, tmp_path):
+    """Whatever a rig calls its joints (eyes, twist bones, a root on the floor), the drawing
+    is the 21-joint body every command reads: its lowest points are the feet, its highest
+    the head, and both sides are coloured."""
+    from helpers.rigs import write
+    from motionlang.formats import read_motion
+    from motionlang.rendering.scene import LEFT, RIGHT, build_scene
+    scene = build_scene(read_motion(write(RIGS[rig], tmp_path, T=20)))
+    feet = {KIT21_NAMES.index(side + n) for side in "LR" for n in ("A", "Mrot", "F")}
+    height = scene.points[..., 2]                # matplotlib frame: z up
+    assert set(height.argmin(axis=1)) <= feet, rig
+    assert set(height.argmax(axis=1)) <= {KIT21_NAMES.index("BUN")}, rig
+    assert {LEFT, RIGHT} <= set(scene.bone_sides)
+    assert scene.floor == pytest.approx(height.min())

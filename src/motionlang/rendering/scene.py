@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from motionlang.errors import MotionlangError
+from motionlang.features.joint_map import KIT21_NAMES, KIT21_PARENTS, positions21
 from motionlang.kinematics import Motion
 
 # canonical (X, Y, Z) -> matplotlib (x, y, z): rows give the new axes
@@ -120,7 +121,19 @@ def _pair_indices(motion: Motion) -> list[tuple[int, int]]:
 
 
 def build_scene(motion: Motion) -> Scene:
-    """Compute everything the renderers draw from one ``Motion`` (one FK pass)."""
+    """Compute everything the renderers draw from one ``Motion``: the 21-joint body that
+    every other command reads (``features.joint_map``: its sides, feet and root, and no
+    helper bone of the rig, such as a root on the floor, eyes or twist bones), or the rig's
+    own joints (one FK pass) where no body map fits it."""
+    try:
+        p21 = positions21(motion)
+    except MotionlangError:
+        return rig_scene(motion)
+    return kit21_scene(p21, float(motion.fps), motion.name)
+
+
+def rig_scene(motion: Motion) -> Scene:
+    """The rig's own joints and bones, sides and feet read from its joint names."""
     sk = motion.skeleton
     points = motion.positions() @ TO_MPL.T
     sides = joint_sides(motion)
@@ -243,7 +256,6 @@ def camera_basis(azim_deg: float, elev: float) -> tuple[np.ndarray, np.ndarray, 
 def kit21_scene(positions: np.ndarray, fps: float, name: str = "generated") -> Scene:
     """A Scene of the 21 KIT joints (T, 21, 3) metres, Y up, in ``joint_map.KIT21_NAMES``
     order: the output of the *positions* models (two-stream, positions L2M)."""
-    from motionlang.features.joint_map import KIT21_NAMES, KIT21_PARENTS
     pos = np.asarray(positions, dtype=float)
     if pos.ndim != 3 or pos.shape[1:] != (len(KIT21_NAMES), 3):
         raise ValueError(f"positions must be (T, {len(KIT21_NAMES)}, 3), got {pos.shape}")
