@@ -162,3 +162,13 @@ def test_reconcile_keeps_style_words_only_where_the_model_knows_the_motion():
     stutter = [("a person takes 6 steps 6 steps", -1.0), ("a man walks forward", -1.5)]
     assert [t for t, _ in reconcile(stutter, _walking(), 1.0)][:2] == [
         "a person takes 6 steps", "a man walks forward"]
+
+
+def test_reconcile_without_an_analysis_says_it_cannot_tell():
+    """One frame, or a body the analysis cannot read: the model's sentences rest on nothing
+    and come after the honest line."""
+    from motionlang.analysis import CANNOT_TELL
+    from motionlang.decoding.grounded import reconcile
+    got = reconcile([("a human is walking backwards", -6.9)], None, 1.0)
+    assert got[0][0] == CANNOT_TELL and math.isnan(got[0][1])
+    assert got[1] == ("a human is walking backwards", -6.9)

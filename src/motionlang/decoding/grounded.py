@@ -36,7 +36,7 @@ from typing import Any
 
 import numpy as np
 
-from motionlang.analysis import Analysis, analyse_positions, repeats, tidy
+from motionlang.analysis import CANNOT_TELL, Analysis, analyse_positions, repeats, tidy
 from motionlang.analysis.check import contradicted
 from motionlang.analysis.words import actions_named, agrees
 from motionlang.datasets.bandai_text import STYLES, styles_named
@@ -246,8 +246,8 @@ def reconcile(hyps: list[tuple[str, float]], analysis: Analysis | None,
         if not repeats(t):   # "3 squats 3 times squats": the model stumbling
             out.append((t, s))
     hyps = list({t: (t, s) for t, s in reversed(out)}.values())[::-1]   # each once
-    if analysis is None:
-        return hyps or [(UNFAMILIAR, float("nan"))]
+    if analysis is None:   # one frame, no body: what the model says of it rests on nothing
+        return [(CANNOT_TELL, float("nan"))] + [(t, s) for t, s in hyps if t != UNFAMILIAR]
     grounded = analysis.sentence()
     if not hyps:
         return [(grounded, float("nan"))]
