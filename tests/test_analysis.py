@@ -283,3 +283,18 @@ def test_check_says_yes_no_and_cannot_tell():
                                                  ("dance", None)]
     assert got[0].findings[0].label == "sit" and got[0].line().startswith("sit: yes (")
     assert got[1].line() == "punch: no" and "cannot tell" in got[2].line()
+
+
+def test_the_open_world_check_as_a_share():
+    from motionlang.evaluation.open_world import check_share, shown
+    sat = take(hold(pose(), 1.0), blend(pose(), SIT, 1.0), hold(SIT, 2.0))
+    stood = hold(pose(), 4.0)
+    assert shown("a person sits down", sat, FPS) is True
+    assert shown("a person sits down", stood, FPS) is False
+    assert shown("a person dances", sat, FPS) is None          # nothing it can tell
+    assert shown("a person sits", sat[:1], FPS) is None         # one frame: unread
+    assert check_share(["a person sits down", "a person sits down", "a person dances"],
+                       [sat, stood, sat], FPS) == 0.5
+    assert np.isnan(check_share(["someone dances"], [sat], FPS))
+    with pytest.raises(MotionlangError):
+        check_share(["a"], [], FPS)

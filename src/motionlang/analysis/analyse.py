@@ -69,9 +69,12 @@ def prune(found: list[Finding]) -> list[Finding]:
                        max(f.duration, 1e-6) and (not sides or _sides_meet(f, g))
                        for g in found)
         lab = f.label
-        if lab == "raise" and covered(("wave", "hang", "climb"), sides=True):
+        if lab == "raise" and covered(("wave", "hang", "climb", "punch"), sides=True):
             continue
-        if lab == "reach" and covered(("punch", "hang", "climb", "raise"), sides=True):
+        if lab == "raise" and covered(("reach",), 0.5, sides=True) and not any(
+                g.label == "raise" and g.side == "both" for g in found):
+            continue    # an arm held out in front is said as a reach
+        if lab == "reach" and covered(("punch", "hang", "climb"), sides=True):
             continue
         if lab == "bend" and covered(("touch_floor",)):
             continue

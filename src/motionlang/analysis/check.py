@@ -56,7 +56,9 @@ def check_sentence(text: str, analysis: Analysis) -> list[ActionCheck]:
             out.append(ActionCheck(action, None))
             continue
         accept = {action, *COMPATIBLE.get(action, ())}
-        hits = sorted((f for f in analysis.findings if ACTION[f.label] in accept),
+        hits = sorted((f for f in analysis.findings if ACTION[f.label] in accept or (
+            action == "turn" and f.label in ("walk", "run") and
+            f.detail.get("path", "straight") != "straight")),   # a walk that turns
                       key=lambda f: -f.confidence)
         out.append(ActionCheck(action, bool(hits), tuple(hits)))
     return out

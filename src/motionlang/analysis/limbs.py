@@ -1,6 +1,7 @@
 """What the arms, legs and trunk do, as events with their repetitions counted.
 
-- **raises** an arm: the wrist above the shoulder by :data:`RAISE` arm lengths, held;
+- **raises** an arm: the wrist lifted to the shoulder's height or above (:data:`RAISE`),
+  held;
 - **waves**: a raised hand swinging from side to side (:data:`WAVE_SWINGS` swings or more);
 - **punches**: a fast straightening of the arm away from the shoulder, at chest height;
 - **kicks**: a fast, high swing of a nearly straight leg;
@@ -28,7 +29,8 @@ from motionlang.analysis.posture import (
     lying,
 )
 
-RAISE = 0.45               # arm lengths: wrist over shoulder
+RAISE = -0.05              # arm lengths: wrist over shoulder (a hanging arm is near -1; a
+                           # raise lifts the hand to the shoulder or above)
 MIN_RAISE = 0.4            # s
 WAVE_LEVEL = -0.1          # arm lengths: the waving wrist at least this high over the shoulder
 WAVE_AMPLITUDE = 0.06      # L: half the side-to-side swing
@@ -230,7 +232,7 @@ def reaches(body: Body) -> list[Finding]:
     for side in range(2):
         arm = body.arm_length(side)
         rel = _rel_wrist(body, side) / arm
-        m = clean_mask((rel[:, 2] > REACH_FORWARD) & (rel[:, 1] > -0.3) & (rel[:, 1] < RAISE),
+        m = clean_mask((rel[:, 2] > REACH_FORWARD) & (rel[:, 1] > -0.3) & (rel[:, 1] < 0.45),
                        body.fps, min_len=0.5, max_gap=EVENT_GAP)
         for a, b in runs(m):
             v = float(np.median(rel[a:b, 2]))

@@ -92,6 +92,8 @@ def judge_report(judge, generated: Sequence[np.ndarray], asked, fps: float,
 # -- the table of ``motionlang evaluate-judge`` ---------------------------------------------
 #: the columns of :func:`markdown_judge_table`: measure -> (header, scale)
 JUDGE_COLUMNS = {"content_acc": ("content %", 100), "style_acc": ("style %", 100),
+                 # the grounded analysis: any action it reads, not the judge's classes
+                 "check": ("open-world check %", 100),
                  "fid": ("FID", 1), "diversity": ("diversity", 1),
                  "skating": ("skating m/s", 1), "penetration": ("penetration cm", 100),
                  "penetration_max": ("max penetration cm", 100),

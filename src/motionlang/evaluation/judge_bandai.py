@@ -3,7 +3,9 @@
 One sentence per take of a split (``bandai_text``), each model's motion for it as long as
 the take, judged by a trained judge beside the real takes (:func:`.judge.judge_table`):
 recognition of the asked content and style, FID and diversity on the judge's features,
-foot skating, floor penetration and root jumps. The data and the judge are CC BY-NC 4.0
+foot skating, floor penetration and root jumps, and the open-world check (the share of
+motions that show their sentence's actions by the grounded analysis,
+``evaluation.open_world``). The data and the judge are CC BY-NC 4.0
 (``datasets.sources``): every figure made here is for non-commercial use only.
 """
 from __future__ import annotations
@@ -16,6 +18,7 @@ from typing import Any
 from motionlang.datasets.sources import DataSource, licence_text, parse_source
 from motionlang.errors import MotionlangError
 from motionlang.evaluation.judge import asked_labels, judge_table, markdown_judge_table
+from motionlang.evaluation.open_world import check_share
 
 #: the values of ``foot_lock``: rows with feet held (on), as decoded (off), or both
 FOOT_LOCK = ("on", "off", "both")
@@ -93,6 +96,10 @@ def evaluate_on_bandai(judge: Any, models: Mapping[str, Any], data: str | Path |
     rows = judge_table(judge, [it.positions for it in real],
                        [(it.content, it.style) for it in real], FPS, generated,
                        asked_labels(sentences), FPS, rng=seed)
+    texts = [s.text for s in sentences]
+    rows["ground truth"]["check"] = check_share(texts, [it.positions for it in real], FPS)
+    for name, motions in generated.items():
+        rows[name]["check"] = check_share(texts, motions, FPS)
     terms = (licence_text(source, "judge") or "").splitlines()[0]
     name = judge_name or "judge"
     c = judge.config
