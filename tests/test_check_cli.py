@@ -36,7 +36,7 @@ def test_check_prints_each_action_of_the_sentence(walk_file, capsys):
 def test_check_bad_input_is_one_line(walk_file, tmp_path, capsys):
     assert main(["check", "  ", str(walk_file)]) == 2
     err = capsys.readouterr().err
-    assert "sentence is empty" in err and len(err.strip().splitlines()) == 1
+    assert "sentence to check is empty" in err and len(err.strip().splitlines()) == 1
     assert main(["check", "a person walks", str(tmp_path / "missing.bvh")]) == 2
     err = capsys.readouterr().err
     assert "missing.bvh" in err and "Traceback" not in err
@@ -49,3 +49,20 @@ def test_generate_warns_of_an_action_the_model_never_learnt(tmp_path):
         pytest.skip("packaged l2m not installed")
     with pytest.warns(UserWarning, match="never learnt to sit or climb.*it can make: .*walk"):
         ml.generate_hypotheses("a person sits down and climbs", "l2m", max_frames=5)
+
+
+def test_a_wrong_frame_rate_in_a_header_can_be_overridden(walk_file, tmp_path, capsys):
+    """Some BVH exports declare 25 fps for 120 Hz takes: --source-fps replaces the rate
+    (here a header ten times too slow, where no step of a walk is seen)."""
+    slow = tmp_path / "slow.bvh"
+    lines = walk_file.read_text().splitlines()
+    at = next(i for i, line in enumerate(lines) if line.startswith("Frame Time:"))
+    rate = 1.0 / float(lines[at].split(":")[1])
+    lines[at] = "Frame Time: 0.1"
+    slow.write_text("\n".join(lines) + "\n")
+    assert ml.read_motion(slow).fps == pytest.approx(10.0)   # ten times too slow
+    assert main(["check", "a person walks", str(slow), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)[0]["shown"] is False   # far too slow a walk
+    assert main(["check", "a person walks", str(slow), "--json",
+                 "--source-fps", str(rate)]) == 0
+    assert json.loads(capsys.readouterr().out)[0]["shown"] is True

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from motionlang.analysis.analyse import ACTION, Analysis
 from motionlang.analysis.evidence import Finding
 from motionlang.analysis.words import COMPATIBLE, actions_named
+from motionlang.errors import MotionlangError
 
 #: the coarse actions some detector can find (others are "cannot tell")
 DETECTABLE = frozenset(ACTION.values())
@@ -49,7 +50,13 @@ class ActionCheck:
 
 
 def check_sentence(text: str, analysis: Analysis) -> list[ActionCheck]:
-    """Every action ``text`` names, in its order, against ``analysis``."""
+    """Every action ``text`` names, in its order, against ``analysis``.
+
+    Raises:
+        MotionlangError: an empty sentence.
+    """
+    if not text.strip():
+        raise MotionlangError("the sentence to check is empty")
     out = []
     for action in actions_named(text):
         if action not in DETECTABLE and not COMPATIBLE.get(action, set()) & DETECTABLE:

@@ -25,7 +25,8 @@ def add_input_args(p: argparse.ArgumentParser, many: bool = False) -> None:
     p.add_argument("--asf", metavar="PATH", default=None,
                    help="ASF skeleton of an .amc input (default: <subject>.asf next to it)")
     p.add_argument("--source-fps", type=rate_float, default=None, metavar="HZ",
-                   help="frame rate of an .amc input (AMC files do not store it; default 120)")
+                   help="the take's true frame rate: of an .amc input (default 120), or "
+                        "in place of a file's own where its header is wrong")
     p.add_argument("--sequence", type=positive_int, default=None, metavar="N",
                    help="which sequence of a .mat input holding several (1-based; default 1)")
     add_joint_map_arg(p)
@@ -39,18 +40,19 @@ def add_joint_map_arg(p: argparse.ArgumentParser) -> None:
 
 
 def load_input(args: argparse.Namespace, path: str | None = None) -> Motion:
-    """Read ``path`` (default ``args.input``; with ``--asf`` / ``--source-fps`` for AMC
-    files, ``--sequence`` for MAT files; a ``--joint-map`` is checked against the rig)."""
+    """Read ``path`` (default ``args.input``; with ``--asf`` for AMC files, ``--source-fps``
+    for AMC files or in place of a file's own rate, ``--sequence`` for MAT files; a ``--joint-map`` is checked against the rig)."""
     from motionlang.api import read_mapped
 
     path = Path(path or args.input)
     ext = path.suffix.lower()
-    if ext != ".amc" and (args.asf is not None or args.source_fps is not None):
-        raise MotionlangError(f"{path}: --asf and --source-fps apply to .amc inputs only")
+    if ext != ".amc" and args.asf is not None:
+        raise MotionlangError(f"{path}: --asf applies to .amc inputs only")
     if ext != ".mat" and args.sequence is not None:
         raise MotionlangError(f"{path}: --sequence applies to .mat inputs only")
-    return read_mapped(path, args.joint_map, skeleton=args.asf, fps=args.source_fps,
-                       sequence=args.sequence or 1)
+    motion = read_mapped(path, args.joint_map, skeleton=args.asf, sequence=args.sequence or 1,
+                         fps=args.source_fps if ext == ".amc" else None)
+    return motion if args.source_fps is None else motion.replace(fps=args.source_fps)
 
 
 def add_clip_args(p: argparse.ArgumentParser) -> None:
@@ -101,8 +103,6 @@ def cmd_convert(args: argparse.Namespace) -> int:
 def cmd_check(args: argparse.Namespace) -> int:
     from motionlang.analysis.check import printed
     from motionlang.api import check
-    if not args.text.strip():
-        raise MotionlangError("TEXT: the sentence is empty")
     print(printed(args.text, check(args.text, load_input(args)), as_json=args.json))
     return 0
 

@@ -35,7 +35,8 @@ from motionlang.library.windows import Window, cut, motion_windows, span
 @dataclass(frozen=True)
 class ReadOptions:
     """How files are read: the ``read_motion`` options that apply to some formats only
-    (``skeleton``, ``fps``: AMC; ``sequence``: MAT), and a joint map for every file."""
+    (``skeleton``: AMC; ``sequence``: MAT), ``fps`` (AMC's rate, or the rate that replaces
+    any other file's own), and a joint map for every file."""
 
     skeleton: str | None = None
     fps: float | None = None
@@ -48,6 +49,8 @@ class ReadOptions:
         kw: dict[str, Any] = {"skeleton": self.skeleton, "fps": self.fps} if ext == ".amc" \
             else {"sequence": self.sequence} if ext == ".mat" else {}
         motion = read_motion(path, joint_map=self.joint_map, **kw)
+        if self.fps is not None and ext != ".amc":   # the file's own rate is wrong
+            motion = motion.replace(fps=self.fps)
         if self.joint_map is not None:   # a map that does not fit this rig: this file's error
             from motionlang.features.joint_map import match_rig
             match_rig(motion.skeleton, joint_map=motion.meta["joint_map"])
