@@ -227,7 +227,9 @@ class Analysis:
         best = np.full(n, -1)
         score = np.zeros(n)
         ranked = self.ranked()
-        labels = [ACTION[f.label] for f in ranked]
+        # walking forward and stepping sideways are two parts of a timeline
+        labels = [ACTION[f.label] + ("" if f.kind != "locomotion" else
+                                     f" {f.detail.get('direction', '')}") for f in ranked]
         for i, f in enumerate(ranked):
             # a jump's or a kick's span is its flight or swing; the take-off and the landing
             # around it belong to it too

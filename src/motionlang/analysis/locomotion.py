@@ -145,23 +145,27 @@ def travel(body: Body) -> list[Finding]:
     return out
 
 
+_DIRECTIONS = ("forward", "backwards", "left", "right")
+
+
 def _by_gait(body: Body, a: int, b: int) -> list[tuple[int, int]]:
-    """A span of travel cut where the gait changes (a walk that breaks into a run): the
-    gait of overlapping :data:`GAIT_WINDOW` s windows, changes that hold for
-    :data:`GAIT_HOLD` s or more."""
+    """A span of travel cut where the gait or the direction changes (a walk that breaks
+    into a run, steps forward then sideways): the gait and direction of overlapping
+    :data:`GAIT_WINDOW` s windows, changes that hold for :data:`GAIT_HOLD` s or more."""
     w, hop = body.frames(GAIT_WINDOW), body.frames(GAIT_WINDOW / 4)
     if b - a < 2 * body.frames(GAIT_HOLD) or b - a < w:
         return [(a, b)]
     starts = list(range(a, b - w + 1, hop))
-    running = np.array([gait(body.p[s:s + w], body.fps).run_score > 0 or froude(
-        float(np.median(np.linalg.norm(body.ground_velocity[s:s + w], axis=1))),
-        body.leg) >= WALK_LIMIT for s in starts])
+    kinds = np.array([2 * _DIRECTIONS.index(_direction(body, s, s + w)[0]) + int(
+        gait(body.p[s:s + w], body.fps).run_score > 0 or froude(
+            float(np.median(np.linalg.norm(body.ground_velocity[s:s + w], axis=1))),
+            body.leg) >= WALK_LIMIT) for s in starts])
     cell = np.zeros(b - a, dtype=int)
-    for s, r in zip(starts, running):            # each frame: the window centred nearest
+    for s, k in zip(starts, kinds):              # each frame: the window centred nearest
         centre = s + w // 2 - a
-        cell[max(0, centre - hop):centre + hop] = int(r)
-    cell[:starts[0] + w // 2 - a] = int(running[0])
-    cell[starts[-1] + w // 2 - a:] = int(running[-1])
+        cell[max(0, centre - hop):centre + hop] = k
+    cell[:starts[0] + w // 2 - a] = kinds[0]
+    cell[starts[-1] + w // 2 - a:] = kinds[-1]
     cuts = [a]
     for lo, _ in runs(np.diff(cell) != 0):
         at = a + lo + 1
