@@ -41,6 +41,8 @@ ACTION = {"run": "run", "walk": "walk", "jump": "jump", "hop": "jump", "climb": 
 LOW = ("sit", "lie", "kneel", "squat", "crouch", "all_fours", "crawl")
 #: a timeline segment shorter than this (s) is taken into its neighbour
 MIN_SEGMENT = 0.8
+#: wrist over shoulder (arm lengths) from which a raise is overhead, more than arms held out
+OVERHEAD = 0.45
 #: seconds before and after a jump or a strike that a timeline gives to it
 EVENT_PAD = 0.6
 
@@ -105,8 +107,10 @@ def prune(found: list[Finding]) -> list[Finding]:
             continue
         if lab in ("wave", "clap") and covered(("punch",), 0.3):
             continue    # a boxer's guard moves the hands too
-        if lab == "arms_out" and covered(("wave", "raise", "punch", "hang"), 0.1):
+        if lab == "arms_out" and covered(("wave", "punch", "hang"), 0.1):
             continue
+        if lab == "raise" and f.value < OVERHEAD and covered(("arms_out",), 0.5):
+            continue    # arms held out level to the sides, not raised
         keep.append(f)
     return keep
 
