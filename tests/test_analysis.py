@@ -298,3 +298,12 @@ def test_the_open_world_check_as_a_share():
     assert np.isnan(check_share(["someone dances"], [sat], FPS))
     with pytest.raises(MotionlangError):
         check_share(["a"], [], FPS)
+
+
+@pytest.mark.parametrize("fps", [1e-12, 1e-3, 1e6])
+def test_an_absurd_frame_rate_is_a_sentence_not_a_traceback(fps):
+    """A header that claims 1e12 s a frame (or a millionth of a second) must neither fill
+    the memory with a timeline nor break the filters."""
+    a = analyse_positions(hold(pose(), 3.0), fps)
+    assert a.duration == pytest.approx(90 / fps)
+    assert a.sentence() and len(a.timeline()) >= 1

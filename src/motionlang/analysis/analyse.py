@@ -41,6 +41,8 @@ ACTION = {"run": "run", "walk": "walk", "jump": "jump", "hop": "jump", "climb": 
 LOW = ("sit", "lie", "kneel", "squat", "crouch", "all_fours", "crawl")
 #: a timeline segment shorter than this (s) is taken into its neighbour
 MIN_SEGMENT = 0.8
+#: most cells a timeline is painted in (its resolution falls below 0.1 s past 10,000 s)
+TIMELINE_CELLS = 100_000
 #: wrist over shoulder (arm lengths) from which a raise is overhead, more than arms held out
 OVERHEAD = 0.45
 #: seconds before and after a jump or a strike that a timeline gives to it
@@ -226,7 +228,9 @@ class Analysis:
     def timeline(self, min_segment: float = MIN_SEGMENT) -> list[tuple[float, float, str]]:
         """[(start, end, sentence), ...] covering the take: cut where the most salient
         finding changes, segments under ``min_segment`` s merged into a neighbour."""
-        rate = 10.0          # timeline resolution, cells a second
+        # timeline resolution, cells a second: ten, fewer for a take so long (or a frame
+        # time so absurd) that ten would not fit in memory
+        rate = min(10.0, TIMELINE_CELLS / max(self.duration, 1e-9))
         n = max(1, int(np.ceil(self.duration * rate)))
         best = np.full(n, -1)
         score = np.zeros(n)

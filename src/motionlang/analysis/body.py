@@ -82,7 +82,9 @@ class Body:
         if not np.isfinite(p).all():
             raise MotionlangError("analysis: positions are not all finite")
         step = max(1, int(round(fps / RATE)))
-        p = p[::step] if len(p[::step]) >= MIN_FRAMES else p[:MIN_FRAMES]
+        if len(p[::step]) < MIN_FRAMES:    # too few frames to thin: all of them
+            step = 1
+        p = p[::step]
         fps = fps / step
         leg = leg_length21(bone_lengths21(p))
         if not (np.isfinite(leg) and leg > 1e-9):
@@ -137,11 +139,9 @@ class Body:
         """(T, 2) the root's horizontal velocity, m/s, over :data:`SPEED_SPAN` spans."""
         root = self.p[:, 0, [0, 2]]
         k = self.frames(SPEED_SPAN / 2)
-        ahead = np.concatenate([root[k:], np.repeat(root[-1:], k, axis=0)])
-        behind = np.concatenate([np.repeat(root[:1], k, axis=0), root[:-k]])
-        span = np.clip(np.arange(self.n) + k, 0, self.n - 1) - np.clip(
-            np.arange(self.n) - k, 0, self.n - 1)
-        return (ahead - behind) * self.fps / np.maximum(span, 1)[:, None]
+        i = np.arange(self.n)
+        hi, lo = np.clip(i + k, 0, self.n - 1), np.clip(i - k, 0, self.n - 1)
+        return (root[hi] - root[lo]) * self.fps / np.maximum(hi - lo, 1)[:, None]
 
     @cached_property
     def ground_speed(self) -> np.ndarray:
@@ -157,7 +157,8 @@ class Body:
     def local_floor(self) -> np.ndarray:
         """(T,) the floor under the body, metres: a rolling low percentile of the lowest foot
         over :data:`FLOOR_WINDOW` s, so that ramps, steps and drifting captures carry it."""
-        size = _odd(FLOOR_WINDOW * self.fps)
+        # a window longer than the take is the whole take (and costs no more)
+        size = _odd(min(FLOOR_WINDOW * self.fps, 2 * self.n + 1))
         return percentile_filter(self.foot_low.min(axis=0), 5, size=size, mode="nearest")
 
     @cached_property

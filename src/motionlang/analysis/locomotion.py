@@ -285,7 +285,8 @@ def support_level(body: Body) -> np.ndarray:
     if not len(idx):
         return np.zeros(body.n)
     filled = np.interp(np.arange(body.n), idx, level[idx])
-    return median_filter(filled, size=body.frames(0.5) | 1, mode="nearest")
+    return median_filter(filled, size=min(body.frames(0.5), 2 * body.n + 1) | 1,
+                         mode="nearest")
 
 
 def levels(body: Body) -> list[Finding]:
