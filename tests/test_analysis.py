@@ -307,3 +307,15 @@ def test_an_absurd_frame_rate_is_a_sentence_not_a_traceback(fps):
     a = analyse_positions(hold(pose(), 3.0), fps)
     assert a.duration == pytest.approx(90 / fps)
     assert a.sentence() and len(a.timeline()) >= 1
+
+
+def test_findings_close_in_time_are_one_series_with_their_count():
+    from motionlang.analysis.evidence import Finding, merge_series
+
+    def bow(t0, t1, c=0.8):
+        return Finding("limb", "bow", t0, t1, "tilt", 40.0, 25.0, c)
+    got = merge_series([bow(5.0, 5.5), bow(0.0, 0.5, 0.9), bow(1.0, 1.5), bow(9.0, 9.5)])
+    assert [(f.start, f.end, f.count) for f in got] == [(0.0, 1.5, 2), (5.0, 5.5, 1),
+                                                        (9.0, 9.5, 1)]
+    assert got[0].confidence == 0.9
+    assert merge_series([bow(0, 1), bow(1.2, 2)], label="squat")[0].label == "squat"

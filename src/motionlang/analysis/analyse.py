@@ -15,7 +15,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from motionlang.analysis.body import Body
-from motionlang.analysis.evidence import Finding, overlap
+from motionlang.analysis.evidence import Finding, merge_series, overlap
 from motionlang.analysis.limbs import limb_actions
 from motionlang.analysis.locomotion import jumps, levels, travel, turns
 from motionlang.analysis.posture import postures
@@ -120,17 +120,9 @@ def prune(found: list[Finding]) -> list[Finding]:
 def _series_of_squats(found: list[Finding]) -> list[Finding]:
     """Crouches and squats less than 1.5 s apart as one squat with its count ("squats 3
     times"): going down and up again and again is one action."""
-    low = sorted((f for f in found if f.label in ("crouch", "squat")), key=lambda f: f.start)
-    groups: list[list[Finding]] = []
-    for f in low:
-        if groups and f.start - groups[-1][-1].end < 1.5:
-            groups[-1].append(f)
-        else:
-            groups.append([f])
-    merged = [g[0] if len(g) == 1 else replace(
-        g[0], label="squat", end=g[-1].end, count=len(g),
-        value=min(f.value for f in g), confidence=max(f.confidence for f in g))
-        for g in groups]
+    series = merge_series([f for f in found if f.label in ("crouch", "squat")])
+    # a series is said as squats; one going down stays as it was found
+    merged = [replace(f, label="squat") if f.count > 1 else f for f in series]
     return [f for f in found if f.label not in ("crouch", "squat")] + merged
 
 
@@ -207,16 +199,15 @@ class Analysis:
         if level not in LEVELS:
             raise MotionlangError(f"sentence level must be one of {', '.join(LEVELS)}, got "
                                   f"{level!r}")
+        said = self.explain(level, clauses)
+        return join([text for text, _ in said]) if said else CANNOT_TELL
+
+    def explain(self, level: str = "terse", clauses: int | None = None
+                ) -> list[tuple[str, Finding]]:
+        """(phrase, finding) for each phrase of :meth:`sentence`."""
         chosen = self.clauses(clauses or (MAX_CLAUSES if level == "terse" else
                                           MAX_CLAUSES + 2))
-        return join([phrase(f, level=level, first=i == 0, end=self.duration)
-                     for i, f in enumerate(chosen)]) if chosen else CANNOT_TELL
-
-    def explain(self, level: str = "terse") -> list[tuple[str, Finding]]:
-        """(phrase, finding) for each phrase of :meth:`sentence`."""
-        chosen = self.clauses(MAX_CLAUSES if level == "terse" else MAX_CLAUSES + 2)
-        return [(phrase(f, level=level, first=i == 0, end=self.duration), f)
-                for i, f in enumerate(chosen)]
+        return [(phrase(f, level=level, first=i == 0), f) for i, f in enumerate(chosen)]
 
     def within(self, start: float, end: float) -> Analysis:
         """The findings that fall mostly within [start, end), times kept."""

@@ -8,7 +8,7 @@ below :data:`MIN_CONFIDENCE` rather than guess.
 """
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -113,3 +113,20 @@ def clean_mask(mask: np.ndarray, fps: float, *, min_len: float, max_gap: float) 
 def overlap(a: Finding, b: Finding) -> float:
     """Seconds that two findings share."""
     return max(0.0, min(a.end, b.end) - max(a.start, b.start))
+
+
+def merge_series(found: list[Finding], gap: float = 1.5, label: str | None = None
+                 ) -> list[Finding]:
+    """Findings less than ``gap`` s apart (in time order) as one finding with their counts
+    summed, spanning them all, at the largest confidence (``label``: the merged one's, else
+    the first's): bowing again and again is one action, said with its count."""
+    out: list[Finding] = []
+    for f in sorted(found, key=lambda f: f.start):
+        if out and f.start - out[-1].end < gap:
+            g = out[-1]
+            out[-1] = replace(g, label=label or g.label, end=max(g.end, f.end),
+                              count=g.count + f.count, confidence=max(g.confidence,
+                                                                      f.confidence))
+        else:
+            out.append(f)
+    return out

@@ -20,7 +20,14 @@ import numpy as np
 from scipy.ndimage import uniform_filter1d
 
 from motionlang.analysis.body import ARMS, LEGS, SIDES, Body, J
-from motionlang.analysis.evidence import MIN_CONFIDENCE, Finding, clean_mask, confidence, runs
+from motionlang.analysis.evidence import (
+    MIN_CONFIDENCE,
+    Finding,
+    clean_mask,
+    confidence,
+    merge_series,
+    runs,
+)
 from motionlang.analysis.posture import (
     HAND_NEAR_FLOOR,
     all_fours,
@@ -271,21 +278,7 @@ def bows(body: Body) -> list[Finding]:
         v = float(body.trunk_tilt[a:b].max())
         out.append(Finding("limb", "bow", body.t(a), body.t(b), "trunk tilt from vertical "
                            "(deg)", v, BOW_TILT, confidence(v, BOW_TILT, 10.0)))
-    return _merge_count(body, [f for f in out if f.confidence >= MIN_CONFIDENCE])
-
-
-def _merge_count(body: Body, found: list[Finding]) -> list[Finding]:
-    """Findings of one label less than 1.5 s apart as one with their count."""
-    out: list[Finding] = []
-    for f in found:
-        if out and f.start - out[-1].end < 1.5:
-            g = out[-1]
-            out[-1] = Finding(g.kind, g.label, g.start, f.end, g.measure, max(g.value, f.value),
-                              g.threshold, max(g.confidence, f.confidence), side=g.side,
-                              count=g.count + f.count, detail=g.detail)
-        else:
-            out.append(f)
-    return out
+    return merge_series([f for f in out if f.confidence >= MIN_CONFIDENCE])
 
 
 def touches_floor(body: Body) -> list[Finding]:

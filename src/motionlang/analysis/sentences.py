@@ -8,8 +8,6 @@ geometry does not show them.
 """
 from __future__ import annotations
 
-import re
-
 from motionlang.analysis.evidence import Finding
 from motionlang.analysis.locomotion import JOG_UPTO
 
@@ -31,11 +29,10 @@ def _hand(side: str | None, limb: str = "hand") -> str:
     return f"the {side} {limb}" if side else f"a {limb}"
 
 
-def phrase(f: Finding, *, level: str = "terse", first: bool = False,
-           last: bool = False, end: float | None = None) -> str:
-    """One verb phrase (third person, present) for a finding. ``first``/``last``: the
-    finding opens or closes the take (a posture held from the start is "sits", entered
-    later "sits down"); ``end``: the take's end, seconds."""
+def phrase(f: Finding, *, level: str = "terse", first: bool = False) -> str:
+    """One verb phrase (third person, present) for a finding. ``first``: the finding
+    opens the take (a posture held from the start is "sits", entered later "sits
+    down")."""
     d = f.detail
     detailed = level == "detailed"
     lab = f.label
@@ -162,9 +159,6 @@ def tidy(text: str) -> str:
             if changed:
                 break
     return " ".join(words)
-
-
-_WORD = re.compile(r"[a-z']+")
 
 
 #: words a sentence may well say twice ("walks forward, then walks back" says "walks" twice
