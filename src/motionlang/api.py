@@ -383,14 +383,14 @@ def index(folder: str | Path, out: str | Path, model: Any = None, **options: Any
     return build_index(folder, out, model, **options)
 
 
-def search(query: str, index: Any, k: int = 10, *, model: Any = None,
-           render: str | Path | None = None) -> list:
-    """The ``k`` best matches of ``query`` in an index file (or an open
-    ``library.search.Library``), as ``motionlang search``: ``[(file, start, end, score)]``
-    (``library.search.Hit``), overlapping windows of a take merged into one span, best
-    first; ``model``: the index's own unless given; ``render``: also draw them (``.png``)."""
+def search(query: str, index: Any, k: int | None = None, *, model: Any = None,
+           render: str | Path | None = None, **options: Any) -> list:
+    """The best matches of ``query`` in an index file (or an open ``library.search.Library``),
+    as ``motionlang search``: ``[(file, start, end, score, why)]`` (``library.search.Hit``),
+    best first; ``k`` (10) and ``options`` (``where``, ``min_duration``, ``rig``,
+    ``path_glob``, ``grounded``): ``library.options.SearchOptions``; ``render``: a .png."""
     from motionlang.library.search import search as run_search
-    return run_search(query, index, k, model=model, render=render)
+    return run_search(query, index, k, model=model, render=render, **options)
 
 
 __all__ = ["read_motion", "write_motion", "read_mapped", "load_model", "describe",

@@ -7,8 +7,8 @@ import json
 import sys
 
 from motionlang.cli.config_options import add_config_options, config_from_args, config_values
-from motionlang.cli.options import output_file, positive_int
-from motionlang.library.options import IndexOptions  # torch-free
+from motionlang.cli.options import output_file
+from motionlang.library.options import IndexOptions, SearchOptions  # torch-free
 
 
 def cmd_index(args: argparse.Namespace) -> int:
@@ -23,10 +23,10 @@ def cmd_index(args: argparse.Namespace) -> int:
 
 def cmd_search(args: argparse.Namespace) -> int:
     from motionlang.api import search
-    hits = search(args.query, args.index, args.k, model=args.model, render=args.render)
-    print(json.dumps([h._asdict() for h in hits], indent=1) if args.json else "\n".join(
-        f"{i:3d}. {h.score:6.3f}  {h.start:7.1f}-{h.end:<7.1f} s  {h.file}"
-        for i, h in enumerate(hits, 1)))
+    opts = config_values(config_from_args(SearchOptions, args))
+    hits = search(args.query, args.index, model=args.model, render=args.render, **opts)
+    print(json.dumps([h._asdict() for h in hits], indent=1) if args.json else
+          "\n".join(h.line(i) for i, h in enumerate(hits, 1)))
     return 0
 
 
@@ -46,7 +46,7 @@ def register(subparsers) -> None:
     s = subparsers.add_parser("search", help=h, description=h[0].upper() + h[1:] + ".")
     s.add_argument("query", metavar="QUERY", help='what to find, e.g. "someone waves"')
     s.add_argument("--index", required=True, metavar="FILE", help="the index file")
-    s.add_argument("-k", type=positive_int, default=10, help="hits to show")
+    add_config_options(s, SearchOptions)
     s.add_argument("--render", type=output_file, metavar="PNG",
                    help="also write a contact sheet of the hits' poses (.png)")
     for q, default in ((p, "the packaged retrieval model, where installed"),

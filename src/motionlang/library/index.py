@@ -5,6 +5,8 @@ overlapping windows (:mod:`.windows`) and each window embedded by a model that p
 sentences and motions in one space (:mod:`.embedder`). A second run reads the files'
 digests and embeds only what is new or changed; files gone are dropped. A file that does
 not read is listed with its one-line reason and skipped: one bad file never ends a run.
+Every take is also analysed (:mod:`.grounded`), and the findings stored with it; a take
+of an older index that holds none is read and analysed again, its vectors kept.
 """
 from __future__ import annotations
 
@@ -17,6 +19,7 @@ import numpy as np
 
 from motionlang.errors import MotionlangError
 from motionlang.library.embedder import Embedder
+from motionlang.library.grounded import take_findings
 from motionlang.library.options import IndexOptions
 from motionlang.library.scan import file_facts, motion_files, read_takes, reason, rig_of
 from motionlang.library.store import Entry, Failure, IndexData, load_index, save_index
@@ -33,7 +36,8 @@ class IndexSummary:
         files: files in the index (readable ones); ``takes`` and ``windows`` in them;
             ``hours`` of motion.
         embedded: files embedded by this run; ``reused``: files whose digest the index
-            already held; ``removed``: files of the old index no longer in the folder.
+            already held; ``removed``: files of the old index no longer in the folder;
+            ``analysed``: reused files analysed anew (from an index without findings).
         vectors: windows embedded by this run.
         failed: ``[(path, reason)]`` of the files skipped.
         seconds: wall time of the run.
@@ -48,6 +52,7 @@ class IndexSummary:
     embedded: int = 0
     reused: int = 0
     removed: int = 0
+    analysed: int = 0
     vectors: int = 0
     failed: list[tuple[str, str]] = field(default_factory=list)
     seconds: float = 0.0
@@ -62,8 +67,9 @@ class IndexSummary:
         return (f"{self.index}: {self.files} files, {self.takes} takes, {self.windows} "
                 f"windows, {self.hours:.2f} h of motion ({self.model})\n"
                 f"  this run: {self.embedded} files embedded ({self.vectors} windows), "
-                f"{self.reused} unchanged, {self.removed} removed, {len(self.failed)} "
-                f"skipped, {self.seconds:.1f} s")
+                f"{self.reused} unchanged"
+                + (f" ({self.analysed} analysed anew)" if self.analysed else "")
+                + f", {self.removed} removed, {len(self.failed)} skipped, {self.seconds:.1f} s")
 
 
 def embed_take(embedder: Embedder, motion, window: float, hop: float
@@ -190,8 +196,13 @@ def _index_file(b: _Builder, summary: IndexSummary, embedder: Embedder, root: Pa
     stamp = {"path": rel, "size": facts.size, "mtime": facts.mtime}
     if facts.sha256 in b.takes:
         b.used.add(facts.sha256)
-        for e, v, s in b.takes[facts.sha256]:
-            b.add(Entry(**{**asdict(e), **stamp}), v, s)
+        old = b.takes[facts.sha256]
+        found: list[list[dict] | None] = [e.findings for e, _, _ in old]
+        if any(f is None for f in found):
+            found = list(_analysed(path, len(old)))
+            summary.analysed += 1
+        for (e, v, s), f in zip(old, found):
+            b.add(Entry(**{**asdict(e), **stamp, "findings": f}), v, s)
         summary.reused += 1
         return
     if facts.sha256 in b.bad:
@@ -205,7 +216,7 @@ def _index_file(b: _Builder, summary: IndexSummary, embedder: Embedder, root: Pa
             vectors, spans = embed_take(embedder, motion, opts.window, opts.hop)
             done.append((Entry(rel, facts.size, facts.mtime, facts.sha256, rig,
                                float(motion.fps), float(span(motion)), len(vectors), i,
-                               len(takes)), vectors, spans))
+                               len(takes), take_findings(motion)), vectors, spans))
     except Exception as exc:   # noqa: BLE001 (one file's failure, whatever it is, is its own)
         b.data.failed.append(Failure(rel, facts.size, facts.mtime, facts.sha256,
                                      reason(exc, path, rel)))
@@ -214,3 +225,15 @@ def _index_file(b: _Builder, summary: IndexSummary, embedder: Embedder, root: Pa
         b.add(entry, vectors, spans)
         summary.vectors += len(vectors)
     summary.embedded += 1
+
+
+def _analysed(path: Path, takes: int) -> list[list[dict]]:
+    """The findings of each of a file's ``takes`` (an entry of an older index reused):
+    ``[]`` each where the file no longer reads as it did."""
+    try:
+        motions = read_takes(path)
+    except MotionlangError:
+        motions = []
+    if len(motions) != takes:
+        return [[] for _ in range(takes)]
+    return [take_findings(m) for m in motions]

@@ -1,12 +1,14 @@
-"""Options of building an index and of describing motions, torch- and numpy-free (``--help``
-reads them).
+"""Options of building an index, searching it and describing motions, torch- and numpy-free
+(``--help`` reads them).
 
-Each field with a ``help`` is an option of ``motionlang index`` or ``motionlang describe``
-(``cli.config_options``) and a keyword of ``ml.index`` / ``ml.describe_many``; the checks
-are the config's own.
+Each field with a ``help`` is an option of ``motionlang index``, ``search`` or ``describe``
+(``cli.config_options``) and a keyword of ``ml.index`` / ``ml.search`` /
+``ml.describe_many``; the checks are the config's own.
 """
 from __future__ import annotations
 
+import math
+import re
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -52,6 +54,70 @@ class IndexOptions:
             raise MotionlangError(f"IndexOptions.hop ({self.hop:g}) must be at most "
                                   f"IndexOptions.window ({self.window:g}): windows must "
                                   "cover the take")
+
+
+#: nearest-window backends of ``library.search``
+BACKENDS = ("auto", "numpy", "faiss")
+_SECONDS = re.compile(r"\s*([0-9]*\.?[0-9]+(?:e[+-]?[0-9]+)?)\s*(ms|s|min)?\s*", re.I)
+_UNIT = {None: 1.0, "s": 1.0, "ms": 1e-3, "min": 60.0}
+
+
+def seconds(value: Any, name: str) -> float:
+    """A duration given as a number or a text with a unit (``2``, ``2s``, ``500ms``,
+    ``1.5min``) -> seconds.
+
+    Raises:
+        MotionlangError: anything else, or a duration that is negative or not finite.
+    """
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        out = float(value)
+    else:
+        m = _SECONDS.fullmatch(str(value))
+        if m is None:
+            raise MotionlangError(f"{name} must be a duration such as 2, 2s or 500ms, got "
+                                  f"{value!r}")
+        out = float(m.group(1)) * _UNIT[m.group(2) and m.group(2).lower()]
+    if not math.isfinite(out) or out < 0:
+        raise MotionlangError(f"{name} must be a finite duration >= 0, got {value!r}")
+    return out
+
+
+@dataclass(frozen=True)
+class SearchOptions:
+    """How an index is searched (``library.search``): how many hits, which takes may give
+    them, and whether the analysis stored in the index takes part."""
+
+    k: int = _opt(10, "hits to show", flag="-k", metavar="K")
+    where: str | None = _opt(None, "only spans where the analysis stored in the index sees "
+                             "this action (sit, crouch, kneel, lie, climb, crawl, balance, "
+                             "walk, run, jump, kick, punch, wave, turn, ...)", metavar="ACTION")
+    min_duration: float | str = _opt(0.0, "findings of the actions asked for (by the query "
+                                     "or --where) count only when at least this long (2, "
+                                     "2s, 500ms); hits shorter than it are left out",
+                                     metavar="S")
+    rig: str | None = _opt(None, "only takes of this rig: the name of the map that put it "
+                           "on the 21-joint body (as 'motionlang info' prints it)",
+                           metavar="NAME")
+    path_glob: str | None = _opt(None, "only takes whose path under the indexed folder "
+                                 "matches this glob ('subject05/*', '*.bvh')", metavar="GLOB")
+    grounded: bool = _opt(True, "rank by the learned model alone: no take is lifted for "
+                          "showing an action the query names (the analysis still answers "
+                          "--where)")
+    backend: str = _opt("auto", "nearest windows by numpy or faiss (exact both; auto: faiss "
+                        "where installed and the index is large)", choices=BACKENDS)
+
+    def __post_init__(self) -> None:
+        check_numbers("SearchOptions", self, positive_ints=("k",))
+        object.__setattr__(self, "min_duration",
+                           seconds(self.min_duration, "SearchOptions.min_duration"))
+        if self.backend not in BACKENDS:
+            raise MotionlangError(f"SearchOptions.backend must be one of "
+                                  f"{', '.join(BACKENDS)}, got {self.backend!r}")
+        for name in ("where", "rig", "path_glob"):
+            v = getattr(self, name)
+            if v is not None and (not isinstance(v, str) or not v.strip()):
+                raise MotionlangError(f"SearchOptions.{name} must be a non-empty text, got "
+                                      f"{v!r}")
 
 
 RANKS = ("mbr", "logp")   # decoding.seq2seq.RANKS, named here without importing torch

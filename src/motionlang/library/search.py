@@ -8,13 +8,21 @@ about as well as at its peak, as a peak's width is read at half its height. Any 
 window starts a new hit, until ``k`` hits exist. A hit runs from the start of its first
 window to the end of its last; its score is its best window's.
 
+Where the query names actions the analysis finds (``library.grounded``) and the index holds
+its findings, the takes that show them come first: a hit for each group of such findings,
+ordered by how many of the query's actions it shows, then by its best window's cosine plus
+the findings' confidence, each saying why (``sits: 12.4-15.0 s``); the learned hits follow.
+Filters (``SearchOptions``: ``where``, ``min_duration``, ``rig``, ``path_glob``) decide
+which takes and spans may give hits at all.
+
 Scores come from one matrix product in numpy; where ``faiss`` is installed and the index is
 large, an exact inner-product index of faiss gives the same hits behind the same call (it
-is optional, not a dependency).
+is optional, not a dependency) for a search that neither filters nor matches actions.
 """
 from __future__ import annotations
 
 import importlib.util
+import warnings
 from pathlib import Path
 from typing import Any, NamedTuple
 
@@ -22,11 +30,12 @@ import numpy as np
 
 from motionlang.errors import MotionlangError
 from motionlang.library.embedder import Embedder
+from motionlang.library.grounded import matches, path_allowed, query_actions, where_actions
+from motionlang.library.options import BACKENDS, SearchOptions
 from motionlang.library.store import IndexData, load_index
 
 #: windows from which faiss, when installed, is used instead of numpy
 FAISS_MIN_ROWS = 200_000
-BACKENDS = ("auto", "numpy", "faiss")
 EPS = 1e-6   # seconds: windows that touch are one span
 #: windows whose median score is the typical one (a sample: the median of millions costs)
 TYPICAL_SAMPLE = 4096
@@ -34,12 +43,20 @@ TYPICAL_SAMPLE = 4096
 
 class Hit(NamedTuple):
     """One result: a take (its path relative to the indexed folder, ``#N`` after a file of
-    several sequences), a span in seconds and the best window's cosine similarity."""
+    several sequences), a span in seconds, the best window's cosine similarity, and what
+    the analysis saw there of the query's actions (empty for a hit of the learned model
+    alone)."""
 
     file: str
     start: float
     end: float
     score: float
+    why: str = ""
+
+    def line(self, rank: int) -> str:
+        """How ``motionlang search`` prints the hit ranked ``rank``."""
+        return (f"{rank:3d}. {self.score:6.3f}  {self.start:7.1f}-{self.end:<7.1f} s  "
+                f"{self.file}" + (f"  ({self.why})" if self.why else ""))
 
 
 def unit_rows(x: np.ndarray) -> np.ndarray:
@@ -110,11 +127,94 @@ class Library:
                                       f"load ({exc}); pass the model") from None
         return cls(data, Embedder.load(model), str(index))
 
-    def search(self, query: str, k: int = 10, backend: str = "auto") -> list[Hit]:
-        """The ``k`` best hits for ``query``, best first."""
+    def search(self, query: str, k: int | None = None, backend: str | None = None,
+               **options: Any) -> list[Hit]:
+        """The best hits for ``query``, best first (module docstring); ``k``, ``backend``
+        and ``options``: the fields of :class:`~motionlang.library.options.SearchOptions`.
+        """
+        given: dict[str, Any] = {n: v for n, v in (("k", k), ("backend", backend)) if v is not None}
+        opts = SearchOptions(**given, **options)
         if not isinstance(query, str) or not query.split():
             raise MotionlangError(f"the query has no words: {query!r}")
-        return self.rank(self.embedder.text(query), k, backend)
+        vector = self.embedder.text(query)
+        actions = query_actions(query) if opts.grounded else []
+        unanalysed = any(e.findings is None for e in self.data.entries)
+        if opts.where and unanalysed:
+            raise MotionlangError(f"{self.where}: made before indexes held the analysis; run "
+                                  "'motionlang index' on its folder again to search it with "
+                                  "--where (the vectors are kept)")
+        if actions and unanalysed:
+            warnings.warn(f"{self.where}: made before indexes held the analysis, so only the "
+                          "learned model answers; run 'motionlang index' on its folder again "
+                          "(the vectors are kept)", UserWarning, stacklevel=2)
+            actions = []
+        plain = not (actions or opts.where or opts.rig or opts.path_glob or opts.min_duration)
+        if plain:
+            return self.rank(vector, opts.k, opts.backend)
+        return self._filtered(vector, actions, opts)
+
+    def _filtered(self, vector: np.ndarray, actions: list[str], opts: SearchOptions
+                  ) -> list[Hit]:
+        """Hits of a search with filters or actions to match (numpy only)."""
+        data, k, least = self.data, opts.k, float(opts.min_duration)
+        where = where_actions(opts.where) if opts.where else []
+        first = data.first_rows
+        allowed = np.zeros(len(self.unit), dtype=bool)
+        spans_of: dict[int, list[tuple[float, float]]] = {}   # --where: where each take may hit
+        for i, e in enumerate(data.entries):
+            if (opts.rig and e.rig.get("map") != opts.rig) or not path_allowed(e.path,
+                                                                               opts.path_glob):
+                continue
+            rows = slice(first[i], first[i + 1])
+            if not where:
+                allowed[rows] = True
+                continue
+            spans = [(m.start, m.end) for m in matches(e.findings or [], where, e.duration,
+                                                       min_duration=least)]
+            if spans:
+                spans_of[i] = spans
+                allowed[rows] = _overlapping(data.spans[rows], spans)
+        hits: list[Hit] = []
+        if not allowed.any():
+            return hits
+        q = unit_rows(vector)
+        scores = np.full(len(self.unit), -np.inf, dtype=np.float32)
+        scores[allowed] = self.unit[allowed] @ q
+        names = [e.name for e in data.entries]
+        shown: list[tuple[int, float, float]] = []
+        if actions:
+            found = []
+            for i, e in enumerate(data.entries):
+                if not allowed[first[i]:first[i + 1]].any():
+                    continue
+                for m in matches(e.findings or [], actions, e.duration,
+                                 min_duration=least):
+                    if i in spans_of and not _overlapping(np.array([[m.start, m.end]]),
+                                                          spans_of[i]).any():
+                        continue
+                    own = np.arange(first[i], first[i + 1])
+                    near = own[_overlapping(data.spans[own], [(m.start, m.end)])]
+                    best = float(scores[near].max()) if near.size else float(
+                        scores[own].max())
+                    found.append((len(m.actions), best + m.confidence, i, m, best))
+            found.sort(key=lambda x: (-x[0], -x[1], x[2], x[3].start))
+            for _, _, i, m, best in found[:k]:
+                hits.append(Hit(names[i], m.start, m.end, best, m.why))
+                shown.append((i, m.start, m.end))
+        if len(hits) < k:
+            order = np.flatnonzero(allowed)
+            order = order[np.argsort(-scores[order], kind="stable")]
+            typical = float(np.median(scores[order[::max(1, len(order) // TYPICAL_SAMPLE)]]))
+            merged, _ = merge_windows(order, scores, self.entry_of, data.spans,
+                                      k + len(shown), typical)
+            for e, s, t, score, _ in merged:
+                if len(hits) >= k:
+                    break
+                if t - s < least or any(
+                        i == e and s < b and t > a for i, a, b in shown):
+                    continue
+                hits.append(Hit(names[e], s, t, score))
+        return hits
 
     def rank(self, vector: np.ndarray, k: int = 10, backend: str = "auto") -> list[Hit]:
         """The ``k`` best hits for a query vector (D,) of the index's space."""
@@ -176,17 +276,27 @@ class Library:
         return read_takes(Path(self.data.root) / entry.path)[entry.sequence - 1]
 
 
-def search(query: str, index: str | Path | Library, k: int = 10, *, model: Any = None,
-           render: str | Path | None = None, backend: str = "auto") -> list[Hit]:
-    """The ``k`` best hits for ``query`` in ``index`` (a file or an open :class:`Library`),
-    best first; ``render``: also write a contact sheet of the hits there (``.png``)."""
+def _overlapping(spans: np.ndarray, allowed: list[tuple[float, float]]) -> np.ndarray:
+    """(N,) whether each span (N, 2) seconds overlaps one of ``allowed``."""
+    out = np.zeros(len(spans), dtype=bool)
+    for a, b in allowed:
+        out |= (spans[:, 0] < b) & (spans[:, 1] > a)
+    return out
+
+
+def search(query: str, index: str | Path | Library, k: int | None = None, *,
+           model: Any = None, render: str | Path | None = None, **options: Any) -> list[Hit]:
+    """The best hits for ``query`` in ``index`` (a file or an open :class:`Library`), best
+    first; ``k`` and ``options``: the fields of ``SearchOptions`` (``where``,
+    ``min_duration``, ``rig``, ``path_glob``, ``grounded``, ``backend``); ``render``: also
+    write a contact sheet of the hits there (``.png``)."""
     if render is not None and Path(render).suffix.lower() != ".png":
         raise MotionlangError(f"{render}: a contact sheet is written as .png")
     lib = index if isinstance(index, Library) else Library.open(index, model)
-    hits = lib.search(query, k, backend)
+    hits = lib.search(query, k, **options)
     if render is not None:
         from motionlang.library.sheet import contact_sheet
-        contact_sheet([(f"{h.file}  {h.start:.1f}-{h.end:.1f} s  ({h.score:.3f})",
+        contact_sheet([(f"{h.file}  {h.start:.1f}-{h.end:.1f} s  ({h.why or f'{h.score:.3f}'})",
                         lib.take(h).between(h.start, h.end)) for h in hits], render,
                       title=f'"{query}"')
     return hits

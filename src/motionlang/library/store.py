@@ -8,7 +8,9 @@ Arrays (no pickled objects: read with ``allow_pickle=False``):
   the indexed folder (``root``), the windows' ``window`` and ``hop`` (seconds), ``entries``
   (one per take, in row order: path relative to the root, ``sequence`` / ``sequences`` of a
   file holding several, size, mtime, ``sha256``, ``rig`` (joint count and map name),
-  ``fps``, ``duration`` (seconds) and ``rows``, its number of windows) and ``failed`` (files
+  ``fps``, ``duration`` (seconds), ``rows``, its number of windows, and ``findings``,
+  what the analysis saw in it, ``library.grounded.FIELDS`` each; null in an index of
+  format 1, which is read as it is and analysed on its next update) and ``failed`` (files
   skipped: path, size, mtime, sha256, one-line ``reason``).
 
 Reading checks every size and shape against the others before anything is used, so that a
@@ -25,17 +27,19 @@ from pathlib import Path
 import numpy as np
 
 from motionlang.errors import MotionlangError
+from motionlang.library.grounded import valid_findings
 from motionlang.library.scan import take_name
 from motionlang.utils import limits
 from motionlang.utils.atomic import atomic_write
 
 WHAT = "motionlang index"
-FORMAT = 1
+FORMAT = 2
 
 
 @dataclass
 class Entry:
-    """One take of the index and its windows' rows (``rows`` of them, in order)."""
+    """One take of the index and its windows' rows (``rows`` of them, in order), and the
+    analysis' findings (None: not analysed, an index of format 1)."""
 
     path: str
     size: int
@@ -47,6 +51,7 @@ class Entry:
     rows: int
     sequence: int = 1
     sequences: int = 1
+    findings: list[dict] | None = None
 
     @property
     def name(self) -> str:
@@ -177,4 +182,6 @@ def load_index(path: str | Path) -> IndexData:
         raise _damaged(path, "non-finite values")
     if any(e.rows < 0 for e in data.entries):
         raise _damaged(path, "a negative window count")
+    if any(e.findings is not None and not valid_findings(e.findings) for e in data.entries):
+        raise _damaged(path, "malformed findings")
     return data

@@ -1,0 +1,140 @@
+"""What the analysis saw in each take of an index, and a query's actions matched against it.
+
+When a take is indexed it is also analysed once (:mod:`motionlang.analysis`: physics and
+geometry, no model) and its findings are stored beside its vectors, compact: label, span in
+seconds, confidence, side and count. A query's actions are read by the same reader that
+``describe``, ``check`` and ``generate`` use (``analysis.words``). A take that shows an
+action the query asks for is a hit because the body does it, whatever the learned encoder
+makes of the sentence: this is how a library answers "someone sits down" for actions its
+model never saw. Each such hit says why (``sits: 12.4-15.0 s``).
+
+Matching is strict: a finding answers for the action its label names (``analysis.ACTION``:
+a hop is a jump, a squat a crouch), never for a merely compatible one (a jump is no climb).
+"""
+from __future__ import annotations
+
+import fnmatch
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from motionlang.analysis import ACTION, analyse
+from motionlang.analysis.words import actions_named
+from motionlang.errors import MotionlangError
+from motionlang.kinematics.motion import Motion
+
+#: the stored fields of a finding, in this order
+FIELDS = ("label", "start", "end", "confidence", "side", "count")
+#: findings of a take this close (s) or closer are one hit: a walk and the sitting down
+#: right after it, or kicks of one series
+JOIN_GAP = 2.0
+#: seconds shown around a matched finding (a kick's span is its swing alone)
+PAD = 0.5
+#: the actions some detector finds
+DETECTABLE = frozenset(ACTION.values())
+
+
+def compact(finding: Any) -> dict:
+    """An ``analysis.Finding`` as the index stores it (:data:`FIELDS`, rounded)."""
+    return {"label": finding.label, "start": round(float(finding.start), 2),
+            "end": round(float(finding.end), 2),
+            "confidence": round(float(finding.confidence), 3), "side": finding.side,
+            "count": int(finding.count)}
+
+
+def take_findings(motion: Motion) -> list[dict]:
+    """The compact findings of one take (:func:`compact`), in time order; ``[]`` where the
+    analysis cannot read the body (one frame, all joints at one point): the take stays
+    searchable by its vectors."""
+    try:
+        found = analyse(motion, joint_map=motion.meta.get("joint_map")).findings
+    except MotionlangError:
+        return []
+    return [compact(f) for f in found]
+
+
+def valid_findings(value: Any) -> bool:
+    """Whether ``value`` is a list of stored findings (what a reader of an index checks)."""
+    if not isinstance(value, list):
+        return False
+    for f in value:
+        if not isinstance(f, dict) or f.get("label") not in ACTION:
+            return False
+        nums = [f.get(k) for k in ("start", "end", "confidence", "count")]
+        if not all(isinstance(x, (int, float)) and not isinstance(x, bool) and
+                   math.isfinite(x) for x in nums) or f["end"] < f["start"]:
+            return False
+    return True
+
+
+def query_actions(text: str) -> list[str]:
+    """The actions ``text`` names that some detector can find, in its order."""
+    return [a for a in actions_named(text) if a in DETECTABLE]
+
+
+def where_actions(text: str) -> list[str]:
+    """The actions of a ``--where`` filter.
+
+    Raises:
+        MotionlangError: it names no action the analysis finds.
+    """
+    actions = query_actions(text)
+    if not actions:
+        raise MotionlangError(f"--where {text!r} names no action the analysis finds (one of "
+                              f"{', '.join(sorted(DETECTABLE - {'arms_out'}))})")
+    return actions
+
+
+def verb(action: str) -> str:
+    """``sit`` -> ``sits``, ``crouch`` -> ``crouches`` (how a reason names it)."""
+    return action + ("es" if action.endswith(("ch", "sh", "s", "x")) else "s")
+
+
+@dataclass(frozen=True)
+class Match:
+    """Findings of one take that show actions a query asks for, close enough to be one hit.
+
+    Attributes:
+        start, end: the hit's span, seconds (the findings' span, :data:`PAD` around it,
+            within the take).
+        actions: the query's actions shown, in the query's order.
+        confidence: mean over those actions of their best finding's confidence.
+        why: ``"sits: 12.4-15.0 s"``, one part per finding.
+    """
+
+    start: float
+    end: float
+    actions: tuple[str, ...]
+    confidence: float
+    why: str
+
+
+def matches(findings: list[dict], actions: list[str], duration: float, *,
+            min_duration: float = 0.0) -> list[Match]:
+    """The hits a take's stored findings give for ``actions``: its findings of those
+    actions (each at least ``min_duration`` s long), those within :data:`JOIN_GAP` s of
+    one another taken together, in time order."""
+    wanted = [f for f in findings if ACTION[f["label"]] in actions and
+              f["end"] - f["start"] >= min_duration]
+    wanted.sort(key=lambda f: f["start"])
+    groups: list[list[dict]] = []
+    for f in wanted:
+        if groups and f["start"] <= max(g["end"] for g in groups[-1]) + JOIN_GAP:
+            groups[-1].append(f)
+        else:
+            groups.append([f])
+    out = []
+    for g in groups:
+        shown = [a for a in actions if any(ACTION[f["label"]] == a for f in g)]
+        best = [max(f["confidence"] for f in g if ACTION[f["label"]] == a) for a in shown]
+        why = "; ".join(f"{verb(ACTION[f['label']])}: {f['start']:.1f}-{f['end']:.1f} s"
+                        for f in g)
+        out.append(Match(max(0.0, min(f["start"] for f in g) - PAD),
+                         min(duration, max(f["end"] for f in g) + PAD), tuple(shown),
+                         sum(best) / len(best), why))
+    return out
+
+
+def path_allowed(path: str, glob: str | None) -> bool:
+    """Whether a take's path (relative to the indexed folder) passes ``--path-glob``."""
+    return glob is None or fnmatch.fnmatchcase(path, glob)

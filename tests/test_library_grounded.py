@@ -1,0 +1,165 @@
+"""The analysis in the index (``library.grounded``): a take that shows what a query asks for is
+found even where the learned model is blind to the words, the hit says why, and the filters
+(``--where``, ``--min-duration``, ``--rig``, ``--path-glob``) decide what may be a hit.
+
+The library is made here: a body that sits down on a seat, one that stands, and a walk, on
+the 21-joint body written as BVH. The learned side is a hand-made encoder that knows only
+"walks" and "stands": "sits" means nothing to it.
+"""
+from __future__ import annotations
+
+import json
+import warnings
+
+import numpy as np
+import pytest
+
+import motionlang as ml
+from helpers.bodies import FPS, SIT, I, blend, hold, pose, take
+from motionlang.cli.main import main
+from motionlang.errors import MotionlangError
+from motionlang.features.body21 import body21
+from motionlang.library.embedder import Embedder
+from motionlang.library.grounded import matches, valid_findings, where_actions
+from motionlang.library.options import SearchOptions, seconds
+from motionlang.library.search import Library
+from motionlang.library.store import load_index, save_index
+from motionlang.rendering.output import body_motion
+
+WORDS = {"walks": [1.0, 0.0], "stands": [0.0, 1.0], "sits": [0.7, 0.7], "down": [0.7, 0.7]}
+
+
+def walking(seconds: float) -> np.ndarray:
+    """(T, 21, 3) the standing body carried forward at 1.2 m/s, its feet stepping."""
+    t = np.arange(int(seconds * FPS)) / FPS
+    p = hold(pose(), seconds).copy()
+    p[:, :, 2] += 1.2 * t[:, None]
+    swing = 0.25 * np.sin(2 * np.pi * 0.9 * t)
+    for foot, sign in (("LA", 1), ("LF", 1), ("LMrot", 1), ("RA", -1), ("RF", -1),
+                       ("RMrot", -1)):
+        p[:, I[foot], 2] += sign * swing
+        p[:, I[foot], 1] += 0.06 * np.clip(sign * np.cos(2 * np.pi * 0.9 * t), 0, None)
+    return p
+
+
+def hand_made() -> Embedder:
+    def motion(m):
+        p = body21(m)[:, 0]
+        moved = np.linalg.norm(p[-1, [0, 2]] - p[0, [0, 2]]) / max(len(p) / m.fps, 1e-3)
+        return np.array([moved, 0.3])
+    return Embedder("hand-made", "g", lambda s: np.array(WORDS[s.split()[-1]]), motion)
+
+
+@pytest.fixture(scope="module")
+def library(tmp_path_factory):
+    root = tmp_path_factory.mktemp("grounded") / "mocap"
+    (root / "chairs").mkdir(parents=True)
+    sit = take(hold(pose(), 1.0), blend(pose(), SIT, 1.0), hold(SIT, 2.0),
+               blend(SIT, pose(), 1.0), hold(pose(), 1.0))
+    for name, p in (("chairs/sit.bvh", sit), ("stand.bvh", hold(pose(), 4.0)),
+                    ("walk.bvh", walking(4.0))):
+        ml.write_motion(body_motion(p, FPS)[0], root / name)
+    out = root.parent / "library.idx"
+    ml.index(root, out, hand_made(), show_progress=False)
+    return root, out
+
+
+def test_the_index_holds_what_the_analysis_saw(library):
+    _, out = library
+    found = {e.path: {f["label"] for f in e.findings} for e in load_index(out).entries}
+    assert "sit" in found["chairs/sit.bvh"]
+    assert "sit" not in found["stand.bvh"] | found["walk.bvh"]
+    assert "walk" in found["walk.bvh"]
+
+
+def test_a_sitting_take_is_found_where_the_model_is_blind(library):
+    _, out = library
+    lib = Library.open(out, hand_made())
+    hits = lib.search("someone sits", k=3)
+    assert hits[0].file == "chairs/sit.bvh" and hits[0].why.startswith("sits: ")
+    assert 0.8 <= hits[0].start <= 2.0 and 3.8 <= hits[0].end <= 5.5   # the sitting span
+    assert all(not h.why for h in hits[1:])   # the others only resemble the words
+    # the learned model alone ranks the walk first: "sits" is half walk to it
+    assert lib.search("someone sits", k=3, grounded=False)[0].file == "walk.bvh"
+
+
+def test_filters_decide_which_takes_may_be_hits(library):
+    _, out = library
+    lib = Library.open(out, hand_made())
+    only = lib.search("someone stands", k=5, where="sit")
+    assert {h.file for h in only} == {"chairs/sit.bvh"}
+    assert lib.search("someone walks", where="sitting", min_duration="10s") == []
+    assert {h.file for h in lib.search("someone walks", k=5, path_glob="chairs/*")} == {
+        "chairs/sit.bvh"}
+    rig = load_index(out).entries[0].rig["map"]
+    assert len(lib.search("someone walks", k=5, rig=rig)) == 3
+    assert lib.search("someone walks", k=5, rig="no-such-rig") == []
+    with pytest.raises(MotionlangError, match="--where 'happily' names no action"):
+        lib.search("someone walks", where="happily")
+
+
+def test_matching_findings_by_hand():
+    f = [{"label": "walk", "start": 0.0, "end": 4.0, "confidence": 0.9, "side": None,
+          "count": 1},
+         {"label": "sit", "start": 5.0, "end": 9.0, "confidence": 0.8, "side": None,
+          "count": 1},
+         {"label": "jump", "start": 20.0, "end": 20.4, "confidence": 0.7, "side": None,
+          "count": 1}]
+    assert valid_findings(f) and not valid_findings([{**f[0], "end": -1.0}])
+    assert not valid_findings([{**f[0], "label": "fly"}]) and not valid_findings("x")
+    both = matches(f, ["walk", "sit"], 30.0)   # 1 s apart: one hit showing both
+    assert len(both) == 1 and both[0].actions == ("walk", "sit")
+    assert (both[0].start, both[0].end) == (0.0, 9.5)
+    assert both[0].why == "walks: 0.0-4.0 s; sits: 5.0-9.0 s"
+    assert matches(f, ["climb"], 30.0) == []          # a jump is no climb
+    assert matches(f, ["jump"], 30.0, min_duration=1.0) == []
+    assert where_actions("hopping") == ["jump"]
+
+
+def test_durations_and_options():
+    assert seconds("2s", "x") == 2.0 and seconds("500ms", "x") == 0.5
+    assert seconds(3, "x") == 3.0 and seconds("1.5min", "x") == 90.0
+    for bad in ("two", "-1", "inf", True):
+        with pytest.raises(MotionlangError, match="x must be"):
+            seconds(bad, "x")
+    with pytest.raises(MotionlangError, match="SearchOptions.k"):
+        SearchOptions(k=0)
+    assert SearchOptions(min_duration="2s").min_duration == 2.0
+
+
+def test_an_index_without_findings_is_searched_and_brought_up_to_date(library, tmp_path):
+    _, out = library
+    old = tmp_path / "old.idx"
+    data = load_index(out)
+    for e in data.entries:
+        e.findings = None
+    save_index(data, old)
+    meta = json.loads(str(np.load(old)["meta"]))
+    assert all(e["findings"] is None for e in meta["entries"])
+    lib = Library.open(old, hand_made())
+    with pytest.warns(UserWarning, match="made before indexes held the analysis"):
+        hits = lib.search("someone sits", k=1)
+    assert not hits[0].why
+    with pytest.raises(MotionlangError, match="old.idx: made before.*--where"):
+        lib.search("someone walks", where="sit")
+    emb = hand_made()
+    s = ml.index(library[0], old, emb, show_progress=False)
+    assert (s.embedded, s.reused, s.analysed, emb.embedded) == (0, 3, 3, 0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert Library.open(old, hand_made()).search("someone sits", k=1)[0].why
+
+
+def test_the_cli_prints_why_and_takes_the_filters(library, capsys, monkeypatch):
+    _, out = library
+    monkeypatch.setattr(Embedder, "load", classmethod(lambda cls, model=None: hand_made()))
+    assert main(["search", "someone sits", "--index", str(out), "-k", "2"]) == 0
+    first = capsys.readouterr().out.splitlines()[0]
+    assert "chairs/sit.bvh" in first and "(sits: " in first
+    assert main(["search", "someone walks", "--index", str(out), "--where", "sit",
+                 "--min-duration", "1s", "--json"]) == 0
+    assert [h["file"] for h in json.loads(capsys.readouterr().out)] == ["chairs/sit.bvh"]
+    assert main(["search", "someone walks", "--index", str(out), "--min-duration",
+                 "soon"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--min-duration must be a duration" in err
