@@ -59,6 +59,21 @@ def test_lying_face_up_from_the_first_frame():
     assert a.sentence().startswith("a person lies on the back")
 
 
+def test_lying_face_down_still_is_lying_and_travelling_so_is_a_crawl():
+    up = np.array([[STAND[n][0], 0.12 + 0.02 * (STAND[n][2] > 0), 1.0 - STAND[n][1]]
+                   for n in KIT21_NAMES])
+    down = up * [-1, -1, 1] + [0, 0.26, 0]   # turned over about its length: face down
+    still = analyse_positions(hold(down, 3.0), FPS)
+    assert [(f.label, f.detail.get("face")) for f in still.findings] == [("lie", "down")]
+    p = hold(down, 3.0).copy()
+    p[:, :, 2] -= 0.5 * (np.arange(len(p)) / FPS)[:, None]   # head first, 0.5 m/s
+    labels_ = [f.label for f in analyse_positions(p, FPS).findings]
+    assert "crawl" in labels_ and "lie" not in labels_
+    slid = up[None].repeat(len(p), 0).copy()
+    slid[:, :, 2] = p[:, :, 2]   # face up, the same travel: no crawl
+    assert "crawl" not in labels(slid)
+
+
 def test_kneeling_on_both_knees():
     kn = pose(root=(0, 0.5, 0), BP=(0, 0.6, 0), BT=(0, 0.8, 0), BLN=(0, 1.0, 0),
               BUN=(0, 1.15, 0), LS=(0.18, 0.97, 0), RS=(-0.18, 0.97, 0), LE=(0.2, 0.7, 0),

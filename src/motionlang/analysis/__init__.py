@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from motionlang.analysis.analyse import ACTION, Analysis, analyse_positions, salience
+from motionlang.analysis.analyse import ACTION, VERSION, Analysis, analyse_positions, salience
 from motionlang.analysis.body import Body
 from motionlang.analysis.check import ActionCheck, check_sentence
 from motionlang.analysis.evidence import Finding
@@ -21,7 +21,7 @@ from motionlang.features.joint_map import positions21
 from motionlang.formats import read_motion
 from motionlang.kinematics.motion import Motion
 
-__all__ = ["ACTION", "CANNOT_TELL", "ActionCheck", "Analysis", "Body", "Finding", "analyse",
+__all__ = ["ACTION", "CANNOT_TELL", "VERSION", "ActionCheck", "Analysis", "Body", "Finding", "analyse",
            "analyse_positions", "check", "repeats", "salience", "tidy"]
 
 

@@ -74,10 +74,12 @@ def _rel_wrist(body: Body, side: int) -> np.ndarray:
 def raises(body: Body) -> list[Finding]:
     out: list[Finding] = []
     masks = []
+    upright = ~lying(body)   # lying, a hand at the shoulder's height is lying too
     for side in range(2):
         arm = body.arm_length(side)
         up = _rel_wrist(body, side)[:, 1] / arm
-        masks.append((clean_mask(up > RAISE, body.fps, min_len=MIN_RAISE, max_gap=EVENT_GAP), up))
+        masks.append((clean_mask((up > RAISE) & upright, body.fps, min_len=MIN_RAISE,
+                                 max_gap=EVENT_GAP), up))
     both = masks[0][0] & masks[1][0]
     for a, b in runs(clean_mask(both, body.fps, min_len=MIN_RAISE, max_gap=EVENT_GAP)):
         v = float(np.median(np.minimum(masks[0][1][a:b], masks[1][1][a:b])))

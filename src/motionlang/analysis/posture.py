@@ -7,7 +7,7 @@ same road): heights over the local floor in standing pelvis heights (1 = upright
 degrees, distances in leg lengths.
 
 - **lying**: the trunk near horizontal and the pelvis near the floor (face up or down from the
-  chest's normal);
+  chest's normal); crawling low when the body travels so;
 - **all fours** (crawling when it travels): trunk tilted forward, both hands and a knee or a
   foot near the floor;
 - **kneeling**: a knee on the floor, the trunk more upright than lying;
@@ -156,7 +156,8 @@ def outstretched(body: Body) -> np.ndarray:
         elev = np.degrees(np.arcsin(np.clip(v[:, 1] / np.maximum(np.linalg.norm(v, axis=1),
                                                                   1e-9), -1, 1)))
         ok.append((reach > OUTSTRETCHED_REACH) & (np.abs(elev) < OUTSTRETCHED_ELEV))
-    return np.asarray(np.stack(ok).all(axis=0))
+    # lying, arms along the body are level too: that is no holding them out
+    return np.asarray(np.stack(ok).all(axis=0) & ~lying(body))
 
 
 def standing(body: Body) -> np.ndarray:
@@ -183,8 +184,11 @@ def postures(body: Body) -> list[Finding]:
 
     for a, b in _spans(body, lying(body)):
         face = "up" if np.median(body.chest_normal[a:b, 1]) > 0 else "down"
-        add("lie", a, b, "trunk tilt from vertical (deg)", float(np.median(tilt[a:b])),
-            LYING_TILT, 20.0, face=face)
+        # a body that travels along the floor lying face down crawls (on belly or elbows);
+        # face up, the pelvis shifts while sitting up, which is no travel
+        moving = face == "down" and float(np.median(body.ground_speed[a:b])) > STILL
+        add("crawl" if moving else "lie", a, b, "trunk tilt from vertical (deg)",
+            float(np.median(tilt[a:b])), LYING_TILT, 20.0, face=face)
     fours = all_fours(body)
     for a, b in _spans(body, fours):
         moving = float(np.median(body.ground_speed[a:b])) > STILL

@@ -25,9 +25,10 @@ ACTION_WORDS: dict[str, tuple[str, ...]] = {
               "jabs", "jabbing", "strike", "strikes", "striking", "hits", "hitting"),
     "kick": ("kick", "kicks", "kicking", "kicked"),
     "crouch": ("crouch", "crouches", "crouching", "crouched", "squat", "squats", "squatting",
-               "squatted", "duck", "ducks", "ducking"),
-    "sit": ("sit", "sits", "sitting", "sat", "seated"),
-    "lie": ("lie", "lies", "lying", "lay", "lays", "laying"),
+               "squatted", "duck", "ducks", "ducking", "hunker", "hunkers", "hunkering",
+               "hunkered"),
+    "sit": ("sit", "sits", "sitting", "sat", "seated", "seats"),
+    "lie": ("lie", "lies", "lying", "lay", "lays", "laying", "prone", "supine"),
     "kneel": ("kneel", "kneels", "kneeling", "knelt"),
     "crawl": ("crawl", "crawls", "crawling", "crawled"),
     "balance": ("balance", "balances", "balancing", "balanced"),
@@ -49,6 +50,23 @@ ACTION_WORDS: dict[str, tuple[str, ...]] = {
     "cartwheel": ("cartwheel", "cartwheels", "somersault", "somersaults", "flip", "flips",
                   "backflip", "backflips"),
 }
+_POSSESSIVE = r"(?:his|her|their|its|the|a|one|both|\s)*"
+#: phrases that name an action their words alone do not (or name another: "standing on one
+#: leg" is balancing, not standing); read before the single words, whose words they take
+PHRASES: tuple[tuple[re.Pattern[str], str], ...] = tuple(
+    (re.compile(p), a) for p, a in (
+        (r"\b(?:(?:stands?|standing|stood|balances?|balancing|poses?|posing|remains?|"
+         r"stays?)\s+(?:still\s+)?)?on\s+(?:one|a single|(?:his|her|their|the)\s+"
+         r"(?:left|right))\s+(?:leg|foot)\b", "balance"),
+        (rf"\bon\s+(?:all fours|{_POSSESSIVE}hands and knees)\b", "crawl"),
+        (rf"\b(?:gets?|getting|goes|going|went|drops?|dropping)\s+down\s+on\s+"
+         rf"{_POSSESSIVE}knees?\b", "kneel"),
+        (rf"\bon\s+{_POSSESSIVE}knees?\b", "kneel"),
+        (r"\b(?:takes?|taking|took|has|have)\s+a\s+seat\b", "sit"),
+        (rf"\bon\s+{_POSSESSIVE}(?:back|belly|stomach|side)\b", "lie"),
+        (r"\b(?:goes|going|went|walks?|walking)\s+up\s+(?:the\s+)?(?:stairs|steps|ladder)\b",
+         "climb"),
+    ))
 _INDEX = {w: a for a, ws in ACTION_WORDS.items() for w in ws}
 _TOKEN = re.compile(r"[a-z]+")
 #: actions that answer for one another when two readers compare (a hop is a jump, a squat is
@@ -60,11 +78,23 @@ COMPATIBLE = {"spin": {"turn"}, "turn": {"spin"}, "raise": {"wave", "reach"},
 
 
 def actions_named(text: str) -> list[str]:
-    """The coarse actions a sentence names, in the order it names them, each once."""
+    """The coarse actions a sentence names, in the order it names them, each once: its
+    :data:`PHRASES` first, then the words of :data:`ACTION_WORDS` outside them."""
+    text = text.lower()
+    found: list[tuple[int, str]] = []
+    taken = [False] * len(text)
+    for pattern, action in PHRASES:
+        for m in pattern.finditer(text):
+            if not any(taken[m.start():m.end()]):
+                found.append((m.start(), action))
+                taken[m.start():m.end()] = [True] * (m.end() - m.start())
+    for m in _TOKEN.finditer(text):
+        a = _INDEX.get(m.group())
+        if a is not None and not taken[m.start()]:
+            found.append((m.start(), a))
     out: list[str] = []
-    for w in _TOKEN.findall(text.lower()):
-        a = _INDEX.get(w)
-        if a is not None and a not in out:
+    for _, a in sorted(found):
+        if a not in out:
             out.append(a)
     return out
 

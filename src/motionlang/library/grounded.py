@@ -9,7 +9,8 @@ makes of the sentence: this is how a library answers "someone sits down" for act
 model never saw. Each such hit says why (``sits: 12.4-15.0 s``).
 
 Matching is strict: a finding answers for the action its label names (``analysis.ACTION``:
-a hop is a jump, a squat a crouch), never for a merely compatible one (a jump is no climb).
+a hop is a jump, a squat a crouch), never for a merely compatible one (a jump is no climb);
+the one widening is :data:`ALSO` (stepping up onto something is climbing up).
 """
 from __future__ import annotations
 
@@ -32,6 +33,13 @@ JOIN_GAP = 2.0
 PAD = 0.5
 #: the actions some detector finds
 DETECTABLE = frozenset(ACTION.values())
+#: labels that answer for an action besides its own
+ALSO = {"climb": ("step_up",)}
+
+
+def answers(label: str, action: str) -> bool:
+    """Whether a finding labelled ``label`` shows ``action``."""
+    return ACTION[label] == action or label in ALSO.get(action, ())
 
 
 def compact(finding: Any) -> dict:
@@ -85,9 +93,21 @@ def where_actions(text: str) -> list[str]:
     return actions
 
 
+#: labels whose reason is not their action's verb
+LABEL_WORDS = {"all_fours": "on all fours", "one_leg": "balances on one leg",
+               "hang": "hangs", "step_up": "steps up", "step_down": "steps down",
+               "squat": "squats", "hop": "hops", "touch_floor": "touches the floor",
+               "get_up": "gets up", "arms_out": "holds the arms out"}
+
+
 def verb(action: str) -> str:
     """``sit`` -> ``sits``, ``crouch`` -> ``crouches`` (how a reason names it)."""
     return action + ("es" if action.endswith(("ch", "sh", "s", "x")) else "s")
+
+
+def reason(label: str) -> str:
+    """How a hit's reason names a finding: ``sits``, ``on all fours``, ``hops``."""
+    return LABEL_WORDS.get(label) or verb(ACTION[label])
 
 
 @dataclass(frozen=True)
@@ -114,7 +134,7 @@ def matches(findings: list[dict], actions: list[str], duration: float, *,
     """The hits a take's stored findings give for ``actions``: its findings of those
     actions (each at least ``min_duration`` s long), those within :data:`JOIN_GAP` s of
     one another taken together, in time order."""
-    wanted = [f for f in findings if ACTION[f["label"]] in actions and
+    wanted = [f for f in findings if any(answers(f["label"], a) for a in actions) and
               f["end"] - f["start"] >= min_duration]
     wanted.sort(key=lambda f: f["start"])
     groups: list[list[dict]] = []
@@ -125,9 +145,9 @@ def matches(findings: list[dict], actions: list[str], duration: float, *,
             groups.append([f])
     out = []
     for g in groups:
-        shown = [a for a in actions if any(ACTION[f["label"]] == a for f in g)]
-        best = [max(f["confidence"] for f in g if ACTION[f["label"]] == a) for a in shown]
-        why = "; ".join(f"{verb(ACTION[f['label']])}: {f['start']:.1f}-{f['end']:.1f} s"
+        shown = [a for a in actions if any(answers(f["label"], a) for f in g)]
+        best = [max(f["confidence"] for f in g if answers(f["label"], a)) for a in shown]
+        why = "; ".join(f"{reason(f['label'])}: {f['start']:.1f}-{f['end']:.1f} s"
                         for f in g)
         out.append(Match(max(0.0, min(f["start"] for f in g) - PAD),
                          min(duration, max(f["end"] for f in g) + PAD), tuple(shown),

@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from motionlang.analysis import VERSION as ANALYSIS
 from motionlang.errors import MotionlangError
 from motionlang.library.embedder import Embedder
 from motionlang.library.grounded import take_findings
@@ -37,7 +38,8 @@ class IndexSummary:
             ``hours`` of motion.
         embedded: files embedded by this run; ``reused``: files whose digest the index
             already held; ``removed``: files of the old index no longer in the folder;
-            ``analysed``: reused files analysed anew (from an index without findings).
+            ``analysed``: reused files analysed anew (their findings missing, or made
+            by other detectors: ``analysis.VERSION``).
         vectors: windows embedded by this run.
         failed: ``[(path, reason)]`` of the files skipped.
         seconds: wall time of the run.
@@ -92,6 +94,8 @@ class _Builder:
             first = old.first_rows
             for i, e in enumerate(old.entries):
                 rows = slice(first[i], first[i + 1])
+                if old.analysis != ANALYSIS:   # findings of other detectors: made anew
+                    e = Entry(**{**asdict(e), "findings": None})
                 self.takes.setdefault(e.sha256, []).append((e, old.vectors[rows],
                                                             old.spans[rows]))
             self.bad = {f.sha256: f for f in old.failed if f.sha256}
@@ -117,7 +121,7 @@ class _Builder:
         vectors = np.concatenate([v for v, _ in blocks]) if blocks else np.zeros((0, dim))
         spans = np.concatenate([s for _, s in blocks]) if blocks else np.zeros((0, 2))
         return IndexData(d.model, d.root, d.window, d.hop, entries, list(d.failed),
-                         vectors.astype(np.float32), spans)
+                         vectors.astype(np.float32), spans, d.analysis)
 
 
 def _open_old(out: Path, embedder: Embedder, opts: IndexOptions) -> IndexData | None:
@@ -158,7 +162,7 @@ def build_index(folder: str | Path, out: str | Path, model: Any = None,
     paths = motion_files(root)
     embedder = Embedder.load(model)
     old = _open_old(out, embedder, opts)
-    data = IndexData(embedder.identity, str(root), opts.window, opts.hop)
+    data = IndexData(embedder.identity, str(root), opts.window, opts.hop, analysis=ANALYSIS)
     b = _Builder(old, data, opts.rebuild)
     summary = IndexSummary(str(out), embedder.name)
     last_save = time.monotonic()

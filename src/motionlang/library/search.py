@@ -30,7 +30,13 @@ import numpy as np
 
 from motionlang.errors import MotionlangError
 from motionlang.library.embedder import Embedder
-from motionlang.library.grounded import matches, path_allowed, query_actions, where_actions
+from motionlang.library.grounded import (
+    matches,
+    path_allowed,
+    query_actions,
+    verb,
+    where_actions,
+)
 from motionlang.library.options import BACKENDS, SearchOptions
 from motionlang.library.store import IndexData, load_index
 
@@ -201,6 +207,14 @@ class Library:
             for _, _, i, m, best in found[:k]:
                 hits.append(Hit(names[i], m.start, m.end, best, m.why))
                 shown.append((i, m.start, m.end))
+            unseen = [a for a in actions if not any(a in m.actions for *_, m, _ in found)]
+            if unseen:
+                among = " among those the filters allow" if (
+                    where or opts.rig or opts.path_glob or least) else ""
+                warnings.warn(f"{self.where}: the analysis sees no take{among} that "
+                              f"{' or '.join(verb(a) for a in unseen)}; the hits without a "
+                              "reason are the learned model's nearest", UserWarning,
+                              stacklevel=3)
         if len(hits) < k:
             order = np.flatnonzero(allowed)
             order = order[np.argsort(-scores[order], kind="stable")]

@@ -11,7 +11,8 @@ Arrays (no pickled objects: read with ``allow_pickle=False``):
   ``fps``, ``duration`` (seconds), ``rows``, its number of windows, and ``findings``,
   what the analysis saw in it, ``library.grounded.FIELDS`` each; null in an index of
   format 1, which is read as it is and analysed on its next update) and ``failed`` (files
-  skipped: path, size, mtime, sha256, one-line ``reason``).
+  skipped: path, size, mtime, sha256, one-line ``reason``), and ``analysis``, the version
+  of the detectors that made the findings (``analysis.VERSION``; 0 where unknown).
 
 Reading checks every size and shape against the others before anything is used, so that a
 damaged or foreign file is one line naming it. Writing is atomic (``utils.atomic``).
@@ -82,6 +83,7 @@ class IndexData:
     failed: list[Failure] = field(default_factory=list)
     vectors: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), np.float32))
     spans: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    analysis: int = 0
 
     @property
     def first_rows(self) -> np.ndarray:
@@ -94,7 +96,7 @@ class IndexData:
 
     def meta(self) -> dict:
         return {"what": WHAT, "format": FORMAT, "model": self.model, "root": self.root,
-                "window": self.window, "hop": self.hop,
+                "window": self.window, "hop": self.hop, "analysis": self.analysis,
                 "entries": [asdict(e) for e in self.entries],
                 "failed": [asdict(f) for f in self.failed]}
 
@@ -169,7 +171,7 @@ def load_index(path: str | Path) -> IndexData:
                          window=float(m["window"]), hop=float(m["hop"]),
                          entries=[Entry(**e) for e in m["entries"]],
                          failed=[Failure(**f) for f in m["failed"]], vectors=vectors,
-                         spans=spans)
+                         spans=spans, analysis=int(m.get("analysis", 0)))
     except (KeyError, TypeError, ValueError) as exc:
         raise _damaged(path, f"malformed metadata: {exc}") from None
     n = int(data.first_rows[-1])
