@@ -2,9 +2,9 @@
 found even where the learned model is blind to the words, the hit says why, and the filters
 (``--where``, ``--min-duration``, ``--rig``, ``--path-glob``) decide what may be a hit.
 
-The library is made here: a body that sits down on a seat, one that stands, and a walk, on
-the 21-joint body written as BVH. The learned side is a hand-made encoder that knows only
-"walks" and "stands": "sits" means nothing to it.
+The library is made here (``helpers.grounded``): a body that sits down on a seat, one that
+stands, and a walk. The learned side is a hand-made encoder that knows only "walks" and
+"stands": "sits" is half a walk to it.
 """
 from __future__ import annotations
 
@@ -15,53 +15,19 @@ import numpy as np
 import pytest
 
 import motionlang as ml
-from helpers.bodies import FPS, SIT, I, blend, hold, pose, take
+from helpers.grounded import hand_made, make_library
 from motionlang.cli.main import main
 from motionlang.errors import MotionlangError
-from motionlang.features.body21 import body21
 from motionlang.library.embedder import Embedder
 from motionlang.library.grounded import matches, valid_findings, where_actions
 from motionlang.library.options import SearchOptions, seconds
 from motionlang.library.search import Library
 from motionlang.library.store import load_index, save_index
-from motionlang.rendering.output import body_motion
-
-WORDS = {"walks": [1.0, 0.0], "stands": [0.0, 1.0], "sits": [0.7, 0.7], "down": [0.7, 0.7]}
-
-
-def walking(seconds: float) -> np.ndarray:
-    """(T, 21, 3) the standing body carried forward at 1.2 m/s, its feet stepping."""
-    t = np.arange(int(seconds * FPS)) / FPS
-    p = hold(pose(), seconds).copy()
-    p[:, :, 2] += 1.2 * t[:, None]
-    swing = 0.25 * np.sin(2 * np.pi * 0.9 * t)
-    for foot, sign in (("LA", 1), ("LF", 1), ("LMrot", 1), ("RA", -1), ("RF", -1),
-                       ("RMrot", -1)):
-        p[:, I[foot], 2] += sign * swing
-        p[:, I[foot], 1] += 0.06 * np.clip(sign * np.cos(2 * np.pi * 0.9 * t), 0, None)
-    return p
-
-
-def hand_made() -> Embedder:
-    def motion(m):
-        p = body21(m)[:, 0]
-        moved = np.linalg.norm(p[-1, [0, 2]] - p[0, [0, 2]]) / max(len(p) / m.fps, 1e-3)
-        return np.array([moved, 0.3])
-    return Embedder("hand-made", "g", lambda s: np.array(WORDS[s.split()[-1]]), motion)
 
 
 @pytest.fixture(scope="module")
 def library(tmp_path_factory):
-    root = tmp_path_factory.mktemp("grounded") / "mocap"
-    (root / "chairs").mkdir(parents=True)
-    sit = take(hold(pose(), 1.0), blend(pose(), SIT, 1.0), hold(SIT, 2.0),
-               blend(SIT, pose(), 1.0), hold(pose(), 1.0))
-    for name, p in (("chairs/sit.bvh", sit), ("stand.bvh", hold(pose(), 4.0)),
-                    ("walk.bvh", walking(4.0))):
-        ml.write_motion(body_motion(p, FPS)[0], root / name)
-    out = root.parent / "library.idx"
-    ml.index(root, out, hand_made(), show_progress=False)
-    return root, out
+    return make_library(tmp_path_factory.mktemp("grounded"))
 
 
 def test_the_index_holds_what_the_analysis_saw(library):

@@ -1,7 +1,8 @@
 """motionlang serve in a real browser (Debian's headless Chromium, selenium): a sentence
 typed, the motion drawn and moving, paused, scrubbed and orbited; a BVH uploaded and
-described; a bad file's one line; a GLB downloaded and read back; a rig uploaded. Each step
-leaves a screenshot (``$MOTIONLANG_SCREENSHOTS`` or the test's temporary folder)."""
+described; a bad file's one line; a GLB downloaded and read back; a rig uploaded; an index
+searched with a filter, the reasons shown and a hit played. Each step leaves a screenshot
+(``$MOTIONLANG_SCREENSHOTS`` or the test's temporary folder)."""
 from __future__ import annotations
 
 import base64
@@ -12,8 +13,10 @@ import numpy as np
 import pytest
 
 from helpers.browser import chromium, screenshot_dir, wait_for
+from helpers.grounded import hand_made, make_library
 from helpers.rigs import RIGS, write
 from helpers.web import SMALL
+from motionlang.library.embedder import Embedder
 from motionlang.web.options import ServeOptions
 
 BLUE, ORANGE = (0x2A, 0x6F, 0xDB), (0xE0, 0x7B, 0x22)   # left and right bones (viewer.js)
@@ -153,3 +156,47 @@ def test_the_page_generates_plays_describes_and_downloads(page, tmp_path):
     assert browser.execute_script("return viewer.motion.J") == \
         len(read_motion(rig).skeleton.joints)
     browser.save_screenshot(str(shots / "6-on-rig.png"))
+
+
+def test_the_search_panel_filters_says_why_and_plays_a_hit(tmp_path, monkeypatch):
+    from motionlang.web.app import running
+    from motionlang.web.studio import Studio
+    _, index = make_library(tmp_path)
+    monkeypatch.setattr(Embedder, "load", classmethod(lambda cls, model=None: hand_made()))
+    shots = screenshot_dir(tmp_path)
+    browser = chromium(tmp_path / "downloads")
+    try:
+        with running(Studio(ServeOptions(**SMALL, index=str(index)))) as url:
+            browser.get(url)
+            wait_for(lambda: browser.execute_script("return document.body.dataset.ready"),
+                     what="the page to load")
+            find = browser.find_element
+            assert find("id", "panel-search").is_displayed()
+            find("id", "query").send_keys("someone sits down")
+            find("id", "search").click()
+            wait_for(lambda: find("id", "hits").find_elements("tag name", "li"),
+                     what="the hits")
+            first = find("id", "hits").find_elements("tag name", "li")[0].text
+            assert "chairs/sit.bvh" in first and "(sits: " in first, first
+            browser.save_screenshot(str(shots / "search-1-why.png"))
+            # a filter: only takes where the analysis sees walking
+            find("id", "where").send_keys("walks")
+            find("id", "search").click()
+            wait_for(lambda: [li.text for li in find("id", "hits").find_elements(
+                "tag name", "li")] and all("walk.bvh" in li.text for li in find(
+                    "id", "hits").find_elements("tag name", "li")), what="filtered hits")
+            # a bad filter is its one line, in the panel
+            find("id", "where").clear()
+            find("id", "where").send_keys("happily")
+            find("id", "search").click()
+            wait_for(lambda: status_of(browser, "search-status")[1], what="the error")
+            assert "names no action" in status_of(browser, "search-status")[0]
+            find("id", "where").clear()
+            find("id", "search").click()
+            wait_for(lambda: "chairs/sit.bvh" in find("id", "hits").text, what="the hits")
+            before = canvas_pixels(browser)
+            find("id", "hits").find_elements("tag name", "li")[0].click()
+            wait_for(lambda: changed(browser, before), what="the hit drawn")
+            browser.save_screenshot(str(shots / "search-2-played.png"))
+    finally:
+        browser.quit()

@@ -132,8 +132,9 @@ def create_app(studio: Studio) -> FastAPI:
         return JSONResponse(await _in_thread(studio.add_rig, data))
 
     @app.get("/api/search")
-    def search(q: str, k: int = 10) -> list:
-        return studio.search(q, max(1, min(k, 100)))
+    def search(q: str, k: int = 10, where: str | None = None,
+               min_duration: str | None = None) -> list:
+        return studio.search(q, max(1, min(k, 100)), where=where, min_duration=min_duration)
 
     @app.get("/api/take")
     def take(file: str, start: float, end: float) -> dict:

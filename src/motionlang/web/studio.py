@@ -207,14 +207,18 @@ class Studio:
                            timeline=[{"start": round(s.start, 2), "end": round(s.end, 2),
                                       "text": s.text} for s in segments])
 
-    def search(self, query: str, k: int = 10) -> list[dict[str, Any]]:
-        """The index's best ``k`` spans for ``query``: [{"file", "start", "end", "score"}]."""
+    def search(self, query: str, k: int = 10, where: str | None = None,
+               min_duration: str | None = None) -> list[dict[str, Any]]:
+        """The index's best ``k`` spans for ``query``: [{"file", "start", "end", "score",
+        "why"}]; ``where``, ``min_duration``: the filters of ``motionlang search``."""
         if self.library is None:
             raise MotionlangError("no index was given (motionlang serve --index FILE)")
-        with self.lock:
-            hits = ml.search(query, self.library, k)
+        filters = {n: v for n, v in (("where", where), ("min_duration", min_duration)) if v}
+        with self.lock, warnings.catch_warnings():
+            warnings.simplefilter("ignore")   # "no take shows it": the reasons say as much
+            hits = ml.search(query, self.library, k, **filters)
         return [{"file": h.file, "start": round(h.start, 2), "end": round(h.end, 2),
-                 "score": round(float(h.score), 4)} for h in hits]
+                 "score": round(float(h.score), 4), "why": h.why} for h in hits]
 
     def search_take(self, file: str, start: float, end: float) -> dict[str, Any]:
         """A span of an indexed take, for the viewer (on the 21-joint body)."""

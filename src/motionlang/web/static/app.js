@@ -171,12 +171,17 @@ async function search() {
   status("search-status", "searching...");
   $("hits").replaceChildren();
   try {
-    const q = encodeURIComponent($("query").value);
-    const hits = await (await call(`/api/search?q=${q}&k=10`)).json();
+    const args = new URLSearchParams({q: $("query").value, k: "10"});
+    for (const [id, key] of [["where", "where"], ["min-duration", "min_duration"]]) {
+      if ($(id).value.trim()) args.set(key, $(id).value.trim());
+    }
+    const hits = await (await call(`/api/search?${args}`)).json();
     status("search-status", hits.length ? "" : "no match");
     for (const h of hits) {
       const li = document.createElement("li");
-      li.textContent = `${h.file}  ${h.start.toFixed(1)}-${h.end.toFixed(1)} s  (${h.score.toFixed(3)})`;
+      // a hit the analysis found says why; one of the learned model alone shows its score
+      const why = h.why ? h.why : `score ${h.score.toFixed(3)}`;
+      li.textContent = `${h.file}  ${h.start.toFixed(1)}-${h.end.toFixed(1)} s  (${why})`;
       li.onclick = async () => {
         try {
           const args = `file=${encodeURIComponent(h.file)}&start=${h.start}&end=${h.end}`;
