@@ -31,7 +31,6 @@ describer):
 """
 from __future__ import annotations
 
-import re
 from typing import Any
 
 import numpy as np
@@ -39,7 +38,8 @@ import numpy as np
 from motionlang.analysis import CANNOT_TELL, Analysis, analyse_positions, repeats, tidy
 from motionlang.analysis.check import contradicted
 from motionlang.analysis.words import actions_named, agrees
-from motionlang.datasets.bandai_text import STYLES, styles_named
+from motionlang.datasets.bandai_text import styles_named
+from motionlang.datasets.canonical import without_style
 from motionlang.datasets.pos_tags import tag
 from motionlang.decoding.seq2seq import _features_of, describe_features
 from motionlang.decoding.seq2seq_io import normalize
@@ -195,33 +195,6 @@ def familiarity(model: Any, frames) -> float:
     return float(np.sqrt(np.mean(np.square(x)))) if np.size(x) else float("inf")
 
 
-_ARTICLE = re.compile(r"\ban (?=[^aeiou\s])")
-_MANNER = re.compile(r" (?:in|with) (?:a|an|the)(?: \w+){0,3} (?:way|manner) | at speed ")
-_DANGLING = re.compile(r"(?: (?:in|like|with|at|a|an|the|is|of))+$")
-_STYLE_SUBJECTS = sorted({s for st in STYLES.values() for s, _ in st.subjects}, key=len,
-                         reverse=True)
-_STYLE_PHRASES = sorted({p for st in STYLES.values() for p in (*st.phrases, *st.synonyms)
-                         if " " in p}, key=len, reverse=True)
-_STYLE_WORDS = {w for st in STYLES.values() for w in (*st.adverbs, *st.synonyms)
-                if " " not in w}
-
-
-def without_style(text: str) -> str:
-    """A sentence with its style and mood words taken out ("an insecure woman jumps ahead"
-    -> "a woman jumps ahead", "walks forward in a rage" -> "walks forward")."""
-    low = f" {' '.join(text.lower().split())} "
-    for phrase in _STYLE_PHRASES:
-        if phrase not in _STYLE_SUBJECTS:
-            low = low.replace(f" {phrase} ", " ")
-    for subject in _STYLE_SUBJECTS:
-        low = low.replace(f" {subject} ", " a person ")
-    words = [w for w in low.split() if w not in _STYLE_WORDS]
-    out = " ".join(words)
-    # the frame of a style phrase whose words are gone ("in an ... way", "like a"), and a
-    # sentence left ending on an article or a preposition
-    out = _MANNER.sub(" ", f" {out} ")
-    out = _DANGLING.sub("", out.strip())
-    return _ARTICLE.sub("a ", out).strip()
 
 
 def per_word(text: str, score: float) -> float:

@@ -90,7 +90,8 @@ class TransformerTokens(CachedTokens):
     Args:
         model: an encoder's name (``"minilm"``, ``"mpnet"`` once installed:
             ``models.encoders``) or a folder with ``config.json``, tokenizer and weights.
-        layers: hidden-state indices (0 = embedding output, 1..n the transformer layers).
+        layers: hidden-state indices (0 = embedding output, 1..n the transformer layers,
+            -1 the last).
     """
 
     def __init__(self, model: str = "minilm", layers: Sequence[int] = (3, 4, 5, 6),
@@ -114,7 +115,7 @@ class TransformerTokens(CachedTokens):
         except (OSError, ValueError) as exc:
             raise MotionlangError(f"{path}: cannot load the text model: {exc}") from None
         n = self.model.config.num_hidden_layers
-        self.layers = [int(i) for i in layers]
+        self.layers = [n if int(i) == -1 else int(i) for i in layers]
         if not self.layers or any(not 0 <= i <= n for i in self.layers):
             raise MotionlangError(f"text layers {self.layers} outside 0..{n}")
         self.dim = self.model.config.hidden_size * len(self.layers)

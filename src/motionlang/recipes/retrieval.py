@@ -202,7 +202,8 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
     if resume:
         check_resume(out)
     source_weights(sources)   # all weighted or none
-    text = sentence_vectors(config.text_model, config.text_layer)   # before any data is read
+    # before any data is read
+    text = sentence_vectors(config.text_model, config.text_layer, config.canonical)
     paths = [s.path for s in sources]
     data = build_twostream_data(paths if len(paths) > 1 else paths[0], seed=train_cfg.seed,
                                 max_seconds=data_cfg.max_seconds, mirror=data_cfg.mirror)

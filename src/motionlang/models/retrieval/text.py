@@ -18,6 +18,8 @@ from typing import Any
 
 import torch
 
+from motionlang.datasets.canonical import canonical_text
+
 #: sentences given to the encoder at once (its token cache holds more than one batch, so
 #: no sentence of a batch is evicted before it is read)
 CHUNK = 256
@@ -25,16 +27,21 @@ CHUNK = 256
 
 class SentenceVectors:
     """``vectors(sentences) -> (B, D)`` float32: the mean of each sentence's token
-    features from ``tokens`` (a ``models.text_tokens.CachedTokens``), cached."""
+    features from ``tokens`` (a ``models.text_tokens.CachedTokens``), cached; with
+    ``canonical``, of each sentence's canonical form (``datasets.canonical``), so that
+    training captions and queries are read alike."""
 
-    def __init__(self, tokens: Any, cache_size: int = 200_000):
+    def __init__(self, tokens: Any, cache_size: int = 200_000, canonical: bool = False):
         self.tokens = tokens
+        self.canonical = canonical
         self.dim = int(tokens.dim)
         self.cache_size = cache_size
         self._cache: OrderedDict[str, torch.Tensor] = OrderedDict()
 
     def vectors(self, sentences: Sequence[str]) -> torch.Tensor:
         """(B, D) float32 sentence vectors (B >= 0)."""
+        if self.canonical:
+            sentences = [canonical_text(s) for s in sentences]
         todo = list(dict.fromkeys(s for s in sentences if s not in self._cache))
         fresh = {}
         for i in range(0, len(todo), CHUNK):
@@ -50,13 +57,16 @@ class SentenceVectors:
         return torch.stack(rows)
 
 
-def sentence_vectors(text_model: str = "minilm", layer: int = 6) -> SentenceVectors:
-    """The sentence vectors of ``text_model`` (``"minilm"`` or a local Hugging Face
-    folder), hidden state ``layer`` mean-pooled.
+def sentence_vectors(text_model: str = "minilm", layer: int = 0, canonical: bool = False
+                     ) -> SentenceVectors:
+    """The sentence vectors of ``text_model`` (an encoder's name, ``models.encoders``, or a
+    local Hugging Face folder), hidden state ``layer`` mean-pooled (0: the last), of the
+    sentences' canonical forms with ``canonical``.
 
     Raises:
         MotionlangError: transformers or the model's package is missing, the folder is not
             a model, the layer is out of range.
     """
     from motionlang.models.text_tokens import TransformerTokens
-    return SentenceVectors(TransformerTokens(text_model, (layer,), cache_size=4 * CHUNK))
+    return SentenceVectors(TransformerTokens(text_model, (layer or -1,),
+                                             cache_size=4 * CHUNK), canonical=canonical)

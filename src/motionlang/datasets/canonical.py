@@ -1,0 +1,132 @@
+"""Canonical captions: one rule-based normal form for a sentence about motion, applied to
+training captions and to queries alike, so that the many ways people say the same thing
+meet before any encoder reads them (MoCHA, 2026, canonicalises captions and queries; its
+rule-based variant needs no model at all).
+
+:func:`canonical` keeps what the body does and says it one way: the subject is "a person",
+each action verb is its action's own word in the third person ("strolls", "is jogging" ->
+"walks", "runs"; ``analysis.words``), number words are digits ("twice" -> "2 times"),
+left/right, directions and counts stay, fillers go ("is", "the", "his"), and the words of
+style and mood are set apart (returned beside the text, not in it): a style is not an
+action, and the takes it was learnt from always carry one. :func:`without_style` is the
+style part alone, as ``describe`` uses it.
+"""
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+from motionlang.analysis.words import ACTION_WORDS
+from motionlang.datasets.bandai_text import STYLES
+
+_ARTICLE = re.compile(r"\ban (?=[^aeiou\s])")
+_MANNER = re.compile(r" (?:in|with) (?:a|an|the)(?: \w+){0,3} (?:way|manner) | at speed ")
+_DANGLING = re.compile(r"(?: (?:in|like|with|at|a|an|the|is|of))+$")
+_STYLE_SUBJECTS = sorted({s for st in STYLES.values() for s, _ in st.subjects}, key=len,
+                         reverse=True)
+_STYLE_PHRASES = sorted({p for st in STYLES.values() for p in (*st.phrases, *st.synonyms)
+                         if " " in p}, key=len, reverse=True)
+_STYLE_WORDS = {w for st in STYLES.values() for w in (*st.adverbs, *st.synonyms)
+                if " " not in w}
+
+
+def without_style(text: str) -> str:
+    """A sentence with its style and mood words taken out ("an insecure woman jumps ahead"
+    -> "a woman jumps ahead", "walks forward in a rage" -> "walks forward")."""
+    low = f" {' '.join(text.lower().split())} "
+    for phrase in _STYLE_PHRASES:
+        if phrase not in _STYLE_SUBJECTS:
+            low = low.replace(f" {phrase} ", " ")
+    for subject in _STYLE_SUBJECTS:
+        low = low.replace(f" {subject} ", " a person ")
+    words = [w for w in low.split() if w not in _STYLE_WORDS]
+    out = " ".join(words)
+    # the frame of a style phrase whose words are gone ("in an ... way", "like a"), and a
+    # sentence left ending on an article or a preposition
+    out = _MANNER.sub(" ", f" {out} ")
+    out = _DANGLING.sub("", out.strip())
+    return _ARTICLE.sub("a ", out).strip()
+
+
+#: words of several actions, or of none in most captions: left as they are
+_AMBIGUOUS = frozenset({"touch", "touches", "pick", "picks", "picking", "still", "step",
+                        "steps", "stepping", "hits", "hitting", "strike", "strikes", "striking",
+                        "box", "boxes", "duck", "ducks", "ducking", "scale", "scales",
+                        "scaling", "lay", "lays", "laying", "trip", "trips", "bent", "lift",
+                        "lifts", "lifting", "lifted"})
+#: action -> its own word in the third person
+_VERB = {"walk": "walks", "run": "runs", "jump": "jumps", "climb": "climbs",
+         "punch": "punches", "kick": "kicks", "crouch": "crouches", "sit": "sits",
+         "lie": "lies", "kneel": "kneels", "crawl": "crawls", "balance": "balances",
+         "wave": "waves", "raise": "raises", "clap": "claps", "turn": "turns",
+         "spin": "spins", "bow": "bows", "bend": "bends", "reach": "reaches",
+         "stand": "stands", "dance": "dances", "throw": "throws", "fall": "falls",
+         "cartwheel": "cartwheels"}
+_CANON = {w: _VERB[a] for a, ws in ACTION_WORDS.items() for w in ws if w not in _AMBIGUOUS}
+#: an action word after an article is a noun ("at a trot", "does a jump"): its action's
+#: own noun
+_NOUN = {w: a for a, ws in ACTION_WORDS.items() for w in ws if w not in _AMBIGUOUS}
+_ARTICLES = frozenset({"a", "an", "the"})
+_SUBJECT = re.compile(r"^(?:(?:a|an|the|this|that)\s+)?(?:person|man|woman|human|figure|guy|"
+                      r"lady|boy|girl|someone|somebody|individual|character|subject|he|she|"
+                      r"they|people|actor)\b\s*")
+_FILLERS = frozenset({"a", "an", "the", "is", "are", "was", "were", "be", "being", "been",
+                      "his", "her", "their", "its", "just", "very", "really", "also"})
+_NUMBERS = {"one": "1", "two": "2", "three": "3", "four": "4", "five": "5", "six": "6",
+            "seven": "7", "eight": "8", "nine": "9", "ten": "10", "twice": "2 times",
+            "thrice": "3 times", "once": "1 time"}
+_TOKEN = re.compile(r"[a-z0-9]+(?:'[a-z]+)?|,")
+
+
+@dataclass(frozen=True)
+class Canonical:
+    """A caption's canonical text and the style and mood words set apart from it."""
+
+    text: str
+    style: tuple[str, ...] = ()
+
+
+def styles_in(text: str) -> tuple[str, ...]:
+    """The style and mood words and phrases of ``text`` (those :func:`without_style`
+    takes out), in its order."""
+    low = f" {' '.join(text.lower().split())} "
+    found = [(low.find(f" {p} "), p) for p in (*_STYLE_PHRASES, *_STYLE_SUBJECTS)
+             if f" {p} " in low]
+    words = low.split()
+    found += [(low.find(f" {w} "), w) for w in dict.fromkeys(words) if w in _STYLE_WORDS]
+    kept: list[str] = []
+    for _, p in sorted(found, key=lambda x: (x[0], -len(x[1]))):
+        if not any(f" {p} " in f" {k} " for k in kept):   # a word of a phrase already kept
+            kept.append(p)
+    return tuple(kept)
+
+
+def canonical(text: str) -> Canonical:
+    """The canonical form of a caption or a query (module docstring)::
+
+        >>> canonical("A man is slowly strolling forward, then waves his left hand twice")
+        Canonical(text='a person walks forward slowly, then waves left hand 2 times')
+    """
+    style = styles_in(text)
+    plain = without_style(text).lower()
+    plain = _SUBJECT.sub("", plain.strip())
+    out: list[str] = []
+    before = ""
+    for raw in _TOKEN.findall(plain):
+        after_article, before = before in _ARTICLES, raw
+        if raw in _FILLERS:
+            continue
+        if after_article and raw in _NOUN:
+            out += ["a", _NOUN[raw]]
+            continue
+        tok = _CANON.get(raw, _NUMBERS.get(raw, raw))
+        if out and tok == out[-1]:   # "is walking walks" after the fillers go
+            continue
+        out.append(tok)
+    body = " ".join(out).replace(" ,", ",").strip(" ,")
+    return Canonical(f"a person {body}".strip(), style)
+
+
+def canonical_text(text: str) -> str:
+    """:func:`canonical`'s text alone: what an encoder reads when captions are canonical."""
+    return canonical(text).text
