@@ -81,18 +81,19 @@ def training_words(data: str, corpus: str | None) -> set[str]:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--retrieval", required=True, help="retrieval model (file or run folder)")
-    ap.add_argument("--evaluator", required=True, help="text-motion evaluator (file or run)")
+    ap.add_argument("--evaluator", help="text-motion evaluator (file or run); without one, "
+                                        "only the retrieval model's columns")
     ap.add_argument("--data", default="bandai:../shared/data/bandai", help="Bandai source")
     ap.add_argument("--corpus", help="the procedural corpus the model was also trained on")
     ap.add_argument("--json", help="also write the figures here")
     args = ap.parse_args(argv)
 
     model = ml.load_model(args.retrieval, kind="retrieval")
-    evaluator = load_evaluator(args.evaluator)
+    evaluator = load_evaluator(args.evaluator) if args.evaluator else None
     from motionlang.datasets.seq2seq_pairs import load_records
     tests = [r for r in load_records(args.data, 30.0) if r.split == "test"]
-    built = build_evaluator_data(tests, evaluator_body(evaluator), seed=0,
-                                 bones=evaluator.config.bones)
+    built = build_evaluator_data(tests, evaluator_body(evaluator) if evaluator else "kit",
+                                 seed=0, bones=evaluator.config.bones if evaluator else None)
     pairs = test_pairs(built.items["test"], 0)
     records = [built.records[p["id"]] for p in pairs]
     labels = [(r.labels["content"], r.labels["style"]) for r in records]
@@ -103,12 +104,13 @@ def main(argv=None) -> int:
     emb = {"retrieval": (model.embed_texts(captions),
                          model.embed_motions([model.motion_rows(r.load_motion())
                                               for r in records]))}
-    ev_t = evaluator.embed_texts(captions, [p.get("tokens") for p in pairs])
-    ev_m = evaluator.embed_motions([p["motion"] for p in pairs])
-    unit = [x / np.linalg.norm(x, axis=1, keepdims=True) for x in (ev_t, ev_m)]
-    sims = {"retrieval": emb["retrieval"][0] @ emb["retrieval"][1].T,
-            "evaluator (cosine)": unit[0] @ unit[1].T,
-            "evaluator (distance)": -euclidean_distance_matrix(ev_t, ev_m)}
+    sims = {"retrieval": emb["retrieval"][0] @ emb["retrieval"][1].T}
+    if evaluator is not None:
+        ev_t = evaluator.embed_texts(captions, [p.get("tokens") for p in pairs])
+        ev_m = evaluator.embed_motions([p["motion"] for p in pairs])
+        unit = [x / np.linalg.norm(x, axis=1, keepdims=True) for x in (ev_t, ev_m)]
+        sims["evaluator (cosine)"] = unit[0] @ unit[1].T
+        sims["evaluator (distance)"] = -euclidean_distance_matrix(ev_t, ev_m)
     hits = hit_sets(labels)
     report: dict = {"pairs": len(pairs), "retrieval": {}, "queries": {}}
     print("\n| encoders | hit | t2m R@1 | R@2 | R@3 | R@5 | R@10 | MedR | m2t R@1 | R@5 | MedR |")
@@ -124,9 +126,10 @@ def main(argv=None) -> int:
 
     content = [c for c, _ in labels]
     queries = list(QUERIES.values())
-    q_sims = {"retrieval": model.embed_texts(queries) @ emb["retrieval"][1].T,
-              "evaluator (distance)": -euclidean_distance_matrix(
-                  evaluator.embed_texts(queries), ev_m)}
+    q_sims = {"retrieval": model.embed_texts(queries) @ emb["retrieval"][1].T}
+    if evaluator is not None:
+        q_sims["evaluator (distance)"] = -euclidean_distance_matrix(
+            evaluator.embed_texts(queries), ev_m)
     known = training_words(args.data, args.corpus)
     print("\n| action | query | words in training captions | retrieval P@5 | evaluator P@5 |")
     print("|---|---|---|---|---|")
@@ -135,9 +138,11 @@ def main(argv=None) -> int:
         used = sorted(set(WORD.findall(query)) & known)
         report["queries"][action] = {"query": query, "known_words": used,
                                      **{n: p[action] for n, p in precision.items()}}
+        ev = precision.get("evaluator (distance)", {}).get(action, float("nan"))
         print(f"| {action} | {query} | {', '.join(used)} | "
-              f"{precision['retrieval'][action]:.1f} | "
-              f"{precision['evaluator (distance)'][action]:.1f} |")
+              f"{precision['retrieval'][action]:.1f} | {ev:.1f} |")
+    print(f"\nactions at P@5 >= 0.9: {sum(p >= 0.9 for p in precision['retrieval'].values())} "
+          f"of {len(QUERIES)}")
     if args.json:
         Path(args.json).write_text(json.dumps(report, indent=1) + "\n")
     return 0

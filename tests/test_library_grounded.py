@@ -138,3 +138,17 @@ def test_the_cli_prints_why_and_takes_the_filters(library, capsys, monkeypatch):
                  "soon"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "--min-duration must be a duration" in err
+
+
+def test_workers_give_the_index_one_process_gives(library, tmp_path):
+    root, out = library
+    two = tmp_path / "two.idx"
+    s = ml.index(root, two, hand_made(), workers=2, show_progress=False)
+    assert s.embedded == 3
+    a, b = load_index(out), load_index(two)
+    assert a.entries == b.entries and a.failed == b.failed
+    np.testing.assert_allclose(a.vectors, b.vectors, rtol=1e-6)
+    np.testing.assert_array_equal(a.spans, b.spans)
+    blind = Embedder("x", "y", lambda s: np.zeros(2), lambda m: np.zeros(2))
+    with pytest.raises(MotionlangError, match="--workers needs a model given by name"):
+        ml.index(root, tmp_path / "three.idx", blind, workers=2, show_progress=False)

@@ -122,3 +122,14 @@ def test_holdout_words_and_their_scores_by_hand():
     assert held["holdout/t2m/R01"] == 0.0 and held["holdout/t2m/R02"] == 100.0
     assert held["holdout/t2m/MedR"] == 2.0 and held["t2m/R01"] == 60.0
     assert not [k for k in held if k.startswith("holdout/m2t")]
+
+
+def test_canonical_captions_read_wordings_of_one_motion_alike():
+    """With ``canonical``, "A man is strolling forward" and "someone walks forward" are one
+    text before the encoder reads them (fake features hash the words, so only identical
+    texts get identical vectors); without it they are two."""
+    plain, canon = tiny(), tiny(canonical=True)
+    a, b = "A man is strolling forward", "someone walks forward"
+    assert not np.allclose(*plain.embed_texts([a, b]))
+    np.testing.assert_allclose(*canon.embed_texts([a, b]), rtol=1e-6)
+    assert not np.allclose(*canon.embed_texts(["walks left", "walks right"]))

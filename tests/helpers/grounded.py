@@ -29,13 +29,20 @@ def walking(seconds: float) -> np.ndarray:
     return p
 
 
+def motion_vector(m) -> np.ndarray:
+    """(2,) how far the root travelled a second, and a constant."""
+    p = body21(m)[:, 0]
+    moved = np.linalg.norm(p[-1, [0, 2]] - p[0, [0, 2]]) / max(len(p) / m.fps, 1e-3)
+    return np.array([moved, 0.3])
+
+
+def text_vector(s: str) -> np.ndarray:
+    return np.array(WORDS.get(s.split()[-1], [0.5, 0.5]))
+
+
 def hand_made() -> Embedder:
-    def motion(m):
-        p = body21(m)[:, 0]
-        moved = np.linalg.norm(p[-1, [0, 2]] - p[0, [0, 2]]) / max(len(p) / m.fps, 1e-3)
-        return np.array([moved, 0.3])
-    return Embedder("hand-made", "g",
-                    lambda s: np.array(WORDS.get(s.split()[-1], [0.5, 0.5])), motion)
+    """The learned side (module-level functions: it can be sent to worker processes)."""
+    return Embedder("hand-made", "g", text_vector, motion_vector)
 
 
 def make_library(folder: Path) -> tuple[Path, Path]:

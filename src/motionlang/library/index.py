@@ -10,6 +10,8 @@ of an older index that holds none is read and analysed again, its vectors kept.
 """
 from __future__ import annotations
 
+import os
+import pickle
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -88,6 +90,8 @@ class _Builder:
     def __init__(self, old: IndexData | None, data: IndexData, rebuild: bool):
         self.data = data
         self.blocks: list[tuple[np.ndarray, np.ndarray]] = []
+        self.order: list[int] = []     # each entry's file's place in the folder's listing
+        self.failed_at: list[int] = []
         self.takes: dict[str, list[tuple[Entry, np.ndarray, np.ndarray]]] = {}
         self.bad: dict[str, Failure] = {}
         if old is not None and not rebuild:
@@ -103,15 +107,24 @@ class _Builder:
             if old is not None else set()
         self.used: set[str] = set()
 
-    def add(self, entry: Entry, vectors: np.ndarray, spans: np.ndarray) -> None:
+    def add(self, entry: Entry, vectors: np.ndarray, spans: np.ndarray, at: int) -> None:
         self.data.entries.append(entry)
         self.blocks.append((vectors, spans))
+        self.order.append(at)
+
+    def fail(self, failure: Failure, at: int) -> None:
+        self.data.failed.append(failure)
+        self.failed_at.append(at)
 
     def snapshot(self, final: bool) -> IndexData:
-        """The index so far; before the end, the old takes not yet met are kept too, so
-        that an interrupted run loses none of them."""
+        """The index so far, in the folder's order whatever order files were done in;
+        before the end, the old takes not yet met are kept too, so that an interrupted run
+        loses none of them."""
         d = self.data
-        entries, blocks = list(d.entries), list(self.blocks)
+        rank = sorted(range(len(d.entries)), key=lambda i: self.order[i])
+        entries, blocks = [d.entries[i] for i in rank], [self.blocks[i] for i in rank]
+        failed = [d.failed[i] for i in sorted(range(len(d.failed)),
+                                              key=lambda i: self.failed_at[i])]
         if not final:
             for digest, takes in self.takes.items():
                 if digest not in self.used:
@@ -120,7 +133,7 @@ class _Builder:
         dim = next((v.shape[1] for v, _ in blocks if v.size), 0)
         vectors = np.concatenate([v for v, _ in blocks]) if blocks else np.zeros((0, dim))
         spans = np.concatenate([s for _, s in blocks]) if blocks else np.zeros((0, 2))
-        return IndexData(d.model, d.root, d.window, d.hop, entries, list(d.failed),
+        return IndexData(d.model, d.root, d.window, d.hop, entries, failed,
                          vectors.astype(np.float32), spans, d.analysis)
 
 
@@ -169,9 +182,16 @@ def build_index(folder: str | Path, out: str | Path, model: Any = None,
     bar = progress(total=len(paths), desc="index", unit="files",
                    disable=None if opts.show_progress is None else not opts.show_progress)
     with bar:
-        for path in paths:
+        todo = []
+        for at, path in enumerate(paths):
             rel = path.relative_to(root).as_posix()
-            _index_file(b, summary, embedder, root, path, rel, opts)
+            facts = _known(b, summary, root, path, rel, at)
+            if facts is None:
+                bar.update(1)
+            else:
+                todo.append(_Job(at, path, rel, facts, opts.window, opts.hop))
+        for job, result in _embedded(todo, embedder, model, opts.workers):
+            _add(b, summary, job, result)
             bar.update(1)
             if time.monotonic() - last_save >= opts.save_every:
                 save_index(b.snapshot(final=False), out)
@@ -188,15 +208,26 @@ def build_index(folder: str | Path, out: str | Path, model: Any = None,
     return summary
 
 
-def _index_file(b: _Builder, summary: IndexSummary, embedder: Embedder, root: Path,
-                path: Path, rel: str, opts: IndexOptions) -> None:
-    """Add one file to the index: reused by its digest, or read and embedded, or listed as
-    skipped with its reason."""
+@dataclass(frozen=True)
+class _Job:
+    """A file to read, analyse and embed: its place in the listing, path, facts, windows."""
+
+    at: int
+    path: Path
+    rel: str
+    facts: Any
+    window: float
+    hop: float
+
+
+def _known(b: _Builder, summary: IndexSummary, root: Path, path: Path, rel: str, at: int):
+    """A file the index can settle without embedding (reused by its digest, skipped again
+    for the reason it had, or unreadable), settled; else its facts, to be embedded."""
     try:
         facts = file_facts(root, path)
     except MotionlangError as exc:
-        b.data.failed.append(Failure(rel, 0, 0.0, "", reason(exc, path, rel)))
-        return
+        b.fail(Failure(rel, 0, 0.0, "", reason(exc, path, rel)), at)
+        return None
     stamp = {"path": rel, "size": facts.size, "mtime": facts.mtime}
     if facts.sha256 in b.takes:
         b.used.add(facts.sha256)
@@ -206,29 +237,81 @@ def _index_file(b: _Builder, summary: IndexSummary, embedder: Embedder, root: Pa
             found = list(_analysed(path, len(old)))
             summary.analysed += 1
         for (e, v, s), f in zip(old, found):
-            b.add(Entry(**{**asdict(e), **stamp, "findings": f}), v, s)
+            b.add(Entry(**{**asdict(e), **stamp, "findings": f}), v, s, at)
         summary.reused += 1
-        return
+        return None
     if facts.sha256 in b.bad:
-        b.data.failed.append(Failure(**{**asdict(b.bad[facts.sha256]), **stamp}))
-        return
+        b.fail(Failure(**{**asdict(b.bad[facts.sha256]), **stamp}), at)
+        return None
+    return facts
+
+
+def embed_file(embedder: Embedder, job: _Job) -> list[tuple[Entry, np.ndarray, np.ndarray]] | str:
+    """A file's takes as (entry, vectors, spans), or the one-line reason it is skipped."""
+    f = job.facts
     try:
-        takes = read_takes(path)
+        takes = read_takes(job.path)
         done = []
         for i, motion in enumerate(takes, 1):
             rig = rig_of(motion)   # a rig no map fits fails before any embedding
-            vectors, spans = embed_take(embedder, motion, opts.window, opts.hop)
-            done.append((Entry(rel, facts.size, facts.mtime, facts.sha256, rig,
-                               float(motion.fps), float(span(motion)), len(vectors), i,
-                               len(takes), take_findings(motion)), vectors, spans))
+            vectors, spans = embed_take(embedder, motion, job.window, job.hop)
+            done.append((Entry(job.rel, f.size, f.mtime, f.sha256, rig, float(motion.fps),
+                               float(span(motion)), len(vectors), i, len(takes),
+                               take_findings(motion)), vectors, spans))
     except Exception as exc:   # noqa: BLE001 (one file's failure, whatever it is, is its own)
-        b.data.failed.append(Failure(rel, facts.size, facts.mtime, facts.sha256,
-                                     reason(exc, path, rel)))
+        return reason(exc, job.path, job.rel)
+    return done
+
+
+def _add(b: _Builder, summary: IndexSummary, job: _Job, result) -> None:
+    f = job.facts
+    if isinstance(result, str):
+        b.fail(Failure(job.rel, f.size, f.mtime, f.sha256, result), job.at)
         return
-    for entry, vectors, spans in done:
-        b.add(entry, vectors, spans)
+    for entry, vectors, spans in result:
+        b.add(entry, vectors, spans, job.at)
         summary.vectors += len(vectors)
     summary.embedded += 1
+
+
+_WORKER: Embedder | None = None
+
+
+def _start_worker(model: Any, threads: int) -> None:
+    """A worker process: the model loaded once."""
+    global _WORKER
+    import torch
+    torch.set_num_threads(threads)
+    _WORKER = Embedder.load(model)
+
+
+def _worker_embed(job: _Job):
+    assert _WORKER is not None, "worker not started"
+    return job, embed_file(_WORKER, job)
+
+
+def _embedded(jobs: list[_Job], embedder: Embedder, model: Any, workers: int):
+    """``(job, result)`` of each job, in order: here, or in ``workers`` processes (at most
+    the CPU count and the jobs), each loading the model once."""
+    workers = max(1, min(workers, os.cpu_count() or 1, len(jobs)))
+    if workers == 1:
+        for job in jobs:
+            yield job, embed_file(embedder, job)
+        return
+    import multiprocessing
+
+    import torch
+    sent = model if isinstance(model, (str, Path)) or model is None else embedder
+    try:
+        pickle.dumps(sent)
+    except Exception:   # noqa: BLE001 (whatever stops it from being sent, the answer is one)
+        raise MotionlangError("--workers needs a model given by name or file (this one "
+                              "cannot be sent to other processes)") from None
+    threads = max(1, torch.get_num_threads() // workers)
+    # spawned, not forked: a fork of a process whose torch runs threads can hang
+    ctx = multiprocessing.get_context("spawn")
+    with ctx.Pool(workers, initializer=_start_worker, initargs=(sent, threads)) as pool:
+        yield from pool.imap(_worker_embed, jobs)
 
 
 def _analysed(path: Path, takes: int) -> list[list[dict]]:

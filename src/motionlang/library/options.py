@@ -34,6 +34,8 @@ class IndexOptions:
             of it wherever it starts).
         rebuild: embed every file again, even where an index exists (one made with
             another model or other windows is otherwise refused).
+        workers: processes that read, analyse and embed the files, each loading the
+            model once (at most the CPU count and the files to embed).
         save_every: seconds between saves of the index while it is built, so that an
             interrupted run keeps what it embedded (the next one goes on from there).
         show_progress: None: a bar on a terminal, log lines elsewhere; False: nothing.
@@ -45,11 +47,14 @@ class IndexOptions:
     rebuild: bool = _opt(False, "embed every file again, even where the index exists (one "
                                 "made with another model or other windows is refused "
                                 "otherwise)")
+    workers: int = _opt(1, "processes reading, analysing and embedding files, each loading "
+                           "the model once (at most the CPU count)", metavar="N")
     save_every: float = 60.0
     show_progress: bool | None = None
 
     def __post_init__(self) -> None:
-        check_numbers("IndexOptions", self, positive=("window", "hop", "save_every"))
+        check_numbers("IndexOptions", self, positive=("window", "hop", "save_every"),
+                      positive_ints=("workers",))
         if self.hop > self.window:
             raise MotionlangError(f"IndexOptions.hop ({self.hop:g}) must be at most "
                                   f"IndexOptions.window ({self.window:g}): windows must "
