@@ -86,9 +86,14 @@ def main(argv=None) -> int:
     ap.add_argument("--data", default="bandai:../shared/data/bandai", help="Bandai source")
     ap.add_argument("--corpus", help="the procedural corpus the model was also trained on")
     ap.add_argument("--json", help="also write the figures here")
+    ap.add_argument("--canonical", action="store_true",
+                    help="read captions and queries in their canonical form "
+                         "(datasets.canonical) even where the model was trained without")
     args = ap.parse_args(argv)
 
     model = ml.load_model(args.retrieval, kind="retrieval")
+    if args.canonical:
+        model.text.canonical = True
     evaluator = load_evaluator(args.evaluator) if args.evaluator else None
     from motionlang.datasets.seq2seq_pairs import load_records
     tests = [r for r in load_records(args.data, 30.0) if r.split == "test"]

@@ -44,6 +44,11 @@ def test_style_and_mood_are_set_apart():
     assert styles_in("walks happily and proudly") == ("happily", "proudly")
     assert without_style("walks forward in a rage") == "walks forward"
     assert canonical("a person walks").style == ()
+    # what an encoder reads: the style by its own name, in its own place at the end
+    assert canonical_text("A man walks forward in a rage") == (
+        "a person walks forward; style: angry")
+    assert canonical_text("A man proudly and happily walks") == (
+        "a person walks; style: happy, proud")
 
 
 def test_a_repeated_word_left_after_the_fillers_is_said_once():

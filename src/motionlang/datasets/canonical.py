@@ -17,7 +17,7 @@ import re
 from dataclasses import dataclass
 
 from motionlang.analysis.words import ACTION_WORDS
-from motionlang.datasets.bandai_text import STYLES
+from motionlang.datasets.bandai_text import STYLES, styles_named
 
 _ARTICLE = re.compile(r"\ban (?=[^aeiou\s])")
 _MANNER = re.compile(r" (?:in|with) (?:a|an|the)(?: \w+){0,3} (?:way|manner) | at speed ")
@@ -122,11 +122,18 @@ def canonical(text: str) -> Canonical:
         tok = _CANON.get(raw, _NUMBERS.get(raw, raw))
         if out and tok == out[-1]:   # "is walking walks" after the fillers go
             continue
+        if tok in ("and", "then") and (not out or out[-1] in ("and", ",")):
+            continue   # the joint of words that went ("proudly and happily walks")
         out.append(tok)
     body = " ".join(out).replace(" ,", ",").strip(" ,")
     return Canonical(f"a person {body}".strip(), style)
 
 
 def canonical_text(text: str) -> str:
-    """:func:`canonical`'s text alone: what an encoder reads when captions are canonical."""
-    return canonical(text).text
+    """What an encoder reads when captions are canonical: :func:`canonical`'s text, then the
+    styles it names by their own names in a fixed place at the end ("a person walks
+    forward, then waves left hand; style: angry"), so that a style is said one way and
+    never mixed into the actions, yet a take's style can still be asked for."""
+    c = canonical(text)
+    named = sorted(styles_named(" ".join(c.style))) if c.style else []
+    return f"{c.text}; style: {', '.join(named)}" if named else c.text
