@@ -122,7 +122,7 @@ def canonical(text: str) -> Canonical:
         tok = _CANON.get(raw, _NUMBERS.get(raw, raw))
         if out and tok == out[-1]:   # "is walking walks" after the fillers go
             continue
-        if tok in ("and", "then") and (not out or out[-1] in ("and", ",")):
+        if tok in ("and", "then") and (not out or out[-1] == "and"):
             continue   # the joint of words that went ("proudly and happily walks")
         out.append(tok)
     body = " ".join(out).replace(" ,", ",").strip(" ,")
