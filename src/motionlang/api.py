@@ -264,14 +264,22 @@ def read_words(text: str, model: Any = None):
 
 
 def generate(text: str, model: Any = None, *, rig: Motion | str | Path | None = None,
-             rig_joint_map: dict | str | Path | None = None, **options: Any) -> Motion:
+             rig_joint_map: dict | str | Path | None = None, library: Any = None,
+             **options: Any) -> Motion:
     """A motion for ``text`` (the best of ``width`` hypotheses), as a :class:`Motion`: on
     the 21-joint body, or with ``rig`` (a Motion or motion file; ``rig_joint_map``: its map
     onto the 21-joint body, if no built-in map fits) retargeted onto that skeleton.
     ``options``: those of :func:`generate_hypotheses` (``width``, ``method``, ``seed``,
     ``max_frames``, ``start_from`` ...), the same as ``motionlang generate``'s.
+    ``library``: an index file (or open ``library.search.Library``): the motion is composed
+    of its clips (``library.compose``; ``model``: the index's model) instead of generated;
+    ``library.compose.compose`` gives the clips too.
     """
     rig_motion = None if rig is None else load_rig(rig, rig_joint_map)
+    if library is not None:
+        from motionlang.library.compose import compose
+        made = compose(text, library, model=model)
+        return body_motion(made.positions, made.fps, rig_motion)[0]
     hyps, fps = generate_hypotheses(text, model, **options)
     return body_motion(hyps[0][0], fps, rig_motion)[0]
 

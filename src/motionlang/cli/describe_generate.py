@@ -62,6 +62,10 @@ def cmd_generate(args: argparse.Namespace) -> int:
     if args.rig_joint_map is not None and args.rig is None:
         raise MotionlangError("--rig-joint-map needs --rig")
     rig = None if args.rig is None else load_rig(args.rig, args.rig_joint_map)
+    if args.library is not None:
+        from motionlang.library.compose import compose_to
+        print(compose_to(args.text, args.library, out, rig=rig))
+        return 0
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", UserWarning)
         hyps, fps = generate_hypotheses(
@@ -164,5 +168,8 @@ def register(subparsers) -> None:
                         "rig that maps onto the 21-joint body; L2M models)")
     p.add_argument("--keep", metavar="FILE:RANGES", help="keep these seconds of a motion file "
                    "(walk.bvh:0-2s,8-10s; 8- to its end), generate the rest (masked models)")
+    p.add_argument("--library", metavar="INDEX", help="compose the motion from the clips of "
+                   "this index (motionlang index) that search finds for each part of the "
+                   "sentence, instead of a model; the clips are listed in OUTPUT.json")
     add_joint_map_arg(p)   # for --start-from and --keep
     p.set_defaults(func=cmd_generate)

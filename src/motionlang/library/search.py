@@ -283,10 +283,15 @@ class Library:
 
     def take(self, hit: Hit):
         """The motion of a hit's take, read again from the indexed folder."""
+        return self.take_named(hit.file)
+
+    def take_named(self, name: str):
+        """The motion of the take ``name`` (as hits name it), read again from the indexed
+        folder."""
         from motionlang.library.scan import read_takes
-        entry = next((e for e in self.data.entries if e.name == hit.file), None)
+        entry = next((e for e in self.data.entries if e.name == name), None)
         if entry is None:
-            raise MotionlangError(f"{self.where}: no take {hit.file!r}")
+            raise MotionlangError(f"{self.where}: no take {name!r}")
         return read_takes(Path(self.data.root) / entry.path)[entry.sequence - 1]
 
 

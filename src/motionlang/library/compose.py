@@ -1,0 +1,205 @@
+"""Motion composed from a library's own clips: ``motionlang generate "a person walks forward,
+then sits down" --library library.idx -o out.bvh`` (``ml.generate(..., library=...)``).
+
+How animators already work (motion graphs; retrieval-augmented generation): the sentence is
+cut into its parts where it says one thing after another ("then", "after that", "followed
+by", ";"), each part is searched in the library (``library.search``: the takes the analysis
+sees doing it first), and the best hit of each becomes a clip. The clips are laid one after
+the other on the 21-joint body: each turned about the vertical so that it starts facing the
+way the last one ends, and moved so that its root starts where the last one's is, its feet
+on the same floor. Each join is an in-between of :data:`JOIN` seconds where the last frames
+of one clip and the first of the next overlap: the root-relative poses are blended with a
+smooth weight, the root path follows the blend of the two, every frame is put back on one
+set of bone lengths (a blend of two poses shortens the bones between them), and the feet
+are then held where they are planted (``features.foot_lock.lock_feet``, footskate cleanup) so that a join does
+not slide. Every clip's source file and time span is kept: a user knows whose motion it is.
+"""
+from __future__ import annotations
+
+import re
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from motionlang.analysis.words import actions_named
+from motionlang.errors import MotionlangError
+from motionlang.features.body21 import body21, stature21, uniform_bones21
+from motionlang.features.joint_map import bone_lengths21
+from motionlang.features.foot_lock import lock_feet
+from motionlang.features.positions import facing_yaw
+from motionlang.features.root import from_heading
+from motionlang.library.search import Library
+
+#: frames a second of the composed motion
+FPS = 30.0
+#: seconds two clips overlap at a join
+JOIN = 0.5
+#: seconds of a clip at most (a long walk of a take is cut to this)
+MAX_CLIP = 4.0
+#: seconds taken before a hit the analysis found: sitting down starts before the sitting
+LEAD = 1.0
+#: where a sentence says one thing after another
+_PARTS = re.compile(r"\s*(?:,?\s*(?:and\s+)?then\b|,?\s*after that\b|,?\s*followed by\b|;|"
+                    r",?\s*and finally\b|,?\s*afterwards\b)\s*,?\s*", re.IGNORECASE)
+_SUBJECT = re.compile(r"^(?:a|an|the|some)\s+\w+|^(?:someone|somebody|he|she|they)\b", re.I)
+
+METHOD = ("clips of the library found by search, turned and moved to follow one another, "
+          f"overlapping {JOIN:g} s at each join where their poses are blended and the root "
+          "path follows, then the planted feet held (footskate cleanup)")
+
+
+def parts(text: str) -> list[str]:
+    """The parts of a sentence that says one thing after another, each a query with the
+    sentence's subject ("a person walks forward, then sits down" -> ["a person walks
+    forward", "a person sits down"]).
+
+    Raises:
+        MotionlangError: a sentence with no words.
+    """
+    if not text.split():
+        raise MotionlangError("the sentence to compose is empty")
+    pieces = [p.strip(" ,.") for p in _PARTS.split(text) if p and p.strip(" ,.")]
+    m = _SUBJECT.match(pieces[0]) if pieces else None
+    subject = m.group(0) if m else "a person"
+    return [p if _SUBJECT.match(p) else f"{subject} {p}" for p in pieces]
+
+
+@dataclass
+class Clip:
+    """One part's clip: the part, the take it came from (path under the indexed folder), its
+    span in seconds there, and why search chose it (empty: the learned model alone)."""
+
+    part: str
+    file: str
+    start: float
+    end: float
+    why: str = ""
+
+
+@dataclass
+class Composed:
+    """A composed motion: global 21-joint positions (T, 21, 3) metres at ``fps``, its clips
+    in order, and how it was made (for the output's sidecar)."""
+
+    positions: np.ndarray
+    fps: float
+    clips: list[Clip] = field(default_factory=list)
+    method: str = METHOD
+
+    def sidecar(self, text: str, index: str) -> dict:
+        """What the output's ``.json`` sidecar records."""
+        return {"text": text, "method": self.method, "index": index, "fps": self.fps,
+                "frames": len(self.positions), "clips": [asdict(c) for c in self.clips]}
+
+
+def _resampled(p: np.ndarray, fps: float, to: float) -> np.ndarray:
+    """(T, 21, 3) at ``fps`` -> the same span at ``to`` Hz (linear)."""
+    if len(p) < 2 or abs(fps - to) < 1e-6:
+        return p
+    t = np.arange(len(p)) / fps
+    new = np.arange(0.0, t[-1] + 1e-9, 1.0 / to)
+    flat = p.reshape(len(p), -1)
+    return np.stack([np.interp(new, t, flat[:, j]) for j in range(flat.shape[1])],
+                    axis=1).reshape(len(new), 21, 3)
+
+
+def choose(lib: Library, part: str, used: set[tuple[str, float]]) -> Clip:
+    """The clip of one part: the first hit whose reason shows the part's actions (else the
+    first hit), not a span already used."""
+    hits = lib.search(part, k=10)
+    if not hits:
+        raise MotionlangError(f"{lib.where}: nothing in the library for {part!r}")
+    asked = bool(actions_named(part))
+    pick = next((h for h in hits if (h.why or not asked) and (h.file, h.start) not in used),
+                hits[0])
+    used.add((pick.file, pick.start))
+    start = max(0.0, pick.start - LEAD) if pick.why else pick.start
+    return Clip(part, pick.file, round(start, 3), round(min(pick.end, start + MAX_CLIP), 3),
+                pick.why)
+
+
+def _clip_positions(lib: Library, clip: Clip, stature: float | None) -> np.ndarray:
+    """(T, 21, 3) of a clip at :data:`FPS`, feet on the floor, starting at the origin facing
+    +Z, scaled to ``stature`` m (the first clip's: one body all through)."""
+    take = lib.take_named(clip.file)
+    cut = take.between(clip.start, clip.end)
+    return _resampled(body21(cut, stature=stature), float(take.fps), FPS)
+
+
+def _smooth(n: int) -> np.ndarray:
+    x = (np.arange(n) + 0.5) / n
+    return x * x * (3 - 2 * x)
+
+
+def join(a: np.ndarray, b: np.ndarray, overlap: int) -> np.ndarray:
+    """``b`` (starting at the origin facing +Z) laid after ``a``: turned and moved so that
+    its first frame stands where ``a``'s frame ``-overlap`` stands, the ``overlap`` frames
+    blended (module docstring)."""
+    overlap = max(1, min(overlap, len(a) - 1, len(b) - 1))
+    at = len(a) - overlap
+    yaw = float(facing_yaw(a[at:at + 1])[0])
+    root = a[at, 0] * np.array([1.0, 0.0, 1.0])
+    placed = from_heading(b, np.full(b.shape[:2], yaw)) + root
+    w = _smooth(overlap)[:, None, None]
+    ra, rb = a[at:, :1], placed[:overlap, :1]
+    mixed_root = (1 - w) * ra + w * rb
+    mixed_pose = (1 - w) * (a[at:] - ra) + w * (placed[:overlap] - rb)
+    # the rest of b follows where the blended root ended, so nothing jumps
+    shift = (mixed_root[-1] - rb[-1]) * np.array([1.0, 0.0, 1.0])
+    return np.concatenate([a[:at], mixed_pose + mixed_root, placed[overlap:] + shift])
+
+
+def compose(text: str, library: str | Path | Library, *, model: Any = None,
+            overlap: float = JOIN) -> Composed:
+    """A motion for ``text`` made of ``library``'s clips (an index file or an open
+    :class:`Library`; ``model``: its model, if not the one it names).
+
+    Raises:
+        MotionlangError: an empty sentence, a missing or damaged index, a part nothing in
+            the library matches, or a clip whose file no longer reads.
+    """
+    lib = library if isinstance(library, Library) else Library.open(library, model)
+    used: set[tuple[str, float]] = set()
+    clips = [choose(lib, p, used) for p in parts(text)]
+    frames = max(1, int(round(overlap * FPS)))
+    out: np.ndarray | None = None
+    for clip in clips:
+        p = _clip_positions(lib, clip, None if out is None else stature21(out))
+        out = p if out is None else join(out, p, frames)
+    assert out is not None
+    # a blend of two poses shortens the bones between them: every frame back on one body
+    out = uniform_bones21(out, np.median(bone_lengths21(out), axis=0))
+    return Composed(lock_feet(out, FPS), FPS, clips)
+
+
+def compose_to(text: str, library: str | Path | Library, out: str | Path, *,
+               model: Any = None, rig: Any = None) -> str:
+    """Compose ``text`` (:func:`compose`) and write it to ``out`` (any format
+    ``rendering.output.write_result`` writes; ``rig``: retargeted onto it) with the sidecar
+    ``OUT.json`` listing the method and every clip; returns the lines that say so.
+
+    Raises:
+        MotionlangError: as :func:`compose`, or an output that cannot hold the motion.
+    """
+    import json
+    import warnings
+
+    from motionlang.rendering.output import check_result_path, write_result
+    from motionlang.utils.atomic import atomic_write
+    out = Path(out)
+    check_result_path(out, rig=rig is not None)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")   # "no take shows it": the clips' reasons say so
+        made = compose(text, library, model=model)
+    note = write_result(made.positions, out, fps=made.fps, title=text, rig=rig)
+    side = out.with_name(out.name + ".json")
+    with atomic_write(side) as fh:
+        fh.write(json.dumps(made.sidecar(text, str(library)), indent=1) + "\n")
+    lines = [f"{len(made.positions)} frames at {made.fps:g} Hz -> {out}{note}",
+             f"made of {len(made.clips)} clips of the library (listed in {side}):"]
+    lines += [f"  {c.part!r}: {c.file} {c.start:.1f}-{c.end:.1f} s"
+              + (f" ({c.why})" if c.why else " (the learned model's nearest)")
+              for c in made.clips]
+    return "\n".join(lines)
