@@ -16,7 +16,9 @@ not slide. Every clip's source file and time span is kept: a user knows whose mo
 """
 from __future__ import annotations
 
+import json
 import re
+import warnings
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -26,11 +28,13 @@ import numpy as np
 from motionlang.analysis.words import actions_named
 from motionlang.errors import MotionlangError
 from motionlang.features.body21 import body21, stature21, uniform_bones21
-from motionlang.features.joint_map import bone_lengths21
 from motionlang.features.foot_lock import lock_feet
+from motionlang.features.joint_map import bone_lengths21
 from motionlang.features.positions import facing_yaw
 from motionlang.features.root import from_heading
 from motionlang.library.search import Library
+from motionlang.rendering.output import check_result_path, write_result
+from motionlang.utils.atomic import atomic_write
 
 #: frames a second of the composed motion
 FPS = 30.0
@@ -183,11 +187,6 @@ def compose_to(text: str, library: str | Path | Library, out: str | Path, *,
     Raises:
         MotionlangError: as :func:`compose`, or an output that cannot hold the motion.
     """
-    import json
-    import warnings
-
-    from motionlang.rendering.output import check_result_path, write_result
-    from motionlang.utils.atomic import atomic_write
     out = Path(out)
     check_result_path(out, rig=rig is not None)
     with warnings.catch_warnings():
