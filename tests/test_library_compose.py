@@ -1,0 +1,87 @@
+"""Motion composed from a library's clips (``library.compose``, ``generate --library``): the
+sentence cut into its parts, each part's clip found by search, the clips joined without a
+jump in place or facing, and every clip's source listed beside the output."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import motionlang as ml
+from helpers.grounded import hand_made, make_library, walking
+from motionlang.analysis import check
+from motionlang.cli.main import main
+from motionlang.errors import MotionlangError
+from motionlang.features.positions import facing_yaw
+from motionlang.library.compose import FPS, compose, join, parts
+from motionlang.library.embedder import Embedder
+from motionlang.library.search import Library
+from motionlang.rendering.output import body_motion
+
+
+@pytest.fixture(scope="module")
+def library(tmp_path_factory):
+    return make_library(tmp_path_factory.mktemp("compose"))
+
+
+def test_a_sentence_is_cut_where_it_says_one_thing_after_another():
+    assert parts("a person walks forward, then sits down") == [
+        "a person walks forward", "a person sits down"]
+    assert parts("A man runs and then jumps; after that he waves") == [
+        "A man runs", "A man jumps", "he waves"]
+    assert parts("someone walks and waves") == ["someone walks and waves"]   # at once
+    with pytest.raises(MotionlangError, match="empty"):
+        parts("   ")
+
+
+def test_walk_then_sit_is_a_walk_and_a_sit_joined_without_a_jump(library):
+    _, index = library
+    made = compose("a person walks forward, then sits down", Library.open(index, hand_made()))
+    assert [c.file for c in made.clips] == ["walk.bvh", "chairs/sit.bvh"]
+    assert made.clips[1].why.startswith("sits: ")
+    p = made.positions
+    assert p.shape[1:] == (21, 3) and made.fps == FPS and np.isfinite(p).all()
+    # no jump in place or facing: the root's steps and turns at most a little above the
+    # clips' own (walking at 1.2 m/s is 0.04 m a frame)
+    steps = np.linalg.norm(np.diff(p[:, 0, [0, 2]], axis=0), axis=1)
+    assert steps.max() < 0.08, steps.max()
+    turn = np.abs(np.diff(np.unwrap(facing_yaw(p))))
+    assert np.degrees(turn.max()) < 10
+    motion = body_motion(made.positions, made.fps)[0]
+    shown = {c.action: c.shown for c in check("a person walks, then sits down", motion)}
+    assert shown == {"walk": True, "sit": True}
+
+
+def test_join_places_the_second_clip_where_the_first_ends():
+    a = walking(1.0)                                  # 1.2 m/s to +Z, facing +Z
+    turned = a[:, :, [2, 1, 0]] * [1, 1, -1]          # the same walk facing and going to +X
+    b = a - a[0, 0] * np.array([1, 0, 1])            # a clip starts at the origin facing +Z
+    out = join(turned, b, 5)
+    assert len(out) == 2 * len(a) - 5
+    step = np.diff(out[:, 0], axis=0)
+    assert np.abs(step[:, 0] - 1.2 / FPS).max() < 0.01 and np.abs(step[:, 2]).max() < 0.01
+
+
+def test_the_command_line_writes_the_motion_and_lists_its_clips(library, tmp_path, capsys,
+                                                                 monkeypatch):
+    _, index = library
+    monkeypatch.setattr(Embedder, "load", classmethod(lambda cls, model=None: hand_made()))
+    out = tmp_path / "made.bvh"
+    assert main(["generate", "a person walks forward, then sits down", "--library",
+                 str(index), "-o", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "chairs/sit.bvh" in printed and "sits: " in printed
+    side = json.loads((tmp_path / "made.bvh.json").read_text())
+    assert [c["file"] for c in side["clips"]] == ["walk.bvh", "chairs/sit.bvh"]
+    assert side["method"].startswith("clips of the library") and side["frames"] > 100
+    motion = ml.read_motion(out)
+    assert motion.n_frames == side["frames"]
+    assert main(["generate", "a person walks", "--library", str(tmp_path / "none.idx"),
+                 "-o", str(tmp_path / "x.bvh")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "no such index file" in err
+    assert not (tmp_path / "x.bvh").exists() and not (tmp_path / "x.bvh.json").exists()
+    api = ml.generate("a person walks forward, then sits down",
+                      library=Library.open(index, hand_made()))
+    assert api.n_frames == side["frames"]
