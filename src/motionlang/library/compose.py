@@ -7,8 +7,10 @@ by", ";"), each part is searched in the library (``library.search``: the takes t
 sees doing it first), and the best hit of each becomes a clip. The clips are laid one after
 the other on the 21-joint body: each turned about the vertical so that it starts facing the
 way the last one ends, and moved so that its root starts where the last one's is, its feet
-on the same floor. Each join is an in-between of :data:`JOIN` seconds where the last frames
-of one clip and the first of the next overlap: the root-relative poses are blended with a
+on the same floor. Where they meet is searched for, as a motion graph's transitions are:
+the frames near the end of one clip and the start of the next whose poses and foot speeds
+are most alike (:func:`best_cut`). Each join is an in-between of :data:`JOIN` seconds where
+the last frames of one clip and the first of the next overlap: the root-relative poses are blended with a
 smooth weight, the root path follows the blend of the two, every frame is put back on one
 set of bone lengths (a blend of two poses shortens the bones between them), and the feet
 are then held where they are planted (``features.foot_lock.lock_feet``, footskate cleanup) so that a join does
@@ -31,7 +33,7 @@ from motionlang.features.body21 import body21, stature21, uniform_bones21
 from motionlang.features.foot_lock import lock_feet
 from motionlang.features.joint_map import bone_lengths21
 from motionlang.features.positions import facing_yaw
-from motionlang.features.root import from_heading
+from motionlang.features.root import from_heading, to_heading
 from motionlang.library.search import Library
 from motionlang.rendering.output import check_result_path, write_result
 from motionlang.utils.atomic import atomic_write
@@ -44,6 +46,9 @@ JOIN = 0.5
 MAX_CLIP = 4.0
 #: seconds taken before a hit the analysis found: sitting down starts before the sitting
 LEAD = 1.0
+#: seconds at the end of a clip and at the start of the next searched for the frames most
+#: alike to join at (a motion graph's transition point)
+SEARCH = (1.0, 0.5)
 #: where a sentence says one thing after another
 _PARTS = re.compile(r"\s*(?:,?\s*(?:and\s+)?then\b|,?\s*after that\b|,?\s*followed by\b|;|"
                     r",?\s*and finally\b|,?\s*afterwards\b)\s*,?\s*", re.IGNORECASE)
@@ -91,11 +96,13 @@ class Composed:
     fps: float
     clips: list[Clip] = field(default_factory=list)
     method: str = METHOD
+    joins: list[int] = field(default_factory=list)   # the first frame of each overlap
 
     def sidecar(self, text: str, index: str) -> dict:
         """What the output's ``.json`` sidecar records."""
         return {"text": text, "method": self.method, "index": index, "fps": self.fps,
-                "frames": len(self.positions), "clips": [asdict(c) for c in self.clips]}
+                "frames": len(self.positions), "clips": [asdict(c) for c in self.clips],
+                "joins": [round(j / self.fps, 3) for j in self.joins]}
 
 
 def _resampled(p: np.ndarray, fps: float, to: float) -> np.ndarray:
@@ -137,6 +144,39 @@ def _smooth(n: int) -> np.ndarray:
     return x * x * (3 - 2 * x)
 
 
+def _pose(p: np.ndarray) -> np.ndarray:
+    """(T, 21, 3) -> each frame's joints relative to its root, in its own heading."""
+    rel = p - p[:, :1] * np.array([1.0, 0.0, 1.0])
+    return to_heading(rel, facing_yaw(p)[:, None])
+
+
+def best_cut(a: np.ndarray, b: np.ndarray, overlap: int, fps: float = FPS
+             ) -> tuple[int, int]:
+    """``(end, start)``: join ``a[:end]`` to ``b[start:]`` where the frames are most alike
+    (mean joint distance of the root-relative poses in their own heading, the feet's
+    velocities too, so that a planted foot meets a planted foot), searched over
+    :data:`SEARCH` seconds."""
+    na, nb = int(SEARCH[0] * fps), int(SEARCH[1] * fps)
+    ends = np.arange(max(overlap + 1, len(a) - na), len(a) + 1)
+    starts = np.arange(0, max(1, min(nb, len(b) - overlap - 1)))
+    pa, pb = _pose(a), _pose(b)
+    va, vb = np.gradient(a, axis=0) * fps, np.gradient(b, axis=0) * fps
+    cost = np.empty((len(ends), len(starts)))
+    for i, e in enumerate(ends):
+        f = e - overlap   # a's first overlapping frame meets b's start
+        d = np.linalg.norm(pa[f] - pb[starts], axis=-1).mean(axis=-1)
+        dv = np.linalg.norm(va[f][None] - vb[starts], axis=-1).mean(axis=-1) / fps
+        cost[i] = d + dv
+    i, j = np.unravel_index(int(np.argmin(cost)), cost.shape)
+    return int(ends[i]), int(starts[j])
+
+
+def _from_start(b: np.ndarray) -> np.ndarray:
+    """``b`` moved and turned so that its first frame stands at the origin facing +Z."""
+    moved = b - b[:1, :1] * np.array([1.0, 0.0, 1.0])
+    return to_heading(moved, np.full(b.shape[:2], facing_yaw(b[:1])[0]))
+
+
 def join(a: np.ndarray, b: np.ndarray, overlap: int) -> np.ndarray:
     """``b`` (starting at the origin facing +Z) laid after ``a``: turned and moved so that
     its first frame stands where ``a``'s frame ``-overlap`` stands, the ``overlap`` frames
@@ -169,13 +209,19 @@ def compose(text: str, library: str | Path | Library, *, model: Any = None,
     clips = [choose(lib, p, used) for p in parts(text)]
     frames = max(1, int(round(overlap * FPS)))
     out: np.ndarray | None = None
+    joins = []
     for clip in clips:
         p = _clip_positions(lib, clip, None if out is None else stature21(out))
-        out = p if out is None else join(out, p, frames)
+        if out is None:
+            out = p
+            continue
+        end, start = best_cut(out, p, frames)
+        joins.append(end - min(frames, end - 1, len(p) - start - 1))
+        out = join(out[:end], _from_start(p[start:]), frames)
     assert out is not None
     # a blend of two poses shortens the bones between them: every frame back on one body
     out = uniform_bones21(out, np.median(bone_lengths21(out), axis=0))
-    return Composed(lock_feet(out, FPS), FPS, clips)
+    return Composed(lock_feet(out, FPS), FPS, clips, joins=joins)
 
 
 def compose_to(text: str, library: str | Path | Library, out: str | Path, *,
