@@ -258,3 +258,34 @@ def test_api_and_cli_give_the_same_results(folder, tmp_path, capsys):
     assert main(["search", "a person jumps in place", "--index", str(out), "-k", "3"]) == 0
     lines = capsys.readouterr().out.splitlines()
     assert len(lines) == 3 and all(h.file in line for h, line in zip(hits, lines))
+
+
+@pytest.mark.skipif(importlib.util.find_spec("usearch") is None, reason="usearch not installed")
+def test_the_approximate_graph_finds_the_numpy_hits_and_is_kept_beside_the_index(tmp_path):
+    rng = np.random.default_rng(1)
+    from motionlang.library.store import Entry, save_index
+    entries = [Entry(f"f{i}.bvh", 1, 0.0, "0" * 64, {}, 30.0, 20.0, 18) for i in range(20)]
+    spans = np.tile(np.array([[s, s + 3.0] for s in range(18)]), (20, 1))
+    data = IndexData({"name": "x", "digest": "r"}, "/", 3.0, 1.0, entries, [],
+                     rng.normal(size=(360, 16)).astype(np.float32), spans)
+    path = save_index(data, tmp_path / "big.idx")
+    emb = Embedder("x", "r", lambda s: rng.normal(size=16), motion_vector)
+    lib = Library.open(path, emb)
+    agree = []
+    for _ in range(10):
+        q = rng.normal(size=16).astype(np.float32)
+        exact, approx = lib.rank(q, 5, "numpy"), lib.rank(q, 5, "usearch")
+        agree.append(len({h[:3] for h in exact} & {h[:3] for h in approx}) / 5)
+    # on 360 windows the graph is as good as exhaustive: every hit found
+    assert np.mean(agree) == 1.0, agree
+    graph = tmp_path / "big.idx.usearch"
+    assert graph.is_file() and (tmp_path / "big.idx.usearch.json").is_file()
+    stamp = graph.stat().st_mtime_ns
+    again = Library.open(path, emb)
+    again.rank(rng.normal(size=16).astype(np.float32), 3, "usearch")
+    assert graph.stat().st_mtime_ns == stamp        # loaded, not built again
+    data.vectors = data.vectors[::-1].copy()        # other vectors: the graph is made anew
+    save_index(data, path)
+    Library.open(path, emb).rank(rng.normal(size=16).astype(np.float32), 3, "usearch")
+    assert graph.stat().st_mtime_ns != stamp
+    assert [p.name for p in tmp_path.iterdir() if p.name.endswith(".tmp")] == []

@@ -167,8 +167,8 @@ def best_cut(a: np.ndarray, b: np.ndarray, overlap: int, fps: float = FPS
         d = np.linalg.norm(pa[f] - pb[starts], axis=-1).mean(axis=-1)
         dv = np.linalg.norm(va[f][None] - vb[starts], axis=-1).mean(axis=-1) / fps
         cost[i] = d + dv
-    i, j = np.unravel_index(int(np.argmin(cost)), cost.shape)
-    return int(ends[i]), int(starts[j])
+    best_i, best_j = np.unravel_index(int(np.argmin(cost)), cost.shape)
+    return int(ends[best_i]), int(starts[best_j])
 
 
 def _from_start(b: np.ndarray) -> np.ndarray:

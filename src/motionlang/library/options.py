@@ -62,7 +62,7 @@ class IndexOptions:
 
 
 #: nearest-window backends of ``library.search``
-BACKENDS = ("auto", "numpy", "faiss")
+BACKENDS = ("auto", "numpy", "faiss", "usearch")
 _SECONDS = re.compile(r"\s*([0-9]*\.?[0-9]+(?:e[+-]?[0-9]+)?)\s*(ms|s|min)?\s*", re.I)
 _UNIT = {None: 1.0, "s": 1.0, "ms": 1e-3, "min": 60.0}
 
@@ -108,8 +108,10 @@ class SearchOptions:
     grounded: bool = _opt(True, "rank by the learned model alone: no take is lifted for "
                           "showing an action the query names (the analysis still answers "
                           "--where)")
-    backend: str = _opt("auto", "nearest windows by numpy or faiss (exact both; auto: faiss "
-                        "where installed and the index is large)", choices=BACKENDS)
+    backend: str = _opt("auto", "nearest windows by numpy or faiss (exact), or usearch "
+                        "(approximate, an HNSW graph kept beside the index); auto: exact, "
+                        "faiss or usearch where installed and the index is very large",
+                        choices=BACKENDS)
 
     def __post_init__(self) -> None:
         check_numbers("SearchOptions", self, positive_ints=("k",))

@@ -29,6 +29,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from motionlang.errors import MotionlangError
+from motionlang.library import ann
 from motionlang.library.embedder import Embedder
 from motionlang.library.grounded import (
     matches,
@@ -40,8 +41,11 @@ from motionlang.library.grounded import (
 from motionlang.library.options import BACKENDS, SearchOptions
 from motionlang.library.store import IndexData, load_index
 
-#: windows from which faiss, when installed, is used instead of numpy
+#: windows from which faiss, when installed, is used instead of numpy (exact both)
 FAISS_MIN_ROWS = 200_000
+#: windows from which ``auto`` takes the approximate graph (``library.ann``), when usearch is
+#: installed: below it exact search is fast enough (benchmarks/bench_search_ann.py)
+ANN_MIN_ROWS = 1_000_000
 EPS = 1e-6   # seconds: windows that touch are one span
 #: windows whose median score is the typical one (a sample: the median of millions costs)
 TYPICAL_SAMPLE = 4096
@@ -116,6 +120,9 @@ class Library:
         self.unit = unit_rows(data.vectors)
         self.entry_of = data.entry_of_rows()
         self._faiss: Any = None
+        self._ann: ann.Approximate | None = None
+        #: where an approximate graph of this index is kept (beside its file)
+        self.cache: Path | None = None
 
     @classmethod
     def open(cls, index: str | Path, model: Any = None) -> Library:
@@ -131,7 +138,9 @@ class Library:
             except MotionlangError as exc:
                 raise MotionlangError(f"{index}: its model {data.model['name']!r} does not "
                                       f"load ({exc}); pass the model") from None
-        return cls(data, Embedder.load(model), str(index))
+        lib = cls(data, Embedder.load(model), str(index))
+        lib.cache = Path(f"{index}.usearch")
+        return lib
 
     def search(self, query: str, k: int | None = None, backend: str | None = None,
                **options: Any) -> list[Hit]:
@@ -244,36 +253,55 @@ class Library:
             raise MotionlangError(f"{self.where}: a query vector of shape {vector.shape}, "
                                   f"the index holds vectors of {self.unit.shape[1]}")
         q = unit_rows(vector)
-        # a fixed sample of the windows, so that both backends see the same typical score
+        # a fixed sample of the windows, so that every backend sees the same typical score
         typical = float(np.median(self.unit[::max(1, n // TYPICAL_SAMPLE)] @ q))
-        use_faiss = backend == "faiss" or (backend == "auto" and n >= FAISS_MIN_ROWS
-                                           and importlib.util.find_spec("faiss") is not None)
-        if not use_faiss:
-            scores = self.unit @ q
-            order = np.argsort(-scores, kind="stable")
-            hits, _ = merge_windows(order, scores, self.entry_of, self.data.spans, k, typical)
-        else:
-            hits = self._faiss_hits(q, k, typical)
+        hits = self._grown(self._best_rows(backend, n), q, k, typical)
         names = [e.name for e in self.data.entries]
         return [Hit(names[h[0]], h[1], h[2], h[3]) for h in hits]
 
-    def _faiss_hits(self, q: np.ndarray, k: int, typical: float) -> list[list]:
-        """As the numpy path, over faiss's best windows: more of them until the hits are
-        final (or every window was taken)."""
-        try:
-            import faiss
-        except ImportError:
-            raise MotionlangError("backend 'faiss' needs the faiss-cpu package "
-                                  "(pip install faiss-cpu)") from None
-        if self._faiss is None:
-            self._faiss = faiss.IndexFlatIP(self.unit.shape[1])
-            self._faiss.add(self.unit)
+    def _best_rows(self, backend: str, n: int):
+        """``best(q, m) -> (rows, scores)``: about the ``m`` best windows, best first, by the
+        backend ``auto`` picks for ``n`` windows or the one named."""
+        if backend == "auto":
+            backend = ("usearch" if n >= ANN_MIN_ROWS and ann.available() else
+                       "faiss" if n >= FAISS_MIN_ROWS and importlib.util.find_spec("faiss")
+                       else "numpy")
+        if backend == "usearch":
+            if self._ann is None:
+                self._ann = ann.Approximate(self.unit, self.cache)
+            return self._ann.best
+        if backend == "faiss":
+            if self._faiss is None:
+                try:
+                    import faiss
+                except ImportError:
+                    raise MotionlangError("backend 'faiss' needs the faiss-cpu package "
+                                          "(pip install faiss-cpu)") from None
+                self._faiss = faiss.IndexFlatIP(self.unit.shape[1])
+                self._faiss.add(self.unit)
+
+            def by_faiss(q: np.ndarray, m: int):
+                got, rows = self._faiss.search(q[None], m)
+                keep = rows[0] >= 0
+                return rows[0][keep], got[0][keep]
+            return by_faiss
+
+        def by_numpy(q: np.ndarray, m: int):
+            scores = self.unit @ q
+            top = np.argpartition(-scores, m - 1)[:m] if m < len(scores) else \
+                np.arange(len(scores))
+            top = top[np.lexsort((top, -scores[top]))]   # best first, ties by row
+            return top, scores[top]
+        return by_numpy
+
+    def _grown(self, best, q: np.ndarray, k: int, typical: float) -> list[list]:
+        """Hits merged from the best windows ``best`` gives: more of them until the hits
+        are final (or every window was taken)."""
         n, m = len(self.unit), 8 * k
         scores = np.zeros(n, dtype=np.float32)
         while True:
             m = min(m, n)
-            got, rows = self._faiss.search(q[None], m)
-            rows, got = rows[0][rows[0] >= 0], got[0][rows[0] >= 0]
+            rows, got = best(q, m)
             scores[rows] = got
             hits, final = merge_windows(rows, scores, self.entry_of, self.data.spans, k,
                                         typical)
