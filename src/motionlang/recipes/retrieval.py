@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING, Any
 from motionlang.errors import MotionlangError
 from motionlang.recipes import Recipe
 from motionlang.utils.checks import check_numbers
+from motionlang.utils.progress import progress
 
 if TYPE_CHECKING:
     from motionlang.models.retrieval.model import RetrievalModel
@@ -190,7 +191,7 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
     from motionlang.datasets.twostream_items import build_twostream_data
     from motionlang.models.registry import family
     from motionlang.models.retrieval.model import RetrievalModel
-    from motionlang.models.retrieval.text import sentence_vectors
+    from motionlang.models.retrieval.text import CHUNK, sentence_vectors
     from motionlang.recipes.seq2seq import mix_training
     from motionlang.training.run_files import check_resume
     from motionlang.training.run_guard import keep_splits
@@ -221,7 +222,12 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
     # every caption through the frozen encoder once, in large batches, before training
     started = time.perf_counter()
     captions = sorted({str(it["sentence"]) for part in data.items.values() for it in part})
-    text.vectors(captions)
+    bar = progress(total=len(captions), desc="sentence vectors", unit="captions",
+                   disable=not lead)
+    with bar:
+        for i in range(0, len(captions), CHUNK):
+            text.vectors(captions[i:i + CHUNK])
+            bar.update(len(captions[i:i + CHUNK]))
     if lead:
         print(f"sentence vectors of {len(captions)} captions: "
               f"{time.perf_counter() - started:.0f} s")
