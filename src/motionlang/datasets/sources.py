@@ -136,6 +136,15 @@ register(SourceKind(
            "with attribution to Bandai Namco Research Inc.",
     reads=("max_seconds",)))
 register(SourceKind(
+    "library", "library:", "motionlang.datasets.library:load_library", OWN_TERMS,
+    "a motion library without captions: the grounded analysis' sentence of each take, its "
+    "folder's captions file where there is one, and the words of its path",
+    reads=("max_seconds",)))
+register(SourceKind(
+    "analysis", "analysis:", "motionlang.datasets.library:load_library", OWN_TERMS,
+    "a motion library captioned by the grounded analysis alone (no names, no captions file)",
+    reads=("max_seconds",), options=(("names", False),)))
+register(SourceKind(
     "humanml3d", "humanml3d:", "motionlang.datasets.humanml3d:load_h3d", OWN_TERMS,
     "a HumanML3D-layout folder, 22 SMPL joints at 20 fps (its own split files)",
     reads=("max_seconds",), options=(("body", "smpl"),)))

@@ -54,9 +54,28 @@ class RetrievalOptions:
                                       "Bandai grammar's alternative verbs (jogs, lifts, ...); "
                                       "the validation captions with them are also scored on "
                                       "their own, and count in the choice of epoch")
+    init: str | None = _opt(None, "fine-tune: start from this retrieval model (a packaged "
+                                  "name such as 'retrieval', a file or a run folder), its "
+                                  "sizes, text side and motion normaliser kept (the model "
+                                  "options are then its own)", metavar="MODEL")
 
     def __post_init__(self) -> None:
         check_numbers("RetrievalOptions", self, positive=("max_seconds",))
+
+
+def renormalise(items: Sequence[dict], fitted: Any, to: Any) -> None:
+    """Items' ``motion`` rows, normalised by the features ``fitted`` on this data, normalised
+    instead by ``to``'s (a fine-tuned model's own), in place; each motion once."""
+    done: dict[int, Any] = {}
+    seen: set[int] = set()   # an item listed twice (training and its split) is done once
+    for it in items:
+        if id(it) in seen:
+            continue
+        seen.add(id(it))
+        key = id(it["motion"])
+        if key not in done:
+            done[key] = to.encode_rows(fitted.normalizer.inverse(it["motion"]))
+        it["motion"] = done[key]
 
 
 def model_config(model_cfg: dict[str, Any]) -> Any:
@@ -203,8 +222,14 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
     if resume:
         check_resume(out)
     source_weights(sources)   # all weighted or none
+    init = None
+    if data_cfg.init is not None:   # before any data is read: a wrong model is one line
+        from motionlang.models.registry import load_model
+        init = load_model(data_cfg.init, kind="retrieval")
+        config = init.config
     # before any data is read
-    text = sentence_vectors(config.text_model, config.text_layer, config.canonical)
+    text = init.text if init is not None else sentence_vectors(
+        config.text_model, config.text_layer, config.canonical)
     paths = [s.path for s in sources]
     data = build_twostream_data(paths if len(paths) > 1 else paths[0], seed=train_cfg.seed,
                                 max_seconds=data_cfg.max_seconds, mirror=data_cfg.mirror)
@@ -232,9 +257,15 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
         print(f"sentence vectors of {len(captions)} captions: "
               f"{time.perf_counter() - started:.0f} s")
     torch.manual_seed(train_cfg.seed)
-    config = dataclasses.replace(config, n_features=data.features.dim, fps=data.features.fps)
-    model = RetrievalModel(config, data.features, text)
-    model.fit_text(text.vectors(sorted({str(it["sentence"]) for it in train_items})))
+    if init is not None:
+        model = init
+        renormalise([*train_items, *(it for part in data.items.values() for it in part)],
+                    data.features, init.features)
+    else:
+        config = dataclasses.replace(config, n_features=data.features.dim,
+                                     fps=data.features.fps)
+        model = RetrievalModel(config, data.features, text)
+        model.fit_text(text.vectors(sorted({str(it["sentence"]) for it in train_items})))
     if lead:
         print(f"retrieval: {len(train_items)} training pairs ({len(data.splits['train'])} "
               f"motions), {sum(p.numel() for p in model.parameters()):,} parameters")
