@@ -289,3 +289,31 @@ def test_the_approximate_graph_finds_the_numpy_hits_and_is_kept_beside_the_index
     Library.open(path, emb).rank(rng.normal(size=16).astype(np.float32), 3, "usearch")
     assert graph.stat().st_mtime_ns != stamp
     assert [p.name for p in tmp_path.iterdir() if p.name.endswith(".tmp")] == []
+
+
+def test_shards_joined_are_the_index_of_the_whole_folder(folder, tmp_path, capsys):
+    whole = tmp_path / "whole.idx"
+    ml.index(folder, whole, fake(), show_progress=False)
+    parts = [tmp_path / f"part{k}.idx" for k in (1, 2, 3)]
+    for k, p in enumerate(parts, 1):
+        ml.index(folder, p, fake(), shard=f"{k}/3", show_progress=False)
+    sizes = [len(load_index(p).entries) + len(load_index(p).failed) for p in parts]
+    assert sum(sizes) == 5                       # 3 takes + 2 skipped, each in one shard
+    from motionlang.library.merge import merge_indexes
+    merged = merge_indexes(parts, tmp_path / "merged.idx")
+    a = load_index(whole)
+    assert merged.shard == "" and merged.entries == a.entries
+    assert sorted(f.path for f in merged.failed) == sorted(f.path for f in a.failed)
+    np.testing.assert_array_equal(merged.vectors, a.vectors)
+    # the joined index is brought up to date as any other: nothing embedded again
+    again = ml.index(folder, tmp_path / "merged.idx", fake(), show_progress=False)
+    assert (again.embedded, again.reused) == (0, 3)
+    with pytest.raises(MotionlangError, match="is in .*part1.idx too"):
+        merge_indexes([parts[0], parts[0]], tmp_path / "x.idx")
+    with pytest.raises(MotionlangError, match="made of shard 1/3, not of the whole folder"):
+        ml.index(folder, parts[0], fake(), show_progress=False)
+    assert main(["merge-index", str(parts[0]), str(parts[1]), "-o",
+                 str(tmp_path / "two.idx")]) == 0
+    assert "still only shards 1/3,2/3" in capsys.readouterr().out
+    assert main(["index", str(folder), "-o", str(tmp_path / "y.idx"), "--shard", "4/3"]) == 2
+    assert "--shard must be K/N" in capsys.readouterr().err

@@ -30,6 +30,14 @@ def cmd_search(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_merge(args: argparse.Namespace) -> int:
+    from motionlang.library.merge import merge_indexes
+    d = merge_indexes(args.shards, args.output, root=args.root)
+    print(f"{args.output}: {len(d.entries)} takes, {len(d.vectors)} windows from "
+          f"{len(args.shards)} shards" + (f" (still only shards {d.shard})" if d.shard else ""))
+    return 0
+
+
 def register(subparsers) -> None:
     p = subparsers.add_parser(
         "index", help="make a folder of motion files searchable by text",
@@ -57,3 +65,10 @@ def register(subparsers) -> None:
         q.add_argument("--json", action="store_true", help="print JSON")
     p.set_defaults(func=cmd_index)
     s.set_defaults(func=cmd_search)
+    m = subparsers.add_parser("merge-index", help="join index shards (index --shard K/N) "
+                              "into one index")
+    m.add_argument("shards", nargs="+", metavar="SHARD", help="the shards' index files")
+    m.add_argument("-o", "--output", required=True, type=output_file, metavar="FILE")
+    m.add_argument("--root", help="where the indexed folder is, if the shards name other "
+                                  "places (made on other machines)")
+    m.set_defaults(func=cmd_merge)

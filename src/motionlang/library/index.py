@@ -10,6 +10,7 @@ of an older index that holds none is read and analysed again, its vectors kept.
 """
 from __future__ import annotations
 
+import hashlib
 import os
 import pickle
 import time
@@ -23,7 +24,7 @@ from motionlang.analysis import VERSION as ANALYSIS
 from motionlang.errors import MotionlangError
 from motionlang.library.embedder import Embedder
 from motionlang.library.grounded import take_findings
-from motionlang.library.options import IndexOptions
+from motionlang.library.options import IndexOptions, shard_of
 from motionlang.library.scan import file_facts, motion_files, read_takes, reason, rig_of
 from motionlang.library.store import Entry, Failure, IndexData, load_index, save_index
 from motionlang.library.windows import motion_windows, span
@@ -134,7 +135,13 @@ class _Builder:
         vectors = np.concatenate([v for v, _ in blocks]) if blocks else np.zeros((0, dim))
         spans = np.concatenate([s for _, s in blocks]) if blocks else np.zeros((0, 2))
         return IndexData(d.model, d.root, d.window, d.hop, entries, failed,
-                         vectors.astype(np.float32), spans, d.analysis)
+                         vectors.astype(np.float32), spans, d.analysis, d.shard)
+
+
+def in_shard(rel: str, k: int, n: int) -> bool:
+    """Whether the file at ``rel`` (under the folder) belongs to shard ``k`` of ``n``: by
+    the hash of its path, the same on every machine."""
+    return int(hashlib.sha256(rel.encode("utf-8")).hexdigest()[:8], 16) % n == k - 1
 
 
 def _open_old(out: Path, embedder: Embedder, opts: IndexOptions) -> IndexData | None:
@@ -147,6 +154,10 @@ def _open_old(out: Path, embedder: Embedder, opts: IndexOptions) -> IndexData | 
         embedder.check(old.model, str(out))
     except MotionlangError as exc:
         raise MotionlangError(f"{exc}{again}") from None
+    if old.shard != (opts.shard or ""):
+        was = f"shard {old.shard}" if old.shard else "the whole folder"
+        now = f"shard {opts.shard}" if opts.shard else "the whole folder"
+        raise MotionlangError(f"{out}: made of {was}, not of {now}{again}")
     if (old.window, old.hop) != (opts.window, opts.hop):
         raise MotionlangError(f"{out}: made with windows of {old.window:g} s every "
                               f"{old.hop:g} s, not {opts.window:g} s every {opts.hop:g} s"
@@ -173,9 +184,13 @@ def build_index(folder: str | Path, out: str | Path, model: Any = None,
     opts = IndexOptions(**options)
     root, out = Path(folder).resolve(), Path(out)
     paths = motion_files(root)
+    if opts.shard:
+        k, n = shard_of(opts.shard)
+        paths = [p for p in paths if in_shard(p.relative_to(root).as_posix(), k, n)]
     embedder = Embedder.load(model)
     old = _open_old(out, embedder, opts)
-    data = IndexData(embedder.identity, str(root), opts.window, opts.hop, analysis=ANALYSIS)
+    data = IndexData(embedder.identity, str(root), opts.window, opts.hop, analysis=ANALYSIS,
+                     shard=opts.shard or "")
     b = _Builder(old, data, opts.rebuild)
     summary = IndexSummary(str(out), embedder.name)
     last_save = time.monotonic()

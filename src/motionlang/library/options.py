@@ -49,6 +49,9 @@ class IndexOptions:
                                 "otherwise)")
     workers: int = _opt(1, "processes reading, analysing and embedding files, each loading "
                            "the model once (at most the CPU count)", metavar="N")
+    shard: str | None = _opt(None, "index only share K of N of the files (by the hash of "
+                                   "their path): shards made apart, on other machines too, "
+                                   "are joined by 'motionlang merge-index'", metavar="K/N")
     save_every: float = 60.0
     show_progress: bool | None = None
 
@@ -59,6 +62,21 @@ class IndexOptions:
             raise MotionlangError(f"IndexOptions.hop ({self.hop:g}) must be at most "
                                   f"IndexOptions.window ({self.window:g}): windows must "
                                   "cover the take")
+        if self.shard is not None:
+            k, n = shard_of(self.shard, "IndexOptions.shard")
+            self.shard = f"{k}/{n}"
+
+
+def shard_of(text: str, name: str = "shard") -> tuple[int, int]:
+    """``"K/N"`` -> (K, N), 1 <= K <= N.
+
+    Raises:
+        MotionlangError: anything else.
+    """
+    m = re.fullmatch(r"\s*(\d{1,6})\s*/\s*(\d{1,6})\s*", str(text))
+    if m is None or not 1 <= int(m.group(1)) <= int(m.group(2)):
+        raise MotionlangError(f"{name} must be K/N with 1 <= K <= N (e.g. 2/8), got {text!r}")
+    return int(m.group(1)), int(m.group(2))
 
 
 #: nearest-window backends of ``library.search``

@@ -12,7 +12,8 @@ Arrays (no pickled objects: read with ``allow_pickle=False``):
   what the analysis saw in it, ``library.grounded.FIELDS`` each; null in an index of
   format 1, which is read as it is and analysed on its next update) and ``failed`` (files
   skipped: path, size, mtime, sha256, one-line ``reason``), and ``analysis``, the version
-  of the detectors that made the findings (``analysis.VERSION``; 0 where unknown).
+  of the detectors that made the findings (``analysis.VERSION``; 0 where unknown), and
+  ``shard`` ("K/N" for a shard of the folder, ``index --shard``; "" for all of it).
 
 Reading checks every size and shape against the others before anything is used, so that a
 damaged or foreign file is one line naming it. Writing is atomic (``utils.atomic``).
@@ -84,6 +85,7 @@ class IndexData:
     vectors: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), np.float32))
     spans: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
     analysis: int = 0
+    shard: str = ""   # "K/N" for a shard of a folder (``index --shard``), "" for all of it
 
     @property
     def first_rows(self) -> np.ndarray:
@@ -97,6 +99,7 @@ class IndexData:
     def meta(self) -> dict:
         return {"what": WHAT, "format": FORMAT, "model": self.model, "root": self.root,
                 "window": self.window, "hop": self.hop, "analysis": self.analysis,
+                "shard": self.shard,
                 "entries": [asdict(e) for e in self.entries],
                 "failed": [asdict(f) for f in self.failed]}
 
@@ -171,7 +174,8 @@ def load_index(path: str | Path) -> IndexData:
                          window=float(m["window"]), hop=float(m["hop"]),
                          entries=[Entry(**e) for e in m["entries"]],
                          failed=[Failure(**f) for f in m["failed"]], vectors=vectors,
-                         spans=spans, analysis=int(m.get("analysis", 0)))
+                         spans=spans, analysis=int(m.get("analysis", 0)),
+                         shard=str(m.get("shard", "")))
     except (KeyError, TypeError, ValueError) as exc:
         raise _damaged(path, f"malformed metadata: {exc}") from None
     n = int(data.first_rows[-1])
