@@ -8,8 +8,11 @@ stands, and a walk. The learned side is a hand-made encoder that knows only "wal
 """
 from __future__ import annotations
 
+import importlib.util
 import json
+import os
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -152,3 +155,22 @@ def test_workers_give_the_index_one_process_gives(library, tmp_path):
     blind = Embedder("x", "y", lambda s: np.zeros(2), lambda m: np.zeros(2))
     with pytest.raises(MotionlangError, match="--workers needs a model given by name"):
         ml.index(root, tmp_path / "three.idx", blind, workers=2, show_progress=False)
+
+
+@pytest.mark.skipif(importlib.util.find_spec("ray") is None, reason="ray not installed")
+def test_ray_with_two_workers_gives_the_index_one_process_gives(library, tmp_path,
+                                                               monkeypatch):
+    root, out = library
+    monkeypatch.delenv("RAY_ADDRESS", raising=False)
+    # Ray's workers import the hand-made encoder's functions from the tests' helpers
+    here = str(Path(__file__).resolve().parent)
+    monkeypatch.setenv("PYTHONPATH", os.pathsep.join(
+        p for p in (here, os.environ.get("PYTHONPATH", "")) if p))
+    on_ray = tmp_path / "ray.idx"
+    s = ml.index(root, on_ray, hand_made(), workers=2, engine="ray", show_progress=False)
+    assert s.embedded == 3
+    a, b = load_index(out), load_index(on_ray)
+    assert a.entries == b.entries and a.failed == b.failed
+    np.testing.assert_allclose(a.vectors, b.vectors, rtol=1e-6)
+    again = ml.index(root, on_ray, hand_made(), workers=2, engine="ray", show_progress=False)
+    assert (again.embedded, again.reused) == (0, 3)   # nothing sent to Ray at all

@@ -205,7 +205,13 @@ def build_index(folder: str | Path, out: str | Path, model: Any = None,
                 bar.update(1)
             else:
                 todo.append(_Job(at, path, rel, facts, opts.window, opts.hop))
-        for job, result in _embedded(todo, embedder, model, opts.workers):
+        if opts.engine == "ray":
+            from motionlang.library.ray_engine import embedded_on_ray
+            sent = model if isinstance(model, (str, Path)) or model is None else embedder
+            done = embedded_on_ray(todo, sent, opts.workers, embed_file) if todo else iter(())
+        else:
+            done = _embedded(todo, embedder, model, opts.workers)
+        for job, result in done:
             _add(b, summary, job, result)
             bar.update(1)
             if time.monotonic() - last_save >= opts.save_every:

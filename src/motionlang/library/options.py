@@ -15,6 +15,8 @@ from typing import Any
 from motionlang.errors import MotionlangError
 from motionlang.utils.checks import MAX_WIDTH, check_numbers
 
+#: what runs ``index --workers``
+ENGINES = ("processes", "ray")
 #: how neighbouring windows of a timeline are merged (``library.timeline.merge_windows``)
 MERGES = ("action", "sentence")
 
@@ -49,6 +51,10 @@ class IndexOptions:
                                 "otherwise)")
     workers: int = _opt(1, "processes reading, analysing and embedding files, each loading "
                            "the model once (at most the CPU count)", metavar="N")
+    engine: str = _opt("processes", "what runs --workers: processes on this machine, or ray: "
+                                    "actors on the Ray cluster RAY_ADDRESS names, else on a "
+                                    "Ray started here (the ray extra)",
+                        choices=ENGINES)
     shard: str | None = _opt(None, "index only share K of N of the files (by the hash of "
                                    "their path): shards made apart, on other machines too, "
                                    "are joined by 'motionlang merge-index'", metavar="K/N")
@@ -62,6 +68,9 @@ class IndexOptions:
             raise MotionlangError(f"IndexOptions.hop ({self.hop:g}) must be at most "
                                   f"IndexOptions.window ({self.window:g}): windows must "
                                   "cover the take")
+        if self.engine not in ENGINES:
+            raise MotionlangError(f"IndexOptions.engine must be one of {', '.join(ENGINES)}, "
+                                  f"got {self.engine!r}")
         if self.shard is not None:
             k, n = shard_of(self.shard, "IndexOptions.shard")
             self.shard = f"{k}/{n}"
