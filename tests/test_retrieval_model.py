@@ -211,6 +211,9 @@ def test_ml_train_on_a_tiny_corpus(corpus, tmp_path, monkeypatch, capsys):
                     progress=False, plot=False)
     assert path == out / "model.pt" and path.is_file()
     assert (out / "splits" / "train.txt").is_file() and not (out / "LICENSE.txt").exists()
+    # the captions' vectors kept for the next run, keyed by encoder
+    assert [p.name.split("-")[0] for p in (tmp_path / "cache" / "sentences").iterdir()] == [
+        "minilm"]
     history = json.loads((out / "history.json").read_text())
     assert len(history) == 2 and "select" in history[-1]["val"]
     printed = capsys.readouterr().out

@@ -133,3 +133,25 @@ def test_canonical_captions_read_wordings_of_one_motion_alike():
     assert not np.allclose(*plain.embed_texts([a, b]))
     np.testing.assert_allclose(*canon.embed_texts([a, b]), rtol=1e-6)
     assert not np.allclose(*canon.embed_texts(["walks left", "walks right"]))
+
+
+def test_caption_vectors_kept_on_disk_are_read_back(tmp_path):
+    from motionlang.models.retrieval.text import SentenceVectors, cache_file
+    first = SentenceVectors(HashTokens())
+    want = first.vectors(CAPTIONS).numpy()
+    path = tmp_path / "v.npz"
+    first.save(path)
+    calls = []
+
+    class Counting(HashTokens):
+        def many(self, sentences):
+            calls.extend(sentences)
+            return super().many(sentences)
+
+    again = SentenceVectors(Counting())
+    assert again.load(path) == len(CAPTIONS)
+    np.testing.assert_array_equal(again.vectors(CAPTIONS).numpy(), want)
+    assert calls == []                                      # not one through the encoder
+    path.write_bytes(b"damaged")
+    assert SentenceVectors(Counting()).load(path) == 0      # computed again, no error
+    assert cache_file("minilm", 6) != cache_file("mpnet", 6) != cache_file("mpnet", 12)

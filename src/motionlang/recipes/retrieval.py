@@ -210,7 +210,7 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
     from motionlang.datasets.twostream_items import build_twostream_data
     from motionlang.models.registry import family
     from motionlang.models.retrieval.model import RetrievalModel
-    from motionlang.models.retrieval.text import CHUNK, sentence_vectors
+    from motionlang.models.retrieval.text import CHUNK, cache_file, sentence_vectors
     from motionlang.recipes.seq2seq import mix_training
     from motionlang.training.run_files import check_resume
     from motionlang.training.run_guard import keep_splits
@@ -247,6 +247,9 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
     # every caption through the frozen encoder once, in large batches, before training
     started = time.perf_counter()
     captions = sorted({str(it["sentence"]) for part in data.items.values() for it in part})
+    kept = cache_file(config.text_model, config.text_layer)
+    if lead:
+        text.load(kept)
     bar = progress(total=len(captions), desc="sentence vectors", unit="captions",
                    disable=not lead)
     with bar:
@@ -254,6 +257,7 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
             text.vectors(captions[i:i + CHUNK])
             bar.update(len(captions[i:i + CHUNK]))
     if lead:
+        text.save(kept)
         print(f"sentence vectors of {len(captions)} captions: "
               f"{time.perf_counter() - started:.0f} s")
     torch.manual_seed(train_cfg.seed)

@@ -12,13 +12,20 @@ masks of near-duplicate captions, cost no encoder call.
 """
 from __future__ import annotations
 
+import hashlib
+import re
+import zipfile
 from collections import OrderedDict
 from collections.abc import Sequence
+from pathlib import Path
 from typing import Any
 
+import numpy as np
 import torch
 
 from motionlang.datasets.canonical import canonical_text
+from motionlang.models.encoders import cache_root
+from motionlang.utils.atomic import atomic_write
 
 #: sentences given to the encoder at once (its token cache holds more than one batch, so
 #: no sentence of a batch is evicted before it is read)
@@ -55,6 +62,38 @@ class SentenceVectors:
         if not rows:
             return torch.zeros(0, self.dim)
         return torch.stack(rows)
+
+    def load(self, path: str | Path) -> int:
+        """Take the vectors a :meth:`save` kept in ``path`` (none where it is missing, of
+        another size or unreadable: they are computed again); returns how many."""
+        try:
+            with np.load(path, allow_pickle=False) as z:
+                sentences, vectors = z["sentences"], z["vectors"]
+        except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile):
+            return 0
+        if vectors.ndim != 2 or vectors.shape != (len(sentences), self.dim) or \
+                not np.isfinite(vectors).all():
+            return 0
+        for text, v in zip(sentences.tolist(), vectors):
+            self._cache.setdefault(str(text), torch.from_numpy(v.copy()))
+        return len(sentences)
+
+    def save(self, path: str | Path) -> None:
+        """Keep every vector read so far in ``path`` (atomically), for the next run."""
+        texts = list(self._cache)
+        Path(path).parent.mkdir(parents=True, exist_ok=True)
+        with atomic_write(Path(path), "wb") as fh:
+            np.savez(fh, sentences=np.array(texts, dtype=str),
+                     vectors=torch.stack([self._cache[t] for t in texts]).numpy()
+                     if texts else np.zeros((0, self.dim), np.float32))
+
+
+def cache_file(text_model: str, layer: int) -> Path:
+    """Where the caption vectors of an encoder and layer are kept between runs (keyed by
+    encoder and sentence: ``$MOTIONLANG_CACHE/sentences/``)."""
+    name = re.sub(r"[^A-Za-z0-9_.-]", "_", text_model)[-60:]
+    key = hashlib.sha256(f"{text_model}|{layer}".encode()).hexdigest()[:12]
+    return cache_root().parent / "sentences" / f"{name}-L{layer}-{key}.npz"
 
 
 def sentence_vectors(text_model: str = "minilm", layer: int = 0, canonical: bool = False
