@@ -4,6 +4,8 @@ their statistics in the checkpoint, and the held-out-word validation of the reci
 sentence features (``HashTokens``): no language model needed."""
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 import torch
@@ -155,3 +157,29 @@ def test_caption_vectors_kept_on_disk_are_read_back(tmp_path):
     path.write_bytes(b"damaged")
     assert SentenceVectors(Counting()).load(path) == 0      # computed again, no error
     assert cache_file("minilm", 6) != cache_file("mpnet", 6) != cache_file("mpnet", 12)
+
+
+def test_a_text_head_maps_one_encoders_vectors_to_anothers(tmp_path):
+    from motionlang.models.retrieval.text import SentenceVectors, TextHead
+    rng = np.random.default_rng(0)
+    d_in = HashTokens().dim
+    w = {"mu": rng.normal(size=d_in), "sd": 1 + rng.random(d_in),
+         "linear.weight": rng.normal(size=(5, d_in)), "w1.weight": rng.normal(size=(3, d_in)),
+         "w1.bias": rng.normal(size=3), "w2.weight": rng.normal(size=(5, 3)),
+         "w2.bias": rng.normal(size=5)}
+    path = tmp_path / "head.npz"
+    np.savez(path, **{k: v.astype(np.float16) for k, v in w.items()})
+    head = TextHead(path)
+    plain, headed = SentenceVectors(HashTokens()), SentenceVectors(HashTokens(), head=head)
+    x = plain.vectors(CAPTIONS[:2]).numpy().astype(np.float64)
+    f = {k: v.astype(np.float16).astype(np.float64) for k, v in w.items()}
+    z = (x - f["mu"]) / f["sd"]
+    gelu = 0.5 * (z @ f["w1.weight"].T + f["w1.bias"]) * (
+        1 + np.vectorize(math.erf)((z @ f["w1.weight"].T + f["w1.bias"]) / math.sqrt(2)))
+    want = z @ f["linear.weight"].T + gelu @ f["w2.weight"].T + f["w2.bias"]
+    assert headed.dim == 5
+    np.testing.assert_allclose(headed.vectors(CAPTIONS[:2]).numpy(), want, rtol=1e-4,
+                               atol=1e-4)
+    (tmp_path / "bad.npz").write_bytes(b"x")
+    with pytest.raises(MotionlangError, match="bad.npz: not a readable text head"):
+        TextHead(tmp_path / "bad.npz")

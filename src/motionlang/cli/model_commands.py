@@ -40,7 +40,8 @@ def cmd_encoders(args: argparse.Namespace) -> int:
     print(json.dumps(rows, indent=1) if args.json else "\n".join(
         f"{r['name']:8s} {r['dim']:4d}-d  {r['title']}; {r['licence']}; "
         + (f"installed: {r['installed']}" if r["installed"] else
-           f"not installed ({r['download_mb']} MB: motionlang encoders install {r['name']})")
+           f"not installed ({r['download_mb']} MB: motionlang encoders install {r['name']})"
+           if r["download_mb"] else "missing from this install")
         for r in rows))
     return 0
 

