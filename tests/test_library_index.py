@@ -317,3 +317,41 @@ def test_shards_joined_are_the_index_of_the_whole_folder(folder, tmp_path, capsy
     assert "still only shards 1/3,2/3" in capsys.readouterr().out
     assert main(["index", str(folder), "-o", str(tmp_path / "y.idx"), "--shard", "4/3"]) == 2
     assert "--shard must be K/N" in capsys.readouterr().err
+
+
+def test_an_interrupted_rebuild_loses_nothing_and_goes_on(folder, tmp_path):
+    out, emb = tmp_path / "library.idx", fake()
+    ml.index(folder, out, emb, show_progress=False)
+    before = load_index(out)
+    real, calls = emb.encode_motion, []
+
+    def stop_inside_long(m):   # jump.bvh (2 windows) done, then stopped in sub/long.bvh
+        calls.append(m)
+        if len(calls) > 2 + 3:
+            raise KeyboardInterrupt
+        return real(m)
+
+    emb.encode_motion = stop_inside_long
+    with pytest.raises(KeyboardInterrupt):
+        ml.index(folder, out, emb, rebuild=True, show_progress=False, save_every=1e-9)
+    after = load_index(out)     # the index as it was, every take in it
+    assert after.entries == before.entries
+    np.testing.assert_array_equal(after.vectors, before.vectors)
+    partial = tmp_path / "library.idx.rebuilding"
+    assert partial.is_file()
+    emb.encode_motion = real
+    s = ml.index(folder, out, emb, rebuild=True, show_progress=False)
+    assert (s.reused, s.embedded) == (1, 2) and not partial.exists()   # jump.bvh kept
+
+
+def test_another_folders_index_is_not_replaced_silently(folder, tmp_path):
+    out = tmp_path / "library.idx"
+    ml.index(folder, out, fake(), show_progress=False)
+    other = tmp_path / "other"
+    other.mkdir()
+    ml.write_motion(take("walk", 3.0), other / "w.bvh")
+    with pytest.raises(MotionlangError, match="the index of .*mocap, not of .*other: give "
+                                              "another -o"):
+        ml.index(other, out, fake(), show_progress=False)
+    assert {e.path for e in load_index(out).entries} == {"walk.bvh", "jump.bvh",
+                                                         "sub/long.bvh"}

@@ -88,14 +88,14 @@ def embed_take(embedder: Embedder, motion, window: float, hop: float
 class _Builder:
     """The new index as it grows, and what the old one offers to reuse."""
 
-    def __init__(self, old: IndexData | None, data: IndexData, rebuild: bool):
+    def __init__(self, old: IndexData | None, data: IndexData):
         self.data = data
         self.blocks: list[tuple[np.ndarray, np.ndarray]] = []
         self.order: list[int] = []     # each entry's file's place in the folder's listing
         self.failed_at: list[int] = []
         self.takes: dict[str, list[tuple[Entry, np.ndarray, np.ndarray]]] = {}
         self.bad: dict[str, Failure] = {}
-        if old is not None and not rebuild:
+        if old is not None:
             first = old.first_rows
             for i, e in enumerate(old.entries):
                 rows = slice(first[i], first[i + 1])
@@ -144,12 +144,16 @@ def in_shard(rel: str, k: int, n: int) -> bool:
     return int(hashlib.sha256(rel.encode("utf-8")).hexdigest()[:8], 16) % n == k - 1
 
 
-def _open_old(out: Path, embedder: Embedder, opts: IndexOptions) -> IndexData | None:
-    """The index already in ``out``, checked to be of this model and these windows."""
+def _open_old(out: Path, embedder: Embedder, opts: IndexOptions, root: Path
+              ) -> IndexData | None:
+    """The index already in ``out``, checked to be of this folder, model and windows."""
     if opts.rebuild or not out.exists():
         return None
     old = load_index(out)
     again = "; pass --rebuild (rebuild=True) to embed the folder anew"
+    if old.root != str(root):
+        raise MotionlangError(f"{out}: the index of {old.root}, not of {root}: give another "
+                              f"-o for this folder, or pass --rebuild to replace it")
     try:
         embedder.check(old.model, str(out))
     except MotionlangError as exc:
@@ -162,6 +166,21 @@ def _open_old(out: Path, embedder: Embedder, opts: IndexOptions) -> IndexData | 
         raise MotionlangError(f"{out}: made with windows of {old.window:g} s every "
                               f"{old.hop:g} s, not {opts.window:g} s every {opts.hop:g} s"
                               f"{again}")
+    return old
+
+
+def _open_partial(partial: Path, embedder: Embedder, opts: IndexOptions) -> IndexData | None:
+    """What an interrupted rebuild had done (``OUT.rebuilding``), where it is of this model,
+    windows and shard; None (and nothing kept of it) otherwise."""
+    if not partial.exists():
+        return None
+    try:
+        old = load_index(partial)
+        embedder.check(old.model, str(partial))
+    except MotionlangError:
+        return None
+    if (old.window, old.hop, old.shard) != (opts.window, opts.hop, opts.shard or ""):
+        return None
     return old
 
 
@@ -188,10 +207,14 @@ def build_index(folder: str | Path, out: str | Path, model: Any = None,
         k, n = shard_of(opts.shard)
         paths = [p for p in paths if in_shard(p.relative_to(root).as_posix(), k, n)]
     embedder = Embedder.load(model)
-    old = _open_old(out, embedder, opts)
+    # a rebuild saves as it goes beside the index, which it replaces only once complete: an
+    # interrupted rebuild loses nothing, and the next one goes on from what it had done
+    partial = out.with_name(out.name + ".rebuilding") if opts.rebuild else None
+    old = _open_old(out, embedder, opts, root) if partial is None else _open_partial(
+        partial, embedder, opts)
     data = IndexData(embedder.identity, str(root), opts.window, opts.hop, analysis=ANALYSIS,
                      shard=opts.shard or "")
-    b = _Builder(old, data, opts.rebuild)
+    b = _Builder(old, data)
     summary = IndexSummary(str(out), embedder.name)
     last_save = time.monotonic()
     bar = progress(total=len(paths), desc="index", unit="files",
@@ -215,10 +238,12 @@ def build_index(folder: str | Path, out: str | Path, model: Any = None,
             _add(b, summary, job, result)
             bar.update(1)
             if time.monotonic() - last_save >= opts.save_every:
-                save_index(b.snapshot(final=False), out)
+                save_index(b.snapshot(final=False), partial or out)
                 last_save = time.monotonic()
     final = b.snapshot(final=True)
     save_index(final, out)
+    if partial is not None:
+        partial.unlink(missing_ok=True)
     summary.files = len({e.path for e in final.entries})
     summary.takes, summary.windows = len(final.entries), len(final.vectors)
     summary.hours = sum(e.duration for e in final.entries) / 3600.0
