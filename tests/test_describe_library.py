@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import re
 from pathlib import Path
 
@@ -21,6 +22,7 @@ from motionlang.datasets.synth.corpus import generate_sample
 from motionlang.datasets.synth.spec import Primitive
 from motionlang.errors import MotionlangError
 from motionlang.library.bank import read_bank
+from motionlang.library.describe import Describer
 from motionlang.library.timeline import action_of, merge_windows
 from motionlang.library.windows import Window
 
@@ -203,3 +205,54 @@ def test_a_missing_input_is_named_before_anything_is_written(library, tmp_path, 
     assert main(["describe", str(library), str(tmp_path / "gone"), "-o", str(out)]) == 2
     assert "gone: no such file or folder" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_an_interrupted_run_keeps_what_it_did_and_the_same_command_goes_on(library, described,
+                                                                         tmp_path, capsys,
+                                                                         monkeypatch):
+    out = tmp_path / "captions.jsonl"
+    argv = ["describe", str(library), "-o", str(out), *WIDTH, "--threads", "1"]
+    real, seen = Describer.record, []
+
+    def stop_at_the_third(self, path):
+        seen.append(path)
+        if len(seen) == 3:
+            raise KeyboardInterrupt
+        return real(self, path)
+
+    monkeypatch.setattr(Describer, "record", stop_at_the_third)
+    assert main(argv) == 130                            # Ctrl-C
+    partial = tmp_path / "captions.jsonl.partial"
+    assert not out.exists() and len(partial.read_text().splitlines()) == 1 + 2
+    monkeypatch.setattr(Describer, "record", real)
+    again = []
+    monkeypatch.setattr(Describer, "record", lambda self, p: again.append(p) or real(self, p))
+    assert main(argv) == 0
+    assert len(again) == 2                              # only the two not done before
+    assert out.read_text().splitlines() == described and not partial.exists()
+    # a partial of another command is not gone on from
+    partial.write_text(json.dumps({"motionlang describe": {"other": 1}}) + "\n")
+    assert main(argv) == 0 and out.read_text().splitlines() == described
+    capsys.readouterr()
+
+
+class Dying(Describer):
+    """A describer whose worker process dies on one file, as one killed would."""
+
+    def record(self, path):
+        if Path(path).name == "c.bvh":
+            os._exit(3)
+        return super().record(path)
+
+
+def test_a_worker_that_dies_is_one_line_and_what_was_done_is_kept(library, tmp_path):
+    from motionlang.library.describe import describe_run
+    from motionlang.library.options import DescribeOptions
+    run = describe_run([library / "a.bvh", library / "more"], None,
+                       DescribeOptions(workers=2, width=2))
+    run.describer.__class__ = Dying
+    out = tmp_path / "o.jsonl"
+    with pytest.raises(MotionlangError, match="worker process died.*run the same command "
+                                              "again"):
+        run.write(out)
+    assert not out.exists() and (tmp_path / "o.jsonl.partial").is_file()

@@ -25,7 +25,7 @@ from motionlang.errors import MotionlangError
 
 def cmd_describe(args: argparse.Namespace) -> int:
     from motionlang.cli.config_options import config_from_args
-    from motionlang.library.describe import DescribeOptions, ReadOptions, describe_run, write_jsonl
+    from motionlang.library.describe import DescribeOptions, ReadOptions, describe_run
     options = config_from_args(DescribeOptions, args)
     if args.output is None and len(args.input) == 1 and not Path(args.input[0]).is_dir():
         return _describe_one(args, options)
@@ -35,7 +35,7 @@ def cmd_describe(args: argparse.Namespace) -> int:
         for record in run.records():
             print(json.dumps(record, ensure_ascii=False), flush=True)
         return 0
-    n, errors = write_jsonl(run.records(), args.output)
+    n, errors = run.write(args.output)
     print(f"{args.output}: {n - errors} of {n} files described" +
           (f"; {errors} could not be (their \"error\" says why)" if errors else ""))
     return 0

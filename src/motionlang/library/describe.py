@@ -261,24 +261,28 @@ class DescribeRun:
     describer: Describer
     model_file: Path | None = None
 
-    def records(self, *, show_progress: bool | None = None) -> Iterator[dict]:
-        """One record per file, in order; ``options.workers`` processes (at most the CPU
-        count and the files), each loading the model once."""
+    def records(self, *, show_progress: bool | None = None,
+                files: Sequence[Path] | None = None) -> Iterator[dict]:
+        """One record per file (``files``, default all), in order; ``options.workers``
+        processes (at most the CPU count and the files), each loading the model once."""
         from motionlang.utils.progress import progress
         d = self.describer
-        workers = max(1, min(d.options.workers, os.cpu_count() or 1, len(self.files)))
-        bar = progress(total=len(self.files), desc="describe", unit="files",
+        files = list(self.files if files is None else files)
+        workers = max(1, min(d.options.workers, os.cpu_count() or 1, len(files)))
+        bar = progress(total=len(files), desc="describe", unit="files",
                        disable=None if show_progress is None else not show_progress)
         with bar:
             if workers == 1:
-                for path in self.files:
+                for path in files:
                     yield d.record(path)
                     bar.update(1)
                 return
-            yield from self._in_workers(workers, bar)
+            yield from self._in_workers(workers, bar, files)
 
-    def _in_workers(self, workers: int, bar) -> Iterator[dict]:
+    def _in_workers(self, workers: int, bar, files: list[Path]) -> Iterator[dict]:
         import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor
+        from concurrent.futures.process import BrokenProcessPool
 
         import torch
         d = self.describer   # a file is cheaper to send than the weights
@@ -286,11 +290,73 @@ class DescribeRun:
         threads = max(1, torch.get_num_threads() // workers)
         # spawned, not forked: a fork of a process whose torch runs threads can hang
         ctx = multiprocessing.get_context("spawn")
-        with ctx.Pool(workers, initializer=_start_worker,
-                      initargs=(self.model_file, shell, threads)) as pool:
-            for rec in pool.imap(_worker_record, self.files):
-                yield rec
-                bar.update(1)
+        with ProcessPoolExecutor(workers, mp_context=ctx, initializer=_start_worker,
+                                 initargs=(self.model_file, shell, threads)) as pool:
+            try:
+                for rec in pool.map(_worker_record, files):
+                    yield rec
+                    bar.update(1)
+            except BrokenProcessPool:
+                raise MotionlangError("a describe worker process died (killed, or out of "
+                                      "memory); what was done is kept: run the same "
+                                      "command again to go on") from None
+
+    def header(self) -> dict:
+        """What an interrupted run's partial output must match to be gone on from."""
+        return {"motionlang describe": {
+            "model": str(self.model_file) if self.model_file is not None else
+            str(getattr(self.describer.model, "name", "")),
+            "options": {k: v for k, v in vars(self.describer.options).items()
+                        if k != "workers"}}}
+
+    def write(self, out: str | Path) -> tuple[int, int]:
+        """Write the records as JSON lines to ``out``: as it goes into ``OUT.partial`` (an
+        interrupted run, a killed worker, loses nothing; the same command goes on from
+        there), then ``out`` at once when every file is done; returns (records, errors)."""
+        from motionlang.utils.atomic import atomic_write
+        out = Path(out)
+        partial = out.with_name(out.name + ".partial")
+        done = _done_before(partial, self.header())
+        todo = [p for p in self.files if str(p) not in done]
+        with open(partial, "a" if done else "w", encoding="utf-8") as fh:
+            if not done:
+                fh.write(json.dumps(self.header(), ensure_ascii=False) + "\n")
+            for rec in self.records(files=todo):
+                done[rec["file"]] = rec
+                fh.write(json.dumps(rec, ensure_ascii=False) + "\n")
+                fh.flush()
+        n = errors = 0
+        with atomic_write(out) as fh:
+            for p in self.files:
+                rec = done[str(p)]
+                fh.write(json.dumps(rec, ensure_ascii=False) + "\n")
+                n += 1
+                errors += "error" in rec
+        partial.unlink(missing_ok=True)
+        return n, errors
+
+
+def _done_before(partial: Path, header: dict) -> dict[str, dict]:
+    """The records an interrupted run of the same command kept in ``partial`` (by file);
+    none where it is missing, of another command or unreadable; a torn last line dropped."""
+    try:
+        lines = partial.read_text(encoding="utf-8").splitlines()
+    except (OSError, UnicodeDecodeError):
+        return {}
+    try:
+        if not lines or json.loads(lines[0]) != json.loads(json.dumps(header)):
+            return {}
+    except ValueError:
+        return {}
+    done = {}
+    for line in lines[1:]:
+        try:
+            rec = json.loads(line)
+        except ValueError:
+            continue
+        if isinstance(rec, dict) and isinstance(rec.get("file"), str):
+            done[rec["file"]] = rec
+    return done
 
 
 def motion_paths(inputs: Iterable[str | Path]) -> list[Path]:
@@ -325,14 +391,3 @@ def describe_run(paths: Iterable[str | Path], model: Any = None,
     return DescribeRun(files, Describer(loaded, options, bank, read), where)
 
 
-def write_jsonl(records: Iterable[dict], out: str | Path) -> tuple[int, int]:
-    """Write records as JSON lines to ``out`` (atomically: the file appears complete or not
-    at all); returns (records, errors among them)."""
-    from motionlang.utils.atomic import atomic_write
-    n = errors = 0
-    with atomic_write(out) as fh:
-        for rec in records:
-            fh.write(json.dumps(rec, ensure_ascii=False) + "\n")
-            n += 1
-            errors += "error" in rec
-    return n, errors
