@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import importlib.util
 import json
+import os
 
 import numpy as np
 import pytest
@@ -355,3 +356,29 @@ def test_another_folders_index_is_not_replaced_silently(folder, tmp_path):
         ml.index(other, out, fake(), show_progress=False)
     assert {e.path for e in load_index(out).entries} == {"walk.bvh", "jump.bvh",
                                                          "sub/long.bvh"}
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no FIFOs here")
+def test_fifos_devices_unlistable_and_deep_folders_are_each_one_line(folder, tmp_path):
+    os.mkfifo(folder / "pipe.bvh")
+    os.symlink("/dev/zero", folder / "zero.bvh")
+    os.mkfifo(folder / "clip.txt")              # a .txt is read only where regular
+    locked = folder / "locked"
+    locked.mkdir()
+    deep = folder
+    for _ in range(1100):   # deeper than os.walk's recursion reaches
+        deep = deep / "d"
+        os.mkdir(deep)
+    ml.write_motion(take("walk", 3.0), deep / "w.bvh")
+    os.chmod(locked, 0)
+    try:
+        s = ml.index(folder, tmp_path / "library.idx", fake(), show_progress=False)
+    finally:
+        os.chmod(locked, 0o755)
+    failed = dict(s.failed)
+    assert "not a regular file" in failed["pipe.bvh"] and "not a regular file" in \
+        failed["zero.bvh"]
+    assert "clip.txt" not in failed
+    assert os.geteuid() == 0 or "cannot list this folder" in failed["locked/"]
+    assert any(e.path.endswith("/w.bvh") for e in load_index(tmp_path / "library.idx").entries)
+    assert main(["describe", str(folder / "pipe.bvh")]) == 2

@@ -117,7 +117,8 @@ def read_motion(path: str | Path, *, skeleton: Skeleton | str | Path | None = No
                                       f"expected one of {', '.join(READ_EXTENSIONS)} or .txt "
                                       "(DeepMimic)")
     if not path.is_file():
-        raise MotionFormatError(path, "file not found")
+        raise MotionFormatError(path, "not a regular file (a FIFO, device or socket)"
+                                if path.exists() else "file not found")
     if ext == ".amc":
         from motionlang.formats.asf_amc import read_amc, read_asf
         if skeleton is None:

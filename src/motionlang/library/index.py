@@ -202,7 +202,8 @@ def build_index(folder: str | Path, out: str | Path, model: Any = None,
     t0 = time.perf_counter()
     opts = IndexOptions(**options)
     root, out = Path(folder).resolve(), Path(out)
-    paths = motion_files(root)
+    unlisted: list[tuple[str, str]] = []
+    paths = motion_files(root, unlisted)
     if opts.shard:
         k, n = shard_of(opts.shard)
         paths = [p for p in paths if in_shard(p.relative_to(root).as_posix(), k, n)]
@@ -215,6 +216,8 @@ def build_index(folder: str | Path, out: str | Path, model: Any = None,
     data = IndexData(embedder.identity, str(root), opts.window, opts.hop, analysis=ANALYSIS,
                      shard=opts.shard or "")
     b = _Builder(old, data)
+    for at, (rel, why) in enumerate(unlisted):
+        b.fail(Failure(rel, 0, 0.0, "", why), -1 - at)
     summary = IndexSummary(str(out), embedder.name)
     last_save = time.monotonic()
     bar = progress(total=len(paths), desc="index", unit="files",

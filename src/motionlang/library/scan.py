@@ -10,20 +10,27 @@ from __future__ import annotations
 import hashlib
 import os
 import re
+import stat
 from dataclasses import dataclass
 from pathlib import Path
 
 from motionlang.datasets.download import sha256_file
 from motionlang.errors import MotionlangError
-from motionlang.formats import find_asf, is_motion_file, read_motion
+from motionlang.formats import READ_EXTENSIONS, find_asf, is_motion_file, read_motion
 from motionlang.kinematics.motion import Motion
 
 
-def motion_files(root: str | Path) -> list[Path]:
-    """Every file under ``root`` (recursively) with an extension a reader knows (``.txt``:
-    a DeepMimic clip, known by its content), sorted by relative path. Hidden files and
-    folders (a name starting with ".": version control, the temporary files of atomic
-    writes) are left out.
+def motion_files(root: str | Path, unlisted: list[tuple[str, str]] | None = None
+                 ) -> list[Path]:
+    """Every file under ``root`` (recursively, however deep) with an extension a reader
+    knows (``.txt``: a DeepMimic clip, known by its content, read only from a regular
+    file), sorted by relative path. Hidden files and folders (a name starting with ".":
+    version control, the temporary files of atomic writes) are left out; so are folder
+    links, which could lead round in a circle. A file that is not a regular one (a FIFO, a
+    link to a device) is listed, for its reader to refuse in one line, never read.
+
+    unlisted: where given, gets ``(folder relative to root, reason)`` of each folder that
+    could not be listed.
 
     Raises:
         MotionlangError: ``root`` is not a folder.
@@ -32,10 +39,30 @@ def motion_files(root: str | Path) -> list[Path]:
     if not root.is_dir():
         raise MotionlangError(f"{root}: not a folder")
     found = []
-    for folder, dirs, names in os.walk(root):
-        dirs[:] = [d for d in dirs if not d.startswith(".")]
-        found += [Path(folder) / n for n in names
-                  if not n.startswith(".") and is_motion_file(Path(folder) / n)]
+    stack = [root]
+    while stack:   # not os.walk: its recursion ends a folder nested ~1,000 deep
+        folder = stack.pop()
+        try:
+            with os.scandir(folder) as it:
+                entries = list(it)
+        except OSError as exc:
+            if unlisted is not None:
+                unlisted.append(((folder.relative_to(root).as_posix() or ".") + "/",
+                                 f"cannot list this folder: {exc.strerror or exc}"))
+            continue
+        for e in entries:
+            if e.name.startswith("."):
+                continue
+            path = Path(e.path)
+            try:
+                if e.is_dir(follow_symlinks=False):
+                    stack.append(path)
+                    continue
+                regular = e.is_file()
+            except OSError:
+                regular = False
+            if path.suffix.lower() in READ_EXTENSIONS or (regular and is_motion_file(path)):
+                found.append(path)
     return sorted(found, key=lambda p: p.relative_to(root).as_posix())
 
 
@@ -58,6 +85,9 @@ def file_facts(root: Path, path: Path) -> FileFacts:
     """
     try:
         st = path.stat()
+        if not stat.S_ISREG(st.st_mode):
+            raise MotionlangError(f"{path}: not a regular file (a FIFO, device or socket): "
+                                  "left out")
         digest = sha256_file(path)
         if path.suffix.lower() == ".amc":
             both = digest + sha256_file(find_asf(path))
