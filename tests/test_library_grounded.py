@@ -174,3 +174,17 @@ def test_ray_with_two_workers_gives_the_index_one_process_gives(library, tmp_pat
     np.testing.assert_allclose(a.vectors, b.vectors, rtol=1e-6)
     again = ml.index(root, on_ray, hand_made(), workers=2, engine="ray", show_progress=False)
     assert (again.embedded, again.reused) == (0, 3)   # nothing sent to Ray at all
+
+
+def test_a_worker_that_dies_is_one_line_and_the_index_keeps_what_was_done(library,
+                                                                         tmp_path):
+    from helpers.grounded import dying
+    root, _ = library
+    out = tmp_path / "dies.idx"
+    with pytest.raises(MotionlangError, match="worker process died.*run the same command"):
+        ml.index(root, out, dying(), workers=2, show_progress=False)
+    # what came back before the pool broke (the other worker's file may be lost with it)
+    kept = [e.path for e in load_index(out).entries]
+    assert kept in (["chairs/sit.bvh"], ["chairs/sit.bvh", "stand.bvh"])
+    s = ml.index(root, out, hand_made(), show_progress=False)
+    assert (s.reused, s.embedded) == (len(kept), 3 - len(kept))

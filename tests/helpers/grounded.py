@@ -3,6 +3,7 @@ and a walk, on the 21-joint body written as BVH; and a hand-made learned side th
 "walks" and "stands" ("sits" is half a walk to it), for the search tests and the browser's."""
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
@@ -57,3 +58,15 @@ def make_library(folder: Path) -> tuple[Path, Path]:
     out = root.parent / "library.idx"
     ml.index(root, out, hand_made(), show_progress=False)
     return root, out
+
+
+def dying_motion_vector(m) -> np.ndarray:
+    """As :func:`motion_vector`, but the process dies on the walk, as one killed would."""
+    if "walk" in str(m.name):
+        os._exit(3)
+    return motion_vector(m)
+
+
+def dying() -> Embedder:
+    """:func:`hand_made` whose worker process dies on the walk (the same identity)."""
+    return Embedder("hand-made", "g", text_vector, dying_motion_vector)

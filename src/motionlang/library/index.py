@@ -14,6 +14,8 @@ import hashlib
 import os
 import pickle
 import time
+from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -237,12 +239,17 @@ def build_index(folder: str | Path, out: str | Path, model: Any = None,
             done = embedded_on_ray(todo, sent, opts.workers, embed_file) if todo else iter(())
         else:
             done = _embedded(todo, embedder, model, opts.workers)
-        for job, result in done:
-            _add(b, summary, job, result)
-            bar.update(1)
-            if time.monotonic() - last_save >= opts.save_every:
+        try:
+            for job, result in done:
+                _add(b, summary, job, result)
+                bar.update(1)
+                if time.monotonic() - last_save >= opts.save_every:
+                    save_index(b.snapshot(final=False), partial or out)
+                    last_save = time.monotonic()
+        except (MotionlangError, KeyboardInterrupt):   # a dead worker, Ctrl-C: keep the work
+            if summary.embedded:
                 save_index(b.snapshot(final=False), partial or out)
-                last_save = time.monotonic()
+            raise
     final = b.snapshot(final=True)
     save_index(final, out)
     if partial is not None:
@@ -359,8 +366,14 @@ def _embedded(jobs: list[_Job], embedder: Embedder, model: Any, workers: int):
     threads = max(1, torch.get_num_threads() // workers)
     # spawned, not forked: a fork of a process whose torch runs threads can hang
     ctx = multiprocessing.get_context("spawn")
-    with ctx.Pool(workers, initializer=_start_worker, initargs=(sent, threads)) as pool:
-        yield from pool.imap(_worker_embed, jobs)
+    with ProcessPoolExecutor(workers, mp_context=ctx, initializer=_start_worker,
+                             initargs=(sent, threads)) as pool:
+        try:
+            yield from pool.map(_worker_embed, jobs)
+        except BrokenProcessPool:
+            raise MotionlangError("an index worker process died (killed, or out of "
+                                  "memory); what was embedded before is kept in the index: "
+                                  "run the same command again to go on") from None
 
 
 def _analysed(path: Path, takes: int) -> list[list[dict]]:
