@@ -14,6 +14,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
+import warnings
 
 from motionlang import __version__
 from motionlang.cli.options import threads_int
@@ -117,7 +118,11 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     threads = getattr(args, "threads", None) or default_threads()
     try:
-        with sigterm_unwinds(), limit_threads(threads), lead_output():
+        with sigterm_unwinds(), limit_threads(threads), lead_output(), \
+                warnings.catch_warnings():
+            # a warning is one line naming the command, not a source file and line
+            warnings.formatwarning = lambda message, *_, **__: (
+                f"motionlang {args.command}: warning: {message}\n")
             code = int(args.func(args) or 0)
             distributed = sys.modules.get("motionlang.training.distributed")
             if distributed is not None:  # only the trainer joins a process group (torchrun)
