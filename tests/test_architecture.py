@@ -1,4 +1,4 @@
-"""The package's shape: imports flow down the layers the README states, no import circles
+"""The package's shape: imports flow down the layers docs/contributing.md states, no import circles
 (at module level or through imports inside functions), no source file over the hard cap."""
 from __future__ import annotations
 
@@ -10,18 +10,19 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 SRC = ROOT / "src" / "motionlang"
-#: a README line such as ``utils, errors → kinematics → formats → ... → cli``
+#: a line of docs/contributing.md such as ``utils, errors → kinematics → formats → ... → cli``
 LAYER_LINE = re.compile(r"^\s*([a-z_]+(?:, [a-z_]+)*)((?: → [a-z_]+(?:, [a-z_]+)*)+)\s*$")
 
 
 def readme_layers() -> dict[str, int]:
-    """Top-level package/module name -> its layer number, from the README."""
-    for line in (ROOT / "README.md").read_text(encoding="utf-8").splitlines():
+    """Top-level package/module name -> its layer number, from docs/contributing.md."""
+    for line in (ROOT / "docs" / "contributing.md").read_text(encoding="utf-8").splitlines():
         m = LAYER_LINE.match(line)
         if m:
             groups = [g.split(", ") for g in line.strip().split(" → ")]
             return {name: i for i, names in enumerate(groups) for name in names}
-    raise AssertionError("README.md states no layer order (a line 'a, b → c → ...')")
+    raise AssertionError("docs/contributing.md states no layer order (a line "
+                         "'a, b → c → ...')")
 
 
 def modules() -> dict[str, Path]:
@@ -75,7 +76,7 @@ def test_every_top_level_part_has_a_layer():
     layers = readme_layers()
     tops = {p.relative_to(SRC).parts[0].removesuffix(".py") for p in SRC.rglob("*.py")}
     missing = sorted(tops - set(layers) - {"__init__"})
-    assert not missing, f"parts of motionlang without a layer in the README: {missing}"
+    assert not missing, f"parts of motionlang without a layer in docs/contributing.md: {missing}"
 
 
 def test_no_module_imports_from_a_higher_layer():
