@@ -17,6 +17,7 @@ from motionlang.rendering.draw import (
     grab,
     grid_segments,
     new_figure,
+    side_legend,
 )
 from motionlang.rendering.scene import (
     SIDE_COLOURS,
@@ -160,6 +161,7 @@ def animation_frames(motions: Motion | Sequence[Motion], *, fps: float | None = 
     n = len(groups)
     top = 0.9 if title else 1.0
     fig, canvas = new_figure(size[0] * n, size[1], dpi)
+    side_legend(fig)
     if title:
         fig.suptitle(title, fontsize=10)
     panels = [_Panel(fig, (i / n, 0.0, 1.0 / n, top), g, camera, lab)

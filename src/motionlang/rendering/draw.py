@@ -23,6 +23,16 @@ def new_figure(width_in: float, height_in: float, dpi: float) -> tuple[Figure, F
     return fig, FigureCanvasAgg(fig)
 
 
+def side_legend(fig: Figure) -> None:
+    """"left" and "right" in their colours in the picture's upper left corner (placed in
+    inches, so that a small GIF and a wide strip alike have room for both), so that whoever
+    looks knows which side is which."""
+    top = fig.get_figheight() - 0.06
+    for x, word, side in ((0.06, "left", LEFT), (0.36, "right", RIGHT)):
+        fig.text(x, top, word, color=SIDE_COLOURS[side], fontsize=7, ha="left", va="top",
+                 fontweight="bold", transform=fig.dpi_scale_trans)
+
+
 def grab(canvas: FigureCanvasAgg) -> np.ndarray:
     """(H, W, 3) uint8 RGB image of the canvas."""
     canvas.draw()

@@ -21,9 +21,11 @@ TO_MPL = np.array([[1.0, 0.0, 0.0],
                    [0.0, 1.0, 0.0]])
 
 LEFT, RIGHT, CENTRE = "L", "R", "C"
-SIDE_COLOURS = {LEFT: "#d62728", RIGHT: "#1f77b4", CENTRE: "#404040"}
+#: the body's sides as every picture draws them, the web viewer's too (static/viewer.js):
+#: left blue, right orange
+SIDE_COLOURS = {LEFT: "#2a6fdb", RIGHT: "#e07b22", CENTRE: "#404040"}
 # second motion in an overlay: same idea, lighter tones
-SIDE_COLOURS_ALT = {LEFT: "#ff9f40", RIGHT: "#2ca02c", CENTRE: "#9467bd"}
+SIDE_COLOURS_ALT = {LEFT: "#8fb3ee", RIGHT: "#f2b27f", CENTRE: "#9a9a9a"}
 
 
 @dataclass

@@ -9,7 +9,13 @@ from matplotlib.collections import LineCollection
 
 from motionlang.errors import MotionlangError
 from motionlang.kinematics import Motion
-from motionlang.rendering.draw import GRID_COLOUR, bone_segments, grid_segments, new_figure
+from motionlang.rendering.draw import (
+    GRID_COLOUR,
+    bone_segments,
+    grid_segments,
+    new_figure,
+    side_legend,
+)
 from motionlang.rendering.scene import (
     CENTRE,
     LEFT,
@@ -72,6 +78,7 @@ def render_strip(motion: Motion | Scene, path: str | Path, n_frames: int = 8, ti
     fig, ax = _strip_axes(scene, picks, offsets, ground, view, pad, title, dpi)
     _draw_floor(ax, scene, ground, view)
     _draw_poses(ax, scene, picks, offsets, ground, view, pad)
+    side_legend(fig)
     if title:
         fig.suptitle(title, fontsize=10)
     with atomic_path(path) as tmp:
