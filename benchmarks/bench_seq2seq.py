@@ -19,7 +19,7 @@ import time
 import numpy as np
 import torch
 
-from motionlang.decoding.seq2seq import describe_features, generate_features
+from motionlang.models.seq2seq.decode.search import describe_features, generate_features
 from motionlang.models.seq2seq.l2m import L2MConfig, LanguageToMotion
 from motionlang.models.seq2seq.m2l import M2LConfig, MotionToLanguage
 from motionlang.training.collate import collate_pairs
@@ -97,7 +97,7 @@ def main() -> None:
     t = median_time(lambda: generate_features(l2m, [1, 5, 6, 7, 2], width=5, method="sample",
                                               max_frames=100), args.repeats)
     print(f"generate (W=5 ancestral samples, 100 frames): median {t * 1e3:.1f} ms")
-    from motionlang.decoding.rerank import rerank
+    from motionlang.models.seq2seq.decode.rerank import rerank
     for w in (5, 10, 30, 60):
         t = median_time(lambda w=w: rerank(generate_features(
             l2m, [1, 5, 6, 7, 2], width=w, method="sample", max_frames=100), m2l,

@@ -33,7 +33,7 @@ def child(workload: str, threads: int | None, repeats: int) -> None:
     import numpy as np
     import torch
 
-    from motionlang.decoding.seq2seq import describe_features
+    from motionlang.models.seq2seq.decode.search import describe_features
     from motionlang.models.seq2seq.m2l import MotionToLanguage
     from motionlang.training.collate import collate_pairs
     if threads:

@@ -50,7 +50,7 @@ def main() -> None:
 
     import motionlang as ml
     from motionlang.datasets.named import cmu35_walkjog, cmu_dev_folder
-    from motionlang.decoding.grounded import named_gait
+    from motionlang.models.seq2seq.decode.grounded import named_gait
     torch.set_num_threads(1)
     data, cmudev = Path(args.data), Path(args.cmudev)
     dev = cmu_dev_folder(data, cmudev)

@@ -24,7 +24,7 @@ def main() -> None:
     import motionlang as ml
     from motionlang.analysis import repeats
     from motionlang.datasets.bandai_text import styles_named
-    from motionlang.decoding.grounded import has_verb
+    from motionlang.models.seq2seq.decode.grounded import has_verb
     torch.set_num_threads(1)
     model = ml.load_model(args.model)
     rows = [line.split("\t") for line in

@@ -1,5 +1,5 @@
 """How familiar the packaged M2L is with motion from its own corpora and from another lab:
-percentiles of ``decoding.grounded.familiarity`` (RMS of its normalised input features) and
+percentiles of ``models.seq2seq.decode.grounded.familiarity`` (RMS of its normalised input features) and
 of its first sentence's log P per word, on Bandai test takes, ``cmu_dev`` files and
 procedural samples (the figures ``FAMILIAR_RMS``, ``STYLE_RMS`` and ``LEAD_LOGP`` were set
 from).
@@ -30,9 +30,9 @@ def main() -> None:
     import motionlang as ml
     from motionlang.datasets.bandai import load_bandai
     from motionlang.datasets.synth import generate_sample
-    from motionlang.decoding.grounded import familiarity, per_word
-    from motionlang.decoding.seq2seq import _features_of
     from motionlang.features.frames import motion_frames
+    from motionlang.models.seq2seq.decode.grounded import familiarity, per_word
+    from motionlang.models.seq2seq.decode.search import _features_of
     torch.set_num_threads(1)
     model = ml.load_model("m2l")
 

@@ -35,9 +35,9 @@ def main() -> None:
     import motionlang as ml
     from motionlang.api import generate_hypotheses, load_rig, write_result
     from motionlang.datasets.bandai import bandai_folders
-    from motionlang.decoding.t2m import FPS
     from motionlang.evaluation.metrics.physics import foot_skating, root_jitter
     from motionlang.models.judge.fit import bandai_items, bandai_sentences
+    from motionlang.models.t2m import FPS
     from motionlang.utils.progress import progress
 
     out = Path(args.out)

@@ -70,7 +70,7 @@ def main() -> None:
     torch.set_num_threads(1)
     import motionlang as ml
     from motionlang.datasets.splits import load_splits, random_split
-    from motionlang.decoding.t2m import FPS
+    from motionlang.models.t2m import FPS
 
     ids = sorted(f.name[:-len("_meta.json")] for f in args.corpus.glob("*_meta.json"))
     if not ids:

@@ -6,7 +6,7 @@
 
 For each of the 556 Bandai Namco test takes (dataset 2, take numbers 0 mod 5): the model's
 first sentence as its beam ranks it (``describe --raw``) and as ``describe`` gives it
-(checked against the gait, ``decoding.grounded``); how often each names the take's action
+(checked against the gait, ``models.seq2seq.decode.grounded``); how often each names the take's action
 and style (``evaluation.seq2seq.label_accuracy``, the figure of the README's table), and
 every take where the two differ in the action they name.
 """

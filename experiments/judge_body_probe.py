@@ -31,9 +31,9 @@ def main() -> None:
     import torch
     torch.set_num_threads(1)
     import motionlang as ml
-    from motionlang.decoding.t2m import FPS
     from motionlang.models.judge.fit import bandai_items, bandai_sentences
     from motionlang.models.judge.model import position_rows
+    from motionlang.models.t2m import FPS
 
     train = np.concatenate([position_rows(it.positions)[:, LEFT_HIP_X]
                             for it in bandai_items(args.data, "train", fps=FPS)])

@@ -75,12 +75,12 @@ def main() -> None:
     import torch
     torch.set_num_threads(1)
     import motionlang as ml
-    from motionlang.decoding.t2m import FPS
     from motionlang.evaluation.judge import asked_labels, judge_table
     from motionlang.evaluation.sampling import stratified_sample
     from motionlang.features.foot_lock import lock_feet
     from motionlang.features.positions import positions_to_rows
     from motionlang.models.judge.fit import bandai_items, bandai_sentences
+    from motionlang.models.t2m import FPS
 
     model = ml.load_model(args.model, kind="masked")
     judge = ml.load_model(args.judge, kind="judge")

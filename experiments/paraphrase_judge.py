@@ -53,9 +53,9 @@ def main() -> None:
     import torch
     torch.set_num_threads(1)
     import motionlang as ml
-    from motionlang.decoding.t2m import FPS
     from motionlang.evaluation.judge import asked_labels, judge_table, markdown_judge_table
     from motionlang.models.judge.fit import bandai_items, bandai_sentences
+    from motionlang.models.t2m import FPS
     from motionlang.utils.progress import progress
 
     judge = ml.load_model(args.judge, kind="judge")

@@ -73,7 +73,7 @@ def asked_action(description: str) -> str:
 
 
 def has_verb(text: str) -> bool:
-    from motionlang.decoding.grounded import has_verb as verb
+    from motionlang.models.seq2seq.decode.grounded import has_verb as verb
     return verb(text)
 
 

@@ -5,7 +5,7 @@
         [--model twostream] [--data ../shared/data/bandai]
 
 1. For each L2M given: on how many test sentences its end flag stops it before the take's
-   length when it is not held to it (``decoding.seq2seq.generate``, mean decoding, the length
+   length when it is not held to it (``models.seq2seq.decode.search.generate``, mean decoding, the length
    given), and by how many frames at most.
 2. For the real takes and each model's motions as ``generate`` writes them (held to the
    take's length, ``lock_feet``): how many motions change their one-frame root move by more
@@ -31,10 +31,10 @@ def main() -> None:
     import torch
     torch.set_num_threads(1)
     import motionlang as ml
-    from motionlang.decoding.seq2seq import generate
-    from motionlang.decoding.t2m import FPS
     from motionlang.evaluation.metrics.physics import root_jitter, root_kick
     from motionlang.models.judge.fit import bandai_items, bandai_sentences
+    from motionlang.models.seq2seq.decode.search import generate
+    from motionlang.models.t2m import FPS
     from motionlang.utils.progress import progress
 
     real = bandai_items(args.data, "test", fps=FPS)

@@ -37,10 +37,10 @@ def main() -> None:
     import torch
     torch.set_num_threads(1)
     import motionlang as ml
-    from motionlang.decoding.t2m import FPS
     from motionlang.evaluation.metrics.physics import foot_skating
     from motionlang.features.foot_lock import lock_feet
     from motionlang.models.judge.fit import bandai_items, bandai_sentences
+    from motionlang.models.t2m import FPS
 
     real = bandai_items(args.data, "test", fps=FPS)
     sentences = bandai_sentences(args.data, "test", seed=0)

@@ -71,7 +71,7 @@ def test_newer_checkpoint_formats_are_refused(tmp_path):
 
 
 def test_text_to_motion_interface_and_wrong_kinds():
-    from motionlang.decoding.t2m import text_to_motion
+    from motionlang.models.t2m import text_to_motion
     l2m = text_to_motion(registry.load_model("l2m"))
     assert l2m.fps == 12.5 and l2m.default_method() == "mean" and not l2m.deterministic
     with pytest.raises(MotionlangError, match="m2l model does not generate motion"):
@@ -84,9 +84,9 @@ def test_generation_locks_feet_unless_told_not_to(tmp_path):
     """The packaged L2M's walk slides its feet as decoded; generate holds them (the lock is
     features.foot_lock's, applied to the decoded frames), --no-foot-lock keeps the frames."""
     from motionlang.cli.main import main
-    from motionlang.decoding.t2m import text_to_motion
     from motionlang.evaluation.metrics.physics import foot_skating
     from motionlang.features.foot_lock import lock_feet
+    from motionlang.models.t2m import text_to_motion
     t2m = text_to_motion(registry.load_model("l2m"))
     (raw, _), = t2m.hypotheses("a person walks forward", width=1, max_frames=40)
     (held, _), = t2m.hypotheses("a person walks forward", width=1, max_frames=40,

@@ -216,3 +216,49 @@ def test_the_command_line_is_a_thin_layer():
                 for p in (SRC / "cli").glob("*.py"))
     commands = len(leaf_parsers(build_parser()))
     assert lines / commands < 2000 / 32, f"cli/ has {lines} lines for {commands} commands"
+
+
+def family_table_problems(path: Path) -> list[str]:
+    """The strings of a family table (``models/NAME/family.py``) that name code outside the
+    family's own folder: every ``"module:object"`` but the recipe must be under
+    ``motionlang.models.NAME``, the recipe under ``motionlang.recipes``, and each must name
+    a module that exists."""
+    folder = path.parent.name
+    known = modules()
+    name = path.relative_to(ROOT) if path.is_relative_to(ROOT) else path
+    bad = []
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if not (isinstance(node, ast.Call) and getattr(node.func, "id", None) == "Family"):
+            continue
+        for kw in node.keywords:
+            if not (isinstance(kw.value, ast.Constant) and isinstance(kw.value.value, str)
+                    and kw.value.value.startswith("motionlang.")):
+                continue
+            module = kw.value.value.split(":")[0]
+            home = "motionlang.recipes." if kw.arg == "recipe" else f"motionlang.models.{folder}."
+            if not module.startswith(home):
+                bad.append(f"{name}: {kw.arg}={kw.value.value!r} is not under "
+                           f"{home.rstrip('.')}")
+            elif module not in known:
+                bad.append(f"{name}: {kw.arg}={kw.value.value!r} names no module")
+    return bad
+
+
+def test_family_tables_name_only_their_folder_and_recipe():
+    """A family is its folder: its table's strings (resolved at run time, where the import
+    test does not see them) point into it, or to its recipe; none climbs a layer."""
+    tables = sorted(SRC.glob("models/*/family.py"))
+    assert len(tables) >= 7
+    bad = [p for t in tables for p in family_table_problems(t)]
+    assert not bad, "\n".join(bad)
+
+
+def test_the_family_table_check_can_fail(tmp_path):
+    f = tmp_path / "models" / "tokens" / "family.py"
+    f.parent.mkdir(parents=True)
+    f.write_text('FAMILIES = (Family(kind="tokens", model="motionlang.models.tokens.model:M",\n'
+                 '  recipe="motionlang.recipes.tokens:T",\n'
+                 '  describes="motionlang.library.describe:describe"),)\n')
+    bad = family_table_problems(f)
+    assert any("describes=" in b and "not under motionlang.models.tokens" in b for b in bad)
+    assert any("model=" in b and "names no module" in b for b in bad)

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import torch
 
-from motionlang.decoding.beam import Hypothesis, beam_search, greedy_search
+from motionlang.models.seq2seq.decode.beam import Hypothesis, beam_search, greedy_search
 
 torch.set_num_threads(1)
 EOS = 0

@@ -129,8 +129,8 @@ def test_contradictory_generation_options_are_refused():
 
 
 def test_describing_features_that_are_not_finite_is_an_error():
-    from motionlang.decoding.seq2seq import describe_features
     from motionlang.models.seq2seq.config import M2LConfig
+    from motionlang.models.seq2seq.decode.search import describe_features
     from motionlang.models.seq2seq.m2l import MotionToLanguage
     torch.manual_seed(0)
     model = MotionToLanguage(M2LConfig(n_features=4, vocab_size=8, enc_hidden=8, dec_hidden=8,

@@ -95,7 +95,7 @@ def test_describe_with_a_file_that_is_not_a_checkpoint(tmp_path, capsys):
 
 @pytest.mark.parametrize("text", ["", "   ", "!!!"])
 def test_text_without_words_is_an_error(text):
-    from motionlang.decoding.t2m import generate_any
+    from motionlang.models.t2m import generate_any
     with pytest.raises(MotionlangError, match="no words"):
         generate_any(None, text)
 

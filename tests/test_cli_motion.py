@@ -128,7 +128,7 @@ def test_demo_main_job_offline_with_packaged_models(tmp_path, capsys, monkeypatc
     assert 1 <= len(desc) + len(grounded) <= 3 and desc   # one procedural motion described
     assert all(s < 0 for s in desc)
     # ordered as 'motionlang describe' orders them: minimum Bayes risk over the beam
-    from motionlang.decoding.mbr import mbr_rank
+    from motionlang.models.seq2seq.decode.mbr import mbr_rank
     shown = [(m[2], float(m[1])) for m in re.finditer(r"log P =\s*(-?[\d.]+)  (.+)", out)]
     assert len(shown) == len(desc) and all(t.split() for t, _ in shown)
     assert [t for t, _ in mbr_rank(sorted(shown, key=lambda h: -h[1]))] == [t for t, _ in shown]

@@ -14,13 +14,9 @@ from motionlang.features import root as rootlib
 from motionlang.features.joint_map import TOES
 from motionlang.features.normalizer import Normalizer
 from motionlang.features.positions import PositionFeatures, split_global
+from motionlang.models.frame_losses import foot_contact_loss, foot_steps
 from motionlang.models.seq2seq.l2m import L2MConfig, LanguageToMotion
-from motionlang.models.seq2seq.losses import (
-    expected_foot_loss,
-    fed_foot_contact_loss,
-    foot_contact_loss,
-    foot_steps,
-)
+from motionlang.models.seq2seq.losses import expected_foot_loss, fed_foot_contact_loss
 from motionlang.models.seq2seq.mdn import mixture_mean
 
 FPS = 12.5

@@ -1,4 +1,4 @@
-"""decoding.grounded: the M2L's sentences checked against the gait the feet show, and an
+"""models.seq2seq.decode.grounded: the M2L's sentences checked against the gait the feet show, and an
 honest line for motion the model does not know (issue 41, items 2 and 3)."""
 from __future__ import annotations
 
@@ -8,9 +8,15 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-import motionlang.decoding.grounded as g
+import motionlang.models.seq2seq.decode.grounded as g
 from motionlang.analysis import Analysis
-from motionlang.decoding.grounded import UNFAMILIAR, familiar, ground, has_verb, named_gait
+from motionlang.models.seq2seq.decode.grounded import (
+    UNFAMILIAR,
+    familiar,
+    ground,
+    has_verb,
+    named_gait,
+)
 
 
 def test_named_gait_and_verbs():
@@ -133,7 +139,7 @@ def _walking(path: str = "straight") -> Analysis:
 
 
 def test_reconcile_keeps_an_agreeing_familiar_sentence_first():
-    from motionlang.decoding.grounded import reconcile
+    from motionlang.models.seq2seq.decode.grounded import reconcile
     got = reconcile([("a man walks forward", -2.0), ("a man walks", -2.5)], _walking(), 1.0)
     assert [t for t, _ in got] == ["a man walks forward", "a man walks",
                                    "a person walks forward"]
@@ -141,7 +147,7 @@ def test_reconcile_keeps_an_agreeing_familiar_sentence_first():
 
 
 def test_reconcile_leads_with_the_body_where_the_model_contradicts_it():
-    from motionlang.decoding.grounded import reconcile
+    from motionlang.models.seq2seq.decode.grounded import reconcile
     # another action, a path the travel does not show, an unfamiliar motion, a guess
     for hyps, rms in (([("a person jumps forward", -2.0)], 1.0),
                       ([("a person walks in a circle", -2.0)], 1.0),
@@ -155,7 +161,7 @@ def test_reconcile_leads_with_the_body_where_the_model_contradicts_it():
 
 
 def test_reconcile_keeps_style_words_only_where_the_model_knows_the_motion():
-    from motionlang.decoding.grounded import reconcile
+    from motionlang.models.seq2seq.decode.grounded import reconcile
     hyps = [("an angry man walks forward in a rage", -1.0)]
     assert reconcile(hyps, _walking(), 1.0)[0][0] == hyps[0][0]
     assert reconcile(hyps, _walking(), 1.5)[0][0] == "a person walks forward"
@@ -168,7 +174,7 @@ def test_reconcile_without_an_analysis_says_it_cannot_tell():
     """One frame, or a body the analysis cannot read: the model's sentences rest on nothing
     and come after the honest line."""
     from motionlang.analysis import CANNOT_TELL
-    from motionlang.decoding.grounded import reconcile
+    from motionlang.models.seq2seq.decode.grounded import reconcile
     got = reconcile([("a human is walking backwards", -6.9)], None, 1.0)
     assert got[0][0] == CANNOT_TELL and math.isnan(got[0][1])
     assert got[1] == ("a human is walking backwards", -6.9)

@@ -91,8 +91,8 @@ def test_teacher_forcing_follows_the_true_plan_and_step_decoding_the_given_one()
 
 def test_the_planner_is_fitted_and_rides_in_the_checkpoint(tmp_path):
     from motionlang.datasets.text import Vocabulary
-    from motionlang.decoding.seq2seq import generate_features
     from motionlang.models.length import SentenceLength
+    from motionlang.models.seq2seq.decode.search import generate_features
     model, batch = plan_model(), make_batch()
     model.train()
     opt = torch.optim.Adam(model.parameters(), lr=1e-2)

@@ -140,8 +140,8 @@ def test_save_load_is_bit_exact_with_its_stage_and_features(features, tmp_path):
 
 
 def test_the_text_to_motion_protocol_through_the_registry(features, tmp_path):
-    from motionlang.decoding.t2m import SamplingModel, SelfAdapter, text_to_motion
     from motionlang.models import registry
+    from motionlang.models.t2m import SamplingModel, SelfAdapter, text_to_motion
     model = tiny(features)
     assert isinstance(model, SamplingModel)
     assert registry.family("masked").text_to_motion == "self"

@@ -1,4 +1,4 @@
-"""Text-conditioned in-betweening through the kind-neutral layer (``decoding.inbetween``),
+"""Text-conditioned in-betweening through the kind-neutral layer (``models.inbetween``),
 the API (``ml.generate_hypotheses(..., keep=...)``) and the command line
 (``generate --keep FILE:RANGES``): the ranges read by hand, the kept frames kept, and each
 bad input one line naming ``--keep``."""
@@ -10,9 +10,9 @@ import torch
 
 from helpers.mocap import synthetic_mmm
 from helpers.twostream import HashTokens
-from motionlang.decoding.inbetween import Inbetweening, keep_frames, parse_keep
 from motionlang.errors import MotionlangError
 from motionlang.features.positions import PositionFeatures
+from motionlang.models.inbetween import Inbetweening, keep_frames, parse_keep
 from motionlang.models.masked.config import MaskedConfig
 from motionlang.models.masked.model import MaskedModel
 

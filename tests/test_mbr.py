@@ -1,11 +1,11 @@
-"""Minimum Bayes risk ordering of description beams (decoding.mbr), worked by hand."""
+"""Minimum Bayes risk ordering of description beams (models.seq2seq.decode.mbr), worked by hand."""
 from __future__ import annotations
 
 import math
 
 import pytest
 
-from motionlang.decoding.mbr import bleu_plus_one, mbr_rank
+from motionlang.models.seq2seq.decode.mbr import bleu_plus_one, mbr_rank
 
 
 def test_bleu_plus_one_by_hand():

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 import torch
 
-from motionlang.decoding.motion_beam import mean_decode, sample_decode, sampled_beam
+from motionlang.models.seq2seq.decode.motion_beam import mean_decode, sample_decode, sampled_beam
 from motionlang.models.seq2seq.mdn import MixtureParams, active_log_prob, mixture_log_prob, sample
 
 torch.set_num_threads(1)

@@ -4,7 +4,7 @@
 commit 7af4dd5 (before the checkpoint/registry refactor), with one torch thread, and the
 inputs they were given; this test recomputes the same outputs through the public loading path
 (``registry.load_model``, ``motionlang.describe / generate / encode``,
-``decoding.t2m.generate_positions21``, the judge's ``judge`` and ``predict``) and compares:
+``models.t2m.generate_positions21``, the judge's ``judge`` and ``predict``) and compares:
 sentences, method names and labels exactly, arrays with the same dtype and shape and within
 the tolerance of their kind (:data:`TOLERANCES`). Those tolerances sit well above how far the
 outputs move on other x86-64 CPUs (OpenBLAS, MKL and torch pick their kernels by CPU, and
@@ -97,8 +97,8 @@ def outputs(name: str, kind: str, motion, p21: np.ndarray) -> dict[str, np.ndarr
     :data:`JUDGE_FPS`. Models are reached only by name through the public API.
     """
     import motionlang as ml
-    from motionlang.decoding.t2m import default_method, generate_positions21
     from motionlang.models.registry import load_model
+    from motionlang.models.t2m import default_method, generate_positions21
 
     out: dict[str, np.ndarray] = {}
     model = load_model(name)

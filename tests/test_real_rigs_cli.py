@@ -138,9 +138,9 @@ def test_generate_errors_for_rig_and_start(tmp_path, capsys):
 
 
 def test_generate_starts_from_a_real_pose(tmp_path, capsys):
-    from motionlang.decoding.seq2seq import generate
     from motionlang.features.body21 import normalise21
     from motionlang.features.frames import motion_frames
+    from motionlang.models.seq2seq.decode.search import generate
     start = write(RIGS["bandai"], tmp_path, T=20)
     model = ml.load_model("l2m")
     first = motion_frames(model.features, read_motion(start), 1)[0][0]

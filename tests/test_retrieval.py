@@ -1,5 +1,5 @@
 """The bag-of-words sentence index of the text-to-motion nearest-neighbour baseline, and the
-re-timing of a retrieved motion (``decoding.t2m.stretch``)."""
+re-timing of a retrieved motion (``models.t2m.stretch``)."""
 from __future__ import annotations
 
 import math
@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from motionlang.decoding.t2m import interp_frames, stretch
 from motionlang.errors import MotionlangError
 from motionlang.evaluation.retrieval import SentenceIndex
+from motionlang.models.t2m import interp_frames, stretch
 
 
 def test_cosine_by_hand():

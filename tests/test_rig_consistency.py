@@ -11,7 +11,7 @@ import motionlang as ml
 from helpers.data import shared_file
 from helpers.rigs import RIGS, write
 from motionlang.datasets.synth.corpus import generate_sample
-from motionlang.decoding.grounded import named_gait
+from motionlang.models.seq2seq.decode.grounded import named_gait
 
 torch.set_num_threads(1)
 TARGETS = ("bandai", "cmu-bvh", "cc", "second-life", "mixamo", "poser")

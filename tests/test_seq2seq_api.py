@@ -6,9 +6,13 @@ import pytest
 import torch
 
 from helpers.seq2seq import F_DIM, WORDS, items, tiny
-from motionlang.decoding.motion_beam import mean_decode
-from motionlang.decoding.seq2seq import describe_features, encode_sentence, generate_features
 from motionlang.errors import MotionlangError
+from motionlang.models.seq2seq.decode.motion_beam import mean_decode
+from motionlang.models.seq2seq.decode.search import (
+    describe_features,
+    encode_sentence,
+    generate_features,
+)
 from motionlang.training.collate import collate_pairs
 from motionlang.training.trainer import TrainConfig, Trainer
 

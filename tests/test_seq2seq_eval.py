@@ -125,7 +125,7 @@ def test_actions_named_by_place_on_hand_made_descriptions():
 
 
 def test_sentence_log_probs_equal_stepwise_decoding_in_any_batch():
-    from motionlang.decoding.rerank import sentence_log_probs
+    from motionlang.models.seq2seq.decode.rerank import sentence_log_probs
     rng = np.random.default_rng(3)
     for attention in (False, True):
         m2l = tiny("m2l", attention).eval()
@@ -148,7 +148,7 @@ def test_sentence_log_probs_equal_stepwise_decoding_in_any_batch():
 
 
 def test_rerank_puts_the_motion_the_sentence_describes_first(trained):
-    from motionlang.decoding.rerank import rerank
+    from motionlang.models.seq2seq.decode.rerank import rerank
     m2l, frames, refs = trained
     up, down = frames["m0"], frames["m1"]             # rising / falling first feature
     for sentence, want in ((refs["m0"][0], up), (refs["m1"][0], down)):
@@ -193,7 +193,7 @@ def test_round_trip_describes_the_motion_the_reranker_puts_first(trained, monkey
                                reranker=ranker)
     _same_features(l2m, ranker)
     # a ranker that prefers the L2M's least likely sample: that one must be described
-    import motionlang.decoding.rerank as rr
+    import motionlang.models.seq2seq.decode.rerank as rr
     monkeypatch.setattr(rr, "sentence_log_probs",
                         lambda model, motions, sentence: np.arange(len(motions), dtype=float))
     real_rerank, seen, described = ev.rerank, [], []
@@ -214,8 +214,8 @@ def test_round_trip_describes_the_motion_the_reranker_puts_first(trained, monkey
 def test_generate_ranks_by_the_reranker_and_shows_its_scores(trained, monkeypatch):
     import copy
 
-    import motionlang.decoding.rerank as rr
-    from motionlang.decoding.seq2seq import generate
+    import motionlang.models.seq2seq.decode.rerank as rr
+    from motionlang.models.seq2seq.decode.search import generate
     m2l, _, refs = trained
     l2m = tiny("l2m", False)
     l2m.vocab = WORDS
@@ -235,7 +235,7 @@ def test_generate_ranks_by_the_reranker_and_shows_its_scores(trained, monkeypatc
 def test_reranker_features_must_be_the_l2m_features():
     import types
 
-    from motionlang.decoding.rerank import check_same_features
+    from motionlang.models.seq2seq.decode.rerank import check_same_features
     a = types.SimpleNamespace(features=StubFeatures(3))
     check_same_features(a, types.SimpleNamespace(features=StubFeatures(3)))
     other = StubFeatures(3)

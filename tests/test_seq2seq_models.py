@@ -8,9 +8,9 @@ import pytest
 import torch
 
 from helpers.seq2seq import F_DIM, V, make_batch, outputs, tiny
-from motionlang.decoding.beam import beam_search
-from motionlang.decoding.motion_beam import mean_decode, sampled_beam
 from motionlang.errors import MotionlangError
+from motionlang.models.seq2seq.decode.beam import beam_search
+from motionlang.models.seq2seq.decode.motion_beam import mean_decode, sampled_beam
 from motionlang.models.seq2seq.l2m import LanguageToMotion
 from motionlang.models.seq2seq.m2l import MotionToLanguage
 from motionlang.models.seq2seq.mdn import sample
@@ -193,8 +193,8 @@ def test_l2m_loss_weights_reweight_the_frame_nll():
 
 
 def test_l2m_energy_term_on_the_expected_frames():
+    from motionlang.models.frame_losses import energy_loss, frame_mask
     from motionlang.models.seq2seq import mdn
-    from motionlang.models.seq2seq.losses import energy_loss, frame_mask
     model, batch = tiny("l2m", False), make_batch()
     model.eval()
     with torch.no_grad():
@@ -291,8 +291,8 @@ def test_l2m_progress_input():
 
 def test_l2m_length_model_rides_in_the_checkpoint_and_plans_generation(tmp_path):
     from motionlang.datasets.text import Vocabulary
-    from motionlang.decoding.seq2seq import generate_features
     from motionlang.models.length import SentenceLength
+    from motionlang.models.seq2seq.decode.search import generate_features
     model = tiny("l2m", False, progress_input=True)
     model.vocab = Vocabulary.build(["a person waves", "a person walks far"])   # V = 9 ids
     with pytest.raises(MotionlangError, match="length"):       # no length model, no cap
@@ -387,8 +387,8 @@ def test_l2m_rollout_is_teacher_forcing_at_zero_and_feeds_own_frames_at_one():
 
 
 def test_l2m_rollout_on_expected_frames_and_their_mean_decoding():
-    from motionlang.decoding.seq2seq import generate_features
     from motionlang.models.seq2seq import mdn
+    from motionlang.models.seq2seq.decode.search import generate_features
     batch = make_batch()
     model = tiny("l2m", False, time_input=True, rollout=1.0, rollout_input="mean")
     model.train()

@@ -106,11 +106,11 @@ def test_l2m_on_the_test_subjects_bodies(data):
     """An angles L2M with --true-start: the same generated angles drive each test subject's
     own MMM body, so only bone lengths change (and the root's start stays at the origin)."""
     from motionlang.datasets.text import Vocabulary
-    from motionlang.decoding.t2m import generate_positions21
     from motionlang.features.angles import AnglesFeatures
     from motionlang.features.frames import model_dim
     from motionlang.formats.mmm_model import mmm_skeleton
     from motionlang.models.seq2seq.l2m import L2MConfig, LanguageToMotion
+    from motionlang.models.t2m import generate_positions21
     fs = AnglesFeatures().fit([r.load_motion() for r in list(data.records.values())[:3]])
     vocab = Vocabulary.build([s for r in data.records.values() for s in r.annotations])
     torch.manual_seed(0)
@@ -150,7 +150,7 @@ def test_l2m_on_the_test_subjects_bodies(data):
 
 
 def test_l2m_and_twostream_positions(data):
-    from motionlang.decoding.t2m import generate_positions21
+    from motionlang.models.t2m import generate_positions21
     from motionlang.models.twostream import TwoStreamConfig, TwoStreamModel
     l2m = _tiny_l2m(data)
     p = generate_positions21(l2m, "a person walks forward", 9)
@@ -314,10 +314,10 @@ def test_positions_of_the_sample_an_m2l_ranks_first(data, monkeypatch):
     """width W with a reranker: the motion is the best of the same W samples by the M2L's
     log P(sentence | motion), decoded as without one. A ranker that prefers the L2M's least
     likely sample shows that its choice, not the L2M's, is decoded."""
-    import motionlang.decoding.rerank as rr
-    from motionlang.decoding.seq2seq import generate_features
-    from motionlang.decoding.t2m import anchor, fit_length, generate_positions21
+    import motionlang.models.seq2seq.decode.rerank as rr
+    from motionlang.models.seq2seq.decode.search import generate_features
     from motionlang.models.seq2seq.m2l import M2LConfig, MotionToLanguage
+    from motionlang.models.t2m import anchor, fit_length, generate_positions21
     l2m = _tiny_l2m(data)
     torch.manual_seed(1)
     m2l = MotionToLanguage(M2LConfig(n_features=66, vocab_size=len(l2m.vocab), enc_hidden=8,
@@ -341,7 +341,7 @@ def test_positions_of_the_sample_an_m2l_ranks_first(data, monkeypatch):
 
 
 def test_generate_any_passes_l2m_options(data):
-    from motionlang.decoding.t2m import generate_any
+    from motionlang.models.t2m import generate_any
     hyps = generate_any(_tiny_l2m(data), "a person walks forward", width=2, method="beam",
                         max_frames=6, seed=1)
     assert len(hyps) == 2 and hyps[0][1] >= hyps[1][1]
@@ -387,7 +387,6 @@ def test_same_parameter_oracles(data):
     re-timed mean / first of the other training motions that share the item's set."""
     from types import SimpleNamespace
 
-    from motionlang.decoding.t2m import stretch
     from motionlang.evaluation.metrics.motion import position_metrics_mm
     from motionlang.evaluation.t2m.oracle import (
         MEAN_ROW,
@@ -396,6 +395,7 @@ def test_same_parameter_oracles(data):
         oracle_table,
         parameter_key,
     )
+    from motionlang.models.t2m import stretch
     train = data.splits["train"]
     kind = {rid: "walk" if k % 3 == 0 else "wave" for k, rid in enumerate(train)}
     fake = SimpleNamespace(splits=data.splits, sequences=data.sequences, features=data.features,
@@ -439,8 +439,8 @@ def test_an_l2m_told_its_length_runs_to_it(data):
     flag says stop: no frozen tail of held frames. One not told its length ends where its
     flag says, and the rest is its last frame held."""
     from motionlang.datasets.text import Vocabulary
-    from motionlang.decoding.t2m import generate_positions21
     from motionlang.models.seq2seq.l2m import L2MConfig, LanguageToMotion
+    from motionlang.models.t2m import generate_positions21
     vocab = Vocabulary.build([s for r in data.records.values() for s in r.annotations])
     for told in (True, False):
         torch.manual_seed(0)

@@ -9,8 +9,8 @@ import pytest
 
 pytest.importorskip("torch")
 
-from motionlang.decoding.t2m import SamplingModel, SelfAdapter, TextToMotion  # noqa: E402
 from motionlang.errors import MotionlangError  # noqa: E402
+from motionlang.models.t2m import SamplingModel, SelfAdapter, TextToMotion  # noqa: E402
 
 
 @dataclass
@@ -84,9 +84,9 @@ def test_its_options_are_checked_once_with_a_line_naming_them():
 
 
 def test_the_registry_wraps_a_self_family(monkeypatch):
-    from motionlang.decoding.t2m import text_to_motion
     from motionlang.models import registry
     from motionlang.models.family import Family
+    from motionlang.models.t2m import text_to_motion
     fams = {**registry.families(),
             "toy": Family(kind="toy", model="tests:ToyModel", summary="toy",
                           text_to_motion="self")}

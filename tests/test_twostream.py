@@ -431,7 +431,7 @@ def test_progress_input_is_the_fraction_of_each_sequences_own_length():
 def test_last_valid_output_is_the_packed_final_state(kind, layers):
     """Unpacked, the stack's output at each sequence's last valid step is the final state a
     packed run gives (values and gradients), whatever the padding after it holds."""
-    from motionlang.models.seq2seq.layers import last_valid_output
+    from motionlang.models.recurrent import last_valid_output
     torch.manual_seed(0)
     rnn = (torch.nn.GRU if kind == "gru" else torch.nn.LSTM)(3, 5, num_layers=layers,
                                                                  batch_first=True)

@@ -40,8 +40,8 @@ def test_fit_checks_its_input():
 
 def test_model_carries_its_length_model(tmp_path):
     from helpers.twostream import HashTokens, tiny
-    from motionlang.decoding.t2m import generate_any
     from motionlang.features.normalizer import Normalizer
+    from motionlang.models.t2m import generate_any
     from motionlang.models.twostream import TwoStreamModel
     m = tiny()
     m.normalizer = Normalizer().fit(np.random.default_rng(0).normal(size=(50, 66)))

@@ -208,8 +208,8 @@ def test_refit_moves_the_sentence_encoder_only(data, tmp_path, monkeypatch, deco
 
 
 def test_registry_loads_a_two_stream_model(data, tmp_path):
-    from motionlang.decoding.t2m import generate_any
     from motionlang.models.registry import TEXT_TO_MOTION, load_model
+    from motionlang.models.t2m import generate_any
     m = tiny(data).eval()
     m.save(tmp_path / "ts.pt")
     back = load_model(tmp_path / "ts.pt", TEXT_TO_MOTION, text_encoder=HashTokens())

@@ -69,7 +69,7 @@ def main(argv=None) -> int:
     missing = [n for n in ROOT if n not in fs.names]
     if missing:
         raise SystemExit(f"{path}: the model's features have no {', '.join(missing)}")
-    from motionlang.decoding.seq2seq import encode_sentence
+    from motionlang.models.seq2seq.decode.search import encode_sentence
     # the split of the shipped runs (seed 0); sentences re-encoded in the model's vocabulary
     data = build_pairs(args.data, features=fs.kind, offsets=1, seed=0)
     items = [{**it, "tokens": encode_sentence(model.vocab, data.vocab.decode(it["tokens"]))}

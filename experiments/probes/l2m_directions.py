@@ -6,7 +6,7 @@ metres), the total turn (degrees), and how many samples go the stated way.
         [--rerank M2L --candidates 10]
 
 With ``--rerank``, each of the ``--samples`` motions is the best of ``--candidates`` draws by
-that M2L's log P(sentence | motion) (``decoding.rerank``).
+that M2L's log P(sentence | motion) (``models.seq2seq.decode.rerank``).
 
 The sign of "sideways" is calibrated on a real procedural sample whose sentence says
 "leftwards" (``--data`` corpus), so no axis convention is assumed. Default model: packaged.
@@ -61,7 +61,7 @@ def main() -> None:
     ap.add_argument("--candidates", type=int, default=10)
     args = ap.parse_args()
     import motionlang as ml
-    from motionlang.decoding.seq2seq import generate_features
+    from motionlang.models.seq2seq.decode.search import generate_features
     model = ml.load_model(args.model or "l2m", kind="l2m")
     fs = model.features
     method = args.method or ("mean" if model.config.rollout_input == "mean" else "sample")
@@ -70,7 +70,7 @@ def main() -> None:
     left = left_sign(fs, Path(args.data))
     reranker = None
     if args.rerank:
-        from motionlang.decoding.rerank import check_same_features, rerank
+        from motionlang.models.seq2seq.decode.rerank import check_same_features, rerank
         reranker = ml.load_model(args.rerank, kind="m2l")
         check_same_features(model, reranker, f"--rerank {args.rerank}")
     for sentence, way in SENTENCES.items():

@@ -31,7 +31,7 @@ def _expected(params) -> torch.Tensor:
 
 def teacher_forced(m, path: str, text: str, j: int, frame: int) -> None:
     import motionlang as ml
-    from motionlang.decoding.seq2seq import encode_sentence, motion_frames
+    from motionlang.models.seq2seq.decode.search import encode_sentence, motion_frames
     from motionlang.models.seq2seq.l2m import _previous_frames
     x = torch.as_tensor(motion_frames(m.features, ml.read_motion(path), 1)[0])[None]
     T = x.shape[1]
@@ -61,8 +61,8 @@ def teacher_forced(m, path: str, text: str, j: int, frame: int) -> None:
 
 
 def generated(m, t2m, text: str, joint: int) -> None:
-    import motionlang.decoding.motion_beam as mb
-    import motionlang.decoding.seq2seq as s2s
+    import motionlang.models.seq2seq.decode.motion_beam as mb
+    import motionlang.models.seq2seq.decode.search as s2s
     from motionlang.models.seq2seq.mdn import mixture_mean, sample
     plain = mb.mean_decode
 

@@ -37,7 +37,7 @@ def select(data, word: str, limit: int) -> list[dict]:
 
 def with_sentences(items: list[dict], vocab, sentences: list[str]) -> list[dict]:
     """The items with their tokens in the model's vocabulary."""
-    from motionlang.decoding.seq2seq import encode_sentence
+    from motionlang.models.seq2seq.decode.search import encode_sentence
     return [{**it, "tokens": encode_sentence(vocab, s)} for it, s in zip(items, sentences)]
 
 
@@ -72,9 +72,9 @@ def main(argv=None) -> int:
 
     import motionlang as ml
     from motionlang.datasets.seq2seq_pairs import build_pairs
-    from motionlang.decoding.seq2seq import _normalize, generate_features
     from motionlang.features.frames import model_dim
     from motionlang.models.registry import resolve
+    from motionlang.models.seq2seq.decode.search import _normalize, generate_features
     path = resolve(args.model or "l2m")
     model = ml.load_model(path, kind="l2m")
     fs, vocab = model.features, model.vocab

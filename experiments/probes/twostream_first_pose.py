@@ -33,10 +33,10 @@ def main(argv: list[str] | None = None) -> int:
 
     import motionlang as ml
     from motionlang.datasets.twostream_items import build_twostream_data
-    from motionlang.decoding.t2m import FPS
     from motionlang.features.foot_lock import lock_feet
     from motionlang.models.judge.fit import bandai_items, bandai_sentences
     from motionlang.models.registry import load_model
+    from motionlang.models.t2m import FPS
     from motionlang.models.twostream.start import fit_start_pose
     torch.set_num_threads(1)
     model = ml.load_model(a.model).eval()

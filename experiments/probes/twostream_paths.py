@@ -39,11 +39,11 @@ def main(argv: list[str] | None = None) -> int:
     import torch
 
     from motionlang.api import body21, load_model
-    from motionlang.decoding.t2m import text_to_motion
     from motionlang.errors import MotionlangError
     from motionlang.evaluation.t2m.guo import GuoRun, load_evaluator
     from motionlang.evaluation.t2m.yardstick import generated_rows, guo_metrics, positions_rows
     from motionlang.features.base import downsample
+    from motionlang.models.t2m import text_to_motion
     torch.set_num_threads(a.threads)
     try:
         ev = load_evaluator(a.evaluator)

@@ -55,11 +55,11 @@ def main(argv: list[str] | None = None) -> int:
     import torch
 
     import motionlang as ml
-    from motionlang.decoding.t2m import FPS
     from motionlang.evaluation.sampling import stratified_sample
     from motionlang.features.foot_lock import lock_feet
     from motionlang.models.judge.fit import bandai_items, bandai_sentences
     from motionlang.models.registry import load_model
+    from motionlang.models.t2m import FPS
     torch.set_num_threads(1)
     judge = load_model(a.judge, kind="judge")
     real = bandai_items(a.bandai, a.split, fps=FPS)

@@ -1,9 +1,9 @@
 """motionlang: human whole-body motion and natural language.
 
 Layers (a module imports from its own layer and those before it; ``tests/test_architecture``
-checks the README's statement of it): utils, errors -> kinematics -> formats -> features ->
-rendering -> datasets -> models -> decoding -> training -> evaluation -> library -> api
--> cli.
+checks ``docs/contributing.md``'s statement of it): utils, errors -> kinematics -> formats ->
+features -> analysis -> rendering -> datasets -> models -> training -> evaluation -> recipes
+-> library -> api -> web -> cli.
 """
 from motionlang.errors import DatasetError, MotionFormatError, MotionlangError, SkeletonError
 from motionlang.kinematics import Joint, Motion, Skeleton

@@ -46,13 +46,13 @@ def load_model(name_or_path: str | Path, kind: str | tuple[str, ...] | None = No
 
 
 def text_to_motion(model: Any = None, options: Any = None):
-    """A text-to-motion model behind the one interface (``decoding.t2m.TextToMotion``):
+    """A text-to-motion model behind the one interface (``models.t2m.TextToMotion``):
     ``model`` loaded, a packaged name, a checkpoint, a run folder, ``"NAME:key=value,..."``
     (its sampling options, ``models.options``) or None (the packaged L2M); ``options`` (a
     dict or the family's ``Options``) are applied after those of the text."""
-    from motionlang.decoding.t2m import text_to_motion as wrap
     from motionlang.models.options import ModelSpec, parse_model_spec
     from motionlang.models.registry import kinds_with
+    from motionlang.models.t2m import text_to_motion as wrap
     spec_options: dict = {}
     if model is None or isinstance(model, (str, Path)):
         name = str(model or "l2m")   # an existing file or folder is a name, whatever it holds
@@ -141,9 +141,9 @@ def describe(motion: Motion | str | Path, model: Any = None, width: int = 5, *,
     model: a loaded model whose family describes motion (``Family.describes``: the M2L), a
     packaged name, a checkpoint path, or None for the packaged M2L. width: beam width
     and number of sentences (as ``motionlang describe -w``). rank: "mbr" (as ``describe``)
-    puts first the sentence the beam agrees on most (``decoding.mbr``), "logp" the
+    puts first the sentence the beam agrees on most (``models.seq2seq.decode.mbr``), "logp" the
     likeliest (the paper's). raw: the beam as it is (``describe --raw``), not checked
-    against what the body does (``decoding.grounded``: gait, familiarity, grounded analysis)."""
+    against what the body does (``models.seq2seq.decode.grounded``: gait, familiarity, grounded analysis)."""
     from motionlang.models.registry import describer, kinds_with
     DescribeOptions(width=width, length_penalty=length_penalty, rank=rank)   # checks them
     if model is None or isinstance(model, (str, Path)):
@@ -228,7 +228,7 @@ def generate_hypotheses(text: str, model: Any = None, *, width: int | None = Non
         if t2m.deterministic or method == "mean" or width < 2:
             raise MotionlangError("rerank ranks several L2M motions: an L2M model with method "
                                   "sample or beam and width 2 or more")
-        from motionlang.decoding.rerank import check_same_features
+        from motionlang.models.seq2seq.decode.rerank import check_same_features
         kw["reranker"] = rerank if not isinstance(rerank, (str, Path)) \
             else load_model(rerank, kind="m2l")
         check_same_features(t2m.model, kw["reranker"], f"rerank {rerank}")
@@ -244,7 +244,7 @@ def generate_hypotheses(text: str, model: Any = None, *, width: int | None = Non
                       UserWarning, stacklevel=2)
     warn_never_learnt(text, t2m.model)
     if keep is not None:   # the kept seconds of a motion, the rest from the text
-        from motionlang.decoding.inbetween import fill_between
+        from motionlang.models.inbetween import fill_between
         return fill_between(t2m, text, keep, lambda m: _motion(m, joint_map), seed=seed,
                             foot_lock=foot_lock), t2m.fps
     if start_from is not None:

@@ -26,7 +26,7 @@ SYNTAX = "MODEL[:key=value,...]"
 
 
 def load_t2m(text: str, flag: str = "--model") -> tuple[str, Any]:
-    """(row label, the model behind ``decoding.t2m.TextToMotion`` with its options) of one
+    """(row label, the model behind ``models.t2m.TextToMotion`` with its options) of one
     ``--model`` value: parsed, loaded as any text-to-motion kind and wrapped; a ``method``
     left to the model is "mean", as evaluation rows decode; an option that names another
     model (an L2M's ``rerank``) is loaded now, so that a bad one fails before any data is

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from motionlang.decoding.seq2seq_io import encode_sentence, normalize
+from motionlang.models.seq2seq.decode.codec import encode_sentence, normalize
 
 
 @torch.no_grad()

@@ -47,7 +47,7 @@ class JudgeEvaluation:
 def evaluate_on_bandai(judge: Any, models: Mapping[str, Any], data: str | Path | DataSource,
                        split: str = "test", *, limit: int = 0, seed: int = 0,
                        foot_lock: str = "on", judge_name: str = "") -> JudgeEvaluation:
-    """Judge ``models`` (row label -> text-to-motion model, ``decoding.t2m``; none: the
+    """Judge ``models`` (row label -> text-to-motion model, ``models.t2m``; none: the
     judge and the real takes only) on the takes of ``split`` of the Bandai folder ``data``
     (``bandai:DIR``, or a bare folder read as one).
 
@@ -62,11 +62,11 @@ def evaluate_on_bandai(judge: Any, models: Mapping[str, Any], data: str | Path |
         MotionlangError: not a Bandai source, no takes in the split, a bad ``foot_lock``,
             a judge file that is not a judge.
     """
-    from motionlang.decoding.t2m import FPS
     from motionlang.evaluation.sampling import stratified_sample
     from motionlang.features.foot_lock import lock_feet
     from motionlang.models.judge.fit import bandai_items, bandai_sentences
     from motionlang.models.registry import load_model
+    from motionlang.models.t2m import FPS
     from motionlang.utils.progress import progress
 
     if foot_lock not in FOOT_LOCK:

@@ -22,10 +22,10 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from motionlang.datasets.text import normalize
-from motionlang.decoding.rerank import check_same_features, rerank
-from motionlang.decoding.seq2seq import describe_features, generate_features
 from motionlang.errors import MotionlangError
 from motionlang.evaluation.metrics import text as tm
+from motionlang.models.seq2seq.decode.rerank import check_same_features, rerank
+from motionlang.models.seq2seq.decode.search import describe_features, generate_features
 from motionlang.utils.progress import progress
 
 
@@ -48,7 +48,7 @@ def text_scores(refs: list[list[str]], hyps: list[str]) -> dict[str, float]:
 def evaluate_m2l(model, frames: Mapping[str, np.ndarray], references: Mapping[str, Sequence[str]],
                  width: int = 5, length_penalty: float = 0.0, *, rank: str = "logp") -> dict:
     """Describe every motion with beam width W (its sentences ordered by ``rank``,
-    ``decoding.seq2seq.describe_features``) and score the hypotheses.
+    ``models.seq2seq.decode.search.describe_features``) and score the hypotheses.
 
     Returns ``{"n", "width", "bleu_by_rank" [W], "rank_bleu_spearman", "bleu", "bleu1",
     "rouge_l", ("cider"), "examples"}`` (scores of the top hypothesis).
@@ -99,13 +99,13 @@ def evaluate_round_trip(l2m, m2l, references: Mapping[str, Sequence[str]],
                         max_frames: int | None = None, seed: int = 0,
                         temperature: float = 1.0, reranker=None,
                         length_norm: bool = False) -> dict:
-    """Generate from each reference sentence (``decoding.seq2seq.generate_features`` with
+    """Generate from each reference sentence (``models.seq2seq.decode.search.generate_features`` with
     ``method``, ``width``, ``temperature``, ``length_norm``; its best hypothesis), describe
     the result, score against the motion's references. Both models must share one feature
     set (same frames). :func:`round_trip_of` runs it with a text-to-motion model's options.
 
     reranker: another M2L model; the described hypothesis is then the one of the ``width``
-    under which it finds the sentence likeliest (``decoding.rerank``), not the L2M's likeliest.
+    under which it finds the sentence likeliest (``models.seq2seq.decode.rerank``), not the L2M's likeliest.
     It must not be ``m2l`` itself, which would grade its own choice.
 
     Returns ``{"n_sentences", "bleu", "bleu1", "rouge_l", ("cider"), "relative",
@@ -130,7 +130,7 @@ def evaluate_round_trip(l2m, m2l, references: Mapping[str, Sequence[str]],
 
 def round_trip_model(t2m, what: str = "the round trip's model") -> None:
     """Raise :class:`MotionlangError` (naming ``what``) unless the text-to-motion model
-    ``t2m`` (``decoding.t2m.TextToMotion``) can make the round trip's motions: ranked
+    ``t2m`` (``models.t2m.TextToMotion``) can make the round trip's motions: ranked
     hypotheses of frames in its own features, which the M2L describes (an L2M)."""
     if "hypotheses" not in t2m.capabilities:
         kind = getattr(t2m.model, "kind", type(t2m.model).__name__)
@@ -141,7 +141,7 @@ def round_trip_model(t2m, what: str = "the round trip's model") -> None:
 
 def round_trip_of(t2m, m2l, references: Mapping[str, Sequence[str]], m2l_bleu: float, *,
                   max_frames: int | None = None, seed: int = 0) -> dict:
-    """:func:`evaluate_round_trip` of a text-to-motion model (``decoding.t2m``, checked by
+    """:func:`evaluate_round_trip` of a text-to-motion model (``models.t2m``, checked by
     :func:`round_trip_model`) decoding with its own options: ``method`` (unset: "mean"),
     ``width``, ``temperature``, ``length_norm`` and the reranker its ``rerank`` names."""
     round_trip_model(t2m)

@@ -29,11 +29,11 @@ def evaluate_seq2seq(m2l, records: Mapping[str, Any], splits: Mapping[str, Seque
             data it was trained on. splits: ``{name: [id, ...]}``, with "train" (the
             baseline's search space and the round trip's sentences) and ``split``.
         width: beam width, hypotheses per motion (ordered by ``rank``, "logp" or "mbr";
-            ``length_penalty`` as in ``decoding.seq2seq.describe_features``).
+            ``length_penalty`` as in ``models.seq2seq.decode.search.describe_features``).
         limit: evaluate at most this many motions of the split (0: all), a random sample
             (seed 0, ``evaluation.sampling``); the baseline
             searches the whole training split.
-        t2m: a text-to-motion model (``decoding.t2m.TextToMotion``, one that gives ranked
+        t2m: a text-to-motion model (``models.t2m.TextToMotion``, one that gives ranked
             hypotheses in the M2L's features) whose round trip is also scored, named
             ``t2m_name`` in the report. tsne: also draw the context vectors' t-SNE map to
             this PNG.

@@ -154,7 +154,7 @@ class SearchOptions:
                                       f"{v!r}")
 
 
-RANKS = ("mbr", "logp")   # decoding.seq2seq.RANKS, named here without importing torch
+RANKS = ("mbr", "logp")   # models.seq2seq.decode.search.RANKS, named here without importing torch
 
 
 @dataclass(frozen=True)
@@ -172,7 +172,7 @@ class DescribeOptions:
                                     "keeps", metavar="ALPHA")
     rank: str = _opt("mbr", "order of the beam's sentences: mbr puts first the one the "
                         "beam agrees on most (mean sentence BLEU against the beam, "
-                        "decoding/mbr.py), logp the likeliest (the paper's; it favours the "
+                        "models/seq2seq/decode/mbr.py), logp the likeliest (the paper's; it favours the "
                         "shortest phrasing)", choices=RANKS)
     segments: bool = _opt(False, "each take as a timeline of (start, end, sentence) "
                              "segments, cut where the grounded analysis sees the action "

@@ -59,8 +59,8 @@ class Family:
             trainer -> model file, behind ``train KIND`` and ``ml.train``); None: not
             trainable.
         text_to_motion: ``"module:Class"`` wrapping a loaded model in the text-to-motion
-            interface (``decoding.t2m.TextToMotion``), or ``"self"`` when the model follows
-            the small ``decoding.t2m.SamplingModel`` protocol (the generic adapter does the
+            interface (``models.t2m.TextToMotion``), or ``"self"`` when the model follows
+            the small ``models.t2m.SamplingModel`` protocol (the generic adapter does the
             rest); None: not a text-to-motion family.
         describes: ``"module:function"`` turning motion into text, ``(model, motion, *,
             width, length_penalty, rank) -> [(sentence, score), ...]`` best first

@@ -49,7 +49,7 @@ def model_methods(t2m: Any) -> list[str]:
     """The decodings the page offers for a text-to-motion model: every one of
     :data:`METHODS`, but only its own for a model that samples by itself (``SelfAdapter``,
     e.g. the masked-token model: it refuses the others)."""
-    from motionlang.decoding.t2m import SelfAdapter
+    from motionlang.models.t2m import SelfAdapter
     return [t2m.default_method()] if isinstance(t2m, SelfAdapter) else list(METHODS)
 
 

@@ -15,7 +15,7 @@ def evaluate_ape(models: dict[str, Any], data: str | Path | Sequence[str | Path]
                  limit: int | None = None, autoencode: bool = False, true_start: bool = False,
                  oracle: int = 0, out_dir: str | Path | None = None, figures: int = 3
                  ) -> tuple[dict, str]:
-    """Evaluate ``{row label: model}`` (each behind ``decoding.t2m.TextToMotion`` with its
+    """Evaluate ``{row label: model}`` (each behind ``models.t2m.TextToMotion`` with its
     sampling options) on the ``split`` of ``data`` (a dataset folder or source, split as
     training split it with ``seed``, motions over ``max_seconds`` dropped), at most ``limit``
     motions. ``autoencode``, ``true_start``, ``oracle``, ``out_dir`` (``t2m_table.md``,

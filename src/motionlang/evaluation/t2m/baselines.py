@@ -3,7 +3,7 @@ retrieved real motion and the test motions themselves score, and how well a sent
 length model guesses the test lengths.
 
 Each ``*_baseline`` returns ``generate(sentence, n_frames) -> (n_frames, 21, 3)`` positions
-in metres, as ``decoding.t2m.TextToMotion.positions21`` does for a model.
+in metres, as ``models.t2m.TextToMotion.positions21`` does for a model.
 """
 from __future__ import annotations
 
@@ -27,12 +27,12 @@ def still_baseline(data):
 def retrieval_baseline(data, split: str = "train"):
     """``generate(sentence, T)`` of the nearest-neighbour baseline: the ``split`` motion
     whose description is closest to the sentence in bag of words
-    (``evaluation.retrieval``), re-timed to T frames (``decoding.t2m.stretch``: all of its
+    (``evaluation.retrieval``), re-timed to T frames (``models.t2m.stretch``: all of its
     actions kept, as a model told the length would). A real motion of about what the
     sentence says (a bag of words misses counts and, but for ties, word order), so its APE
     shows how far apart two motions of one description lie."""
-    from motionlang.decoding.t2m import stretch
     from motionlang.evaluation.retrieval import SentenceIndex
+    from motionlang.models.t2m import stretch
     index = SentenceIndex((rid, s) for rid in data.splits[split]
                           for s in data.records[rid].annotations)
     return lambda sentence, n_frames: stretch(

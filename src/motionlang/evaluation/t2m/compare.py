@@ -4,7 +4,7 @@ For each test motion: one description (the first that states all of its body act
 else the first), the target = the motion's 21 joints at 12.5 Hz anchored at the origin
 facing +Z (``PositionFeatures.decode`` of its features), and each model's generation of the
 same length from the same sentence with its own sampling options
-(``decoding.t2m.TextToMotion.positions21``: the two-stream model directly, the seq2seq L2M
+(``models.t2m.TextToMotion.positions21``: the two-stream model directly, the seq2seq L2M
 through forward kinematics). Columns:
 
 * APE / AVE local (mean of the 20 non-root joints in the body frame) and root (global
@@ -182,7 +182,7 @@ def compare(models: dict[str, object], data, *, split: str = "test", limit: int 
             autoencode: bool = False, true_start: bool = False, oracle: int = 0,
             seed: int = 0) -> tuple[dict, str]:
     """Evaluate ``{name: model}`` on ``data`` (``TwoStreamData``). A model is a
-    text-to-motion model behind ``decoding.t2m.TextToMotion`` and decodes with its own
+    text-to-motion model behind ``models.t2m.TextToMotion`` and decodes with its own
     sampling options (``text_to_motion(model, options)``; a loaded model as it is: its
     default options, an L2M's mean decoding). Extra rows unless ``baseline`` is False: the no-motion baseline
     (``still_baseline``), the nearest-neighbour baseline (``retrieval_baseline``) and the
@@ -199,7 +199,7 @@ def compare(models: dict[str, object], data, *, split: str = "test", limit: int 
     names prefixed "same-parameter subset: ". With ``out_dir`` also write ``t2m_table.md``,
     ``t2m_report.json`` (with each model's options that differ from the defaults) and the
     trajectory figures. Returns (results, table)."""
-    from motionlang.decoding.t2m import text_to_motion
+    from motionlang.models.t2m import text_to_motion
     models = {name: text_to_motion(model) for name, model in models.items()}
     items = eval_items(data, split, limit, seed)   # a sample drawn with seed
     protos = fit_prototypes(data)
@@ -264,7 +264,7 @@ def _baseline_rows(results: dict, data, items, protos, true_start: bool) -> None
 def _length_rows(models: dict, data, items) -> tuple[dict, str]:
     """Sentence -> length errors of each model's length model (and of one refit on the
     training motions), and the table's line about them."""
-    from motionlang.decoding.t2m import FPS
+    from motionlang.models.t2m import FPS
     lengths = {"refit on the whole training motions": length_errors(data, items)}
     # models whose length model counts frames at 12.5 Hz (an angles L2M's counts at 10 Hz)
     lengths.update({name: length_errors(data, items, t2m.model.length_model)

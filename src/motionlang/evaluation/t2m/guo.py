@@ -213,7 +213,7 @@ class GuoRun:
 
     def text_to_motion(self, models: dict) -> tuple[dict, str]:
         """The text-to-motion table (``yardstick.guo_table``) with a row per model
-        (``{label: decoding.t2m.TextToMotion}``), and its Markdown with a title."""
+        (``{label: models.t2m.TextToMotion}``), and its Markdown with a title."""
         from motionlang.evaluation.t2m.yardstick import guo_table, markdown_table
         o = self.options
         captions = [p["caption"] for p in self.pairs]

@@ -67,7 +67,7 @@ def nearest_captions(train_items: Sequence[dict], pairs: Sequence[dict]) -> list
 
 def describe_motions(model, motions: Sequence, *, width: int = 5, desc: str = "describe"
                      ) -> list[str]:
-    """An M2L's likeliest beam hypothesis (``decoding.seq2seq.describe``, beam ``width``,
+    """An M2L's likeliest beam hypothesis (``models.seq2seq.decode.search.describe``, beam ``width``,
     the paper's order; ``describe`` shows its minimum-Bayes-risk choice first) for each
     ``Motion``."""
     from motionlang.models.registry import describer

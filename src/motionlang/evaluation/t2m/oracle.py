@@ -8,7 +8,7 @@ second, and APE, a frame-by-frame distance, charges for it. Two rows measure thi
 test motions whose exact parameters occur at least ``min_group`` times in training:
 
 * **mean of the same-parameter training motions**: each re-timed to the test length
-  (``decoding.t2m.stretch``) and averaged frame by frame: a reference point for a
+  (``models.t2m.stretch``) and averaged frame by frame: a reference point for a
   deterministic model told *every* parameter (the frame-wise mean minimises a squared
   error; APE is a plain distance and the re-timing is a guess, so this is not a strict
   floor);
@@ -59,7 +59,7 @@ def oracle_generations(data, items: Sequence, min_group: int = 3
     Raises:
         MotionlangError: ``min_group`` < 1, or no item has an oracle.
     """
-    from motionlang.decoding.t2m import stretch
+    from motionlang.models.t2m import stretch
     if min_group < 1:
         raise MotionlangError(f"the oracle needs groups of at least 1 motion, got {min_group}")
     groups = same_parameter_groups(data)

@@ -133,7 +133,7 @@ def evaluator_body(evaluator) -> str:
 
 def positions_rows(p21: np.ndarray, bones=None) -> np.ndarray:
     """Global 21-joint positions (T >= 2, 21, 3) metres at 12.5 Hz (what every text-to-motion
-    model gives, ``decoding.t2m``) -> (T-1, 251) float32 rows of the ``kit`` body (mm), laid
+    model gives, ``models.t2m``) -> (T-1, 251) float32 rows of the ``kit`` body (mm), laid
     on ``bones`` (20 lengths, m: an evaluator's ``config.bones``) if given."""
     from motionlang.training.evaluator_train import joints_rows
     p = np.asarray(p21, dtype=float)
@@ -282,9 +282,9 @@ def markdown_table(table: dict[str, dict], title: str = "") -> str:
 def generated_rows(model, captions: Sequence[str], n_frames: Sequence[int], *,
                    desc: str = "generate", bones=None, **kw) -> list[np.ndarray]:
     """A text-to-motion model's motions for ``captions``, each ``n_frames[i]`` frames at
-    12.5 Hz (``decoding.t2m.TextToMotion.positions21``; ``kw`` go to it, e.g. ``method``,
+    12.5 Hz (``models.t2m.TextToMotion.positions21``; ``kw`` go to it, e.g. ``method``,
     ``seed``), as ``kit`` rows (:func:`positions_rows`, on ``bones`` if given)."""
-    from motionlang.decoding.t2m import text_to_motion
+    from motionlang.models.t2m import text_to_motion
     from motionlang.utils.progress import progress
     t2m = text_to_motion(model)
     if t2m.deterministic:   # no sampling options

@@ -14,7 +14,7 @@ global-position and foot-velocity reconstruction, commitment; codebooks by EMA);
 (quantiser dropout still applies, so it keeps decoding coarse codes alone). ``loss`` and
 ``collate`` follow the stage, so the shared trainer runs each.
 
-Sampling (:meth:`MaskedModel.sample`, the ``decoding.t2m.SamplingModel`` protocol): the
+Sampling (:meth:`MaskedModel.sample`, the ``models.t2m.SamplingModel`` protocol): the
 length from the caller or the estimator, base tokens by iterative masked decoding with
 classifier-free guidance (:mod:`.sampling`), the finer codebooks by the residual
 transformer, decoded to rows and to global positions. :meth:`MaskedModel.inbetween` fixes

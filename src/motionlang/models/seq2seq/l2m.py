@@ -59,13 +59,14 @@ import torch
 from torch import nn
 
 from motionlang.errors import MotionlangError
+from motionlang.models.frame_losses import energy_loss
 from motionlang.models.length import SentenceLength
 from motionlang.models.schema import LENGTH_MODEL
 from motionlang.models.seq2seq import mdn
 from motionlang.models.seq2seq.checkpoint import Seq2SeqCheckpointed
 from motionlang.models.seq2seq.config import L2MConfig  # noqa: F401 (re-exported)
 from motionlang.models.seq2seq.layers import AdditiveAttention, BiGRUEncoder, StackedDecoder
-from motionlang.models.seq2seq.losses import energy_loss, expected_foot_loss
+from motionlang.models.seq2seq.losses import expected_foot_loss
 from motionlang.models.seq2seq.plan import Planner, motion_plan, plan_at
 
 

@@ -8,8 +8,6 @@
   and for one decoding step (L = 1) by the same code.
 - :class:`AdditiveAttention`: Bahdanau-style scores v^T tanh(W_q q + W_k k) over encoder
   outputs, the attention variant the paper proposes as future work.
-- :func:`last_valid_output`: a one-way recurrent stack's state at each sequence's end,
-  without packing (the two-stream model's encoders and discriminator).
 """
 from __future__ import annotations
 
@@ -17,28 +15,6 @@ import torch
 from torch import nn
 
 from motionlang.features.collate import lengths_to_mask
-
-
-def last_valid_output(rnn: nn.RNNBase, x: torch.Tensor, lengths: torch.Tensor | None
-                      ) -> torch.Tensor:
-    """A one-way, batch-first recurrent stack over a padded batch x (B, T, D) -> the last
-    layer's output at each sequence's last valid step, (B, H): the last layer's final state
-    that packing the batch would give (steps past a sequence's end are computed, then
-    ignored: a recurrence only looks back). ``lengths`` None: every sequence is T long.
-
-    Why not pack: on CPU the backward pass of a packed GRU zero-fills the whole
-    (B*T, 3H) gate tensor once per time step; unpacked, the fused kernel runs once."""
-    if rnn.bidirectional or not rnn.batch_first:
-        raise ValueError("last_valid_output needs a one-way, batch-first recurrent module")
-    if lengths is not None and len(lengths) and not (
-            1 <= int(lengths.min()) and int(lengths.max()) <= x.shape[1]):
-        raise ValueError(f"sequence lengths must be in 1..{x.shape[1]} (the padded length), "
-                         f"got {int(lengths.min())}..{int(lengths.max())}")
-    out, _ = rnn(x)
-    if lengths is None:
-        return out[:, -1]
-    last = lengths.to(device=x.device, dtype=torch.long) - 1
-    return out[torch.arange(len(x), device=x.device), last]
 
 
 def reverse_within_lengths(x: torch.Tensor, lengths: torch.Tensor) -> torch.Tensor:

@@ -8,7 +8,7 @@ additive attention (``attention=True``): the top decoder layer's output queries 
 outputs and the attended vector joins the softmax input.
 
 The decoder is driven word by word through :meth:`MotionToLanguage.step` so that
-``motionlang.decoding.beam`` can search it without knowing the model.
+``motionlang.models.seq2seq.decode.beam`` can search it without knowing the model.
 """
 from __future__ import annotations
 

@@ -36,7 +36,7 @@ UPPER, LOWER = ("left_arm", "right_arm"), ("left_leg", "right_leg")
 
 #: paper weights (pose prediction 1; λ_M, λ_V, λ_E, λ_G); the discriminator's own loss has
 #: weight 1 (it only reaches the discriminator's parameters). "energy" (local speeds,
-#: ``models.seq2seq.losses.energy_loss``) and "foot" (the decoded toes' speed where the
+#: ``models.frame_losses.energy_loss``) and "foot" (the decoded toes' speed where the
 #: reference's toe is down, ``losses.foot_contact_loss``) are beyond the paper and off (0)
 #: by default.
 DEFAULT_LAMBDAS = {"pose": 1.0, "manifold": 0.001, "velocity": 0.1, "embedding": 0.1,

@@ -5,7 +5,7 @@ from __future__ import annotations
 import torch
 from torch import nn
 
-from motionlang.models.seq2seq.layers import last_valid_output
+from motionlang.models.recurrent import last_valid_output
 
 
 class PoseDiscriminator(nn.Module):

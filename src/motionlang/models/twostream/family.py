@@ -6,7 +6,7 @@ FAMILIES = (
            summary="hierarchical two-stream text-to-motion model (Ghosh et al. 2021)",
            config="motionlang.models.twostream.config:TwoStreamConfig",
            recipe="motionlang.recipes.twostream:TWOSTREAM",
-           text_to_motion="motionlang.decoding.t2m_models:TwoStreamText2Motion",
-           encodes_text="motionlang.decoding.t2m_models:twostream_text_vector",
-           encodes_motion="motionlang.decoding.t2m_models:twostream_motion_vector"),
+           text_to_motion="motionlang.models.twostream.t2m:TwoStreamText2Motion",
+           encodes_text="motionlang.models.twostream.t2m:twostream_text_vector",
+           encodes_motion="motionlang.models.twostream.t2m:twostream_motion_vector"),
 )

@@ -1,5 +1,5 @@
 """Loss terms of the two-stream model: the embedding and discriminator terms here; the
-masked frame terms (pose, velocity, energy, foot contact) are :mod:`motionlang.models.seq2seq.losses`',
+masked frame terms (pose, velocity, energy, foot contact) are :mod:`motionlang.models.frame_losses`',
 re-exported.
 """
 from __future__ import annotations
@@ -9,7 +9,7 @@ from typing import cast
 import torch
 import torch.nn.functional as F
 
-from motionlang.models.seq2seq.losses import (  # noqa: F401 (the model's terms, re-exported)
+from motionlang.models.frame_losses import (  # noqa: F401 (the model's terms, re-exported)
     energy_loss,
     foot_contact_loss,
     frame_mask,

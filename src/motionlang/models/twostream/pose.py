@@ -19,7 +19,7 @@ Options beyond the paper (``TwoStreamConfig.z_every_step`` / ``time_input`` /
 initial state, the decoder has to carry a whole sequence of actions in a state it also
 overwrites every step, and our models (h 128) lost the order of actions even when decoding a
 motion from its own embedding. z and the elapsed time alone did not bring the order back; the
-phase-free energy loss (``models.seq2seq.losses.energy_loss``) with z and the progress input
+phase-free energy loss (``models.frame_losses.energy_loss``) with z and the progress input
 did (figures in ``docs/results/twostream.md``).
 """
 from __future__ import annotations
@@ -29,7 +29,7 @@ from typing import cast
 import torch
 from torch import nn
 
-from motionlang.models.seq2seq.layers import last_valid_output
+from motionlang.models.recurrent import last_valid_output
 from motionlang.models.twostream.config import PART_NAMES, TwoStreamConfig
 from motionlang.models.twostream.unroll import unroll
 

@@ -41,13 +41,13 @@ from motionlang.analysis.words import actions_named, agrees
 from motionlang.datasets.bandai_text import styles_named
 from motionlang.datasets.canonical import without_style
 from motionlang.datasets.pos_tags import tag
-from motionlang.decoding.seq2seq import _features_of, describe_features
-from motionlang.decoding.seq2seq_io import normalize
 from motionlang.errors import MotionlangError
 from motionlang.features.body21 import normalise21
 from motionlang.features.frames import motion_frames
 from motionlang.features.gait import gait
 from motionlang.features.joint_map import positions21
+from motionlang.models.seq2seq.decode.codec import normalize
+from motionlang.models.seq2seq.decode.search import _features_of, describe_features
 
 #: what :func:`describe` says of a motion the model cannot describe
 UNFAMILIAR = "the person makes an unfamiliar movement"
@@ -171,7 +171,7 @@ def describe(model: Any, motion, *, width: int = 5, max_len: int | None = None,
              length_penalty: float = 0.0, rank: str = "logp",
              grounded: bool = True) -> list[tuple[str, float]]:
     """A :class:`Motion` -> up to W sentences with their total log probability, best first
-    (as ``decoding.seq2seq.describe``), checked against the motion's gait and the model's
+    (as ``models.seq2seq.decode.search.describe``), checked against the motion's gait and the model's
     familiarity with it (module docstring); ``grounded=False``: the model's beam as it is."""
     frames = motion_frames(_features_of(model), motion, 1)[0]
     beam: dict[str, Any] = dict(max_len=max_len, length_penalty=length_penalty, rank=rank)

@@ -1,6 +1,6 @@
-"""The text-to-motion adapters of the seq2seq L2M (Plappert et al. 2018) and the two-stream
-model (Ghosh et al. 2021), with the L2M's sampling options and the two-stream model's
-encoders; their family entries name them (``Family.text_to_motion``)."""
+"""The seq2seq L2M (Plappert et al. 2018) behind the text-to-motion interface
+(``models.t2m``): its sampling options and its adapter, which its family entry names
+(``Family.text_to_motion``)."""
 from __future__ import annotations
 
 import math
@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 import torch
 
-from motionlang.decoding.t2m import (
+from motionlang.models.t2m import (
     FPS,
     Text2MotionAdapter,
     _check_words,
@@ -18,7 +18,6 @@ from motionlang.decoding.t2m import (
     fit_length,
     interp_frames,
 )
-from motionlang.errors import MotionlangError
 from motionlang.utils.checks import MAX_WIDTH
 
 
@@ -67,7 +66,7 @@ class L2MOptions:
 
 class L2MText2Motion(Text2MotionAdapter):
     """The seq2seq L2M: decodes by sampling, a sampled beam or component means
-    (``decoding.seq2seq.generate``); starts from a given pose if asked."""
+    (``models.seq2seq.decode.search.generate``); starts from a given pose if asked."""
 
     Options = L2MOptions
     capabilities = frozenset({"start_pose", "hypotheses"})
@@ -77,8 +76,8 @@ class L2MText2Motion(Text2MotionAdapter):
         """The M2L of ``options.rerank``, loaded once and checked against the L2M's
         features; None without one."""
         if self.options.rerank and self._reranker is None:
-            from motionlang.decoding.rerank import check_same_features
             from motionlang.models.registry import load_model
+            from motionlang.models.seq2seq.decode.rerank import check_same_features
             self._reranker = load_model(self.options.rerank, kind="m2l")
             check_same_features(self.model, self._reranker, f"rerank={self.options.rerank}")
         return self._reranker
@@ -111,7 +110,7 @@ class L2MText2Motion(Text2MotionAdapter):
 
     def _hypotheses(self, sentence: str, *, max_frames: int | None = None, **kw
                     ) -> list[tuple[Any, float]]:
-        from motionlang.decoding.seq2seq import generate
+        from motionlang.models.seq2seq.decode.search import generate
         _check_words(sentence)
         self._option_kw(kw, self.default_method())
         if self.options.temperature != 1.0:
@@ -131,9 +130,9 @@ class L2MText2Motion(Text2MotionAdapter):
     def _positions21(self, sentence: str, n_frames: int, *, seed: int = 0,
                      method: str = "mean", skeleton=None, width: int = 1, reranker=None,
                      first_frame: np.ndarray | None = None, **_) -> np.ndarray:
-        from motionlang.decoding.seq2seq import generate
         from motionlang.features.base import downsample
         from motionlang.features.joint_map import positions21
+        from motionlang.models.seq2seq.decode.search import generate
         fps = self.fps
         cap = max(1, int(np.ceil(n_frames * fps / FPS)))
         # a model told its length runs to it: its end flag fires early on many test
@@ -153,60 +152,3 @@ class L2MText2Motion(Text2MotionAdapter):
         else:
             p = positions21(downsample(result, FPS) if result.n_frames > 1 else result)
         return fit_length(anchor(p), n_frames)
-
-
-class TwoStreamText2Motion(Text2MotionAdapter):
-    """The two-stream model: deterministic, 12.5 Hz, the length its length model plans
-    (or the one given); its start pose is given to ``model.generate(start=...)``."""
-
-    deterministic = True
-    capabilities = frozenset({"reconstruct", "positions_start"})
-
-    @property
-    def fps(self) -> float:
-        return FPS
-
-    @torch.no_grad()
-    def reconstruct21(self, p21: np.ndarray) -> np.ndarray:
-        return self.model.positions(self.model.reconstruct(self.model.features_from_positions(p21)))
-
-    @torch.no_grad()
-    def start_from21(self, sentence: str, p21: np.ndarray) -> np.ndarray:
-        return self.model.positions(self.model.generate(
-            sentence, len(p21), start=self.model.features_from_positions(p21)[0]))
-
-    def default_method(self) -> str:
-        return "mean"
-
-    def _hypotheses(self, sentence: str, *, max_frames: int | None = None, **kw
-                    ) -> list[tuple[Any, float]]:
-        _check_words(sentence)
-        if kw.get("first_frame") is not None:
-            raise MotionlangError("a start pose applies to L2M models")
-        n = max_frames or self.model.frames_for(sentence)
-        return [(self.model.generate_positions(sentence, n), float("nan"))]
-
-    @torch.no_grad()
-    def _positions21(self, sentence: str, n_frames: int, *, first_frame=None, **kw
-                     ) -> np.ndarray:
-        if first_frame is not None:
-            raise MotionlangError("first_frame is for L2M models; a two-stream model takes "
-                                  "its start pose in generate(start=...)")
-        return self.model.generate_positions(sentence, n_frames)
-
-
-def twostream_text_vector(model, sentence: str) -> np.ndarray:
-    """A sentence -> the two-stream model's joint-space embedding (D,) float32."""
-    with torch.no_grad():
-        return model.joint(model.encode_text([sentence]))[0].numpy()
-
-
-def twostream_motion_vector(model, motion) -> np.ndarray:
-    """A Motion -> the two-stream model's joint-space pose embedding (D,) float32."""
-    from motionlang.features.base import downsample
-    from motionlang.features.body21 import body21
-    p = body21(downsample(motion, FPS) if motion.fps > FPS else motion)
-    feats = torch.as_tensor(model.features_from_positions(p),
-                            dtype=torch.float32)[None]
-    with torch.no_grad():
-        return model.joint(model.encode_motion(feats))[0].numpy()

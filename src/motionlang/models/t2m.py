@@ -391,8 +391,8 @@ def generate_positions21(model, sentence: str, n_frames: int, **kw) -> np.ndarra
     ``skeleton``: the body its joint angles drive (default: the training subjects' mean
     build). ``width`` > 1 with "sample": the likeliest of that many samples, or with
     ``reranker`` (an M2L model) the one under which it finds the sentence likeliest
-    (``decoding.rerank``). ``first_frame`` (L2M only): its motion starts with this frame of
-    its own features (``decoding.seq2seq.generate_features``); an L2M told its length runs to
+    (``models.seq2seq.decode.rerank``). ``first_frame`` (L2M only): its motion starts with this frame of
+    its own features (``models.seq2seq.decode.search.generate_features``); an L2M told its length runs to
     it (its end flag is not read before). ``foot_lock`` (default off: the model's own
     frames): the body moved with its planted feet, held in place (``features.foot_lock``).
     """

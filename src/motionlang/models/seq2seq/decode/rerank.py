@@ -22,9 +22,9 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
-from motionlang.decoding.seq2seq_io import encode_sentence, normalize
 from motionlang.errors import MotionlangError
 from motionlang.features.collate import pad_batch
+from motionlang.models.seq2seq.decode.codec import encode_sentence, normalize
 from motionlang.models.seq2seq.m2l import MotionToLanguage
 
 

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 import torch
 
-from motionlang.decoding.beam import select_state
+from motionlang.models.seq2seq.decode.beam import select_state
 from motionlang.models.seq2seq.mdn import (
     MixtureParams,
     active_log_prob,

@@ -17,15 +17,15 @@ from typing import Any
 import numpy as np
 import torch
 
-from motionlang.decoding.beam import beam_search, greedy_search
-from motionlang.decoding.mbr import mbr_rank
-from motionlang.decoding.motion_beam import mean_decode, sample_decode, sampled_beam
-from motionlang.decoding.rerank import check_same_features, rerank
-from motionlang.decoding.seq2seq_io import denormalize as _denormalize
-from motionlang.decoding.seq2seq_io import encode_sentence
-from motionlang.decoding.seq2seq_io import normalize as _normalize
 from motionlang.errors import MotionlangError
 from motionlang.features.frames import frames_to_features, motion_frames
+from motionlang.models.seq2seq.decode.beam import beam_search, greedy_search
+from motionlang.models.seq2seq.decode.codec import denormalize as _denormalize
+from motionlang.models.seq2seq.decode.codec import encode_sentence
+from motionlang.models.seq2seq.decode.codec import normalize as _normalize
+from motionlang.models.seq2seq.decode.mbr import mbr_rank
+from motionlang.models.seq2seq.decode.motion_beam import mean_decode, sample_decode, sampled_beam
+from motionlang.models.seq2seq.decode.rerank import check_same_features, rerank
 from motionlang.models.seq2seq.l2m import LanguageToMotion
 from motionlang.models.seq2seq.m2l import MotionToLanguage
 
@@ -56,7 +56,7 @@ def describe_features(model: MotionToLanguage, features: np.ndarray, *, width: i
                       prefix: Sequence[str] = ()) -> list[tuple[str, float]]:
     """features (T, F) raw -> W sentences with their total log probability, best first:
     ``rank`` "logp" (the paper's) by the total, or by total / length ** ``length_penalty``
-    (see ``beam_search``); "mbr" by expected agreement with the beam (``decoding.mbr``).
+    (see ``beam_search``); "mbr" by expected agreement with the beam (``models.seq2seq.decode.mbr``).
 
     width=1 uses greedy decoding. banned_words: words never generated; prefix: words every
     sentence starts with (beam search only); words the vocabulary lacks are ignored in both.
@@ -219,7 +219,7 @@ def generate(model: LanguageToMotion, sentence: str | Sequence[int], *, width: i
     (T, 21, 3) for position features.
 
     reranker: an M2L model with the same features; the motions then come ranked by its log
-    P(sentence | motion) instead, and that is the number beside each (``decoding.rerank``).
+    P(sentence | motion) instead, and that is the number beside each (``models.seq2seq.decode.rerank``).
 
     first_frame: (F,) model features (``motion_frames(model.features, motion)[0][0]``):
     every motion starts with this frame ("mean" and "sample"; see ``generate_features``).

@@ -95,7 +95,7 @@ def fill_between(t2m: Any, text: str, keep: Any, read: Callable[[Any], Any], *,
                  seed: int = 0, foot_lock: bool = False) -> list[tuple[np.ndarray, float]]:
     """The kept spans of a motion (``keep``: as :func:`parse_keep` reads it; ``read`` turns
     its motion or file into a ``Motion`` of any rig the 21-joint body maps) with the rest
-    generated for ``text`` by ``t2m`` (a ``decoding.t2m.TextToMotion``): one hypothesis
+    generated for ``text`` by ``t2m`` (a ``models.t2m.TextToMotion``): one hypothesis
     ``[(positions (T, 21, 3) metres at the model's fps, NaN)]``, placed where the motion
     is. ``foot_lock``: the generated frames' planted feet held, before they are joined to
     the kept ones and again after.

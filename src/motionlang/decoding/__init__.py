@@ -1,1 +1,0 @@
-"""motionlang.decoding"""
