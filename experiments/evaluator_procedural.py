@@ -26,12 +26,13 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from motionlang.datasets.evaluator_items import build_evaluator_data
 from motionlang.evaluation.metrics.t2m import fid
 from motionlang.evaluation.retrieval import SentenceIndex
 from motionlang.evaluation.t2m.yardstick import guo_metrics, retrieval_table
 from motionlang.features.h3d_vectors import KIT_H3D, joints_to_vectors, vectors_to_joints
 from motionlang.models.evaluator import EvaluatorConfig, TextMotionEvaluator
-from motionlang.training.evaluator_train import build_evaluator_data, train_evaluator
+from motionlang.recipes.evaluator_train import train_evaluator
 from motionlang.training.trainer import TrainConfig
 
 

@@ -74,9 +74,9 @@ def _encode(captions: list[str]) -> dict:
 def pack(args: argparse.Namespace) -> None:
     import torch
 
+    from motionlang.datasets.position_items import build_twostream_data
     from motionlang.datasets.sources import parse_source
     from motionlang.datasets.splits import save_splits
-    from motionlang.datasets.twostream_items import build_twostream_data
     from motionlang.training.run_log import log_command, write_licence
 
     sources = [parse_source(s) for s in args.data]
@@ -138,7 +138,7 @@ def _read_pack(p: Path, args: argparse.Namespace) -> tuple:
     """``(TwoStreamData, VectorTable, meta)`` of a pack (``--limit``: every k-th motion)."""
     import torch
 
-    from motionlang.datasets.twostream_items import TwoStreamData
+    from motionlang.datasets.position_items import TwoStreamData
     slim = torch.load(p / "meta.pt", weights_only=False)
     flat = np.frombuffer(lzma.decompress((p / "rows.xz").read_bytes()), dtype=np.int16)
     sequences, at, F = {}, 0, slim["dim"]
@@ -308,8 +308,8 @@ def mirror(args: argparse.Namespace) -> None:
     MODEL, under id ``"M" + id``, its sentences' sides swapped, their MiniLM vectors added."""
     import torch
 
+    from motionlang.datasets.position_items import build_twostream_data
     from motionlang.datasets.sources import parse_source
-    from motionlang.datasets.twostream_items import build_twostream_data
     from motionlang.models.masked.model import MaskedModel
 
     p, out = Path(args.pack), Path(args.out)

@@ -41,9 +41,9 @@ sys.path.insert(0, str(ROOT / "src"))
 
 def _load(args: argparse.Namespace):
     """(model, TwoStreamData) of the run folder and sources."""
+    from motionlang.datasets.position_items import build_twostream_data
     from motionlang.datasets.sources import parse_source
     from motionlang.datasets.splits import load_splits
-    from motionlang.datasets.twostream_items import build_twostream_data
     from motionlang.models.registry import load_model
 
     model = load_model(args.model, kind="masked").eval()   # a file, run folder or "masked"

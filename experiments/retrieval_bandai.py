@@ -27,10 +27,10 @@ from pathlib import Path
 import numpy as np
 
 import motionlang as ml
+from motionlang.datasets.evaluator_items import build_evaluator_data
 from motionlang.evaluation.metrics.t2m import euclidean_distance_matrix, retrieval_scores
 from motionlang.evaluation.t2m.guo import load_evaluator
 from motionlang.evaluation.t2m.yardstick import evaluator_body, test_pairs
-from motionlang.training.evaluator_train import build_evaluator_data
 
 #: one query per action of the test takes, the action in words the captions do not use
 QUERIES = {

@@ -47,6 +47,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "src"))
+sys.path.insert(0, str(ROOT))   # experiments.lab
 
 STATE = Path("experiments/state/twostream_recipe")   # relative to ROOT: committed
 WORK = Path("runs/twostream_parts")                   # relative to ROOT: not kept
@@ -98,11 +99,11 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     os.chdir(ROOT)          # the run records its --data as given: the same text every part
     import torch
+    from experiments.lab.run_state import read_state, restore_state, save_state
 
     import motionlang as ml
     from motionlang.errors import MotionlangError
     from motionlang.training.run_files import read_training_checkpoint
-    from motionlang.training.run_state import read_state, restore_state, save_state
     torch.set_num_threads(a.threads)
     keep_best = bool(a.select_evaluator)   # the best epoch may be an earlier part's
     corpus = WORK / "corpus"

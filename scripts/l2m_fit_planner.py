@@ -15,6 +15,9 @@ from __future__ import annotations
 import argparse
 import logging
 import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))   # experiments.lab
 
 
 def main(argv=None) -> int:
@@ -33,13 +36,13 @@ def main(argv=None) -> int:
     ap.add_argument("--fresh", action="store_true", help="new planner weights")
     args = ap.parse_args(argv)
     import torch
+    from experiments.lab.plan_fit import fit_planner
 
     from motionlang.datasets.seq2seq_pairs import build_pairs
     from motionlang.errors import MotionlangError
     from motionlang.models.checkpoint import read_model_dict
     from motionlang.models.seq2seq.l2m import L2MConfig, LanguageToMotion
     from motionlang.models.seq2seq.plan import Planner
-    from motionlang.training.plan_fit import fit_planner
 
     logging.basicConfig(level=logging.INFO, format="%(message)s")
     try:

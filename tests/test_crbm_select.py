@@ -49,9 +49,10 @@ def test_on_epoch_sees_every_snapshot_of_one_run():
 
 
 def test_validation_split_holds_out_training_trials_only():
+    from experiments.lab.crbm_select import VALIDATION_TRIALS, validation_split
+
     from helpers.data import shared_file
     from motionlang.evaluation.crbm.fill import load_cmu35
-    from motionlang.evaluation.crbm.select import VALIDATION_TRIALS, validation_split
     data = load_cmu35(shared_file("cmu35/cmu35WalkJog.mat").parent)
     val = validation_split(data)
     assert len(val.train) == 27 and set(val.test) == set(VALIDATION_TRIALS)
@@ -63,7 +64,7 @@ def test_validation_split_holds_out_training_trials_only():
 
 
 def test_choose_prefers_the_best_eligible_run_and_falls_back_to_the_best():
-    from motionlang.evaluation.crbm.select import choose
+    from experiments.lab.crbm_select import choose
 
     def run(score, kept):
         return {"score": score, "generation": {"a": {"style_kept": kept[0]},

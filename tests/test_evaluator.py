@@ -9,17 +9,14 @@ import pytest
 import torch
 import torch.nn.functional as F
 
+from motionlang.datasets.evaluator_items import build_evaluator_data, fit_normalizer
 from motionlang.errors import DatasetError, MotionlangError
 from motionlang.evaluation.metrics.t2m import r_precision
 from motionlang.evaluation.t2m.yardstick import format_table, guo_metrics, score_t2m
 from motionlang.models.evaluator import EvaluatorConfig, TextMotionEvaluator, official_config
 from motionlang.models.evaluator.text import POS_CATEGORIES, pos_index, tag, text_inputs
 from motionlang.models.registry import load_model
-from motionlang.training.evaluator_train import (
-    build_evaluator_data,
-    fit_normalizer,
-    train_evaluator,
-)
+from motionlang.recipes.evaluator_train import train_evaluator
 from motionlang.training.trainer import TrainConfig
 
 torch.set_num_threads(1)
@@ -309,11 +306,11 @@ def test_items_laid_on_the_training_motions_median_bones(tmp_path):
     """bones="median": the training motions' median bone lengths, every split's rows made
     on them (a row's bones are the joints' distances, back from the rows); the rows of a
     generated motion on a body 1.2 times as big are those of the motion itself."""
+    from motionlang.datasets.evaluator_items import body_joints_of
     from motionlang.datasets.synth import write_corpus
     from motionlang.evaluation.t2m.yardstick import positions_rows
     from motionlang.features.h3d_vectors import KIT_H3D, vectors_to_joints
     from motionlang.features.joint_map import bone_lengths21
-    from motionlang.training.evaluator_train import body_joints_of
     write_corpus(tmp_path / "c", n=4, seed=3, workers=1, show_progress=False)
     plain = build_evaluator_data(tmp_path / "c", fractions=(0.5, 0.25, 0.25))
     data = build_evaluator_data(tmp_path / "c", fractions=(0.5, 0.25, 0.25), bones="median")

@@ -142,7 +142,7 @@ def test_train_l2m_plan_options_are_checked_before_any_data_is_read(tmp_path, ca
 
 
 def test_fit_planner_fits_the_planner_alone_and_keeps_the_best_epoch():
-    from motionlang.training.plan_fit import fit_planner, true_plans
+    from experiments.lab.plan_fit import fit_planner, true_plans
     model, batch = plan_model(), make_batch()
     items = [{"tokens": batch["tokens"][b, :int(batch["token_lengths"][b])].tolist(),
               "motion": batch["motion"][b, :int(batch["motion_lengths"][b])].numpy()}

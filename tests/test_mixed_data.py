@@ -165,7 +165,7 @@ def test_label_accuracy_by_hand():
 
 
 def test_twostream_items_from_two_datasets(corpus, bandai, tmp_path):
-    from motionlang.datasets.twostream_items import build_twostream_data
+    from motionlang.datasets.position_items import build_twostream_data
     spec = f"bandai:{bandai}"
     got = build_twostream_data([corpus, spec], cache_dir=tmp_path / "fc")
     assert got.splits == build_pairs([corpus, spec], features="positions", offsets=1).splits
@@ -178,7 +178,7 @@ def test_twostream_items_normalised_by_source(corpus, bandai, tmp_path):
     still decodes to the same numbers as under the one shared normaliser."""
     import numpy as np
 
-    from motionlang.datasets.twostream_items import build_twostream_data
+    from motionlang.datasets.position_items import build_twostream_data
     spec, cache = f"bandai:{bandai}", tmp_path / "fc"
     one = build_twostream_data([corpus, spec], cache_dir=cache, mirror=True)
     by = build_twostream_data([corpus, spec], cache_dir=cache, mirror=True, by_source=-1)
@@ -248,7 +248,7 @@ def test_train_twostream_on_two_datasets(corpus, bandai, tmp_path, capsys):
     import numpy as np
 
     import motionlang as ml
-    from motionlang.datasets.twostream_items import build_twostream_data
+    from motionlang.datasets.position_items import build_twostream_data
     model = ml.load_model(out / "model.pt")
     alone = build_twostream_data([corpus, f"bandai:{bandai}"], by_source=-1, cache_dir=tmp_path)
     np.testing.assert_allclose(np.asarray(model.normalizer.mean),

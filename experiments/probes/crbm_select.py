@@ -7,9 +7,14 @@ Prints one JSON line per (setting, snapshot) and writes the whole grid to --out.
 """
 import argparse
 import json
+import sys
+from pathlib import Path
 
-from motionlang.evaluation.crbm.select import SelectionConfig, select
-from motionlang.utils.atomic import atomic_write
+sys.path.insert(0, str(Path(__file__).resolve().parents[2]))   # experiments.lab
+
+from experiments.lab.crbm_select import SelectionConfig, select  # noqa: E402
+
+from motionlang.utils.atomic import atomic_write  # noqa: E402
 
 
 def main() -> None:

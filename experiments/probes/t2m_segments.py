@@ -16,7 +16,7 @@ def main(argv=None) -> int:
     import torch
 
     import motionlang as ml
-    from motionlang.datasets.twostream_items import build_twostream_data
+    from motionlang.datasets.position_items import build_twostream_data
     from motionlang.evaluation.action_order import segment_labels, segment_tally
     from motionlang.evaluation.t2m.compare import eval_items, fit_prototypes, positions_to_features
 

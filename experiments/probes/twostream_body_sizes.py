@@ -27,7 +27,7 @@ def main() -> None:
     ap.add_argument("--corpus", required=True)
     ap.add_argument("--bandai", default=str(ROOT.parent / "shared" / "data" / "bandai"))
     a = ap.parse_args()
-    from motionlang.datasets.twostream_items import build_twostream_data
+    from motionlang.datasets.position_items import build_twostream_data
     from motionlang.features.joint_map import KIT21_NAMES
     from motionlang.features.positions import local_joints
 

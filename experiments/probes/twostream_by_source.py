@@ -1,7 +1,7 @@
 """Does a normaliser per source give the mixed two-stream model its Bandai figures back? The
 package's recipe (procedural corpus + Bandai takes, half of every epoch each, mirrored),
 each source's motions z-normalised with the mean and spread of that source's own training
-motions (``train twostream --normalise by-source``: ``datasets.twostream_items.
+motions (``train twostream --normalise by-source``: ``datasets.position_items.
 normalise_by_source``); the model keeps the Bandai normaliser (the last source), so its
 motions come out in the Bandai takes' statistics. Every epoch is scored on the Bandai
 validation pairs (``--select-evaluator``).

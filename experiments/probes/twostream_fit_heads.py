@@ -34,7 +34,7 @@ def main(argv: list[str] | None = None) -> int:
     import torch
 
     import motionlang as ml
-    from motionlang.datasets.twostream_items import build_twostream_data
+    from motionlang.datasets.position_items import build_twostream_data
     from motionlang.models.twostream.sources import embed, fit_source_output
     from motionlang.models.twostream.start import fit_start_pose
     torch.set_num_threads(1)

@@ -7,7 +7,7 @@ with it: the pose encoder, the decoder and the discriminator are kept as they ar
 Why: decoded from the motions' *own* pose embeddings, our models get the order of actions
 right more often than from the sentence (README), so the sentence embedding, not the
 decoder, is where orders are lost. The loss is the "text" stage of the no-joint-training
-ablation (``training.twostream_train.refit_sentence_encoder``): the motion decoded from the
+ablation (``recipes.twostream_train.refit_sentence_encoder``): the motion decoded from the
 sentence embedding against the true one (pose, and energy with the model's weight) plus
 the embedding term. ``--weight pose=0 --weight energy=0`` fits the embedding term alone
 (nothing is decoded: a few minutes per epoch on the 6,000-motion corpus, the pose encoder
@@ -71,11 +71,11 @@ def main(argv=None) -> int:
     import torch
 
     import motionlang as ml
-    from motionlang.datasets.twostream_items import build_twostream_data
+    from motionlang.datasets.position_items import build_twostream_data
     from motionlang.errors import MotionlangError
+    from motionlang.recipes.twostream_train import refit_sentence_encoder
     from motionlang.training.config import TrainConfig
     from motionlang.training.schedule import check_schedule
-    from motionlang.training.twostream_train import refit_sentence_encoder
 
     logging.basicConfig(level=logging.INFO, format="%(message)s")
     torch.set_num_threads(max(1, args.threads))

@@ -2,7 +2,7 @@
 Bandai takes, half of every epoch each, mirrored; ``twostream_parts.RECIPE``) trained into
 RUN with every epoch scored on the Bandai validation pairs (``--select-evaluator``), resumed
 where RUN has a ``last.pt``. A probe changes how the data is prepared by wrapping
-``datasets.twostream_items.build_twostream_data`` (or one of its helpers) and passes extra
+``datasets.position_items.build_twostream_data`` (or one of its helpers) and passes extra
 ``train twostream`` options. Not a probe itself.
 """
 from __future__ import annotations
@@ -31,7 +31,7 @@ def run_probe(doc: str, name: str, argv: list[str] | None = None,
     import torch
 
     import motionlang as ml
-    import motionlang.datasets.twostream_items as items
+    import motionlang.datasets.position_items as items
     from motionlang.errors import MotionlangError
     sys.path.insert(0, str(ROOT / "experiments"))
     from twostream_parts import RECIPE

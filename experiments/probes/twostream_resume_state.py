@@ -19,6 +19,7 @@ import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT))   # experiments.lab
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -32,10 +33,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--threads", type=int, default=1)
     a = ap.parse_args(argv)
     import torch
+    from experiments.lab.run_state import read_state, restore_state
 
     import motionlang as ml
     from motionlang.errors import MotionlangError
-    from motionlang.training.run_state import read_state, restore_state
     sys.path.insert(0, str(ROOT / "experiments"))
     from twostream_parts import RECIPE
     torch.set_num_threads(a.threads)

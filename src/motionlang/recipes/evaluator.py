@@ -1,6 +1,6 @@
 """The recipe of the text-motion evaluator (Guo et al. 2022): one ``--data`` source -> its
 motions as HumanML3D rows of one body and its tagged captions
-(``training.evaluator_train.build_evaluator_data``) -> a ``TextMotionEvaluator`` -> the
+(``datasets.evaluator_items.build_evaluator_data``) -> a ``TextMotionEvaluator`` -> the
 shared trainer -> ``model.pt``, the epoch of the best validation R-precision.
 
 The model's sizes and loss are ``EvaluatorConfig`` fields; the recipe sets what the data
@@ -99,10 +99,11 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg,
     """
     import torch
 
+    from motionlang.datasets.evaluator_items import build_evaluator_data
     from motionlang.evaluation.t2m.yardstick import r_precision_miss
     from motionlang.models.evaluator import TextMotionEvaluator
     from motionlang.models.registry import family
-    from motionlang.training.evaluator_train import build_evaluator_data, train_evaluator
+    from motionlang.recipes.evaluator_train import train_evaluator
     from motionlang.training.run_guard import keep_splits
     from motionlang.training.run_log import lead_process, log_command, write_licence
 

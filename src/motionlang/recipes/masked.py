@@ -1,7 +1,7 @@
 """The recipe of the masked-token model (``models.masked``), in two stages in one run folder:
 
 1. **tokenizer** (``OUT/tokenizer/``): the VQ-VAE on random crops of the training motions
-   (21-joint position rows, ``datasets.twostream_items``: split by motion, features fitted on
+   (21-joint position rows, ``datasets.position_items``: split by motion, features fitted on
    the training motions, cached), the epoch of the lowest validation loss kept; then its
    reconstruction error in millimetres (MPJPE of the body-frame joints) and codebook use on
    the validation motions, and ``OUT/tokenizer.pt``.
@@ -161,8 +161,8 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
     """
 
     from motionlang.datasets.mixing import source_weights
+    from motionlang.datasets.position_items import build_twostream_data
     from motionlang.datasets.splits import save_splits
-    from motionlang.datasets.twostream_items import build_twostream_data
     from motionlang.models.text_tokens import TransformerTokens
     from motionlang.training.run_log import lead_process, log_command, write_licence
 

@@ -1,5 +1,5 @@
 """The recipe of the text-motion retrieval model (``models.retrieval``): ``--data`` sources
--> (21-joint position rows, caption) pairs (``datasets.twostream_items``: split by motion,
+-> (21-joint position rows, caption) pairs (``datasets.position_items``: split by motion,
 features fitted on the training motions, cached) -> a ``RetrievalModel`` -> the shared
 trainer, ``best.pt`` the epoch of the best validation retrieval (text -> motion R@1 + R@5
 among the validation motions) -> ``model.pt``, its retrieval on the test split, the licence
@@ -207,7 +207,7 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
     import torch
 
     from motionlang.datasets.mixing import source_weights
-    from motionlang.datasets.twostream_items import build_twostream_data
+    from motionlang.datasets.position_items import build_twostream_data
     from motionlang.models.registry import family
     from motionlang.models.retrieval.model import RetrievalModel
     from motionlang.models.retrieval.text import CHUNK, cache_file, sentence_vectors

@@ -1,7 +1,7 @@
 """The recipe of the two-stream text-to-motion model (Ghosh et al. 2021): ``--data`` sources
--> (motion, sentence) items on the 21-joint positions (``datasets.twostream_items``) -> a
+-> (motion, sentence) items on the 21-joint positions (``datasets.position_items``) -> a
 ``TwoStreamModel`` (the full model or one of the paper's ablations) -> the shared trainer
-with annealed teacher forcing (``training.twostream_train``) -> ``model.pt``.
+with annealed teacher forcing (``recipes.twostream_train``) -> ``model.pt``.
 
 The model file holds the final weights, unless ``--select-evaluator`` scores every epoch's
 motions on validation pairs (``evaluation.t2m.selection``): then it holds the epoch with the
@@ -86,7 +86,7 @@ class TwoStreamOptions:
 def model_config(model_cfg: dict[str, Any], ablation: str = "full") -> Any:
     """The ``TwoStreamConfig`` of the user's fields (None: the config's default) with the
     ablation's flags; checked by the config."""
-    from motionlang.training.twostream_train import make_config
+    from motionlang.recipes.twostream_train import make_config
     return make_config(ablation, **{k: v for k, v in model_cfg.items() if v is not None})
 
 
@@ -145,17 +145,17 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg,
     import torch
 
     from motionlang.datasets.mixing import source_weights
-    from motionlang.datasets.twostream_items import build_twostream_data
+    from motionlang.datasets.position_items import build_twostream_data
     from motionlang.models.length import SentenceLength
     from motionlang.models.registry import family
     from motionlang.models.twostream import TwoStreamModel
     from motionlang.models.twostream.sources import fit_source_output
     from motionlang.models.twostream.start import fit_start_pose
     from motionlang.recipes.seq2seq import mix_training
+    from motionlang.recipes.twostream_train import ForcingSchedule, train_twostream
     from motionlang.training.run_files import check_resume
     from motionlang.training.run_guard import keep_splits
     from motionlang.training.run_log import lead_process, log_command, write_licence
-    from motionlang.training.twostream_train import ForcingSchedule, train_twostream
 
     out = Path(out_dir)
     data_cfg = data_cfg if data_cfg is not None else TwoStreamOptions()

@@ -11,7 +11,7 @@ ground-plane position (x, z) replaced by its frame-to-frame step in the root's f
 folded back (:func:`to_protocol59`) and scored in the protocol space.
 
 Hyper-parameters (:data:`SELECTED`) were chosen on training trials only
-(``experiments/probes/crbm_select.py`` / ``evaluation/crbm/select.py``: train on 27 trials, fill in
+(``experiments/probes/crbm_select.py`` / ``experiments/lab/crbm_select.py``: train on 27 trials, fill in
 35_15, 35_16 (walks) and 35_25, 35_26 (jogs) with the same erase protocol, score = mean CRBM /
 nearest-neighbour error ratio over the 8 cells; eligible only if generation from each
 held-out trial keeps its walk/jog label), over weight decays, the autoregressive weights'

@@ -26,7 +26,7 @@ def evaluate_ape(models: dict[str, Any], data: str | Path | Sequence[str | Path]
         MotionlangError: ``autoencode`` without a model that autoencodes (a two-stream
             model), unreadable data, an unknown split.
     """
-    from motionlang.datasets.twostream_items import build_twostream_data
+    from motionlang.datasets.position_items import build_twostream_data
     from motionlang.evaluation.t2m.compare import compare
     if autoencode and not any(m.autoencodes for m in models.values()):
         raise MotionlangError("--autoencode needs a two-stream model among --model")

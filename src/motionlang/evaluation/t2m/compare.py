@@ -74,7 +74,7 @@ def _ranges(record, n_frames: int) -> tuple[list[tuple[int, int]], list[str]]:
 
 def eval_items(data, split: str = "test", limit: int | None = None, seed: int = 0
                ) -> list[T2MItem]:
-    """The evaluation items of a ``datasets.twostream_items.TwoStreamData`` split; with
+    """The evaluation items of a ``datasets.position_items.TwoStreamData`` split; with
     ``limit``, a sample of them drawn with ``seed``, stratified by each motion's first
     ground-truth action where the data has one (``evaluation.sampling``)."""
     from motionlang.evaluation.sampling import stratified_sample

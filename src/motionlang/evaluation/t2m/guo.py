@@ -160,7 +160,7 @@ def model_rows(models: dict, captions: list[str], frames: list[int], bones=None,
 @dataclass
 class GuoRun:
     """The test pairs of a dataset read on an evaluator's body, and the settings every
-    table of the run shares. ``data``: ``training.evaluator_train.EvaluatorData``;
+    table of the run shares. ``data``: ``datasets.evaluator_items.EvaluatorData``;
     ``pairs``: one item per test motion (``yardstick.test_pairs``); ``reference``: the
     items the ground truth's FID compares with (None: the training split's)."""
 
@@ -185,9 +185,9 @@ class GuoRun:
             MotionlangError: unreadable data, fewer test pairs than a batch, a FID
                 reference split with fewer than 2 motions.
         """
+        from motionlang.datasets.evaluator_items import build_evaluator_data
         from motionlang.evaluation.sampling import stratified_sample
         from motionlang.evaluation.t2m.yardstick import evaluator_body, test_pairs
-        from motionlang.training.evaluator_train import build_evaluator_data
         options = options or GuoOptions()
         built = build_evaluator_data(data, evaluator_body(evaluator), seed=seed,
                                      max_seconds=max_seconds, bones=evaluator.config.bones)

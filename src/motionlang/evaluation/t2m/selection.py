@@ -28,7 +28,7 @@ def guo_selector(evaluator: Any, data: str | Path, *, split: str = "val", pairs:
         evaluator: a text-motion evaluator, or its file, run folder or packaged name
             (``evaluation.t2m.guo.load_evaluator``).
         data: the data source whose ``split`` pairs are scored (anything
-            ``training.evaluator_train.build_evaluator_data`` reads, e.g.
+            ``datasets.evaluator_items.build_evaluator_data`` reads, e.g.
             ``bandai:DIR``), read on the evaluator's body; one caption per motion.
         pairs: how many of them (drawn with ``seed``, spread evenly over the split's
             order; 0: all).

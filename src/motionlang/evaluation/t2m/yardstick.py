@@ -135,7 +135,7 @@ def positions_rows(p21: np.ndarray, bones=None) -> np.ndarray:
     """Global 21-joint positions (T >= 2, 21, 3) metres at 12.5 Hz (what every text-to-motion
     model gives, ``models.t2m``) -> (T-1, 251) float32 rows of the ``kit`` body (mm), laid
     on ``bones`` (20 lengths, m: an evaluator's ``config.bones``) if given."""
-    from motionlang.training.evaluator_train import joints_rows
+    from motionlang.datasets.evaluator_items import joints_rows
     p = np.asarray(p21, dtype=float)
     if len(p) < 2:
         p = np.repeat(p[:1], 2, axis=0)
@@ -152,7 +152,7 @@ def still_rows(rows: np.ndarray, body: str) -> np.ndarray:
 
 
 def test_pairs(items: Sequence[dict], seed: int = 0) -> list[dict]:
-    """One item per motion (items: ``training.evaluator_train`` items, several captions per
+    """One item per motion (items: ``datasets.evaluator_items`` items, several captions per
     motion id), its caption drawn with ``seed``, in the items' order of motions."""
     by_id: dict[str, list[dict]] = {}
     for it in items:

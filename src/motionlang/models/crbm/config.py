@@ -17,7 +17,7 @@ PARAMS = ("W", "A", "B", "a", "b")
 #: a bound that keeps a mistyped history length from allocating gigabytes (past frames)
 MAX_ORDER = 1000
 
-#: The settings chosen for the CMU subject-35 experiment by ``evaluation/crbm/select.py`` on 4
+#: The settings chosen for the CMU subject-35 experiment by ``experiments/lab/crbm_select.py`` on 4
 #: held-out TRAINING trials (grid and scores in ``docs/results/crbm.md``):
 #: the defaults of ``train crbm`` (``recipes.crbm``) and ``crbm reproduce``. The
 #: test trials' numbers played no part in the choice; history noise as a remedy was prompted

@@ -1,6 +1,6 @@
 """Each sentence's motion in the statistics of the training source it reads like.
 
-Trained with ``--normalise by-source`` (``datasets.twostream_items.normalise_by_source``),
+Trained with ``--normalise by-source`` (``datasets.position_items.normalise_by_source``),
 the two-stream model has learnt every source's motions in that source's own normalised
 features: a procedural sentence's motion in the procedural corpus' means and spreads (many
 body sizes), a Bandai sentence's in the Bandai takes' (one actor's body). Decoded with one

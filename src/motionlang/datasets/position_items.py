@@ -1,4 +1,6 @@
-"""From a dataset folder to the two-stream model's training items (Ghosh et al. 2021).
+"""From a dataset folder to training items of 12.5 Hz position features: the two-stream
+model's (Ghosh et al. 2021), the masked and retrieval families' and the text-to-motion
+evaluations'.
 
 Reads a KIT-ML-format folder (the release or a procedural corpus) or a custom folder
 (``datasets.seq2seq_pairs.load_records``), drops motions without descriptions, splits by

@@ -1,5 +1,5 @@
-"""Training the text-motion evaluator (``models.evaluator``) on any motionlang dataset with
-the shared trainer.
+"""The text-motion evaluator's (``models.evaluator``) training items, from any motionlang
+dataset (its trainer is ``recipes.evaluator_train``).
 
 Items: ``{"motion": (T-1, D) float32 HumanML3D vectors in the body's file unit, "caption",
 "tokens": [word/POS] or None, "id"}``, one per caption of each motion. The rows are those
@@ -23,7 +23,6 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from motionlang.errors import DatasetError
-from motionlang.training.trainer import TrainConfig, Trainer
 
 if TYPE_CHECKING:
     from motionlang.datasets.sources import Record
@@ -160,25 +159,3 @@ def build_evaluator_data(data: str | Path | Sequence[Record], body: str = "kit",
     items = {s: [it for i in ids for it in record_items(by_id[i], body, bones, joints.get(i))]
              for s, ids in splits.items()}
     return EvaluatorData(items, body, by_id, None if bones is None else list(bones))
-
-
-def train_evaluator(model, train_items: Sequence[dict], config: TrainConfig, *,
-                    val_items: Sequence[dict] | None = None, body: str | None = "kit",
-                    fit_stats: bool = True, resume: bool = False, select=None):
-    """Train a ``TextMotionEvaluator`` with the shared trainer (``config.out_dir`` gets
-    ``last.pt``/``best.pt``, the model's own checkpoints). ``fit_stats``: first set its
-    mean/std from the training items (:func:`fit_normalizer` with ``body``). ``select``:
-    model -> validation score picking ``best.pt`` (lower is better; default the validation
-    loss), e.g. ``evaluation.t2m.yardstick.r_precision_miss``.
-
-    Returns:
-        (model in eval mode, history)
-    """
-    if not train_items:
-        raise DatasetError("no training items for the evaluator")
-    if fit_stats:
-        model.set_normalizer(*fit_normalizer(train_items, body))
-    trainer = Trainer(model, list(train_items), model.collate, config,
-                      val_set=list(val_items) if val_items else None, select=select)
-    history = trainer.fit(resume=resume)
-    return model.eval(), history
