@@ -14,7 +14,8 @@ from _common import median_time, need_data  # noqa: E402
 from motionlang.features import AnglesFeatures, PositionFeatures, TaylorFeatures  # noqa: E402
 from motionlang.formats.asf_amc import read_asf_amc  # noqa: E402
 from motionlang.formats.mmm import read_mmm, write_mmm  # noqa: E402
-from motionlang.rendering import render_animation, render_strip  # noqa: E402
+from motionlang.rendering.animation import render_animation
+from motionlang.rendering.strip import render_strip  # noqa: E402
 
 
 def main() -> None:

@@ -19,7 +19,8 @@ import time
 import torch
 
 from motionlang.errors import MotionlangError
-from motionlang.models.twostream import TwoStreamConfig, TwoStreamModel
+from motionlang.models.twostream.config import TwoStreamConfig
+from motionlang.models.twostream.model import TwoStreamModel
 
 SENTENCES = [
     "a person walks forward four steps, turns around and waves with the right hand",

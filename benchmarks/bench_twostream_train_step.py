@@ -37,7 +37,8 @@ def worker(threads: int, h: int, B: int, T: int) -> None:
     import torch
 
     import motionlang
-    from motionlang.models.twostream import TwoStreamConfig, TwoStreamModel
+    from motionlang.models.twostream.config import TwoStreamConfig
+    from motionlang.models.twostream.model import TwoStreamModel
     from motionlang.training.trainer import OPTIMIZERS
     torch.set_num_threads(threads)
     torch.manual_seed(0)

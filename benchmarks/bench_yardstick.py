@@ -52,7 +52,8 @@ def main() -> int:
     import torch
 
     from motionlang.evaluation.t2m.yardstick import guo_metrics, retrieval_table
-    from motionlang.models.evaluator import EvaluatorConfig, TextMotionEvaluator
+    from motionlang.models.evaluator.config import EvaluatorConfig
+    from motionlang.models.evaluator.model import TextMotionEvaluator
     from motionlang.models.registry import load_model
     torch.set_num_threads(1)
     if args.evaluator:

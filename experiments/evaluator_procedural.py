@@ -31,7 +31,8 @@ from motionlang.evaluation.metrics.t2m import fid
 from motionlang.evaluation.retrieval import SentenceIndex
 from motionlang.evaluation.t2m.yardstick import guo_metrics, retrieval_table
 from motionlang.features.h3d_vectors import KIT_H3D, joints_to_vectors, vectors_to_joints
-from motionlang.models.evaluator import EvaluatorConfig, TextMotionEvaluator
+from motionlang.models.evaluator.config import EvaluatorConfig
+from motionlang.models.evaluator.model import TextMotionEvaluator
 from motionlang.recipes.evaluator_train import train_evaluator
 from motionlang.training.trainer import TrainConfig
 

@@ -25,7 +25,7 @@ def main(argv=None) -> int:
     import imageio.v3 as iio
 
     from motionlang.datasets.synth.corpus import generate_sample
-    from motionlang.rendering import render_strip
+    from motionlang.rendering.strip import render_strip
     from motionlang.utils.atomic import atomic_path
 
     idx = np.random.default_rng(args.seed).choice(args.corpus_size, args.n, replace=False)

@@ -262,3 +262,16 @@ def test_the_family_table_check_can_fail(tmp_path):
     bad = family_table_problems(f)
     assert any("describes=" in b and "not under motionlang.models.tokens" in b for b in bad)
     assert any("model=" in b and "names no module" in b for b in bad)
+
+
+def module_getattrs() -> list[str]:
+    """Modules of ``src/`` that hand out names through a module-level ``__getattr__``."""
+    return sorted(mod for mod, path in modules().items()
+                  if any(isinstance(n, ast.FunctionDef) and n.name == "__getattr__"
+                         for n in ast.parse(path.read_text(encoding="utf-8")).body))
+
+
+def test_only_the_package_face_hands_out_names_lazily():
+    """A name is imported from the module that defines it; only ``motionlang/__init__``
+    (``import motionlang as ml`` without loading torch) resolves names on first use."""
+    assert module_getattrs() == ["motionlang"]

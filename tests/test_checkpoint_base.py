@@ -17,8 +17,7 @@ from motionlang.errors import MotionlangError
 from motionlang.features.angles import AnglesFeatures
 from motionlang.features.normalizer import Normalizer
 from motionlang.features.positions import PositionFeatures
-from motionlang.models.twostream import TwoStreamModel
-from motionlang.models.twostream.model import DEFAULT_SECONDS
+from motionlang.models.twostream.model import DEFAULT_SECONDS, TwoStreamModel
 
 torch.set_num_threads(1)
 SENTENCE = "a person walks forward"

@@ -13,7 +13,8 @@ from motionlang.datasets.evaluator_items import build_evaluator_data, fit_normal
 from motionlang.errors import DatasetError, MotionlangError
 from motionlang.evaluation.metrics.t2m import r_precision
 from motionlang.evaluation.t2m.yardstick import format_table, guo_metrics, score_t2m
-from motionlang.models.evaluator import EvaluatorConfig, TextMotionEvaluator, official_config
+from motionlang.models.evaluator.config import EvaluatorConfig
+from motionlang.models.evaluator.model import TextMotionEvaluator, official_config
 from motionlang.models.evaluator.text import POS_CATEGORIES, pos_index, tag, text_inputs
 from motionlang.models.registry import load_model
 from motionlang.recipes.evaluator_train import train_evaluator

@@ -151,7 +151,8 @@ def test_official_weights_give_the_table_of_the_same_weights(run, corpus, tmp_pa
     """The public checkpoint layout (three state dicts in one file, mean.npy / std.npy,
     GloVe-format word vectors) loads into the same modules: the same table as those weights
     saved as a motionlang evaluator."""
-    from motionlang.models.evaluator import EvaluatorConfig, TextMotionEvaluator
+    from motionlang.models.evaluator.config import EvaluatorConfig
+    from motionlang.models.evaluator.model import TextMotionEvaluator
     from motionlang.models.evaluator.text import TextFileVectors
     words = tmp_path / "words.txt"
     rng = np.random.default_rng(0)

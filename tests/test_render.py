@@ -14,24 +14,22 @@ from motionlang.errors import MotionlangError
 from motionlang.features.joint_map import KIT21_NAMES
 from motionlang.kinematics import Motion
 from motionlang.rendering import animation as animation_mod
-from motionlang.rendering import (
-    build_scene,
-    contact_frames,
-    footsteps,
-    plot_trajectory,
-    render_animation,
-    render_strip,
-)
+from motionlang.rendering.animation import render_animation
 from motionlang.rendering.scene import (
     LEFT,
     RIGHT,
     TO_MPL,
+    build_scene,
     camera_basis,
+    contact_frames,
+    footsteps,
     joint_sides,
     sample_times,
     scene_from_positions,
     view_azimuth,
 )
+from motionlang.rendering.strip import render_strip
+from motionlang.rendering.trajectory import plot_trajectory
 
 
 def expected_frames(motion: Motion, out_fps: float = 25.0) -> int:
@@ -147,8 +145,8 @@ def test_trajectory_plot(tmp_path):
 def test_no_pyplot_state(tmp_path):
     # pyplot (and so a backend switch) is never touched; matplotlib.get_backend() itself
     # imports pyplot, so the check looks at sys.modules only
-    code = ("import sys, numpy as np; import motionlang.rendering as r; from helpers.mocap "
-            "import walker; r.render_strip(walker(), sys.argv[1]); "
+    code = ("import sys, numpy as np; from motionlang.rendering.strip import render_strip; from helpers.mocap "
+            "import walker; render_strip(walker(), sys.argv[1]); "
             "print('matplotlib.pyplot' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code, str(tmp_path / "s.png")],
                          capture_output=True, text=True, check=True,
@@ -177,7 +175,7 @@ def test_real_kit_walker_scene():
 
 
 def test_animation_frames_lazy_and_counted():
-    from motionlang.rendering import animation_frames
+    from motionlang.rendering.animation import animation_frames
 
     m = walker(T=30)
     fps, n, frames = animation_frames([m, m], fps=10, dpi=20, layout="overlay")

@@ -46,7 +46,7 @@ def test_the_scores_line():
 def test_the_run_keeps_the_epoch_of_the_best_validation_r_precision(corpus, evaluator,
                                                                     tmp_path):
     from motionlang.datasets.position_items import build_twostream_data
-    from motionlang.models.twostream import TwoStreamModel
+    from motionlang.models.twostream.model import TwoStreamModel
     from motionlang.recipes.twostream_train import make_config, train_twostream
     data = build_twostream_data(corpus, max_frames=12, cache_dir=tmp_path / "cache")
     select = guo_selector(evaluator, str(corpus), batch_size=4, repeats=2)

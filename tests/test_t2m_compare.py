@@ -151,7 +151,8 @@ def test_l2m_on_the_test_subjects_bodies(data):
 
 def test_l2m_and_twostream_positions(data):
     from motionlang.models.t2m import generate_positions21
-    from motionlang.models.twostream import TwoStreamConfig, TwoStreamModel
+    from motionlang.models.twostream.config import TwoStreamConfig
+    from motionlang.models.twostream.model import TwoStreamModel
     l2m = _tiny_l2m(data)
     p = generate_positions21(l2m, "a person walks forward", 9)
     assert p.shape == (9, 21, 3) and np.isfinite(p).all()
@@ -171,7 +172,8 @@ def test_l2m_and_twostream_positions(data):
 
 def test_compare_writes_table_report_and_figures(data, tmp_path):
     from motionlang.datasets.text import tokenize
-    from motionlang.models.twostream import TwoStreamConfig, TwoStreamModel
+    from motionlang.models.twostream.config import TwoStreamConfig
+    from motionlang.models.twostream.model import TwoStreamModel
     torch.manual_seed(0)
     ts = TwoStreamModel(TwoStreamConfig(h1=4, h2=8, h=16, disc_hidden=8),
                         data.features.normalizer, text_encoder=HashTokens()).eval()
@@ -256,7 +258,8 @@ def test_compare_writes_table_report_and_figures(data, tmp_path):
 def test_evaluate_command(corpus, data, tmp_path, monkeypatch, capsys):
     import motionlang.models.registry as registry
     from motionlang.cli.main import main
-    from motionlang.models.twostream import TwoStreamConfig, TwoStreamModel
+    from motionlang.models.twostream.config import TwoStreamConfig
+    from motionlang.models.twostream.model import TwoStreamModel
     torch.manual_seed(0)
     TwoStreamModel(TwoStreamConfig(h1=4, h2=8, h=16, disc_hidden=8, text_dim=8),
                    data.features.normalizer).save(tmp_path / "ts.pt")

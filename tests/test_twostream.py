@@ -12,7 +12,8 @@ import torch
 from helpers.twostream import HashTokens, tiny
 from motionlang.errors import MotionlangError
 from motionlang.features.normalizer import Normalizer
-from motionlang.models.twostream import TwoStreamConfig, TwoStreamModel, kit21_parts
+from motionlang.models.twostream.config import TwoStreamConfig, kit21_parts
+from motionlang.models.twostream.model import TwoStreamModel
 
 torch.set_num_threads(1)
 

@@ -42,7 +42,7 @@ def test_model_carries_its_length_model(tmp_path):
     from helpers.twostream import HashTokens, tiny
     from motionlang.features.normalizer import Normalizer
     from motionlang.models.t2m import generate_any
-    from motionlang.models.twostream import TwoStreamModel
+    from motionlang.models.twostream.model import TwoStreamModel
     m = tiny()
     m.normalizer = Normalizer().fit(np.random.default_rng(0).normal(size=(50, 66)))
     default = round(DEFAULT_SECONDS * m.fps)

@@ -10,7 +10,7 @@ import torch
 from helpers.twostream import HashTokens, tiny
 from motionlang.errors import MotionlangError
 from motionlang.features.normalizer import Normalizer
-from motionlang.models.twostream import TwoStreamModel
+from motionlang.models.twostream.model import TwoStreamModel
 from motionlang.models.twostream.sources import SourceOutput, fit_source_output
 from motionlang.models.twostream.start import StartPose, fit_start_pose
 

@@ -16,7 +16,7 @@ import torch
 from helpers.scripts import PROBES, load_script
 from helpers.twostream import HashTokens  # fake token features, no language model
 from motionlang.errors import MotionlangError
-from motionlang.models.twostream import TwoStreamModel
+from motionlang.models.twostream.model import TwoStreamModel
 from motionlang.recipes.twostream_train import (
     ForcingSchedule,
     TwoStreamTrainer,
@@ -208,21 +208,21 @@ def test_refit_moves_the_sentence_encoder_only(data, tmp_path, monkeypatch, deco
 
 
 def test_registry_loads_a_two_stream_model(data, tmp_path):
-    from motionlang.models.registry import TEXT_TO_MOTION, load_model
+    from motionlang.models.registry import kinds_with, load_model
     from motionlang.models.t2m import generate_any
     m = tiny(data).eval()
     m.save(tmp_path / "ts.pt")
-    back = load_model(tmp_path / "ts.pt", TEXT_TO_MOTION, text_encoder=HashTokens())
+    back = load_model(tmp_path / "ts.pt", kinds_with("text_to_motion"), text_encoder=HashTokens())
     assert isinstance(back, TwoStreamModel)
     torch.testing.assert_close(back.generate("walk", 4), m.generate("walk", 4))
     (pos, score), = generate_any(back, "a person walks", max_frames=7)
     assert pos.shape == (7, 21, 3) and np.isnan(score)
     torch.save({"kind": "m2l"}, tmp_path / "other.pt")
     with pytest.raises(MotionlangError, match="other.pt: a model of kind m2l, not l2m or twostream"):
-        load_model(tmp_path / "other.pt", TEXT_TO_MOTION)
+        load_model(tmp_path / "other.pt", kinds_with("text_to_motion"))
     (tmp_path / "junk.pt").write_bytes(b"no checkpoint")
     with pytest.raises(MotionlangError, match="junk.pt"):
-        load_model(tmp_path / "junk.pt", TEXT_TO_MOTION)
+        load_model(tmp_path / "junk.pt", kinds_with("text_to_motion"))
     torch.save({"kind": "twostream", "format": 99}, tmp_path / "newer.pt")
     with pytest.raises(MotionlangError, match="newer.pt: checkpoint format 99 is newer"):
         load_model(tmp_path / "newer.pt")

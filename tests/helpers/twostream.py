@@ -4,7 +4,8 @@ from __future__ import annotations
 import torch
 
 from motionlang.models.text_tokens import CachedTokens
-from motionlang.models.twostream import TwoStreamConfig, TwoStreamModel
+from motionlang.models.twostream.config import TwoStreamConfig
+from motionlang.models.twostream.model import TwoStreamModel
 
 
 class HashTokens(CachedTokens):

@@ -3,7 +3,7 @@
 * :func:`families` — every model family, one :class:`~motionlang.models.family.Family`
   entry per checkpoint kind (model class, config, recipe, capabilities, run-file name),
   read from the family folders listed in :data:`FAMILY_MODULES`; every other table
-  (``KINDS``, ``TEXT_TO_MOTION``, the ``train`` commands, the encoders) derives from it.
+  (:func:`kinds_with`, the ``train`` commands, the encoders) derives from it.
   Classes are imported on first use, so that asking for a CRBM never loads torch.
 * :data:`PACKAGED` — the models shipped inside the package, by name, with their model cards
   (``data/models/NAME.md``: data, licence, recipe, measured figures).
@@ -92,15 +92,6 @@ def kinds_with(capability: str) -> tuple[str, ...]:
     """The kinds that have ``capability`` (a :class:`Family` attribute: "text_to_motion",
     "describes", "encodes_text", "encodes_motion", "recipe")."""
     return tuple(k for k, f in families().items() if getattr(f, capability))
-
-
-def __getattr__(name: str) -> Any:
-    # derived tables, read from the family entries on first use
-    if name == "KINDS":
-        return {k: f.model for k, f in families().items()}
-    if name == "TEXT_TO_MOTION":
-        return kinds_with("text_to_motion")
-    raise AttributeError(name)
 
 
 #: file names a training run folder keeps its model under, in order of preference

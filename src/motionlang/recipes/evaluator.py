@@ -101,7 +101,7 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg,
 
     from motionlang.datasets.evaluator_items import build_evaluator_data
     from motionlang.evaluation.t2m.yardstick import r_precision_miss
-    from motionlang.models.evaluator import TextMotionEvaluator
+    from motionlang.models.evaluator.model import TextMotionEvaluator
     from motionlang.models.registry import family
     from motionlang.recipes.evaluator_train import train_evaluator
     from motionlang.training.run_guard import keep_splits

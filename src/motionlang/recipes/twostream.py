@@ -148,7 +148,7 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg,
     from motionlang.datasets.position_items import build_twostream_data
     from motionlang.models.length import SentenceLength
     from motionlang.models.registry import family
-    from motionlang.models.twostream import TwoStreamModel
+    from motionlang.models.twostream.model import TwoStreamModel
     from motionlang.models.twostream.sources import fit_source_output
     from motionlang.models.twostream.start import fit_start_pose
     from motionlang.recipes.seq2seq import mix_training

@@ -64,7 +64,7 @@ class TwoStreamTrainer(Trainer):
 def make_config(ablation: str = "full", **fields):
     """A ``TwoStreamConfig`` with ``fields`` and the ablation's flags."""
     from motionlang.errors import MotionlangError
-    from motionlang.models.twostream import TwoStreamConfig
+    from motionlang.models.twostream.config import TwoStreamConfig
     if ablation not in ABLATIONS:
         raise MotionlangError(f"unknown ablation {ablation!r}; choose from {sorted(ABLATIONS)}")
     return TwoStreamConfig(**{**fields, **ABLATIONS[ablation]})
@@ -91,7 +91,7 @@ def train_twostream(model, train_items: Sequence[dict], config: TrainConfig, *,
         (model, history) — history is a list of per-epoch dicts with a ``stage`` key; the
         selected epoch's also has ``"selected": True``.
     """
-    from motionlang.models.twostream import TwoStreamModel
+    from motionlang.models.twostream.model import TwoStreamModel
 
     if first_frames is not None:
         model.set_rest_pose(first_frames)
@@ -148,7 +148,7 @@ def refit_sentence_encoder(model, train_items: Sequence[dict], config: TrainConf
     Returns:
         (model in eval mode, history)
     """
-    from motionlang.models.twostream import TwoStreamModel
+    from motionlang.models.twostream.model import TwoStreamModel
 
     stage = model.stage
     model.set_stage("text")

@@ -40,7 +40,7 @@ def write_frames(frames: np.ndarray, out: str | Path, data: Cmu35, data_dir: str
         from motionlang.formats import write_motion
         write_motion(motion, out)
         return out
-    from motionlang.rendering import render_animation
+    from motionlang.rendering.animation import render_animation
     if compare is None:
         return render_animation(motion, out, title=title)
     truth = frames_to_motion(compare, data, asf, start_xz=start_xz, name="true")

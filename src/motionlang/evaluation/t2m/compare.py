@@ -122,7 +122,7 @@ def trajectory_figures(results: dict[str, dict], items: Sequence[T2MItem], out_d
                        n: int = 3) -> list[Path]:
     """One top-view PNG per compositional item (the first ``n``): ground truth and every
     model's root path with footsteps (``render.plot_trajectory``)."""
-    from motionlang.rendering import plot_trajectory
+    from motionlang.rendering.trajectory import plot_trajectory
     chosen = [it for it in items if it.compositional][:n] or list(items)[:n]
     paths = []
     for it in chosen:

@@ -88,7 +88,7 @@ def load_evaluator(path: str | Path | None = None, *, official: str | Path | Non
         MotionlangError: neither ``path`` nor ``official``, a missing or damaged file, word
             vectors of another size.
     """
-    from motionlang.models.evaluator import TextMotionEvaluator
+    from motionlang.models.evaluator.model import TextMotionEvaluator
     from motionlang.models.registry import load_model
     if path is None and official is None:
         raise MotionlangError("an evaluator is needed: its file, or the public weights with "
