@@ -1,6 +1,7 @@
 """How long one ``motionlang describe FILE`` process takes against ``python -c "import
 torch"`` in the same run (issue 58: at most 1.6x), medians of repeated runs on one core, and
-whether ``torch._dynamo`` is imported by ``describe`` and ``generate``.
+whether ``torch._dynamo`` is imported by ``describe`` and ``generate``; also ``motionlang -h``
+and ``motionlang info FILE``, which load no model, against ``python -c "import numpy"``.
 
     .venv/bin/python benchmarks/bench_startup.py [--repeat 5] [FILE]
 
@@ -48,10 +49,17 @@ def main() -> None:
             from motionlang.datasets.synth import generate_sample
             path = str(Path(tmp) / "walk.bvh")
             ml.write_motion(generate_sample(0, 0).motion, path)
-        torch_s, describe_s = [], []
+        torch_s, describe_s, numpy_s, help_s, info_s = [], [], [], [], []
         for _ in range(args.repeat):
             torch_s.append(timed([sys.executable, "-c", "import torch"], env))
             describe_s.append(timed([str(BIN / "motionlang"), "describe", path], env))
+            numpy_s.append(timed([sys.executable, "-c", "import numpy"], env))
+            help_s.append(timed([str(BIN / "motionlang"), "-h"], env))
+            info_s.append(timed([str(BIN / "motionlang"), "info", path], env))
+        n = statistics.median(numpy_s)
+        print(f"python -c 'import numpy': median {n:.2f} s; motionlang -h: median "
+              f"{statistics.median(help_s):.2f} s; motionlang info: median "
+              f"{statistics.median(info_s):.2f} s")
         t, d = statistics.median(torch_s), statistics.median(describe_s)
         print(f"python -c 'import torch': median {t:.2f} s; motionlang describe: median "
               f"{d:.2f} s; ratio {d / t:.2f} (bar 1.6) over {args.repeat} runs each")

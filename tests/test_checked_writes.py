@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from helpers.patching import patch_everywhere
 from motionlang.cli.main import main
 from motionlang.datasets import cache
 from motionlang.datasets.splits import save_splits
@@ -76,7 +77,7 @@ def test_a_folder_that_is_a_file_is_named_as_such(tmp_path):
 
 def test_the_cli_turns_any_os_error_into_one_line(tmp_path, capsys, monkeypatch):
     from motionlang.formats import mmm
-    monkeypatch.setattr(mmm, "write_mmm", _full)   # a raw OSError, outside a checked write
+    patch_everywhere(monkeypatch, mmm, "write_mmm", _full)   # a raw OSError, outside a checked write
     code = main(["data", "synth", "--out", str(tmp_path / "syn"), "--n", "2",
                  "--workers", "1"])
     err = capsys.readouterr().err.strip().splitlines()

@@ -9,6 +9,7 @@ import pytest
 import torch
 
 from helpers.mocap import synthetic_mmm
+from helpers.patching import patch_everywhere
 from helpers.twostream import HashTokens
 from motionlang.errors import MotionlangError
 from motionlang.features.positions import PositionFeatures
@@ -55,7 +56,7 @@ def test_join_holds_feet_a_little_out_of_reach(monkeypatch):
         seen.append(kw.get("reach"))
         return np.asarray(p21, dtype=np.float64)
 
-    monkeypatch.setattr(fl, "lock_feet", spy)
+    patch_everywhere(monkeypatch, fl, "lock_feet", spy)
     src = np.zeros((10, 21, 3))
     keep = np.ones(10, dtype=bool)
     keep[3:6] = False

@@ -424,7 +424,8 @@ def test_changed_weights_are_caught(name, pinned, monkeypatch):
                 dict(model.named_parameters())[PERTURBED[name]].mul_(PERTURBATION)
         return model
 
-    monkeypatch.setattr(registry, "load_model", perturbed)
+    from helpers.patching import patch_everywhere  # the module also runs in a bare child
+    patch_everywhere(monkeypatch, registry, "load_model", perturbed)
     got = outputs(name, MODELS[name], stored_motion(pinned), pinned["input/judge_p21"])
     assert mismatches(name, pinned, got), (
         f"{name} with {PERTURBED[name]} scaled by {PERTURBATION} still passes")

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 import torch
 
+from helpers.patching import patch_everywhere
 from helpers.twostream import HashTokens
 from motionlang.errors import MotionlangError
 from motionlang.evaluation.action_order import segment_labels
@@ -265,7 +266,7 @@ def test_evaluate_command(corpus, data, tmp_path, monkeypatch, capsys):
                    data.features.normalizer).save(tmp_path / "ts.pt")
     _tiny_l2m(data).save(tmp_path / "l2m.pt")
     real = registry.load_model
-    monkeypatch.setattr(registry, "load_model", lambda p, kind=None: real(
+    patch_everywhere(monkeypatch, registry, "load_model", lambda p, kind=None: real(
         p, kind, **({"text_encoder": HashTokens()} if registry.checkpoint_kind(p) == "twostream"
                     else {})))
     rc = main(["evaluate-t2m", "--data", str(corpus), "--model", f"ts={tmp_path / 'ts.pt'}",

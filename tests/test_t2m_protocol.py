@@ -9,6 +9,7 @@ import pytest
 
 pytest.importorskip("torch")
 
+from helpers.patching import patch_everywhere
 from motionlang.errors import MotionlangError  # noqa: E402
 from motionlang.models.t2m import SamplingModel, SelfAdapter, TextToMotion  # noqa: E402
 
@@ -90,7 +91,7 @@ def test_the_registry_wraps_a_self_family(monkeypatch):
     fams = {**registry.families(),
             "toy": Family(kind="toy", model="tests:ToyModel", summary="toy",
                           text_to_motion="self")}
-    monkeypatch.setattr(registry, "families", lambda: fams)
+    patch_everywhere(monkeypatch, registry, "families", lambda: fams)
     t2m = text_to_motion(ToyModel(), {"top_k": 2})
     assert isinstance(t2m, SelfAdapter) and t2m.options.top_k == 2
     assert text_to_motion(t2m) is t2m

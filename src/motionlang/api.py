@@ -29,11 +29,27 @@ import numpy as np
 from motionlang.analysis import analyse, check  # noqa: F401  (the API's, re-exported)
 from motionlang.analysis.words import warn_never_learnt
 from motionlang.errors import MotionlangError
+from motionlang.features.body21 import body21 as _body21
+from motionlang.features.frames import motion_frames
+from motionlang.features.joint_map import as_joint_map, kit21_weights, match_rig, positions21
 from motionlang.formats import read_motion, write_motion
 from motionlang.kinematics.motion import Motion
+from motionlang.kinematics.retarget import retarget as retarget_positions
+from motionlang.library.compose import compose
+from motionlang.library.describe import ReadOptions, describe_run
+from motionlang.library.describe import describer as timeline_describer
+from motionlang.library.index import build_index
 from motionlang.library.options import DescribeOptions
+from motionlang.library.search import search as run_search
+from motionlang.models.family import load_object
+from motionlang.models.inbetween import fill_between
+from motionlang.models.options import ModelSpec, parse_model_spec
+from motionlang.models.registry import describer, families, kinds_with
+from motionlang.models.registry import load_model as _load
+from motionlang.models.t2m import text_to_motion as wrap
 from motionlang.models.word_map import WordsRead
-from motionlang.rendering.output import body_motion, write_result
+from motionlang.recipes import train as run_recipe
+from motionlang.rendering.output import body_motion, check_drawable, render_file, write_result
 
 
 def load_model(name_or_path: str | Path, kind: str | tuple[str, ...] | None = None):
@@ -41,7 +57,6 @@ def load_model(name_or_path: str | Path, kind: str | tuple[str, ...] | None = No
     or a training run folder, whatever its kind (``kind=`` insists on one);
     ``motionlang.models.registry`` lists the kinds and the packaged models with their cards.
     """
-    from motionlang.models.registry import load_model as _load
     return _load(name_or_path, kind)
 
 
@@ -50,9 +65,6 @@ def text_to_motion(model: Any = None, options: Any = None):
     ``model`` loaded, a packaged name, a checkpoint, a run folder, ``"NAME:key=value,..."``
     (its sampling options, ``models.options``) or None (the packaged L2M); ``options`` (a
     dict or the family's ``Options``) are applied after those of the text."""
-    from motionlang.models.options import ModelSpec, parse_model_spec
-    from motionlang.models.registry import kinds_with
-    from motionlang.models.t2m import text_to_motion as wrap
     spec_options: dict = {}
     if model is None or isinstance(model, (str, Path)):
         name = str(model or "l2m")   # an existing file or folder is a name, whatever it holds
@@ -83,7 +95,6 @@ def read_mapped(path: str | Path, joint_map: dict | str | Path | None = None,
 
 def check_map(motion: Motion, joint_map) -> None:
     """Raise MotionlangError (naming the map) unless ``joint_map`` maps ``motion``'s rig."""
-    from motionlang.features.joint_map import as_joint_map, match_rig
     where = joint_map if isinstance(joint_map, (str, Path)) else "joint map"
     try:
         match_rig(motion.skeleton, joint_map=as_joint_map(joint_map))
@@ -94,7 +105,6 @@ def check_map(motion: Motion, joint_map) -> None:
 def _motion(motion: Motion | str | Path, joint_map) -> Motion:
     if isinstance(motion, Motion):
         if joint_map is not None:
-            from motionlang.features.joint_map import as_joint_map
             check_map(motion, joint_map)
             motion = motion.replace(meta={**motion.meta, "joint_map": as_joint_map(joint_map)})
         return motion
@@ -109,13 +119,11 @@ def load_rig(rig: Motion | str | Path, joint_map: dict | str | Path | None = Non
     Raises:
         MotionlangError: naming the rig file and the problem.
     """
-    from motionlang.features.joint_map import kit21_weights, positions21
-    from motionlang.kinematics.retarget import retarget
     where = rig if isinstance(rig, (str, Path)) else rig.meta.get("path", rig.name)
     motion = _motion(rig, joint_map)
     try:
         W = kit21_weights(motion.skeleton, joint_map=motion.meta.get("joint_map"))[1]
-        retarget(positions21(motion[:1]), motion.fps, motion, weights=W)  # one-frame trial
+        retarget_positions(positions21(motion[:1]), motion.fps, motion, weights=W)  # one-frame trial
     except MotionlangError as exc:
         raise MotionlangError(f"rig {where}: {exc}") from None
     return motion
@@ -125,7 +133,6 @@ def first_frame(model, start: Motion | str | Path,
                 joint_map: dict | str | Path | None = None) -> np.ndarray:
     """(F,) model features of the first pose of ``start`` (a Motion or file), for L2M models
     to begin their motions with."""
-    from motionlang.features.frames import motion_frames
     t2m = _t2m(model)
     if not t2m.takes_start_pose:
         raise MotionlangError(f"a start pose applies to L2M models, not {t2m.model.kind}")
@@ -144,7 +151,6 @@ def describe(motion: Motion | str | Path, model: Any = None, width: int = 5, *,
     puts first the sentence the beam agrees on most (``models.seq2seq.decode.mbr``), "logp" the
     likeliest (the paper's). raw: the beam as it is (``describe --raw``), not checked
     against what the body does (``models.seq2seq.decode.grounded``: gait, familiarity, grounded analysis)."""
-    from motionlang.models.registry import describer, kinds_with
     DescribeOptions(width=width, length_penalty=length_penalty, rank=rank)   # checks them
     if model is None or isinstance(model, (str, Path)):
         model = load_model(model or "m2l", kind=kinds_with("describes"))
@@ -160,7 +166,6 @@ def describe_many(paths: Any, model: Any = None, *, joint_map: dict | str | Path
     ``segments=True``, ``"cos"`` scores with a ``bank``, ``{"file", "error"}`` for a file that
     cannot be read. ``options``: the fields of ``library.describe.DescribeOptions``
     (``width``, ``rank``, ``segments``, ``window``, ``hop``, ``merge``, ``bank``, ``workers``)."""
-    from motionlang.library.describe import DescribeOptions, ReadOptions, describe_run
     run = describe_run([paths] if isinstance(paths, (str, Path)) else paths, model,
                        DescribeOptions(**options), read=ReadOptions(joint_map=joint_map))
     return list(run.records(show_progress=show_progress))
@@ -171,8 +176,7 @@ def timeline(motion: Motion | str | Path, model: Any = None, *,
     """A long take (a Motion or file) as ``library.timeline.Segment``s (``start``, ``end``
     seconds, ``text``, ``score``), as ``motionlang describe --segments`` prints it;
     ``options`` as :func:`describe_many`'s."""
-    from motionlang.library.describe import DescribeOptions, describer
-    d = describer(model, DescribeOptions(**{**options, "segments": True}))
+    d = timeline_describer(model, DescribeOptions(**{**options, "segments": True}))
     return d.timeline(_motion(motion, joint_map))
 
 
@@ -244,7 +248,6 @@ def generate_hypotheses(text: str, model: Any = None, *, width: int | None = Non
                       UserWarning, stacklevel=2)
     warn_never_learnt(text, t2m.model)
     if keep is not None:   # the kept seconds of a motion, the rest from the text
-        from motionlang.models.inbetween import fill_between
         return fill_between(t2m, text, keep, lambda m: _motion(m, joint_map), seed=seed,
                             foot_lock=foot_lock), t2m.fps
     if start_from is not None:
@@ -277,7 +280,6 @@ def generate(text: str, model: Any = None, *, rig: Motion | str | Path | None = 
     """
     rig_motion = None if rig is None else load_rig(rig, rig_joint_map)
     if library is not None:
-        from motionlang.library.compose import compose
         made = compose(text, library, model=model)
         return body_motion(made.positions, made.fps, rig_motion)[0]
     hyps, fps = generate_hypotheses(text, model, **options)
@@ -288,7 +290,6 @@ def body21(motion: Motion | str | Path, *, joint_map: dict | str | Path | None =
            stature: float | None = None) -> np.ndarray:
     """Any motion (or file) -> (T, 21, 3) metres on the common 21-joint body: feet on the
     floor, frame 0 at the origin facing +Z, scaled to ``stature`` metres if given."""
-    from motionlang.features.body21 import body21 as _body21
     return _body21(_motion(motion, joint_map), stature=stature)
 
 
@@ -296,7 +297,6 @@ def retarget(motion: Motion | str | Path, rig: Motion | str | Path, *,
              joint_map: dict | str | Path | None = None,
              rig_joint_map: dict | str | Path | None = None) -> Motion:
     """``motion`` (any rig) moved onto ``rig``'s skeleton through the 21-joint body."""
-    from motionlang.features.joint_map import positions21
     src = _motion(motion, joint_map)
     return body_motion(positions21(src), src.fps, load_rig(rig, rig_joint_map),
                        name=src.name)[0]
@@ -308,7 +308,6 @@ def render(motion: Motion | str | Path, path: str | Path, *, title: str | None =
     strip, as ``motionlang render``; ``title`` defaults to the motion's name, ``options``
     are those of ``rendering.output.render_file`` (``n_poses``, ``fps``, ``camera``,
     ``trajectory``). Returns the path written."""
-    from motionlang.rendering.output import check_drawable, render_file
     check_drawable(path)   # before a file is read
     m = _motion(motion, joint_map)
     return render_file(m, path, title=m.name if title is None else title, **options)
@@ -325,8 +324,6 @@ def encode(x: Motion | str | Path, model: Any = None, *,
     model puts both in one space (its embeddings are trained to meet); the seq2seq encoders
     do not, so compare sentences with sentences, motions with motions.
     """
-    from motionlang.models.family import load_object
-    from motionlang.models.registry import families, kinds_with
     is_text = isinstance(x, str) and not Path(x).is_file()
     side = "text" if is_text else "motion"
     capability = f"encodes_{side}"
@@ -375,7 +372,6 @@ def train(kind: str, data: str | Path | list, out: str | Path, *, resume: bool =
     model's config, the trainer's (``epochs``, ``lr``, ...) and the recipe's data options
     (``features``, ``offsets``, ...). Returns the trained model's path (``out/model.pt``).
     """
-    from motionlang.recipes import train as run_recipe
     return run_recipe(kind, data, out, resume=resume, **options)
 
 
@@ -387,7 +383,6 @@ def index(folder: str | Path, out: str | Path, model: Any = None, **options: Any
     changed files. ``options``: ``window``, ``hop`` (seconds), ``rebuild``
     (``library.options.IndexOptions``). Returns a ``library.index.IndexSummary``; files that
     do not read are in its ``failed``, with their reasons."""
-    from motionlang.library.index import build_index
     return build_index(folder, out, model, **options)
 
 
@@ -397,7 +392,6 @@ def search(query: str, index: Any, k: int | None = None, *, model: Any = None,
     as ``motionlang search``: ``[(file, start, end, score, why)]`` (``library.search.Hit``),
     best first; ``k`` (10) and ``options`` (``where``, ``min_duration``, ``rig``,
     ``path_glob``, ``grounded``): ``library.options.SearchOptions``; ``render``: a .png."""
-    from motionlang.library.search import search as run_search
     return run_search(query, index, k, model=model, render=render, **options)
 
 

@@ -9,6 +9,7 @@ import argparse
 import json
 import sys
 
+from motionlang.api import load_model
 from motionlang.cli.config_options import add_config_options, option_fields, option_message
 from motionlang.cli.options import (
     count_int,
@@ -18,9 +19,18 @@ from motionlang.cli.options import (
     output_file,
     seed_int,
 )
+from motionlang.datasets.cmu35 import load_cmu35
 from motionlang.errors import MotionlangError
+from motionlang.evaluation.crbm.generation import START_TRIALS, generate_from_test
+from motionlang.evaluation.crbm.output import start_xz, write_fill, write_fill_figures, write_frames
+from motionlang.evaluation.crbm.reproduce import (
+    ReproduceConfig,
+    fill_test_trial,
+    format_table,
+    reproduce,
+)
 from motionlang.models.crbm.config import SELECTED, CRBMConfig
-from motionlang.recipes.crbm import DATA_HELP, MODEL_DEFAULTS, STACK_FILE
+from motionlang.recipes.crbm import DATA_HELP, MODEL_DEFAULTS, STACK_FILE, model_config
 
 
 def _add_data(p: argparse.ArgumentParser) -> None:
@@ -28,10 +38,6 @@ def _add_data(p: argparse.ArgumentParser) -> None:
 
 
 def cmd_generate(args: argparse.Namespace) -> int:
-    from motionlang.api import load_model
-    from motionlang.datasets.cmu35 import load_cmu35
-    from motionlang.evaluation.crbm.generation import START_TRIALS, generate_from_test
-    from motionlang.evaluation.crbm.output import start_xz, write_frames
     model = load_model(args.model, kind=("crbm", "crbm_stack"))
     data = load_cmu35(args.data)
     gen, report = generate_from_test(model, data, args.start, args.frames, n_gibbs=args.gibbs,
@@ -49,10 +55,6 @@ def cmd_generate(args: argparse.Namespace) -> int:
 
 
 def cmd_fill(args: argparse.Namespace) -> int:
-    from motionlang.api import load_model
-    from motionlang.datasets.cmu35 import load_cmu35
-    from motionlang.evaluation.crbm.output import write_fill
-    from motionlang.evaluation.crbm.reproduce import fill_test_trial
     model = load_model(args.model, kind="crbm")
     data = load_cmu35(args.data)
     part = args.part.replace("-", " ")
@@ -67,10 +69,7 @@ def cmd_fill(args: argparse.Namespace) -> int:
 
 
 def cmd_reproduce(args: argparse.Namespace) -> int:
-    from motionlang.evaluation.crbm.reproduce import ReproduceConfig, format_table, reproduce
-    from motionlang.recipes.crbm import model_config
     if args.model:
-        from motionlang.api import load_model
         model, config = load_model(args.model, kind="crbm"), None
     else:
         model = None
@@ -84,8 +83,6 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
     result = reproduce(args.data, cfg, crbm=model, show_progress=not (args.quiet or args.json),
                        keep_fills=bool(args.plots))
     if args.plots:
-        from motionlang.datasets.cmu35 import load_cmu35
-        from motionlang.evaluation.crbm.output import write_fill_figures
         write_fill_figures(result.pop("fills"), args.plots, load_cmu35(args.data), args.data)
         result.pop("models")
     if args.json:

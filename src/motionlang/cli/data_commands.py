@@ -16,10 +16,15 @@ import json
 
 from motionlang.cli.options import nonneg_float, output_dir, positive_float, positive_int, seed_int
 from motionlang.cli.synth_commands import register_synth
+from motionlang.datasets.folders import folder_summary, split_folder, summary_text
+from motionlang.datasets.humanml3d_export import export_h3d
+from motionlang.datasets.kitml import KITML_URL, download_kitml
+from motionlang.datasets.seq2seq_pairs import load_records
+from motionlang.utils.folder_lock import check_new_output, check_no_clash
+from motionlang.utils.progress import progress
 
 
 def cmd_download(args: argparse.Namespace) -> int:
-    from motionlang.datasets.kitml import KITML_URL, download_kitml
     root = download_kitml(args.dest, url=args.url or KITML_URL, sha256=args.sha256,
                           include_raw=args.include_raw, keep_archive=not args.remove_archive)
     print(root)
@@ -27,15 +32,12 @@ def cmd_download(args: argparse.Namespace) -> int:
 
 
 def cmd_info(args: argparse.Namespace) -> int:
-    from motionlang.datasets.folders import folder_summary, summary_text
     info = folder_summary(args.dir, args.max_seconds)
     print(json.dumps(info, indent=2) if args.json else summary_text(info))
     return 0
 
 
 def cmd_split(args: argparse.Namespace) -> int:
-    from motionlang.datasets.folders import split_folder
-    from motionlang.utils.folder_lock import check_no_clash
     if not args.overwrite:
         names = ("train", "val", "test") if len(args.fractions) == 3 else ("train", "test")
         check_no_clash(args.out, {f"{n}.txt" for n in names}, "--out")
@@ -50,15 +52,11 @@ def cmd_export_h3d(args: argparse.Namespace) -> int:
     import os
     import time
 
-    from motionlang.datasets.humanml3d_export import export_h3d
-    from motionlang.datasets.seq2seq_pairs import load_records
-    from motionlang.utils.folder_lock import check_new_output
     check_new_output(args.out, "--out", "an export goes into a new or empty folder")
     t0 = time.perf_counter()
     records = load_records(args.data, args.max_seconds, args.joint_map)
     print(f"export-h3d: {len(records)} motions from {args.data} "
           f"({time.perf_counter() - t0:.1f} s to list)", flush=True)
-    from motionlang.utils.progress import progress
 
     # a bar on a terminal, else a line every 30 s
     bar = progress(total=len(records), desc="export-h3d", unit="motions")

@@ -17,8 +17,15 @@ import sys
 import warnings
 from pathlib import Path
 
+from motionlang import api as ml
+from motionlang.cli.motion_commands import add_joint_map_arg
 from motionlang.cli.options import frames_int, output_dir, seed_int, width_int
+from motionlang.datasets import named
+from motionlang.datasets.kitml import caption_of
+from motionlang.datasets.synth import generate_sample
 from motionlang.errors import MotionlangError
+from motionlang.library.describe import score_text
+from motionlang.models.registry import PACKAGED
 
 DEFAULT_SENTENCE = "a person waves with the left hand"
 DEMO_MOTION = Path("kitml") / "00001_mmm.xml"
@@ -30,7 +37,6 @@ SYNTH_SEED = 2026
 
 
 def _print_hyps(hyps, label: str) -> None:
-    from motionlang.library.describe import score_text
     for i, (text, score) in enumerate(hyps, 1):
         print(f"  {i}. {score_text(label, score, '9.2f')}  {text}")
 
@@ -39,7 +45,6 @@ def generate_part(out_dir: Path, sentence: str, *, width: int, seed: int,
                   max_frames: int) -> list[Path]:
     """The packaged L2M's hypotheses for ``sentence`` printed; the best written as
     ``generated.gif``, ``generated_strip.png`` and ``generated.bvh`` in ``out_dir``."""
-    from motionlang import api as ml
 
     t2m = ml.text_to_motion("l2m")
     method = t2m.default_method()
@@ -67,7 +72,6 @@ def generate_part(out_dir: Path, sentence: str, *, width: int, seed: int,
 def describe_part(motions: list[tuple[str, object]], width: int) -> None:
     """The packaged M2L's sentences for each (label, Motion), printed; a motion it cannot
     read (a rig no joint map fits) is said to be not described."""
-    from motionlang import api as ml
 
     m2l = ml.load_model("m2l", kind="m2l")
     for label, motion in motions:
@@ -82,11 +86,6 @@ def describe_part(motions: list[tuple[str, object]], width: int) -> None:
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
-    from motionlang import api as ml
-    from motionlang.datasets import named
-    from motionlang.datasets.kitml import caption_of
-    from motionlang.datasets.synth import generate_sample
-    from motionlang.models.registry import PACKAGED
 
     out_dir = Path(args.out)
     written = generate_part(out_dir, args.sentence, width=args.width, seed=args.seed,
@@ -123,7 +122,6 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
 
 def register(subparsers) -> None:
-    from motionlang.cli.motion_commands import add_joint_map_arg
     p = subparsers.add_parser(
         "demo", help="generate a motion from text and describe motions (packaged models)",
         description="The main job, offline: generate a motion for SENTENCE with the packaged "

@@ -12,6 +12,9 @@ import math
 import sys
 from pathlib import Path
 
+from motionlang.api import WordsRead, generate_hypotheses, load_rig, write_result
+from motionlang.cli.config_options import add_config_options, config_from_args
+from motionlang.cli.motion_commands import add_input_args, add_joint_map_arg, load_input
 from motionlang.cli.options import (
     frames_int,
     nonneg_int,
@@ -21,11 +24,19 @@ from motionlang.cli.options import (
     width_int,
 )
 from motionlang.errors import MotionlangError
+from motionlang.library.compose import compose_to
+from motionlang.library.describe import (
+    DescribeOptions,
+    ReadOptions,
+    describe_run,
+    describer,
+    printed,
+)
+from motionlang.models.registry import licence_note
+from motionlang.rendering.output import check_result_path
 
 
 def cmd_describe(args: argparse.Namespace) -> int:
-    from motionlang.cli.config_options import config_from_args
-    from motionlang.library.describe import DescribeOptions, ReadOptions, describe_run
     options = config_from_args(DescribeOptions, args)
     if args.output is None and len(args.input) == 1 and not Path(args.input[0]).is_dir():
         return _describe_one(args, options)
@@ -43,8 +54,6 @@ def cmd_describe(args: argparse.Namespace) -> int:
 
 def _describe_one(args: argparse.Namespace, options) -> int:
     """One motion file, printed: its sentences, or with --segments its timeline."""
-    from motionlang.cli.motion_commands import load_input
-    from motionlang.library.describe import describer, printed
 
     d = describer(args.model, options)   # a missing model is named first
     print(printed(d, load_input(args, args.input[0]), as_json=args.json))
@@ -54,8 +63,6 @@ def _describe_one(args: argparse.Namespace, options) -> int:
 def cmd_generate(args: argparse.Namespace) -> int:
     import warnings
 
-    from motionlang.api import WordsRead, generate_hypotheses, load_rig, write_result
-    from motionlang.rendering.output import check_result_path
 
     out = Path(args.output)
     check_result_path(out, rig=args.rig is not None)   # before the model is read
@@ -63,7 +70,6 @@ def cmd_generate(args: argparse.Namespace) -> int:
         raise MotionlangError("--rig-joint-map needs --rig")
     rig = None if args.rig is None else load_rig(args.rig, args.rig_joint_map)
     if args.library is not None:
-        from motionlang.library.compose import compose_to
         print(compose_to(args.text, args.library, out, rig=rig))
         return 0
     with warnings.catch_warnings(record=True) as caught:
@@ -93,7 +99,6 @@ def cmd_generate(args: argparse.Namespace) -> int:
 
 def _add_model_arg(p: argparse.ArgumentParser, default: str | None, packaged: str,
                    files: str) -> None:
-    from motionlang.models.registry import licence_note
     p.add_argument("--model", default=default, metavar="MODEL",
                    help=f"a packaged model's name, {files} or a training run folder "
                         f"(default: {packaged}; 'motionlang models' lists the packaged ones; "
@@ -102,9 +107,6 @@ def _add_model_arg(p: argparse.ArgumentParser, default: str | None, packaged: st
 
 
 def register(subparsers) -> None:
-    from motionlang.cli.config_options import add_config_options
-    from motionlang.cli.motion_commands import add_input_args, add_joint_map_arg
-    from motionlang.library.options import DescribeOptions
     p = subparsers.add_parser("describe", help="describe motions in English: a file, a "
                               "library (-o captions.jsonl), long takes as timelines")
     add_input_args(p, many=True)

@@ -12,16 +12,22 @@ import argparse
 import json
 from pathlib import Path
 
+from motionlang.cli.config_options import add_config_options
+from motionlang.cli.models_arg import add_model_arg, load_t2m
 from motionlang.cli.options import nonneg_int, output_file, positive_float
+from motionlang.datasets.seq2seq_pairs import load_sources
+from motionlang.datasets.sources import parse_source
+from motionlang.datasets.splits import load_splits
 from motionlang.errors import MotionlangError
+from motionlang.library.options import DescribeOptions
+from motionlang.models.registry import resolve  # a run folder -> its model file
+from motionlang.utils.atomic import atomic_write
 
 
 def _evaluate_models(args: argparse.Namespace):
     """(M2L file, round-trip model or None): the round trip's model (with its options and
     reranker) loaded first, as its errors come before the long M2L run."""
-    from motionlang.cli.models_arg import load_t2m
     from motionlang.evaluation.seq2seq import round_trip_model
-    from motionlang.models.registry import resolve  # a run folder -> its model file
     m2l_path = resolve(args.m2l)
     if not args.t2m:
         return m2l_path, None
@@ -35,12 +41,8 @@ def _evaluate_models(args: argparse.Namespace):
 
 
 def cmd_evaluate(args: argparse.Namespace) -> int:
-    from motionlang.datasets.seq2seq_pairs import load_sources
-    from motionlang.datasets.sources import parse_source
-    from motionlang.datasets.splits import load_splits
     from motionlang.evaluation.seq2seq_report import evaluate_seq2seq, report_text
     from motionlang.models.seq2seq.m2l import MotionToLanguage
-    from motionlang.utils.atomic import atomic_write
 
     m2l_path, t2m = _evaluate_models(args)
     m2l = MotionToLanguage.load(m2l_path)
@@ -67,9 +69,6 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
 def register(subparsers) -> None:
     from dataclasses import fields
 
-    from motionlang.cli.config_options import add_config_options
-    from motionlang.cli.models_arg import add_model_arg
-    from motionlang.library.options import DescribeOptions
     p = subparsers.add_parser("evaluate", help="BLEU/ROUGE/CIDEr of M2L, baseline, L2M round trip")
     p.add_argument("--m2l", required=True, metavar="MODEL",
                    help="M2L model file or its run folder (train m2l --out), which holds "

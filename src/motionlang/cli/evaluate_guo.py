@@ -12,7 +12,12 @@ from __future__ import annotations
 import argparse
 
 from motionlang.cli.config_options import add_config_options, config_from_args, option_message
+from motionlang.cli.models_arg import load_t2m_models
 from motionlang.errors import MotionlangError
+from motionlang.evaluation.t2m import guo
+from motionlang.evaluation.t2m.guo import GuoOptions  # torch-free
+from motionlang.models.options import split_label
+from motionlang.models.registry import load_model
 
 #: options of the default (``ape``) protocol that mean nothing under ``guo``: name -> unset
 APE_ONLY = {"autoencode": False, "true_start": False, "oracle": 0}
@@ -22,7 +27,6 @@ GUO_ONLY = ("evaluator", "evaluator_official", "mean", "std", "word_vectors", "m
 
 def add_guo_args(p: argparse.ArgumentParser) -> None:
     """The ``guo`` protocol's options of ``evaluate-t2m``."""
-    from motionlang.evaluation.t2m.guo import GuoOptions  # torch-free
     g = p.add_argument_group(
         "--protocol guo", "the papers' yardstick under a text-motion evaluator; rows: ground "
         "truth, nearest neighbour, standing still, each --model (default: the packaged l2m)")
@@ -47,7 +51,6 @@ def add_guo_args(p: argparse.ArgumentParser) -> None:
 def check_protocol(args: argparse.Namespace):
     """Options of one protocol given to the other: one line naming them. Returns the
     ``GuoOptions`` of the options (checked under either protocol)."""
-    from motionlang.evaluation.t2m.guo import GuoOptions
     options = config_from_args(GuoOptions, args)
     if args.protocol == "guo":
         wrong = [k for k, unset in APE_ONLY.items() if getattr(args, k) != unset]
@@ -72,8 +75,6 @@ def m2l_models(values: list[str] | None) -> tuple[dict, dict]:
     """``{label: model}`` and ``{label: value}`` of the ``--m2l`` values (default the
     packaged m2l; ``none`` alone: none), loaded before the data is read so that a bad one
     fails at once."""
-    from motionlang.models.options import split_label
-    from motionlang.models.registry import load_model
     specs = values or ["m2l"]
     models, given = {}, {}
     for spec in [] if specs == ["none"] else specs:
@@ -83,8 +84,6 @@ def m2l_models(values: list[str] | None) -> tuple[dict, dict]:
 
 
 def cmd_evaluate_guo(args: argparse.Namespace) -> int:
-    from motionlang.cli.models_arg import load_t2m_models
-    from motionlang.evaluation.t2m import guo
 
     options = check_protocol(args)
     try:

@@ -12,15 +12,15 @@ import argparse
 import json
 from pathlib import Path
 
+from motionlang.cli.models_arg import add_model_arg, load_t2m_models
 from motionlang.cli.options import nonneg_int, output_dir, seed_int
+from motionlang.evaluation.judge_bandai import FOOT_LOCK, evaluate_on_bandai
+from motionlang.models.registry import load_model
 from motionlang.recipes.judge import NON_COMMERCIAL
+from motionlang.utils.atomic import write_texts
 
 
 def cmd_evaluate(args: argparse.Namespace) -> int:
-    from motionlang.cli.models_arg import load_t2m_models
-    from motionlang.evaluation.judge_bandai import evaluate_on_bandai
-    from motionlang.models.registry import load_model
-    from motionlang.utils.atomic import write_texts
 
     judge = load_model(args.judge, kind="judge")
     models = load_t2m_models(args.model)
@@ -37,8 +37,6 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
 
 
 def register(subparsers) -> None:
-    from motionlang.cli.models_arg import add_model_arg
-    from motionlang.evaluation.judge_bandai import FOOT_LOCK
     h = "judge text-to-motion models on real motion (Bandai Namco test takes)"
     p = subparsers.add_parser(
         "evaluate-judge", help=h, description=h + ": the judge's own accuracy on the real "

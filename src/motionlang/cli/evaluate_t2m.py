@@ -11,16 +11,16 @@ from __future__ import annotations
 
 import argparse
 
+from motionlang.cli.evaluate_guo import add_guo_args, check_protocol, cmd_evaluate_guo
+from motionlang.cli.models_arg import add_model_arg, load_t2m_models
 from motionlang.cli.options import nonneg_int, output_dir, positive_float, seed_int
+from motionlang.evaluation.t2m.ape import evaluate_ape
 
 
 def cmd_evaluate(args: argparse.Namespace) -> int:
-    from motionlang.cli.evaluate_guo import check_protocol, cmd_evaluate_guo
     if args.protocol == "guo":
         return cmd_evaluate_guo(args)
     check_protocol(args)
-    from motionlang.cli.models_arg import load_t2m_models
-    from motionlang.evaluation.t2m.ape import evaluate_ape
     _, table = evaluate_ape(load_t2m_models(args.model), args.data, split=args.split,
                             seed=args.seed, max_seconds=args.max_seconds, limit=args.limit,
                             autoencode=args.autoencode, true_start=args.true_start,
@@ -30,8 +30,6 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
 
 
 def register(subparsers) -> None:
-    from motionlang.cli.evaluate_guo import add_guo_args
-    from motionlang.cli.models_arg import add_model_arg
     p = subparsers.add_parser(
         "evaluate-t2m", help="one table for text-to-motion models: APE/AVE and action order "
                              "(--protocol ape) or the papers' R-precision, FID, MM-Dist, "

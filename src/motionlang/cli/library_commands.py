@@ -6,13 +6,14 @@ import argparse
 import json
 import sys
 
+from motionlang.api import index, search
 from motionlang.cli.config_options import add_config_options, config_from_args, config_values
 from motionlang.cli.options import output_file
+from motionlang.library.merge import merge_indexes
 from motionlang.library.options import IndexOptions, SearchOptions  # torch-free
 
 
 def cmd_index(args: argparse.Namespace) -> int:
-    from motionlang.api import index
     summary = index(args.dir, args.output, args.model,
                     **config_values(config_from_args(IndexOptions, args)))
     for path, why in summary.failed:
@@ -22,7 +23,6 @@ def cmd_index(args: argparse.Namespace) -> int:
 
 
 def cmd_search(args: argparse.Namespace) -> int:
-    from motionlang.api import search
     opts = config_values(config_from_args(SearchOptions, args))
     hits = search(args.query, args.index, model=args.model, render=args.render, **opts)
     print(json.dumps([h._asdict() for h in hits], indent=1) if args.json else
@@ -31,7 +31,6 @@ def cmd_search(args: argparse.Namespace) -> int:
 
 
 def cmd_merge(args: argparse.Namespace) -> int:
-    from motionlang.library.merge import merge_indexes
     d = merge_indexes(args.shards, args.output, root=args.root)
     print(f"{args.output}: {len(d.entries)} takes, {len(d.vectors)} windows from "
           f"{len(args.shards)} shards" + (f" (still only shards {d.shard})" if d.shard else ""))

@@ -7,11 +7,13 @@ from __future__ import annotations
 import argparse
 import json
 
-from motionlang.models import encoders  # torch-free
+from motionlang.models import (
+    encoders,  # torch-free
+    registry,
+)
 
 
 def cmd_models(args: argparse.Namespace) -> int:
-    from motionlang.models import registry
     if args.model is None:
         print(registry.describe_packaged())
         print("\n'motionlang models NAME' shows a model's card (data, licence, recipe, "

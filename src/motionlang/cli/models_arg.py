@@ -19,8 +19,12 @@ import argparse
 import dataclasses
 from typing import Any
 
+from motionlang.api import text_to_motion
 from motionlang.errors import MotionlangError
-from motionlang.models.options import parse_t2m  # torch-free
+from motionlang.models.options import (
+    options_help,
+    parse_t2m,  # torch-free
+)
 
 SYNTAX = "MODEL[:key=value,...]"
 
@@ -36,7 +40,6 @@ def load_t2m(text: str, flag: str = "--model") -> tuple[str, Any]:
         MotionlangError: one line naming ``flag`` and the value: an unknown option or a bad
             value (the known options listed), or a model that is missing or of another kind.
     """
-    from motionlang.api import text_to_motion
     label, spec = parse_t2m(text)
     try:
         t2m = text_to_motion(spec.name, spec.options or None)
@@ -74,7 +77,6 @@ class _OptionsHelp:
     def help(self) -> str | None:
         if not self._base_help:
             return self._base_help
-        from motionlang.models.options import options_help
         return (f"{self._base_help}. Options by kind (a method left unset decodes the "
                 f"means): {options_help()}")
 

@@ -11,9 +11,13 @@ import argparse
 import json
 from pathlib import Path
 
+from motionlang.analysis.check import printed
+from motionlang.api import check, load_rig, read_mapped, render, retarget
 from motionlang.cli.options import int_range, output_file, positive_int, rate_float, seconds_float
 from motionlang.errors import MotionlangError
+from motionlang.formats import info_text, motion_info, write_motion
 from motionlang.kinematics import Motion
+from motionlang.rendering.output import check_drawable
 from motionlang.rendering.scene import RENDER_MAX_FRAMES
 
 
@@ -42,7 +46,6 @@ def add_joint_map_arg(p: argparse.ArgumentParser) -> None:
 def load_input(args: argparse.Namespace, path: str | None = None) -> Motion:
     """Read ``path`` (default ``args.input``; with ``--asf`` for AMC files, ``--source-fps``
     for AMC files or in place of a file's own rate, ``--sequence`` for MAT files; a ``--joint-map`` is checked against the rig)."""
-    from motionlang.api import read_mapped
 
     path = Path(path or args.input)
     ext = path.suffix.lower()
@@ -62,7 +65,6 @@ def add_clip_args(p: argparse.ArgumentParser) -> None:
 
 # ------------------------------------------------------------------ info
 def cmd_info(args: argparse.Namespace) -> int:
-    from motionlang.formats import info_text, motion_info
 
     info = motion_info(load_input(args))
     info["path"] = str(args.input)
@@ -72,8 +74,6 @@ def cmd_info(args: argparse.Namespace) -> int:
 
 # ------------------------------------------------------------------ render
 def cmd_render(args: argparse.Namespace) -> int:
-    from motionlang.api import render
-    from motionlang.rendering.output import check_drawable
 
     check_drawable(args.output)   # before the (slow) read
     motion = load_input(args).between(args.start, args.end)
@@ -85,8 +85,6 @@ def cmd_render(args: argparse.Namespace) -> int:
 
 # ------------------------------------------------------------------ convert
 def cmd_convert(args: argparse.Namespace) -> int:
-    from motionlang.api import load_rig, retarget
-    from motionlang.formats import write_motion
 
     out = Path(args.output)
     if out.resolve() == Path(args.input).resolve():
@@ -101,8 +99,6 @@ def cmd_convert(args: argparse.Namespace) -> int:
 
 
 def cmd_check(args: argparse.Namespace) -> int:
-    from motionlang.analysis.check import printed
-    from motionlang.api import check
     print(printed(args.text, check(args.text, load_input(args)), as_json=args.json))
     return 0
 

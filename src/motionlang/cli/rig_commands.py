@@ -13,10 +13,10 @@ import argparse
 import json
 
 from motionlang.cli.motion_commands import add_input_args, load_input
+from motionlang.features.joint_map import map_json, rig_summary, summary_text, template_map
 
 
 def cmd_show(args: argparse.Namespace) -> int:
-    from motionlang.features.joint_map import rig_summary, summary_text
 
     motion = load_input(args)
     s = rig_summary(motion.skeleton, motion.meta.get("joint_map"))
@@ -26,7 +26,6 @@ def cmd_show(args: argparse.Namespace) -> int:
 
 
 def cmd_template(args: argparse.Namespace) -> int:
-    from motionlang.features.joint_map import map_json, template_map
 
     print(map_json(template_map(load_input(args).skeleton)))
     return 0

@@ -4,6 +4,8 @@ from __future__ import annotations
 import time
 
 from motionlang.cli.options import nonneg_int, output_dir, positive_int, seed_int
+from motionlang.datasets.synth.corpus import write_corpus
+from motionlang.utils.folder_lock import check_new_output, check_no_clash
 
 
 def register_synth(data_subparsers) -> None:
@@ -28,8 +30,6 @@ def register_synth(data_subparsers) -> None:
 
 
 def _run(args) -> int:
-    from motionlang.datasets.synth.corpus import write_corpus
-    from motionlang.utils.folder_lock import check_new_output, check_no_clash
 
     if not args.overwrite:   # an existing dataset is never overwritten unasked
         if args.start:

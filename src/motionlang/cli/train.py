@@ -17,9 +17,18 @@ from __future__ import annotations
 
 import argparse
 
-from motionlang.cli.config_options import add_config_options, config_from_args, option_message
+from motionlang.cli.config_options import (
+    add_config_options,
+    config_from_args,
+    option_fields,  # torch-free
+    option_message,
+)
 from motionlang.cli.options import output_dir
+from motionlang.datasets.sources import KINDS, data_help, parse_source
 from motionlang.errors import MotionlangError
+from motionlang.models.registry import families, family
+from motionlang.recipes import recipe_of, run_recipe
+from motionlang.training.config import TrainConfig
 
 #: what a run of the shared trainer keeps beside the model (``--out``'s help)
 TRAINER_FILES = "best.pt and last.pt (checkpoints), history.json, loss_curve.png, splits/"
@@ -28,7 +37,6 @@ TRAINER_FILES = "best.pt and last.pt (checkpoints), history.json, loss_curve.png
 def data_source(text: str, kind: str | None = None):
     """argparse type of ``--data``: ``[PREFIX:]DIR[@WEIGHT]`` (``datasets.sources``), of
     ``kind`` where given."""
-    from motionlang.datasets.sources import parse_source
     try:
         return parse_source(text, kind=kind)
     except MotionlangError as exc:
@@ -39,7 +47,6 @@ def add_data_arg(p: argparse.ArgumentParser, several: bool = True,
                  kind: str | None = None) -> None:
     """``--data``: one source, or several (repeatable, ``@W`` weights); with ``kind``, one
     source of that kind (``datasets.sources.KINDS``)."""
-    from motionlang.datasets.sources import KINDS, data_help
     if kind is not None:
         def parse(text: str):
             return data_source(text, kind)
@@ -56,9 +63,6 @@ def add_data_arg(p: argparse.ArgumentParser, several: bool = True,
 
 
 def _register_recipe(train_sub, kind: str) -> None:
-    from motionlang.models.registry import family
-    from motionlang.recipes import recipe_of
-    from motionlang.training.config import TrainConfig  # torch-free
     fam, recipe = family(kind), recipe_of(kind)
     p = train_sub.add_parser(kind, help=f"train the {fam.summary}",
                              description=" ".join(filter(None, (f"Train the {fam.summary}.",
@@ -92,10 +96,6 @@ def cmd_train(args: argparse.Namespace) -> int:
     the recipe."""
     from pathlib import Path
 
-    from motionlang.cli.config_options import option_fields
-    from motionlang.models.registry import family
-    from motionlang.recipes import recipe_of, run_recipe
-    from motionlang.training.config import TrainConfig
     kind = args.model_kind
     recipe, model_cls = recipe_of(kind), family(kind).config_class()
     train_cfg = config_from_args(TrainConfig, args, out_dir=str(args.out)) \
@@ -118,7 +118,6 @@ def cmd_train(args: argparse.Namespace) -> int:
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    from motionlang.models.registry import families
     parser = subparsers.add_parser("train", help="train a model",
                                    description="Train a model; see 'motionlang train MODEL -h'.")
     train_sub = parser.add_subparsers(dest="model", metavar="MODEL")

@@ -24,10 +24,13 @@ import re
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
+from motionlang.datasets.bandai_text import describe, mirror_sentence
 from motionlang.datasets.cache import cache_dir
 from motionlang.datasets.download import safe_extract_tar, sha256_file
 from motionlang.datasets.sources import KINDS
 from motionlang.errors import DatasetError
+from motionlang.formats import read_motion  # lower layer, loaded lazily
+from motionlang.kinematics.from_positions import mirror_motion
 from motionlang.utils.paths import check_inside
 
 LICENSE = KINDS["bandai"].notice   # the attribution line, kept with the source registry
@@ -78,10 +81,8 @@ class BandaiRecord:
     def load_motion(self):
         """Read the take (``formats.read_motion``; mirrored by
         ``kinematics.from_positions.mirror_motion`` if ``mirrored``); labels in ``meta``."""
-        from motionlang.formats import read_motion  # lower layer, loaded lazily
         motion = read_motion(self.path)
         if self.mirrored:
-            from motionlang.kinematics.from_positions import mirror_motion
             motion = mirror_motion(motion)
         motion.meta.update(dataset="bandai", content=self.content, style=self.style,
                            take=self.take, licence=LICENSE)
@@ -201,7 +202,6 @@ def load_bandai_text(source: str | Path, split: str | None = None, *, per_take: 
     """
     import zlib
 
-    from motionlang.datasets.bandai_text import describe, mirror_sentence
     out = []
     for rec in load_bandai(source, split):
         if max_seconds is not None and bvh_seconds(rec.path) > max_seconds:

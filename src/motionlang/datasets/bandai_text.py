@@ -23,6 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from motionlang.datasets.synth.augment import mirror_text  # same layer
+
 #: content label -> verb phrases (third person); ``{p}`` is the subject's possessive
 CONTENTS: dict[str, tuple[str, ...]] = {
     "walk": ("walks forward", "walks", "walks straight ahead", "walks forwards"),
@@ -208,7 +210,6 @@ def describe(content: str, style: str, n: int = 3, seed: int = 0) -> list[Senten
 
 def mirror_sentence(s: Sentence) -> Sentence:
     """Left and right swapped in the words and in the content label."""
-    from motionlang.datasets.synth.augment import mirror_text  # same layer
     return Sentence(mirror_text(s.text), MIRROR_CONTENT.get(s.content, s.content), s.style,
                     s.states_style)
 

@@ -23,6 +23,10 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from motionlang.errors import DatasetError, MotionlangError
+from motionlang.formats import (
+    read_joint_map,
+    read_motion,  # lower layer, loaded lazily
+)
 from motionlang.utils import limits
 from motionlang.utils.paths import leads_outside
 from motionlang.utils.sidecar import check_name, check_text, parse_json, read_text
@@ -58,7 +62,6 @@ class CustomRecord:
     def load_motion(self) -> Motion:
         """Read the file with ``motionlang.formats.read_motion`` (ASF found automatically;
         the dataset's joint map, if any, attached)."""
-        from motionlang.formats import read_motion  # lower layer, loaded lazily
         return read_motion(self.path, fps=self.fps, joint_map=self.joint_map)
 
 
@@ -176,7 +179,6 @@ def load_custom(folder: str | Path, captions: str | Path | None = None, *,
     if joint_map is None and (folder / JOINT_MAP_NAME).is_file():
         joint_map = folder / JOINT_MAP_NAME
     if joint_map is not None and not isinstance(joint_map, dict):
-        from motionlang.formats import read_joint_map
         joint_map = read_joint_map(joint_map)
     records: dict[str, CustomRecord] = {}  # by path in the folder, not by resolved path
     real = folder.resolve()

@@ -22,7 +22,12 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from motionlang.datasets.humanml3d_export import body_joints
+from motionlang.datasets.seq2seq_pairs import load_records
+from motionlang.datasets.splits import random_split
 from motionlang.errors import DatasetError
+from motionlang.features.body21 import median_bones21, uniform_bones21
+from motionlang.features.h3d_vectors import H3D_BODIES, group_std, joints_to_vectors
 
 if TYPE_CHECKING:
     from motionlang.datasets.sources import Record
@@ -30,8 +35,6 @@ if TYPE_CHECKING:
 
 def body_joints_of(motion, body: str = "kit") -> np.ndarray:
     """A ``Motion`` -> (T, J, 3) metres of ``body`` at its rate (at least 2 frames)."""
-    from motionlang.datasets.humanml3d_export import body_joints
-    from motionlang.features.h3d_vectors import H3D_BODIES
     joints = body_joints(motion, H3D_BODIES[body])
     if len(joints) < 2:
         raise DatasetError(f"{motion.name}: too short for motion rows ({len(joints)} frame)")
@@ -41,12 +44,10 @@ def body_joints_of(motion, body: str = "kit") -> np.ndarray:
 def joints_rows(joints: np.ndarray, body: str = "kit", bones=None) -> np.ndarray:
     """(T, J, 3) metres of ``body`` -> (T-1, D) float32 HumanML3D rows in its file unit;
     ``bones`` (20 lengths, m; ``kit`` only): laid on them first (``uniform_bones21``)."""
-    from motionlang.features.h3d_vectors import H3D_BODIES, joints_to_vectors
     spec = H3D_BODIES[body]
     if bones is not None:
         if body != "kit":
             raise DatasetError(f"uniform bones are for the kit body (21 joints), not {body}")
-        from motionlang.features.body21 import uniform_bones21
         joints = uniform_bones21(joints, bones)
     return joints_to_vectors(joints / spec.unit, spec)[0].astype(np.float32)
 
@@ -101,7 +102,6 @@ def fit_normalizer(items: Sequence[dict], body: str | None = "kit"
     x = np.concatenate(rows)
     mean, std = x.mean(axis=0), x.std(axis=0)
     if body is not None:
-        from motionlang.features.h3d_vectors import H3D_BODIES, group_std
         std = group_std(std, H3D_BODIES[body].n_joints)
     return mean, np.where(std > 0, std, 1.0)
 
@@ -119,7 +119,6 @@ class EvaluatorData:
 
     @property
     def motion_dim(self) -> int:
-        from motionlang.features.h3d_vectors import H3D_BODIES
         return H3D_BODIES[self.body].dim
 
 
@@ -133,9 +132,7 @@ def build_evaluator_data(data: str | Path | Sequence[Record], body: str = "kit",
     ``bones``: None (each motion on its own bones), 20 lengths (m) to lay every motion on
     (``kit`` body), or ``"median"``: the training motions' median bone lengths (set in the
     result's ``bones``)."""
-    from motionlang.datasets.splits import random_split
     if isinstance(data, (str, Path)):
-        from motionlang.datasets.seq2seq_pairs import load_records
         records = load_records(data, max_seconds)
     else:
         records = list(data)
@@ -153,7 +150,6 @@ def build_evaluator_data(data: str | Path | Sequence[Record], body: str = "kit",
         if bones != "median" or body != "kit":
             raise DatasetError(f"bones={bones!r}: 'median' (kit body), a list of 20 lengths "
                                "or None")
-        from motionlang.features.body21 import median_bones21
         joints = {i: _record_joints(by_id[i], body) for i in splits.get("train") or list(by_id)}
         bones = median_bones21(joints.values())
     items = {s: [it for i in ids for it in record_items(by_id[i], body, bones, joints.get(i))]

@@ -23,6 +23,7 @@ import numpy as np
 from motionlang.datasets.cache import cached, file_identity
 from motionlang.errors import MotionlangError
 from motionlang.features.base import FeatureSet, features_from_dict, make_features
+from motionlang.formats import find_asf
 from motionlang.kinematics.from_positions import mirror_motion
 from motionlang.utils.progress import progress
 
@@ -51,7 +52,6 @@ def record_sources(record: Any) -> list[Path]:
                               f"file (mmm_path or path)")
     path = Path(path)
     if path.suffix.lower() == ".amc":
-        from motionlang.formats import find_asf
         return [path, find_asf(path)]
     return [path]
 

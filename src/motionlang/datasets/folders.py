@@ -10,12 +10,14 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
+from motionlang.datasets.custom import CAPTION_NAMES, load_custom
+from motionlang.datasets.kitml import kitml_summary, load_kitml
+from motionlang.datasets.splits import random_split, save_splits
 from motionlang.errors import DatasetError
 
 
 def is_custom(folder: str | Path) -> bool:
     """Whether ``folder`` holds a captions file (``custom.CAPTION_NAMES``)."""
-    from motionlang.datasets.custom import CAPTION_NAMES
     return any((Path(folder) / n).is_file() for n in CAPTION_NAMES)
 
 
@@ -23,9 +25,7 @@ def folder_records(folder: str | Path, max_seconds: float | None = 30.0) -> list
     """The records of a folder of either kind; ``max_seconds`` filters KIT-ML motions only
     (custom folders are read whole)."""
     if is_custom(folder):
-        from motionlang.datasets.custom import load_custom
         return load_custom(folder)
-    from motionlang.datasets.kitml import load_kitml
     return load_kitml(folder, max_seconds=max_seconds)
 
 
@@ -38,7 +38,6 @@ def folder_summary(folder: str | Path, max_seconds: float = 30.0) -> dict:
         DatasetError: no such folder, or unreadable files (named).
     """
     if not is_custom(folder):
-        from motionlang.datasets.kitml import kitml_summary
         return {"kind": "kitml", **kitml_summary(folder, max_seconds=max_seconds)}
     recs = folder_records(folder, None)
     return {"root": str(Path(folder)), "kind": "custom", "motions": len(recs),
@@ -71,7 +70,6 @@ def split_folder(folder: str | Path, out: str | Path, fractions: Sequence[float]
     Raises:
         DatasetError: no motions, or fractions that are not 2 or 3 summing to 1.
     """
-    from motionlang.datasets.splits import random_split, save_splits
     recs = folder_records(folder, max_seconds)
     if not recs:
         raise DatasetError(f"{folder}: no motions to split")

@@ -33,6 +33,7 @@ import numpy as np
 
 from motionlang.errors import DatasetError, MotionlangError
 from motionlang.features.h3d_vectors import H3D_BODIES, H3DBody, vectors_to_joints
+from motionlang.kinematics.from_positions import motion_from_positions
 from motionlang.utils.limits import check, check_file, check_motion
 from motionlang.utils.paths import check_inside
 
@@ -141,7 +142,6 @@ class H3DRecord:
     def load_motion(self):
         """A ``Motion`` fitted to :meth:`load_joints` (``motion_from_positions``); the KIT
         body carries its identity joint map, so ``positions21`` works on it."""
-        from motionlang.kinematics.from_positions import motion_from_positions
         b = self.body
         joints = self.load_joints()
         try:

@@ -33,6 +33,7 @@ import numpy as np
 from motionlang.datasets.humanml3d import JOINTS, TEXTS, VECS, format_caption_line
 from motionlang.datasets.pos_tags import tag
 from motionlang.datasets.splits import random_split
+from motionlang.datasets.synth.augment import mirror_text
 from motionlang.errors import DatasetError, MotionFormatError, SkeletonError
 from motionlang.features.base import downsample
 from motionlang.features.h3d_vectors import (
@@ -129,7 +130,6 @@ def _file_ids(records: Sequence, mirror: bool) -> list[str]:
 def _prepare(job: tuple) -> list[tuple[str, np.ndarray, np.ndarray, list[str]]]:
     """One record -> ``[(file id, rows, joints, caption lines)]`` (float32, file units), its
     mirrored copy second; ``[]`` if it has fewer than 2 frames at the body's rate."""
-    from motionlang.datasets.synth.augment import mirror_text
     rec, fid, body, heading, mirror, tagger = job
     spec = H3D_BODIES[body]
     joints = body_joints(rec.load_motion(), spec)

@@ -23,6 +23,7 @@ from urllib.parse import urlparse
 
 from motionlang.datasets.download import download_file, safe_extract
 from motionlang.errors import DatasetError
+from motionlang.formats.mmm import read_mmm  # formats are a lower layer, loaded lazily
 from motionlang.utils.paths import check_inside
 from motionlang.utils.progress import progress
 
@@ -69,7 +70,6 @@ class KitMLRecord:
 
     def load_motion(self) -> Motion:
         """Read the MMM file (``motionlang.formats.mmm.read_mmm``)."""
-        from motionlang.formats.mmm import read_mmm  # formats are a lower layer, loaded lazily
         return read_mmm(self.mmm_path)
 
 

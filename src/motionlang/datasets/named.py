@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from motionlang.errors import DatasetError
+from motionlang.formats.asf_amc import motion_from_channels, read_asf
 from motionlang.kinematics import Motion
 
 DATA_ENV = "MOTIONLANG_DATA"
@@ -137,7 +138,6 @@ def cmu35_walkjog(data_dir: str | Path | None = None) -> Cmu35WalkJog:
         data_dir: folder holding ``cmu35/cmu35WalkJog.mat`` and ``cmu35/35.asf``
             (default ``default_data_dir()``).
     """
-    from motionlang.formats.asf_amc import motion_from_channels, read_asf
 
     mat_path = _data_file(data_dir, "cmu35/cmu35WalkJog.mat")
     asf_path = _data_file(data_dir, "cmu35/35.asf")

@@ -25,7 +25,10 @@ from typing import Any
 import numpy as np
 
 from motionlang.datasets.feature_cache import dataset_features
+from motionlang.datasets.seq2seq_pairs import load_sources
+from motionlang.datasets.synth.augment import mirror_text
 from motionlang.errors import DatasetError
+from motionlang.features.normalizer import Normalizer
 from motionlang.features.positions import DEFAULT_FPS
 
 #: frame rate of the positions features (the features' own default)
@@ -86,7 +89,6 @@ def build_twostream_data(data: str | Path | Sequence[str | Path], *, fractions: 
             negative from the end): :func:`normalise_by_source`. None: one normaliser
             fitted on all training motions.
     """
-    from motionlang.datasets.seq2seq_pairs import load_sources
 
     records, splits, sources = load_sources(data, max_seconds, fractions=fractions, seed=seed)
     by_id = {str(r.id): r for r in records}
@@ -100,7 +102,6 @@ def build_twostream_data(data: str | Path | Sequence[str | Path], *, fractions: 
                     for i in ids for s in by_id[i].annotations]
              for name, ids in splits.items()}
     if mirror:
-        from motionlang.datasets.synth.augment import mirror_text
         flipped = _first_sequences(dataset_features(
             train, "positions", {"fps": FPS}, fit_records=train, directory=cache_dir,
             mirror=True), max_frames)
@@ -135,7 +136,6 @@ def normalise_by_source(data: TwoStreamData, output: int,
     """
     import copy
 
-    from motionlang.features.normalizer import Normalizer
     ids = sorted(set(data.sources.values()))
     n = (max(ids) + 1) if ids else 1
     if not -n <= output < n:

@@ -26,10 +26,14 @@ from motionlang.datasets.cache import cached, file_identity
 from motionlang.datasets.mixing import check_distinct_ids
 from motionlang.datasets.sources import DataSource, Record, load
 from motionlang.datasets.splits import random_split
+from motionlang.datasets.synth import ground_truth
+from motionlang.datasets.synth.augment import mirror_text
 from motionlang.datasets.text import SPECIALS, Vocabulary
 from motionlang.errors import DatasetError, MotionlangError
+from motionlang.features.angles import AnglesFeatures
 from motionlang.features.base import FeatureSet, features_from_dict
 from motionlang.features.frames import motion_frames
+from motionlang.features.positions import PositionFeatures
 from motionlang.kinematics.from_positions import mirror_motion
 from motionlang.utils.progress import progress
 
@@ -98,10 +102,8 @@ def record_path(rec: Any) -> Path:
 
 def make_features(kind: str) -> FeatureSet:
     if kind == "angles":
-        from motionlang.features.angles import AnglesFeatures
         return AnglesFeatures()
     if kind == "positions":
-        from motionlang.features.positions import PositionFeatures
         return PositionFeatures()
     raise MotionlangError(f"unknown features {kind!r} (angles or positions)")
 
@@ -232,7 +234,6 @@ def build_pairs(data: str | Path | DataSource | Sequence[str | Path | DataSource
                            "more: the vocabulary would be empty (lower --min-count)")
     fs = _fit_features(features, train)
     if mirror:
-        from motionlang.datasets.synth.augment import mirror_text
         # words only the mirrored sentences have go last: the ids of the others stay as
         # without --mirror, so a run can be resumed with it, unless new words make the
         # vocabulary larger (the trainer then refuses the checkpoint with a clear error)
@@ -268,7 +269,6 @@ def sentence_lengths(data: PairData, split: str) -> tuple[list[str], list[int]]:
 def primitive_labels(meta: dict) -> list[str]:
     """A procedural sample's primitives as labels: "action/direction" when the primitive
     has a direction (walk, run, jump), else "action"."""
-    from motionlang.datasets.synth import ground_truth
     return [p.action + (f"/{p.direction}" if p.direction else "") for p in ground_truth(meta)]
 
 

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
+from motionlang.datasets.kitml import find_kitml_root
 from motionlang.errors import DatasetError, MotionlangError
 
 if TYPE_CHECKING:
@@ -159,7 +160,6 @@ def folder_kind(root: str | Path) -> str:
     """The kind of a bare folder: ``"kitml"`` where it holds ``*_mmm.xml`` files (up to two
     levels down, ``kitml.find_kitml_root``), else ``"custom"`` (a missing folder too: its
     loader says so)."""
-    from motionlang.datasets.kitml import find_kitml_root
     try:
         find_kitml_root(root)
     except DatasetError:

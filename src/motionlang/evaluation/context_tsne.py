@@ -12,7 +12,9 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from motionlang.errors import MotionlangError
 from motionlang.models.seq2seq.decode.codec import encode_sentence, normalize
+from motionlang.utils.atomic import atomic_path
 
 
 @torch.no_grad()
@@ -42,7 +44,6 @@ def tsne_2d(vectors: np.ndarray, seed: int = 0) -> np.ndarray:
     """(N, C) -> (N, 2) t-SNE embedding (perplexity capped for small N)."""
     from sklearn.manifold import TSNE
 
-    from motionlang.errors import MotionlangError
     if len(vectors) < 4:
         raise MotionlangError(f"t-SNE needs at least 4 points, got {len(vectors)}")
     perplexity = float(min(30.0, max(1.0, (len(vectors) - 1) / 3)))
@@ -57,7 +58,6 @@ def plot_context_tsne(panels: dict[str, tuple[np.ndarray, Sequence[str]]], path:
     matplotlib.use("Agg")
     from matplotlib import pyplot as plt
 
-    from motionlang.utils.atomic import atomic_path
 
     fig, axes = plt.subplots(1, len(panels), figsize=(5.5 * len(panels), 5), squeeze=False)
     for ax, (title, (vec, labels)) in zip(axes[0], panels.items()):

@@ -19,6 +19,11 @@ from motionlang.datasets.sources import DataSource, licence_text, parse_source
 from motionlang.errors import MotionlangError
 from motionlang.evaluation.judge import asked_labels, judge_table, markdown_judge_table
 from motionlang.evaluation.open_world import check_share
+from motionlang.evaluation.sampling import stratified_sample
+from motionlang.features.foot_lock import lock_feet
+from motionlang.models.registry import load_model
+from motionlang.models.t2m import FPS
+from motionlang.utils.progress import progress
 
 #: the values of ``foot_lock``: rows with feet held (on), as decoded (off), or both
 FOOT_LOCK = ("on", "off", "both")
@@ -62,12 +67,7 @@ def evaluate_on_bandai(judge: Any, models: Mapping[str, Any], data: str | Path |
         MotionlangError: not a Bandai source, no takes in the split, a bad ``foot_lock``,
             a judge file that is not a judge.
     """
-    from motionlang.evaluation.sampling import stratified_sample
-    from motionlang.features.foot_lock import lock_feet
     from motionlang.models.judge.fit import bandai_items, bandai_sentences
-    from motionlang.models.registry import load_model
-    from motionlang.models.t2m import FPS
-    from motionlang.utils.progress import progress
 
     if foot_lock not in FOOT_LOCK:
         raise MotionlangError(f"foot_lock must be one of {', '.join(FOOT_LOCK)}, got "

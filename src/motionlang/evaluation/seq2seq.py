@@ -21,6 +21,8 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
+from motionlang.datasets.bandai_text import names_content, names_style
+from motionlang.datasets.synth import extract, score
 from motionlang.datasets.text import normalize
 from motionlang.errors import MotionlangError
 from motionlang.evaluation.metrics import text as tm
@@ -209,7 +211,6 @@ def actions_named(descriptions: Sequence[Sequence[str]], truths: Mapping[str, Se
     Returns {place: fraction named, "n_" + place: primitives} for place "first" and "later"
     (motions of several primitives) and "only" (motions of one).
     """
-    from motionlang.datasets.synth import extract
 
     named = {"first": 0, "later": 0, "only": 0}
     total = dict.fromkeys(named, 0)
@@ -247,7 +248,6 @@ def parameter_accuracy(texts: Mapping[str, str], truths: Mapping[str, Sequence])
     sequence), field: accuracy over the descriptions that state it (NaN if none),
     field + "_stated": how many stated it} for side, count, direction, speed.
     """
-    from motionlang.datasets.synth import score
 
     fields = ("side", "count", "direction", "speed")
     right = {f: 0 for f in fields}
@@ -280,7 +280,6 @@ def label_accuracy(texts: Mapping[str, str], labels: Mapping[str, Mapping[str, s
     synonyms; "normal" also when no style is named). Returns ``{"n", "content", "style",
     "both"}`` (fractions) and ``"by_content"`` / ``"by_style"``: ``{label: [right, of]}``.
     """
-    from motionlang.datasets.bandai_text import names_content, names_style
     right = {"content": 0, "style": 0, "both": 0}
     by: dict[str, dict[str, list[int]]] = {"by_content": {}, "by_style": {}}
     for i, text in texts.items():

@@ -14,8 +14,14 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from motionlang.datasets.synth import ground_truth
 from motionlang.errors import MotionlangError
 from motionlang.evaluation import seq2seq as ev
+from motionlang.evaluation.context_tsne import l2m_contexts, m2l_contexts, plot_context_tsne
+from motionlang.evaluation.retrieval import SentenceIndex
+from motionlang.evaluation.sampling import stratified_sample
+from motionlang.features.frames import motion_frames
+from motionlang.utils.progress import progress
 
 
 def evaluate_seq2seq(m2l, records: Mapping[str, Any], splits: Mapping[str, Sequence[str]], *,
@@ -48,8 +54,6 @@ def evaluate_seq2seq(m2l, records: Mapping[str, Any], splits: Mapping[str, Seque
     Raises:
         MotionlangError: a split missing, or fewer than 4 motions for the t-SNE map.
     """
-    from motionlang.features.frames import motion_frames
-    from motionlang.utils.progress import progress
 
     for name in ("train", split):
         if name not in splits:
@@ -59,7 +63,6 @@ def evaluate_seq2seq(m2l, records: Mapping[str, Any], splits: Mapping[str, Seque
         ids = [i for i in ids if i in records][:n]
         return {i: motion_frames(m2l.features, records[i].load_motion(), 1)[0]
                 for i in progress(ids, desc="encode", unit="motion")}
-    from motionlang.evaluation.sampling import stratified_sample
     present = [i for i in splits[split] if i in records]
     chosen = [present[k] for k in stratified_sample(len(present), limit)]   # seed 0
     n_eval = len(chosen)
@@ -72,7 +75,6 @@ def evaluate_seq2seq(m2l, records: Mapping[str, Any], splits: Mapping[str, Seque
                     "m2l": ev.evaluate_m2l(m2l, test, refs, width, length_penalty, rank=rank),
                     "nearest_neighbour": ev.evaluate_nn_baseline(train, refs, test, refs)}
     if t2m is not None:
-        from motionlang.evaluation.retrieval import SentenceIndex
         test_refs = {i: refs[i] for i in test}
         report["l2m_round_trip"] = ev.round_trip_of(t2m, m2l, test_refs, report["m2l"]["bleu"])
         report["l2m_round_trip"].update(model=t2m_name, **dataclasses.asdict(t2m.options))
@@ -175,7 +177,6 @@ def _labels(records: Mapping[str, Any], ids) -> dict:
 
 def _ground_truths(records: Mapping[str, Any], ids) -> dict:
     """{id: ground-truth primitives} when every record carries them (procedural corpus)."""
-    from motionlang.datasets.synth import ground_truth
     metas = {i: records[i].meta for i in ids}
     if not metas or not all(m.get("primitives") for m in metas.values()):
         return {}
@@ -185,7 +186,6 @@ def _ground_truths(records: Mapping[str, Any], ids) -> dict:
 def _context_tsne(path: Path, m2l, l2m, test: dict, records: Mapping[str, Any]) -> None:
     """The paper's Fig. 9: t-SNE of both encoders' context vectors, coloured by motion type
     (the first action of a procedural sample, else the first word after "a person")."""
-    from motionlang.evaluation.context_tsne import l2m_contexts, m2l_contexts, plot_context_tsne
 
     def label(i):
         prims = records[i].meta.get("primitives")

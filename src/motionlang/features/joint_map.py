@@ -41,7 +41,9 @@ from pathlib import Path
 import numpy as np
 
 from motionlang.errors import MotionlangError, SkeletonError
+from motionlang.features.rig_auto import ABOUT, auto_map
 from motionlang.features.rig_maps import RIG_MAPS, SMPL_JOINT_NAMES, RigMap, Spec
+from motionlang.formats import read_joint_map  # the one reader of the file
 from motionlang.kinematics.motion import Motion
 from motionlang.kinematics.skeleton import Skeleton
 from motionlang.utils.sidecar import check_name
@@ -181,7 +183,6 @@ def match_rig(skeleton: Skeleton, map_name: str | None = None,
     if map_name is not None:
         raise SkeletonError(f"skeleton {label!r} cannot be mapped to the 21 KIT joints with "
                             f"map {map_name!r}: it lacks {_listed(missing)}; {HINT}")
-    from motionlang.features.rig_auto import ABOUT, auto_map
     auto = auto_map(skeleton)
     if auto.confident:
         W, missing, sources = _resolve(names, {k: f.spec for k, f in auto.joints.items()})
@@ -283,7 +284,6 @@ def check_joint_map(d, where: str = "joint map") -> dict:
 
 def load_joint_map(path: str | Path) -> dict:
     """Read and check a joint map JSON file (see the module docstring)."""
-    from motionlang.formats import read_joint_map  # the one reader of the file
     path = Path(path)
     d = read_joint_map(path)
     d = {**d, "name": d.get("name") or path.stem, "source": str(path)}

@@ -23,8 +23,16 @@ from __future__ import annotations
 from pathlib import Path
 
 from motionlang.errors import MotionFormatError, SkeletonError
+from motionlang.formats.asf_amc import read_amc, read_asf, write_amc
+from motionlang.formats.bvh import read_bvh, write_bvh
+from motionlang.formats.deepmimic import looks_like_deepmimic, read_deepmimic
+from motionlang.formats.gltf import write_gltf
+from motionlang.formats.mit import read_mit
+from motionlang.formats.mmm import read_mmm, write_mmm
+from motionlang.formats.units import motion_stature, unit_name
 from motionlang.kinematics.motion import Motion
 from motionlang.kinematics.skeleton import Skeleton
+from motionlang.utils.sidecar import load_json
 
 READ_EXTENSIONS = (".xml", ".bvh", ".amc", ".mat")
 #: extensions read when the content is a motion's: DeepMimic clips are ``.txt`` files
@@ -60,7 +68,6 @@ def is_motion_file(path: str | Path) -> bool:
     ext = Path(path).suffix.lower()
     if ext in READ_EXTENSIONS:
         return True
-    from motionlang.formats.deepmimic import looks_like_deepmimic
     return ext in CONTENT_EXTENSIONS and looks_like_deepmimic(path)
 
 
@@ -72,7 +79,6 @@ def read_joint_map(path: str | Path) -> dict:
         MotionlangError: the file is missing, not a regular file, too big, not JSON
             within the bounds of :mod:`motionlang.utils.sidecar`, or not a JSON object.
     """
-    from motionlang.utils.sidecar import load_json
 
     path = Path(path)
     spec = load_json(path, "joint map")   # a regular file, bounded; one line naming it
@@ -120,27 +126,22 @@ def read_motion(path: str | Path, *, skeleton: Skeleton | str | Path | None = No
         raise MotionFormatError(path, "not a regular file (a FIFO, device or socket)"
                                 if path.exists() else "file not found")
     if ext == ".amc":
-        from motionlang.formats.asf_amc import read_amc, read_asf
         if skeleton is None:
             skeleton = find_asf(path)
         if not isinstance(skeleton, Skeleton):
             skeleton = read_asf(skeleton)
         return read_amc(path, skeleton, fps=120.0 if fps is None else fps)
     if ext == ".bvh":
-        from motionlang.formats.bvh import read_bvh
         motion = read_bvh(path)
     elif ext == ".txt":
-        from motionlang.formats.deepmimic import read_deepmimic
         motion = read_deepmimic(path)
     elif ext == ".mat":
-        from motionlang.formats.mit import read_mit
         motions = read_mit(path)
         if not 1 <= sequence <= len(motions):
             raise MotionFormatError(path, f"no sequence {sequence}: the file holds "
                                           f"{len(motions)} (1..{len(motions)})")
         motion = motions[sequence - 1]
     else:
-        from motionlang.formats.mmm import read_mmm  # imported lazily: a sibling module
         motion = read_mmm(path)
     if fps is not None and abs(fps - motion.fps) > 1e-9:
         motion = motion.resample(fps)
@@ -160,19 +161,15 @@ def write_motion(motion: Motion, path: str | Path) -> Path:
     ext = path.suffix.lower()
     try:
         if ext == ".bvh":
-            from motionlang.formats.bvh import write_bvh
             write_bvh(motion, path)
         elif ext in (".glb", ".gltf"):
-            from motionlang.formats.gltf import write_gltf
             write_gltf(motion, path)
         elif ext == ".amc":
-            from motionlang.formats.asf_amc import write_amc
             write_amc(motion, path)
         elif ext == ".xml":
             if not str(motion.skeleton.name).startswith("mmm"):
                 raise MotionFormatError(path, f"MMM XML needs an MMM skeleton, not "
                                               f"{motion.skeleton.name!r}; write .bvh instead")
-            from motionlang.formats.mmm import write_mmm
             write_mmm(motion, path)
         else:
             raise MotionFormatError(path, f"cannot write {ext or '(no extension)'!r}; "
@@ -194,7 +191,6 @@ def motion_info(motion: Motion) -> dict:
     for MMM, ``"1/0.45 inch"`` for a CMU ASF), ``stature_m`` (the body's stature in metres,
     :func:`motionlang.formats.units.estimate_stature`).
     """
-    from motionlang.formats.units import motion_stature, unit_name
 
     sk = motion.skeleton
     moving = [j.name for j in sk.joints if len(j.dof_names)]

@@ -44,7 +44,6 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-from scipy.spatial.transform import Rotation, Slerp
 
 from motionlang.errors import MotionFormatError, MotionlangError
 from motionlang.kinematics.motion import Motion
@@ -258,6 +257,9 @@ def _retime(X: np.ndarray, fps: float, path: Path) -> np.ndarray:
     out[:, 0] = 1.0 / fps
     for c in range(1, 4):
         out[:, c] = np.interp(grid, times, X[:, c])
+    # scipy.spatial loads in a few tenths of a second, which every command would pay
+    # (formats is read by all of them) and only a DeepMimic clip needs
+    from scipy.spatial.transform import Rotation, Slerp
     for cols in COLUMNS.values():
         if cols.stop - cols.start == 1:
             out[:, cols.start] = np.interp(grid, times, X[:, cols.start])
@@ -270,6 +272,7 @@ def _retime(X: np.ndarray, fps: float, path: Path) -> np.ndarray:
 def quat_matrix(q: np.ndarray) -> np.ndarray:
     """Quaternions (..., 4) in DeepMimic's (w, x, y, z) order, normalised -> rotation
     matrices (..., 3, 3)."""
+    from scipy.spatial.transform import Rotation  # only for a DeepMimic clip, as above
     q = np.asarray(q, dtype=float)
     flat = q.reshape(-1, 4)[:, [1, 2, 3, 0]]
     return Rotation.from_quat(flat).as_matrix().reshape(q.shape[:-1] + (3, 3))

@@ -31,6 +31,7 @@ import numpy as np
 
 from motionlang.errors import MotionFormatError
 from motionlang.kinematics.motion import Motion
+from motionlang.utils.atomic import atomic_path
 
 GLTF_EXTENSIONS = (".glb", ".gltf")
 #: glTF component types and accessor kinds used here (glTF 2.0 spec, "Accessors")
@@ -233,7 +234,6 @@ def write_gltf(motion: Motion, path: str | Path, *, mesh: bool = True) -> Path:
     except ImportError:
         raise MotionFormatError(path, "writing glTF needs pygltflib: pip install "
                                       "'motionlang[export]'") from None
-    from motionlang.utils.atomic import atomic_path
 
     gltf, data = gltf_document(motion, mesh=mesh)
     if ext == ".glb":

@@ -30,8 +30,13 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from motionlang.datasets.cache import cached
+from motionlang.datasets.custom import read_captions
 from motionlang.datasets.text import normalize
 from motionlang.errors import DatasetError, MotionlangError
+from motionlang.library.embedder import default_model, joint_kinds
+from motionlang.models.registry import PACKAGED
+from motionlang.utils.progress import progress
 
 if TYPE_CHECKING:
     from motionlang.library.embedder import Embedder
@@ -64,7 +69,6 @@ def read_bank(path: str | Path) -> list[str]:
         raise DatasetError(f"{path}: sentence bank not found")
     ext = path.suffix.lower()
     if ext in (".csv", ".jsonl"):
-        from motionlang.datasets.custom import read_captions
         sentences = [text for _, _, text in read_captions(path)]
     else:
         try:
@@ -92,8 +96,6 @@ def default_bank_model() -> str:
     """The packaged model a bank is embedded with when none is named: the index's default
     (``library.embedder``) where it is installed, else the first packaged model that encodes
     both sentences and motions."""
-    from motionlang.library.embedder import default_model, joint_kinds
-    from motionlang.models.registry import PACKAGED
     try:
         return default_model()
     except MotionlangError:
@@ -130,8 +132,6 @@ def embed_bank(embedder: Embedder, sentences: list[str], *,
     """Embed ``sentences`` with a joint text-motion model (``library.embedder``). The
     vectors are cached (``datasets.cache``) under the model's digest and the sentences', so
     that a bank is embedded once per model, not once per run."""
-    from motionlang.datasets.cache import cached
-    from motionlang.utils.progress import progress
 
     def compute() -> dict[str, np.ndarray]:
         bar = progress(sentences, desc="bank", unit="sentences",

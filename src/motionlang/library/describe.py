@@ -26,10 +26,18 @@ from typing import Any
 
 from motionlang.analysis import analyse
 from motionlang.errors import MotionlangError
-from motionlang.library.bank import SentenceBank
+from motionlang.features.joint_map import match_rig
+from motionlang.formats import read_motion
+from motionlang.library.bank import SentenceBank, default_bank_model, embed_bank, read_bank
+from motionlang.library.embedder import Embedder
 from motionlang.library.options import DescribeOptions
+from motionlang.library.scan import motion_files
 from motionlang.library.timeline import Segment, merge_windows
 from motionlang.library.windows import Window, cut, motion_windows, span
+from motionlang.models.registry import describer as family_describer
+from motionlang.models.registry import kinds_with, load_model, resolve
+from motionlang.utils.atomic import atomic_write
+from motionlang.utils.progress import progress
 
 
 @dataclass(frozen=True)
@@ -44,7 +52,6 @@ class ReadOptions:
     joint_map: dict | str | Path | None = None
 
     def read(self, path: Path):
-        from motionlang.formats import read_motion
         ext = path.suffix.lower()
         kw: dict[str, Any] = {"skeleton": self.skeleton, "fps": self.fps} if ext == ".amc" \
             else {"sequence": self.sequence} if ext == ".mat" else {}
@@ -52,7 +59,6 @@ class ReadOptions:
         if self.fps is not None and ext != ".amc":   # the file's own rate is wrong
             motion = motion.replace(fps=self.fps)
         if self.joint_map is not None:   # a map that does not fit this rig: this file's error
-            from motionlang.features.joint_map import match_rig
             match_rig(motion.skeleton, joint_map=motion.meta["joint_map"])
         return motion
 
@@ -62,11 +68,8 @@ def load_describer_model(model: Any, options: DescribeOptions) -> tuple[Any, Pat
     name, a file, a run folder; None: the packaged m2l) of a kind that describes; with one,
     an ``Embedder`` (``library.embedder``) of a model that encodes sentences and motions
     (None: ``bank.default_bank_model``)."""
-    from motionlang.models.registry import kinds_with, load_model, resolve
     named = model is None or isinstance(model, (str, Path))
     if options.bank:
-        from motionlang.library.bank import default_bank_model
-        from motionlang.library.embedder import Embedder
         name = default_bank_model() if model is None else model
         return Embedder.load(name), resolve(name) if named else None
     if not named:
@@ -113,8 +116,7 @@ class Describer:
         o = self.options
         if self.bank is not None:
             return self.bank.nearest(self.model.motion(motion), o.width)
-        from motionlang.models.registry import describer
-        return describer(self.model)(self.model, motion, width=o.width,
+        return family_describer(self.model)(self.model, motion, width=o.width,
                                      length_penalty=o.length_penalty, rank=o.rank,
                                      grounded=not o.raw)
 
@@ -168,7 +170,6 @@ class Describer:
 
 def _bank(embedder: Any, options: DescribeOptions,
           show_progress: bool | None) -> SentenceBank | None:
-    from motionlang.library.bank import embed_bank, read_bank
     if not options.bank:
         return None
     return embed_bank(embedder, read_bank(options.bank), show_progress=show_progress)
@@ -243,7 +244,6 @@ def _start_worker(model_file: Path | None, describer_: Describer, threads: int) 
     import torch
     torch.set_num_threads(threads)
     if model_file is not None:
-        from motionlang.models.registry import load_model
         describer_.attach(load_model(model_file))
     _WORKER = describer_
 
@@ -265,7 +265,6 @@ class DescribeRun:
                 files: Sequence[Path] | None = None) -> Iterator[dict]:
         """One record per file (``files``, default all), in order; ``options.workers``
         processes (at most the CPU count and the files), each loading the model once."""
-        from motionlang.utils.progress import progress
         d = self.describer
         files = list(self.files if files is None else files)
         workers = max(1, min(d.options.workers, os.cpu_count() or 1, len(files)))
@@ -313,7 +312,6 @@ class DescribeRun:
         """Write the records as JSON lines to ``out``: as it goes into ``OUT.partial`` (an
         interrupted run, a killed worker, loses nothing; the same command goes on from
         there), then ``out`` at once when every file is done; returns (records, errors)."""
-        from motionlang.utils.atomic import atomic_write
         out = Path(out)
         partial = out.with_name(out.name + ".partial")
         done = _done_before(partial, self.header())
@@ -367,7 +365,6 @@ def motion_paths(inputs: Iterable[str | Path]) -> list[Path]:
     Raises:
         MotionlangError: an input that does not exist, or no motion file at all.
     """
-    from motionlang.library.scan import motion_files
     out: dict[Path, None] = {}
     given = [Path(p) for p in inputs]
     for path in given:

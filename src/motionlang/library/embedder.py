@@ -16,8 +16,11 @@ from typing import Any
 
 import numpy as np
 
+from motionlang.datasets.download import sha256_file
 from motionlang.errors import MotionlangError
 from motionlang.kinematics.motion import Motion
+from motionlang.models.family import load_object
+from motionlang.models.registry import PACKAGED, families, kinds_with, load_model, resolve
 
 #: the packaged model an index uses when none is named, where the installation has it
 DEFAULT_MODEL = "retrieval"
@@ -25,7 +28,6 @@ DEFAULT_MODEL = "retrieval"
 
 def joint_kinds() -> tuple[str, ...]:
     """The model kinds whose family encodes both sentences and motions."""
-    from motionlang.models.registry import kinds_with
     motion = set(kinds_with("encodes_motion"))
     return tuple(k for k in kinds_with("encodes_text") if k in motion)
 
@@ -36,7 +38,6 @@ def default_model() -> str:
     Raises:
         MotionlangError: it is not; the message says which models to name instead.
     """
-    from motionlang.models.registry import PACKAGED
     p = PACKAGED.get(DEFAULT_MODEL)
     if p is not None and p.path.is_file():
         return DEFAULT_MODEL
@@ -92,8 +93,6 @@ class Embedder:
         Raises:
             MotionlangError: its family does not encode both sentences and motions.
         """
-        from motionlang.models.family import load_object
-        from motionlang.models.registry import families
         kind = getattr(model, "kind", None)
         fam = families().get(kind) if isinstance(kind, str) else None
         if fam is None or fam.encodes_text is None or fam.encodes_motion is None:
@@ -114,8 +113,6 @@ class Embedder:
         if isinstance(model, Embedder):
             return model
         if model is None or isinstance(model, (str, Path)):
-            from motionlang.datasets.download import sha256_file
-            from motionlang.models.registry import PACKAGED, load_model, resolve
             name = str(model or default_model())
             loaded = load_model(name, kind=joint_kinds() or None)
             path = resolve(name)

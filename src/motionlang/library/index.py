@@ -27,9 +27,11 @@ from motionlang.errors import MotionlangError
 from motionlang.library.embedder import Embedder
 from motionlang.library.grounded import take_findings
 from motionlang.library.options import IndexOptions, shard_of
+from motionlang.library.ray_engine import embedded_on_ray
 from motionlang.library.scan import file_facts, motion_files, read_takes, reason, rig_of
 from motionlang.library.store import Entry, Failure, IndexData, load_index, save_index
 from motionlang.library.windows import motion_windows, span
+from motionlang.utils.progress import progress
 
 
 @dataclass
@@ -200,7 +202,6 @@ def build_index(folder: str | Path, out: str | Path, model: Any = None,
             sides, or an existing index of another model or other windows (without
             ``rebuild``); never for a file of the folder, which is listed and skipped.
     """
-    from motionlang.utils.progress import progress
     t0 = time.perf_counter()
     opts = IndexOptions(**options)
     root, out = Path(folder).resolve(), Path(out)
@@ -234,7 +235,6 @@ def build_index(folder: str | Path, out: str | Path, model: Any = None,
             else:
                 todo.append(_Job(at, path, rel, facts, opts.window, opts.hop))
         if opts.engine == "ray":
-            from motionlang.library.ray_engine import embedded_on_ray
             sent = model if isinstance(model, (str, Path)) or model is None else embedder
             done = embedded_on_ray(todo, sent, opts.workers, embed_file) if todo else iter(())
         else:

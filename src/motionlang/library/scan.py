@@ -16,7 +16,9 @@ from pathlib import Path
 
 from motionlang.datasets.download import sha256_file
 from motionlang.errors import MotionlangError
+from motionlang.features.joint_map import match_rig
 from motionlang.formats import READ_EXTENSIONS, find_asf, is_motion_file, read_motion
+from motionlang.formats.mit import read_mit
 from motionlang.kinematics.motion import Motion
 
 
@@ -105,7 +107,6 @@ def read_takes(path: Path) -> list[Motion]:
         MotionlangError: the reader's one-line reason.
     """
     if path.suffix.lower() == ".mat":
-        from motionlang.formats.mit import read_mit
         return read_mit(path)
     return [read_motion(path)]
 
@@ -117,7 +118,6 @@ def rig_of(motion: Motion) -> dict:
     Raises:
         MotionlangError: no map fits the rig (the reason names its unmatched joints).
     """
-    from motionlang.features.joint_map import match_rig
     match = match_rig(motion.skeleton, joint_map=motion.meta.get("joint_map"))
     return {"joints": len(motion.skeleton), "map": match.name}
 

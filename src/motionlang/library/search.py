@@ -39,6 +39,8 @@ from motionlang.library.grounded import (
     where_actions,
 )
 from motionlang.library.options import BACKENDS, SearchOptions
+from motionlang.library.scan import read_takes
+from motionlang.library.sheet import contact_sheet
 from motionlang.library.store import IndexData, load_index
 
 #: windows from which faiss, when installed, is used instead of numpy (exact both)
@@ -316,7 +318,6 @@ class Library:
     def take_named(self, name: str):
         """The motion of the take ``name`` (as hits name it), read again from the indexed
         folder."""
-        from motionlang.library.scan import read_takes
         entry = next((e for e in self.data.entries if e.name == name), None)
         if entry is None:
             raise MotionlangError(f"{self.where}: no take {name!r}")
@@ -342,7 +343,6 @@ def search(query: str, index: str | Path | Library, k: int | None = None, *,
     lib = index if isinstance(index, Library) else Library.open(index, model)
     hits = lib.search(query, k, **options)
     if render is not None:
-        from motionlang.library.sheet import contact_sheet
         contact_sheet([(f"{h.file}  {h.start:.1f}-{h.end:.1f} s  ({h.why or f'{h.score:.3f}'})",
                         lib.take(h).between(h.start, h.end)) for h in hits], render,
                       title=f'"{query}"')

@@ -10,7 +10,9 @@ import tempfile
 from pathlib import Path
 
 from motionlang.errors import MotionlangError
+from motionlang.features.body21 import body21
 from motionlang.kinematics.motion import Motion
+from motionlang.rendering.scene import kit21_scene
 from motionlang.utils.atomic import atomic_path
 
 DPI = 100.0
@@ -27,9 +29,7 @@ def contact_sheet(items: list[tuple[str, Motion]], path: str | Path, *, poses: i
     """
     from matplotlib.image import imread
 
-    from motionlang.features.body21 import body21
     from motionlang.rendering.draw import new_figure
-    from motionlang.rendering.scene import kit21_scene
     from motionlang.rendering.strip import render_strip
     path = Path(path)
     if path.suffix.lower() != ".png":

@@ -25,7 +25,9 @@ from typing import Any, ClassVar, cast
 import numpy as np
 import torch
 
+from motionlang.datasets.text import Vocabulary
 from motionlang.errors import MotionlangError
+from motionlang.features.base import features_from_dict
 from motionlang.models.schema import check_config, check_entries, wrap
 from motionlang.models.versions import (
     DAMAGE,
@@ -67,7 +69,6 @@ def unpack_vocab(d: dict | None) -> Any:
     if d is None:
         return None
     if d["type"] == "Vocabulary":
-        from motionlang.datasets.text import Vocabulary
         return Vocabulary.from_dict(d["data"])
     return list(d["data"])
 
@@ -103,7 +104,6 @@ def pack_features(features: Any) -> dict | None:
 def unpack_features(d: dict | None) -> Any:
     if d is None:
         return None
-    from motionlang.features.base import features_from_dict
     return features_from_dict(d)
 
 

@@ -14,7 +14,9 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
+from motionlang.datasets.text import tokenize
 from motionlang.errors import MotionlangError
+from motionlang.features.positions import PositionFeatures, PositionsConfig
 
 Spans = list[tuple[float, float | None]]
 
@@ -104,8 +106,6 @@ def fill_between(t2m: Any, text: str, keep: Any, read: Callable[[Any], Any], *,
         MotionlangError: a model that cannot fill in, a sentence without words, spans that
             keep nothing or everything.
     """
-    from motionlang.datasets.text import tokenize
-    from motionlang.features.positions import PositionFeatures, PositionsConfig
     source, spans = parse_keep(keep)   # a malformed --keep first, before any file is read
     model = t2m.model
     if not isinstance(model, Inbetweening):

@@ -16,6 +16,8 @@ from pathlib import Path
 from typing import Any
 
 from motionlang.errors import MotionlangError
+from motionlang.models.family import load_object
+from motionlang.models.registry import families
 
 _TRUE = {"1", "true", "yes", "on"}
 _FALSE = {"0", "false", "no", "off"}
@@ -146,8 +148,6 @@ def options_help() -> str:
     """Each text-to-motion kind and its options with their defaults (and choices), from its
     ``Options`` dataclass: ``l2m: method (sample|beam|mean, default none), width (default
     1), ...; twostream: none``. Imports the families' adapters (torch)."""
-    from motionlang.models.family import load_object
-    from motionlang.models.registry import families
     parts = []
     for kind, fam in families().items():
         if fam.text_to_motion is None:

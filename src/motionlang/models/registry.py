@@ -25,6 +25,7 @@ from typing import Any
 
 from motionlang.errors import MotionlangError
 from motionlang.models.family import Family, ModelClass, load_object
+from motionlang.utils.sidecar import parse_json
 
 PACKAGE_DIR = Path(__file__).resolve().parents[1] / "data" / "models"
 
@@ -247,7 +248,6 @@ def _npz_kind(path: Path) -> str:
 
     import numpy as np
 
-    from motionlang.utils.sidecar import parse_json
     try:
         with np.load(path, allow_pickle=False) as z:
             if "kind" in z.files:

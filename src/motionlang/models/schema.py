@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from motionlang.errors import MotionlangError
-from motionlang.models.versions import damaged
+from motionlang.models.versions import DAMAGE, damaged
 
 
 @dataclasses.dataclass(frozen=True)
@@ -211,7 +211,6 @@ def check_array(path: str | Path, kind: str, name: str, shape: tuple[int, ...],
 
 def wrap(path: str | Path, kind: str, build: Callable[[], Any]) -> Any:
     """``build()``, any failure of a file that passed the schema still one line."""
-    from motionlang.models.versions import DAMAGE
     try:
         return build()
     except (*DAMAGE, MotionlangError, AssertionError, MemoryError) as exc:

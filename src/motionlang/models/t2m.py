@@ -23,8 +23,14 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
+from motionlang.datasets.text import tokenize
 from motionlang.errors import MotionlangError
-from motionlang.features.positions import PositionsConfig
+from motionlang.features.foot_lock import lock_feet
+from motionlang.features.positions import PositionsConfig, join_global, split_global
+from motionlang.models.family import load_object
+from motionlang.models.options import build_options
+from motionlang.models.registry import families, kinds_with
+from motionlang.models.word_map import WordMapper, WordOptions, WordReading
 
 #: frame rate of the comparison: the positions features' rate
 FPS = PositionsConfig.fps
@@ -115,7 +121,6 @@ class NoOptions:
 
 
 def _check_words(sentence: str) -> None:
-    from motionlang.datasets.text import tokenize
     if not tokenize(sentence):
         raise MotionlangError(f"text {sentence!r} has no words to generate a motion from")
 
@@ -143,7 +148,6 @@ class Text2MotionAdapter:
     def configure(self, options: Any) -> Text2MotionAdapter:
         """Set the sampling options: an ``Options`` instance or a dict of values (text
         from ``--model NAME:key=value`` or Python values), checked once here."""
-        from motionlang.models.options import build_options
         if not isinstance(options, self.Options):
             where = f"model {getattr(self.model, 'kind', type(self.model).__name__)}"
             options = build_options(self.Options, options, where)
@@ -198,8 +202,6 @@ class Text2MotionAdapter:
     def read_words(self, sentence: str) -> Any:
         """How the model reads ``sentence`` (``models.word_map.WordReading``; ``.text`` is
         what it decodes): with ``map_words`` on (``WordOptions``), unknown words as known."""
-        from motionlang.datasets.text import tokenize
-        from motionlang.models.word_map import WordMapper, WordOptions, WordReading
         unknown = self._unknown_words(sentence)
         if not (unknown and isinstance(self.options, WordOptions) and self.options.map_words):
             return WordReading(sentence, (), tuple(unknown))
@@ -215,7 +217,6 @@ class Text2MotionAdapter:
         vocab = getattr(self.model, "vocab", None)
         if vocab is None or not hasattr(vocab, "__contains__"):
             return []   # a pretrained text encoder reads any word
-        from motionlang.datasets.text import tokenize
         return list(dict.fromkeys(w for w in tokenize(sentence) if w not in vocab))
 
     def hypotheses(self, sentence: str, *, max_frames: int | None = None,
@@ -228,7 +229,6 @@ class Text2MotionAdapter:
         hyps = self._hypotheses(self.read_words(sentence).text, max_frames=max_frames, **kw)
         if not foot_lock:
             return hyps
-        from motionlang.features.foot_lock import lock_feet
         return [(lock_feet(r, self.fps) if isinstance(r, np.ndarray) else r, s)
                 for r, s in hyps]
 
@@ -240,7 +240,6 @@ class Text2MotionAdapter:
         p = self._positions21(self.read_words(sentence).text, n_frames, **kw)
         if not foot_lock:
             return p
-        from motionlang.features.foot_lock import lock_feet
         return lock_feet(p, FPS)
 
     def _hypotheses(self, sentence: str, *, max_frames: int | None = None, **kw
@@ -270,8 +269,6 @@ def text_to_motion(model, options: Any = None) -> Any:
         MotionlangError: a model that does not turn text into motion (an M2L, a CRBM), or
             options it does not take.
     """
-    from motionlang.models.family import load_object
-    from motionlang.models.registry import families, kinds_with
     if isinstance(model, TextToMotion):
         return model if options is None else model.configure(options)
     kind = getattr(model, "kind", None)
@@ -351,7 +348,6 @@ def generate_any(model, sentence: str, *, max_frames: int | None = None, **kw
 def anchor(p21: np.ndarray) -> np.ndarray:
     """Global (T, 21, 3) -> the same motion moved so that frame 0's root is above the
     origin and faces +Z (the start of every generated motion)."""
-    from motionlang.features.positions import join_global, split_global
     local, v, dyaw, _ = split_global(np.asarray(p21, dtype=np.float64))
     return join_global(local, v, dyaw)
 

@@ -13,7 +13,20 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from motionlang.datasets.sources import LICENCE_FILE, parse_source
 from motionlang.errors import MotionlangError
+from motionlang.models.family import load_object
+from motionlang.models.registry import family, kinds_with
+from motionlang.training.config import TrainConfig
+from motionlang.training.run_guard import (
+    check_identity,
+    check_run_folder,
+    clear_run,
+    run_identity,
+    write_identity,
+)
+from motionlang.training.run_log import lead_process
+from motionlang.utils.folder_lock import folder_lock
 
 
 @dataclass(frozen=True)
@@ -68,8 +81,6 @@ class Recipe:
 
 def recipe_of(kind: str) -> Recipe:
     """The recipe of a trainable kind (``Family.recipe``)."""
-    from motionlang.models.family import load_object
-    from motionlang.models.registry import family, kinds_with
     fam = family(kind)
     if fam.recipe is None:
         raise MotionlangError(f"no training recipe for {kind} models (trainable: "
@@ -83,8 +94,6 @@ def split_options(kind: str, options: dict[str, Any]) -> tuple[dict, dict, dict]
     Raises:
         MotionlangError: a key that none of the three configs has.
     """
-    from motionlang.models.registry import family
-    from motionlang.training.config import TrainConfig
     recipe = recipe_of(kind)
     model_cls = family(kind).config_class()
     names = [set() if c is None else {f.name for f in dataclasses.fields(c)}
@@ -110,8 +119,6 @@ def train(kind: str, data: str | Path | Sequence[str | Path], out: str | Path, *
     (``enc_hidden=32``, ``epochs=2``, ``features="positions"``). ``out`` must be new or
     empty unless ``resume`` (continue the run there) or ``overwrite`` (replace it):
     :func:`run_recipe`. Returns the trained model's path."""
-    from motionlang.datasets.sources import parse_source
-    from motionlang.training.config import TrainConfig
     recipe = recipe_of(kind)
     model_kw, train_kw, data_kw = split_options(kind, options)
     given = [data] if isinstance(data, (str, Path)) else list(data)
@@ -144,17 +151,6 @@ def run_recipe(kind: str, sources: Sequence, out: Path, model_cfg: dict, train_c
     others write nothing)."""
     import dataclasses
 
-    from motionlang.datasets.sources import LICENCE_FILE
-    from motionlang.models.registry import family
-    from motionlang.training.run_guard import (
-        check_identity,
-        check_run_folder,
-        clear_run,
-        run_identity,
-        write_identity,
-    )
-    from motionlang.training.run_log import lead_process
-    from motionlang.utils.folder_lock import folder_lock
     recipe = recipe_of(kind)
 
     def go() -> Path:

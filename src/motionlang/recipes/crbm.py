@@ -17,9 +17,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from motionlang.datasets.cmu35 import load_cmu35, model_frames
 from motionlang.errors import MotionlangError
 from motionlang.models.crbm.config import SELECTED, CRBMConfig
+from motionlang.models.crbm.model import CRBM as CRBMModel
+from motionlang.models.crbm.stack import CRBMStack
+from motionlang.models.registry import family
 from motionlang.recipes import Recipe
+from motionlang.training.run_log import log_command
 
 #: the two-level model of ``level2``, beside the run folder's model.npz
 STACK_FILE = "stack.npz"
@@ -76,10 +81,6 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
         MotionlangError: ``resume`` (a CRBM run cannot be resumed), not one folder, a bad
             config value, unreadable data.
     """
-    from motionlang.datasets.cmu35 import load_cmu35, model_frames
-    from motionlang.models.crbm.model import CRBM
-    from motionlang.models.registry import family
-    from motionlang.training.run_log import log_command
 
     if resume:
         raise MotionlangError("a CRBM run cannot be resumed: train it again")
@@ -98,12 +99,11 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
     log_command(out / "commands.jsonl", options if options is not None else
                 {"model": "crbm", "data": str(sources[0]), **dataclasses.asdict(config),
                  **vars(data_cfg)})
-    model = CRBM(config, 59).fit(seqs, show_progress=not data_cfg.quiet)
+    model = CRBMModel(config, 59).fit(seqs, show_progress=not data_cfg.quiet)
     path = out / family("crbm").model_file
     model.save(path)
     print(f"{path}: {model.describe()}")
     if data_cfg.level2:
-        from motionlang.models.crbm.stack import CRBMStack
         stack = CRBMStack.fit(model, seqs, config2, show_progress=not data_cfg.quiet)
         stack.save(out / STACK_FILE)
         print(f"{out / STACK_FILE}: two-level model, level 2 {stack.level2.describe()}")

@@ -17,8 +17,15 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from motionlang.datasets.evaluator_items import build_evaluator_data
 from motionlang.errors import MotionlangError
+from motionlang.evaluation.t2m.yardstick import r_precision_miss
+from motionlang.features.h3d_vectors import H3D_BODIES
+from motionlang.models.evaluator.config import EvaluatorConfig
+from motionlang.models.registry import family
 from motionlang.recipes import Recipe
+from motionlang.training.run_guard import keep_splits
+from motionlang.training.run_log import lead_process, log_command, write_licence
 from motionlang.utils.checks import check_numbers
 
 #: the HumanML3D bodies the rows can be made on (``features.h3d_vectors.H3D_BODIES``)
@@ -55,8 +62,6 @@ class EvaluatorDataOptions:
 def model_config(model_cfg: dict[str, Any], body: str):
     """The ``EvaluatorConfig`` of the user's fields on ``body``'s rows (the 4 foot-contact
     columns left out, as the public evaluator), checked by the config itself."""
-    from motionlang.features.h3d_vectors import H3D_BODIES
-    from motionlang.models.evaluator.config import EvaluatorConfig
     given = [k for k in FROM_DATA if k in model_cfg]
     if given:
         raise MotionlangError(f"train evaluator: {', '.join(given)} come from the data, not "
@@ -99,13 +104,8 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg,
     """
     import torch
 
-    from motionlang.datasets.evaluator_items import build_evaluator_data
-    from motionlang.evaluation.t2m.yardstick import r_precision_miss
     from motionlang.models.evaluator.model import TextMotionEvaluator
-    from motionlang.models.registry import family
     from motionlang.recipes.evaluator_train import train_evaluator
-    from motionlang.training.run_guard import keep_splits
-    from motionlang.training.run_log import lead_process, log_command, write_licence
 
     if len(sources) != 1:
         raise MotionlangError(f"train evaluator reads one dataset, got {len(sources)}")

@@ -17,9 +17,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, cast
 
-from motionlang.datasets.sources import LICENCE_FILE, DataSource, licence_text
+from motionlang.datasets.sources import LICENCE_FILE, DataSource, licence_text, parse_source
 from motionlang.errors import MotionlangError
+from motionlang.models.judge.config import JudgeConfig
+from motionlang.models.registry import family
 from motionlang.recipes import Recipe
+from motionlang.training.run_log import lead_process, log_command, write_licence
 
 if TYPE_CHECKING:
     from motionlang.models.judge.fit import JudgeItem
@@ -56,7 +59,6 @@ class JudgeOptions:
 def check_model_options(model_cfg: dict[str, Any]) -> None:
     """The model options checked by :class:`JudgeConfig` itself, before any data is read;
     the label lists and the input size are the data's, not options."""
-    from motionlang.models.judge.config import JudgeConfig
     given = sorted(set(DATA_FIELDS) & set(model_cfg))
     if given:
         raise MotionlangError(f"train judge: {', '.join(given)} come from the training data, "
@@ -93,7 +95,6 @@ def train_on_items(train: Sequence[JudgeItem], val: Sequence[JudgeItem],
         new_judge,
     )
     from motionlang.models.judge.model import MotionJudge
-    from motionlang.training.run_log import lead_process
     from motionlang.training.trainer import Trainer
 
     if not train:
@@ -150,11 +151,8 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
     """
     import dataclasses
 
-    from motionlang.datasets.sources import parse_source
     from motionlang.models.judge.fit import accuracy, bandai_items, median_bones, primitive_items
-    from motionlang.models.registry import family
     from motionlang.training.run_files import check_resume
-    from motionlang.training.run_log import lead_process, log_command, write_licence
 
     if len(sources) != 1:
         raise MotionlangError(f"train judge reads one bandai:DIR source, got {len(sources)}")

@@ -24,8 +24,16 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from motionlang.datasets.mixing import source_weights
+from motionlang.datasets.position_items import build_twostream_data
+from motionlang.datasets.splits import save_splits
 from motionlang.errors import MotionlangError
+from motionlang.features.positions import local_joints
+from motionlang.models.masked.config import MaskedConfig
+from motionlang.models.registry import family
 from motionlang.recipes import Recipe
+from motionlang.recipes.seq2seq import mix_training
+from motionlang.training.run_log import lead_process, log_command, write_licence
 from motionlang.utils.checks import check_numbers
 
 if TYPE_CHECKING:
@@ -68,7 +76,6 @@ class MaskedTrainOptions:
 def model_config(model_cfg: dict[str, Any]) -> Any:
     """The ``MaskedConfig`` of the user's fields, checked before any data is read; the
     fields the data decides are refused."""
-    from motionlang.models.masked.config import MaskedConfig
     given = sorted(k for k in FROM_DATA if k in model_cfg)
     if given:
         raise MotionlangError(f"train masked: {', '.join(given)} come from the data, not "
@@ -92,7 +99,6 @@ def tokenizer_report(model: MaskedModel, rows: Sequence[np.ndarray]) -> dict[str
     fraction of its codes used and the perplexity of their use."""
     import numpy as np
 
-    from motionlang.features.positions import local_joints
     if model.features is None or model.features.normalizer is None:
         raise MotionlangError("tokenizer_report: the model has no fitted features")
     norm = model.features.normalizer
@@ -124,7 +130,6 @@ def _stage(model: MaskedModel, stage: str, train: list, val: list, cfg: TrainCon
     """Train one stage with the shared trainer into ``cfg.out_dir``; the model of its
     best epoch (the last one without validation items)."""
     from motionlang.models.masked.model import MaskedModel
-    from motionlang.training.run_log import lead_process
     from motionlang.training.trainer import Trainer
     model.set_stage(stage)
     clock = [time.perf_counter()]
@@ -160,11 +165,7 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
             sources only, unreadable data, no sentence encoder, no CUDA for ``cuda``.
     """
 
-    from motionlang.datasets.mixing import source_weights
-    from motionlang.datasets.position_items import build_twostream_data
-    from motionlang.datasets.splits import save_splits
     from motionlang.models.text_tokens import TransformerTokens
-    from motionlang.training.run_log import lead_process, log_command, write_licence
 
     out = Path(out_dir)
     data_cfg = data_cfg if data_cfg is not None else MaskedTrainOptions()
@@ -208,9 +209,6 @@ def train_stages(data: Any, text: Any, sources: Sequence, out: Path, config: Any
     import torch
 
     from motionlang.models.masked.model import MaskedModel
-    from motionlang.models.registry import family
-    from motionlang.recipes.seq2seq import mix_training
-    from motionlang.training.run_log import lead_process
 
     out = Path(out)
     lead = lead_process()

@@ -18,8 +18,17 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from motionlang.datasets.mixing import source_weights
+from motionlang.datasets.position_items import build_twostream_data
 from motionlang.errors import MotionlangError
+from motionlang.evaluation.metrics.t2m import hit_ranks
+from motionlang.evaluation.metrics.t2m import retrieval_scores as scores
+from motionlang.models.registry import family, load_model
+from motionlang.models.retrieval.config import RetrievalConfig
 from motionlang.recipes import Recipe
+from motionlang.recipes.seq2seq import mix_training
+from motionlang.training.run_guard import keep_splits
+from motionlang.training.run_log import lead_process, log_command, write_licence
 from motionlang.utils.checks import check_numbers
 from motionlang.utils.progress import progress
 
@@ -81,7 +90,6 @@ def renormalise(items: Sequence[dict], fitted: Any, to: Any) -> None:
 def model_config(model_cfg: dict[str, Any]) -> Any:
     """The ``RetrievalConfig`` of the user's fields (None: the default), checked before any
     data is read; the fields the data decides are refused."""
-    from motionlang.models.retrieval.config import RetrievalConfig
     given = sorted(k for k in FROM_DATA if k in model_cfg)
     if given:
         raise MotionlangError(f"train retrieval: {', '.join(given)} come from the data, not "
@@ -130,8 +138,6 @@ def scorer(items: Sequence[dict], holdout: bool = False
     among the same motions, under ``holdout/``."""
     import numpy as np
 
-    from motionlang.evaluation.metrics.t2m import hit_ranks
-    from motionlang.evaluation.metrics.t2m import retrieval_scores as scores
     captions, motions, hits = retrieval_set(items)
     held = np.array([holdout and uses_holdout(c) for c in captions], dtype=bool)
 
@@ -156,7 +162,6 @@ def train_on_items(train: Sequence[dict], val: Sequence[dict], model: RetrievalM
     with a held-out word where ``holdout``); without it the last epoch's weights are kept.
     ``log`` gets one line per epoch. Returns the model kept."""
     from motionlang.models.retrieval.model import RetrievalModel
-    from motionlang.training.run_log import lead_process
     from motionlang.training.trainer import Trainer
 
     measured: dict[str, float] = {}
@@ -206,15 +211,9 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
     """
     import torch
 
-    from motionlang.datasets.mixing import source_weights
-    from motionlang.datasets.position_items import build_twostream_data
-    from motionlang.models.registry import family
     from motionlang.models.retrieval.model import RetrievalModel
     from motionlang.models.retrieval.text import CHUNK, cache_file, sentence_vectors
-    from motionlang.recipes.seq2seq import mix_training
     from motionlang.training.run_files import check_resume
-    from motionlang.training.run_guard import keep_splits
-    from motionlang.training.run_log import lead_process, log_command, write_licence
 
     out = Path(out_dir)
     data_cfg = data_cfg if data_cfg is not None else RetrievalOptions()
@@ -224,7 +223,6 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
     source_weights(sources)   # all weighted or none
     init = None
     if data_cfg.init is not None:   # before any data is read: a wrong model is one line
-        from motionlang.models.registry import load_model
         init = load_model(data_cfg.init, kind="retrieval")
         config = init.config
     # before any data is read

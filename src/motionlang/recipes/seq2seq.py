@@ -14,8 +14,21 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from motionlang.datasets.mixing import mix_items, source_counts, source_weights
+from motionlang.datasets.seq2seq_pairs import (
+    balance_repeats,
+    build_pairs,
+    oversample,
+    sentence_lengths,
+)
+from motionlang.datasets.text import SPECIALS
 from motionlang.errors import MotionlangError
+from motionlang.features.frames import model_dim
+from motionlang.models.length import SentenceLength
+from motionlang.models.seq2seq.config import L2MConfig, M2LConfig
 from motionlang.recipes import Recipe
+from motionlang.training.run_guard import keep_splits
+from motionlang.training.run_log import log_command, write_licence
 from motionlang.utils.checks import check_numbers
 
 #: the root's ground velocity and heading change among the features
@@ -84,7 +97,6 @@ def root_loss_weights(features, weight: float, option: str = "--root-weight") ->
     """Per-feature factors: ``weight`` for the root's ground velocity and heading change
     (:data:`ROOT_MOTION`), 1 elsewhere, over the model's features (active flag excluded):
     NLL weights, and with weight 0 the input mask of ``hide_root_input``."""
-    from motionlang.features.frames import model_dim
     names = list(features.names)[:model_dim(features)]
     missing = [n for n in ROOT_MOTION if n not in names]
     if missing:
@@ -106,7 +118,6 @@ def mix_training(sources: Sequence, train_items: list[dict], source_of: dict[str
                  seed: int) -> list[dict]:
     """Several sources: the training items weighted by their ``@W`` (``mixing.mix_items``;
     unchanged without weights), with a line per dataset of its share of an epoch."""
-    from motionlang.datasets.mixing import mix_items, source_counts, source_weights
     if len(sources) < 2:
         return train_items
     n, weights = len(sources), source_weights(sources)
@@ -122,8 +133,6 @@ def mix_training(sources: Sequence, train_items: list[dict], source_of: dict[str
 
 def _config_check(kind: str, model_cfg: dict) -> None:
     """The model options checked by the config itself before any data is read."""
-    from motionlang.datasets.text import SPECIALS
-    from motionlang.models.seq2seq.config import L2MConfig, M2LConfig
     # the smallest sizes the data could give: one feature, the special tokens
     (M2LConfig if kind == "m2l" else L2MConfig)(1, len(SPECIALS), **model_cfg)
 
@@ -134,8 +143,6 @@ def new_model(kind: str, model_cfg: dict, data, data_cfg: Seq2SeqData, seed: int
     training pairs."""
     import torch
 
-    from motionlang.datasets.seq2seq_pairs import sentence_lengths
-    from motionlang.features.frames import model_dim
     torch.manual_seed(seed)
     F, V = model_dim(data.features), len(data.vocab)
     if kind == "m2l":
@@ -159,7 +166,6 @@ def new_model(kind: str, model_cfg: dict, data, data_cfg: Seq2SeqData, seed: int
                                        **{**model_cfg, **derived}),
                              data.vocab, features=data.features)
     if model.config.progress_input:   # it plans its length from the sentence
-        from motionlang.models.length import SentenceLength
         model.length_model = SentenceLength.fit(*sentence_lengths(data, "train"))
     return model
 
@@ -168,13 +174,8 @@ def run(kind: str, sources: Sequence, out: Path, model_cfg: dict, train_cfg,
         data_cfg: Seq2SeqData, *, resume: bool = False, options: dict | None = None) -> Path:
     """Train an M2L or L2M (``kind``) into the run folder ``out``; ``options``: what to
     log in ``commands.jsonl`` (default: the configs). Returns ``out/model.pt``."""
-    from motionlang.datasets.mixing import source_weights
-    from motionlang.datasets.seq2seq_pairs import balance_repeats, build_pairs, oversample
-    from motionlang.features.frames import model_dim
     from motionlang.training.collate import collate_pairs
     from motionlang.training.run_files import check_resume, check_resume_data
-    from motionlang.training.run_guard import keep_splits
-    from motionlang.training.run_log import log_command, write_licence
     from motionlang.training.trainer import Trainer
 
     out = Path(out)

@@ -21,9 +21,17 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from motionlang.datasets.mixing import source_weights
+from motionlang.datasets.position_items import build_twostream_data
 from motionlang.errors import MotionlangError
+from motionlang.evaluation.t2m.selection import format_scores, guo_selector
+from motionlang.models.length import SentenceLength
+from motionlang.models.registry import family
 from motionlang.models.twostream.config import ABLATIONS
 from motionlang.recipes import Recipe
+from motionlang.recipes.seq2seq import mix_training
+from motionlang.training.run_guard import keep_splits
+from motionlang.training.run_log import lead_process, log_command, write_licence
 from motionlang.utils.checks import check_numbers
 
 #: what a run folder holds besides the model and commands.jsonl
@@ -93,7 +101,6 @@ def model_config(model_cfg: dict[str, Any], ablation: str = "full") -> Any:
 def summary(path: Path, history: list[dict]) -> str:
     """One line for a finished run: the model file, its epoch (the selected one, with its
     validation scores, where epochs were scored; else the last) and losses."""
-    from motionlang.evaluation.t2m.selection import format_scores
     chosen = next((h for h in history if h.get("selected")), None)
     last = chosen or (history[-1] if history else {})
     scores = format_scores(last.get("val") or {})
@@ -144,18 +151,11 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg,
     import numpy as np
     import torch
 
-    from motionlang.datasets.mixing import source_weights
-    from motionlang.datasets.position_items import build_twostream_data
-    from motionlang.models.length import SentenceLength
-    from motionlang.models.registry import family
     from motionlang.models.twostream.model import TwoStreamModel
     from motionlang.models.twostream.sources import fit_source_output
     from motionlang.models.twostream.start import fit_start_pose
-    from motionlang.recipes.seq2seq import mix_training
     from motionlang.recipes.twostream_train import ForcingSchedule, train_twostream
     from motionlang.training.run_files import check_resume
-    from motionlang.training.run_guard import keep_splits
-    from motionlang.training.run_log import lead_process, log_command, write_licence
 
     out = Path(out_dir)
     data_cfg = data_cfg if data_cfg is not None else TwoStreamOptions()
@@ -167,7 +167,6 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg,
     select = None
     scored = selection_source(sources, data_cfg)
     if scored is not None:   # its evaluator and data read before the long data preparation
-        from motionlang.evaluation.t2m.selection import guo_selector
         select = guo_selector(data_cfg.select_evaluator, scored, pairs=data_cfg.select_pairs,
                               seed=train_cfg.seed, max_seconds=data_cfg.max_seconds)
     # one line per epoch from the trainer (the progress bar only shows on a terminal)

@@ -16,7 +16,11 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from motionlang.errors import MotionlangError
 from motionlang.models.twostream.config import ABLATIONS as ABLATIONS  # importable here
+from motionlang.models.twostream.config import TwoStreamConfig
+from motionlang.models.twostream.model import TwoStreamModel
+from motionlang.training.run_files import ranked_by, read_training_checkpoint
 from motionlang.training.trainer import TrainConfig, Trainer
 
 if TYPE_CHECKING:
@@ -63,8 +67,6 @@ class TwoStreamTrainer(Trainer):
 
 def make_config(ablation: str = "full", **fields):
     """A ``TwoStreamConfig`` with ``fields`` and the ablation's flags."""
-    from motionlang.errors import MotionlangError
-    from motionlang.models.twostream.config import TwoStreamConfig
     if ablation not in ABLATIONS:
         raise MotionlangError(f"unknown ablation {ablation!r}; choose from {sorted(ABLATIONS)}")
     return TwoStreamConfig(**{**fields, **ABLATIONS[ablation]})
@@ -91,7 +93,6 @@ def train_twostream(model, train_items: Sequence[dict], config: TrainConfig, *,
         (model, history) — history is a list of per-epoch dicts with a ``stage`` key; the
         selected epoch's also has ``"selected": True``.
     """
-    from motionlang.models.twostream.model import TwoStreamModel
 
     if first_frames is not None:
         model.set_rest_pose(first_frames)
@@ -124,7 +125,6 @@ def _load_selected(model, best: Path, key: str) -> int | None:
     warning, the final weights stay, and None."""
     import logging
 
-    from motionlang.training.run_files import ranked_by, read_training_checkpoint
     ck = read_training_checkpoint(best) if best.is_file() else None
     if ck is None or ranked_by(ck) != key:
         logging.getLogger(__name__).warning(
@@ -148,7 +148,6 @@ def refit_sentence_encoder(model, train_items: Sequence[dict], config: TrainConf
     Returns:
         (model in eval mode, history)
     """
-    from motionlang.models.twostream.model import TwoStreamModel
 
     stage = model.stage
     model.set_stage("text")

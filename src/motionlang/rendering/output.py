@@ -10,7 +10,13 @@ from pathlib import Path
 import numpy as np
 
 from motionlang.errors import MotionlangError
+from motionlang.features.joint_map import KIT21_NAMES, KIT21_PARENTS, kit21_weights, positions21
+from motionlang.formats import write_motion
+from motionlang.kinematics.from_positions import motion_from_positions
 from motionlang.kinematics.motion import Motion
+from motionlang.kinematics.retarget import retarget
+from motionlang.rendering.scene import kit21_scene
+from motionlang.utils.atomic import atomic_write
 
 #: motion files (.bvh, .glb and .gltf also for positions, fitted on a 21-joint skeleton)
 MOTION_OUT = (".bvh", ".glb", ".gltf", ".xml", ".amc")
@@ -76,17 +82,14 @@ def body_motion(result, fps: float, rig: Motion | None = None, name: str = "gene
         the Motion and the per-frame, per-joint distance (T, 21) in metres between its
         21 body joints and the generated ones (zeros for a Motion kept as it is).
     """
-    from motionlang.features.joint_map import KIT21_NAMES, KIT21_PARENTS, kit21_weights, positions21
     if isinstance(result, Motion):
         if rig is None:
             return result, np.zeros((result.n_frames, len(KIT21_NAMES)))
         fps, result = result.fps, positions21(result)
     if rig is None:
-        from motionlang.kinematics.from_positions import motion_from_positions
         motion = motion_from_positions(result, fps, KIT21_NAMES, KIT21_PARENTS, name=name)
         W = np.eye(len(KIT21_NAMES))
     else:
-        from motionlang.kinematics.retarget import retarget
         W = kit21_weights(rig.skeleton, joint_map=rig.meta.get("joint_map"))[1]
         motion = retarget(result, fps, rig, weights=W, name=name)
     err = np.linalg.norm(np.einsum("kj,tjc->tkc", W, motion.positions()) - result, axis=-1)
@@ -122,7 +125,6 @@ def write_result(result, path: str | Path, *, fps: float, title: str = "",
         note = _error_note(err, f"on the rig of {rig.meta.get('path', rig.name)}: body joints "
                                 ) + ")"
     if ext == ".npz":
-        from motionlang.utils.atomic import atomic_write
         data = {"positions": result, "fps": np.float64(fps)} if isinstance(result, np.ndarray) \
             else {"positions": result.positions(), "fps": np.float64(result.fps)}
         with atomic_write(path, "wb") as fh:
@@ -138,10 +140,8 @@ def write_result(result, path: str | Path, *, fps: float, title: str = "",
             note = _error_note(err, "joints ") + (": bone lengths held at their medians, "
                                                   "pelvis and neck turned by least squares)")
         else:
-            from motionlang.rendering.scene import kit21_scene
             result = kit21_scene(result, fps)
     if ext in MOTION_OUT:
-        from motionlang.formats import write_motion
         write_motion(result, path)
     else:
         render_file(result, path, title=title)

@@ -19,6 +19,7 @@ import shutil
 from pathlib import Path
 from typing import Any
 
+from motionlang.datasets.splits import load_splits, save_splits
 from motionlang.errors import MotionlangError
 from motionlang.utils.atomic import atomic_write
 from motionlang.utils.folder_lock import entries
@@ -122,7 +123,6 @@ def keep_splits(splits: dict[str, list[str]], folder: Path, resume: bool) -> Non
     Raises:
         MotionlangError: the rebuilt split differs (the data changed on disk), naming ids.
     """
-    from motionlang.datasets.splits import load_splits, save_splits
     if not (resume and folder.is_dir()):
         save_splits(splits, folder)
         return

@@ -9,6 +9,9 @@ import logging
 import os
 from pathlib import Path
 
+from motionlang.datasets.sources import LICENCE_FILE, licence_text
+from motionlang.utils.atomic import atomic_write
+
 
 def lead_process() -> bool:
     """True outside torchrun and on its rank 0: the one process that writes run files."""
@@ -20,7 +23,6 @@ def log_command(path: Path, args: argparse.Namespace | dict) -> None:
     included): data options (offsets, --balance, --max-frames, ...) are not in the
     checkpoint, and a resumed run may differ from its start. Under torchrun only rank 0
     writes."""
-    from motionlang.utils.atomic import atomic_write
     if not lead_process():
         return
     items = args.items() if isinstance(args, dict) else vars(args).items()
@@ -34,8 +36,6 @@ def write_licence(run: Path, sources, what: str) -> str | None:
     """The licence note (``datasets.sources.LICENCE_FILE``) in ``run`` when a source
     restricts the use of ``what`` (e.g. "M2L") and the figures made with it; nothing
     otherwise. Only the lead process writes. Returns the note (None: no restriction)."""
-    from motionlang.datasets.sources import LICENCE_FILE, licence_text
-    from motionlang.utils.atomic import atomic_write
     note = licence_text(sources, what)
     if note is not None and lead_process():
         run.mkdir(parents=True, exist_ok=True)

@@ -23,7 +23,10 @@ import numpy as np
 import motionlang.api as ml
 from motionlang.errors import MotionlangError
 from motionlang.kinematics.motion import Motion
+from motionlang.library.search import Hit, Library
 from motionlang.models.registry import PACKAGED, kinds_with
+from motionlang.models.t2m import SelfAdapter
+from motionlang.rendering.output import RESULT_OUT
 from motionlang.utils.checks import SEED_MAX
 from motionlang.web.options import DEFAULT_MODELS, ServeOptions
 from motionlang.web.uploads import Upload, page_message, read_upload
@@ -49,7 +52,6 @@ def model_methods(t2m: Any) -> list[str]:
     """The decodings the page offers for a text-to-motion model: every one of
     :data:`METHODS`, but only its own for a model that samples by itself (``SelfAdapter``,
     e.g. the masked-token model: it refuses the others)."""
-    from motionlang.models.t2m import SelfAdapter
     return [t2m.default_method()] if isinstance(t2m, SelfAdapter) else list(METHODS)
 
 
@@ -104,7 +106,6 @@ class Studio:
         self.rigs: _Recent = _Recent()
         self.library = None
         if options.index is not None:   # a bad index is named before any model loads
-            from motionlang.library.search import Library
             self.library = Library.open(options.index)
         self.describer = ml.load_model(options.describe_model, kind=kinds_with("describes"))
         self.models = models if models is not None else self._load_models()
@@ -123,7 +124,6 @@ class Studio:
     # ------------------------------------------------------------------ the page's calls
     def info(self) -> dict[str, Any]:
         """What the page offers: models (with their decoding), exports, search."""
-        from motionlang.rendering.output import RESULT_OUT
         return {"models": [{"name": n, "method": t.default_method(),
                             "methods": model_methods(t),
                             "deterministic": bool(t.deterministic), "fps": t.fps}
@@ -222,7 +222,6 @@ class Studio:
 
     def search_take(self, file: str, start: float, end: float) -> dict[str, Any]:
         """A span of an indexed take, for the viewer (on the 21-joint body)."""
-        from motionlang.library.search import Hit
         if self.library is None:
             raise MotionlangError("no index was given (motionlang serve --index FILE)")
         with self.lock:

@@ -14,6 +14,7 @@ import tempfile
 from collections.abc import Sequence
 from pathlib import Path
 
+from motionlang.api import read_mapped
 from motionlang.errors import MotionlangError
 from motionlang.formats import READ_EXTENSIONS
 from motionlang.kinematics.motion import Motion
@@ -84,7 +85,6 @@ def read_upload(files: Sequence[Upload], max_bytes: int) -> Motion:
     Raises:
         MotionlangError: a bad upload (:func:`check_upload`) or the reader's error.
     """
-    from motionlang.api import read_mapped
     check_upload(files, max_bytes)
     with tempfile.TemporaryDirectory(prefix="motionlang-serve-") as tmp:
         folder = Path(tmp)

@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from motionlang.features.joint_map import KIT21_NAMES, KIT21_PARENTS
 from motionlang.kinematics.motion import Motion
 
 #: frames a second sent to the page at most (the viewer interpolates between frames)
@@ -75,5 +76,4 @@ def motion_view(motion: Motion, **extra: Any) -> dict[str, Any]:
 
 def body21_view(positions: np.ndarray, fps: float, **extra: Any) -> dict[str, Any]:
     """The viewer's JSON of positions on the 21-joint body (T, 21, 3)."""
-    from motionlang.features.joint_map import KIT21_NAMES, KIT21_PARENTS
     return positions_view(positions, fps, KIT21_NAMES, KIT21_PARENTS, **extra)

@@ -7,6 +7,7 @@ import re
 
 import numpy as np
 
+from motionlang.datasets.synth.grammar import sentences
 from motionlang.datasets.synth.spec import LOCOMOTION, Primitive
 from motionlang.kinematics.motion import Motion, concatenate
 from motionlang.kinematics.rotations import axis_angle, chain, matrix_to_chain
@@ -96,8 +97,6 @@ def change_speed(motion: Motion, factor: float, texts: list[str] | None = None,
                 q.speed = _SPEED_DOWN[q.speed]
         new.append(q)
     if texts is not None:
-        from motionlang.datasets.synth.grammar import sentences
-
         rng = rng if rng is not None else np.random.default_rng(0)
         texts = [s for s, _ in sentences(new, rng, max(1, len(texts)))]
     return fast, texts, new

@@ -22,6 +22,7 @@ from motionlang.datasets.synth.track import (
     concat_tracks,
     solve_track,
 )
+from motionlang.formats.mmm_model import mmm_skeleton
 from motionlang.kinematics.motion import Motion
 
 # action -> relative frequency (walking dominates KIT-ML, so it does here)
@@ -225,6 +226,5 @@ def _add_noise(track: Track, rng: np.random.Generator, amp: float = 0.015,
 @functools.lru_cache(maxsize=128)
 def _skeleton(height: float):
     """MMM skeletons per height, shared (motions never modify their skeleton)."""
-    from motionlang.formats.mmm_model import mmm_skeleton
 
     return mmm_skeleton(height)

@@ -23,6 +23,7 @@ from motionlang.datasets.synth.compose import build_motion, random_program, rand
 from motionlang.datasets.synth.grammar import sentences
 from motionlang.datasets.synth.spec import PARAM_FIELDS, Primitive
 from motionlang.errors import MotionlangError
+from motionlang.formats.mmm import write_mmm
 from motionlang.kinematics.motion import Motion
 from motionlang.utils.atomic import atomic_path, new_folder
 from motionlang.utils.progress import progress
@@ -93,7 +94,6 @@ def generate_sample(seed: int, index: int) -> SynthSample:
 
 def write_sample(sample: SynthSample, out: str | Path) -> None:
     """Write the three KIT-ML files of one sample into ``out``."""
-    from motionlang.formats.mmm import write_mmm
 
     out = Path(out)
     write_mmm(sample.motion, out / f"{sample.id}_mmm.xml", fsync=False)

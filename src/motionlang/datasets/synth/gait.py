@@ -14,7 +14,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.interpolate import PchipInterpolator
 from scipy.ndimage import gaussian_filter1d
 
 from motionlang.datasets.synth.body import (
@@ -203,6 +202,9 @@ def _pelvis(stance: Stance, p: _Plan, path) -> np.ndarray:
         anchors.append(np.r_[c, yaw])
     anchors_t.append(p.t_end)
     anchors.append(np.r_[path(u[-1])[0], path(u[-1])[1]])
+    # scipy.interpolate takes a few tenths of a second to load, which every command would
+    # pay (the CLI registers `data synth`) and only making a corpus needs
+    from scipy.interpolate import PchipInterpolator
     return PchipInterpolator(np.array(anchors_t), np.array(anchors), axis=0)(p.t)
 
 

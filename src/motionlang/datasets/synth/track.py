@@ -23,6 +23,7 @@ from motionlang.datasets.synth.body import (
     smoothstep,
     solve_leg,
 )
+from motionlang.formats.mmm_model import MMM_DOF_ORDER, mmm_kinematics
 
 FPS = 100.0
 #: Upper-body DOFs the primitives drive directly (everything but legs and feet).
@@ -146,7 +147,6 @@ def limit_reach(body: Body, track: Track, margin: float = 0.995) -> None:
 @functools.lru_cache(maxsize=1)
 def dof_limits() -> dict[str, tuple[float, float]]:
     """MMM joint limits (radians) of the 44 recorded DOFs."""
-    from motionlang.formats.mmm_model import MMM_DOF_ORDER, mmm_kinematics
 
     names = set(MMM_DOF_ORDER)
     return {n["name"]: tuple(n["limits"]) for n in mmm_kinematics()["nodes"]

@@ -12,6 +12,10 @@ import numpy as np
 
 from motionlang.datasets.cmu35 import Cmu35, model_frames
 from motionlang.errors import MotionlangError
+from motionlang.evaluation.crbm.plots import plot_fill
+from motionlang.evaluation.crbm.reproduce import frames_to_motion
+from motionlang.formats import write_motion
+from motionlang.utils.atomic import atomic_write
 
 MOTION_EXTENSIONS = (".bvh", ".amc")
 RENDER_EXTENSIONS = (".gif", ".mp4")
@@ -24,11 +28,9 @@ def write_frames(frames: np.ndarray, out: str | Path, data: Cmu35, data_dir: str
     """(T, 59) model frames -> ``out`` by its extension: ``.npy`` (the frames), ``.bvh`` /
     ``.amc`` (a motion starting at ``start_xz`` on the ground, ASF units) or ``.gif`` /
     ``.mp4`` (beside ``compare``, (T, 59) true frames, where given). Atomic."""
-    from motionlang.evaluation.crbm.reproduce import frames_to_motion
     out = Path(out)
     ext = out.suffix.lower()
     if ext == ".npy":
-        from motionlang.utils.atomic import atomic_write
         with atomic_write(out, "wb") as fh:
             np.save(fh, frames)
         return out
@@ -37,7 +39,6 @@ def write_frames(frames: np.ndarray, out: str | Path, data: Cmu35, data_dir: str
     asf = Path(data_dir) / "35.asf"
     motion = frames_to_motion(frames, data, asf, start_xz=start_xz, name=name)
     if ext in MOTION_EXTENSIONS:
-        from motionlang.formats import write_motion
         write_motion(motion, out)
         return out
     from motionlang.rendering.animation import render_animation
@@ -59,7 +60,6 @@ def write_fill(result: dict, out: str | Path, data: Cmu35, data_dir: str | Path,
     in place of the erased channels (unfolded angles), next to the truth where animated."""
     out = Path(out)
     if out.suffix.lower() == ".png":
-        from motionlang.evaluation.crbm.plots import plot_fill
         return plot_fill(result, out, title=title)
     truth = model_frames(data.test[trial])
     filled = truth.copy()

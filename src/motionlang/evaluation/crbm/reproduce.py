@@ -46,6 +46,7 @@ from motionlang.evaluation.crbm.fill import (
     per_frame_dims,
     score_space,
 )
+from motionlang.formats.asf_amc import motion_from_channels, read_asf
 from motionlang.models.crbm.ar import ARConfig, ARModel
 from motionlang.models.crbm.config import SELECTED, CRBMConfig
 from motionlang.models.crbm.model import CRBM
@@ -122,7 +123,6 @@ def frames_to_motion(frames: np.ndarray, data: Cmu35, asf_path: str | Path, *,
                      start_xz: tuple[float, float] = (0.0, 0.0), name: str = "crbm"):
     """(T, 59) model features -> a ``Motion`` on the subject-35 ASF skeleton at 30 Hz.
     Channels the features drop (clavicles, fingers) take the training mean."""
-    from motionlang.formats.asf_amc import motion_from_channels, read_asf
 
     reference = np.concatenate(data.train).mean(axis=0)
     channels = model_frames_to_channels(frames, reference, start_xz)

@@ -32,6 +32,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from motionlang.errors import MotionlangError
+from motionlang.features.positions import split_global
 
 Seqs = np.ndarray | Sequence[np.ndarray]
 
@@ -142,7 +143,6 @@ def position_metrics_mm(pred: Seqs, target: Seqs) -> dict[str, object]:
         ``ape_local`` mean of the 20 non-root local joints, ``ape_root`` global root
         trajectory APE, and ``ave_joints`` / ``ave_local`` / ``ave_root`` likewise.
     """
-    from motionlang.features.positions import split_global
 
     pairs = _pairs(pred, target)
     if pairs[0][0].shape[1] != 21:

@@ -7,7 +7,9 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from motionlang.datasets.position_items import build_twostream_data
 from motionlang.errors import MotionlangError
+from motionlang.evaluation.t2m.compare import compare
 
 
 def evaluate_ape(models: dict[str, Any], data: str | Path | Sequence[str | Path], *,
@@ -26,8 +28,6 @@ def evaluate_ape(models: dict[str, Any], data: str | Path | Sequence[str | Path]
         MotionlangError: ``autoencode`` without a model that autoencodes (a two-stream
             model), unreadable data, an unknown split.
     """
-    from motionlang.datasets.position_items import build_twostream_data
-    from motionlang.evaluation.t2m.compare import compare
     if autoencode and not any(m.autoencodes for m in models.values()):
         raise MotionlangError("--autoencode needs a two-stream model among --model")
     dataset = build_twostream_data(data, seed=seed, max_seconds=max_seconds)

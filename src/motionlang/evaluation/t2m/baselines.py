@@ -11,7 +11,10 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from motionlang.evaluation.retrieval import SentenceIndex
 from motionlang.evaluation.t2m.scoring import T2MItem
+from motionlang.models.length import SentenceLength
+from motionlang.models.t2m import stretch
 
 GROUND_TRUTH = "ground truth (order check's ceiling)"
 NEAREST = "nearest training sentence's motion (bag of words)"
@@ -31,8 +34,6 @@ def retrieval_baseline(data, split: str = "train"):
     actions kept, as a model told the length would). A real motion of about what the
     sentence says (a bag of words misses counts and, but for ties, word order), so its APE
     shows how far apart two motions of one description lie."""
-    from motionlang.evaluation.retrieval import SentenceIndex
-    from motionlang.models.t2m import stretch
     index = SentenceIndex((rid, s) for rid in data.splits[split]
                           for s in data.records[rid].annotations)
     return lambda sentence, n_frames: stretch(
@@ -44,7 +45,6 @@ def length_errors(data, items: Sequence[T2MItem], model=None) -> dict:
     default: one fitted here on ``data``'s whole training motions, as ``train twostream``
     without ``--max-frames`` or ``--mirror`` fits it) predicts the test lengths:
     ``{"mae_frames", "constant_mae_frames" (always guessing the training mean), "n"}``."""
-    from motionlang.models.length import SentenceLength
     model = model or SentenceLength.from_items(data.items["train"])
     mean = float(np.mean([len(it["motion"]) for it in data.items["train"]]))
     true = np.array([len(it.target) for it in items], dtype=float)

@@ -26,6 +26,7 @@ import numpy as np
 
 from motionlang.errors import MotionlangError
 from motionlang.evaluation.action_order import Prototypes, rescale_ranges
+from motionlang.evaluation.sampling import stratified_sample
 from motionlang.evaluation.t2m.baselines import (
     GROUND_TRUTH,
     NEAREST,
@@ -33,11 +34,17 @@ from motionlang.evaluation.t2m.baselines import (
     retrieval_baseline,
     still_baseline,
 )
+from motionlang.evaluation.t2m.oracle import oracle_generations, oracle_table
 from motionlang.evaluation.t2m.scoring import T2MItem, markdown_table, score_generated
 from motionlang.evaluation.t2m.scoring import (  # importable from here, as before
     positions_to_features as positions_to_features,
 )
+from motionlang.features.frames import motion_frames
 from motionlang.features.positions import DEFAULT_FPS as FPS
+from motionlang.formats.mmm_model import mmm_skeleton
+from motionlang.models.t2m import FPS as T2M_FPS
+from motionlang.models.t2m import text_to_motion
+from motionlang.utils.atomic import atomic_write
 from motionlang.utils.progress import progress
 
 
@@ -77,7 +84,6 @@ def eval_items(data, split: str = "test", limit: int | None = None, seed: int = 
     """The evaluation items of a ``datasets.position_items.TwoStreamData`` split; with
     ``limit``, a sample of them drawn with ``seed``, stratified by each motion's first
     ground-truth action where the data has one (``evaluation.sampling``)."""
-    from motionlang.evaluation.sampling import stratified_sample
     ids = list(data.splits[split])
     spans = {rid: _ranges(data.records[rid], len(data.sequences[rid])) for rid in ids}
     labels = [spans[rid][1][0] if spans[rid][1] else None for rid in ids]
@@ -153,8 +159,6 @@ def _l2m_on_subjects(results, name, t2m, data, items, protos) -> None:
     "sample" decoding (``t2m``'s options decide, as in its main row)."""
     import logging
 
-    from motionlang.features.frames import motion_frames
-    from motionlang.formats.mmm_model import mmm_skeleton
     model = t2m.model
     if getattr(getattr(model, "features", None), "kind", None) != "angles":
         return   # a positions L2M has no body to scale: its joints are its output
@@ -199,12 +203,10 @@ def compare(models: dict[str, object], data, *, split: str = "test", limit: int 
     names prefixed "same-parameter subset: ". With ``out_dir`` also write ``t2m_table.md``,
     ``t2m_report.json`` (with each model's options that differ from the defaults) and the
     trajectory figures. Returns (results, table)."""
-    from motionlang.models.t2m import text_to_motion
     models = {name: text_to_motion(model) for name, model in models.items()}
     items = eval_items(data, split, limit, seed)   # a sample drawn with seed
     protos = fit_prototypes(data)
     if oracle:   # before the models run: a K no test motion meets fails at once
-        from motionlang.evaluation.t2m.oracle import oracle_generations, oracle_table
         kept, oracle_gens = oracle_generations(data, items, oracle)
     results = {name: evaluate_model(t2m.positions21, items, data.features, protos)
                for name, t2m in models.items()}
@@ -264,13 +266,12 @@ def _baseline_rows(results: dict, data, items, protos, true_start: bool) -> None
 def _length_rows(models: dict, data, items) -> tuple[dict, str]:
     """Sentence -> length errors of each model's length model (and of one refit on the
     training motions), and the table's line about them."""
-    from motionlang.models.t2m import FPS
     lengths = {"refit on the whole training motions": length_errors(data, items)}
     # models whose length model counts frames at 12.5 Hz (an angles L2M's counts at 10 Hz)
     lengths.update({name: length_errors(data, items, t2m.model.length_model)
                     for name, t2m in models.items()
                     if getattr(t2m.model, "length_model", None) is not None
-                    and abs(t2m.fps - FPS) < 1e-9})
+                    and abs(t2m.fps - T2M_FPS) < 1e-9})
     line = ("\nSentence -> length (what `generate` uses without --max-frames), mean absolute "
             "error in frames at 12.5 Hz: "
             + "; ".join(f"{k} {v['mae_frames']:.1f}" for k, v in lengths.items())
@@ -285,7 +286,6 @@ def _write_report(out: Path, table: str, results: dict, lengths: dict, split: st
     model's sampling options that differ from its family's defaults."""
     import json
 
-    from motionlang.utils.atomic import atomic_write
     with atomic_write(out / "t2m_table.md") as fh:
         fh.write(table)
     report = {k: {kk: (None if isinstance(vv, float) and math.isnan(vv) else vv)

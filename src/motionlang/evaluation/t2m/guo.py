@@ -19,7 +19,20 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from motionlang.datasets.evaluator_items import build_evaluator_data
 from motionlang.errors import MotionlangError
+from motionlang.evaluation.sampling import stratified_sample
+from motionlang.evaluation.t2m.plots import plot_yardstick
+from motionlang.evaluation.t2m.yardstick import (
+    evaluator_body,
+    generated_rows,
+    guo_table,
+    markdown_table,
+    test_pairs,
+)
+from motionlang.models.evaluator.text import TextFileVectors
+from motionlang.models.registry import load_model
+from motionlang.utils.atomic import atomic_write
 from motionlang.utils.checks import check_numbers
 
 FID_REFERENCES = ("train", "val")
@@ -89,13 +102,11 @@ def load_evaluator(path: str | Path | None = None, *, official: str | Path | Non
             vectors of another size.
     """
     from motionlang.models.evaluator.model import TextMotionEvaluator
-    from motionlang.models.registry import load_model
     if path is None and official is None:
         raise MotionlangError("an evaluator is needed: its file, or the public weights with "
                               "their mean and std")
     vectors = None
     if word_vectors:
-        from motionlang.models.evaluator.text import TextFileVectors
         vectors = TextFileVectors(word_vectors)
     if official:
         model = TextMotionEvaluator.load_official(official, mean, std, vectors=vectors)
@@ -111,7 +122,6 @@ def load_evaluator(path: str | Path | None = None, *, official: str | Path | Non
 def model_specs(evaluator, specs: Sequence[str] | None) -> list[str]:
     """The text-to-motion models to score: ``specs`` (``--model`` values), default the
     packaged l2m; none on an SMPL-body evaluator, which cannot read their 21-joint motions."""
-    from motionlang.evaluation.t2m.yardstick import evaluator_body
     kit = evaluator_body(evaluator) == "kit"
     out = list(specs or (["l2m"] if kit else []))
     if out and not kit:
@@ -134,7 +144,6 @@ def model_rows(models: dict, captions: list[str], frames: list[int], bones=None,
     of the repetition with ``options.regenerate``, for the models that sample), and with
     ``options.multimodality`` S samples for the first ``mm_texts`` captions; laid on
     ``bones`` (the evaluator's) if given."""
-    from motionlang.evaluation.t2m.yardstick import generated_rows
     options = options or GuoOptions()
     gen: dict[str, Any] = {}
     for name, m in models.items():
@@ -185,9 +194,6 @@ class GuoRun:
             MotionlangError: unreadable data, fewer test pairs than a batch, a FID
                 reference split with fewer than 2 motions.
         """
-        from motionlang.datasets.evaluator_items import build_evaluator_data
-        from motionlang.evaluation.sampling import stratified_sample
-        from motionlang.evaluation.t2m.yardstick import evaluator_body, test_pairs
         options = options or GuoOptions()
         built = build_evaluator_data(data, evaluator_body(evaluator), seed=seed,
                                      max_seconds=max_seconds, bones=evaluator.config.bones)
@@ -208,13 +214,11 @@ class GuoRun:
 
     @property
     def body(self) -> str:
-        from motionlang.evaluation.t2m.yardstick import evaluator_body
         return evaluator_body(self.evaluator)
 
     def text_to_motion(self, models: dict) -> tuple[dict, str]:
         """The text-to-motion table (``yardstick.guo_table``) with a row per model
         (``{label: models.t2m.TextToMotion}``), and its Markdown with a title."""
-        from motionlang.evaluation.t2m.yardstick import guo_table, markdown_table
         o = self.options
         captions = [p["caption"] for p in self.pairs]
         frames = [len(p["motion"]) + 1 for p in self.pairs]   # rows: steps between frames
@@ -238,7 +242,6 @@ class GuoRun:
         if not m2l_models:
             return {}, ""
         from motionlang.evaluation.t2m.m2t import describe_motions, m2t_table
-        from motionlang.evaluation.t2m.yardstick import markdown_table
         o = self.options
         records = [self.data.records[p["id"]] for p in self.pairs]
         motions = [r.load_motion() for r in records]
@@ -268,8 +271,6 @@ class GuoRun:
 def write_guo_files(out: str | Path, text: str, report: dict) -> None:
     """``t2m_guo.md`` (``text``), ``t2m_guo.json`` (``report``, :meth:`GuoRun.report`) and
     ``t2m_guo.png`` in ``out`` (atomic writes)."""
-    from motionlang.evaluation.t2m.plots import plot_yardstick
-    from motionlang.utils.atomic import atomic_write
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     with atomic_write(out / "t2m_guo.md") as fh:

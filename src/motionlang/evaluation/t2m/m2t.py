@@ -28,6 +28,8 @@ from motionlang.datasets.text import normalize
 from motionlang.errors import MotionlangError
 from motionlang.evaluation.metrics.t2m import mm_dist, r_precision, repeat
 from motionlang.evaluation.seq2seq import summary, text_scores
+from motionlang.models.registry import describer
+from motionlang.utils.progress import progress
 
 GROUND_TRUTH, NEAREST = "ground truth", "nearest neighbour"
 
@@ -70,8 +72,6 @@ def describe_motions(model, motions: Sequence, *, width: int = 5, desc: str = "d
     """An M2L's likeliest beam hypothesis (``models.seq2seq.decode.search.describe``, beam ``width``,
     the paper's order; ``describe`` shows its minimum-Bayes-risk choice first) for each
     ``Motion``."""
-    from motionlang.models.registry import describer
-    from motionlang.utils.progress import progress
     describe = describer(model)
     return [describe(model, m, width=width)[0][0]
             for m in progress(list(motions), desc=desc, unit="motions")]

@@ -24,8 +24,10 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from motionlang.datasets.synth import ground_truth
 from motionlang.errors import MotionlangError
 from motionlang.evaluation.t2m.scoring import markdown_table, score_generated
+from motionlang.models.t2m import stretch
 
 MEAN_ROW = "oracle: mean of the same-parameter training motions"
 ONE_ROW = "oracle: one same-parameter training motion"
@@ -34,7 +36,6 @@ ONE_ROW = "oracle: one same-parameter training motion"
 def parameter_key(record) -> tuple | None:
     """The motion's full ground-truth parameters (``Primitive.key()`` and layer of each
     primitive, in order), hashable; None without corpus meta."""
-    from motionlang.datasets.synth import ground_truth
     meta = getattr(record, "meta", None) or {}
     if not meta.get("primitives"):
         return None
@@ -59,7 +60,6 @@ def oracle_generations(data, items: Sequence, min_group: int = 3
     Raises:
         MotionlangError: ``min_group`` < 1, or no item has an oracle.
     """
-    from motionlang.models.t2m import stretch
     if min_group < 1:
         raise MotionlangError(f"the oracle needs groups of at least 1 motion, got {min_group}")
     groups = same_parameter_groups(data)

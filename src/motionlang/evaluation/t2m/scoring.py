@@ -20,6 +20,7 @@ from motionlang.evaluation.action_order import (
     segment_labels,
 )
 from motionlang.evaluation.metrics.motion import position_metrics_mm
+from motionlang.features.positions import split_global
 
 
 @dataclass
@@ -41,7 +42,6 @@ class T2MItem:
 def positions_to_features(features, p21: np.ndarray) -> np.ndarray:
     """Global (T, 21, 3) -> the normalised (T, 66) positions features (as ``encode``);
     ``features`` is anything with the positions features' ``normalizer``."""
-    from motionlang.features.positions import split_global
     local, v, dyaw, _ = split_global(np.asarray(p21, dtype=np.float64))
     raw = np.concatenate([local.reshape(len(p21), -1), v, dyaw[:, None]], axis=1)
     return features.normalizer.transform(raw)

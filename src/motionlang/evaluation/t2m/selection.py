@@ -15,6 +15,9 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from motionlang.evaluation.t2m.guo import GuoOptions, GuoRun, load_evaluator, model_specs
+from motionlang.evaluation.t2m.yardstick import generated_rows, guo_metrics
+
 #: the measures a selector reports each epoch (validation record keys)
 TOP3, FID, DIVERSITY = "R-precision top-3", "FID", "Diversity"
 
@@ -46,8 +49,6 @@ def guo_selector(evaluator: Any, data: str | Path, *, split: str = "val", pairs:
         MotionlangError: an unreadable evaluator or data, an SMPL-body evaluator (the
             models make 21-joint motions), fewer pairs than a batch.
     """
-    from motionlang.evaluation.t2m.guo import GuoOptions, GuoRun, load_evaluator, model_specs
-    from motionlang.evaluation.t2m.yardstick import generated_rows, guo_metrics
     ev = evaluator if hasattr(evaluator, "embed_motions") else load_evaluator(evaluator)
     model_specs(ev, ["the model"])   # a kit-body evaluator, or one line saying why not
     run = GuoRun.prepare(ev, data, split=split, seed=seed, limit=pairs, max_seconds=max_seconds,

@@ -28,6 +28,7 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
+from motionlang.datasets.evaluator_items import joints_rows
 from motionlang.errors import MotionlangError
 from motionlang.evaluation.metrics.t2m import (
     diversity,
@@ -38,6 +39,10 @@ from motionlang.evaluation.metrics.t2m import (
     repeat,
     retrieval_metrics,
 )
+from motionlang.evaluation.retrieval import SentenceIndex
+from motionlang.features.h3d_vectors import H3D_BODIES, joints_to_vectors, vectors_to_joints
+from motionlang.models.t2m import text_to_motion
+from motionlang.utils.progress import progress
 
 Generated = Sequence | Callable[[int], Sequence]
 
@@ -123,7 +128,6 @@ GROUND_TRUTH, NEAREST, STILL = "ground truth", "nearest neighbour", "standing st
 
 def evaluator_body(evaluator) -> str:
     """The HumanML3D body (``"kit"``: 251 values a row, ``"smpl"``: 263) an evaluator reads."""
-    from motionlang.features.h3d_vectors import H3D_BODIES
     for name, spec in H3D_BODIES.items():
         if spec.dim == evaluator.config.motion_dim:
             return name
@@ -135,7 +139,6 @@ def positions_rows(p21: np.ndarray, bones=None) -> np.ndarray:
     """Global 21-joint positions (T >= 2, 21, 3) metres at 12.5 Hz (what every text-to-motion
     model gives, ``models.t2m``) -> (T-1, 251) float32 rows of the ``kit`` body (mm), laid
     on ``bones`` (20 lengths, m: an evaluator's ``config.bones``) if given."""
-    from motionlang.datasets.evaluator_items import joints_rows
     p = np.asarray(p21, dtype=float)
     if len(p) < 2:
         p = np.repeat(p[:1], 2, axis=0)
@@ -144,7 +147,6 @@ def positions_rows(p21: np.ndarray, bones=None) -> np.ndarray:
 
 def still_rows(rows: np.ndarray, body: str) -> np.ndarray:
     """The rows of a motion's first pose held for as many frames (``body``'s layout)."""
-    from motionlang.features.h3d_vectors import H3D_BODIES, joints_to_vectors, vectors_to_joints
     spec = H3D_BODIES[body]
     pose = vectors_to_joints(np.asarray(rows)[:1], spec)[0]
     return joints_to_vectors(np.repeat(pose[None], len(rows) + 1, axis=0),
@@ -184,7 +186,6 @@ def r_precision_miss(items: Sequence[dict], *, seed: int = 0, batch_size: int = 
 def nearest_rows(train_items: Sequence[dict], captions: Sequence[str]) -> list[np.ndarray]:
     """The nearest-neighbour baseline: for each caption the training motion whose caption
     is nearest in bag of words (``evaluation.retrieval.SentenceIndex``)."""
-    from motionlang.evaluation.retrieval import SentenceIndex
     motion = {it["id"]: it["motion"] for it in train_items}
     index = SentenceIndex((it["id"], it["caption"]) for it in train_items)
     return [motion[index.nearest(c)[0]] for c in captions]
@@ -284,8 +285,6 @@ def generated_rows(model, captions: Sequence[str], n_frames: Sequence[int], *,
     """A text-to-motion model's motions for ``captions``, each ``n_frames[i]`` frames at
     12.5 Hz (``models.t2m.TextToMotion.positions21``; ``kw`` go to it, e.g. ``method``,
     ``seed``), as ``kit`` rows (:func:`positions_rows`, on ``bones`` if given)."""
-    from motionlang.models.t2m import text_to_motion
-    from motionlang.utils.progress import progress
     t2m = text_to_motion(model)
     if t2m.deterministic:   # no sampling options
         kw = {k: v for k, v in kw.items() if k not in ("method", "seed")}

@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from motionlang.errors import MotionlangError
+from motionlang.utils.checks import check_numbers
 
 #: the parameter arrays of a CRBM: W (D, H), A (n*D, D), B (n*D, H), a (D,), b (H,)
 PARAMS = ("W", "A", "B", "a", "b")
@@ -77,7 +78,6 @@ class CRBMConfig:
         if self.negative_start not in ("data", "previous"):
             raise MotionlangError(f"CRBMConfig.negative_start must be 'data' or 'previous', "
                                   f"got {self.negative_start!r}")
-        from motionlang.utils.checks import check_numbers
         check_numbers("CRBMConfig", self, positive_ints=("order", "batch_size", "cd_steps",
                                                          "epochs"),
                       sizes=("n_hidden",), seeds=("seed",), positive=("lr",),

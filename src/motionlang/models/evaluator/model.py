@@ -30,6 +30,7 @@ import torch.nn.functional as F
 from torch import nn
 
 from motionlang.errors import MotionlangError
+from motionlang.features.h3d_vectors import layout_for_dim
 from motionlang.models.checkpoint import Checkpointed, load_checkpoint, unpack_normalizer
 from motionlang.models.evaluator.config import EvaluatorConfig
 from motionlang.models.evaluator.layers import MotionEncoder, MovementEncoder, TextEncoder
@@ -64,7 +65,6 @@ class TextMotionEvaluator(Checkpointed, nn.Module):
     def __init__(self, config: EvaluatorConfig, mean=None, std=None, vectors=None,
                  features: dict | None = None):
         super().__init__()
-        from motionlang.features.h3d_vectors import layout_for_dim
         c = self.config = config
         #: which rows the evaluator reads: layout, body, frame rate, unit, size (or None)
         self.features = layout_for_dim(c.motion_dim) if features is None else dict(features)

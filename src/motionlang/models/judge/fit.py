@@ -22,11 +22,16 @@ import numpy as np
 import torch
 from torch import nn
 
+from motionlang.datasets.bandai import load_bandai, load_bandai_text
+from motionlang.datasets.bandai_text import MIRROR_CONTENT  # a lower layer
+from motionlang.datasets.cache import cached, file_identity
+from motionlang.datasets.kitml import load_kitml
+from motionlang.datasets.synth import ground_truth
 from motionlang.errors import MotionlangError
 from motionlang.features.body21 import median_bones21
 from motionlang.features.joint_map import KIT21_MIRROR
 from motionlang.features.normalizer import Normalizer
-from motionlang.features.positions import DEFAULT_FPS
+from motionlang.features.positions import DEFAULT_FPS, PositionFeatures, PositionsConfig
 from motionlang.models.judge.config import JudgeConfig
 from motionlang.models.judge.model import MotionJudge, judge_rows
 
@@ -48,7 +53,6 @@ class JudgeItem:
 def mirror_item(item: JudgeItem) -> JudgeItem:
     """Left and right swapped: positions reflected (x -> -x) with partner joints exchanged,
     the content label mirrored (``bandai_text.MIRROR_CONTENT``); id prefixed with ``M``."""
-    from motionlang.datasets.bandai_text import MIRROR_CONTENT  # a lower layer
     return replace(item, id=f"M{item.id}",
                    positions=item.positions[:, list(KIT21_MIRROR)] * np.array([-1.0, 1, 1]),
                    content=MIRROR_CONTENT.get(item.content, item.content))
@@ -59,9 +63,6 @@ def bandai_items(source: str | Path, split: str | None = None, fps: float = DEFA
     """The Bandai Namco takes of ``split`` (``datasets.bandai.load_bandai``) as items: each
     take's 21-joint body (``PositionFeatures.body``: on the floor) at ``fps`` Hz. Cached
     (``datasets.cache``) by the takes' file identities."""
-    from motionlang.datasets.bandai import load_bandai
-    from motionlang.datasets.cache import cached, file_identity
-    from motionlang.features.positions import PositionFeatures, PositionsConfig
     records = load_bandai(source, split)
     body = PositionFeatures(PositionsConfig(fps=fps)).body
 
@@ -94,9 +95,6 @@ def primitive_items(corpus: str | Path, fps: float = DEFAULT_FPS, min_seconds: f
     content, as items without a style: each body primitive with nothing layered on it, and
     each upper-body one layered on standing still; cut at their frame ranges, at least
     ``min_seconds`` long."""
-    from motionlang.datasets.kitml import load_kitml
-    from motionlang.datasets.synth import ground_truth
-    from motionlang.features.positions import PositionFeatures, PositionsConfig
     body = PositionFeatures(PositionsConfig(fps=fps)).body
     out = []
     for rec in load_kitml(corpus, max_seconds=None):
@@ -200,5 +198,4 @@ def bandai_sentences(source: str | Path, split: str | None = "test", seed: int =
     """One English sentence per Bandai take of ``split`` (``bandai_text.Sentence``: ``text``,
     ``content``, ``style``, ``states_style``), in :func:`bandai_items`' order (by id): what a
     text-to-motion model is asked for to be judged beside that take."""
-    from motionlang.datasets.bandai import load_bandai_text
     return [r.sentences[0] for r in load_bandai_text(source, split, per_take=1, seed=seed)]

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from motionlang.features.foot_lock import lock_feet
 from motionlang.models.masked.config import DOWN
 
 #: frames over which the pose part of a one-sided gap's offset fades out (:func:`blend`)
@@ -91,7 +92,6 @@ def join(generated: np.ndarray, source: np.ndarray, keep: np.ndarray, fps: float
     ankle is a little out of the leg's reach (:data:`JOIN_REACH`)."""
     if not foot_lock:
         return blend(generated, source, keep)
-    from motionlang.features.foot_lock import lock_feet
     keep = np.asarray(keep, dtype=bool)
     joined = blend(lock_feet(generated, fps, reach=JOIN_REACH), source, keep)
     # a contact across a gap's edge is held where the kept frames have the foot, so that

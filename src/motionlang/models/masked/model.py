@@ -35,7 +35,7 @@ import torch.nn.functional as F
 from torch import nn
 
 from motionlang.errors import MotionlangError
-from motionlang.features.positions import PositionFeatures
+from motionlang.features.positions import PositionFeatures, facing_yaw, positions_to_rows
 from motionlang.models.checkpoint import Checkpointed, pack_features, unpack_features
 from motionlang.models.masked import goal as goals
 from motionlang.models.masked import sampling
@@ -48,6 +48,7 @@ from motionlang.models.masked.transformer import (
     MaskTransformer,
     ResidualTransformer,
 )
+from motionlang.models.text_tokens import TransformerTokens
 
 #: "decoder" retrains the tokenizer's decoder alone: the tokens, and a generator trained on
 #: them, stay valid
@@ -93,7 +94,6 @@ class MaskedModel(Checkpointed, nn.Module):
     def text(self) -> Any:
         """The frozen token-feature source (built from the config on first use)."""
         if self._text is None:
-            from motionlang.models.text_tokens import TransformerTokens
             self._text = TransformerTokens(self.config.text_model, (self.config.text_layer,))
         return self._text
 
@@ -323,7 +323,6 @@ class MaskedModel(Checkpointed, nn.Module):
         of the kept frames (T,) bool of ``p21`` and regenerate the others for ``text``, a
         model with goals told where each gap must arrive (``goal.kept_goal``); decoded by
         :meth:`decode_placed`, not yet joined to the kept frames."""
-        from motionlang.features.positions import positions_to_rows
         options = options or MaskedOptions()
         p21 = np.asarray(p21, dtype=np.float64)
         keep = np.asarray(keep, dtype=bool)
@@ -357,7 +356,6 @@ class MaskedModel(Checkpointed, nn.Module):
         integrated from frame 0 gathers the tokenizer's small heading errors, and a gap
         entered a few degrees off arrives a stride off: from each gap's last kept frame on,
         the draft is placed again from ``p21``'s own place and heading there."""
-        from motionlang.features.positions import facing_yaw, positions_to_rows
         p21 = np.asarray(p21, dtype=np.float64)
         out = self._positions(rows, positions_to_rows(p21[:1])[1])
         for a, _ in gaps(keep):

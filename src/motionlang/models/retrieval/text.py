@@ -26,6 +26,7 @@ import torch
 from motionlang.datasets.canonical import canonical_text
 from motionlang.errors import MotionlangError
 from motionlang.models.encoders import ENCODERS, cache_root, head_file
+from motionlang.models.text_tokens import TransformerTokens
 from motionlang.utils.atomic import atomic_write
 
 #: sentences given to the encoder at once (its token cache holds more than one batch, so
@@ -134,7 +135,6 @@ def sentence_vectors(text_model: str = "minilm", layer: int = 0, canonical: bool
         MotionlangError: transformers or the model's package is missing, the folder is not
             a model, the layer is out of range.
     """
-    from motionlang.models.text_tokens import TransformerTokens
     known = ENCODERS.get(text_model)
     if known is not None and known.base:   # a head over another encoder's vectors
         path = head_file(text_model)

@@ -10,6 +10,11 @@ from typing import Any
 import numpy as np
 import torch
 
+from motionlang.features.base import downsample
+from motionlang.features.joint_map import positions21
+from motionlang.models.registry import load_model
+from motionlang.models.seq2seq.decode.rerank import check_same_features
+from motionlang.models.seq2seq.decode.search import generate
 from motionlang.models.t2m import (
     FPS,
     Text2MotionAdapter,
@@ -76,8 +81,6 @@ class L2MText2Motion(Text2MotionAdapter):
         """The M2L of ``options.rerank``, loaded once and checked against the L2M's
         features; None without one."""
         if self.options.rerank and self._reranker is None:
-            from motionlang.models.registry import load_model
-            from motionlang.models.seq2seq.decode.rerank import check_same_features
             self._reranker = load_model(self.options.rerank, kind="m2l")
             check_same_features(self.model, self._reranker, f"rerank={self.options.rerank}")
         return self._reranker
@@ -110,7 +113,6 @@ class L2MText2Motion(Text2MotionAdapter):
 
     def _hypotheses(self, sentence: str, *, max_frames: int | None = None, **kw
                     ) -> list[tuple[Any, float]]:
-        from motionlang.models.seq2seq.decode.search import generate
         _check_words(sentence)
         self._option_kw(kw, self.default_method())
         if self.options.temperature != 1.0:
@@ -130,9 +132,6 @@ class L2MText2Motion(Text2MotionAdapter):
     def _positions21(self, sentence: str, n_frames: int, *, seed: int = 0,
                      method: str = "mean", skeleton=None, width: int = 1, reranker=None,
                      first_frame: np.ndarray | None = None, **_) -> np.ndarray:
-        from motionlang.features.base import downsample
-        from motionlang.features.joint_map import positions21
-        from motionlang.models.seq2seq.decode.search import generate
         fps = self.fps
         cap = max(1, int(np.ceil(n_frames * fps / FPS)))
         # a model told its length runs to it: its end flag fires early on many test

@@ -29,6 +29,7 @@ from torch.func import functional_call
 
 from motionlang.errors import MotionlangError
 from motionlang.features.base import FeatureSet
+from motionlang.features.collate import pad_batch
 from motionlang.features.joint_map import TOES
 from motionlang.features.normalizer import Normalizer
 from motionlang.features.positions import PositionFeatures
@@ -178,7 +179,6 @@ class TwoStreamModel(Checkpointed, nn.Module):
         """Items ``{"motion": (T_i, F) normalised features, "sentence": str}`` -> the batch
         :meth:`loss` takes: ``motion`` (B, T, F) float32 zero-padded, ``lengths`` (B,),
         ``sentences``."""
-        from motionlang.features.collate import pad_batch
         if not items:
             raise MotionlangError("cannot collate an empty batch")
         motion, mask = pad_batch([torch.as_tensor(np.asarray(it["motion"]), dtype=torch.float32)

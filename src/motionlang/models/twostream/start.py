@@ -20,6 +20,7 @@ import torch
 
 from motionlang.errors import MotionlangError
 from motionlang.models.schema import NUMBERS, ListOf
+from motionlang.models.twostream.sources import embed
 
 #: at most this many training pairs fit the regression (drawn at random)
 FIT_PAIRS = 6000
@@ -82,7 +83,6 @@ def fit_start_pose(model, sentences: Sequence[str], first: np.ndarray, *, seed: 
     """:meth:`StartPose.fit` (penalty ``ridge``) on ``model``'s embeddings of (at most
     :data:`FIT_PAIRS` of) the training ``sentences`` and their motions' first frames
     ``first`` (N, F), normalised as the model's decoder reads them."""
-    from motionlang.models.twostream.sources import embed
     keep = np.random.default_rng(seed).permutation(len(sentences))[:FIT_PAIRS]
     z = embed(model, [sentences[j] for j in keep], batch)
     return StartPose.fit(z, np.asarray(first)[keep], ridge)

@@ -8,6 +8,8 @@ import numpy as np
 import torch
 
 from motionlang.errors import MotionlangError
+from motionlang.features.base import downsample
+from motionlang.features.body21 import body21
 from motionlang.models.t2m import FPS, Text2MotionAdapter, _check_words
 
 
@@ -59,8 +61,6 @@ def twostream_text_vector(model, sentence: str) -> np.ndarray:
 
 def twostream_motion_vector(model, motion) -> np.ndarray:
     """A Motion -> the two-stream model's joint-space pose embedding (D,) float32."""
-    from motionlang.features.base import downsample
-    from motionlang.features.body21 import body21
     p = body21(downsample(motion, FPS) if motion.fps > FPS else motion)
     feats = torch.as_tensor(model.features_from_positions(p),
                             dtype=torch.float32)[None]

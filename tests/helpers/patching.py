@@ -1,0 +1,30 @@
+"""Replacing a function for a test wherever the package holds it.
+
+Modules import the names they use at their top (``from motionlang.models.registry import
+load_model``), so replacing ``registry.load_model`` alone leaves every caller's own binding
+as it was. :func:`patch_everywhere` replaces the object in its module and in every loaded
+``motionlang`` module that holds that same object, under any name; ``monkeypatch`` undoes it.
+"""
+from __future__ import annotations
+
+import sys
+from types import ModuleType
+from typing import Any
+
+
+def patch_everywhere(monkeypatch, module: ModuleType, name: str, value: Any) -> int:
+    """Set ``module.name`` to ``value`` and each loaded motionlang module's reference to the
+    original object; returns how many modules were changed (at least 1)."""
+    original = getattr(module, name)
+    count = 0
+    for mod_name, mod in list(sys.modules.items()):
+        if not (mod_name == "motionlang" or mod_name.startswith("motionlang.")) or mod is None:
+            continue
+        for attr, obj in list(vars(mod).items()):
+            if obj is original:
+                monkeypatch.setattr(mod, attr, value)
+                count += 1
+    if count == 0:   # a module outside the package (a test helper)
+        monkeypatch.setattr(module, name, value)
+        count = 1
+    return count
