@@ -275,3 +275,128 @@ def test_only_the_package_face_hands_out_names_lazily():
     """A name is imported from the module that defines it; only ``motionlang/__init__``
     (``import motionlang as ml`` without loading torch) resolves names on first use."""
     assert module_getattrs() == ["motionlang"]
+
+
+#: the third-party packages whose loading a module may put off to the function that needs
+#: them (heavy: torch, pictures, the web server), so that the command line and the API stay
+#: quick to start
+HEAVY = frozenset({"torch", "matplotlib", "imageio", "fastapi", "uvicorn", "starlette",
+                   "sentence_transformers", "transformers", "sklearn", "usearch", "ray"})
+#: the lazy doors of docs/contributing.md: the package face, family loading (the registry
+#: and each recipe's run) and the CLI's command modules
+DOORS = ("motionlang", "motionlang.models.registry", "motionlang.recipes.", "motionlang.cli.")
+#: the most function-level imports of motionlang modules the package may hold
+MAX_FUNCTION_IMPORTS = 60
+
+
+def third_party(path: Path) -> set[str]:
+    """Top-level names of the non-motionlang packages a file imports at module level
+    (``if TYPE_CHECKING:`` left out)."""
+    out = set()
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    for node in _walk(tree, type_checking=False):
+        if node is tree or not isinstance(node, (ast.Import, ast.ImportFrom)):
+            continue
+        if _in_function(tree, node):
+            continue
+        names = [a.name for a in node.names] if isinstance(node, ast.Import) else \
+            [node.module or ""] if node.level == 0 else []
+        out |= {n.split(".")[0] for n in names if n and not n.startswith("motionlang")}
+    return out
+
+
+def _in_function(tree: ast.AST, target: ast.AST) -> bool:
+    for fn in ast.walk(tree):
+        if isinstance(fn, (ast.FunctionDef, ast.AsyncFunctionDef)) and \
+                any(n is target for n in ast.walk(fn)):
+            return True
+    return False
+
+
+def function_imports() -> list[tuple[str, int, str]]:
+    """(importing module, line, imported module) for each import of a motionlang module
+    inside a function body (``if TYPE_CHECKING:`` left out)."""
+    known = modules()
+    out = []
+    for mod, path in known.items():
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for fn in ast.walk(tree):
+            if not isinstance(fn, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                continue
+            for node in ast.walk(fn):
+                if isinstance(node, ast.Import):
+                    out += [(mod, node.lineno, a.name) for a in node.names
+                            if a.name.startswith("motionlang")]
+                elif isinstance(node, ast.ImportFrom) and (node.module or "").startswith("motionlang"):
+                    for a in node.names:
+                        sub = f"{node.module}.{a.name}"
+                        out.append((mod, node.lineno, sub if sub in known else node.module))
+    return sorted(set(out))
+
+
+def heavy_loads() -> dict[str, set[str]]:
+    """Module -> the HEAVY packages that importing it loads (its module-level imports,
+    followed through motionlang modules and the packages above them)."""
+    known = modules()
+    graph = {}
+    for m, p in known.items():
+        deps = {d for d in imports(p, top_level_only=True, type_checking=False) if d in known}
+        deps |= {".".join(d.split(".")[:i]) for d in set(deps) for i in range(1, d.count(".") + 1)}
+        graph[m] = deps & set(known)
+    own = {m: third_party(p) & HEAVY for m, p in known.items()}
+    out: dict[str, set[str]] = {}
+
+    def loads(m: str, stack: frozenset = frozenset()) -> set[str]:
+        if m in out:
+            return out[m]
+        found = set(own[m])
+        for d in graph[m]:
+            if d not in stack and d != m:
+                found |= loads(d, stack | {m})
+        out[m] = found
+        return found
+
+    for m in known:
+        loads(m)
+    return out
+
+
+def misplaced_function_imports(found=None, heavy=None) -> list[str]:
+    """The function-level imports (``function_imports()`` unless given) that are neither at
+    a door nor put off a heavy package (``heavy_loads()`` unless given)."""
+    heavy = heavy_loads() if heavy is None else heavy
+    bad = []
+    for mod, line, dep in function_imports() if found is None else found:
+        at_door = mod == "motionlang" or any(
+            mod == d or (d.endswith(".") and mod.startswith(d)) for d in DOORS)
+        puts_off = dep in heavy and heavy[dep] - heavy.get(mod, set())
+        if not (at_door or puts_off):
+            bad.append(f"{mod}:{line} imports {dep} inside a function; it loads nothing heavy "
+                       f"the module does not already load: import it at the top")
+    return bad
+
+
+def test_imports_sit_at_the_top_but_at_the_documented_doors():
+    """An import of a motionlang module sits at the top of the file, where a reader sees the
+    wiring; inside a function only at a lazy door of docs/contributing.md, or where the
+    module imported loads a heavy package (torch, matplotlib, the web server) that the
+    importer must not (a command's ``-h``, ``import motionlang.api``)."""
+    found = function_imports()
+    assert len(found) <= MAX_FUNCTION_IMPORTS, \
+        f"{len(found)} function-level imports of motionlang modules (at most " \
+        f"{MAX_FUNCTION_IMPORTS}):\n" + "\n".join(f"{m}:{n} {d}" for m, n, d in found)
+    bad = misplaced_function_imports()
+    assert not bad, "\n".join(bad)
+
+
+def test_the_door_check_sees_a_light_import_inside_a_function():
+    heavy = heavy_loads()
+    found = [("motionlang.formats", 1, "motionlang.kinematics.motion"),      # light: moved up
+             ("motionlang.formats", 2, "motionlang.models.checkpoint"),      # puts torch off
+             ("motionlang.cli.train", 3, "motionlang.kinematics.motion")]    # at a door
+    bad = misplaced_function_imports(found, heavy)
+    assert len(bad) == 1 and bad[0].startswith("motionlang.formats:1 ")
+    assert "torch" in heavy["motionlang.models.checkpoint"]
+    assert "torch" not in heavy["motionlang.formats"]
+    assert "matplotlib" in heavy["motionlang.rendering.animation"]
+    assert not heavy["motionlang.kinematics.motion"]

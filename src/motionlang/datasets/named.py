@@ -24,6 +24,7 @@ import numpy as np
 
 from motionlang.errors import DatasetError
 from motionlang.formats.asf_amc import motion_from_channels, read_asf
+from motionlang.formats.mit import read_mit
 from motionlang.kinematics import Motion
 
 DATA_ENV = "MOTIONLANG_DATA"
@@ -166,10 +167,6 @@ def cmu35_walkjog(data_dir: str | Path | None = None) -> Cmu35WalkJog:
 def mit_walk(data_dir: str | Path | None = None) -> list[Motion]:
     """The MIT walking sequences (``mit/motion.mat``, 30 Hz) via ``formats.mit.read_mit``."""
     path = _data_file(data_dir, "mit/motion.mat")
-    try:
-        from motionlang.formats.mit import read_mit
-    except ImportError:
-        raise DatasetError("the MIT reader (motionlang.formats.mit) is not available") from None
     return read_mit(path)
 
 

@@ -28,6 +28,7 @@ import torch
 from motionlang.datasets.text import Vocabulary
 from motionlang.errors import MotionlangError
 from motionlang.features.base import features_from_dict
+from motionlang.features.normalizer import Normalizer
 from motionlang.models.schema import check_config, check_entries, wrap
 from motionlang.models.versions import (
     DAMAGE,
@@ -88,11 +89,7 @@ def unpack_normalizer(d: dict | None) -> Any:
     if d is None:
         return None
     if d["type"] == "Normalizer":
-        try:
-            from motionlang.features.normalizer import Normalizer
-            return Normalizer.from_dict(d["data"])
-        except (ImportError, AttributeError):  # features layer without from_dict: keep the dict
-            pass
+        return Normalizer.from_dict(d["data"])
     return d["data"]
 
 
