@@ -53,7 +53,7 @@ def test_no_command_has_a_family_specific_option():
 def test_the_options_are_read_from_the_model_and_checked_once():
     from motionlang.cli.models_arg import load_t2m, load_t2m_models
     from motionlang.evaluation.t2m.guo import draws
-    from motionlang.models.seq2seq.t2m import L2MOptions
+    from motionlang.models.seq2seq.config import L2MOptions
     label, t2m = load_t2m("l2m:method=sample,width=3,temperature=0.8")
     assert label == "l2m:method=sample,width=3,temperature=0.8"
     assert t2m.options == L2MOptions(method="sample", width=3, temperature=0.8)
@@ -77,7 +77,7 @@ def test_a_reranker_is_loaded_with_the_model(tmp_path):
 
 
 def test_the_help_lists_each_familys_options_from_its_dataclass():
-    from motionlang.models.seq2seq.t2m import L2MOptions
+    from motionlang.models.seq2seq.config import L2MOptions
     for leaf in leaf_parsers(build_parser()):
         for action in leaf._actions:
             if {"--model", "--t2m"} & set(action.option_strings) and \

@@ -334,8 +334,8 @@ def test_generate_reranks_sampled_motions_by_an_m2l(runs, tmp_path, capsys):
 
 
 @pytest.mark.parametrize(("output", "options", "message"), [
-    ("rr1.npz", ["-w", "1", "--rerank", "{m2l}"], "rerank ranks several L2M motions"),
-    ("none.npz", ["-w", "0"], "argument -w/--width: must be an integer in 1..1000"),
+    ("rr1.npz", ["-w", "1", "--rerank", "{m2l}"], "rerank ranks several motions"),
+    ("none.npz", ["-w", "0"], "width must be an integer in 1..1000, got 0"),
     ("gen.obj", [], "gen.obj: output must be .bvh, .glb, .gltf, .xml, .amc, .gif, .mp4, .png or .npz"),
     ("t.npz", ["--temperature", "0.5"], "ask for method sample"),
 ])
@@ -507,12 +507,19 @@ def test_errors_are_one_line(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "--foot-step input" in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "f").exists()
-    # sampling options are checked before any model is read (no model file here)
-    for opts, msg in ((["--temperature", "0"], "argument --temperature: must be a finite"),
-                      (["--temperature", "0.5", "--method", "mean"], "mean decoding draws")):
+    assert not (tmp_path / "g.npz").exists()
+
+
+def test_sampling_options_are_checked_once_by_the_models_options(runs, tmp_path, capsys):
+    """The decode flags are the family's option fields: one check, one line, nothing
+    written (the packaged-size L2M here decodes by its expected frames)."""
+    for opts, msg in ((["--temperature", "0"], "temperature must be a finite number > 0"),
+                      (["--temperature", "0.5", "--method", "mean"], "mean decoding draws"),
+                      (["--temperature", "0.5"], "ask for method sample")):
         assert main(["generate", "a person walks", "-o", str(tmp_path / "g.npz"),
-                     "--model", str(tmp_path / "none.pt"), *opts]) == 2
-        assert msg in capsys.readouterr().err
+                     "--model", runs.l2m_pt, *opts]) == 2
+        err = capsys.readouterr().err
+        assert msg in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "g.npz").exists()
 
 

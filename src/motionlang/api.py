@@ -21,6 +21,7 @@ objects on the 21-joint body (joint angles fitted to the positions) or, with
 """
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 from typing import Any
 
@@ -82,6 +83,28 @@ def text_to_motion(model: Any = None, options: Any = None):
 _t2m = text_to_motion
 
 
+def with_options(t2m: Any, options: dict[str, Any]) -> Any:
+    """A text-to-motion model (``models.t2m.TextToMotion``) with more sampling options over
+    its own: a new wrapper of the same model, so that one shared by several callers (the
+    web app's) keeps its own; the family's ``Options`` checks them once. A ``method``
+    its family has no option for is taken when it is the one way the model decodes.
+
+    Raises:
+        MotionlangError: an option the family does not take, or a value it refuses.
+    """
+    options = {k: v for k, v in options.items() if v is not None}
+    fields = {f.name for f in dataclasses.fields(t2m.Options)} \
+        if dataclasses.is_dataclass(t2m.Options) else set()
+    if "method" in options and "method" not in fields:
+        if options["method"] != t2m.default_method():
+            raise MotionlangError(f"method {options['method']!r}: a {t2m.model.kind} model "
+                                  f"decodes only by {t2m.default_method()!r}")
+        del options["method"]
+    if not options:
+        return t2m
+    return wrap(t2m.model, {**t2m.describe_options(), **options})
+
+
 def read_mapped(path: str | Path, joint_map: dict | str | Path | None = None,
                 **kw) -> Motion:
     """``read_motion`` with ``joint_map`` checked against the file's rig at once: a map that
@@ -139,23 +162,30 @@ def first_frame(model, start: Motion | str | Path,
     return motion_frames(t2m.model.features, _motion(start, joint_map), 1)[0][0]
 
 
-def describe(motion: Motion | str | Path, model: Any = None, width: int = 5, *,
-             joint_map: dict | str | Path | None = None,
-             length_penalty: float = 0.0, rank: str = "mbr",
-             raw: bool = False) -> list[tuple[str, float]]:
+def describe(motion: Motion | str | Path, model: Any = None, width: int | None = None, *,
+             joint_map: dict | str | Path | None = None, **options: Any
+             ) -> list[tuple[str, float]]:
     """Sentences for a motion (a Motion or a file), best first: ``[(text, log P), ...]``.
 
     model: a loaded model whose family describes motion (``Family.describes``: the M2L), a
-    packaged name, a checkpoint path, or None for the packaged M2L. width: beam width
-    and number of sentences (as ``motionlang describe -w``). rank: "mbr" (as ``describe``)
-    puts first the sentence the beam agrees on most (``models.seq2seq.decode.mbr``), "logp" the
-    likeliest (the paper's). raw: the beam as it is (``describe --raw``), not checked
-    against what the body does (``models.seq2seq.decode.grounded``: gait, familiarity, grounded analysis)."""
-    DescribeOptions(width=width, length_penalty=length_penalty, rank=rank)   # checks them
+    packaged name, a checkpoint path, or None for the packaged M2L. width, options: the
+    beam's fields of ``library.options.DescribeOptions``, each with its one default there
+    (as ``motionlang describe``'s options): ``width`` (beam width and number of
+    sentences), ``length_penalty``, ``rank`` ("mbr" puts first the sentence the beam agrees
+    on most, ``models.seq2seq.decode.mbr``; "logp" the likeliest, the paper's) and ``raw``
+    (the beam as it is, not checked against what the body does:
+    ``models.seq2seq.decode.grounded``)."""
+    beam = ("length_penalty", "rank", "raw")
+    other = sorted(set(options) - set(beam))
+    if other:
+        raise MotionlangError(f"describe takes the options width, {', '.join(beam)}; not "
+                              f"{', '.join(other)}")
+    given: dict[str, Any] = {**options, **({} if width is None else {"width": width})}
+    o = DescribeOptions(**given)
     if model is None or isinstance(model, (str, Path)):
         model = load_model(model or "m2l", kind=kinds_with("describes"))
-    return describer(model)(model, _motion(motion, joint_map), width=width,
-                            length_penalty=length_penalty, rank=rank, grounded=not raw)
+    return describer(model)(model, _motion(motion, joint_map), width=o.width,
+                            length_penalty=o.length_penalty, rank=o.rank, grounded=not o.raw)
 
 
 def describe_many(paths: Any, model: Any = None, *, joint_map: dict | str | Path | None = None,
@@ -180,26 +210,25 @@ def timeline(motion: Motion | str | Path, model: Any = None, *,
     return d.timeline(_motion(motion, joint_map))
 
 
-def generate_hypotheses(text: str, model: Any = None, *, width: int | None = None,
-                        method: str | None = None, seed: int = 0,
+def generate_hypotheses(text: str, model: Any = None, *, seed: int = 0,
                         max_frames: int | None = None, min_frames: int = 5,
-                        temperature: float | None = None, length_norm: bool | None = None,
-                        rerank: Any = None, start_from: Motion | str | Path | None = None,
+                        start_from: Motion | str | Path | None = None,
                         joint_map: dict | str | Path | None = None, foot_lock: bool = True,
-                        keep: Any = None) -> tuple[list[tuple[Any, float]], float]:
+                        keep: Any = None, **options: Any
+                        ) -> tuple[list[tuple[Any, float]], float]:
     """Every hypothesis ``motionlang generate`` makes for ``text``, best first, and their
     frame rate: ``([(result, score), ...], fps)``; a result is a Motion (joint-angle
     models) or global 21-joint positions (T, 21, 3) metres; the score is the log likelihood
     (with ``rerank``: the M2L's log P(text | motion)), NaN for deterministic models.
 
     model: as :func:`text_to_motion` (None: the packaged L2M; ``"NAME:key=value"`` sets
-    its sampling options, which ``width``, ``method``, ``temperature``, ``length_norm`` and
-    ``rerank`` override when given). width: hypotheses (samples or beam width; default 5).
-    method: None for the model's own way, else "sample", "beam" or "mean".
+    its sampling options). options: more of those sampling options, over the model's: the
+    fields of its family's ``Options`` (the L2M's ``models.seq2seq.t2m.L2MOptions``:
+    ``width``, ``method``, ``temperature``, ``length_norm``, ``rerank``; the masked model's
+    ``steps``, ``guidance``, ``temperature``, ``width`` ...), each with its one default
+    there; ``method`` may also name the one way a model without that option decodes.
     max_frames: length cap in model frames (a model told its length generates exactly
-    this many). min_frames: no end before this many frames. temperature: sharpen the
-    mixture when sampling. length_norm: rank by log likelihood per frame. rerank: an M2L
-    (loaded, a name or a path) ranking the ``width`` motions. start_from: a Motion or file
+    this many). min_frames: no end before this many frames. start_from: a Motion or file
     whose first pose begins every motion (``joint_map``: its map, if no built-in map fits).
     foot_lock: move the body with its planted feet and hold them (position models). keep:
     ``"FILE:0-2s,8-10s"`` or ``(motion, [(t0, t1), ...])``: in-betweening of those seconds.
@@ -208,34 +237,10 @@ def generate_hypotheses(text: str, model: Any = None, *, width: int | None = Non
     """
     if max_frames is not None and min_frames > max_frames:
         raise MotionlangError(f"--min-frames {min_frames} exceeds --max-frames {max_frames}")
-    if temperature not in (None, 1.0) and method == "mean":   # before any model is read
-        raise MotionlangError("temperature applies to 'sample' and 'beam'; mean decoding "
-                              "draws nothing")
-    t2m = text_to_motion(model)
-    given = t2m.describe_options()   # what the model's options set away from their defaults
-    width = width if width is not None else given.get("width", 5)
-    temperature = temperature if temperature is not None else given.get("temperature", 1.0)
-    length_norm = length_norm if length_norm is not None else given.get("length_norm", False)
-    rerank = rerank if rerank is not None else given.get("rerank")
-    if temperature != 1.0 and method == "mean":
-        raise MotionlangError("temperature applies to 'sample' and 'beam'; mean decoding "
-                              "draws nothing")
-    if temperature != 1.0 and t2m.deterministic:
-        raise MotionlangError(f"temperature applies to models that sample; this "
-                              f"{t2m.model.kind} model is deterministic")
-    method = method or t2m.default_method()
-    if method == "mean" and temperature != 1.0:
-        raise MotionlangError("temperature: this model generates with mean decoding (trained "
-                              "on its expected frames); ask for method sample")
+    t2m = with_options(text_to_motion(model), options)
     kw: dict[str, Any] = {}
-    if rerank is not None:
-        if t2m.deterministic or method == "mean" or width < 2:
-            raise MotionlangError("rerank ranks several L2M motions: an L2M model with method "
-                                  "sample or beam and width 2 or more")
-        from motionlang.models.seq2seq.decode.rerank import check_same_features
-        kw["reranker"] = rerank if not isinstance(rerank, (str, Path)) \
-            else load_model(rerank, kind="m2l")
-        check_same_features(t2m.model, kw["reranker"], f"rerank {rerank}")
+    if getattr(t2m, "reranker", None) is not None:
+        kw["reranker"] = t2m.reranker
     import warnings
     reading = t2m.read_words(text)
     if reading.mapped:   # shown, so that a user sees which word steered instead of theirs
@@ -252,9 +257,8 @@ def generate_hypotheses(text: str, model: Any = None, *, width: int | None = Non
                             foot_lock=foot_lock), t2m.fps
     if start_from is not None:
         kw["first_frame"] = first_frame(t2m, start_from, joint_map)
-    hyps = t2m.hypotheses(text, width=width, method=method, seed=seed, max_frames=max_frames,
-                          min_frames=min_frames, length_norm=length_norm,
-                          temperature=temperature, foot_lock=foot_lock, **kw)
+    hyps = t2m.hypotheses(text, seed=seed, max_frames=max_frames, min_frames=min_frames,
+                          foot_lock=foot_lock, **kw)
     return hyps, t2m.fps
 
 

@@ -49,10 +49,13 @@ def option_fields(cls: type) -> list[dataclasses.Field]:
 
 def add_config_options(parser: argparse.ArgumentParser, cls: type, *,
                        defaults: dict[str, Any] | None = None,
-                       skip: tuple[str, ...] = ()) -> None:
+                       skip: tuple[str, ...] = (), unset: bool = False) -> None:
     """One option per documented field of the dataclass ``cls`` (see the module
     docstring); ``defaults`` override the dataclass's own (a recipe's), ``skip`` leaves
-    fields out. Each option's ``dest`` is the field name."""
+    fields out. Each option's ``dest`` is the field name. ``unset``: an option not given
+    is None (:func:`given_options` leaves it out, so that the field's default, or a value
+    set elsewhere such as a ``--model NAME:key=value`` spec, applies) and its help ends
+    with the field's default."""
     hints = typing.get_type_hints(cls)
     defaults = defaults or {}
     for f in option_fields(cls):
@@ -63,6 +66,22 @@ def add_config_options(parser: argparse.ArgumentParser, cls: type, *,
         if default is dataclasses.MISSING:
             default = None
         base = _base_type(hints[f.name])
+        if unset:
+            shown = "none" if default is None else str(default).lower() \
+                if isinstance(default, bool) else str(default)
+            help_ = meta["help"] if "(default" in meta["help"] else \
+                f"{meta['help']} (default: {shown})"
+            if base is bool:
+                flag = "--no-" + flag_of(f)[2:] if default else flag_of(f)
+                parser.add_argument(flag, *meta.get("aliases", ()), dest=f.name,
+                                    action="store_const", const=not default, default=None,
+                                    help=help_)
+                continue
+            parser.add_argument(flag_of(f), *meta.get("aliases", ()), dest=f.name,
+                                type={int: _parse_int, float: float_range()}.get(base, str),
+                                default=None, choices=meta.get("choices"),
+                                metavar=meta.get("metavar"), help=help_)
+            continue
         if base is bool:
             if default:
                 parser.add_argument("--no-" + flag_of(f)[2:], dest=f.name,
@@ -96,6 +115,12 @@ def option_message(cls: type, message: str) -> str:
     for f in sorted(option_fields(cls), key=lambda f: -len(f.name)):
         message = message.replace(f"{cls.__name__}.{f.name}", flag_of(f))
     return message
+
+
+def given_options(cls: type, args: argparse.Namespace) -> dict[str, Any]:
+    """The options of ``cls`` (added with ``unset=True``) that were given, by field name."""
+    return {f.name: getattr(args, f.name) for f in option_fields(cls)
+            if getattr(args, f.name, None) is not None}
 
 
 def config_values(cfg: Any) -> dict[str, Any]:

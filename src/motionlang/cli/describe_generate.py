@@ -13,15 +13,13 @@ import sys
 from pathlib import Path
 
 from motionlang.api import WordsRead, generate_hypotheses, load_rig, write_result
-from motionlang.cli.config_options import add_config_options, config_from_args
+from motionlang.cli.config_options import add_config_options, config_from_args, given_options
 from motionlang.cli.motion_commands import add_input_args, add_joint_map_arg, load_input
 from motionlang.cli.options import (
     frames_int,
     nonneg_int,
     output_file,
-    positive_float,
     seed_int,
-    width_int,
 )
 from motionlang.errors import MotionlangError
 from motionlang.library.compose import compose_to
@@ -33,6 +31,7 @@ from motionlang.library.describe import (
     printed,
 )
 from motionlang.models.registry import licence_note
+from motionlang.models.seq2seq.config import L2MOptions
 from motionlang.rendering.output import check_result_path
 
 
@@ -75,11 +74,10 @@ def cmd_generate(args: argparse.Namespace) -> int:
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", UserWarning)
         hyps, fps = generate_hypotheses(
-            args.text, args.model, width=args.width, method=args.method, seed=args.seed,
-            max_frames=args.max_frames, min_frames=args.min_frames,
-            length_norm=args.length_norm, temperature=args.temperature, rerank=args.rerank,
-            start_from=args.start_from, joint_map=args.joint_map,
-            foot_lock=not args.no_foot_lock, keep=args.keep)
+            args.text, args.model, seed=args.seed, max_frames=args.max_frames,
+            min_frames=args.min_frames, start_from=args.start_from, joint_map=args.joint_map,
+            foot_lock=not args.no_foot_lock, keep=args.keep,
+            **given_options(L2MOptions, args))
     for w in caught:   # what it read as what is a note, not a warning
         note = "" if issubclass(w.category, WordsRead) else "warning: "
         print(f"motionlang generate: {note}{w.message}", file=sys.stderr)
@@ -127,15 +125,8 @@ def register(subparsers) -> None:
                         "on a 21-joint skeleton; glTF in metres, Y up, with a stick mesh) "
                         "or .npz (joint positions and fps)")
     _add_model_arg(p, "l2m", "l2m", "an L2M or two-stream model file")
-    p.add_argument("-w", "--width", type=width_int, default=None,
-                   help="hypotheses (samples or beam width; default: the model value's width "
-                        "option, else 5)")
-    p.add_argument("--method", choices=("sample", "beam", "mean"), default=None,
-                   help="W ancestral samples, the paper's sampled beam (ranked by likelihood, "
-                        "it favours standing still), or the mixture's expected frames "
-                        "(default: the model's own way: mean for models trained on their "
-                        "expected frames or on joint positions, such as the packaged L2M; "
-                        "sample for joint-angle models)")
+    # the decode options: L2MOptions' fields (a masked model takes those of its own it has)
+    add_config_options(p, L2MOptions, unset=True)
     p.add_argument("--seed", type=seed_int, default=0,
                    help="seed of the sampling (sample and beam decoding)")
     p.add_argument("--max-frames", type=frames_int, default=None,
@@ -145,13 +136,6 @@ def register(subparsers) -> None:
                         "sentence; a two-stream model without one: 125 = 10 s)")
     p.add_argument("--min-frames", type=nonneg_int, default=5,
                    help="no end-of-motion before this many model frames (default 5)")
-    p.add_argument("--length-norm", action="store_true", default=None,
-                   help="rank hypotheses (beam, sample) by log likelihood per frame (default: total)")
-    p.add_argument("--temperature", type=positive_float, default=None, metavar="TAU",
-                   help="sample (beam, sample) from the mixture sharpened by TAU: weights "
-                        "softmax(logits / TAU), deviations x TAU (default 1: as trained)")
-    p.add_argument("--rerank", metavar="M2L", help="rank the W motions by this M2L model's "
-                   "log P(text | motion) instead of their own likelihood (L2M, sample or beam)")
     p.add_argument("--no-foot-lock", action="store_true",
                    help="keep the model's frames as decoded (default: the body moves with "
                         "the feet that are down instead of sliding over them, those feet are "

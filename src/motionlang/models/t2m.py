@@ -305,12 +305,14 @@ class SelfAdapter(Text2MotionAdapter):
         return list(self.model.unknown_words(sentence))
 
     def _hypotheses(self, sentence: str, *, max_frames: int | None = None, seed: int = 0,
-                    width: int = 1, method: str | None = None, **_: Any) -> list:
+                    method: str | None = None, width: int | None = None, **_: Any) -> list:
+        method = method or getattr(self.options, "method", None)
         if method not in (None, self.default_method()):   # not silently another decoding
             raise MotionlangError(f"method {method!r}: a {self.model.kind} model decodes "
                                   f"only by {self.default_method()!r}")
         _check_words(sentence)
-        texts = [sentence] * max(1, int(width))
+        count = int(width or getattr(self.options, "width", None) or 1)
+        texts = [sentence] * max(1, count)
         out = self.model.sample(texts, [max_frames] * len(texts), seed=seed,
                                 options=self.options)
         return [(np.asarray(p, dtype=np.float64), float("nan")) for p in out]

@@ -187,11 +187,11 @@ class Studio:
         key = self.rigs.add(rig, self._ids)
         return {"id": key, "name": motion.name, "joints": len(rig.skeleton.joints)}
 
-    def describe(self, files: list[Upload], width: int = 5) -> dict[str, Any]:
+    def describe(self, files: list[Upload], width: int | None = None) -> dict[str, Any]:
         """An uploaded motion described: the viewer's JSON of it on the 21-joint body with
         ``name``, ``seconds``, ``sentences`` ([{"text", "log_p"}], best first) and, for a
         take longer than :data:`TIMELINE_FROM_S`, ``timeline`` ([{"start", "end",
-        "text"}])."""
+        "text"}]). ``width``: as ``motionlang describe -w`` (None: its default)."""
         motion = read_upload(files, self.options.max_upload_bytes)
         with self.lock, _for_page():
             sentences = ml.describe(motion, self.describer, width)

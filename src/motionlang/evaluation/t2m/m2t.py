@@ -73,7 +73,7 @@ def describe_motions(model, motions: Sequence, *, width: int = 5, desc: str = "d
     the paper's order; ``describe`` shows its minimum-Bayes-risk choice first) for each
     ``Motion``."""
     describe = describer(model)
-    return [describe(model, m, width=width)[0][0]
+    return [describe(model, m, width=width, length_penalty=0.0, rank="logp")[0][0]
             for m in progress(list(motions), desc=desc, unit="motions")]
 
 

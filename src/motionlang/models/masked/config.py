@@ -12,7 +12,7 @@ from typing import Any
 from motionlang.errors import MotionlangError
 from motionlang.features.positions import DEFAULT_FPS
 from motionlang.features.positions import DIM as POSITIONS_DIM
-from motionlang.utils.checks import check_numbers
+from motionlang.utils.checks import MAX_WIDTH, check_numbers
 
 #: frames per token: two stride-2 convolutions (MoMask and T2M-GPT downsample by 4)
 DOWN = 4
@@ -137,6 +137,8 @@ class MaskedOptions:
         res_guidance: the same for the residual-token transformer.
         temperature: of the base tokens' softmax (0: the likeliest token, nothing drawn).
         top_k: draw among the k likeliest tokens only (0: all).
+        width: motions per sentence, each drawn with its own seed (``generate --all``
+            writes each; none is likelier than another).
         drafts: in-betweening draws this many motions in one batch and keeps the one that
             arrives closest to the kept frames after each gap (``inbetween.arrival_miss``);
             more drafts arrive closer and slide less, at about 30 ms each for 10 s
@@ -148,13 +150,14 @@ class MaskedOptions:
     res_guidance: float = 2.0
     temperature: float = 1.0
     top_k: int = 0
+    width: int = 1
     drafts: int = 32
 
     def __post_init__(self) -> None:
-        check_numbers("masked options", self, positive_ints=("steps", "drafts"),
+        check_numbers("masked options", self, positive_ints=("steps", "drafts", "width"),
                       nonneg_ints=("top_k",),
                       nonneg=("guidance", "res_guidance", "temperature"))
-        for name, most in (("steps", 100), ("drafts", 64)):
+        for name, most in (("steps", 100), ("drafts", 64), ("width", MAX_WIDTH)):
             if getattr(self, name) > most:
                 raise MotionlangError(f"masked options: {name} must be at most {most}, got "
                                       f"{getattr(self, name)}")

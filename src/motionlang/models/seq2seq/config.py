@@ -5,10 +5,11 @@ can read the default sizes for ``--help`` without importing torch (seconds on ev
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 from motionlang.errors import MotionlangError
-from motionlang.utils.checks import check_numbers
+from motionlang.utils.checks import MAX_WIDTH, check_numbers
 
 
 def _opt(default, help_: str, **meta):
@@ -186,3 +187,59 @@ class L2MConfig:
                 raise MotionlangError(f"L2MConfig.{name} says how L2MConfig.foot_weight "
                                       f"measures: give L2MConfig.foot_weight > 0 with it")
 
+
+@dataclass
+class L2MOptions:
+    """How an L2M samples: ``--model l2m:method=sample,width=5``, the flags of
+    ``motionlang generate`` (generated from the fields with a help text) or the keywords of
+    ``ml.generate``; one default each, here.
+
+    Attributes:
+        method: "sample" (ancestral), "beam" (the paper's sampled beam) or "mean" (the
+            mixture's expected frames); None: the model's own way for ``generate``, "mean"
+            for evaluation rows.
+        width: samples (or beam width) per sentence; the likeliest is kept (or, with
+            ``rerank``, the one that M2L finds the sentence likeliest for); mean decoding
+            gives one motion.
+        temperature: sharpen the mixture when sampling (1: as trained).
+        rerank: an M2L (packaged name, file or run folder) ranking the ``width`` motions.
+        length_norm: rank hypotheses by log likelihood per frame.
+        map_words: read a word its vocabulary lacks as the nearest known word
+            (``models.word_map.WordOptions``; ``generate`` prints what it read as what);
+            false: as one unknown-word token.
+    """
+
+    method: str | None = _opt(
+        None, "W ancestral samples, the paper's sampled beam (ranked by likelihood, it "
+        "favours standing still), or the mixture's expected frames (default: the model's "
+        "own way: mean for models trained on their expected frames or on joint positions, "
+        "such as the packaged L2M; sample for joint-angle models)",
+        choices=("sample", "beam", "mean"))
+    width: int = _opt(1, "hypotheses: samples or beam width, written likeliest first "
+                         "(sample, beam)", aliases=("-w",), metavar="W")
+    temperature: float = _opt(1.0, "sample (beam, sample) from the mixture sharpened by "
+                                   "TAU: weights softmax(logits / TAU), deviations x TAU; "
+                                   "1 samples as trained", metavar="TAU")
+    rerank: str | None = _opt(None, "rank the W motions by this M2L model's log P(text | "
+                                    "motion) instead of their own likelihood (sample or "
+                                    "beam)", metavar="M2L")
+    length_norm: bool = _opt(False, "rank hypotheses (beam, sample) by log likelihood per "
+                                    "frame, not in total")
+    map_words: bool = True
+
+    def __post_init__(self) -> None:
+        if self.method not in (None, "sample", "beam", "mean"):
+            raise ValueError(f"method must be sample, beam or mean, got {self.method!r}")
+        if isinstance(self.width, bool) or not 1 <= int(self.width) <= MAX_WIDTH:
+            raise ValueError(f"width must be an integer in 1..{MAX_WIDTH}, got {self.width}")
+        if not (math.isfinite(self.temperature) and self.temperature > 0):
+            raise ValueError(f"temperature must be a finite number > 0, got {self.temperature}")
+        if self.method == "mean" and self.width != 1:
+            raise ValueError("width applies to 'sample' and 'beam'; mean decoding gives one "
+                             "motion")
+        if self.method == "mean" and self.temperature != 1.0:
+            raise ValueError("temperature applies to 'sample' and 'beam'; mean decoding "
+                             "draws nothing")
+        if self.rerank and (self.method == "mean" or self.width < 2):
+            raise ValueError("rerank ranks several motions: method sample or beam "
+                             "with width 2 or more")

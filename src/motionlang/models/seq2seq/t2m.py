@@ -3,16 +3,16 @@
 (``Family.text_to_motion``)."""
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 import torch
 
+from motionlang.errors import MotionlangError
 from motionlang.features.base import downsample
 from motionlang.features.joint_map import positions21
 from motionlang.models.registry import load_model
+from motionlang.models.seq2seq.config import L2MOptions
 from motionlang.models.seq2seq.decode.rerank import check_same_features
 from motionlang.models.seq2seq.decode.search import generate
 from motionlang.models.t2m import (
@@ -23,50 +23,6 @@ from motionlang.models.t2m import (
     fit_length,
     interp_frames,
 )
-from motionlang.utils.checks import MAX_WIDTH
-
-
-@dataclass
-class L2MOptions:
-    """How an L2M samples (``--model l2m:method=sample,width=5``).
-
-    Attributes:
-        method: "sample" (ancestral), "beam" (the paper's sampled beam) or "mean" (the
-            mixture's expected frames); None: the model's own way for ``generate``, "mean"
-            for evaluation rows.
-        width: samples (or beam width) per sentence; the likeliest is kept (or, with
-            ``rerank``, the one that M2L finds the sentence likeliest for).
-        temperature: sharpen the mixture when sampling (1: as trained).
-        rerank: an M2L (packaged name, file or run folder) ranking the ``width`` motions.
-        length_norm: rank hypotheses by log likelihood per frame.
-        map_words: read a word its vocabulary lacks as the nearest known word
-            (``models.word_map.WordOptions``; ``generate`` prints what it read as what);
-            false: as one unknown-word token.
-    """
-
-    method: str | None = field(default=None, metadata={"choices": ("sample", "beam", "mean")})
-    width: int = 1
-    temperature: float = 1.0
-    rerank: str | None = None
-    length_norm: bool = False
-    map_words: bool = True
-
-    def __post_init__(self) -> None:
-        if self.method not in (None, "sample", "beam", "mean"):
-            raise ValueError(f"method must be sample, beam or mean, got {self.method!r}")
-        if isinstance(self.width, bool) or not 1 <= int(self.width) <= MAX_WIDTH:
-            raise ValueError(f"width must be an integer in 1..{MAX_WIDTH}, got {self.width}")
-        if not (math.isfinite(self.temperature) and self.temperature > 0):
-            raise ValueError(f"temperature must be a finite number > 0, got {self.temperature}")
-        if self.method == "mean" and self.width != 1:
-            raise ValueError("width applies to 'sample' and 'beam'; mean decoding gives one "
-                             "motion")
-        if self.method == "mean" and self.temperature != 1.0:
-            raise ValueError("temperature applies to 'sample' and 'beam'; mean decoding "
-                             "draws nothing")
-        if self.rerank and (self.method in (None, "mean") or self.width < 2):
-            raise ValueError("rerank ranks several motions: method=sample or beam with "
-                             "width 2 or more")
 
 
 class L2MText2Motion(Text2MotionAdapter):
@@ -93,6 +49,25 @@ class L2MText2Motion(Text2MotionAdapter):
         if self.reranker is not None:
             kw.setdefault("reranker", self.reranker)
         return kw
+
+    def configure(self, options: Any) -> L2MText2Motion:
+        """The options, checked once; also against this model's own way of decoding (a
+        model that decodes by its expected frames draws nothing to sharpen or rank)."""
+        super().configure(options)
+        o = self.options
+        if o.method is None and self.default_method() == "mean":
+            # mean decoding gives one motion whatever the width; it draws nothing to
+            # sharpen or to rank
+            if o.temperature != 1.0:
+                raise MotionlangError("temperature applies to 'sample' and 'beam'; mean "
+                                      "decoding draws nothing (this model generates with "
+                                      "mean decoding, trained on its expected frames; ask "
+                                      "for method sample)")
+            if o.rerank:
+                raise MotionlangError("rerank ranks several motions: this model "
+                                      "generates with mean decoding; ask for method sample "
+                                      "or beam, width 2 or more")
+        return self
 
     @property
     def fps(self) -> float:

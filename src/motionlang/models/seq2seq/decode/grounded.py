@@ -167,12 +167,13 @@ def familiar(hyps: list[tuple[str, float]]) -> list[tuple[str, float]]:
     return kept
 
 
-def describe(model: Any, motion, *, width: int = 5, max_len: int | None = None,
-             length_penalty: float = 0.0, rank: str = "logp",
-             grounded: bool = True) -> list[tuple[str, float]]:
+def describe(model: Any, motion, *, width: int, length_penalty: float, rank: str,
+             max_len: int | None = None, grounded: bool = True) -> list[tuple[str, float]]:
     """A :class:`Motion` -> up to W sentences with their total log probability, best first
-    (as ``models.seq2seq.decode.search.describe``), checked against the motion's gait and the model's
-    familiarity with it (module docstring); ``grounded=False``: the model's beam as it is."""
+    (as ``models.seq2seq.decode.search.describe``), checked against the motion's gait and
+    the model's familiarity with it (module docstring); ``grounded=False``: the model's beam
+    as it is. The family's describer (``Family.describes``): ``width``, ``length_penalty``
+    and ``rank`` come from the caller's ``library.options.DescribeOptions``."""
     frames = motion_frames(_features_of(model), motion, 1)[0]
     beam: dict[str, Any] = dict(max_len=max_len, length_penalty=length_penalty, rank=rank)
     hyps = describe_features(model, frames, width=width, **beam)
