@@ -263,10 +263,10 @@ def more(args: argparse.Namespace) -> None:
     the lowest validation loss as the recipe does."""
     import torch
 
+    from motionlang.datasets.mixing import mix_training
     from motionlang.datasets.sources import parse_source
     from motionlang.models.masked.model import MaskedModel
     from motionlang.recipes import masked as recipe
-    from motionlang.recipes.seq2seq import mix_training
     from motionlang.training.config import TrainConfig
 
     p = Path(args.pack)

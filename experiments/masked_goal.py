@@ -50,10 +50,10 @@ def main() -> None:
     import torch
     from masked_root_path import _load
 
+    from motionlang.datasets.mixing import mix_training
     from motionlang.datasets.sources import parse_source
     from motionlang.models.masked.model import MaskedModel
     from motionlang.recipes.masked import _stage, generator_items
-    from motionlang.recipes.seq2seq import mix_training
     from motionlang.training.config import TrainConfig
 
     torch.set_num_threads(args.threads)

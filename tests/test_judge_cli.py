@@ -7,10 +7,9 @@ import json
 
 import pytest
 
-from helpers.data import bandai_takes
+from helpers.data import bandai_folder
 from motionlang.cli.main import main
 
-TAKES = ("walk_normal_001", "walk-back_normal_001", "bye_happy_001")
 TINY = ["--hidden", "8", "--embed", "8", "--layers", "2", "--kernel", "3", "--window", "12"]
 
 
@@ -18,21 +17,7 @@ TINY = ["--hidden", "8", "--embed", "8", "--layers", "2", "--kernel", "3", "--wi
 def bandai(tmp_path_factory):
     """Dataset 2 with contents walk / wave-left-hand, styles normal / elderly, takes 1..5 of
     each pair (take 5: test, 4: validation)."""
-    tmp = tmp_path_factory.mktemp("bandai")
-    src = bandai_takes(TAKES, tmp)
-    top = tmp / "bandai" / "Bandai-Namco-Research-Motiondataset-2"
-    (top / "data").mkdir(parents=True)
-    (top / "cfg").mkdir()
-    (top / "cfg" / "content_label.txt").write_text("dataset-2_walk\ndataset-2_wave-left-hand\n")
-    (top / "cfg" / "style_label.txt").write_text("dataset-2_normal\ndataset-2_elderly\n")
-    for k, (content, style) in enumerate([("walk", "normal"), ("walk", "elderly"),
-                                          ("wave-left-hand", "normal"),
-                                          ("wave-left-hand", "elderly")]):
-        for t in range(1, 6):
-            take = TAKES[(k + t) % len(TAKES)]
-            (top / "data" / f"dataset-2_{content}_{style}_{t:03d}.bvh").write_bytes(
-                (src / f"{take}.bvh").read_bytes())
-    return tmp / "bandai"
+    return bandai_folder(tmp_path_factory.mktemp("bandai"))
 
 
 @pytest.fixture(scope="module")

@@ -35,3 +35,28 @@ def bandai_takes(takes: list[str] | tuple[str, ...], dest: Path) -> Path:
                     break
     assert not want, f"missing from the archive: {sorted(want)}"
     return dest
+
+
+#: the takes of dataset 1 that :func:`bandai_folder` lays out as dataset 2's
+BANDAI_TAKES = ("walk_normal_001", "walk-back_normal_001", "bye_happy_001")
+
+
+def bandai_folder(tmp: Path) -> Path:
+    """A small Bandai dataset-2 folder under ``tmp``: contents walk / wave-left-hand,
+    styles normal / elderly, takes 1..5 of each pair (take 5: test, 4: validation), each a
+    real dataset-1 take (:func:`bandai_takes`); skips where the archive is absent."""
+    tmp.mkdir(parents=True, exist_ok=True)
+    src = bandai_takes(BANDAI_TAKES, tmp)
+    top = tmp / "bandai" / "Bandai-Namco-Research-Motiondataset-2"
+    (top / "data").mkdir(parents=True)
+    (top / "cfg").mkdir()
+    (top / "cfg" / "content_label.txt").write_text("dataset-2_walk\ndataset-2_wave-left-hand\n")
+    (top / "cfg" / "style_label.txt").write_text("dataset-2_normal\ndataset-2_elderly\n")
+    for k, (content, style) in enumerate([("walk", "normal"), ("walk", "elderly"),
+                                          ("wave-left-hand", "normal"),
+                                          ("wave-left-hand", "elderly")]):
+        for t in range(1, 6):
+            take = BANDAI_TAKES[(k + t) % len(BANDAI_TAKES)]
+            (top / "data" / f"dataset-2_{content}_{style}_{t:03d}.bvh").write_bytes(
+                (src / f"{take}.bvh").read_bytes())
+    return tmp / "bandai"

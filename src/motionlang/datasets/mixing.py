@@ -85,3 +85,20 @@ def source_counts(items: Sequence[dict], source_of: dict[str, int], n: int) -> l
     for it in items:
         counts[source_of[it["id"]]] += 1
     return counts
+
+
+def mix_training(sources: Sequence, train_items: list[dict], source_of: dict[str, int],
+                 seed: int) -> list[dict]:
+    """Several sources: the training items weighted by their ``@W`` (``mixing.mix_items``;
+    unchanged without weights), with a line per dataset of its share of an epoch."""
+    if len(sources) < 2:
+        return train_items
+    n, weights = len(sources), source_weights(sources)
+    before = source_counts(train_items, source_of, n)
+    if weights:
+        train_items = mix_items(train_items, source_of, weights, seed=seed)
+    after = source_counts(train_items, source_of, n)
+    for s, b, a in zip(sources, before, after, strict=True):
+        print(f"{s}: {a} training pairs per epoch ({a / len(train_items):.0%}; "
+              f"{b} before weighting)")
+    return train_items

@@ -22,6 +22,7 @@ from motionlang.errors import MotionlangError
 from motionlang.models.judge.config import JudgeConfig
 from motionlang.models.registry import family
 from motionlang.recipes import Recipe
+from motionlang.training.run_guard import keep_splits
 from motionlang.training.run_log import lead_process, log_command, write_licence
 
 if TYPE_CHECKING:
@@ -168,6 +169,9 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
         raise MotionlangError(f"{source.root}: no Bandai training takes")
     used = [source] + ([data_cfg.primitives] if data_cfg.primitives else [])
     out.mkdir(parents=True, exist_ok=True)
+    if lead_process():   # the takes of each split, as every recipe keeps them
+        keep_splits({"train": [it.id for it in train], "val": [it.id for it in val],
+                     "test": [it.id for it in test]}, out / "splits", resume)
     note = write_licence(out, used, "judge")
     log_command(out / "commands.jsonl", options if options is not None else
                 {"model": "judge", "data": str(source), "resume": resume, **model_cfg,
@@ -199,7 +203,8 @@ JUDGE = Recipe(run=run, data_config=JudgeOptions,
                                "optimizer": "adamw", "weight_decay": 1e-4},
                several_sources=False, source_kind="bandai", resume_may_change=("verbose",),
                run_files=f"best.pt and last.pt (checkpoints), history.json, loss_curve.png, "
-                         f"{LICENCE_FILE} (the non-commercial licence)",
+                         f"splits/ (the takes of each split), {LICENCE_FILE} (the "
+                         f"non-commercial licence)",
                description=f"{NON_COMMERCIAL} Splits: dataset 2's takes numbered 0 mod 5 are "
                            "test, 4 mod 5 validation (picks the epoch), the rest and dataset 1 "
                            "training.")

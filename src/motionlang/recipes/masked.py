@@ -24,15 +24,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from motionlang.datasets.mixing import source_weights
+from motionlang.datasets.mixing import mix_training, source_weights
 from motionlang.datasets.position_items import build_twostream_data
-from motionlang.datasets.splits import save_splits
 from motionlang.errors import MotionlangError
 from motionlang.features.positions import local_joints
 from motionlang.models.masked.config import MaskedConfig
 from motionlang.models.registry import family
 from motionlang.recipes import Recipe
-from motionlang.recipes.seq2seq import mix_training
+from motionlang.training.run_guard import keep_splits
 from motionlang.training.run_log import lead_process, log_command, write_licence
 from motionlang.utils.checks import check_numbers
 
@@ -182,7 +181,7 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
                                 max_seconds=data_cfg.max_seconds)
     lead = lead_process()
     if lead:
-        save_splits(data.splits, out / "splits")
+        keep_splits(data.splits, out / "splits", resume)
     note = write_licence(out, sources, "masked-token model")
     log_command(out / "commands.jsonl", options if options is not None else
                 {"model": "masked", "data": [str(s) for s in sources], "resume": resume,

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from motionlang.datasets.mixing import source_weights
+from motionlang.datasets.mixing import mix_training, source_weights
 from motionlang.datasets.position_items import build_twostream_data
 from motionlang.errors import MotionlangError
 from motionlang.evaluation.metrics.t2m import hit_ranks
@@ -26,7 +26,6 @@ from motionlang.evaluation.metrics.t2m import retrieval_scores as scores
 from motionlang.models.registry import family, load_model
 from motionlang.models.retrieval.config import RetrievalConfig
 from motionlang.recipes import Recipe
-from motionlang.recipes.seq2seq import mix_training
 from motionlang.training.run_guard import keep_splits
 from motionlang.training.run_log import lead_process, log_command, write_licence
 from motionlang.utils.checks import check_numbers

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from motionlang.datasets.mixing import mix_items, source_counts, source_weights
+from motionlang.datasets.mixing import mix_training, source_weights
 from motionlang.datasets.seq2seq_pairs import (
     balance_repeats,
     build_pairs,
@@ -112,23 +112,6 @@ def check_mixed_features(sources: Sequence, features: str) -> None:
         raise MotionlangError("--features angles are KIT MMM joint angles, which mixed "
                               "datasets do not share: use --features positions with several "
                               "--data")
-
-
-def mix_training(sources: Sequence, train_items: list[dict], source_of: dict[str, int],
-                 seed: int) -> list[dict]:
-    """Several sources: the training items weighted by their ``@W`` (``mixing.mix_items``;
-    unchanged without weights), with a line per dataset of its share of an epoch."""
-    if len(sources) < 2:
-        return train_items
-    n, weights = len(sources), source_weights(sources)
-    before = source_counts(train_items, source_of, n)
-    if weights:
-        train_items = mix_items(train_items, source_of, weights, seed=seed)
-    after = source_counts(train_items, source_of, n)
-    for s, b, a in zip(sources, before, after, strict=True):
-        print(f"{s}: {a} training pairs per epoch ({a / len(train_items):.0%}; "
-              f"{b} before weighting)")
-    return train_items
 
 
 def _config_check(kind: str, model_cfg: dict) -> None:

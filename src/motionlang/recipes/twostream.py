@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from motionlang.datasets.mixing import source_weights
+from motionlang.datasets.mixing import mix_training, source_weights
 from motionlang.datasets.position_items import build_twostream_data
 from motionlang.errors import MotionlangError
 from motionlang.evaluation.t2m.selection import format_scores, guo_selector
@@ -29,7 +29,6 @@ from motionlang.models.length import SentenceLength
 from motionlang.models.registry import family
 from motionlang.models.twostream.config import ABLATIONS
 from motionlang.recipes import Recipe
-from motionlang.recipes.seq2seq import mix_training
 from motionlang.training.run_guard import keep_splits
 from motionlang.training.run_log import lead_process, log_command, write_licence
 from motionlang.utils.checks import check_numbers
