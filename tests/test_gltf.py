@@ -108,3 +108,33 @@ def test_convert_onto_a_users_rig(tmp_path, capsys):
                  str(tmp_path / "m.json")]) == 2
     assert capsys.readouterr().err.strip().endswith("--rig-joint-map needs --rig")
     assert not (tmp_path / "x.bvh").exists()
+
+
+@pytest.mark.parametrize("ext", [".glb", ".gltf"])
+def test_read_motion_takes_a_glb_back_as_a_motion(tmp_path, ext):
+    """What motionlang writes reads back: the same joints, frame rate and body positions
+    (joint angles fitted to the played positions; float32 storage)."""
+    motion = synthetic_mmm(T=25, fps=100.0)
+    out = write_motion(motion, tmp_path / f"walk{ext}")
+    back = read_motion(out)
+    assert back.source_format == "gltf" and back.fps == pytest.approx(100.0)
+    assert back.n_frames == 25 and back.skeleton.names == motion.skeleton.names
+    err = np.abs(positions21(back) - positions21(motion)).max()
+    assert err < 1e-3, f"{err * 1000:.3f} mm"
+    assert main(["info", str(out)]) == 0
+
+
+def test_a_glb_without_pygltflib_is_one_line(tmp_path, monkeypatch, capsys):
+    import builtins
+    out = write_motion(synthetic_mmm(T=5, fps=100.0), tmp_path / "w.glb")
+    real = builtins.__import__
+
+    def no_gltf(name, *args, **kwargs):
+        if name == "pygltflib":
+            raise ImportError(name)
+        return real(name, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "__import__", no_gltf)
+    assert main(["info", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "w.glb" in err and "motionlang[export]" in err and len(err.splitlines()) == 1

@@ -27,6 +27,7 @@ from motionlang.formats.asf_amc import read_amc, read_asf, write_amc
 from motionlang.formats.bvh import read_bvh, write_bvh
 from motionlang.formats.deepmimic import looks_like_deepmimic, read_deepmimic
 from motionlang.formats.gltf import write_gltf
+from motionlang.formats.gltf_read import read_gltf
 from motionlang.formats.mit import read_mit
 from motionlang.formats.mmm import read_mmm, write_mmm
 from motionlang.formats.units import motion_stature, unit_name
@@ -34,7 +35,7 @@ from motionlang.kinematics.motion import Motion
 from motionlang.kinematics.skeleton import Skeleton
 from motionlang.utils.sidecar import load_json
 
-READ_EXTENSIONS = (".xml", ".bvh", ".amc", ".mat")
+READ_EXTENSIONS = (".xml", ".bvh", ".amc", ".mat", ".glb", ".gltf")
 #: extensions read when the content is a motion's: DeepMimic clips are ``.txt`` files
 CONTENT_EXTENSIONS = (".txt",)
 WRITE_EXTENSIONS = (".bvh", ".xml", ".amc", ".glb", ".gltf")
@@ -95,8 +96,9 @@ def read_motion(path: str | Path, *, skeleton: Skeleton | str | Path | None = No
     """Read a motion file, choosing the reader from the extension.
 
     Args:
-        path: ``.xml`` (MMM), ``.bvh``, ``.amc``, ``.mat`` (MIT walking data) or ``.txt``
-            (a DeepMimic clip).
+        path: ``.xml`` (MMM), ``.bvh``, ``.amc``, ``.mat`` (MIT walking data), ``.txt``
+            (a DeepMimic clip) or ``.glb`` / ``.gltf`` (a skeletal animation: joint angles
+            fitted to its joints' positions).
         skeleton: for ``.amc``: a ``Skeleton`` or the path of its ``.asf`` (found next to
             the AMC when omitted).
         fps: for ``.amc`` (default 120); for other formats, the motion is resampled to
@@ -135,6 +137,8 @@ def read_motion(path: str | Path, *, skeleton: Skeleton | str | Path | None = No
         motion = read_bvh(path)
     elif ext == ".txt":
         motion = read_deepmimic(path)
+    elif ext in (".glb", ".gltf"):
+        motion = read_gltf(path)
     elif ext == ".mat":
         motions = read_mit(path)
         if not 1 <= sequence <= len(motions):

@@ -6,17 +6,24 @@ motionlang's skeletons: it composes the nodes' translation, rotation and scale a
 defines them) and lets a user or a test see what a viewer will show. It reads the first
 animation of a file whose channels share one set of key times (as motionlang writes
 them); a file that needs interpolation between differing key times is refused, as are
-sparse accessors and external buffers.
+sparse accessors and external buffers. :func:`read_gltf` turns the skeleton's played
+positions into a :class:`Motion` (joint angles fitted to them), so that ``info``,
+``render``, ``describe`` and ``convert`` take a GLB as they take a BVH.
 """
 from __future__ import annotations
 
 import base64
+import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from motionlang.errors import MotionFormatError
+from motionlang.kinematics.from_positions import ZXY, motion_from_positions
+from motionlang.kinematics.motion import Motion
+from motionlang.kinematics.rotations import matrix_to_chain
+from motionlang.kinematics.skeleton import Joint, Skeleton
 from motionlang.utils.limits import check_file, check_motion
 
 _DTYPES = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16,
@@ -34,6 +41,7 @@ class GltfAnimation:
         times: (T,) key times in seconds.
         fps: frames per second, from the key spacing.
         positions: (T, J, 3) world positions in the file's units (metres, Y up).
+        rotations: (T, J, 3, 3) world rotation (times scale) of each node.
         skin_joints: the node indices of the first skin (empty without one).
         name: the animation's name.
     """
@@ -43,6 +51,7 @@ class GltfAnimation:
     times: np.ndarray
     fps: float
     positions: np.ndarray
+    rotations: np.ndarray
     skin_joints: list[int]
     name: str
 
@@ -105,9 +114,12 @@ def read_gltf_animation(path: str | Path, animation: int = 0) -> GltfAnimation:
     Raises:
         MotionFormatError: a missing, malformed or unsupported file, naming it.
     """
-    import pygltflib
-
     path = Path(path)
+    try:
+        import pygltflib
+    except ImportError:   # an optional dependency: the export extra
+        raise MotionFormatError(path, "reading glTF needs pygltflib: pip install "
+                                      "'motionlang[export]'") from None
     check_file(path, parse_factor=3.0)
     try:
         gltf = pygltflib.GLTF2.load(str(path))
@@ -181,6 +193,7 @@ def read_gltf_animation(path: str | Path, animation: int = 0) -> GltfAnimation:
     skins = gltf.skins[0].joints if gltf.skins else []
     return GltfAnimation(names=[n.name or f"node{i}" for i, n in enumerate(gltf.nodes)],
                          parents=parents, times=times, fps=fps, positions=world_t,
+                         rotations=world_R,
                          skin_joints=list(skins), name=anim.name or "")
 
 
@@ -197,3 +210,70 @@ def _topological(parents: np.ndarray, path: Path) -> list[int]:
     if len(order) != len(parents):
         raise MotionFormatError(path, "the node hierarchy has a cycle")
     return order
+
+
+def read_gltf(path: str | Path) -> Motion:
+    """A glTF / GLB file's skeletal animation as a :class:`Motion` on the joints of its first
+    skin (all nodes without one), in metres, Y up, as glTF is. Where every joint keeps its
+    offset from its parent and no node is scaled (a rig, as motionlang and Blender write
+    them), the joints' own rotations are read exactly; otherwise joint angles are fitted to
+    the played positions (``kinematics.from_positions``).
+
+    Raises:
+        MotionFormatError: as :func:`read_gltf_animation`, or joints that are not one tree,
+            or no frame rate.
+    """
+    path = Path(path)
+    anim = read_gltf_animation(path)
+    chosen = set(anim.skin_joints) if anim.skin_joints else set(range(len(anim.names)))
+    order = [j for j in _topological(anim.parents, path) if j in chosen]
+
+    def kept_parent(j: int) -> int:
+        p = int(anim.parents[j])
+        while p >= 0 and p not in chosen:
+            p = int(anim.parents[p])
+        return p
+
+    index = {j: i for i, j in enumerate(order)}
+    parents = [index.get(kept_parent(j), -1) for j in order]
+    roots = sum(p < 0 for p in parents)
+    if not order or roots != 1:
+        raise MotionFormatError(path, f"its joints are not one tree ({roots} roots)")
+    if not anim.fps > 0:
+        raise MotionFormatError(path, "a single key and no frame rate (extras.fps)")
+    names = [anim.names[j] for j in order]
+    R, x = anim.rotations[:, order], anim.positions[:, order]
+    motion = _rig_motion(R, x, anim.fps, names, parents, anim.name or path.stem)
+    if motion is None:
+        motion = motion_from_positions(x, anim.fps, names, parents, name=anim.name or path.stem)
+    return dataclasses.replace(motion, source_format="gltf")
+
+
+def _rig_motion(R: np.ndarray, x: np.ndarray, fps: float, names: list[str],
+                parents: list[int], name: str) -> Motion | None:
+    """The Motion whose joints turn as the nodes' world rotations R (T, J, 3, 3) say, at
+    the world positions x (T, J, 3); None where a node is scaled or a joint's offset from
+    its parent changes over time (no rig with fixed bones plays it)."""
+    T = len(R)
+    eye = np.eye(3)
+    if np.abs(np.swapaxes(R, -1, -2) @ R - eye).max() > 1e-4:   # scaled or sheared
+        return None
+    joints = [Joint(names[0], -1, np.zeros(3))]   # its turn: root_rotation
+    angles = []
+    has_kids = {q for q in parents if q >= 0}
+    for j in range(1, len(names)):
+        q = parents[j]
+        offset = np.einsum("tji,tj->ti", R[:, q], x[:, j] - x[:, q])   # in the parent's frame
+        if np.abs(offset - offset[0]).max() > 1e-4 * max(1.0, float(np.abs(offset).max())):
+            return None
+        local = np.swapaxes(R[:, q], -1, -2) @ R[:, j]
+        if j in has_kids:
+            joints.append(Joint(names[j], q, offset[0], axes=ZXY,
+                                dof_names=tuple(f"{names[j]}_{c}rotation" for c in "ZXY")))
+            angles.append(np.unwrap(matrix_to_chain(local, ZXY), axis=0))
+        else:   # a leaf's turn moves no joint
+            joints.append(Joint(names[j], q, offset[0]))
+    sk = Skeleton(joints, root_axes=ZXY, name=name)
+    joint_angles = np.concatenate(angles, axis=1) if angles else np.zeros((T, 0))
+    root_rotation = np.unwrap(matrix_to_chain(R[:, 0], ZXY), axis=0)
+    return Motion(sk, float(fps), x[:, 0].copy(), root_rotation, joint_angles, name=name)
