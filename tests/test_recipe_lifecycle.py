@@ -9,7 +9,11 @@ from pathlib import Path
 import pytest
 
 from helpers.data import bandai_folder, shared_file
+from helpers.patching import patch_everywhere
 from motionlang.models.registry import family, kinds_with
+from motionlang.training import run_steps
+
+SRC = Path(__file__).resolve().parents[1] / "src" / "motionlang"
 
 pytest.importorskip("torch")
 
@@ -77,8 +81,18 @@ def test_a_fresh_run_and_its_resume_leave_the_same_files(kind, data, tmp_path, m
     source = _source(kind, data)
     options = TINY[kind][1]
     out = tmp_path / "run"
+    steps: list[str] = []
+    recipe_of(kind)   # its module loaded, so that the spies below replace its bindings
+    for name in ("begin_run", "finish_run"):
+        real = getattr(run_steps, name)
+        patch_everywhere(monkeypatch, run_steps, name,
+                         lambda *a, _real=real, _name=name, **k: steps.append(_name)
+                         or _real(*a, **k))
     path = ml.train(kind, str(source), out, **options)
     fresh = run_files(out)
+    # the run folder's steps, once each and in order (the masked recipe saves its model at
+    # the end of its second stage)
+    assert steps == (["begin_run"] if kind == "masked" else ["begin_run", "finish_run"])
     assert path == out / family(kind).model_file and path.is_file()
     assert {"run.json", "commands.jsonl", family(kind).model_file} <= set(fresh)
     log = (out / "commands.jsonl").read_text(encoding="utf-8").splitlines()
@@ -92,3 +106,11 @@ def test_a_fresh_run_and_its_resume_leave_the_same_files(kind, data, tmp_path, m
     assert run_files(out) == fresh
     assert len((out / "commands.jsonl").read_text(encoding="utf-8").splitlines()) == 2
     capsys.readouterr()
+
+
+def test_recipes_write_the_run_files_through_the_shared_steps():
+    """No recipe writes the split, the licence or the command log itself."""
+    for path in sorted((SRC / "recipes").glob("*.py")):
+        text = path.read_text(encoding="utf-8")
+        for name in ("keep_splits", "write_licence", "log_command", "save_splits"):
+            assert name not in text, f"{path.name} calls {name}: use training.run_steps"

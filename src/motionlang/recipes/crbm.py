@@ -24,7 +24,7 @@ from motionlang.models.crbm.model import CRBM as CRBMModel
 from motionlang.models.crbm.stack import CRBMStack
 from motionlang.models.registry import family
 from motionlang.recipes import Recipe
-from motionlang.training.run_log import log_command
+from motionlang.training.run_steps import begin_run, finish_run
 
 #: the two-level model of ``level2``, beside the run folder's model.npz
 STACK_FILE = "stack.npz"
@@ -96,13 +96,13 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
     out = Path(out_dir)
     data = load_cmu35(str(sources[0]))
     seqs = [model_frames(c) for c in data.train]
-    log_command(out / "commands.jsonl", options if options is not None else
-                {"model": "crbm", "data": str(sources[0]), **dataclasses.asdict(config),
-                 **vars(data_cfg)})
+    # the paper's fixed trials, no split of its own; the CMU database restricts no use
+    note = begin_run(out, sources=(), what="CRBM", resume=False, options=options,
+                     logged={"model": "crbm", "data": str(sources[0]),
+                             **dataclasses.asdict(config), **vars(data_cfg)})
     model = CRBMModel(config, 59).fit(seqs, show_progress=not data_cfg.quiet)
-    path = out / family("crbm").model_file
-    model.save(path)
-    print(f"{path}: {model.describe()}")
+    path = finish_run(out / family("crbm").model_file, model,
+                      lambda: f"{out / family('crbm').model_file}: {model.describe()}", note)
     if data_cfg.level2:
         stack = CRBMStack.fit(model, seqs, config2, show_progress=not data_cfg.quiet)
         stack.save(out / STACK_FILE)

@@ -24,8 +24,8 @@ from motionlang.features.h3d_vectors import H3D_BODIES
 from motionlang.models.evaluator.config import EvaluatorConfig
 from motionlang.models.registry import family
 from motionlang.recipes import Recipe
-from motionlang.training.run_guard import keep_splits
-from motionlang.training.run_log import lead_process, log_command, write_licence
+from motionlang.training.run_log import lead_process
+from motionlang.training.run_steps import begin_run, finish_run
 from motionlang.utils.checks import check_numbers
 
 #: the HumanML3D bodies the rows can be made on (``features.h3d_vectors.H3D_BODIES``)
@@ -122,13 +122,11 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg,
     data = build_evaluator_data(str(sources[0]), body, seed=cfg.seed,
                                 max_seconds=data_cfg.max_seconds, bones=bones)
     config.bones = data.bones
-    if lead:
-        keep_splits({s: list(dict.fromkeys(it["id"] for it in items))
-                     for s, items in data.items.items()}, out / "splits", resume)
-        write_licence(out, sources, "evaluator")
-    log_command(out / "commands.jsonl", options if options is not None else
-                {"model": "evaluator", "data": [str(s) for s in sources], "resume": resume,
-                 **model_cfg, **vars(data_cfg), **vars(cfg)})
+    note = begin_run(out, sources=sources, what="evaluator", resume=resume, options=options,
+                     splits={s: list(dict.fromkeys(it["id"] for it in items))
+                             for s, items in data.items.items()},
+                     logged={"model": "evaluator", "data": [str(s) for s in sources],
+                             "resume": resume, **model_cfg, **vars(data_cfg), **vars(cfg)})
     torch.manual_seed(cfg.seed)
     model = TextMotionEvaluator(config)
     if lead:
@@ -143,13 +141,10 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg,
     model, history = train_evaluator(model, data.items["train"], cfg, val_items=val,
                                      body=body, resume=resume, select=select)
     path = out / family("evaluator").model_file
-    if not lead:
-        return path
-    if val and (out / "best.pt").is_file():
+    if lead and val and (out / "best.pt").is_file():
         model = TextMotionEvaluator.load(out / "best.pt")
-    model.save(path)
-    print(f"{path}: {_kept_epoch(history, bool(val))}")
-    return path
+    return finish_run(path, model, lambda: f"{path}: {_kept_epoch(history, bool(val))}",
+                      note)
 
 
 EVALUATOR = Recipe(run=run, data_config=EvaluatorDataOptions, several_sources=False,

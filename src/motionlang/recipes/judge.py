@@ -22,8 +22,8 @@ from motionlang.errors import MotionlangError
 from motionlang.models.judge.config import JudgeConfig
 from motionlang.models.registry import family
 from motionlang.recipes import Recipe
-from motionlang.training.run_guard import keep_splits
-from motionlang.training.run_log import lead_process, log_command, write_licence
+from motionlang.training.run_log import lead_process
+from motionlang.training.run_steps import begin_run, finish_run
 
 if TYPE_CHECKING:
     from motionlang.models.judge.fit import JudgeItem
@@ -168,14 +168,12 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
     if not train and not extra:
         raise MotionlangError(f"{source.root}: no Bandai training takes")
     used = [source] + ([data_cfg.primitives] if data_cfg.primitives else [])
-    out.mkdir(parents=True, exist_ok=True)
-    if lead_process():   # the takes of each split, as every recipe keeps them
-        keep_splits({"train": [it.id for it in train], "val": [it.id for it in val],
-                     "test": [it.id for it in test]}, out / "splits", resume)
-    note = write_licence(out, used, "judge")
-    log_command(out / "commands.jsonl", options if options is not None else
-                {"model": "judge", "data": str(source), "resume": resume, **model_cfg,
-                 **dataclasses.asdict(data_cfg), **dataclasses.asdict(train_cfg)})
+    note = begin_run(out, sources=used, what="judge", resume=resume, options=options,
+                     splits={"train": [it.id for it in train], "val": [it.id for it in val],
+                             "test": [it.id for it in test]},
+                     logged={"model": "judge", "data": str(source), "resume": resume,
+                             **model_cfg, **dataclasses.asdict(data_cfg),
+                             **dataclasses.asdict(train_cfg)})
     print(f"judge: {len(train)} training takes, {len(val)} validation, {len(test)} test"
           + (f"; {len(extra)} procedural primitives" if data_cfg.primitives else ""))
     cfg = dict(model_cfg)
@@ -185,17 +183,16 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
                               uniform=not data_cfg.as_given, resume=resume,
                               verbose=data_cfg.verbose)
     path = out / family("judge").model_file
-    if lead_process():
-        judge.save(path)
+
+    def summary() -> str:
         line = f"{path}: {len(judge.config.contents)} contents, {len(judge.config.styles)} styles"
         if test:
             acc = accuracy(judge, test)
             line += (f"; on the {acc['n']} test takes content {acc['content']:.3f}, style "
                      f"{acc['style']:.3f}")
-        print(line)
-        if note:
-            print(note.splitlines()[0])
-    return path
+        return line
+
+    return finish_run(path, judge, summary, note)
 
 
 JUDGE = Recipe(run=run, data_config=JudgeOptions,

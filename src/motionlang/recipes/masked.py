@@ -31,8 +31,8 @@ from motionlang.features.positions import local_joints
 from motionlang.models.masked.config import MaskedConfig
 from motionlang.models.registry import family
 from motionlang.recipes import Recipe
-from motionlang.training.run_guard import keep_splits
-from motionlang.training.run_log import lead_process, log_command, write_licence
+from motionlang.training.run_log import lead_process
+from motionlang.training.run_steps import begin_run
 from motionlang.utils.checks import check_numbers
 
 if TYPE_CHECKING:
@@ -180,13 +180,11 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
     data = build_twostream_data(paths if len(paths) > 1 else paths[0], seed=train_cfg.seed,
                                 max_seconds=data_cfg.max_seconds)
     lead = lead_process()
-    if lead:
-        keep_splits(data.splits, out / "splits", resume)
-    note = write_licence(out, sources, "masked-token model")
-    log_command(out / "commands.jsonl", options if options is not None else
-                {"model": "masked", "data": [str(s) for s in sources], "resume": resume,
-                 **config.to_dict(), **dataclasses.asdict(data_cfg),
-                 **dataclasses.asdict(train_cfg)})
+    note = begin_run(out, sources=sources, what="masked-token model", splits=data.splits,
+                     resume=resume, options=options,
+                     logged={"model": "masked", "data": [str(s) for s in sources],
+                             "resume": resume, **config.to_dict(),
+                             **dataclasses.asdict(data_cfg), **dataclasses.asdict(train_cfg)})
     started = time.perf_counter()
     captions = sorted({str(it["sentence"]) for part in data.items.values() for it in part})
     for i in range(0, len(captions), 256):   # every caption through the encoder once

@@ -26,8 +26,8 @@ from motionlang.evaluation.metrics.t2m import retrieval_scores as scores
 from motionlang.models.registry import family, load_model
 from motionlang.models.retrieval.config import RetrievalConfig
 from motionlang.recipes import Recipe
-from motionlang.training.run_guard import keep_splits
-from motionlang.training.run_log import lead_process, log_command, write_licence
+from motionlang.training.run_log import lead_process
+from motionlang.training.run_steps import begin_run, finish_run
 from motionlang.utils.checks import check_numbers
 from motionlang.utils.progress import progress
 
@@ -234,13 +234,11 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
     if data_cfg.holdout_words:
         train_items = [it for it in train_items if not uses_holdout(str(it["sentence"]))]
     lead = lead_process()
-    if lead:
-        keep_splits(data.splits, out / "splits", resume)
-    note = write_licence(out, sources, "retrieval model")
-    log_command(out / "commands.jsonl", options if options is not None else
-                {"model": "retrieval", "data": [str(s) for s in sources], "resume": resume,
-                 **config.to_dict(), **dataclasses.asdict(data_cfg),
-                 **dataclasses.asdict(train_cfg)})
+    note = begin_run(out, sources=sources, what="retrieval model", splits=data.splits,
+                     resume=resume, options=options,
+                     logged={"model": "retrieval", "data": [str(s) for s in sources],
+                             "resume": resume, **config.to_dict(),
+                             **dataclasses.asdict(data_cfg), **dataclasses.asdict(train_cfg)})
     # every caption through the frozen encoder once, in large batches, before training
     started = time.perf_counter()
     captions = sorted({str(it["sentence"]) for part in data.items.values() for it in part})
@@ -273,8 +271,8 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
     model = train_on_items(train_items, data.items.get("val") or [], model, train_cfg,
                            resume=resume, holdout=data_cfg.holdout_words)
     path = out / family("retrieval").model_file
-    if lead:
-        model.save(path)
+
+    def summary() -> str:
         line = f"{path}"
         test = data.items.get("test") or []
         if test:
@@ -284,10 +282,9 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
             if "holdout/t2m/R01" in s:
                 line += (f"; its captions with a held-out word R@1 "
                          f"{s['holdout/t2m/R01']:.1f} %, R@5 {s['holdout/t2m/R05']:.1f} %")
-        print(line)
-        if note:
-            print(note.splitlines()[0])
-    return path
+        return line
+
+    return finish_run(path, model, summary, note)
 
 
 RETRIEVAL = Recipe(run=run, data_config=RetrievalOptions,

@@ -25,10 +25,10 @@ from motionlang.datasets.text import SPECIALS
 from motionlang.errors import MotionlangError
 from motionlang.features.frames import model_dim
 from motionlang.models.length import SentenceLength
+from motionlang.models.registry import family
 from motionlang.models.seq2seq.config import L2MConfig, M2LConfig
 from motionlang.recipes import Recipe
-from motionlang.training.run_guard import keep_splits
-from motionlang.training.run_log import log_command, write_licence
+from motionlang.training.run_steps import begin_run, finish_run
 from motionlang.utils.checks import check_numbers
 
 #: the root's ground velocity and heading change among the features
@@ -183,29 +183,28 @@ def run(kind: str, sources: Sequence, out: Path, model_cfg: dict, train_cfg,
     model = new_model(kind, model_cfg, data, data_cfg, train_cfg.seed)   # checks root options
     if resume:   # the run's vocabulary and features, checked before anything is written
         check_resume_data(out, model)
-    keep_splits(data.splits, out / "splits", resume)
-    write_licence(out, sources, kind.upper())
-    log_command(out / "commands.jsonl", options if options is not None else
-                {"model": kind, "data": [str(s) for s in sources], "resume": resume,
-                 **model_cfg, **vars(data_cfg), **vars(train_cfg)})
+    note = begin_run(out, sources=sources, what=kind.upper(), splits=data.splits,
+                     resume=resume, options=options,
+                     logged={"model": kind, "data": [str(s) for s in sources],
+                             "resume": resume, **model_cfg, **vars(data_cfg),
+                             **vars(train_cfg)})
     print(f"{kind}: {len(train_items)} training pairs ({len(data.splits['train'])} motions), "
           f"vocabulary {len(data.vocab)}, {model_dim(data.features)} features/frame, "
           f"{sum(p.numel() for p in model.parameters()):,} parameters")
     trainer = Trainer(model, train_items, collate_pairs, train_cfg,
                       val_set=data.items.get("val") or None)
     history = trainer.fit(resume=resume)
-    path = out / "model.pt"
+    path = out / family(kind).model_file
+    final = model
     if trainer.rank == 0:
         best = out / "best.pt"
         # without validation "best" is the lowest training loss, which scheduled sampling
         # raises as it ramps up: then the final weights are the model
         by_train_loss = not data.items.get("val") and getattr(model.config, "rollout", 0) > 0
         final = type(model).load(best) if best.exists() and not by_train_loss else model
-        final.save(path)
-        last = history[-1] if history else {}
-        print(f"{path}: epoch {last.get('epoch')}, train {last.get('train')}, "
-              f"val {last.get('val')}")
-    return path
+    last = history[-1] if history else {}
+    return finish_run(path, final, lambda: f"{path}: epoch {last.get('epoch')}, train "
+                                           f"{last.get('train')}, val {last.get('val')}", note)
 
 
 def _run_m2l(*args: Any, **kw: Any) -> Path:

@@ -29,8 +29,8 @@ from motionlang.models.length import SentenceLength
 from motionlang.models.registry import family
 from motionlang.models.twostream.config import ABLATIONS
 from motionlang.recipes import Recipe
-from motionlang.training.run_guard import keep_splits
-from motionlang.training.run_log import lead_process, log_command, write_licence
+from motionlang.training.run_log import lead_process
+from motionlang.training.run_steps import begin_run, finish_run
 from motionlang.utils.checks import check_numbers
 
 #: what a run folder holds besides the model and commands.jsonl
@@ -177,12 +177,11 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg,
                                 max_frames=data_cfg.max_frames, mirror=data_cfg.mirror,
                                 by_source=by_source)
     train_items = mix_training(sources, data.items["train"], data.sources, train_cfg.seed)
-    if lead:
-        keep_splits(data.splits, out / "splits", resume)
-        write_licence(out, sources, "two-stream model")
-    log_command(out / "commands.jsonl", options if options is not None else
-                {"model": "twostream", "data": [str(s) for s in sources], "resume": resume,
-                 **config.to_dict(), **vars(data_cfg), **vars(train_cfg)})
+    note = begin_run(out, sources=sources, what="two-stream model", splits=data.splits,
+                     resume=resume, options=options,
+                     logged={"model": "twostream", "data": [str(s) for s in sources],
+                             "resume": resume, **config.to_dict(), **vars(data_cfg),
+                             **vars(train_cfg)})
     torch.manual_seed(train_cfg.seed)
     model = TwoStreamModel(config, data.features.normalizer)
     model.length_model = SentenceLength.from_items(data.items["train"])
@@ -213,10 +212,7 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg,
         select=None if select is None else WithHeads(select, fit_heads))
     fit_heads(model)   # on the kept epoch's weights
     path = out / family("twostream").model_file
-    if lead:
-        model.save(path)
-        print(summary(path, history))
-    return path
+    return finish_run(path, model, lambda: summary(path, history), note)
 
 
 @dataclass
