@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from motionlang.datasets.mixing import source_weights
 from motionlang.datasets.sources import LICENCE_FILE, parse_source
 from motionlang.errors import MotionlangError
 from motionlang.models.family import load_object
@@ -146,8 +147,9 @@ def run_recipe(kind: str, sources: Sequence, out: Path, model_cfg: dict, train_c
     """``recipe.run`` inside the run folder's guard (``training.run_guard``): a new run
     refuses a non-empty ``out`` unless ``overwrite`` (which first removes the previous
     run's files); the folder is locked against a second process for the whole run; a
-    ``resume`` whose data, seed or data options differ from the run's is refused before
-    anything is written. Under torchrun only the lead process checks and locks (the
+    ``resume`` whose data, seed or data options differ from the run's, or whose checkpoint
+    does not read, is refused before anything is written, as are weights on some sources
+    only. Under torchrun only the lead process checks and locks (the
     others write nothing)."""
     import dataclasses
 
@@ -165,9 +167,15 @@ def run_recipe(kind: str, sources: Sequence, out: Path, model_cfg: dict, train_c
                     and not isinstance(data_cfg, type) else {})
     identity = run_identity(kind, list(sources), getattr(train_cfg, "seed", None),
                             data_options)
-    if resume and recipe.trainer and not any(
-            p.is_file() for p in (out / "last.pt", *out.glob("*/last.pt"))):
-        raise MotionlangError(f"--resume: no checkpoint {out / 'last.pt'} to continue from")
+    if recipe.several_sources:
+        source_weights(sources)   # all weighted or none
+    if resume and recipe.trainer:   # a checkpoint to continue from, readable, checked first
+        last = [p for p in (out / "last.pt", *sorted(out.glob("*/last.pt"))) if p.is_file()]
+        if not last:
+            raise MotionlangError(f"--resume: no checkpoint {out / 'last.pt'} to continue "
+                                  "from")
+        from motionlang.training.run_files import read_training_checkpoint  # torch
+        read_training_checkpoint(last[0])
     with folder_lock(out):   # a busy folder is named as such before its content is
         check_run_folder(out, resume=resume, overwrite=overwrite)
         if resume and recipe.trainer:

@@ -153,7 +153,6 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
     import dataclasses
 
     from motionlang.models.judge.fit import accuracy, bandai_items, median_bones, primitive_items
-    from motionlang.training.run_files import check_resume
 
     if len(sources) != 1:
         raise MotionlangError(f"train judge reads one bandai:DIR source, got {len(sources)}")
@@ -161,8 +160,6 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
     data_cfg = data_cfg if data_cfg is not None else JudgeOptions()
     check_model_options(model_cfg)
     out = Path(out_dir)
-    if resume:
-        check_resume(out)
     train, val, test = (bandai_items(source.root, s) for s in ("train", "val", "test"))
     extra = primitive_items(data_cfg.primitives) if data_cfg.primitives else []
     if not train and not extra:

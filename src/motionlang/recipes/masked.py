@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from motionlang.datasets.mixing import mix_training, source_weights
+from motionlang.datasets.mixing import mix_training
 from motionlang.datasets.position_items import build_twostream_data
 from motionlang.errors import MotionlangError
 from motionlang.features.positions import local_joints
@@ -174,7 +174,6 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
     if resume and not (done_tokenizer.is_file() or (out / "tokenizer" / "last.pt").is_file()):
         raise MotionlangError(f"--resume: nothing to continue in {out} (no tokenizer.pt or "
                               "tokenizer/last.pt)")
-    source_weights(sources)   # all weighted or none
     text = TransformerTokens(config.text_model, (config.text_layer,))
     paths = [s.path for s in sources]
     data = build_twostream_data(paths if len(paths) > 1 else paths[0], seed=train_cfg.seed,

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from motionlang.datasets.mixing import mix_training, source_weights
+from motionlang.datasets.mixing import mix_training
 from motionlang.datasets.position_items import build_twostream_data
 from motionlang.errors import MotionlangError
 from motionlang.evaluation.metrics.t2m import hit_ranks
@@ -212,14 +212,10 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
 
     from motionlang.models.retrieval.model import RetrievalModel
     from motionlang.models.retrieval.text import CHUNK, cache_file, sentence_vectors
-    from motionlang.training.run_files import check_resume
 
     out = Path(out_dir)
     data_cfg = data_cfg if data_cfg is not None else RetrievalOptions()
     config = model_config(model_cfg)
-    if resume:
-        check_resume(out)
-    source_weights(sources)   # all weighted or none
     init = None
     if data_cfg.init is not None:   # before any data is read: a wrong model is one line
         init = load_model(data_cfg.init, kind="retrieval")

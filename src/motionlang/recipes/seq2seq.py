@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from motionlang.datasets.mixing import mix_training, source_weights
+from motionlang.datasets.mixing import mix_training
 from motionlang.datasets.seq2seq_pairs import (
     balance_repeats,
     build_pairs,
@@ -158,15 +158,12 @@ def run(kind: str, sources: Sequence, out: Path, model_cfg: dict, train_cfg,
     """Train an M2L or L2M (``kind``) into the run folder ``out``; ``options``: what to
     log in ``commands.jsonl`` (default: the configs). Returns ``out/model.pt``."""
     from motionlang.training.collate import collate_pairs
-    from motionlang.training.run_files import check_resume, check_resume_data
+    from motionlang.training.run_files import check_resume_data
     from motionlang.training.trainer import Trainer
 
     out = Path(out)
     check_mixed_features(sources, data_cfg.features)
-    source_weights(sources)   # all weighted or none
     _config_check(kind, model_cfg)
-    if resume:
-        check_resume(out)
     # one line per epoch from the trainer (the progress bar only shows on a terminal)
     logging.basicConfig(level=logging.INFO, format="%(message)s")
     data = build_pairs(list(sources), features=data_cfg.features, offsets=data_cfg.offsets,

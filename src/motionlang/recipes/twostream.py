@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from motionlang.datasets.mixing import mix_training, source_weights
+from motionlang.datasets.mixing import mix_training
 from motionlang.datasets.position_items import build_twostream_data
 from motionlang.errors import MotionlangError
 from motionlang.evaluation.t2m.selection import format_scores, guo_selector
@@ -154,14 +154,10 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg,
     from motionlang.models.twostream.sources import fit_source_output
     from motionlang.models.twostream.start import fit_start_pose
     from motionlang.recipes.twostream_train import ForcingSchedule, train_twostream
-    from motionlang.training.run_files import check_resume
 
     out = Path(out_dir)
     data_cfg = data_cfg if data_cfg is not None else TwoStreamOptions()
     config = model_config(model_cfg, data_cfg.ablation)   # checked before the data is read
-    if resume:   # the run's first (or only) stage's checkpoint
-        check_resume(out if (out / "last.pt").is_file() else out / "pose")
-    source_weights(sources)   # all weighted or none
     by_source = output_source(sources, data_cfg)
     select = None
     scored = selection_source(sources, data_cfg)
