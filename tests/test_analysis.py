@@ -7,7 +7,9 @@ import pytest
 
 from helpers.bodies import FPS, SIT, STAND, I, blend, hold, pose, take
 from motionlang.analysis import CANNOT_TELL, analyse, analyse_positions, repeats, tidy
-from motionlang.analysis.evidence import clean_mask, confidence, runs
+from motionlang.analysis.analyse import Analysis
+from motionlang.analysis.body import pieces
+from motionlang.analysis.evidence import Finding, clean_mask, confidence, runs
 from motionlang.analysis.words import actions_named, agrees
 from motionlang.errors import MotionlangError
 from motionlang.features.joint_map import KIT21_NAMES
@@ -294,3 +296,52 @@ def test_findings_close_in_time_are_one_series_with_their_count():
                                                         (9.0, 9.5, 1)]
     assert got[0].confidence == 0.9
     assert merge_series([bow(0, 1), bow(1.2, 2)], label="squat")[0].label == "squat"
+
+
+def test_a_splice_is_found_and_a_smooth_take_has_none():
+    """Two recordings end to end (the second on a floor 0.15 m lower, in another pose) are
+    two pieces cut at the splice; a jump, a fast punch and a one-frame glitch in a short
+    stretch are not splices."""
+    jump = hold(pose(), 3.0).copy()
+    t = np.arange(len(jump)) / FPS
+    flight = (t > 1.0) & (t < 1.45)
+    jump[flight, :, 1] += (4.8 * (t[flight] - 1.0) * (1.45 - t[flight]))[:, None]
+    assert pieces(jump, FPS) == [(0, len(jump))]
+    assert pieces(_punches(3, 0.12), FPS) == [(0, len(_punches(3, 0.12)))]
+    lower = hold(pose(LW=(0.2, 1.6, 0.1), RW=(-0.2, 1.6, 0.1)), 2.0) - np.array([0, 0.15, 0])
+    spliced = take(jump, lower)
+    assert pieces(spliced, FPS) == [(0, len(jump)), (len(jump), len(spliced))]
+    glitch = spliced.copy()
+    glitch[len(jump) + 10] += 0.3   # one frame off its path and back
+    assert [a for a, _ in pieces(glitch, FPS)] == [0, len(jump)]
+
+
+def test_a_spliced_take_is_read_piece_by_piece_on_its_own_floor():
+    """A stand on a floor 0.15 m higher, then the jump take: the raised feet are no flight,
+    and the jump is found where it happens in the take."""
+    p = hold(pose(), 3.0).copy()
+    t = np.arange(len(p)) / FPS
+    flight = (t > 1.0) & (t < 1.45)
+    p[flight, :, 1] += (4.8 * (t[flight] - 1.0) * (1.45 - t[flight]))[:, None]
+    raised = hold(pose(LW=(0.2, 1.6, 0.1), RW=(-0.2, 1.6, 0.1)), 2.0) + np.array([0, 0.15, 0])
+    jumps = [f for f in analyse_positions(take(raised, p), FPS).findings if f.label == "jump"]
+    assert len(jumps) == 1 and 2.9 < jumps[0].start < 3.1
+
+
+def _finding(label: str, start: float, end: float) -> Finding:
+    return Finding("locomotion", label, start, end, "test", 1.0, 0.5, 1.0,
+                   detail={"direction": "forward"})
+
+
+def test_a_pause_beside_a_jump_is_the_jumps_and_a_walk_ends_where_it_ends():
+    walk_then_jump = Analysis((_finding("walk", 0.0, 4.0), _finding("jump", 5.1, 5.5)),
+                              duration=6.5, leg=0.84, stature=1.7)
+    assert [a for a, _, _ in walk_then_jump.timeline()] == [0.0, 4.0]
+    # between two travels a short pause goes to the longer one, as before
+    walk_then_run = Analysis((_finding("walk", 0.0, 4.0), _finding("run", 4.5, 7.0)),
+                             duration=7.0, leg=0.84, stature=1.7)
+    assert [a for a, _, _ in walk_then_run.timeline()] == [0.0, 4.5]
+    # a pause longer than GAP_REACH stays a part of its own
+    long_pause = Analysis((_finding("walk", 0.0, 4.0), _finding("jump", 6.0, 6.4)),
+                          duration=7.0, leg=0.84, stature=1.7)
+    assert [a for a, _, _ in long_pause.timeline()] == [0.0, 4.0, 5.4]

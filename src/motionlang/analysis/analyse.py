@@ -14,7 +14,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from motionlang.analysis.body import Body
+from motionlang.analysis.body import Body, pieces
 from motionlang.analysis.evidence import Finding, merge_series, overlap
 from motionlang.analysis.limbs import limb_actions
 from motionlang.analysis.locomotion import jumps, levels, travel, turns
@@ -24,7 +24,7 @@ from motionlang.errors import MotionlangError
 
 #: the detectors' version: raised whenever what they find changes, so that an index made
 #: with older findings analyses its takes again on its next update
-VERSION = 2
+VERSION = 3
 #: how much each label is worth saying, before confidence and duration
 WEIGHT = {
     "punch": 3.0, "kick": 3.0, "climb": 3.0, "hang": 2.6, "wave": 2.5, "clap": 2.5,
@@ -48,8 +48,15 @@ MIN_SEGMENT = 0.8
 TIMELINE_CELLS = 100_000
 #: wrist over shoulder (arm lengths) from which a raise is overhead, more than arms held out
 OVERHEAD = 0.45
-#: seconds before and after a jump or a strike that a timeline gives to it
+#: the events of a timeline: actions with a wind-up before them and a landing or recovery
+#: after, which a timeline gives the seconds around them
+EVENTS = ("jump", "hop", "kick", "punch")
+#: seconds before and after an event that a timeline gives to it
 EVENT_PAD = 0.6
+#: seconds no finding names, between an event and anything else, that a timeline gives to
+#: the event as well: standing still to gather for a jump, or after landing, belongs to the
+#: jump, and a walk ends where the feet stop
+GAP_REACH = 1.0
 
 
 def salience(f: Finding) -> float:
@@ -235,7 +242,7 @@ class Analysis:
         for i, f in enumerate(ranked):
             # a jump's or a kick's span is its flight or swing; the take-off and the landing
             # around it belong to it too
-            pad = EVENT_PAD if f.label in ("jump", "hop", "kick", "punch") else 0.0
+            pad = EVENT_PAD if f.label in EVENTS else 0.0
             a = max(0, int((f.start - pad) * rate))
             b = max(a + 1, int(np.ceil((f.end + pad) * rate)))
             s = salience(f)
@@ -243,6 +250,8 @@ class Analysis:
             better = score[sl] < s
             best[sl][better] = i
             score[sl][better] = s
+        _give_gaps_to_events(best, [f.label in EVENTS for f in ranked],
+                             int(round(GAP_REACH * rate)))
         # cells of the same coarse action belong together
         key = np.array([labels[i] if i >= 0 else "" for i in best], dtype=object)
         cuts = [0] + [i for i in range(1, n) if key[i] != key[i - 1]] + [n]
@@ -275,13 +284,58 @@ class Analysis:
         return joined
 
 
+def _give_gaps_to_events(best: np.ndarray, event: list[bool], reach: int) -> None:
+    """In place: each run of cells no finding names (-1 in ``best``, (n,) indices into the
+    ranked findings), at most ``reach`` cells long, that an event borders on one side and no
+    event on the other, to that event; one between two events, split between them."""
+    n = len(best)
+    i = 0
+    while i < n:
+        if best[i] >= 0:
+            i += 1
+            continue
+        j = i
+        while j < n and best[j] < 0:
+            j += 1
+        left = int(best[i - 1]) if i > 0 else -1
+        right = int(best[j]) if j < n else -1
+        at_left, at_right = left >= 0 and event[left], right >= 0 and event[right]
+        if j - i <= reach and (at_left or at_right):
+            mid = (i + j) // 2 if at_left and at_right else (j if at_left else i)
+            best[i:mid] = left
+            best[mid:j] = right
+        i = j
+
+
 def analyse_positions(p21, fps: float) -> Analysis:
     """(T, 21, 3) Y-up positions (any unit) at ``fps`` -> :class:`Analysis`.
+
+    A take with splices (``body.pieces``: recordings end to end, a capture glitch) is read
+    piece by piece, each on its own floor and facing, so that nothing is found across a
+    jump in the data that no body made.
 
     Raises:
         MotionlangError: positions of the wrong shape, not finite, one frame, no body.
     """
-    body = Body.from_positions(p21, fps)
+    spans = pieces(p21, fps)
+    if len(spans) == 1:
+        body = Body.from_positions(p21, fps)
+        return Analysis(findings=tuple(_findings(body)), duration=body.duration,
+                        leg=body.leg, stature=body.stature)
+    p = np.asarray(p21)
+    found: list[Finding] = []
+    bodies = []
+    for a, b in spans:
+        body = Body.from_positions(p[a:b], fps)
+        found += [f.shifted(a / fps) for f in _findings(body)]
+        bodies.append(body)
+    longest = max(bodies, key=lambda b: b.n)
+    return Analysis(findings=tuple(sorted(found, key=lambda f: (f.start, f.label))),
+                    duration=len(p) / fps, leg=longest.leg, stature=longest.stature)
+
+
+def _findings(body: Body) -> list[Finding]:
+    """Every detector's findings on ``body``, pruned, in time order."""
     found: list[Finding] = []
     found += _series_of_squats(postures(body))
     found += travel(body)
@@ -290,6 +344,4 @@ def analyse_positions(p21, fps: float) -> Analysis:
     found += levels(body)
     found += limb_actions(body)
     kept = prune(found)
-    kept = sorted(kept + _get_ups(kept, body.duration), key=lambda f: (f.start, f.label))
-    return Analysis(findings=tuple(kept), duration=body.duration, leg=body.leg,
-                    stature=body.stature)
+    return sorted(kept + _get_ups(kept, body.duration), key=lambda f: (f.start, f.label))

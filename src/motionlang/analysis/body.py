@@ -41,6 +41,55 @@ SIDES = ("left", "right")
 ARMS = ((J["LS"], J["LE"], J["LW"]), (J["RS"], J["RE"], J["RW"]))
 LEGS = ((J["LH"], J["LK"], J["LA"]), (J["RH"], J["RK"], J["RA"]))
 MIN_FRAMES = 2
+#: a frame where the median joint leaves the path its neighbours' steps predict by more than
+#: this (leg lengths) is a splice: two recordings end to end, or a capture glitch; a body
+#: moves smoothly, and no action bends every joint's path that far within one frame
+SPLICE = 0.08
+#: seconds of the shortest piece between splices read on its own (about a stride); a shorter
+#: one is read with the piece after it (the last, with the one before)
+MIN_PIECE = 1.0
+
+
+def pieces(p21, fps: float) -> list[tuple[int, int]]:
+    """The continuous pieces of a take: (start, end) frames (end exclusive), cut after each
+    frame where the path of the median joint breaks by more than :data:`SPLICE` leg lengths,
+    a piece shorter than :data:`MIN_PIECE` s joined to its neighbour; ``[(0, T)]`` for a take
+    without a splice.
+
+    The break at frame i is the step from i to i + 1 less the mean of the steps on either
+    side: for a smooth path, nearly nothing at any frame rate; at a splice, the jump itself.
+    """
+    p = np.asarray(p21, dtype=np.float64)
+    whole = [(0, len(p) if p.ndim else 0)]
+    if p.ndim != 3 or p.shape[1:] != (len(KIT21_NAMES), 3) or len(p) < 4 or \
+            not np.isfinite(p).all():
+        return whole   # Body.from_positions says what is wrong
+    leg = leg_length21(bone_lengths21(p))
+    if not (np.isfinite(leg) and leg > 1e-9):
+        return whole
+    d = np.diff(p, axis=0)
+    g = np.zeros(len(d))
+    g[1:-1] = np.median(np.linalg.norm(d[1:-1] - 0.5 * (d[:-2] + d[2:]), axis=-1),
+                        axis=1) / leg
+    # one break spreads to the frames either side at half its size: its peak is the cut
+    peak = (g > SPLICE) & (g >= np.roll(g, 1)) & (g >= np.roll(g, -1))
+    inner = [int(i) + 1 for i in np.flatnonzero(peak)]
+    # a frame or two off the path and back is a glitch: no cut at all
+    glitch = {c for c, d in zip(inner, inner[1:]) if d - c <= 2}
+    glitch |= {d for c, d in zip(inner, inner[1:]) if d - c <= 2}
+    cuts = [0] + [c for c in inner if c not in glitch] + [len(p)]
+    short = MIN_PIECE * fps
+    if len(cuts) - 2 > len(p) / short:   # breaks everywhere: no smooth piece to read apart
+        return whole
+    strength = [np.inf] + [float(g[c - 1]) for c in cuts[1:-1]] + [np.inf]
+    # a piece too short to read goes with its neighbour across the weaker of its two cuts
+    while len(cuts) > 2:
+        k = int(np.argmin(np.diff(cuts)))
+        if cuts[k + 1] - cuts[k] >= short:
+            break
+        drop = k if strength[k] < strength[k + 1] else k + 1
+        del cuts[drop], strength[drop]
+    return list(zip(cuts, cuts[1:]))
 
 
 def _odd(n: float) -> int:

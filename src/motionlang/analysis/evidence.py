@@ -51,6 +51,14 @@ class Finding:
     def duration(self) -> float:
         return self.end - self.start
 
+    def shifted(self, seconds: float) -> Finding:
+        """The same finding ``seconds`` later (its span and any event times in ``detail``)."""
+        detail = dict(self.detail)
+        if "times" in detail:
+            detail["times"] = [round(t + seconds, 2) for t in detail["times"]]
+        return replace(self, start=self.start + seconds, end=self.end + seconds,
+                       detail=detail)
+
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready, numbers rounded to what a reader can use."""
         d = asdict(self)
