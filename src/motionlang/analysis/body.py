@@ -75,8 +75,7 @@ def pieces(p21, fps: float) -> list[tuple[int, int]]:
     peak = (g > SPLICE) & (g >= np.roll(g, 1)) & (g >= np.roll(g, -1))
     inner = [int(i) + 1 for i in np.flatnonzero(peak)]
     # a frame or two off the path and back is a glitch: no cut at all
-    glitch = {c for c, d in zip(inner, inner[1:]) if d - c <= 2}
-    glitch |= {d for c, d in zip(inner, inner[1:]) if d - c <= 2}
+    glitch = {x for c, d in zip(inner, inner[1:]) if d - c <= 2 for x in (c, d)}
     cuts = [0] + [c for c in inner if c not in glitch] + [len(p)]
     short = MIN_PIECE * fps
     if len(cuts) - 2 > len(p) / short:   # breaks everywhere: no smooth piece to read apart
