@@ -183,8 +183,10 @@ def test_a_worker_that_dies_is_one_line_and_the_index_keeps_what_was_done(librar
     out = tmp_path / "dies.idx"
     with pytest.raises(MotionlangError, match="worker process died.*run the same command"):
         ml.index(root, out, dying(), workers=2, show_progress=False)
-    # what came back before the pool broke (the other worker's file may be lost with it)
-    kept = [e.path for e in load_index(out).entries]
-    assert kept in (["chairs/sit.bvh"], ["chairs/sit.bvh", "stand.bvh"])
+    # what came back before the pool broke, in order (a result still in the pipe when the
+    # worker died is lost with it; with nothing embedded no index is written)
+    kept = [e.path for e in load_index(out).entries] if out.exists() else []
+    assert kept in ([], ["chairs/sit.bvh"], ["chairs/sit.bvh", "stand.bvh"])
+    assert sorted(p.name for p in tmp_path.iterdir()) in ([], ["dies.idx"])   # no temp files
     s = ml.index(root, out, hand_made(), show_progress=False)
     assert (s.reused, s.embedded) == (len(kept), 3 - len(kept))

@@ -4,6 +4,7 @@ and a walk, on the 21-joint body written as BVH; and a hand-made learned side th
 from __future__ import annotations
 
 import os
+import time
 from pathlib import Path
 
 import numpy as np
@@ -63,6 +64,8 @@ def make_library(folder: Path) -> tuple[Path, Path]:
 def dying_motion_vector(m) -> np.ndarray:
     """As :func:`motion_vector`, but the process dies on the walk, as one killed would."""
     if "walk" in str(m.name):
+        # a killed process dies a while after its last result went back: the parent reads it
+        time.sleep(0.5)
         os._exit(3)
     return motion_vector(m)
 
