@@ -3,6 +3,7 @@ consumes."""
 from __future__ import annotations
 
 import copy
+import math
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -127,10 +128,14 @@ class Motion:
         """
         if start is None and end is None:
             return self
+        where = self.meta.get("path") or self.name
+        for name, value in (("start", start), ("end", end)):
+            if value is not None and not math.isfinite(value * self.fps):
+                raise MotionlangError(f"{where}: the span's {name} must be a finite number "
+                                      f"of seconds, got {value}")
         a = 0 if start is None else int(round(start * self.fps))
         b = self.n_frames - 1 if end is None else int(round(end * self.fps))
         if not 0 <= a < self.n_frames or b < a:
-            where = self.meta.get("path") or self.name
             raise MotionlangError(f"{where}: no frames between {start or 0:g} s and "
                                   f"{'the end' if end is None else f'{end:g} s'} (motion "
                                   f"lasts {self.duration:.2f} s)")

@@ -25,15 +25,20 @@ SKELETON_EXTENSIONS = (".asf", ".json")
 #: the readers' advice for the command line, and what a page's user does instead
 _CLI_ADVICE = ("pass --joint-map FILE", "upload its joint map (.json) with the file")
 _UNSAFE = re.compile(r"[^A-Za-z0-9._ -]+")
+#: longest stem of an uploaded file's name kept (file systems take 255 bytes)
+NAME_CHARS = 100
 
 Upload = tuple[str, bytes]
 
 
 def safe_name(name: str) -> str:
     """The base name of an uploaded file with anything but letters, digits, ``._ -``
-    replaced; never empty, never a path."""
+    replaced, its stem cut to :data:`NAME_CHARS`; never empty, never a path."""
     base = _UNSAFE.sub("_", Path(name.replace("\\", "/")).name).strip(" .")
-    return base or "upload"
+    stem, dot, ext = base.rpartition(".")
+    if not dot or len(ext) > 16:   # no extension (or a name whose last dot is not one)
+        stem, dot, ext = base, "", ""
+    return (stem[:NAME_CHARS] + dot + ext).strip(" .") or "upload"
 
 
 def check_upload(files: Sequence[Upload], max_bytes: int) -> None:
