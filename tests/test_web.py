@@ -138,6 +138,21 @@ def test_a_long_take_gets_a_timeline(server, tmp_path):
     assert all(a[1] <= b[0] + 1e-9 for a, b in zip(spans, spans[1:]))
 
 
+def test_a_small_file_that_claims_hours_is_refused_before_the_models_are_held(server,
+                                                                            tmp_path):
+    bvh = write(RIGS["mixamo"], tmp_path, T=40)
+    text = bvh.read_text()
+    old = next(line for line in text.splitlines() if line.startswith("Frame Time:"))
+    slow = text.replace(old, "Frame Time: 100").encode()   # 40 frames: 4,000 s
+    status, got = post_files(server + "api/describe", [(bvh.name, slow)])
+    assert status == 400
+    assert got["error"] == ("mixamo: the take lasts 66.7 minutes (40 frames at 0.01 Hz); "
+                            "this server describes up to 30 (motionlang serve "
+                            "--max-describe-minutes; or motionlang describe FILE)")
+    fine = text.replace(old, "Frame Time: 40").encode()     # 1,600 s: within 30 minutes
+    assert post_files(server + "api/describe", [(bvh.name, fine)])[0] == 200
+
+
 @pytest.mark.parametrize("rel", [("cmu35/35_01.amc", "cmu35/35.asf"), ("kitml/00001_mmm.xml",)])
 def test_real_amc_asf_and_mmm_uploads_are_described(server, shared_data, rel):
     files = [((shared_data / r).name, (shared_data / r).read_bytes()) for r in rel]

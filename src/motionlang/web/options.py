@@ -35,6 +35,8 @@ class ServeOptions:
         describe_model: the model that describes uploaded motions (an M2L).
         index: an index file (``motionlang index``) to search from the page, or None.
         max_upload_mb: the largest upload (all files of one request together), MiB.
+        max_describe_minutes: the longest uploaded take described (a small file can claim
+            hours: its frame time is its own), minutes of motion.
         warm: generate one sentence with each model at start, so that the first request
             pays no lazy loading (a sentence encoder is read on first use).
     """
@@ -52,10 +54,14 @@ class ServeOptions:
                              metavar="FILE")
     max_upload_mb: float = _opt(64.0, "largest upload of one request, MiB (the readers' "
                                       "MOTIONLANG_MAX_* limits apply as well)", metavar="MB")
+    max_describe_minutes: float = _opt(30.0, "longest uploaded take the page describes, "
+                                             "minutes of motion (its work holds the models: "
+                                             "longer ones go to motionlang describe FILE)",
+                                       metavar="MIN")
     warm: bool = True
 
     def __post_init__(self) -> None:
-        check_numbers("ServeOptions", self, positive=("max_upload_mb",))
+        check_numbers("ServeOptions", self, positive=("max_upload_mb", "max_describe_minutes"))
         if not 0 <= self.port <= 65535:
             raise MotionlangError(f"ServeOptions.port must be in 0..65535, got {self.port}")
         if not self.host.strip():

@@ -193,6 +193,13 @@ class Studio:
         take longer than :data:`TIMELINE_FROM_S`, ``timeline`` ([{"start", "end",
         "text"}]). ``width``: as ``motionlang describe -w`` (None: its default)."""
         motion = read_upload(files, self.options.max_upload_bytes)
+        most = self.options.max_describe_minutes
+        if motion.duration > most * 60:   # checked before the models are held
+            raise MotionlangError(
+                f"{motion.name}: the take lasts {motion.duration / 60:,.1f} minutes "
+                f"({motion.n_frames:,} frames at {motion.fps:g} Hz); this server describes "
+                f"up to {most:g} (motionlang serve --max-describe-minutes; or motionlang "
+                "describe FILE)")
         with self.lock, _for_page():
             sentences = ml.describe(motion, self.describer, width)
             segments = ml.timeline(motion, self.describer) \
