@@ -13,7 +13,7 @@ import pytest
 import motionlang.api as ml
 from helpers.data import ROOT, SHARED
 from helpers.rigs import RIGS, write
-from helpers.web import SMALL, call, post_files
+from helpers.web import SMALL, call, post_files, post_json
 from motionlang.errors import MotionlangError
 
 sys.path.insert(0, str(ROOT / "benchmarks"))  # the fuzzing package lives beside its benchmark
@@ -82,3 +82,10 @@ def test_an_upload_with_a_very_long_name_is_read(server, tmp_path):
     assert status == 200, got
     assert got["name"] == "x" * 100
     assert call(server + "api/info")[0] == 200
+
+
+def test_a_take_of_a_sentence_in_other_letters_downloads(server):
+    status, view = post_json(server + "api/generate", {"text": "a person walks ١٢ é", "seconds": 1})
+    assert status == 200, view
+    status, bvh = call(server + f"api/export/{view['id']}.bvh")
+    assert status == 200 and bvh.startswith(b"HIERARCHY")

@@ -14,6 +14,7 @@ from motionlang.errors import MotionFormatError
 from motionlang.features.joint_map import KIT21_NAMES, positions21
 from motionlang.formats import read_motion, write_motion
 from motionlang.formats.gltf_read import read_gltf_animation
+from motionlang.rendering.output import part_lengths, rig_differences
 
 
 @pytest.mark.parametrize("ext", [".glb", ".gltf"])
@@ -138,3 +139,29 @@ def test_a_glb_without_pygltflib_is_one_line(tmp_path, monkeypatch, capsys):
     assert main(["info", str(out)]) == 2
     err = capsys.readouterr().err
     assert "w.glb" in err and "motionlang[export]" in err and len(err.splitlines()) == 1
+
+
+def test_the_note_of_a_rig_says_which_parts_differ(tmp_path):
+    p21 = positions21(read_motion(write(RIGS["bandai"], tmp_path, T=10)))
+    assert rig_differences(p21, p21) == ("its legs, arms and trunk are within 3% of the "
+                                         "generated body's")
+    small = p21 * 0.9
+    assert rig_differences(p21, small) == ("its legs are 10% shorter, arms 10% shorter and "
+                                           "trunk 10% shorter than the generated body's")
+    longer_arms = p21.copy()
+    for side in ("L", "R"):   # the forearm 20 cm longer
+        e, w = KIT21_NAMES.index(side + "E"), KIT21_NAMES.index(side + "W")
+        bone = longer_arms[:, w] - longer_arms[:, e]
+        longer_arms[:, w] += 0.2 * bone / np.linalg.norm(bone, axis=-1, keepdims=True)
+    arms = part_lengths(p21)["arms"]
+    said = rig_differences(p21, longer_arms)
+    assert said == f"its arms are {0.2 / arms:.0%} longer than the generated body's", said
+    no_trunk = np.ones(21, dtype=bool)
+    no_trunk[KIT21_NAMES.index("BT")] = False   # a rig that does not map it: not compared
+    assert "trunk" not in part_lengths(p21, no_trunk)
+    # on a rig: the note names the parts and how far the joints lie
+    rig = read_motion(write(RIGS["mixamo"], tmp_path, T=4))
+    note = write_result(p21, tmp_path / "on_rig.bvh", fps=30.0, rig=rig)
+    assert "than the generated body's, so its body joints lie" in note or \
+        "of the generated body's, so its body joints lie" in note, note
+    assert "mm from the generated ones on average" in note

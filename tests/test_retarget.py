@@ -154,9 +154,10 @@ def test_another_body_on_the_rig(rig, tmp_path):
     # the trunk is matched in least squares: within a few degrees
     trunk = _angle(q[:, K["BLN"]] - q[:, K["root"]], p[:, K["BLN"]] - p[:, K["root"]])
     assert np.degrees(trunk.max()) < 10
-    # feet on the source's floor, at every step, and no twist flips
+    # the rig's lowest drawn points (toe tips below its mapped toes) on the source's floor,
+    # the feet there at every step, and no twist flips
     lowest = lambda x: x[..., 1].min(axis=1)                      # noqa: E731
-    assert abs(np.percentile(lowest(q), 5) - np.percentile(lowest(p), 5)) < 1e-6
+    assert abs(np.percentile(lowest(out.positions()), 5) - np.percentile(lowest(p), 5)) < 1e-6
     assert np.abs(lowest(q) - lowest(p)).max() < 0.05
     bones = p[:, 1:] - p[:, list(KIT21_PARENTS[1:])]
     bones /= np.linalg.norm(bones, axis=-1, keepdims=True)
@@ -212,11 +213,26 @@ def test_no_twist_flip_with_the_arm_overhead(rig):
     shift = p[:, K["LS"]] + np.linalg.norm(p[0, K["LE"]] - p[0, K["LS"]]) * d - p[:, K["LE"]]
     p[:, K["LE"]] += shift
     p[:, K["LW"]] += shift
-    out = retarget(p, 30.0, rig, weights=W)
+    out = retarget(p, 30.0, rig, weights=W, ground=False)
     assert np.abs(_mapped(out, W) - p).max() < 1e-6
     arm = np.arccos(np.clip(np.sum(d[1:] * d[:-1], 1), -1, 1))
     turn = _turns(out)[:, rig.skeleton.index("LeftArm")]
     assert turn.max() < 2 * arm.max()
+
+
+def test_the_toe_tips_below_the_mapped_toes_stand_on_the_floor(rig):
+    # the rig's standing pose held: its toe tips lie below the toe joints the body maps
+    _, W = kit21_weights(rig.skeleton)
+    p = _held(rig, W, 30)
+    tips = rig.positions()[0, :, 1].min()
+    depth = p[0, :, 1].min() - tips
+    assert depth > 1e-3
+    out = retarget(p, 30.0, rig, weights=W)
+    assert out.positions()[:, :, 1].min() == pytest.approx(p[..., 1].min(), abs=1e-9)
+    # the whole body raised by that depth, nothing else changed
+    np.testing.assert_allclose(_mapped(out, W), p + [0.0, depth, 0.0], atol=1e-6)
+    np.testing.assert_allclose(_mapped(retarget(p, 30.0, rig, weights=W, ground=False), W),
+                               p, atol=1e-6)
 
 
 def test_hinge_joints_and_bad_input_are_refused(rig):

@@ -22,13 +22,16 @@ bones all lie along local X).
   they span two directions; else the smallest swing of the template-relative orientation
   onto the longest one, then the twist about it that best fits the other targets. The
   in-between joints are solved in their turn and correct the indirect targets, so a rig's
-  own motion comes back exactly as long as its unmapped joints stay as in the template.
+  own motion comes back exactly as long as its unmapped joints stay as in the template
+  (with ``ground``, raised where its toe tips would go below the floor of its mapped
+  points).
 * A single direction with nothing to fix the twist keeps the template's twist; near the
   half turn from the template direction, where that twist is ill defined, the twist is
   carried over from the previous frame instead (blended, so there are no flips).
 * The root: the same fit on vectors from the root body point, which pins the translation.
-  With ``ground`` the rig then stands on the source's floor (lowest body point, 5th
-  percentile over frames) and its travel is scaled by the ratio of hip heights, so that
+  With ``ground`` the rig then stands on the source's floor (its lowest drawn point, toe
+  tips and end sites below the mapped joints included, on the source's lowest body point;
+  5th percentiles over frames) and its travel is scaled by the ratio of hip heights, so that
   longer or shorter legs neither float, sink nor slide.
 
 Euler angles follow the branch and the 2 pi multiple nearest the previous frame (the
@@ -228,12 +231,24 @@ def _solve(P: np.ndarray, W: np.ndarray, sk: Skeleton, plan: list, Gt: np.ndarra
     return G, X, anchor
 
 
-def _ground(P: np.ndarray, Q: np.ndarray, used: np.ndarray, anchor: int) -> np.ndarray:
-    """Shift (T, 3) (canonical frame) that puts the result's body points Q (T, K, 3) on the
-    floor of the given ones P (the ``used`` (K,) ones) and scales the root's travel by the
-    ratio of hip heights (the root point ``anchor`` above the floor)."""
+def _drawn(sk: Skeleton, used: np.ndarray) -> np.ndarray:
+    """(J,) the joints drawn as body: those the body points use (``used`` (J,)) and every
+    joint below them (toe tips, fingers, end sites), but no helper above them (a root
+    bone on the floor)."""
+    drawn = np.asarray(used, dtype=bool).copy()
+    for j, joint in enumerate(sk.joints):   # parents come before their children
+        if joint.parent >= 0 and drawn[joint.parent]:
+            drawn[j] = True
+    return drawn
+
+
+def _ground(P: np.ndarray, lowest: np.ndarray, used: np.ndarray, anchor: int) -> np.ndarray:
+    """Shift (T, 3) (canonical frame) that puts the result's lowest drawn points
+    (``lowest`` (T,) heights, toe tips included) on the floor of the given body points P
+    (T, K, 3; the ``used`` (K,) ones) and scales the root's travel by the ratio of hip
+    heights (the root point ``anchor`` above the floor)."""
     floor_p = np.percentile(P[:, used, 1].min(axis=1), 5)
-    dy = floor_p - np.percentile(Q[:, used, 1].min(axis=1), 5)
+    dy = floor_p - np.percentile(lowest, 5)
     height = float(np.median(P[:, anchor, 1] - floor_p))
     scale = (height + dy) / height if height > 1e-3 else 1.0
     shift = (scale - 1.0) * (P[:, anchor] - P[0, anchor])
@@ -313,8 +328,8 @@ def retarget(positions: np.ndarray, fps: float, rig: Motion, *, weights: np.ndar
     G, X, anchor = _solve(P @ sk.world, W, sk, plan, Gt, Xt)
     translation = X[:, 0] - sk.joints[0].offset
     if ground:
-        Q = np.einsum("kj,tjc->tkc", W, X) @ sk.world.T
-        translation += _ground(P, Q, (W != 0).any(axis=1), anchor) @ sk.world
+        lowest = (X[:, _drawn(sk, (W != 0).any(axis=0))] @ sk.world.T)[..., 1].min(axis=1)
+        translation += _ground(P, lowest, (W != 0).any(axis=1), anchor) @ sk.world
     root_rotation, angles = _dofs(sk, G, plan, tmpl)
     meta = {k: v for k, v in rig.meta.items() if k not in PER_FILE_META}
     meta["rig"] = str(rig.meta.get("path", rig.name))

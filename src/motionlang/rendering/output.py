@@ -96,6 +96,51 @@ def body_motion(result, fps: float, rig: Motion | None = None, name: str = "gene
     return motion, err
 
 
+#: the body's parts compared when a take is put on a rig: chains of 21-joint points
+PARTS = {"legs": (("LH", "LK", "LA"), ("RH", "RK", "RA")),
+         "arms": (("LS", "LE", "LW"), ("RS", "RE", "RW")),
+         "trunk": (("root", "BP", "BT", "BLN", "BUN"),)}
+#: parts whose lengths differ by less than this fraction are "the same"
+SAME_WITHIN = 0.03
+
+
+def part_lengths(points: np.ndarray, used: np.ndarray | None = None) -> dict[str, float]:
+    """Metres of each of :data:`PARTS` in ``points`` (T, 21, 3): the chain's length, the
+    median over frames, the mean of its sides; a part with a point not ``used`` (21,) is
+    left out (a rig that does not map it)."""
+    index = {n: i for i, n in enumerate(KIT21_NAMES)}
+    out = {}
+    for part, chains in PARTS.items():
+        ids = [[index[n] for n in chain] for chain in chains]
+        if used is not None and not all(used[i] for c in ids for i in c):
+            continue
+        lengths = [np.median(np.linalg.norm(np.diff(points[:, c], axis=1), axis=-1).sum(1))
+                   for c in ids]
+        out[part] = float(np.mean(lengths))
+    return out
+
+
+def rig_differences(source: np.ndarray, mapped: np.ndarray,
+                    used: np.ndarray | None = None) -> str:
+    """How a rig's body differs from the generated one, in words: "its legs are 6 %
+    shorter and its arms 12 % longer than the generated body's", or "its legs, arms and
+    trunk are within 3 % of the generated body's". ``source``, ``mapped``: (T, 21, 3)
+    metres, the generated points and the rig's points that follow them."""
+    mine, theirs = part_lengths(mapped, used), part_lengths(source, used)
+    change = {p: mine[p] / theirs[p] - 1.0 for p in mine if theirs.get(p, 0.0) > 1e-6}
+    differ = [(p, c) for p, c in change.items() if abs(c) >= SAME_WITHIN]
+    if not differ:
+        return f"its {_listed(list(change))} are within {SAME_WITHIN:.0%} of the " \
+               "generated body's" if change else "its parts could not be compared"
+    said = [f"{p} {'are ' if i == 0 else ''}{abs(c):.0%} {'longer' if c > 0 else 'shorter'}"
+            for i, (p, c) in enumerate(differ)]
+    return f"its {_listed(said)} than the generated body's"
+
+
+def _listed(items: list[str]) -> str:
+    return items[0] if len(items) == 1 else ", ".join(items[:-1]) + " and " + items[-1]
+
+
 def _error_note(err_m: np.ndarray, what: str) -> str:
     err = err_m * 1000.0
     return f" ({what}{err.mean():.1f} mm from the generated ones on average, at most " \
@@ -121,9 +166,14 @@ def write_result(result, path: str | Path, *, fps: float, title: str = "",
     check_result_path(path)
     note = ""
     if rig is not None:
+        source = positions21(result) if isinstance(result, Motion) else result
         result, err = body_motion(result, fps, rig)
-        note = _error_note(err, f"on the rig of {rig.meta.get('path', rig.name)}: body joints "
-                                ) + ")"
+        W = kit21_weights(rig.skeleton, joint_map=rig.meta.get("joint_map"))[1]
+        mapped = np.einsum("kj,tjc->tkc", W, result.positions())
+        note = _error_note(err, f"on the rig of {rig.meta.get('path', rig.name)}: "
+                                f"{rig_differences(source, mapped, (W != 0).any(axis=1))}, "
+                                "so its body joints lie ") + "; its bones point as the " \
+                                "generated ones do)"
     if ext == ".npz":
         data = {"positions": result, "fps": np.float64(fps)} if isinstance(result, np.ndarray) \
             else {"positions": result.positions(), "fps": np.float64(result.fps)}

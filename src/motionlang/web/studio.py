@@ -246,7 +246,8 @@ class Studio:
                                   f"{', '.join('.' + e for e in offered)}")
         rig_motion = None if rig is None else self.rigs.find(rig, "rig")
         stem = "_".join(item.text.lower().split()[:8]).strip("_.") or "motion"
-        stem = "".join(c for c in stem if c.isalnum() or c == "_")[:60] or "motion"
+        stem = "".join(c for c in stem if (c.isascii() and c.isalnum()) or c == "_")[:60] \
+            or "motion"   # an HTTP header: ASCII
         name = f"{stem}.{fmt}"
         with tempfile.TemporaryDirectory(prefix="motionlang-serve-") as tmp, self.lock:
             path = Path(tmp) / name
