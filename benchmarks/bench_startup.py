@@ -1,6 +1,7 @@
 """How long one ``motionlang describe FILE`` process takes against ``python -c "import
 torch"`` in the same run (issue 58: at most 1.6x), medians of repeated runs on one core, and
-whether ``torch._dynamo`` is imported by ``describe`` and ``generate``; also ``motionlang -h``
+whether ``torch._dynamo`` is imported by ``describe``, ``generate`` (each packaged
+text-to-motion family) and ``search`` (with a word its model knows and one it never saw); also ``motionlang -h``
 and ``motionlang info FILE``, which load no model, against ``python -c "import numpy"``.
 
     .venv/bin/python benchmarks/bench_startup.py [--repeat 5] [FILE]
@@ -63,8 +64,17 @@ def main() -> None:
         t, d = statistics.median(torch_s), statistics.median(describe_s)
         print(f"python -c 'import torch': median {t:.2f} s; motionlang describe: median "
               f"{d:.2f} s; ratio {d / t:.2f} (bar 1.6) over {args.repeat} runs each")
-        gen = ["generate", "a person walks", "-o", str(Path(tmp) / "g.bvh")]
-        for name, cmd in (("describe", ["describe", path]), ("generate", gen)):
+        gen = ["generate", "a person strolls", "-o", str(Path(tmp) / "g.bvh")]
+        index = str(Path(tmp) / "lib.idx")
+        subprocess.run([str(BIN / "motionlang"), "index", str(Path(path).parent), "-o", index],
+                       check=True, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        for name, cmd in (("describe", ["describe", path]), ("generate (l2m)", gen),
+                          ("generate --model twostream", [*gen, "--model", "twostream"]),
+                          ("generate --model masked", [*gen, "--model", "masked"]),
+                          ("search (a word of its vocabulary)",
+                           ["search", "a person walks", "--index", index]),
+                          ("search (a word it never saw)",
+                           ["search", "a person strolls", "--index", index])):
             print(f"{name} imports torch._dynamo: {imports_dynamo(cmd, env)}")
 
 
