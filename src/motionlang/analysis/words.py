@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import re
 import warnings
+from collections.abc import Sequence
 
 #: coarse action -> the words that name it (every form a caption uses)
 ACTION_WORDS: dict[str, tuple[str, ...]] = {
@@ -111,10 +112,21 @@ def never_learnt(text: str, caption_words) -> tuple[list[str], set[str]]:
     return [a for a in actions_named(text) if a not in learnt], learnt
 
 
+def caption_words(model) -> Sequence[str]:
+    """The words of a model's training captions: its ``caption_words`` (a family that
+    keeps them: the two-stream and masked models), else its vocabulary's (an L2M's);
+    empty where it keeps neither (a file from before)."""
+    words = getattr(model, "caption_words", None)
+    if words is None:
+        words = getattr(getattr(model, "vocab", None), "itos", None)
+    return tuple(words or ())
+
+
 def warn_never_learnt(text: str, model) -> None:
-    """One warning when ``text`` asks a model with a vocabulary (the words of its training
-    captions) for an action none of those words names, naming the actions it can make."""
-    never, learnt = never_learnt(text, getattr(getattr(model, "vocab", None), "itos", ()))
+    """One warning when ``text`` asks a model that keeps the words of its training captions
+    (:func:`caption_words`) for an action none of those words names, naming the actions it
+    can make."""
+    never, learnt = never_learnt(text, caption_words(model))
     if never and learnt:
         warnings.warn(f"this {getattr(model, 'kind', 'model')} model never learnt to "
                       f"{' or '.join(never)} (it can make: "

@@ -26,6 +26,7 @@ from typing import TYPE_CHECKING, Any
 
 from motionlang.datasets.mixing import mix_training
 from motionlang.datasets.position_items import build_twostream_data
+from motionlang.datasets.text import tokenize
 from motionlang.errors import MotionlangError
 from motionlang.features.positions import local_joints
 from motionlang.models.masked.config import MaskedConfig
@@ -239,6 +240,9 @@ def train_stages(data: Any, text: Any, sources: Sequence, out: Path, config: Any
     gen_cfg = dataclasses.replace(train_cfg, out_dir=str(out / "generator"))
     model = _stage(model, "generator", train_items, items.get("val") or [], gen_cfg, resume,
                    log)
+    # what `generate` reads to warn of an action the captions never named
+    model.caption_words = sorted({w for it in data.items["train"]
+                                  for w in tokenize(it["sentence"])})
     path = out / family("masked").model_file
     if lead:
         model.save(path)

@@ -21,7 +21,7 @@ transformer, decoded to rows and to global positions. :meth:`MaskedModel.inbetwe
 the tokens of kept frames and generates only the others (:mod:`.inbetween`).
 
 Checkpoint (``save``/``load``, kind ``"masked"``): ``{"kind", "format", "config",
-"features", "stage", "state_dict"}``; the sentence encoder's weights are not in it.
+"features", "stage", "caption_words", "state_dict"}``; the sentence encoder's weights are not in it.
 """
 from __future__ import annotations
 
@@ -48,6 +48,7 @@ from motionlang.models.masked.transformer import (
     MaskTransformer,
     ResidualTransformer,
 )
+from motionlang.models.schema import ListOf
 from motionlang.models.text_tokens import TransformerTokens
 
 #: "decoder" retrains the tokenizer's decoder alone: the tokens, and a generator trained on
@@ -365,10 +366,14 @@ class MaskedModel(Checkpointed, nn.Module):
         return out
 
     # -- checkpoints --------------------------------------------------------------------
+    #: the words of the training captions (the recipe sets them; None: a file from before)
+    caption_words: list[str] | None = None
+    state_schema = {"stage": str, "caption_words": (None, ListOf(str))}
+
     def checkpoint_state(self) -> dict[str, Any]:
         fitted = self.features is not None and self.features.fitted
         return {"features": pack_features(self.features) if fitted else None,
-                "stage": self.stage}
+                "stage": self.stage, "caption_words": self.caption_words}
 
     @classmethod
     def from_state(cls, config: MaskedConfig, state: dict[str, Any],
@@ -381,3 +386,5 @@ class MaskedModel(Checkpointed, nn.Module):
 
     def restore_state(self, state: dict[str, Any]) -> None:
         self.set_stage(str(state.get("stage", STAGES[-1])))
+        words = state.get("caption_words")
+        self.caption_words = None if words is None else [str(w) for w in words]

@@ -358,6 +358,11 @@ class TwoStreamModel(Checkpointed, nn.Module):
         ``start`` of :meth:`generate` and :meth:`encode_motion` read."""
         return self._fitted_features("features").encode_positions(p21)
 
+    @property
+    def caption_words(self) -> list[str] | None:
+        """The words of the training captions (its length model was fitted on them)."""
+        return None if self.length_model is None else list(self.length_model.words)
+
     # ------------------------------------------------------------------ persistence
     state_schema = {"stage": str, "features": FEATURES, "normalizer": NORMALIZER,
                     "length_model": LENGTH_MODEL, "sources": SOURCES,
