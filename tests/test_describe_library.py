@@ -161,6 +161,13 @@ def test_bank_files_of_every_kind(tmp_path):
     (tmp_path / "empty.txt").write_text("\n\n")
     with pytest.raises(MotionlangError, match="no sentences"):
         read_bank(tmp_path / "empty.txt")
+    (tmp_path / "no_text.json").write_text(json.dumps({"k1": {"annotations": [{"t": "x"}]}}))
+    with pytest.raises(MotionlangError, match="no_text.json: entry 'k1', annotation 0 has "
+                                              "no 'text'"):
+        read_bank(tmp_path / "no_text.json")
+    (tmp_path / "deep.json").write_text("[" * 100_000 + "]" * 100_000)
+    with pytest.raises(MotionlangError, match="deep.json: JSON nested deeper than 64"):
+        read_bank(tmp_path / "deep.json")
 
 
 def test_windows_merge_where_their_actions_agree():

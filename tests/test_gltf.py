@@ -90,6 +90,39 @@ def test_a_broken_glb_is_one_error_naming_the_file(tmp_path):
         read_gltf_animation(bad)
 
 
+def _edited_glb(path, edit) -> bytes:
+    """The GLB in ``path`` with its JSON chunk passed through ``edit`` (lengths kept)."""
+    data = path.read_bytes()
+    n = int.from_bytes(data[12:16], "little")
+    doc = json.loads(data[20:20 + n])
+    edit(doc)
+    text = json.dumps(doc).encode()
+    text += b" " * (-len(text) % 4)
+    rest = data[20 + n:]
+    body = len(text).to_bytes(4, "little") + b"JSON" + text + rest
+    return data[:8] + (12 + len(body)).to_bytes(4, "little") + body
+
+
+@pytest.mark.parametrize("edit, needle", [
+    (lambda d: [v.update(byteOffset=-8) for v in d["bufferViews"]], "a negative offset"),
+    (lambda d: d["animations"][0].setdefault("extras", {}).update(fps="fast"),
+     "extras.fps must be a positive number, got 'fast'"),
+    (lambda d: d["animations"][0].setdefault("extras", {}).update(fps=-3),
+     "extras.fps must be a positive number"),
+])
+def test_a_damaged_glb_field_is_one_line(tmp_path, edit, needle, capsys):
+    good = tmp_path / "gen.glb"
+    write_result(positions21(read_motion(write(RIGS["bandai"], tmp_path, T=10))), good,
+                 fps=30.0)
+    bad = tmp_path / "bad.glb"
+    bad.write_bytes(_edited_glb(good, edit))
+    with pytest.raises(MotionFormatError, match=needle):
+        read_gltf_animation(bad)
+    assert main(["info", str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "bad.glb" in err and needle.split(",")[0] in err
+
+
 def test_convert_onto_a_users_rig(tmp_path, capsys):
     # a walk on the Bandai rig retargeted onto a Mixamo-named character, as GLB and BVH
     walk = write(RIGS["bandai"], tmp_path, T=12)

@@ -9,8 +9,11 @@ and the model's identity; the packaged one checks that the API and the CLI agree
 from __future__ import annotations
 
 import importlib.util
+import io
 import json
 import os
+import re
+import zipfile
 
 import numpy as np
 import pytest
@@ -209,7 +212,8 @@ def test_a_damaged_index_is_one_line_naming_it(folder, tmp_path, capsys):
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and "library.idx" in err
     np.savez(out, vectors=np.zeros((3, 2), np.float32), spans=np.zeros((3, 2)),
-             meta=np.array(json.dumps({"what": "motionlang index", "format": 1, "model": {},
+             meta=np.array(json.dumps({"what": "motionlang index", "format": 1,
+                                       "model": {"name": "fake"},
                                        "root": "/", "window": 3, "hop": 1, "entries": [],
                                        "failed": []})))
     (tmp_path / "library.idx.npz").rename(out)
@@ -384,3 +388,80 @@ def test_fifos_devices_unlistable_and_deep_folders_are_each_one_line(folder, tmp
     while deep != folder:
         deep.rmdir()
         deep = deep.parent
+
+
+def _remade(out, edit) -> None:
+    """The index in ``out`` written again with its metadata dict passed through ``edit``."""
+    with np.load(out) as z:
+        arrays = {k: z[k] for k in ("vectors", "spans", "meta")}
+    meta = json.loads(str(arrays["meta"]))
+    edit(meta)
+    arrays["meta"] = np.array(json.dumps(meta))
+    with open(out, "wb") as fh:
+        np.savez(fh, **arrays)
+
+
+def _deep(meta) -> None:
+    """A marker: the metadata nested 100,000 deep (written by hand below)."""
+
+
+@pytest.mark.parametrize("edit, needle", [
+    (lambda m: m["entries"][0].update(rows=None), "entry 0.rows is NoneType"),
+    (lambda m: m["entries"][0].update(rows="3"), "entry 0.rows is str"),
+    (lambda m: m["entries"][0].update(rows=[3]), "entry 0.rows is list"),
+    (lambda m: m["entries"][0].update(rows=2.5), "entry 0.rows is float"),
+    (lambda m: m["model"].pop("name"), "its model has no name"),
+    (lambda m: m.update(model="hand-made"), "its model has no name"),
+    (lambda m: m.update(format=1.0), "index format '1.0' is not one motionlang writes"),
+    (_deep, "JSON nested deeper than 64 levels"),
+])
+def test_damaged_metadata_is_one_line_naming_the_index(folder, tmp_path, capsys, edit,
+                                                        needle):
+    out = tmp_path / "library.idx"
+    ml.index(folder, out, fake(), show_progress=False)
+    if edit is _deep:   # json.dumps itself cannot write it: the text is made by hand
+        with np.load(out) as z:
+            arrays = {k: z[k] for k in ("vectors", "spans", "meta")}
+        text = str(arrays["meta"])[:-1] + ', "extra": ' + "[" * 100_000 + "]" * 100_000 + "}"
+        arrays["meta"] = np.array(text)
+        with open(out, "wb") as fh:
+            np.savez(fh, **arrays)
+    else:
+        _remade(out, edit)
+    with pytest.raises(MotionlangError, match=re.escape(needle)):
+        load_index(out)
+    assert main(["search", "walks", "--index", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "library.idx: not a readable" in err
+
+
+def test_an_array_header_that_declares_more_than_it_holds_is_refused_unread(folder, tmp_path):
+    out = tmp_path / "library.idx"
+    ml.index(folder, out, fake(), show_progress=False)
+    with np.load(out) as z:
+        arrays = {k: z[k] for k in ("spans", "meta")}
+    header = ("{'descr': '<f4', 'fortran_order': False, 'shape': (100000000000, 256), }"
+              .ljust(117) + "\n").encode()
+    member = b"\x93NUMPY\x01\x00" + len(header).to_bytes(2, "little") + header + bytes(64)
+    with zipfile.ZipFile(out, "w") as zf:
+        zf.writestr("vectors.npy", member)
+        for k, v in arrays.items():
+            buf = io.BytesIO()
+            np.save(buf, v)
+            zf.writestr(f"{k}.npy", buf.getvalue())
+    with pytest.raises(MotionlangError, match="vectors.npy declares 102,400,000,000,000 "
+                                              "bytes of data but holds 192"):
+        load_index(out)
+
+
+def test_spans_of_another_dtype_say_so(folder, tmp_path):
+    out = tmp_path / "library.idx"
+    ml.index(folder, out, fake(), show_progress=False)
+    with np.load(out) as z:
+        arrays = {k: z[k] for k in ("vectors", "spans", "meta")}
+    arrays["spans"] = arrays["spans"].astype(np.int64)
+    with open(out, "wb") as fh:
+        np.savez(fh, **arrays)
+    with pytest.raises(MotionlangError, match=r"spans \(\d+, 2\) int64, expected \(\d+, 2\) "
+                                              "float"):
+        load_index(out)

@@ -87,6 +87,16 @@ def test_bad_joint_map_and_missing_file(tmp_path, capsys):
     (tmp_path / "half.json").write_text(json.dumps({"joints": {"root": "pelvis_bone"}}))
     code, _, err = run(capsys, "rig", "show", path, "--joint-map", tmp_path / "half.json")
     assert code == 2 and "half.json: missing body joints" in err
+    # a map of every joint but one, made from the rig's own template: the map is named once
+    cc = rf.write(rf.RIGS["cc"], tmp_path)
+    code, out, _ = run(capsys, "rig", "template", cc)
+    template = json.loads(out)
+    del template["joints"]["BP"]
+    (tmp_path / "no_bp.json").write_text(json.dumps(template))
+    for command in ("info", "describe"):
+        code, _, err = run(capsys, command, cc, "--joint-map", tmp_path / "no_bp.json")
+        assert code == 2 and "no_bp.json: missing body joints ['BP']" in err
+        assert err.count("no_bp.json") == 1, err
     code, _, err = run(capsys, "rig", "template", tmp_path / "absent.bvh")
     assert code == 2 and "absent.bvh" in err and "file not found" in err
     assert run(capsys, "rig")[0] == 2  # no action: help, and the usage error code

@@ -205,3 +205,30 @@ def test_a_resume_with_another_vocabulary_of_the_same_size_is_refused(tmp_path):
     check_same_data(tmp_path, {"vocab": words}, {"vocab": words})
     with pytest.raises(MotionlangError, match="another vocab .3 -> 3 words, 2 ids"):
         check_same_data(tmp_path, {"vocab": words}, {"vocab": other})
+
+
+def test_a_run_stopped_before_its_first_checkpoint_gets_one_advice(corpus, run, capsys):
+    # as a run SIGTERM'd during its first epoch leaves it: run.json and splits, no last.pt
+    for name in ("last.pt", "best.pt", "model.pt", "history.json", "loss_curve.png"):
+        (run / name).unlink(missing_ok=True)
+    assert train(corpus, run) == 2
+    one_line(capsys, "stopped before its first checkpoint", "--overwrite")
+    assert train(corpus, run, "--resume") == 2
+    one_line(capsys, "no checkpoint", "--overwrite starts it again")
+    assert train(corpus, run, "--overwrite") == 0
+    assert (run / "last.pt").is_file()
+
+
+def test_a_lock_on_a_full_disk_names_the_lock(tmp_path, monkeypatch):
+    import errno
+
+    def full(self, *args, **kwargs):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(Path, "write_text", full)
+    with pytest.raises(MotionlangError, match=f"cannot take the lock {tmp_path / LOCK_NAME}: "
+                                              r"disk full \(No space left on device\)"):
+        with folder_lock(tmp_path):
+            pass
+    monkeypatch.undo()
+    assert sorted(p.name for p in tmp_path.iterdir()) == []   # no temporary file left

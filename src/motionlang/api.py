@@ -122,7 +122,9 @@ def check_map(motion: Motion, joint_map) -> None:
     try:
         match_rig(motion.skeleton, joint_map=as_joint_map(joint_map))
     except MotionlangError as exc:
-        raise MotionlangError(f"{where}: {exc}") from None
+        said = str(exc)   # the map's own checks name it already
+        raise MotionlangError(said if said.startswith(f"{where}:") or f"({where})" in said
+                              else f"{where}: {said}") from None
 
 
 def _motion(motion: Motion | str | Path, joint_map) -> Motion:

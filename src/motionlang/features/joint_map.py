@@ -163,8 +163,9 @@ def match_rig(skeleton: Skeleton, map_name: str | None = None,
         W, missing, sources = _resolve(names, jm["joints"])
         if missing:
             raise SkeletonError(f"joint map {jm['name']!r} ({jm['source']}) names joints that "
-                                f"rig {label!r} lacks: {_listed(missing)}; its joints: "
-                                f"{_listed(names, 40)}")
+                                f"rig {label!r} lacks: {_listed(missing)}; its joints "
+                                f"(motionlang rig show FILE lists them all): "
+                                f"{_listed(names)}")
         return RigMatch(jm["name"], f"user map {jm['source']}", W, sources,
                         {k: ("user", 1.0) for k in KIT21_NAMES})
     if map_name is not None:

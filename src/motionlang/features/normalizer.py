@@ -17,6 +17,7 @@ import numpy as np
 
 from motionlang.errors import MotionlangError
 from motionlang.utils.atomic import atomic_path, atomic_write
+from motionlang.utils.sidecar import load_json
 
 
 def _is_torch(x: Any) -> bool:
@@ -147,7 +148,6 @@ class Normalizer:
                     names = [str(n) for n in z["names"]] or None
                     return cls.from_dict({"mean": z["mean"], "std": z["std"],
                                           "min_std": float(z["min_std"]), "names": names})
-            with open(path, encoding="utf-8") as fh:
-                return cls.from_dict(json.load(fh))
-        except (OSError, ValueError, KeyError, zipfile.BadZipFile) as e:
+            return cls.from_dict(load_json(path, "normaliser"))
+        except (OSError, ValueError, KeyError, TypeError, zipfile.BadZipFile) as e:
             raise MotionlangError(f"{path}: cannot read normaliser: {e}") from None

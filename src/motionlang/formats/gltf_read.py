@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import base64
 import dataclasses
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -88,7 +89,10 @@ def _accessor(gltf, buffers: list[bytes], index: int, path: Path) -> np.ndarray:
         row = dtype.itemsize * width
         stride = view.byteStride or row
         end = start + stride * (acc.count - 1) + row if acc.count else start
-        past = acc.count < 0 or stride < row or end > (view.byteOffset or 0) + \
+        if min(view.byteOffset or 0, acc.byteOffset or 0, view.byteLength, acc.count) < 0:
+            raise MotionFormatError(path, f"accessor {index} (bufferView {acc.bufferView}): "
+                                          "a negative offset, length or count")
+        past = stride < row or end > (view.byteOffset or 0) + \
             view.byteLength or end > len(data)
     except (IndexError, KeyError, TypeError) as exc:   # TypeError: a field that is null
         raise MotionFormatError(path, f"accessor {index} is malformed ({exc})") from None
@@ -189,7 +193,12 @@ def read_gltf_animation(path: str | Path, animation: int = 0) -> GltfAnimation:
             world_R[:, j] = world_R[:, p] @ local
             world_t[:, j] = world_t[:, p] + np.einsum("tij,tj->ti", world_R[:, p], trans[:, j])
     step = float(np.median(np.diff(times))) if T > 1 else 0.0
-    fps = float((anim.extras or {}).get("fps") or (1.0 / step if step > 0 else 0.0))
+    given = (anim.extras or {}).get("fps") if isinstance(anim.extras, dict) else None
+    if given is not None and (isinstance(given, bool) or not isinstance(given, (int, float))
+                              or not math.isfinite(given) or given <= 0):
+        raise MotionFormatError(path, f"animation {animation}: extras.fps must be a positive "
+                                      f"number, got {str(given)[:40]!r}")
+    fps = float(given or (1.0 / step if step > 0 else 0.0))
     skins = gltf.skins[0].joints if gltf.skins else []
     return GltfAnimation(names=[n.name or f"node{i}" for i, n in enumerate(gltf.nodes)],
                          parents=parents, times=times, fps=fps, positions=world_t,

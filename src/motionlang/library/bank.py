@@ -23,7 +23,6 @@ file's order.
 from __future__ import annotations
 
 import hashlib
-import json
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -37,6 +36,7 @@ from motionlang.errors import DatasetError, MotionlangError
 from motionlang.library.embedder import default_model, joint_kinds
 from motionlang.models.registry import PACKAGED
 from motionlang.utils.progress import progress
+from motionlang.utils.sidecar import parse_json
 
 if TYPE_CHECKING:
     from motionlang.library.embedder import Embedder
@@ -51,7 +51,10 @@ def _json_sentences(data: Any, path: Path) -> list[str]:
             notes = entry.get("annotations") if isinstance(entry, dict) else None
             if not isinstance(notes, list):
                 raise DatasetError(f"{path}: entry {key!r} has no 'annotations' list")
-            out += [a["text"] if isinstance(a, dict) else a for a in notes]
+            for i, a in enumerate(notes):
+                if isinstance(a, dict) and "text" not in a:
+                    raise DatasetError(f"{path}: entry {key!r}, annotation {i} has no 'text'")
+                out.append(a["text"] if isinstance(a, dict) else a)
         if all(isinstance(s, str) for s in out):
             return out
     raise DatasetError(f"{path}: expected a list of sentences or KIT-ML annotations "
@@ -77,9 +80,11 @@ def read_bank(path: str | Path) -> list[str]:
             raise DatasetError(f"{path}: cannot read ({exc})") from None
         if ext == ".json":
             try:
-                sentences = _json_sentences(json.loads(text), path)
-            except json.JSONDecodeError as exc:
-                raise DatasetError(f"{path}: invalid JSON ({exc.msg})") from None
+                sentences = _json_sentences(parse_json(text, str(path)), path)
+            except DatasetError:
+                raise
+            except MotionlangError as exc:   # invalid, too deep: one line naming the file
+                raise DatasetError(str(exc)) from None
         else:
             sentences = text.splitlines()
     seen: dict[str, str] = {}

@@ -25,6 +25,7 @@ import tokenize
 import zipfile
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -33,6 +34,7 @@ from motionlang.library.grounded import valid_findings
 from motionlang.library.scan import take_name
 from motionlang.utils import limits
 from motionlang.utils.atomic import atomic_write
+from motionlang.utils.sidecar import parse_json
 
 WHAT = "motionlang index"
 FORMAT = 2
@@ -133,6 +135,12 @@ def _arrays(path: Path) -> dict[str, np.ndarray]:
     limits.check(path, "max_memory_bytes", sum(i.file_size for i in infos.values()),
                  "memory needed to read the index")
     try:
+        with zipfile.ZipFile(path) as zf:
+            for name in sorted(names):   # what each header declares, before numpy makes it
+                declared = _declared_bytes(zf, name)
+                if declared > infos[name].file_size:
+                    raise _damaged(path, f"{name} declares {declared:,} bytes of data but "
+                                         f"holds {infos[name].file_size:,}")
         with np.load(path, allow_pickle=False) as npz:
             out = {k: npz[k] for k in ("vectors", "spans", "meta")}
     except (OSError, ValueError, EOFError, zipfile.BadZipFile, SyntaxError,
@@ -143,6 +151,43 @@ def _arrays(path: Path) -> dict[str, np.ndarray]:
         if not isinstance(v, np.ndarray):
             raise _damaged(path, f"{k}.npy is not an array")
     return out
+
+
+def _declared_bytes(zf: zipfile.ZipFile, name: str) -> int:
+    """The bytes of data the ``.npy`` header of member ``name`` declares (0 where the
+    header does not read: numpy names that itself)."""
+    try:
+        with zf.open(name) as fh:
+            version = np.lib.format.read_magic(fh)
+            read = np.lib.format.read_array_header_1_0 if version == (1, 0) \
+                else np.lib.format.read_array_header_2_0
+            shape, _, dtype = read(fh)
+    except (OSError, ValueError, EOFError, SyntaxError, TypeError, zipfile.BadZipFile):
+        return 0
+    return int(np.prod(shape, dtype=object)) * dtype.itemsize
+
+
+#: what each field of an entry must be (bool is no int here)
+_ENTRY_TYPES: dict[str, tuple[type, ...]] = {
+    "path": (str,), "size": (int,), "mtime": (int, float), "sha256": (str,), "rig": (dict,),
+    "fps": (int, float), "duration": (int, float), "rows": (int,), "sequence": (int,),
+    "sequences": (int,), "findings": (list, type(None))}
+_FAILURE_TYPES: dict[str, tuple[type, ...]] = {
+    "path": (str,), "size": (int,), "mtime": (int, float), "sha256": (str,), "reason": (str,)}
+
+
+def _typed(item: Any, types: dict[str, tuple[type, ...]], what: str) -> dict:
+    """``item`` (a dict of metadata) if each field it has is of its type, else a
+    ValueError naming the first that is not."""
+    if not isinstance(item, dict):
+        raise ValueError(f"{what} is {type(item).__name__}, not an object")
+    for key, value in item.items():
+        kinds = types.get(key)
+        if kinds is None:
+            raise ValueError(f"{what} has an unknown field {key!r}")
+        if isinstance(value, bool) or not isinstance(value, kinds):
+            raise ValueError(f"{what}.{key} is {type(value).__name__}: {str(value)[:40]!r}")
+    return item
 
 
 def load_index(path: str | Path) -> IndexData:
@@ -161,19 +206,29 @@ def load_index(path: str | Path) -> IndexData:
     if meta.shape != () or meta.dtype.kind != "U":
         raise _damaged(path, "no metadata string")
     try:
-        m = json.loads(str(meta))
-    except ValueError:
-        raise _damaged(path, "its metadata is not JSON") from None
+        m = parse_json(str(meta), "metadata")
+    except MotionlangError as exc:
+        raise _damaged(path, str(exc)) from None
     if not isinstance(m, dict) or m.get("what") != WHAT:
         raise _damaged(path, "no motionlang index metadata")
-    if not isinstance(m.get("format"), int) or m["format"] > FORMAT:
-        raise MotionlangError(f"{path}: index format {m.get('format')!r} is newer than this "
-                              f"motionlang reads ({FORMAT}); upgrade motionlang")
+    fmt = m.get("format")
+    if isinstance(fmt, bool) or not isinstance(fmt, int) or fmt < 1:
+        raise _damaged(path, f"index format {str(fmt)[:20]!r} is not one motionlang writes")
+    if fmt > FORMAT:
+        raise MotionlangError(f"{path}: index format {fmt} is newer than this motionlang "
+                              f"reads ({FORMAT}); upgrade motionlang")
     try:
-        data = IndexData(model=dict(m["model"]), root=str(m["root"]),
+        model = m["model"]
+        if not isinstance(model, dict) or not isinstance(model.get("name"), str):
+            raise ValueError("its model has no name")
+        if not isinstance(m["entries"], list) or not isinstance(m["failed"], list):
+            raise ValueError("entries and failed must be lists")
+        data = IndexData(model=dict(model), root=str(m["root"]),
                          window=float(m["window"]), hop=float(m["hop"]),
-                         entries=[Entry(**e) for e in m["entries"]],
-                         failed=[Failure(**f) for f in m["failed"]], vectors=vectors,
+                         entries=[Entry(**_typed(e, _ENTRY_TYPES, f"entry {i}"))
+                                  for i, e in enumerate(m["entries"])],
+                         failed=[Failure(**_typed(f, _FAILURE_TYPES, f"failed {i}"))
+                                 for i, f in enumerate(m["failed"])], vectors=vectors,
                          spans=spans, analysis=int(m.get("analysis", 0)),
                          shard=str(m.get("shard", "")))
     except (KeyError, TypeError, ValueError) as exc:
@@ -183,7 +238,7 @@ def load_index(path: str | Path) -> IndexData:
         raise _damaged(path, f"vectors {vectors.shape} {vectors.dtype}, expected ({n}, D) "
                              "float32")
     if spans.shape != (n, 2) or spans.dtype.kind != "f":
-        raise _damaged(path, f"spans {spans.shape}, expected ({n}, 2)")
+        raise _damaged(path, f"spans {spans.shape} {spans.dtype}, expected ({n}, 2) float")
     if n and not (np.isfinite(vectors).all() and np.isfinite(spans).all()):
         raise _damaged(path, "non-finite values")
     if any(e.rows < 0 for e in data.entries):

@@ -24,6 +24,7 @@ from motionlang.training.run_guard import (
     check_run_folder,
     clear_run,
     run_identity,
+    stopped_before_checkpoint,
     write_identity,
 )
 from motionlang.training.run_log import lead_process
@@ -173,7 +174,9 @@ def run_recipe(kind: str, sources: Sequence, out: Path, model_cfg: dict, train_c
         last = [p for p in (out / "last.pt", *sorted(out.glob("*/last.pt"))) if p.is_file()]
         if not last:
             raise MotionlangError(f"--resume: no checkpoint {out / 'last.pt'} to continue "
-                                  "from")
+                                  "from" + (" (the run stopped before its first one: "
+                                            "--overwrite starts it again)"
+                                            if stopped_before_checkpoint(out) else ""))
         from motionlang.training.run_files import read_training_checkpoint  # torch
         read_training_checkpoint(last[0])
     with folder_lock(out):   # a busy folder is named as such before its content is

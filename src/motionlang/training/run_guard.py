@@ -46,8 +46,19 @@ def check_run_folder(out: Path, *, resume: bool, overwrite: bool) -> None:
     names = entries(out)
     if names and not resume and not overwrite:
         shown = ", ".join(names[:5]) + (", ..." if len(names) > 5 else "")
+        if stopped_before_checkpoint(out):
+            raise MotionlangError(f"--out {out}: a run that stopped before its first "
+                                  f"checkpoint ({shown}; no last.pt): --overwrite to start "
+                                  "it again, or another --out")
         raise MotionlangError(f"--out {out}: not empty ({shown}): --resume to continue the "
                               f"run there, --overwrite to replace it, or another --out")
+
+
+def stopped_before_checkpoint(out: Path) -> bool:
+    """Whether ``out`` holds a run (its ``run.json``) that has no checkpoint to resume
+    (``last.pt``, or a stage's ``*/last.pt``)."""
+    return (out / RUN_FILE).is_file() and not (out / "last.pt").is_file() \
+        and not any(out.glob("*/last.pt"))
 
 
 def clear_run(out: Path, model_file: str, extra: tuple[str, ...] = ()) -> list[str]:

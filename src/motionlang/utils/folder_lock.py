@@ -18,7 +18,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 from motionlang.errors import MotionlangError
-from motionlang.utils.atomic import TAG, _alive, _host, make_temp
+from motionlang.utils.atomic import TAG, _alive, _host, make_temp, os_error_line
 
 LOCK_NAME = ".motionlang.lock"
 
@@ -47,9 +47,16 @@ def acquire(folder: Path) -> Path:
     """
     lock = folder / LOCK_NAME
     me = {"pid": os.getpid(), "host": _host()}
-    tmp = make_temp(lock)
+    tmp: Path | None = None
     try:
+        tmp = make_temp(lock)
         tmp.write_text(json.dumps(me), encoding="utf-8")
+    except OSError as exc:   # a full disk, a read-only folder: name the lock it is about
+        if tmp is not None:
+            with contextlib.suppress(OSError):
+                tmp.unlink()
+        raise MotionlangError(f"cannot take the lock {os_error_line(exc, lock)}") from None
+    try:
         for _ in range(3):   # a stale lock removed, then one more try
             try:
                 os.link(tmp, lock)
