@@ -16,13 +16,14 @@ import numpy as np
 import pytest
 
 import motionlang as ml
+from helpers.rigs import RIGS, write
 from motionlang.cli.main import main
 from motionlang.datasets.synth.compose import build_motion, random_style
 from motionlang.datasets.synth.corpus import generate_sample
 from motionlang.datasets.synth.spec import Primitive
 from motionlang.errors import MotionlangError
 from motionlang.library.bank import read_bank
-from motionlang.library.describe import Describer
+from motionlang.library.describe import Describer, motion_paths
 from motionlang.library.timeline import action_of, merge_windows
 from motionlang.library.windows import Window
 
@@ -263,3 +264,21 @@ def test_a_worker_that_dies_is_one_line_and_what_was_done_is_kept(library, tmp_p
                                               "again"):
         run.write(out)
     assert not out.exists() and (tmp_path / "o.jsonl.partial").is_file()
+
+
+def test_a_folder_that_cannot_be_listed_is_named_not_left_out_silently(tmp_path,
+                                                                       monkeypatch):
+    (tmp_path / "lib" / "locked").mkdir(parents=True)
+    ml.write_motion(ml.read_motion(write(RIGS["mixamo"], tmp_path, T=4)), tmp_path / "lib" /
+                    "a.bvh")
+    real = os.scandir
+
+    def refuse(path):   # root lists any folder: the refusal is made by hand
+        if str(path).endswith("locked"):
+            raise PermissionError(13, "Permission denied")
+        return real(path)
+
+    monkeypatch.setattr("motionlang.library.scan.os.scandir", refuse)
+    with pytest.warns(UserWarning, match=r"locked/: left out: cannot list this folder: "
+                                         "Permission denied"):
+        assert [p.name for p in motion_paths([tmp_path / "lib"])] == ["a.bvh"]

@@ -112,9 +112,10 @@ def register(subparsers) -> None:
                    "sentences and motions, default the packaged one)")
     add_config_options(p, DescribeOptions)
     p.add_argument("-o", "--output", type=output_file, metavar="FILE.jsonl",
-                   help="write one JSON line a file (its sentences or segments, or why it "
-                        "could not be read) here; several files or a folder without -o: to "
-                        "stdout")
+                   help="write one JSON line a file here: {\"file\", \"sentences\": [{\"text\", "
+                        "\"log_p\"}]}, with --segments {\"file\", \"segments\": [{\"start\", "
+                        "\"end\", \"text\", \"log_p\"}]}, or {\"file\", \"error\"}; several files "
+                        "or a folder without -o: the same lines to stdout")
     p.add_argument("--json", action="store_true", help="print the hypotheses as JSON")
     p.set_defaults(func=cmd_describe)
     p = subparsers.add_parser("generate", help="generate a motion from English (L2M)")

@@ -10,8 +10,8 @@ way the last one ends, and moved so that its root starts where the last one's is
 on the same floor. Where they meet is searched for, as a motion graph's transitions are:
 the frames near the end of one clip and the start of the next whose poses and foot speeds
 are most alike (:func:`best_cut`). Each join is an in-between of :data:`JOIN` seconds where
-the last frames of one clip and the first of the next overlap: the next clip is moved so that
-the toes planted in both meet, the root-relative poses are blended with a smooth weight, the root path follows the blend of the two, every frame is put back on one
+the last frames of one clip and the first of the next overlap: the root-relative poses are blended with a
+smooth weight, the root path follows the blend of the two, every frame is put back on one
 set of bone lengths (a blend of two poses shortens the bones between them), and the feet
 are then held where they are planted (``features.foot_lock.lock_feet``, footskate cleanup) so that a join does
 not slide. Every clip's source file and time span is kept: a user knows whose motion it is.
@@ -31,15 +31,13 @@ from motionlang.analysis.words import actions_named
 from motionlang.errors import MotionlangError
 from motionlang.features.body21 import body21, stature21, uniform_bones21
 from motionlang.features.foot_lock import lock_feet
-from motionlang.features.joint_map import TOES, bone_lengths21
+from motionlang.features.joint_map import bone_lengths21
 from motionlang.features.positions import facing_yaw
 from motionlang.features.root import from_heading, to_heading
 from motionlang.library.search import Library
 from motionlang.rendering.output import check_result_path, write_result
 from motionlang.utils.atomic import atomic_write
 
-#: a toe is planted below this height (m) and slower than this speed (m/s)
-PLANTED = (0.05, 0.3)
 #: frames a second of the composed motion
 FPS = 30.0
 #: seconds two clips overlap at a join
@@ -179,36 +177,15 @@ def _from_start(b: np.ndarray) -> np.ndarray:
     return to_heading(moved, np.full(b.shape[:2], facing_yaw(b[:1])[0]))
 
 
-def planted_offset(a: np.ndarray, b: np.ndarray, fps: float = FPS) -> np.ndarray:
-    """(3,) the horizontal move of ``b`` that puts its planted toes on ``a``'s: the mean
-    difference over the frames and feet where both (T, 21, 3) have that toe down (below
-    :data:`PLANTED` (height m, speed m/s)); zero where they never share one."""
-    height, speed = PLANTED
-    toes = a[:, list(TOES)], b[:, list(TOES)]                       # (T, 2, 3) each
-    down = []
-    for f in toes:
-        v = np.linalg.norm(np.gradient(f[..., [0, 2]], axis=0), axis=-1) * fps
-        down.append((f[..., 1] < height) & (v < speed))
-    both = down[0] & down[1]
-    if not both.any():
-        return np.zeros(3)
-    d = (toes[0] - toes[1])[both].mean(axis=0)
-    return np.array([d[0], 0.0, d[2]])
-
-
 def join(a: np.ndarray, b: np.ndarray, overlap: int) -> np.ndarray:
     """``b`` (starting at the origin facing +Z) laid after ``a``: turned and moved so that
-    its first frame stands where ``a``'s frame ``-overlap`` stands, then so that the toes
-    both have planted in the overlap meet (:func:`planted_offset`), the ``overlap`` frames
+    its first frame stands where ``a``'s frame ``-overlap`` stands, the ``overlap`` frames
     blended (module docstring)."""
     overlap = max(1, min(overlap, len(a) - 1, len(b) - 1))
     at = len(a) - overlap
     yaw = float(facing_yaw(a[at:at + 1])[0])
     root = a[at, 0] * np.array([1.0, 0.0, 1.0])
     placed = from_heading(b, np.full(b.shape[:2], yaw)) + root
-    # a foot down in both would otherwise be dragged from one clip's spot to the other's
-    # by the blend: the roots take up the difference instead, smoothly, over the overlap
-    placed = placed + planted_offset(a[at:], placed[:overlap])
     w = _smooth(overlap)[:, None, None]
     ra, rb = a[at:, :1], placed[:overlap, :1]
     mixed_root = (1 - w) * ra + w * rb

@@ -19,6 +19,7 @@ import copy
 import json
 import math
 import os
+import warnings
 from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -370,7 +371,11 @@ def motion_paths(inputs: Iterable[str | Path]) -> list[Path]:
     for path in given:
         if not path.exists():
             raise MotionlangError(f"{path}: no such file or folder")
-        out.update(dict.fromkeys(motion_files(path) if path.is_dir() else [path]))
+        unlisted: list[tuple[str, str]] = []
+        out.update(dict.fromkeys(motion_files(path, unlisted) if path.is_dir() else [path]))
+        for folder, why in unlisted:   # never silently: its files are not described
+            warnings.warn(f"{(path / folder).as_posix()}/: left out: {why}", UserWarning,
+                          stacklevel=2)
     if not out:
         raise MotionlangError(f"{', '.join(map(str, given[:3]))}: no motion files")
     return list(out)
