@@ -282,3 +282,24 @@ def test_a_folder_that_cannot_be_listed_is_named_not_left_out_silently(tmp_path,
     with pytest.warns(UserWarning, match=r"locked/: left out: cannot list this folder: "
                                          "Permission denied"):
         assert [p.name for p in motion_paths([tmp_path / "lib"])] == ["a.bvh"]
+
+
+def test_a_long_take_shows_the_progress_of_its_timeline(tmp_path, monkeypatch):
+    import motionlang.library.describe as describe_module
+    from motionlang.library.options import DescribeOptions
+    shown = []
+
+    def recorded(items, **kw):
+        shown.append((len(items), kw["unit"], kw["desc"]))
+        return items
+
+    monkeypatch.setattr(describe_module, "progress", recorded)
+    path = write(RIGS["mixamo"], tmp_path, "walker", T=120)
+    run = describe_module.describe_run([path], "m2l-procedural",
+                                       DescribeOptions(segments=True, width=1))
+    run.describer.record(path)
+    assert shown == []                                  # 4 s: nothing to show
+    monkeypatch.setattr(describe_module, "LONG_TAKE_S", 1.0)
+    record = run.describer.record(path)
+    assert shown and shown[0][1] in ("segments", "windows") and "walker" in shown[0][2]
+    assert all(s["start"] == round(s["start"], 3) for s in record["segments"])

@@ -232,3 +232,17 @@ def test_a_lock_on_a_full_disk_names_the_lock(tmp_path, monkeypatch):
             pass
     monkeypatch.undo()
     assert sorted(p.name for p in tmp_path.iterdir()) == []   # no temporary file left
+
+
+def test_a_stopped_train_says_how_its_run_goes_on(run, tmp_path):
+    import argparse
+
+    from motionlang.cli.main import _what_now
+    args = argparse.Namespace(command="train", out=str(run))
+    assert _what_now(args) == f"the same command with --resume continues the run in {run}"
+    (run / "last.pt").unlink()
+    for p in run.glob("*/last.pt"):
+        p.unlink()
+    assert "holds no checkpoint yet (--overwrite" in _what_now(args)
+    assert _what_now(argparse.Namespace(command="describe", out=str(run))) == ""
+    assert _what_now(argparse.Namespace(command="train", out=str(tmp_path / "none"))) == ""

@@ -15,11 +15,13 @@ import argparse
 import importlib
 import sys
 import warnings
+from pathlib import Path
 
 from motionlang import __version__
 from motionlang.cli.options import threads_int
 from motionlang.cli.threads import MAX_DEFAULT, default_threads, limit_threads
 from motionlang.errors import MotionlangError
+from motionlang.training.run_guard import stopped_before_checkpoint
 from motionlang.training.run_log import lead_output
 from motionlang.utils.atomic import error_line
 from motionlang.utils.signals import received, sigterm_unwinds, stopped
@@ -135,11 +137,24 @@ def main(argv: list[str] | None = None) -> int:
         print(f"motionlang {args.command}: error: {error_line(exc)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt as exc:   # Ctrl-C, or SIGTERM under sigterm_unwinds
-        return stopped(exc)
+        return stopped(exc, _what_now(args))
     except Exception as exc:
         if received() is None:
             raise
-        return stopped(exc)   # the interrupt, turned into another error by a library's C code
+        # the interrupt, turned into another error by a library's C code
+        return stopped(exc, _what_now(args))
+
+
+def _what_now(args) -> str:
+    """For a stopped ``train``: how its run goes on (or starts again)."""
+    out = getattr(args, "out", None) if getattr(args, "command", None) == "train" else None
+    if not out or not Path(out).is_dir():
+        return ""
+    if stopped_before_checkpoint(Path(out)):
+        return f"{out} holds no checkpoint yet (--overwrite starts the run again)"
+    if (Path(out) / "last.pt").is_file() or any(Path(out).glob("*/last.pt")):
+        return f"the same command with --resume continues the run in {out}"
+    return ""
 
 
 if __name__ == "__main__":

@@ -40,6 +40,9 @@ from motionlang.models.registry import kinds_with, load_model, resolve
 from motionlang.utils.atomic import atomic_write
 from motionlang.utils.progress import progress
 
+#: a take at least this long (seconds of motion) shows the progress of its timeline
+LONG_TAKE_S = 600.0
+
 
 @dataclass(frozen=True)
 class ReadOptions:
@@ -134,7 +137,7 @@ class Describer:
             if cuts:
                 end = span(motion)
                 segs = []
-                for a, b, grounded in cuts:
+                for a, b, grounded in self._shown(cuts, motion, "segments"):
                     part = cut(motion, Window(a, min(b, end)))
                     text, score = self.sentences(part)[0]
                     # where the model's sentence does not lead, the segment's own action
@@ -142,12 +145,20 @@ class Describer:
                                         text, score))
                 return segs
         parts = motion_windows(motion, o.window, o.hop)
-        labels = [self.sentences(part)[0] for _, part in parts]
+        labels = [self.sentences(part)[0] for _, part in self._shown(parts, motion, "windows")]
         return merge_windows([w for w, _ in parts], labels, end=span(motion), merge=o.merge,
                              bridge=o.bridge)
 
+    @staticmethod
+    def _shown(items: list, motion, unit: str):
+        """``items``, with progress shown on stderr for a take of :data:`LONG_TAKE_S` or
+        more (minutes of work with nothing said otherwise)."""
+        if motion.duration < LONG_TAKE_S:
+            return items
+        return progress(items, desc=f"describe {motion.name}", unit=unit)
+
     def segment_dicts(self, segments: Sequence[Segment]) -> list[dict]:
-        return [{"start": s.start, "end": s.end, "text": s.text,
+        return [{"start": round(s.start, 3), "end": round(s.end, 3), "text": s.text,
                  self.score_key: _rounded(s.score)} for s in segments]
 
     def record(self, path: str | Path) -> dict:

@@ -68,11 +68,12 @@ def sigterm_unwinds() -> Iterator[None]:
             signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
-def stopped(exc: BaseException) -> int:
-    """Say why a command stopped (on stderr) and return its exit status as a shell
-    reports a signal: 128 + its number (``exc``: the interrupt, or the error a library made
-    of it, see :func:`received`)."""
+def stopped(exc: BaseException, after: str = "") -> int:
+    """Say why a command stopped (on stderr; ``after``: what the user can do now, added to
+    the line) and return its exit status as a shell reports a signal: 128 + its number
+    (``exc``: the interrupt, or the error a library made of it, see :func:`received`)."""
     term = isinstance(exc, Terminated) or (not isinstance(exc, KeyboardInterrupt)
                                            and received() == signal.SIGTERM)
-    print("terminated" if term else "interrupted", file=sys.stderr)
+    print(("terminated" if term else "interrupted") + (f": {after}" if after else ""),
+          file=sys.stderr)
     return 128 + (signal.SIGTERM if term else signal.SIGINT)
