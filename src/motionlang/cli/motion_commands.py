@@ -12,6 +12,7 @@ import json
 from pathlib import Path
 
 from motionlang.analysis.check import printed
+from motionlang.analysis.rate import warn_if_rate_looks_wrong
 from motionlang.api import check, load_rig, read_mapped, render, retarget
 from motionlang.cli.options import int_range, output_file, positive_int, rate_float, seconds_float
 from motionlang.errors import MotionlangError
@@ -55,7 +56,10 @@ def load_input(args: argparse.Namespace, path: str | None = None) -> Motion:
         raise MotionlangError(f"{path}: --sequence applies to .mat inputs only")
     motion = read_mapped(path, args.joint_map, skeleton=args.asf, sequence=args.sequence or 1,
                          fps=args.source_fps if ext == ".amc" else None)
-    return motion if args.source_fps is None else motion.replace(fps=args.source_fps)
+    if args.source_fps is not None:
+        return motion.replace(fps=args.source_fps)
+    warn_if_rate_looks_wrong(motion, str(path))
+    return motion
 
 
 def add_clip_args(p: argparse.ArgumentParser) -> None:
