@@ -4,7 +4,6 @@ with a 4xx, a foreign Host or cross-site Origin is refused, the server stays up 
 nothing into its working folder; and the faults that fuzzing found, pinned."""
 from __future__ import annotations
 
-import os
 import sys
 from collections import Counter
 
@@ -13,7 +12,7 @@ import pytest
 import motionlang.api as ml
 from helpers.data import ROOT, SHARED
 from helpers.rigs import RIGS, write
-from helpers.web import SMALL, call, post_files, post_json
+from helpers.web import call, post_files, post_json, served
 from motionlang.errors import MotionlangError
 
 sys.path.insert(0, str(ROOT / "benchmarks"))  # the fuzzing package lives beside its benchmark
@@ -24,18 +23,9 @@ REQUESTS = 150
 
 @pytest.fixture(scope="module")
 def server(tmp_path_factory):
-    from motionlang.web.app import running
-    from motionlang.web.options import ServeOptions
-    from motionlang.web.studio import Studio
-    cwd = tmp_path_factory.mktemp("cwd")
-    old = os.getcwd()
-    os.chdir(cwd)
-    try:
-        with running(Studio(ServeOptions(**SMALL, max_upload_mb=2))) as url:
-            yield url
-    finally:
-        os.chdir(old)
-    assert list(cwd.iterdir()) == [], "the server wrote into its working folder"
+    """The app on a free port, run from an empty folder that must stay empty."""
+    with served(tmp_path_factory.mktemp("cwd"), max_upload_mb=2) as url:
+        yield url
 
 
 def test_mutated_requests_get_an_answer_or_one_line_never_a_fault(server):

@@ -3,7 +3,6 @@ search, and every bad input as one line with no trace; the command line's option
 from __future__ import annotations
 
 import json
-import os
 import sys
 from pathlib import Path
 
@@ -11,7 +10,7 @@ import numpy as np
 import pytest
 
 from helpers.rigs import RIGS, write
-from helpers.web import SMALL, call, post_files, post_json
+from helpers.web import SMALL, call, post_files, post_json, served
 from motionlang.cli.main import main
 from motionlang.formats import read_motion
 from motionlang.web.options import ServeOptions
@@ -21,18 +20,8 @@ from motionlang.web.views import VIEW_FPS, side, view_step
 @pytest.fixture(scope="module")
 def server(tmp_path_factory):
     """The app on a free port, run from an empty folder that must stay empty."""
-    from motionlang.web.app import running
-    from motionlang.web.studio import Studio
-    cwd = tmp_path_factory.mktemp("cwd")
-    old = os.getcwd()
-    os.chdir(cwd)
-    try:
-        studio = Studio(ServeOptions(**SMALL, max_upload_mb=2))
-        with running(studio) as url:
-            yield url
-    finally:
-        os.chdir(old)
-    assert list(cwd.iterdir()) == [], "the server wrote into its working folder"
+    with served(tmp_path_factory.mktemp("cwd"), max_upload_mb=2) as url:
+        yield url
 
 
 def test_info_names_the_models_and_formats(server):

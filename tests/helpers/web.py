@@ -2,7 +2,9 @@
 status and the decoded body (errors included)."""
 from __future__ import annotations
 
+import contextlib
 import json
+import os
 import urllib.error
 import urllib.request
 import uuid
@@ -41,3 +43,20 @@ def post_files(url: str, files: list[tuple[str, bytes]]):
                      .encode() + data + b"\r\n")
     body = b"".join(parts) + f"--{boundary}--\r\n".encode()
     return call(url, body, {"Content-Type": f"multipart/form-data; boundary={boundary}"})
+
+
+@contextlib.contextmanager
+def served(folder, **options):
+    """The app over the small models (``options``: more ``ServeOptions``) on a free port,
+    run from ``folder`` (empty), which must stay empty; yields its URL."""
+    from motionlang.web.app import running
+    from motionlang.web.options import ServeOptions
+    from motionlang.web.studio import Studio
+    old = os.getcwd()
+    os.chdir(folder)
+    try:
+        with running(Studio(ServeOptions(**{**SMALL, **options}))) as url:
+            yield url
+    finally:
+        os.chdir(old)
+    assert list(folder.iterdir()) == [], "the server wrote into its working folder"

@@ -5,7 +5,8 @@ and the take then plays several times too slowly: a walk is read as standing.
 The evidence is the body's own: where the take at its declared rate shows no walking or
 running, or steps slower than anyone walks (:data:`SLOWEST`), it is read again at the
 capture rates of common systems (:data:`RATES`); if at one of them its legs step as people
-walk or run (a cadence within :data:`CADENCE`, enough steps), the declared rate is suspect
+walk or run through most of the take (:data:`COVER`; a cadence within :data:`CADENCE`,
+slower than :data:`SLOWEST` at the declared rate; enough steps), the declared rate is suspect
 and those rates are named (the steps cannot tell 100 Hz from 120 Hz: both are named).
 Nothing is said where the take already steps as people do at its own rate, nor for files
 that declare more than :data:`SUSPECT_BELOW` Hz (the misdeclared rates seen are video-like
@@ -30,7 +31,9 @@ CADENCE = (1.4, 3.2)
 #: steps a second below which no one walks (the slowest walks of the old are faster)
 SLOWEST = 0.7
 #: fewest steps that count as evidence
-MIN_STEPS = 4
+MIN_STEPS = 6
+#: share of the take that must be walking or running at the other rate
+COVER = 0.5
 #: only files that declare at most this rate are checked (Hz)
 SUSPECT_BELOW = 30.0
 LOCOMOTION = ("walk", "run")
@@ -79,8 +82,12 @@ def rate_hint(p21: np.ndarray, fps: float) -> RateHint | None:
         if rate <= fps * 1.5:
             continue
         n, seconds = _steps(p21, rate)
-        if n >= MIN_STEPS and seconds > 0 and CADENCE[0] <= n / seconds <= CADENCE[1]:
-            fits.append((rate, n / seconds, n))
+        if n < MIN_STEPS or seconds < COVER * len(p21) / rate:
+            continue   # a few steps in a take that does something else: no evidence
+        cadence = n / seconds
+        # the same steps at the declared rate must be slower than anyone walks
+        if CADENCE[0] <= cadence <= CADENCE[1] and cadence * fps / rate < SLOWEST:
+            fits.append((rate, cadence, n))
     if not fits:
         return None
     rate, cadence, n = fits[0]
