@@ -96,3 +96,12 @@ def test_a_wrong_frame_rate_in_a_header_can_be_overridden(walk_file, tmp_path, c
     assert main(["check", "a person walks", str(slow), "--json",
                  "--source-fps", str(rate)]) == 0
     assert json.loads(capsys.readouterr().out)[0]["shown"] is True
+
+
+def test_a_joint_map_with_nothing_to_map_is_refused(tmp_path, capsys):
+    (tmp_path / "map.json").write_text("{not json")
+    assert main(["generate", "a person walks", "-o", str(tmp_path / "o.bvh"), "--joint-map",
+                 str(tmp_path / "map.json"), "--model", "l2m-procedural"]) == 2
+    err = capsys.readouterr().err
+    assert "--joint-map maps the motion of --start-from or --keep" in err
+    assert err.count("\n") == 1 and not (tmp_path / "o.bvh").exists()

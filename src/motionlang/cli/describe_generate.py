@@ -67,6 +67,9 @@ def cmd_generate(args: argparse.Namespace) -> int:
     check_result_path(out, rig=args.rig is not None)   # before the model is read
     if args.rig_joint_map is not None and args.rig is None:
         raise MotionlangError("--rig-joint-map needs --rig")
+    if args.joint_map is not None and args.start_from is None and args.keep is None:
+        raise MotionlangError("--joint-map maps the motion of --start-from or --keep; for "
+                              "the rig to write onto, use --rig with --rig-joint-map")
     rig = None if args.rig is None else load_rig(args.rig, args.rig_joint_map)
     if args.library is not None:
         print(compose_to(args.text, args.library, out, rig=rig))
