@@ -38,6 +38,8 @@ from motionlang.library.search import Library
 from motionlang.rendering.output import check_result_path, write_result
 from motionlang.utils.atomic import atomic_write
 
+#: hits of each later part tried for the cheapest join
+CANDIDATES = 3
 #: frames a second of the composed motion
 FPS = 30.0
 #: seconds two clips overlap at a join
@@ -116,19 +118,30 @@ def _resampled(p: np.ndarray, fps: float, to: float) -> np.ndarray:
                     axis=1).reshape(len(new), 21, 3)
 
 
-def choose(lib: Library, part: str, used: set[tuple[str, float]]) -> Clip:
-    """The clip of one part: the first hit whose reason shows the part's actions (else the
-    first hit), not a span already used."""
+def candidates(lib: Library, part: str, used: set[tuple[str, float]],
+               k: int = CANDIDATES) -> list[tuple[Clip, tuple[str, float]]]:
+    """The clips one part could be, best first, each with its hit's key for ``used``: up
+    to ``k`` hits whose reason shows the part's actions (else the first hit), none a span
+    already used."""
     hits = lib.search(part, k=10)
     if not hits:
         raise MotionlangError(f"{lib.where}: nothing in the library for {part!r}")
     asked = bool(actions_named(part))
-    pick = next((h for h in hits if (h.why or not asked) and (h.file, h.start) not in used),
-                hits[0])
-    used.add((pick.file, pick.start))
-    start = max(0.0, pick.start - LEAD) if pick.why else pick.start
-    return Clip(part, pick.file, round(start, 3), round(min(pick.end, start + MAX_CLIP), 3),
-                pick.why)
+    picks = [h for h in hits if (h.why or not asked) and (h.file, h.start) not in used][:k]
+    out = []
+    for pick in picks or hits[:1]:
+        start = max(0.0, pick.start - LEAD) if pick.why else pick.start
+        out.append((Clip(part, pick.file, round(start, 3),
+                         round(min(pick.end, start + MAX_CLIP), 3), pick.why),
+                    (pick.file, pick.start)))
+    return out
+
+
+def choose(lib: Library, part: str, used: set[tuple[str, float]]) -> Clip:
+    """The clip of one part: the first of :func:`candidates`, marked used."""
+    clip, key = candidates(lib, part, used, 1)[0]
+    used.add(key)
+    return clip
 
 
 def _clip_positions(lib: Library, clip: Clip, stature: float | None) -> np.ndarray:
@@ -153,14 +166,24 @@ def _pose(p: np.ndarray) -> np.ndarray:
 def best_cut(a: np.ndarray, b: np.ndarray, overlap: int, fps: float = FPS
              ) -> tuple[int, int]:
     """``(end, start)``: join ``a[:end]`` to ``b[start:]`` where the frames are most alike
-    (mean joint distance of the root-relative poses in their own heading, the feet's
-    velocities too, so that a planted foot meets a planted foot), searched over
-    :data:`SEARCH` seconds."""
+    (:func:`cut_cost`)."""
+    end, start, _ = cut_cost(a, b, overlap, fps)
+    return end, start
+
+
+def cut_cost(a: np.ndarray, b: np.ndarray, overlap: int, fps: float = FPS
+             ) -> tuple[int, int, float]:
+    """``(end, start, cost)`` of the best join of ``a[:end]`` to ``b[start:]``: the frames
+    most alike (mean joint distance of the root-relative poses in their own heading, m, plus
+    the joints' velocity difference, m a frame, so that a planted foot meets a planted
+    foot), searched over :data:`SEARCH` seconds."""
     na, nb = int(SEARCH[0] * fps), int(SEARCH[1] * fps)
     ends = np.arange(max(overlap + 1, len(a) - na), len(a) + 1)
     starts = np.arange(0, max(1, min(nb, len(b) - overlap - 1)))
     pa, pb = _pose(a), _pose(b)
-    va, vb = np.gradient(a, axis=0) * fps, np.gradient(b, axis=0) * fps
+    # velocities in each frame's own heading, as the poses are: the clips face anywhere
+    va = to_heading(np.gradient(a, axis=0), facing_yaw(a)[:, None]) * fps
+    vb = to_heading(np.gradient(b, axis=0), facing_yaw(b)[:, None]) * fps
     cost = np.empty((len(ends), len(starts)))
     for i, e in enumerate(ends):
         f = e - overlap   # a's first overlapping frame meets b's start
@@ -168,7 +191,7 @@ def best_cut(a: np.ndarray, b: np.ndarray, overlap: int, fps: float = FPS
         dv = np.linalg.norm(va[f][None] - vb[starts], axis=-1).mean(axis=-1) / fps
         cost[i] = d + dv
     best_i, best_j = np.unravel_index(int(np.argmin(cost)), cost.shape)
-    return int(ends[best_i]), int(starts[best_j])
+    return int(ends[best_i]), int(starts[best_j]), float(cost[best_i, best_j])
 
 
 def _from_start(b: np.ndarray) -> np.ndarray:
@@ -206,16 +229,27 @@ def compose(text: str, library: str | Path | Library, *, model: Any = None,
     """
     lib = library if isinstance(library, Library) else Library.open(library, model)
     used: set[tuple[str, float]] = set()
-    clips = [choose(lib, p, used) for p in parts(text)]
     frames = max(1, int(round(overlap * FPS)))
     out: np.ndarray | None = None
-    joins = []
-    for clip in clips:
-        p = _clip_positions(lib, clip, None if out is None else stature21(out))
-        if out is None:
-            out = p
+    joins, clips = [], []
+    for part in parts(text):
+        if out is None:   # the first part: the best hit
+            clip = choose(lib, part, used)
+            out = _clip_positions(lib, clip, None)
+            clips.append(clip)
             continue
-        end, start = best_cut(out, p, frames)
+        # of the hits that show the part, the one that joins the motion so far best (as a
+        # motion graph takes its cheapest transition)
+        best = None
+        for clip, key in candidates(lib, part, used):
+            p = _clip_positions(lib, clip, stature21(out))
+            end, start, cost = cut_cost(out, p, frames)
+            if best is None or cost < best[0]:
+                best = (cost, clip, key, p, end, start)
+        assert best is not None
+        _, clip, key, p, end, start = best
+        used.add(key)
+        clips.append(clip)
         joins.append(end - min(frames, end - 1, len(p) - start - 1))
         out = join(out[:end], _from_start(p[start:]), frames)
     assert out is not None
