@@ -10,6 +10,7 @@ from motionlang.analysis import CANNOT_TELL, analyse, analyse_positions, repeats
 from motionlang.analysis.analyse import Analysis
 from motionlang.analysis.body import pieces
 from motionlang.analysis.evidence import Finding, clean_mask, confidence, runs
+from motionlang.analysis.sentences import join
 from motionlang.analysis.words import actions_named, agrees
 from motionlang.errors import MotionlangError
 from motionlang.features.joint_map import KIT21_NAMES
@@ -243,6 +244,10 @@ def test_sentences_never_repeat_themselves():
         "a person takes 6 steps forward"
     assert tidy("lumbering street punk punk") == "lumbering street punk"
     assert repeats("squatting squats squats") and not repeats("a person walks forward")
+    # two counts side by side (cmu_dev iclone/05_07's first sentence): the second reworded
+    said = join(["kicks with the left leg twice", "spins around twice", "walks forward"])
+    assert said == ("a person kicks with the left leg twice, spins around two times, then "
+                    "walks forward") and not repeats(said)
 
 
 def test_actions_named_in_words():

@@ -134,6 +134,10 @@ def join(phrases: list[str], subject: str = SUBJECT) -> str:
     phrases = list(dict.fromkeys(p for p in phrases if p))
     if not phrases:
         return CANNOT_TELL
+    # "kicks twice, spins around twice" says a word twice within four: the second otherwise
+    for i in range(1, len(phrases)):
+        if phrases[i].endswith(" twice") and phrases[i - 1].endswith(" twice"):
+            phrases[i] = phrases[i].removesuffix(" twice") + " two times"
     if len(phrases) == 1:
         body = phrases[0]
     elif len(phrases) == 2:
