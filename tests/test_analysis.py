@@ -8,8 +8,9 @@ import pytest
 from helpers.bodies import FPS, SIT, STAND, I, blend, hold, pose, take
 from motionlang.analysis import CANNOT_TELL, analyse, analyse_positions, repeats, tidy
 from motionlang.analysis.analyse import Analysis
-from motionlang.analysis.body import pieces
+from motionlang.analysis.body import Body, pieces
 from motionlang.analysis.evidence import Finding, clean_mask, confidence, runs
+from motionlang.analysis.locomotion import ballistic
 from motionlang.analysis.sentences import join
 from motionlang.analysis.words import actions_named, agrees
 from motionlang.errors import MotionlangError
@@ -155,6 +156,14 @@ def test_a_jump_up_and_a_stand_without_one():
     jumps = [f for f in analyse_positions(p, FPS).findings if f.label == "jump"]
     assert len(jumps) == 1 and jumps[0].detail["direction"] == "up"
     assert "jump" not in labels(hold(pose(), 3.0))
+    # a flight falls as thrown bodies fall; a body held up (a bar, a frame, its toes) does not
+    body = Body.from_positions(p, FPS)
+    a, b = int(1.05 * body.fps), int(1.4 * body.fps)
+    assert ballistic(body, a, b)
+    held = hold(pose(), 3.0).copy()
+    held[flight, :, 1] += 0.24
+    assert not ballistic(Body.from_positions(held, FPS), a, b)
+    assert ballistic(body, a, a + 3)   # too short a span to tell: not ruled out
 
 
 def test_balancing_on_one_leg_and_not_for_a_step():

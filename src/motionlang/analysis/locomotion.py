@@ -9,7 +9,10 @@
   backwards, sideways left or right), and its path from how much the direction of travel
   turns (straight, curving left or right, a circle).
 - **Jumps** are flights from both feet (or long flights from one), forward, up or down by
-  where they land; **hops** are repeated flights from one and the same foot.
+  where they land; a flight is one only where the body falls as thrown bodies fall (its
+  mean point's fitted vertical acceleration near gravity's, :func:`ballistic`), which a
+  body up on its toes or held by a bar or a climbing frame does not; **hops** are repeated
+  flights from one and the same foot.
 - **Turns** are changes of facing of at least :data:`MIN_TURN` degrees within a few seconds,
   their angle rounded to 45 degrees; :data:`SPIN_TURN` degrees or more fast is a spin.
 - **Level changes**: the height of the supporting feet moves up or down by a step or more
@@ -50,6 +53,9 @@ JUMP_FORWARD = 0.35        # L of horizontal travel from take-off to landing
 JUMP_RISE = 0.05           # L: the pelvis rises at least this in the flight
 JUMP_SERIES = 1.5          # s: jumps closer than this are one series ("jumps 3 times")
 JUMP_DOWN = 0.25           # L: landing this far below the take-off
+G_LEGS = 9.81 / 0.85       # L/s^2: gravity in leg lengths (an adult's leg of 0.85 m)
+BALLISTIC = 0.5            # share of gravity a flight's fitted fall reaches at least
+BALLISTIC_FRAMES = 6       # frames a flight needs before its fall is fitted
 MIN_TURN = 45.0            # deg
 TURN_WINDOW = 4.0          # s: a turn is done within this
 TURN_RATE = 20.0           # deg/s: facing changing faster than this is turning
@@ -174,6 +180,20 @@ def _by_gait(body: Body, a: int, b: int) -> list[tuple[int, int]]:
     return list(zip(cuts, cuts[1:] + [b]))
 
 
+def ballistic(body: Body, a: int, b: int) -> bool:
+    """Whether frames ``a:b`` with no foot on the floor are a flight: the body's mean
+    point (a stand-in for its centre of mass) falls as a thrown body does, its fitted
+    vertical acceleration at least :data:`BALLISTIC` of gravity's. A body held up by
+    something else (on its toes, on a bar) does not fall; too short a span cannot tell
+    (True)."""
+    if b - a < BALLISTIC_FRAMES:
+        return True
+    y = body.p[a:b, :, 1].mean(axis=1) / body.leg
+    t = np.arange(b - a) / body.fps
+    accel = 2.0 * float(np.polyfit(t, y, 2)[0])
+    return accel <= -BALLISTIC * G_LEGS
+
+
 def jumps(body: Body) -> list[Finding]:
     """Jumps (forward, up or down) and hops, as events (module docstring)."""
     c = body.contacts
@@ -216,6 +236,8 @@ def jumps(body: Body) -> list[Finding]:
         # a jump carries the body up and upright (getting up from the floor does not)
         rise = (float(body.p[a:b, 0, 1].max()) - float(body.p[lo, 0, 1])) / body.leg
         if rise < JUMP_RISE or float(body.trunk_tilt[lo:b].max()) > 50.0:
+            continue
+        if not ballistic(body, a, b):   # up on the toes, on a bar, on a climbing frame
             continue
         root = body.p[:, 0, [0, 2]]
         dist = float(np.linalg.norm(root[hi] - root[lo])) / body.leg
