@@ -21,7 +21,7 @@ from motionlang import __version__
 from motionlang.cli.options import threads_int
 from motionlang.cli.threads import MAX_DEFAULT, default_threads, limit_threads
 from motionlang.errors import MotionlangError
-from motionlang.training.run_guard import stopped_before_checkpoint
+from motionlang.training.run_guard import checkpoints, stopped_before_checkpoint
 from motionlang.training.run_log import lead_output
 from motionlang.utils.atomic import error_line
 from motionlang.utils.signals import received, sigterm_unwinds, stopped
@@ -152,7 +152,7 @@ def _what_now(args) -> str:
         return ""
     if stopped_before_checkpoint(Path(out)):
         return f"{out} holds no checkpoint yet (--overwrite starts the run again)"
-    if (Path(out) / "last.pt").is_file() or any(Path(out).glob("*/last.pt")):
+    if checkpoints(Path(out)):
         return f"the same command with --resume continues the run in {out}"
     return ""
 

@@ -22,6 +22,7 @@ from motionlang.training.config import TrainConfig
 from motionlang.training.run_guard import (
     check_identity,
     check_run_folder,
+    checkpoints,
     clear_run,
     run_identity,
     stopped_before_checkpoint,
@@ -171,7 +172,7 @@ def run_recipe(kind: str, sources: Sequence, out: Path, model_cfg: dict, train_c
     if recipe.several_sources:
         source_weights(sources)   # all weighted or none
     if resume and recipe.trainer:   # a checkpoint to continue from, readable, checked first
-        last = [p for p in (out / "last.pt", *sorted(out.glob("*/last.pt"))) if p.is_file()]
+        last = checkpoints(out)
         if not last:
             raise MotionlangError(f"--resume: no checkpoint {out / 'last.pt'} to continue "
                                   "from" + (" (the run stopped before its first one: "

@@ -54,11 +54,15 @@ def check_run_folder(out: Path, *, resume: bool, overwrite: bool) -> None:
                               f"run there, --overwrite to replace it, or another --out")
 
 
+def checkpoints(out: Path) -> list[Path]:
+    """The checkpoints a run in ``out`` can resume from: ``last.pt``, then each stage's
+    ``*/last.pt``."""
+    return [p for p in (out / "last.pt", *sorted(out.glob("*/last.pt"))) if p.is_file()]
+
+
 def stopped_before_checkpoint(out: Path) -> bool:
-    """Whether ``out`` holds a run (its ``run.json``) that has no checkpoint to resume
-    (``last.pt``, or a stage's ``*/last.pt``)."""
-    return (out / RUN_FILE).is_file() and not (out / "last.pt").is_file() \
-        and not any(out.glob("*/last.pt"))
+    """Whether ``out`` holds a run (its ``run.json``) that has no checkpoint to resume."""
+    return (out / RUN_FILE).is_file() and not checkpoints(out)
 
 
 def clear_run(out: Path, model_file: str, extra: tuple[str, ...] = ()) -> list[str]:
