@@ -187,6 +187,64 @@ def test_hanging_by_the_hands():
     assert a.main_action() == "climb"
 
 
+def _ladder(rungs: int = 4, rise: float = 0.3, step: float = 0.4) -> np.ndarray:
+    """Up a ladder: one foot onto the next rung, then the other with the body, the hands
+    on the rungs above the head."""
+    parts, cur = [hold(pose(), 1.0)], pose()
+    for _ in range(rungs):
+        for foot in (("LA", "LF", "LMrot", "LK"), ("RA", "RF", "RMrot", "RK")):
+            nxt = cur.copy()
+            moved = foot if foot[0] == "LA" else [n for n in I if n not in
+                                                  ("LA", "LF", "LMrot", "LK")]
+            for n in moved:
+                nxt[I[n], 1] += rise
+            for w, e, s in (("LW", "LE", "LS"), ("RW", "RE", "RS")):
+                nxt[I[e]] = nxt[I[s]] + np.array([0, 0.28, 0.05])
+                nxt[I[w]] = nxt[I[s]] + np.array([0, 0.55, 0.1])
+            parts.append(blend(cur, nxt, step))
+            cur = nxt
+    return take(*parts, hold(cur, 1.5))
+
+
+def test_climbing_a_ladder_up_and_down():
+    up = analyse_positions(_ladder(), FPS)
+    assert up.main_action() == "climb" and "climbs up" in up.sentence()
+    down = analyse_positions(_ladder()[::-1].copy(), FPS)
+    assert down.main_action() == "climb" and "climbs down" in down.sentence()
+    # one step up onto a kerb is a step, not a climb
+    kerb = labels(_ladder(rungs=1, rise=0.2))
+    assert "step_up" in kerb and "climb" not in kerb
+
+
+def _drop(height: float, seconds_on_top: float = 1.0) -> np.ndarray:
+    """Standing on a box ``height`` m high, then a jump off it: a thrown body's fall
+    (0.5 m/s up, 1 m/s forward) onto the floor, and standing there."""
+    v0 = 0.5
+    fall = (v0 + np.sqrt(v0 ** 2 + 2 * 9.81 * height)) / 9.81
+    t = np.arange(int(fall * FPS)) / FPS
+    flight = np.repeat(pose()[None], len(t), axis=0)
+    flight[:, :, 1] += (height + v0 * t - 4.905 * t ** 2)[:, None]
+    flight[:, :, 2] += t[:, None]
+    landed = pose() + np.array([0, 0, fall])
+    return take(hold(pose() + np.array([0, height, 0]), seconds_on_top), flight,
+                hold(landed, 1.5))
+
+
+@pytest.mark.parametrize("height", [0.3, 0.6, 1.0])
+def test_a_jump_down_from_a_box_starts_where_the_feet_leave_it(height):
+    a = analyse_positions(_drop(height), FPS)
+    jumps = [f for f in a.findings if f.label == "jump"]
+    assert len(jumps) == 1 and jumps[0].detail["direction"] == "down"
+    # the flight begins when the feet leave the box (1.0 s), not when the floor's window
+    # first reaches the floor below
+    assert jumps[0].start == pytest.approx(1.0, abs=0.1)
+    assert a.sentence() == "a person jumps down"   # no "steps down" beside it
+    # stepping down without a flight is no jump
+    body = take(hold(pose() + np.array([0, height, 0]), 1.0),
+                blend(pose() + np.array([0, height, 0]), pose(), 0.8), hold(pose(), 1.5))
+    assert "jump" not in labels(body)
+
+
 def test_walking_from_the_procedural_generator():
     from motionlang.datasets.synth import Primitive
     from motionlang.datasets.synth.compose import build_motion, random_style

@@ -24,7 +24,7 @@ from motionlang.errors import MotionlangError
 
 #: the detectors' version: raised whenever what they find changes, so that an index made
 #: with older findings analyses its takes again on its next update
-VERSION = 4
+VERSION = 5
 #: how much each label is worth saying, before confidence and duration
 WEIGHT = {
     "punch": 3.0, "kick": 3.0, "climb": 3.0, "hang": 2.6, "wave": 2.5, "clap": 2.5,
@@ -104,6 +104,10 @@ def prune(found: list[Finding]) -> list[Finding]:
             continue
         if lab == "hang" and covered(("climb",), 0.1):
             continue
+        if f.kind == "level" and f.detail.get("direction") == "down" and any(
+                g.label == "jump" and g.detail.get("direction") == "down" and
+                g.start - f.end < 0.5 and f.start - g.end < 0.5 for g in found):
+            continue    # the jump down says it
         if lab == "touch_floor" and covered(("crawl", "all_fours", "lie", "kneel"), 0.1):
             continue
         if lab == "turn" and abs(f.detail.get("angle", 0)) < 135 and \

@@ -16,6 +16,7 @@ from functools import cached_property
 import numpy as np
 from scipy.ndimage import percentile_filter, uniform_filter1d
 
+from motionlang.analysis.evidence import clean_mask
 from motionlang.errors import MotionlangError
 from motionlang.features.body21 import leg_length21, normalise21, stature21
 from motionlang.features.joint_map import KIT21_NAMES, bone_lengths21
@@ -33,6 +34,12 @@ SPEED_SPAN = 0.5
 #: slower than :data:`CONTACT_SPEED` carries weight (``features.gait``'s values)
 CONTACT_HEIGHT = 0.1
 CONTACT_SPEED = 1.3
+#: a lowest foot whose slowest joint moves slower than this (leg lengths a second, in 3D)
+#: for :data:`SUPPORT_HOLD` s stands on something: the floor is there, whatever the floor
+#: of the frames around it (the top of a box before the jump down from it); a flight's
+#: apex is still for far less than that
+SUPPORT_SPEED = 0.3
+SUPPORT_HOLD = 0.15
 
 J = {n: i for i, n in enumerate(KIT21_NAMES)}
 FOOT_JOINTS = ((J["LA"], J["LMrot"], J["LF"]), (J["RA"], J["RMrot"], J["RF"]))
@@ -207,7 +214,23 @@ class Body:
         over :data:`FLOOR_WINDOW` s, so that ramps, steps and drifting captures carry it."""
         # a window longer than the take is the whole take (and costs no more)
         size = _odd(min(FLOOR_WINDOW * self.fps, 2 * self.n + 1))
-        return percentile_filter(self.foot_low.min(axis=0), 5, size=size, mode="nearest")
+        low = self.foot_low.min(axis=0)
+        floor = percentile_filter(low, 5, size=size, mode="nearest")
+        # the window's low percentile reaches a lower floor before the feet do: where the
+        # lowest foot is held still above it, it stands on that higher support
+        speed = self.foot_speed3d[np.argmin(self.foot_low, axis=0), np.arange(self.n)]
+        held = clean_mask(speed < SUPPORT_SPEED, self.fps, min_len=SUPPORT_HOLD, max_gap=0.0)
+        return np.where(held & (low > floor), low, floor)
+
+    @cached_property
+    def foot_speed3d(self) -> np.ndarray:
+        """(2, T) speed of each foot's slowest joint in 3D, leg lengths a second."""
+        if self.n < 2:
+            return np.zeros((2, self.n))
+        out = [np.linalg.norm(np.gradient(self.p[:, list(f)], axis=0), axis=-1).min(axis=1)
+               for f in FOOT_JOINTS]
+        return uniform_filter1d(np.stack(out) * self.fps, _odd(0.1 * self.fps), axis=1,
+                                mode="nearest") / self.leg
 
     @cached_property
     def foot_speed(self) -> np.ndarray:

@@ -16,7 +16,7 @@
 - **Turns** are changes of facing of at least :data:`MIN_TURN` degrees within a few seconds,
   their angle rounded to 45 degrees; :data:`SPIN_TURN` degrees or more fast is a spin.
 - **Level changes**: the height of the supporting feet moves up or down by a step or more
-  (steps or climbs up, steps or jumps down).
+  (steps or climbs up, steps, climbs or jumps down).
 """
 from __future__ import annotations
 
@@ -64,7 +64,7 @@ SPIN_RATE = 270.0          # deg/s
 TWIST_GAP = 0.5            # s: a turn undone within this...
 TWIST_LEFT = 30.0          # deg: ...to within this of where it began is a twist
 LEVEL_STEP = 0.18          # L: a change of support height that counts (a stair is ~0.2 L)
-LEVEL_CLIMB = 0.5          # L: a rise this large is a climb
+LEVEL_CLIMB = 0.5          # L: a rise (or descent) this large is a climb
 
 
 def froude(speed_ms: float, leg: float) -> float:
@@ -233,15 +233,17 @@ def jumps(body: Body) -> list[Finding]:
         if kind != "jump":
             continue
         lo, hi = max(0, a - before), min(body.n - 1, b + before)
-        # a jump carries the body up and upright (getting up from the floor does not)
+        drop = float(body.foot_low[:, lo].min() - body.foot_low[:, hi].min()) / body.leg
+        # a jump carries the body up and upright (getting up from the floor does not); off
+        # a box or a wall it may only fall
         rise = (float(body.p[a:b, 0, 1].max()) - float(body.p[lo, 0, 1])) / body.leg
-        if rise < JUMP_RISE or float(body.trunk_tilt[lo:b].max()) > 50.0:
+        if (rise < JUMP_RISE and drop <= JUMP_DOWN) or \
+                float(body.trunk_tilt[lo:b].max()) > 50.0:
             continue
         if not ballistic(body, a, b):   # up on the toes, on a bar, on a climbing frame
             continue
         root = body.p[:, 0, [0, 2]]
         dist = float(np.linalg.norm(root[hi] - root[lo])) / body.leg
-        drop = float(body.foot_low[:, lo].min() - body.foot_low[:, hi].min()) / body.leg
         direction = "down" if drop > JUMP_DOWN else "forward" if dist > JUMP_FORWARD else "up"
         flight = (b - a) / body.fps
         f = Finding("locomotion", "jump", body.t(a), body.t(b), "flight (s)", flight,
@@ -342,9 +344,11 @@ def levels(body: Body) -> list[Finding]:
         d = g[-1][4] - g[0][3]
         if abs(d) < LEVEL_STEP:
             continue
-        label = "climb" if d >= LEVEL_CLIMB else "step_up" if d > 0 else "step_down"
+        # down a ladder or a climbing frame is as much a climb as up it
+        label = "climb" if abs(d) >= LEVEL_CLIMB else "step_up" if d > 0 else "step_down"
         out.append(Finding("level", label, body.t(a), body.t(min(b, body.n)),
                            "change of support height (L)", d, LEVEL_STEP,
                            confidence(abs(d), LEVEL_STEP, LEVEL_STEP), count=len(g),
-                           detail={"from": g[0][3], "to": g[-1][4]}))
+                           detail={"from": g[0][3], "to": g[-1][4],
+                                   "direction": "up" if d > 0 else "down"}))
     return [f for f in out if f.confidence >= MIN_CONFIDENCE]

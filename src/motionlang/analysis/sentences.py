@@ -70,7 +70,7 @@ def phrase(f: Finding, *, level: str = "terse", first: bool = False) -> str:
     if lab == "spin":
         return "spins around" + times(f.count)
     if lab == "climb":
-        return "climbs up"
+        return "climbs down" if d.get("direction") == "down" else "climbs up"
     if lab == "step_up":
         return "steps up" + (" onto something" if f.count == 1 else "")
     if lab == "step_down":
