@@ -53,6 +53,20 @@ def motion_digest(motion) -> str:
     return h.hexdigest()
 
 
+def rewrite(recipe, path: Path, old: dict, arrays: dict) -> None:
+    """Write ``arrays`` to the fixture ``path``, every array of ``old`` checked to come back
+    byte for byte, and none the recipe expects missing."""
+    missing = set(recipe.expected_keys()) - set(arrays)
+    if missing:
+        raise SystemExit(f"{path} lacks {sorted(missing)}")
+    np.savez_compressed(path, **arrays)
+    with np.load(path, allow_pickle=False) as z:
+        changed = [k for k, a in old.items() if not (
+            z[k].dtype == a.dtype and z[k].shape == a.shape and np.array_equal(z[k], a))]
+    if changed:
+        raise SystemExit(f"{path}: arrays changed on rewriting: {changed}")
+
+
 def add_inputs(recipe, path: Path) -> None:
     """Store the input motion by value in the fixture ``path``, its outputs left as they are."""
     with np.load(path, allow_pickle=False) as z:
@@ -65,15 +79,7 @@ def add_inputs(recipe, path: Path) -> None:
         raise SystemExit(f"{path}: datasets.synth no longer gives the pinned input motion "
                          "(its sha256 differs); regenerate the whole file instead")
     arrays = {**old, **recipe.synth_inputs(motion)}
-    missing = set(recipe.expected_keys()) - set(arrays)
-    if missing:
-        raise SystemExit(f"{path} lacks {sorted(missing)}")
-    np.savez_compressed(path, **arrays)
-    with np.load(path, allow_pickle=False) as z:
-        changed = [k for k, a in old.items() if not (
-            z[k].dtype == a.dtype and z[k].shape == a.shape and np.array_equal(z[k], a))]
-    if changed:
-        raise SystemExit(f"{path}: arrays changed on rewriting: {changed}")
+    rewrite(recipe, path, old, arrays)
     print(f"{path}: input motion stored by value, {len(old)} arrays kept", file=sys.stderr)
 
 
@@ -86,15 +92,7 @@ def add_model(recipe, path: Path, name: str) -> None:
     motion = recipe.stored_motion(old)
     new = recipe.outputs(name, recipe.MODELS[name], motion, old["input/judge_p21"])
     arrays = {**old, **new}
-    missing = set(recipe.expected_keys()) - set(arrays)
-    if missing:
-        raise SystemExit(f"{path} lacks {sorted(missing)}")
-    np.savez_compressed(path, **arrays)
-    with np.load(path, allow_pickle=False) as z:
-        changed = [k for k, a in old.items() if not (
-            z[k].dtype == a.dtype and z[k].shape == a.shape and np.array_equal(z[k], a))]
-    if changed:
-        raise SystemExit(f"{path}: arrays changed on rewriting: {changed}")
+    rewrite(recipe, path, old, arrays)
     print(f"{path}: {len(new)} arrays of {name} added, {len(old)} kept", file=sys.stderr)
 
 
