@@ -46,3 +46,13 @@ SIT = pose(root=(0, 0.5, 0), BP=(0, 0.6, 0), BT=(0, 0.8, 0), BLN=(0, 1.0, 0), BU
            LK=(0.09, 0.5, 0.42), LA=(0.09, 0.08, 0.45), LMrot=(0.09, 0.02, 0.4),
            LF=(0.09, 0.02, 0.57), RH=(-0.09, 0.48, 0), RK=(-0.09, 0.5, 0.42),
            RA=(-0.09, 0.08, 0.45), RMrot=(-0.09, 0.02, 0.4), RF=(-0.09, 0.02, 0.57))
+
+
+def turned(p: np.ndarray, yaw: np.ndarray) -> np.ndarray:
+    """(T, 21, 3) positions ``p`` turned about the vertical by ``yaw`` (T,) radians, frame by
+    frame (positive: to the body's left)."""
+    c, s = np.cos(yaw)[:, None], np.sin(yaw)[:, None]
+    out = p.copy()
+    out[..., 0] = c * p[..., 0] + s * p[..., 2]
+    out[..., 2] = -s * p[..., 0] + c * p[..., 2]
+    return out

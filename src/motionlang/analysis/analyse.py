@@ -15,6 +15,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from motionlang.analysis.body import Body, pieces
+from motionlang.analysis.dance import dances, said_by_dance
 from motionlang.analysis.evidence import Finding, merge_series, overlap
 from motionlang.analysis.limbs import limb_actions
 from motionlang.analysis.locomotion import jumps, levels, travel, turns
@@ -24,17 +25,17 @@ from motionlang.errors import MotionlangError
 
 #: the detectors' version: raised whenever what they find changes, so that an index made
 #: with older findings analyses its takes again on its next update
-VERSION = 5
+VERSION = 6
 #: how much each label is worth saying, before confidence and duration
 WEIGHT = {
-    "punch": 3.0, "kick": 3.0, "climb": 3.0, "hang": 2.6, "wave": 2.5, "clap": 2.5,
+    "dance": 3.2, "punch": 3.0, "kick": 3.0, "climb": 3.0, "hang": 2.6, "wave": 2.5, "clap": 2.5,
     "sit": 2.5, "lie": 2.5, "kneel": 2.5, "crawl": 2.8, "all_fours": 2.4, "squat": 2.3,
     "one_leg": 2.4, "crouch": 2.0, "jump": 2.2, "hop": 2.3, "run": 2.2, "walk": 1.8,
     "spin": 2.2, "turn": 1.2, "raise": 1.6, "touch_floor": 1.6, "bend": 1.3, "reach": 0.8,
     "arms_out": 0.9, "bow": 2.0, "step_up": 1.4, "step_down": 1.4, "stand": 0.3, "get_up": 1.0,
 }
 #: the coarse action each label names (what ``main_action`` reports)
-ACTION = {"run": "run", "walk": "walk", "jump": "jump", "hop": "jump", "climb": "climb",
+ACTION = {"dance": "dance", "run": "run", "walk": "walk", "jump": "jump", "hop": "jump", "climb": "climb",
           "hang": "climb", "punch": "punch", "kick": "kick", "crouch": "crouch",
           "squat": "crouch", "sit": "sit", "lie": "lie", "kneel": "kneel", "crawl": "crawl",
           "all_fours": "crawl", "one_leg": "balance", "wave": "wave", "raise": "raise",
@@ -62,7 +63,8 @@ GAP_REACH = 1.0
 def salience(f: Finding) -> float:
     """How much a reader would want to hear ``f`` (module docstring)."""
     w = WEIGHT.get(f.label, 1.0) * f.confidence
-    if f.kind in ("posture", "locomotion") and f.label not in ("jump", "hop"):
+    if (f.kind in ("posture", "locomotion") and f.label not in ("jump", "hop")) or \
+            f.label == "dance":     # a stretch, worth more the longer it lasts
         return w * (0.4 + 0.6 * min(1.0, f.duration / 2.0))
     if f.label == "turn":
         return w * (1.3 if abs(f.detail.get("angle", 0)) >= 135 else 1.0)
@@ -348,4 +350,6 @@ def _findings(body: Body) -> list[Finding]:
     found += levels(body)
     found += limb_actions(body)
     kept = prune(found)
+    # a dance is read from what the others found, and says the movements it is made of
+    kept = said_by_dance(kept + dances(body, kept))
     return sorted(kept + _get_ups(kept, body.duration), key=lambda f: (f.start, f.label))

@@ -35,7 +35,7 @@ class ActionCheck:
     findings: tuple[Finding, ...] = ()
 
     def line(self) -> str:
-        """``sit: yes (1.9-4.1 s, confidence 0.97)`` / ``sit: no`` / ``dance: cannot tell``."""
+        """``sit: yes (1.9-4.1 s, confidence 0.97)`` / ``sit: no`` / ``throw: cannot tell``."""
         if self.shown is None:
             return f"{self.action}: cannot tell (no detector for it)"
         if not self.shown:
@@ -65,7 +65,9 @@ def check_sentence(text: str, analysis: Analysis) -> list[ActionCheck]:
         accept = {action, *COMPATIBLE.get(action, ())}
         hits = sorted((f for f in analysis.findings if ACTION[f.label] in accept or (
             action == "turn" and f.label in ("walk", "run") and
-            f.detail.get("path", "straight") != "straight")),   # a walk that turns
+            f.detail.get("path", "straight") != "straight") or (   # a walk that turns
+            # a dance says the kicks and spins it is made of
+            f.label == "dance" and {ACTION[m] for m in f.detail.get("moves", ())} & accept)),
                       key=lambda f: -f.confidence)
         out.append(ActionCheck(action, bool(hits), tuple(hits)))
     return out

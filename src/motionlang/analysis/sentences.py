@@ -122,7 +122,16 @@ def phrase(f: Finding, *, level: str = "terse", first: bool = False) -> str:
         return "touches the floor"
     if lab == "clap":
         return "claps" + times(f.count)
+    if lab == "dance":
+        moves = [_MOVE_NOUNS[m] for m in d.get("moves", ()) if m in _MOVE_NOUNS]
+        return "dances" + (f" ({', '.join(moves)})" if detailed and moves else "")
     raise ValueError(f"no phrase for the label {lab!r}")
+
+
+#: what a dance's detailed phrase calls the movements it is made of
+_MOVE_NOUNS = {"kick": "kicks", "spin": "spins", "one_leg": "balances on one leg",
+               "raise": "raised arms", "wave": "waves", "arms_out": "arms held out",
+               "clap": "claps", "jump": "leaps", "hop": "hops", "bow": "bows"}
 
 
 def _froude(f: Finding) -> float:
