@@ -34,6 +34,7 @@ LEG_MOVES = ("kick", "spin", "one_leg")
 ARM_MOVES = ("raise", "wave", "arms_out", "clap")
 OTHER_MOVES = ("jump", "hop", "bow")
 STRIKES = ("punch",)
+MOVES = frozenset(LEG_MOVES + ARM_MOVES + OTHER_MOVES)
 #: findings a dance says (most of their span inside it): the movements it is made of and
 #: the steps and turns between them
 WITHIN = LEG_MOVES + ARM_MOVES + OTHER_MOVES + ("turn", "walk", "reach", "bend", "stand")
@@ -69,7 +70,7 @@ def dances(body: Body, found: list[Finding]) -> list[Finding]:
     for i0 in range(0, body.n, max(1, round(STEP * body.fps))):
         i1 = min(body.n, i0 + width)
         labels = _moves(found, i0 / body.fps, i1 / body.fps)
-        n = len(labels & set(LEG_MOVES + ARM_MOVES + OTHER_MOVES))
+        n = len(labels & MOVES)
         if n >= KINDS and labels & set(LEG_MOVES) and labels & set(ARM_MOVES) and \
                 not labels & set(STRIKES) and moving[i0:i1].mean() >= ACTIVE:
             dancing[i0:i1] = True
@@ -84,7 +85,7 @@ def dances(body: Body, found: list[Finding]) -> list[Finding]:
         peak = float(kinds[a:b].max())
         # counts are whole: the threshold lies half-way below the least that passes
         c = confidence(peak, KINDS - 0.5, 1.0)
-        moves = sorted(_moves(found, start, end) & set(LEG_MOVES + ARM_MOVES + OTHER_MOVES))
+        moves = sorted(_moves(found, start, end) & MOVES)
         if c >= MIN_CONFIDENCE:
             out.append(Finding("limb", "dance", start, end,
                                f"different movements within {WINDOW:g} s", peak,
