@@ -9,7 +9,8 @@ For each sentence: the composed motion's check (each action the sentence names, 
 not, by ``motionlang.analysis``); the foot skating (m/s, ``metrics.physics.foot_skating``)
 inside each join (the overlap and 0.25 s either side) against the skating of the clips'
 own frames, as a ratio; the largest root step (m a frame) and facing change (degrees a
-frame) inside the joins against the largest inside the clips. ``--render``: a PNG strip of
+frame) inside the joins against the largest the clips make themselves (each whole clip on
+the composed body). ``--render``: a PNG strip of
 each composed motion there, to look at. ``--models``: the same check on what each packaged
 generator makes of the sentence.
 """
@@ -24,6 +25,7 @@ import numpy as np
 import motionlang as ml
 from motionlang.analysis import check
 from motionlang.evaluation.metrics.physics import foot_skating
+from motionlang.features.body21 import stature21
 from motionlang.features.positions import facing_yaw
 from motionlang.library.compose import FPS, JOIN, _clip_positions, compose
 from motionlang.library.search import Library
@@ -79,8 +81,11 @@ def main() -> None:
         ratio = float(np.nanmean(skate) / np.nanmean(own))
         ratios.append(ratio)
         root, turn = steps(p)
-        jump = (root[inside].max() / root[~inside].max(), turn[inside].max() /
-                max(turn[~inside].max(), 1e-6))
+        # against the largest the clips make themselves (the whole clip, on the composed
+        # body): a clip that ends in a spin turns as fast inside its join as before it
+        own_steps = [steps(_clip_positions(lib, c, stature21(p))) for c in made.clips]
+        jump = (root[inside].max() / max(max(r.max() for r, _ in own_steps), 1e-6),
+                turn[inside].max() / max(max(t.max() for _, t in own_steps), 1e-6))
         jumps.append(jump)
         print(f"{n:2d}. {text}\n    clips: " + "; ".join(
             f"{c.file} {c.start:.1f}-{c.end:.1f} s ({c.why or 'learned'})" for c in made.clips))

@@ -112,6 +112,26 @@ def test_a_slow_reach_is_no_punch():
     assert "punch" not in labels(_punches(1, 1.5))
 
 
+def _sweep(seconds: float, turn: float) -> np.ndarray:
+    """The right arm straightening from bent in front while the fist swings ``turn`` radians
+    round the shoulder to the side at chest height (a dancer's port de bras; ``turn`` 0: a
+    straight thrust forward), the bones kept their lengths."""
+    shoulder = np.array(STAND["RS"])
+    n = int(round(seconds * FPS))
+    frames = []
+    for k in np.concatenate([np.zeros(15), np.linspace(0, 1, n), np.ones(15)]):
+        r, a = 0.33 + 0.2 * k, turn * k
+        hand = shoulder + r * np.array([-np.sin(a), 0.0, np.cos(a)])
+        drop = np.sqrt(max(0.27 ** 2 - (r / 2) ** 2, 0.0))   # the elbow below the line
+        frames.append(pose(RE=tuple((shoulder + hand) / 2 - [0, drop, 0]), RW=tuple(hand)))
+    return np.stack(frames)
+
+
+def test_an_arm_swept_round_the_shoulder_is_no_punch_though_it_straightens_as_fast():
+    assert "punch" in labels(_sweep(0.12, 0.0))
+    assert "punch" not in labels(_sweep(0.12, np.pi / 2))
+
+
 def test_raise_and_wave_and_their_no():
     up = pose(RE=(-0.2, 1.7, 0), RW=(-0.2, 1.95, 0))
     raised = take(hold(pose(), 0.5), blend(pose(), up, 0.5), hold(up, 1.5), blend(up, pose(), 0.5))

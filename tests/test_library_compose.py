@@ -9,12 +9,13 @@ import numpy as np
 import pytest
 
 import motionlang as ml
+from helpers.bodies import hold, pose, turned
 from helpers.grounded import hand_made, make_library, walking
 from motionlang.analysis import check
 from motionlang.cli.main import main
 from motionlang.errors import MotionlangError
 from motionlang.features.positions import facing_yaw
-from motionlang.library.compose import FPS, compose, join, parts
+from motionlang.library.compose import FPS, Clip, compose, cut_cost, join, parts
 from motionlang.library.embedder import Embedder
 from motionlang.library.search import Library
 from motionlang.rendering.output import body_motion
@@ -61,6 +62,32 @@ def test_join_places_the_second_clip_where_the_first_ends():
     assert len(out) == 2 * len(a) - 5
     step = np.diff(out[:, 0], axis=0)
     assert np.abs(step[:, 0] - 1.2 / FPS).max() < 0.01 and np.abs(step[:, 2]).max() < 0.01
+
+
+def test_a_clip_still_spinning_at_the_join_turns_on_and_settles_never_back():
+    """A body spinning to its left at 6 degrees a frame joined to one standing still: the
+    blend carries the turn over and slows it down, never faster than the spin and never
+    turning back (two bodies facing apart blended in the world fold through each other)."""
+    rate = np.radians(6.0)
+    spin = turned(hold(pose(), 1.0), rate * np.arange(30))
+    still = hold(pose(), 1.0)
+    out = join(spin, still, 15)
+    turn = np.diff(np.unwrap(facing_yaw(out)))
+    assert turn.max() < rate * 1.05 and turn.min() > -np.radians(0.5), np.degrees(turn)
+    steps = np.linalg.norm(np.diff(out[:, 0, [0, 2]], axis=0), axis=1)
+    assert steps.max() < 0.01   # a turn on the spot stays on the spot
+
+
+def test_a_join_never_cuts_into_the_span_where_the_action_was_seen():
+    a, b = walking(3.0), walking(3.0)
+    a[70:] = a[70]   # a walk that stops: the best cut is in its walking
+    free_end, free_start, _ = cut_cost(a, b, 15)
+    assert free_end - 15 < 70 and free_start > 2
+    end, start, _ = cut_cost(a, b, 15, keep=70, reach=2)
+    assert end - 15 >= 70 and start <= 2
+    clip = Clip("a person jumps", "j.bvh", 0.5, 2.9, "jumps: 2.0-2.4 s", (2.0, 2.4))
+    assert clip.kept() == (45, 57)
+    assert Clip("a person walks", "w.bvh", 0.0, 1.0).kept() is None
 
 
 def test_the_command_line_writes_the_motion_and_lists_its_clips(library, tmp_path, capsys,

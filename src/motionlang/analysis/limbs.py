@@ -3,7 +3,8 @@
 - **raises** an arm: the wrist lifted to the shoulder's height or above (:data:`RAISE`),
   held;
 - **waves**: a raised hand swinging from side to side (:data:`WAVE_SWINGS` swings or more);
-- **punches**: a fast straightening of the arm away from the shoulder, at chest height;
+- **punches**: a fast straightening of the arm away from the shoulder, at chest height, the
+  fist driven along the line of the arm (:data:`PUNCH_LINE`);
 - **kicks**: a fast, high swing of a nearly straight leg;
 - **reaches**: an arm held straight out in front;
 - **bends over**: the trunk tilted far forward on straight legs;
@@ -48,6 +49,9 @@ PUNCH_TIME = 0.35          # s: the straightening takes at most this
 PUNCH_SPEED = 2.5          # arm lengths a second of extension at its peak
 PUNCH_LEVEL = 0.35         # arm lengths: the fist at most this far below the shoulder
 PUNCH_OUT = 0.55           # arm lengths: the fist this far out horizontally
+PUNCH_LINE = 0.7           # share of the fist's speed (from the shoulder) along the arm when
+                           # it straightens fastest: a punch drives the fist out along the
+                           # arm, a sweep (a dancer's port de bras, a wave) carries it round
 KICK_HELD = 0.8            # s: a leg held high longer than this is a pose, not a kick
 KICK_HEIGHT = 0.3          # L: ankle over the floor
 KICK_AWAY = 0.45           # L: ankle away from the hip, horizontally
@@ -156,9 +160,12 @@ def punches(body: Body) -> list[Finding]:
     for side in range(2):
         s, _, w = ARMS[side]
         arm = body.arm_length(side)
-        d = np.linalg.norm(body.p[:, w] - body.p[:, s], axis=1) / arm
+        arm_vec = body.p[:, w] - body.p[:, s]
+        d = np.linalg.norm(arm_vec, axis=1) / arm
         rel = _rel_wrist(body, side)
         rate = np.gradient(d) * body.fps
+        fist = np.linalg.norm(np.gradient(arm_vec, axis=0), axis=1) * body.fps / arm
+        along = rate / np.maximum(fist, 1e-9)   # the straightening's share of the fist's speed
         # at chest to head height and straight out, not down (a dribble) or up (a raise)
         height_ok = (body.p[:, w, 1] > body.p[:, s, 1] - PUNCH_LEVEL * arm) & \
             (body.p[:, w, 1] < body.p[:, J["BUN"], 1] + 0.2 * body.leg) & \
@@ -173,8 +180,9 @@ def punches(body: Body) -> list[Finding]:
             if d[i] >= PUNCH_TO and height_ok[i] and out_ok:
                 lo = max(0, i - window)
                 if d[lo:i + 1].min() <= PUNCH_FROM:
-                    peak = float(rate[lo:i + 1].max())
-                    if peak >= PUNCH_SPEED:
+                    top = lo + int(np.argmax(rate[lo:i + 1]))
+                    peak = float(rate[top])
+                    if peak >= PUNCH_SPEED and along[top] >= PUNCH_LINE:
                         events.append((int(lo + np.argmin(d[lo:i + 1])), i + 1, peak))
                         # wait for the arm to bend again before the next punch
                         while i < body.n and d[i] > PUNCH_FROM + 0.1:

@@ -10,8 +10,9 @@ way the last one ends, and moved so that its root starts where the last one's is
 on the same floor. Where they meet is searched for, as a motion graph's transitions are:
 the frames near the end of one clip and the start of the next whose poses and foot speeds
 are most alike (:func:`best_cut`). Each join is an in-between of :data:`JOIN` seconds where
-the last frames of one clip and the first of the next overlap: the root-relative poses are blended with a
-smooth weight, the root path follows the blend of the two, every frame is put back on one
+the last frames of one clip and the first of the next overlap: the root-relative poses are
+blended in their own headings with a smooth weight while the heading turns from the one to
+the other, the root path follows the blend of the two, every frame is put back on one
 set of bone lengths (a blend of two poses shortens the bones between them), and the feet
 are then held where they are planted (``features.foot_lock.lock_feet``, footskate cleanup) so that a join does
 not slide. Every clip's source file and time span is kept: a user knows whose motion it is.
@@ -27,13 +28,14 @@ from typing import Any
 
 import numpy as np
 
+from motionlang.analysis import analyse_positions, check_sentence
 from motionlang.analysis.words import actions_named
 from motionlang.errors import MotionlangError
 from motionlang.features.body21 import body21, stature21, uniform_bones21
 from motionlang.features.foot_lock import lock_feet
 from motionlang.features.joint_map import bone_lengths21
 from motionlang.features.positions import facing_yaw
-from motionlang.features.root import from_heading, to_heading
+from motionlang.features.root import from_heading, increments, integrate, to_heading
 from motionlang.library.search import Library
 from motionlang.rendering.output import check_result_path, write_result
 from motionlang.utils.atomic import atomic_write
@@ -80,13 +82,23 @@ def parts(text: str) -> list[str]:
 @dataclass
 class Clip:
     """One part's clip: the part, the take it came from (path under the indexed folder), its
-    span in seconds there, and why search chose it (empty: the learned model alone)."""
+    span in seconds there, why search chose it (empty: the learned model alone) and the
+    span, seconds in the take, where the analysis saw the part's action (a join never cuts
+    into it)."""
 
     part: str
     file: str
     start: float
     end: float
     why: str = ""
+    shows: tuple[float, float] | None = None
+
+    def kept(self, fps: float = FPS) -> tuple[int, int] | None:
+        """The frames of the clip (at ``fps``) from the action's first to its last."""
+        if self.shows is None:
+            return None
+        lo, hi = (max(0.0, t - self.start) for t in self.shows)
+        return int(lo * fps), int(np.ceil(min(hi, self.end - self.start) * fps))
 
 
 @dataclass
@@ -132,16 +144,10 @@ def candidates(lib: Library, part: str, used: set[tuple[str, float]],
     for pick in picks or hits[:1]:
         start = max(0.0, pick.start - LEAD) if pick.why else pick.start
         out.append((Clip(part, pick.file, round(start, 3),
-                         round(min(pick.end, start + MAX_CLIP), 3), pick.why),
+                         round(min(pick.end, start + MAX_CLIP), 3), pick.why,
+                         pick.shows if pick.why else None),
                     (pick.file, pick.start)))
     return out
-
-
-def choose(lib: Library, part: str, used: set[tuple[str, float]]) -> Clip:
-    """The clip of one part: the first of :func:`candidates`, marked used."""
-    clip, key = candidates(lib, part, used, 1)[0]
-    used.add(key)
-    return clip
 
 
 def _clip_positions(lib: Library, clip: Clip, stature: float | None) -> np.ndarray:
@@ -150,6 +156,15 @@ def _clip_positions(lib: Library, clip: Clip, stature: float | None) -> np.ndarr
     take = lib.take_named(clip.file)
     cut = take.between(clip.start, clip.end)
     return _resampled(body21(cut, stature=stature), float(take.fps), FPS)
+
+
+def _shows(part: str, p: np.ndarray) -> bool:
+    """Whether the analysis sees every action ``part`` names in ``p`` (T, 21, 3) at
+    :data:`FPS` (an action it has no detector for counts as seen)."""
+    try:
+        return all(c.shown is not False for c in check_sentence(part, analyse_positions(p, FPS)))
+    except MotionlangError:
+        return False
 
 
 def _smooth(n: int) -> np.ndarray:
@@ -171,15 +186,20 @@ def best_cut(a: np.ndarray, b: np.ndarray, overlap: int, fps: float = FPS
     return end, start
 
 
-def cut_cost(a: np.ndarray, b: np.ndarray, overlap: int, fps: float = FPS
-             ) -> tuple[int, int, float]:
+def cut_cost(a: np.ndarray, b: np.ndarray, overlap: int, fps: float = FPS, *,
+             keep: int = 0, reach: int | None = None) -> tuple[int, int, float]:
     """``(end, start, cost)`` of the best join of ``a[:end]`` to ``b[start:]``: the frames
     most alike (mean joint distance of the root-relative poses in their own heading, m, plus
     the joints' velocity difference, m a frame, so that a planted foot meets a planted
-    foot), searched over :data:`SEARCH` seconds."""
+    foot), searched over :data:`SEARCH` seconds; the blend starts no earlier than ``a``'s
+    frame ``keep`` and ``b`` starts no later than its frame ``reach`` (the spans where the
+    analysis saw each part's action stay whole)."""
     na, nb = int(SEARCH[0] * fps), int(SEARCH[1] * fps)
-    ends = np.arange(max(overlap + 1, len(a) - na), len(a) + 1)
-    starts = np.arange(0, max(1, min(nb, len(b) - overlap - 1)))
+    ends = np.arange(min(len(a), max(overlap + 1, len(a) - na, keep + overlap)), len(a) + 1)
+    last = max(1, min(nb, len(b) - overlap - 1))
+    if reach is not None:
+        last = max(1, min(last, reach + 1))
+    starts = np.arange(0, last)
     pa, pb = _pose(a), _pose(b)
     # velocities in each frame's own heading, as the poses are: the clips face anywhere
     va = to_heading(np.gradient(a, axis=0), facing_yaw(a)[:, None]) * fps
@@ -194,28 +214,45 @@ def cut_cost(a: np.ndarray, b: np.ndarray, overlap: int, fps: float = FPS
     return int(ends[best_i]), int(starts[best_j]), float(cost[best_i, best_j])
 
 
-def _from_start(b: np.ndarray) -> np.ndarray:
-    """``b`` moved and turned so that its first frame stands at the origin facing +Z."""
-    moved = b - b[:1, :1] * np.array([1.0, 0.0, 1.0])
-    return to_heading(moved, np.full(b.shape[:2], facing_yaw(b[:1])[0]))
+def _local(p: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(T, 21, 3) -> the pose in its own heading about the root's ground point (T, 21, 3),
+    the root's ground path (T, 2) as (x, z) and the heading (T,) radians, unwrapped."""
+    yaw = np.unwrap(facing_yaw(p))
+    ground = p[:, 0, [0, 2]]
+    at_root = p - np.stack([ground[:, 0], np.zeros(len(p)), ground[:, 1]], axis=1)[:, None]
+    return to_heading(at_root, yaw[:, None]), ground, yaw
+
+
+def _placed(local: np.ndarray, ground: np.ndarray, yaw: np.ndarray) -> np.ndarray:
+    """:func:`_local`'s inverse: (T, 21, 3) world positions."""
+    root = np.stack([ground[:, 0], np.zeros(len(ground)), ground[:, 1]], axis=1)[:, None]
+    return from_heading(local, yaw[:, None]) + root
 
 
 def join(a: np.ndarray, b: np.ndarray, overlap: int) -> np.ndarray:
-    """``b`` (starting at the origin facing +Z) laid after ``a``: turned and moved so that
-    its first frame stands where ``a``'s frame ``-overlap`` stands, the ``overlap`` frames
-    blended (module docstring)."""
+    """``b`` (T, 21, 3) laid after ``a`` (T, 21, 3), ``a``'s last ``overlap`` frames
+    blended with ``b``'s first (module docstring); where ``b`` starts in the world does not
+    matter."""
     overlap = max(1, min(overlap, len(a) - 1, len(b) - 1))
     at = len(a) - overlap
-    yaw = float(facing_yaw(a[at:at + 1])[0])
-    root = a[at, 0] * np.array([1.0, 0.0, 1.0])
-    placed = from_heading(b, np.full(b.shape[:2], yaw)) + root
-    w = _smooth(overlap)[:, None, None]
-    ra, rb = a[at:, :1], placed[:overlap, :1]
-    mixed_root = (1 - w) * ra + w * rb
-    mixed_pose = (1 - w) * (a[at:] - ra) + w * (placed[:overlap] - rb)
-    # the rest of b follows where the blended root ended, so nothing jumps
-    shift = (mixed_root[-1] - rb[-1]) * np.array([1.0, 0.0, 1.0])
-    return np.concatenate([a[:at], mixed_pose + mixed_root, placed[overlap:] + shift])
+    la, ga, ya = _local(a[at:])
+    lb, gb, yb = _local(b[:overlap + 1])
+    w = _smooth(overlap)
+    # the root's steps and turns (in each clip's own heading) are blended, not its places:
+    # the blend then carries a walk's speed or a spin's turning over into the next clip,
+    # where blending positions would pull the root back and fold two bodies facing apart
+    # through each other
+    va, ta = increments(ga, ya)
+    vb, tb = increments(gb[:overlap], yb[:overlap])
+    ground, yaw = integrate((1 - w)[:, None] * va + w[:, None] * vb, (1 - w) * ta + w * tb,
+                            (ga[0, 0], ga[0, 1], ya[0]))
+    mixed = _placed((1 - w)[:, None, None] * la + w[:, None, None] * lb[:overlap], ground, yaw)
+    # the rest of b goes on from b's own last overlapping frame, laid where the blend ended
+    turn = yaw[-1] - yb[overlap - 1]
+    rest = b[overlap:] - np.array([gb[overlap - 1, 0], 0.0, gb[overlap - 1, 1]])
+    rest = from_heading(rest, np.full(rest.shape[:2], turn)) + \
+        np.array([ground[-1, 0], 0.0, ground[-1, 1]])
+    return np.concatenate([a[:at], mixed, rest])
 
 
 def compose(text: str, library: str | Path | Library, *, model: Any = None,
@@ -231,27 +268,34 @@ def compose(text: str, library: str | Path | Library, *, model: Any = None,
     used: set[tuple[str, float]] = set()
     frames = max(1, int(round(overlap * FPS)))
     out: np.ndarray | None = None
-    joins, clips = [], []
+    joins: list[int] = []
+    clips: list[Clip] = []
+    offset = 0   # where the last clip's first frame is in ``out``
     for part in parts(text):
-        if out is None:   # the first part: the best hit
-            clip = choose(lib, part, used)
-            out = _clip_positions(lib, clip, None)
-            clips.append(clip)
-            continue
-        # of the hits that show the part, the one that joins the motion so far best (as a
-        # motion graph takes its cheapest transition)
-        best = None
+        tried = []
         for clip, key in candidates(lib, part, used):
+            if out is None:   # the first part: the hits in search's order
+                p = _clip_positions(lib, clip, None)
+                tried.append((0.0, clip, key, p, 0, 0, p, 0))
+                continue
+            shown = clips[-1].kept()
+            reach = clip.kept()
             p = _clip_positions(lib, clip, stature21(out))
-            end, start, cost = cut_cost(out, p, frames)
-            if best is None or cost < best[0]:
-                best = (cost, clip, key, p, end, start)
-        assert best is not None
-        _, clip, key, p, end, start = best
+            end, start, cost = cut_cost(out, p, frames, keep=shown[1] + offset if shown else 0,
+                                        reach=reach[0] if reach else None)
+            at = end - min(frames, end - 1, len(p) - start - 1)
+            tried.append((cost, clip, key, p, end, start, join(out[:end], p[start:], frames), at))
+        # of the hits that show the part, the one that joins the motion so far best (as a
+        # motion graph takes its cheapest transition) where the part's action is still
+        # there once joined, else the one that joins best
+        tried.sort(key=lambda x: x[0])
+        pick = next((t for t in tried if _shows(part, t[6][t[7]:])), tried[0])
+        _, clip, key, p, end, start, out, at = pick
         used.add(key)
+        if clips:
+            joins.append(at)
+            offset = at - start
         clips.append(clip)
-        joins.append(end - min(frames, end - 1, len(p) - start - 1))
-        out = join(out[:end], _from_start(p[start:]), frames)
     assert out is not None
     # a blend of two poses shortens the bones between them: every frame back on one body
     out = uniform_bones21(out, np.median(bone_lengths21(out), axis=0))

@@ -120,6 +120,7 @@ class Match:
         actions: the query's actions shown, in the query's order.
         confidence: mean over those actions of their best finding's confidence.
         why: ``"sits: 12.4-15.0 s"``, one part per finding.
+        shows: the findings' own span, seconds (``start``, ``end`` without the pad).
     """
 
     start: float
@@ -127,6 +128,7 @@ class Match:
     actions: tuple[str, ...]
     confidence: float
     why: str
+    shows: tuple[float, float] = (0.0, 0.0)
 
 
 def matches(findings: list[dict], actions: list[str], duration: float, *,
@@ -149,9 +151,9 @@ def matches(findings: list[dict], actions: list[str], duration: float, *,
         best = [max(f["confidence"] for f in g if answers(f["label"], a)) for a in shown]
         why = "; ".join(f"{reason(f['label'])}: {f['start']:.1f}-{f['end']:.1f} s"
                         for f in g)
-        out.append(Match(max(0.0, min(f["start"] for f in g) - PAD),
-                         min(duration, max(f["end"] for f in g) + PAD), tuple(shown),
-                         sum(best) / len(best), why))
+        lo, hi = min(f["start"] for f in g), max(f["end"] for f in g)
+        out.append(Match(max(0.0, lo - PAD), min(duration, hi + PAD), tuple(shown),
+                         sum(best) / len(best), why, (lo, hi)))
     return out
 
 

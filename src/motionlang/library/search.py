@@ -57,13 +57,15 @@ class Hit(NamedTuple):
     """One result: a take (its path relative to the indexed folder, ``#N`` after a file of
     several sequences), a span in seconds, the best window's cosine similarity, and what
     the analysis saw there of the query's actions (empty for a hit of the learned model
-    alone)."""
+    alone) with the span, seconds, of the findings that show them (``None``: the learned
+    model alone)."""
 
     file: str
     start: float
     end: float
     score: float
     why: str = ""
+    shows: tuple[float, float] | None = None
 
     def line(self, rank: int) -> str:
         """How ``motionlang search`` prints the hit ranked ``rank``."""
@@ -216,7 +218,7 @@ class Library:
                     found.append((len(m.actions), best + m.confidence, i, m, best))
             found.sort(key=lambda x: (-x[0], -x[1], x[2], x[3].start))
             for _, _, i, m, best in found[:k]:
-                hits.append(Hit(names[i], m.start, m.end, best, m.why))
+                hits.append(Hit(names[i], m.start, m.end, best, m.why, m.shows))
                 shown.append((i, m.start, m.end))
             unseen = [a for a in actions if not any(a in m.actions for *_, m, _ in found)]
             if unseen:
