@@ -93,6 +93,12 @@ def test_dances_needs_legs_arms_three_kinds_moving_limbs_and_time():
     spin_kick = [_f("raise", 0.2, 1.0), _f("spin", 1.1, 1.9), _f("kick", 1.3, 1.7),
                  _f("raise", 3.0, 4.0)]
     assert dances(_body(5.0, moving=True), spin_kick) == []
+    # spinning kicks 4.5 s apart with the guard raised between (Bandai's kick take): a 4-s
+    # window that holds one kick's spin but not its kick still holds no third kind
+    kicks = [_f("spin", 0.2, 1.8), _f("kick", 0.9, 1.5), _f("raise", 2.5, 3.2),
+             _f("spin", 4.7, 6.3), _f("kick", 5.4, 6.0), _f("raise", 7.0, 7.7),
+             _f("spin", 9.2, 10.8), _f("kick", 9.9, 10.5)]
+    assert dances(_body(11.0, moving=True), kicks) == []
     # too short a take
     short = [f for f in MIX if f.end <= MIN_DANCE - 0.5]
     assert dances(_body(MIN_DANCE - 0.5, moving=True), short) == []

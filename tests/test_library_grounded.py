@@ -87,6 +87,22 @@ def test_matching_findings_by_hand():
     assert where_actions("hopping") == ["jump"]
 
 
+def test_a_dance_answers_for_its_moves_after_a_take_that_shows_them_alone():
+    dance = {"label": "dance", "start": 3.0, "end": 9.3, "confidence": 0.9, "side": None,
+             "count": 1, "moves": ["kick", "raise", "spin"]}
+    kick = {"label": "kick", "start": 1.0, "end": 1.4, "confidence": 0.9, "side": "left",
+            "count": 2}
+    assert valid_findings([dance]) and not valid_findings([{**dance, "moves": ["fly"]}])
+    inside = matches([dance], ["kick"], 10.0)
+    assert len(inside) == 1 and inside[0].why == "dances (kicks among its moves): 3.0-9.3 s"
+    assert inside[0].shows == (3.0, 9.3)
+    alone = matches([kick], ["kick"], 10.0)
+    assert alone[0].why == "kicks: 1.0-1.4 s" and alone[0].confidence > inside[0].confidence
+    assert matches([dance], ["dance"], 10.0)[0].why == "dances: 3.0-9.3 s"
+    assert matches([dance], ["punch"], 10.0) == []   # not among its moves
+    assert matches([{**dance, "moves": []}], ["kick"], 10.0) == []
+
+
 def test_durations_and_options():
     assert seconds("2s", "x") == 2.0 and seconds("500ms", "x") == 0.5
     assert seconds(3, "x") == 3.0 and seconds("1.5min", "x") == 90.0

@@ -50,9 +50,10 @@ def limbs_moving(body: Body) -> np.ndarray:
 
 
 def _moves(found: list[Finding], t0: float, t1: float) -> set[str]:
-    """The labels of the movements within [t0, t1), a spin during a kick not counted."""
+    """The labels of the movements within [t0, t1), a spin during a kick not counted
+    (wherever the kick lies: a spinning kick cut by the window's edge is still one)."""
     inside = [f for f in found if f.end > t0 and f.start < t1]
-    kicks = [f for f in inside if f.label == "kick"]
+    kicks = [f for f in found if f.label == "kick"]
     return {f.label for f in inside
             if not (f.label == "spin" and any(overlap(f, k) > 0.5 * k.duration for k in kicks))}
 

@@ -10,7 +10,9 @@ model never saw. Each such hit says why (``sits: 12.4-15.0 s``).
 
 Matching is strict: a finding answers for the action its label names (``analysis.ACTION``:
 a hop is a jump, a squat a crouch), never for a merely compatible one (a jump is no climb);
-the one widening is :data:`ALSO` (stepping up onto something is climbing up).
+the widenings are :data:`ALSO` (stepping up onto something is climbing up) and a dance,
+which answers for the movements it is made of (a ballet take's battements are kicks), after
+the takes that show them on their own (:data:`IN_A_DANCE`).
 """
 from __future__ import annotations
 
@@ -24,7 +26,7 @@ from motionlang.analysis.words import actions_named
 from motionlang.errors import MotionlangError
 from motionlang.kinematics.motion import Motion
 
-#: the stored fields of a finding, in this order
+#: the stored fields of a finding, in this order (a dance also stores its ``moves``)
 FIELDS = ("label", "start", "end", "confidence", "side", "count")
 #: findings of a take this close (s) or closer are one hit: a walk and the sitting down
 #: right after it, or kicks of one series
@@ -35,6 +37,9 @@ PAD = 0.5
 DETECTABLE = frozenset(ACTION.values())
 #: labels that answer for an action besides its own
 ALSO = {"climb": ("step_up",)}
+#: a dance answers for one of its movements with its confidence times this: a take that
+#: kicks comes before a dance that has kicks in it
+IN_A_DANCE = 0.5
 
 
 def answers(label: str, action: str) -> bool:
@@ -42,12 +47,21 @@ def answers(label: str, action: str) -> bool:
     return ACTION[label] == action or label in ALSO.get(action, ())
 
 
+def in_a_dance(finding: dict, action: str) -> bool:
+    """Whether a stored dance finding has ``action`` among its movements."""
+    return finding["label"] == "dance" and any(
+        m in ACTION and answers(m, action) for m in finding.get("moves", ()))
+
+
 def compact(finding: Any) -> dict:
     """An ``analysis.Finding`` as the index stores it (:data:`FIELDS`, rounded)."""
-    return {"label": finding.label, "start": round(float(finding.start), 2),
-            "end": round(float(finding.end), 2),
-            "confidence": round(float(finding.confidence), 3), "side": finding.side,
-            "count": int(finding.count)}
+    out = {"label": finding.label, "start": round(float(finding.start), 2),
+           "end": round(float(finding.end), 2),
+           "confidence": round(float(finding.confidence), 3), "side": finding.side,
+           "count": int(finding.count)}
+    if finding.label == "dance":
+        out["moves"] = list(finding.detail.get("moves", ()))
+    return out
 
 
 def take_findings(motion: Motion) -> list[dict]:
@@ -71,6 +85,9 @@ def valid_findings(value: Any) -> bool:
         nums = [f.get(k) for k in ("start", "end", "confidence", "count")]
         if not all(isinstance(x, (int, float)) and not isinstance(x, bool) and
                    math.isfinite(x) for x in nums) or f["end"] < f["start"]:
+            return False
+        moves = f.get("moves", [])
+        if not isinstance(moves, list) or not all(m in ACTION for m in moves):
             return False
     return True
 
@@ -134,9 +151,16 @@ class Match:
 def matches(findings: list[dict], actions: list[str], duration: float, *,
             min_duration: float = 0.0) -> list[Match]:
     """The hits a take's stored findings give for ``actions``: its findings of those
-    actions (each at least ``min_duration`` s long), those within :data:`JOIN_GAP` s of
-    one another taken together, in time order."""
-    wanted = [f for f in findings if any(answers(f["label"], a) for a in actions) and
+    actions (each at least ``min_duration`` s long; a dance for the movements it is made
+    of, :data:`IN_A_DANCE`), those within :data:`JOIN_GAP` s of one another taken together,
+    in time order."""
+    def direct(f: dict, a: str) -> bool:
+        return answers(f["label"], a)
+
+    def shows(f: dict, a: str) -> bool:
+        return direct(f, a) or in_a_dance(f, a)
+
+    wanted = [f for f in findings if any(shows(f, a) for a in actions) and
               f["end"] - f["start"] >= min_duration]
     wanted.sort(key=lambda f: f["start"])
     groups: list[list[dict]] = []
@@ -147,14 +171,23 @@ def matches(findings: list[dict], actions: list[str], duration: float, *,
             groups.append([f])
     out = []
     for g in groups:
-        shown = [a for a in actions if any(answers(f["label"], a) for f in g)]
-        best = [max(f["confidence"] for f in g if answers(f["label"], a)) for a in shown]
-        why = "; ".join(f"{reason(f['label'])}: {f['start']:.1f}-{f['end']:.1f} s"
-                        for f in g)
+        shown = [a for a in actions if any(shows(f, a) for f in g)]
+        best = [max(f["confidence"] * (1.0 if direct(f, a) else IN_A_DANCE)
+                    for f in g if shows(f, a)) for a in shown]
+        why = "; ".join(f"{_why(f, actions)}: {f['start']:.1f}-{f['end']:.1f} s" for f in g)
         lo, hi = min(f["start"] for f in g), max(f["end"] for f in g)
         out.append(Match(max(0.0, lo - PAD), min(duration, hi + PAD), tuple(shown),
                          sum(best) / len(best), why, (lo, hi)))
     return out
+
+
+def _why(f: dict, actions: list[str]) -> str:
+    """How a hit's reason names one finding: ``kicks``, or a dance that answers for its
+    movements as ``dances (kicks among its moves)``."""
+    inside = [a for a in actions if not answers(f["label"], a) and in_a_dance(f, a)]
+    if inside:
+        return f"{reason(f['label'])} ({', '.join(verb(a) for a in inside)} among its moves)"
+    return reason(f["label"])
 
 
 def path_allowed(path: str, glob: str | None) -> bool:
