@@ -277,11 +277,18 @@ class Body:
         f = np.cross(up, across)
         return f / np.maximum(np.linalg.norm(f, axis=1, keepdims=True), 1e-9)
 
+    @cached_property
+    def _arm_lengths(self) -> tuple[float, float]:
+        out = []
+        for s, e, w in ARMS:
+            b = [np.median(np.linalg.norm(self.p[:, a] - self.p[:, c], axis=1))
+                 for a, c in ((s, e), (e, w))]
+            out.append(float(sum(b)))
+        return out[0], out[1]
+
     def arm_length(self, side: int) -> float:
-        s, e, w = ARMS[side]
-        b = [np.median(np.linalg.norm(self.p[:, a] - self.p[:, c], axis=1))
-             for a, c in ((s, e), (e, w))]
-        return float(sum(b))
+        """Upper arm plus forearm of ``side`` (0 left, 1 right), metres (medians)."""
+        return self._arm_lengths[side]
 
     def to_body_frame(self, v: np.ndarray) -> np.ndarray:
         """(T, 3) world vectors -> (T, 3) in the body's heading frame: x to the body's
