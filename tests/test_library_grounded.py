@@ -78,6 +78,7 @@ def test_matching_findings_by_hand():
           "count": 1}]
     assert valid_findings(f) and not valid_findings([{**f[0], "end": -1.0}])
     assert not valid_findings([{**f[0], "label": "fly"}]) and not valid_findings("x")
+    assert not valid_findings([{**f[0], "label": ["walk"]}])   # unhashable: no TypeError
     both = matches(f, ["walk", "sit"], 30.0)   # 1 s apart: one hit showing both
     assert len(both) == 1 and both[0].actions == ("walk", "sit")
     assert (both[0].start, both[0].end) == (0.0, 9.5)
@@ -93,11 +94,14 @@ def test_a_dance_answers_for_its_moves_after_a_take_that_shows_them_alone():
     kick = {"label": "kick", "start": 1.0, "end": 1.4, "confidence": 0.9, "side": "left",
             "count": 2}
     assert valid_findings([dance]) and not valid_findings([{**dance, "moves": ["fly"]}])
+    assert not valid_findings([{**dance, "moves": [["kick"]]}])
     inside = matches([dance], ["kick"], 10.0)
     assert len(inside) == 1 and inside[0].why == "dances (kicks among its moves): 3.0-9.3 s"
     assert inside[0].shows == (3.0, 9.3)
     alone = matches([kick], ["kick"], 10.0)
     assert alone[0].why == "kicks: 1.0-1.4 s" and alone[0].confidence > inside[0].confidence
+    # search ranks a take's own kick first even where the dance's confidence ties it
+    assert alone[0].direct == 1 and inside[0].direct == 0
     assert matches([dance], ["dance"], 10.0)[0].why == "dances: 3.0-9.3 s"
     assert matches([dance], ["punch"], 10.0) == []   # not among its moves
     assert matches([{**dance, "moves": []}], ["kick"], 10.0) == []

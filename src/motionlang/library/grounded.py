@@ -37,8 +37,8 @@ PAD = 0.5
 DETECTABLE = frozenset(ACTION.values())
 #: labels that answer for an action besides its own
 ALSO = {"climb": ("step_up",)}
-#: a dance answers for one of its movements with its confidence times this: a take that
-#: kicks comes before a dance that has kicks in it
+#: a dance answers for one of its movements with its confidence times this (search ranks
+#: a take whose own finding shows the action before a dance that has it among its moves)
 IN_A_DANCE = 0.5
 
 
@@ -80,16 +80,20 @@ def valid_findings(value: Any) -> bool:
     if not isinstance(value, list):
         return False
     for f in value:
-        if not isinstance(f, dict) or f.get("label") not in ACTION:
+        if not isinstance(f, dict) or not _is_label(f.get("label")):
             return False
         nums = [f.get(k) for k in ("start", "end", "confidence", "count")]
         if not all(isinstance(x, (int, float)) and not isinstance(x, bool) and
                    math.isfinite(x) for x in nums) or f["end"] < f["start"]:
             return False
         moves = f.get("moves", [])
-        if not isinstance(moves, list) or not all(m in ACTION for m in moves):
+        if not isinstance(moves, list) or not all(_is_label(m) for m in moves):
             return False
     return True
+
+
+def _is_label(value: Any) -> bool:
+    return isinstance(value, str) and value in ACTION
 
 
 def query_actions(text: str) -> list[str]:
@@ -138,6 +142,8 @@ class Match:
         confidence: mean over those actions of their best finding's confidence.
         why: ``"sits: 12.4-15.0 s"``, one part per finding.
         shows: the findings' own span, seconds (``start``, ``end`` without the pad).
+        direct: how many of ``actions`` a finding of their own shows (not only a dance
+            they are among the moves of): search ranks those hits first.
     """
 
     start: float
@@ -146,6 +152,7 @@ class Match:
     confidence: float
     why: str
     shows: tuple[float, float] = (0.0, 0.0)
+    direct: int = 0
 
 
 def matches(findings: list[dict], actions: list[str], duration: float, *,
@@ -176,8 +183,9 @@ def matches(findings: list[dict], actions: list[str], duration: float, *,
                     for f in g if shows(f, a)) for a in shown]
         why = "; ".join(f"{_why(f, actions)}: {f['start']:.1f}-{f['end']:.1f} s" for f in g)
         lo, hi = min(f["start"] for f in g), max(f["end"] for f in g)
+        own = sum(any(direct(f, a) for f in g) for a in shown)
         out.append(Match(max(0.0, lo - PAD), min(duration, hi + PAD), tuple(shown),
-                         sum(best) / len(best), why, (lo, hi)))
+                         sum(best) / len(best), why, (lo, hi), own))
     return out
 
 

@@ -41,7 +41,7 @@ from motionlang.library.grounded import (
 from motionlang.library.options import BACKENDS, SearchOptions
 from motionlang.library.scan import read_takes
 from motionlang.library.sheet import contact_sheet
-from motionlang.library.store import IndexData, load_index
+from motionlang.library.store import Entry, IndexData, load_index
 
 #: windows from which faiss, when installed, is used instead of numpy (exact both)
 FAISS_MIN_ROWS = 200_000
@@ -215,9 +215,9 @@ class Library:
                     near = own[_overlapping(data.spans[own], [(m.start, m.end)])]
                     best = float(scores[near].max()) if near.size else float(
                         scores[own].max())
-                    found.append((len(m.actions), best + m.confidence, i, m, best))
-            found.sort(key=lambda x: (-x[0], -x[1], x[2], x[3].start))
-            for _, _, i, m, best in found[:k]:
+                    found.append((len(m.actions), m.direct, best + m.confidence, i, m, best))
+            found.sort(key=lambda x: (-x[0], -x[1], -x[2], x[3], x[4].start))
+            for *_, i, m, best in found[:k]:
                 hits.append(Hit(names[i], m.start, m.end, best, m.why, m.shows))
                 shown.append((i, m.start, m.end))
             unseen = [a for a in actions if not any(a in m.actions for *_, m, _ in found)]
@@ -317,12 +317,17 @@ class Library:
         """The motion of a hit's take, read again from the indexed folder."""
         return self.take_named(hit.file)
 
-    def take_named(self, name: str):
-        """The motion of the take ``name`` (as hits name it), read again from the indexed
-        folder."""
+    def entry_named(self, name: str) -> Entry:
+        """The index's entry of the take ``name`` (as hits name it)."""
         entry = next((e for e in self.data.entries if e.name == name), None)
         if entry is None:
             raise MotionlangError(f"{self.where}: no take {name!r}")
+        return entry
+
+    def take_named(self, name: str):
+        """The motion of the take ``name`` (as hits name it), read again from the indexed
+        folder."""
+        entry = self.entry_named(name)
         return read_takes(Path(self.data.root) / entry.path)[entry.sequence - 1]
 
 
