@@ -15,7 +15,7 @@ from motionlang.analysis import check
 from motionlang.cli.main import main
 from motionlang.errors import MotionlangError
 from motionlang.features.positions import facing_yaw
-from motionlang.library.compose import FPS, Clip, compose, cut_cost, join, parts
+from motionlang.library.compose import FPS, TAIL, Clip, candidates, compose, cut_cost, join, parts
 from motionlang.library.embedder import Embedder
 from motionlang.library.search import Library
 from motionlang.rendering.output import body_motion
@@ -83,11 +83,36 @@ def test_a_join_never_cuts_into_the_span_where_the_action_was_seen():
     a[70:] = a[70]   # a walk that stops: the best cut is in its walking
     free_end, free_start, _ = cut_cost(a, b, 15)
     assert free_end - 15 < 70 and free_start > 2
-    end, start, _ = cut_cost(a, b, 15, keep=70, reach=2)
-    assert end - 15 >= 70 and start <= 2
+    end, start, _ = cut_cost(a, b, 15, keep=70, reach=20)
+    assert end - 15 >= 70 and start + 15 <= 20   # b's blended frames too come before 20
     clip = Clip("a person jumps", "j.bvh", 0.5, 2.9, "jumps: 2.0-2.4 s", (2.0, 2.4))
     assert clip.kept() == (45, 57)
     assert Clip("a person walks", "w.bvh", 0.0, 1.0).kept() is None
+    # a long walk cut to its clip is kept to its end
+    long = Clip("a person walks", "w.bvh", 0.0, 4.0, "walks: 0.0-9.0 s", (0.0, 9.0))
+    assert long.kept() == (0, int(round(4.0 * FPS)))
+    late = Clip("a person waves", "w.bvh", 0.0, 4.0, "waves: 5.0-6.0 s", (5.0, 6.0))
+    lo, hi = late.kept()
+    assert lo <= hi
+
+
+def test_a_join_of_very_short_clips_overlaps_what_they_have():
+    a, b = walking(1.0), walking(1.0)
+    end, start, cost = cut_cost(a[:5], b, 15)
+    assert 2 <= end <= 5 and np.isfinite(cost)
+    with pytest.raises(MotionlangError, match="two frames"):
+        cut_cost(a[:1], b, 15)
+
+
+def test_a_clip_goes_on_past_its_action_so_that_the_join_comes_after_it(library):
+    _, index = library
+    lib = Library.open(index, hand_made())
+    (clip, _), *_ = candidates(lib, "a person sits down", set())
+    assert clip.shows is not None
+    room = lib.entry_named(clip.file).duration - clip.shows[1]
+    assert clip.end - clip.shows[1] >= min(TAIL, room) - 0.01
+    kept = clip.kept()
+    assert kept is not None and kept[1] + 15 <= (clip.end - clip.start) * FPS
 
 
 def test_the_command_line_writes_the_motion_and_lists_its_clips(library, tmp_path, capsys,

@@ -53,6 +53,9 @@ LEAD = 1.0
 #: seconds at the end of a clip and at the start of the next searched for the frames most
 #: alike to join at (a motion graph's transition point)
 SEARCH = (1.0, 0.5)
+#: seconds a clip goes on past its action where the take allows: the join is searched for
+#: and blended after the action, never over its last frames (a jump keeps its landing)
+TAIL = JOIN + SEARCH[0]
 #: where a sentence says one thing after another
 _PARTS = re.compile(r"\s*(?:,?\s*(?:and\s+)?then\b|,?\s*after that\b|,?\s*followed by\b|;|"
                     r",?\s*and finally\b|,?\s*afterwards\b)\s*,?\s*", re.IGNORECASE)
@@ -94,11 +97,14 @@ class Clip:
     shows: tuple[float, float] | None = None
 
     def kept(self, fps: float = FPS) -> tuple[int, int] | None:
-        """The frames of the clip (at ``fps``) from the action's first to its last."""
+        """The frames of the clip (at ``fps``) from the action's first to its last (an
+        action that goes on past the clip's end, a long walk cut to :data:`MAX_CLIP`, to
+        the clip's last frame: the join then comes at its end, the action still going)."""
         if self.shows is None:
             return None
-        lo, hi = (max(0.0, t - self.start) for t in self.shows)
-        return int(lo * fps), int(np.ceil(min(hi, self.end - self.start) * fps))
+        length = self.end - self.start
+        lo, hi = (min(max(0.0, t - self.start), length) for t in self.shows)
+        return int(lo * fps), int(np.ceil(max(lo, hi) * fps))
 
 
 @dataclass
@@ -142,11 +148,17 @@ def candidates(lib: Library, part: str, used: set[tuple[str, float]],
     picks = [h for h in hits if (h.why or not asked) and (h.file, h.start) not in used][:k]
     out = []
     for pick in picks or hits[:1]:
-        start = max(0.0, pick.start - LEAD) if pick.why else pick.start
-        out.append((Clip(part, pick.file, round(start, 3),
-                         round(min(pick.end, start + MAX_CLIP), 3), pick.why,
-                         pick.shows if pick.why else None),
-                    (pick.file, pick.start)))
+        if pick.why and pick.shows is not None:
+            start = max(0.0, pick.start - LEAD)
+            if pick.shows[1] <= start + MAX_CLIP:   # the clip goes on past the action
+                end = min(lib.entry_named(pick.file).duration, pick.shows[1] + TAIL)
+            else:   # a long action is cut, and joined inside it
+                end = start + MAX_CLIP
+            clip = Clip(part, pick.file, round(start, 3), round(end, 3), pick.why, pick.shows)
+        else:
+            clip = Clip(part, pick.file, round(pick.start, 3),
+                        round(min(pick.end, pick.start + MAX_CLIP), 3), pick.why)
+        out.append((clip, (pick.file, pick.start)))
     return out
 
 
@@ -167,6 +179,15 @@ def _shows(part: str, p: np.ndarray) -> bool:
         return False
 
 
+def _lost(part: str, last: str | None, joined: np.ndarray, at: int, end: int, offset: int,
+          cost: float) -> tuple[bool, bool, float]:
+    """How a candidate join is ranked: whether ``part``'s action is lost from the joined
+    motion (T, 21, 3) after ``at``, whether the ``last`` part's is lost from its clip
+    (``joined[offset:end]``, up to the blend's end) and the join's cost."""
+    before = last is not None and not _shows(last, joined[max(0, offset):end])
+    return not _shows(part, joined[at:]), before, cost
+
+
 def _smooth(n: int) -> np.ndarray:
     x = (np.arange(n) + 0.5) / n
     return x * x * (3 - 2 * x)
@@ -176,6 +197,12 @@ def _pose(p: np.ndarray) -> np.ndarray:
     """(T, 21, 3) -> each frame's joints relative to its root, in its own heading."""
     rel = p - p[:, :1] * np.array([1.0, 0.0, 1.0])
     return to_heading(rel, facing_yaw(p)[:, None])
+
+
+def overlap_frames(overlap: int, na: int, nb: int) -> int:
+    """The frames a join of a clip of ``na`` frames to one of ``nb`` overlaps, at most
+    ``overlap``: each keeps a frame of its own."""
+    return max(1, min(overlap, na - 1, nb - 1))
 
 
 def best_cut(a: np.ndarray, b: np.ndarray, overlap: int, fps: float = FPS
@@ -193,12 +220,17 @@ def cut_cost(a: np.ndarray, b: np.ndarray, overlap: int, fps: float = FPS, *,
     the joints' velocity difference, m a frame, so that a planted foot meets a planted
     foot), searched over :data:`SEARCH` seconds; the blend starts no earlier than ``a``'s
     frame ``keep`` and ``b`` starts no later than its frame ``reach`` (the spans where the
-    analysis saw each part's action stay whole)."""
+    analysis saw each part's action stay whole: where a clip leaves no room, the join
+    comes as close to that as it can)."""
+    if len(a) < 2 or len(b) < 2:
+        raise MotionlangError(f"a join needs two frames of each clip, got {len(a)} and "
+                              f"{len(b)}")
+    overlap = overlap_frames(overlap, len(a), len(b))
     na, nb = int(SEARCH[0] * fps), int(SEARCH[1] * fps)
     ends = np.arange(min(len(a), max(overlap + 1, len(a) - na, keep + overlap)), len(a) + 1)
-    last = max(1, min(nb, len(b) - overlap - 1))
-    if reach is not None:
-        last = max(1, min(last, reach + 1))
+    last = max(1, min(nb, len(b) - overlap))
+    if reach is not None:   # the blended frames of b too come before its action
+        last = max(1, min(last, reach - overlap + 1))
     starts = np.arange(0, last)
     pa, pb = _pose(a), _pose(b)
     # velocities in each frame's own heading, as the poses are: the clips face anywhere
@@ -233,20 +265,20 @@ def join(a: np.ndarray, b: np.ndarray, overlap: int) -> np.ndarray:
     """``b`` (T, 21, 3) laid after ``a`` (T, 21, 3), ``a``'s last ``overlap`` frames
     blended with ``b``'s first (module docstring); where ``b`` starts in the world does not
     matter."""
-    overlap = max(1, min(overlap, len(a) - 1, len(b) - 1))
+    overlap = overlap_frames(overlap, len(a), len(b))
     at = len(a) - overlap
     la, ga, ya = _local(a[at:])
-    lb, gb, yb = _local(b[:overlap + 1])
+    lb, gb, yb = _local(b[:overlap])
     w = _smooth(overlap)
     # the root's steps and turns (in each clip's own heading) are blended, not its places:
     # the blend then carries a walk's speed or a spin's turning over into the next clip,
     # where blending positions would pull the root back and fold two bodies facing apart
     # through each other
     va, ta = increments(ga, ya)
-    vb, tb = increments(gb[:overlap], yb[:overlap])
+    vb, tb = increments(gb, yb)
     ground, yaw = integrate((1 - w)[:, None] * va + w[:, None] * vb, (1 - w) * ta + w * tb,
                             (ga[0, 0], ga[0, 1], ya[0]))
-    mixed = _placed((1 - w)[:, None, None] * la + w[:, None, None] * lb[:overlap], ground, yaw)
+    mixed = _placed((1 - w)[:, None, None] * la + w[:, None, None] * lb, ground, yaw)
     # the rest of b goes on from b's own last overlapping frame, laid where the blend ended
     turn = yaw[-1] - yb[overlap - 1]
     rest = b[overlap:] - np.array([gb[overlap - 1, 0], 0.0, gb[overlap - 1, 1]])
@@ -283,13 +315,13 @@ def compose(text: str, library: str | Path | Library, *, model: Any = None,
             p = _clip_positions(lib, clip, stature21(out))
             end, start, cost = cut_cost(out, p, frames, keep=shown[1] + offset if shown else 0,
                                         reach=reach[0] if reach else None)
-            at = end - min(frames, end - 1, len(p) - start - 1)
+            at = end - overlap_frames(frames, end, len(p) - start)
             tried.append((cost, clip, key, p, end, start, join(out[:end], p[start:], frames), at))
         # of the hits that show the part, the one that joins the motion so far best (as a
         # motion graph takes its cheapest transition) where the part's action is still
-        # there once joined, else the one that joins best
-        tried.sort(key=lambda x: x[0])
-        pick = next((t for t in tried if _shows(part, t[6][t[7]:])), tried[0])
+        # there once joined and the last part's too, else the nearest to that
+        last = clips[-1].part if clips else None
+        pick = min(tried, key=lambda t: _lost(part, last, t[6], t[7], t[4], offset, t[0]))
         _, clip, key, p, end, start, out, at = pick
         used.add(key)
         if clips:
