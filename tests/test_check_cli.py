@@ -84,9 +84,11 @@ def test_a_masked_model_keeps_its_captions_words_and_warns(tmp_path):
         warn_never_learnt("a person kicks", back)
 
 
-def test_a_wrong_frame_rate_in_a_header_can_be_overridden(walk_file, tmp_path, capsys):
-    """Some BVH exports declare 25 fps for 120 Hz takes: --source-fps replaces the rate
-    (here a header ten times too slow, where no step of a walk is seen)."""
+def test_a_wrong_frame_rate_in_a_header_is_read_at_the_bodys_or_the_users(walk_file, tmp_path,
+                                                                          capsys):
+    """Some BVH exports declare 25 fps for 120 Hz takes: the take is read at the rate its
+    steps give, saying so, and --source-fps replaces the rate (here a header ten times too
+    slow, where no step of a walk is seen)."""
     slow = tmp_path / "slow.bvh"
     lines = walk_file.read_text().splitlines()
     at = next(i for i, line in enumerate(lines) if line.startswith("Frame Time:"))
@@ -94,7 +96,10 @@ def test_a_wrong_frame_rate_in_a_header_can_be_overridden(walk_file, tmp_path, c
     lines[at] = "Frame Time: 0.1"
     slow.write_text("\n".join(lines) + "\n")
     assert ml.read_motion(slow).fps == pytest.approx(10.0)   # ten times too slow
-    assert main(["check", "a person walks", str(slow), "--json"]) == 0
+    with pytest.warns(UserWarning, match="header says 10 Hz.*read at"):
+        assert main(["check", "a person walks", str(slow), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)[0]["shown"] is True   # at its steps' rate
+    assert main(["check", "a person walks", str(slow), "--json", "--source-fps", "10"]) == 0
     assert json.loads(capsys.readouterr().out)[0]["shown"] is False   # far too slow a walk
     assert main(["check", "a person walks", str(slow), "--json",
                  "--source-fps", str(rate)]) == 0

@@ -1,6 +1,7 @@
-"""A frame rate that looks wrong (``analysis/rate.py``): a walk whose header declares a
-video-like rate for frames captured at 120 Hz is named, with the rate its steps fit; a
-walk at its true rate, a body standing still and a high declared rate are not."""
+"""A frame rate that looks wrong (``analysis/rate.py``): a walk or a jump whose header
+declares a video-like rate for frames captured at 120 Hz is named, with the rate its steps
+fit or its flight falls at g, and read at that rate; a walk or a jump at its true rate, a
+body standing still or held up off the floor, and a high declared rate are not."""
 from __future__ import annotations
 
 import warnings
@@ -8,13 +9,15 @@ import warnings
 import numpy as np
 import pytest
 
-from helpers.bodies import FPS, hold, pose
+from helpers.bodies import FPS, I, hold, pose
 from helpers.data import shared_file
 from helpers.grounded import walking
-from motionlang.analysis.rate import rate_hint, warn_if_rate_looks_wrong
+from motionlang.analysis.rate import at_its_rate, fall_rate, rate_hint
 from motionlang.cli.main import main
 from motionlang.features.joint_map import positions21
 from motionlang.formats import read_motion, write_motion
+from motionlang.library.scan import read_takes
+from motionlang.rendering.output import body_motion
 
 
 def _four_times_as_many(p: np.ndarray) -> np.ndarray:
@@ -47,17 +50,63 @@ def test_standing_still_and_high_rates_say_nothing():
 def test_the_cmu_walk_as_makehuman_declares_it(shared_data, tmp_path):
     amc = read_motion(shared_file("cmu35/35_01.amc"), skeleton=shared_file("cmu35/35.asf"))
     slow = amc.replace(fps=25.0)   # MakeHuman's header for CMU's 120 Hz takes
-    with pytest.warns(UserWarning, match="header says 25 Hz.*at 120 Hz 2.3.*pass "
+    with pytest.warns(UserWarning, match="header says 25 Hz.*at 120 Hz 2.3.*"
                                          "--source-fps"):
-        warn_if_rate_looks_wrong(slow, "35_01.bvh")
+        read = at_its_rate(slow, "35_01.bvh")
+    assert read.fps in (100.0, 120.0) and read.meta["declared_fps"] == 25.0
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        warn_if_rate_looks_wrong(amc, "35_01.amc")   # its own 120 Hz: no warning
+        assert at_its_rate(amc, "35_01.amc") is amc   # its own 120 Hz: no warning
     assert positions21(amc).shape[1] == 21
     path = tmp_path / "slow.bvh"
     write_motion(slow, path)
-    with pytest.warns(UserWarning, match="at 120 Hz.*--source-fps"):
+    with pytest.warns(UserWarning, match="at 120 Hz.*read at 1[02]0 Hz.*--source-fps"):
         assert main(["info", str(path)]) == 0
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert main(["info", str(path), "--source-fps", "120"]) == 0
+
+
+def _jumps(fps: float, g: float = 9.81) -> np.ndarray:
+    """(T, 21, 3) a body standing, jumping up twice (0.45 s flights falling at ``g``) and
+    standing, in ``fps`` Hz frames."""
+    n = int(round(4.0 * fps))
+    p = np.repeat(pose()[None], n, axis=0)
+    t = np.arange(n) / fps
+    for start in (1.0, 2.5):
+        up = (t > start) & (t < start + 0.45)
+        p[up, :, 1] += (g / 2 * (t[up] - start) * (start + 0.45 - t[up]))[:, None]
+    return p
+
+
+def test_a_jump_captured_at_120_hz_but_declared_at_25_falls_as_at_120():
+    jumps = _jumps(120.0)
+    assert rate_hint(jumps, 120.0) is None              # declared above 30 Hz: not checked
+    hint = rate_hint(jumps, 25.0)
+    assert hint is not None and hint.rate == 120.0 and not hint.cadences
+    assert hint.fall_rate == pytest.approx(120.0, rel=0.1) and hint.flights == 2
+    assert "fall at 0.04 of gravity" in hint.line("jump.bvh")
+    rate, flights, seconds = fall_rate(jumps, 120.0)   # at its own rate, as it is
+    assert rate == pytest.approx(120.0, rel=0.1) and 0.5 < seconds < 0.9   # above the floor
+    assert rate_hint(_jumps(30.0), 30.0) is None        # a jump at its true 30 Hz
+
+
+def test_a_body_held_up_or_on_its_hands_is_no_flight_to_time():
+    held = np.repeat(pose()[None], 480, axis=0)
+    held[120:300, :, 1] += 0.3                          # lifted off the floor and held
+    assert rate_hint(held, 25.0) is None
+    hands = _jumps(120.0)
+    hands[:, [I["LW"], I["RW"]], 1] = 0.02              # a jump with the hands on the floor
+    assert rate_hint(hands, 25.0) is None
+
+
+def test_a_file_is_read_at_the_rate_its_body_says_and_the_user_can_say_otherwise(tmp_path):
+    motion, _ = body_motion(_jumps(120.0), 120.0)
+    path = tmp_path / "jump.bvh"
+    write_motion(motion.replace(fps=25.0), path)
+    with pytest.warns(UserWarning, match="jump.bvh: its header says 25 Hz.*read at 120 Hz"):
+        assert main(["info", str(path)]) == 0
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert main(["info", str(path), "--source-fps", "25"]) == 0
+    assert read_takes(path)[0].fps == 120.0            # the index reads it so too

@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 
 from motionlang.analysis import analyse, check  # noqa: F401  (the API's, re-exported)
+from motionlang.analysis.rate import at_its_rate
 from motionlang.analysis.words import warn_never_learnt
 from motionlang.errors import MotionlangError
 from motionlang.features.body21 import body21 as _body21
@@ -133,7 +134,7 @@ def _motion(motion: Motion | str | Path, joint_map) -> Motion:
             check_map(motion, joint_map)
             motion = motion.replace(meta={**motion.meta, "joint_map": as_joint_map(joint_map)})
         return motion
-    return read_mapped(motion, joint_map)
+    return at_its_rate(read_mapped(motion, joint_map), str(motion))
 
 
 def load_rig(rig: Motion | str | Path, joint_map: dict | str | Path | None = None) -> Motion:

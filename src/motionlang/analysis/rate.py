@@ -1,26 +1,41 @@
 """Does a file's frame rate look wrong? Some exports declare a rate their frames were never
 captured at (MakeHuman's BVH of CMU trials: ``Frame Time 0.04``, 25 Hz, for 120 Hz takes),
-and the take then plays several times too slowly: a walk is read as standing.
+and the take then plays several times too slowly: a walk is read as standing, a jump as
+stepping up and down.
 
-The evidence is the body's own: where the take at its declared rate shows no walking or
-running, or steps slower than anyone walks (:data:`SLOWEST`), it is read again at the
-capture rates of common systems (:data:`RATES`); if at one of them its legs step as people
-walk or run through most of the take (:data:`COVER`; a cadence within :data:`CADENCE`,
-slower than :data:`SLOWEST` at the declared rate; enough steps), the declared rate is suspect
-and those rates are named (the steps cannot tell 100 Hz from 120 Hz: both are named).
-Nothing is said where the take already steps as people do at its own rate, nor for files
-that declare more than :data:`SUSPECT_BELOW` Hz (the misdeclared rates seen are video-like
-ones).
+The evidence is the body's own, two clocks that are the same in every lab:
+
+- **steps**: where the take at its declared rate shows no walking or running, or steps
+  slower than anyone walks (:data:`SLOWEST`), it is read again at the capture rates of
+  common systems (:data:`RATES`); if at one of them its legs step as people walk or run
+  through most of the take (:data:`COVER`; a cadence within :data:`CADENCE`; enough steps),
+  the declared rate is suspect. Steps cannot tell 100 Hz from 120 Hz: both are named, the
+  one whose cadence lies nearer the middle of people's first.
+- **gravity**: a body in flight (both feet off the floor) falls at g whatever the lab.
+  The fitted fall of its centre of mass in flight (``features.body21.centre_of_mass21``;
+  :data:`FLIGHT_FRAMES` or more frames each, parabolas that fit with their apex inside,
+  the hands clear of the floor, :data:`FLIGHT_SECONDS` in all, flights that agree) gives the rate at which they fall at g; where that is
+  well above the declared rate, the capture rates within :data:`FALL_TOLERANCE` of it are
+  named, nearest first.
+
+Nothing is said where the take already steps or falls as people do at its own rate, nor for
+files that declare more than :data:`SUSPECT_BELOW` Hz (the misdeclared rates seen are
+video-like ones). Where the evidence names a rate, commands that read a file read it at that
+rate and say so in one line (:func:`at_its_rate`); ``--source-fps`` chooses another.
 """
 from __future__ import annotations
 
+import math
 import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
-from motionlang.analysis.analyse import analyse_positions
+from motionlang.analysis.body import CONTACT_HEIGHT, Body, J
+from motionlang.analysis.evidence import runs
+from motionlang.analysis.locomotion import G_LEGS, travel
 from motionlang.errors import MotionlangError
+from motionlang.features.body21 import centre_of_mass21
 from motionlang.features.joint_map import positions21
 from motionlang.kinematics.motion import Motion
 
@@ -36,50 +51,137 @@ MIN_STEPS = 6
 COVER = 0.5
 #: only files that declare at most this rate are checked (Hz)
 SUSPECT_BELOW = 30.0
+#: fewest frames of one flight whose fall is fitted
+FLIGHT_FRAMES = 8
+#: seconds of flight in all (at the rate they give) that count as evidence
+FLIGHT_SECONDS = 0.15
+#: share of a flight's height variance its fitted parabola must explain
+FLIGHT_FIT = 0.97
+#: where in a flight (share of its span) the fitted fall's apex lies: a body thrown up
+#: rises and falls; one rising onto something or sinking from it does not
+APEX = (0.2, 0.8)
+#: leg lengths above the floor both hands stay through a flight (a body on its hands is
+#: held up, not falling)
+HANDS_CLEAR = 0.3
+#: capture rates named from the flights lie within this share of the rate they give
+FALL_TOLERANCE = 0.25
+#: a declared rate is suspect where the evidence gives at least this many times it
+SUSPECT_RATIO = 1.5
 LOCOMOTION = ("walk", "run")
 
 
 @dataclass(frozen=True)
 class RateHint:
-    """A declared rate that looks wrong: ``declared`` (Hz), the capture ``rates`` (Hz) at
-    which the take steps as people do, with the ``cadences`` (steps a second) there, the
-    ``steps`` seen and the cadence at the declared rate."""
+    """A declared rate that looks wrong: ``declared`` (Hz) and the capture ``rates`` (Hz),
+    likeliest first, at which the take steps (``cadences``, steps a second there, of
+    ``steps`` seen; ``declared_cadence`` at the declared rate) or falls (``fall_rate``: the
+    rate, Hz, at which its flights fall at g, of ``flights`` seen) as people do."""
 
     declared: float
     rates: tuple[float, ...]
-    cadences: tuple[float, ...]
-    steps: int
-    declared_cadence: float
+    cadences: tuple[float, ...] = ()
+    steps: int = 0
+    declared_cadence: float = math.nan
+    fall_rate: float | None = None
+    flights: int = 0
 
-    def line(self, where: str) -> str:
-        at = ", ".join(f"at {r:g} Hz {c:.1f}" for r, c in zip(self.rates, self.cadences))
+    @property
+    def rate(self) -> float:
+        """The rate the take is read at (the likeliest)."""
+        return self.rates[0]
+
+    def evidence(self) -> str:
+        """What the body showed, in words."""
+        if self.cadences:
+            at = ", ".join(f"at {r:g} Hz {c:.1f}" for r, c in zip(self.rates, self.cadences))
+            return (f"its {self.steps} steps come {self.declared_cadence:.1f} a second, "
+                    f"slower than anyone walks ({at} a second)")
+        assert self.fall_rate is not None
+        share = (self.declared / self.fall_rate) ** 2
+        return (f"its {self.flights} flight(s) fall at {share:.2f} of gravity (at g at "
+                f"{self.fall_rate:.0f} Hz)")
+
+    def line(self, where: str, *, read: bool = False) -> str:
+        """The warning; ``read``: the take is read at :attr:`rate` (said so)."""
+        said = f"{where}: its header says {self.declared:g} Hz, but at that rate " \
+               f"{self.evidence()}"
+        if read:
+            return (f"{said}: read at {self.rate:g} Hz (--source-fps HZ reads it at "
+                    "another rate)")
         rate = f"{self.rates[0]:g}" if len(self.rates) == 1 else "RATE"
         which = "at that rate" if len(self.rates) == 1 else "at one of these rates"
-        return (f"{where}: its header says {self.declared:g} Hz, but at that rate its "
-                f"{self.steps} steps come {self.declared_cadence:.1f} a second, slower than "
-                f"anyone walks ({at} a second): if it was captured {which}, pass "
-                f"--source-fps {rate}")
+        return f"{said}: if it was captured {which}, pass --source-fps {rate}"
 
 
 def _steps(p21: np.ndarray, fps: float) -> tuple[int, float]:
     """(steps, seconds) of walking or running the analysis finds at ``fps``."""
-    found = [f for f in analyse_positions(p21, fps).findings if f.label in LOCOMOTION]
+    found = [f for f in travel(Body.from_positions(p21, fps)) if f.label in LOCOMOTION]
     return sum(int(f.detail.get("steps") or 0) for f in found), \
         sum(f.end - f.start for f in found)
 
 
+def fall_rate(p21: np.ndarray, fps: float) -> tuple[float, int, float] | None:
+    """``(rate Hz, flights, seconds)``: the rate at which the flights of ``p21`` (T, 21, 3),
+    declared at ``fps``, fall at g (their frames' fitted fall, median over their frames), how
+    many were fitted and their seconds at that rate; None where no flight can be fitted or
+    the flights disagree by more than :data:`FALL_TOLERANCE`.
+    Gravity in leg lengths assumes an adult's leg (``locomotion.G_LEGS``); a child's shorter
+    leg reads the rate a few per cent high."""
+    body = Body.from_positions(p21, fps)
+    step = fps / body.fps   # frames of p21 in one of the body's
+    # the take's own floor, not the analysis' local one: that follows the feet over a
+    # window of seconds, and a flight at the wrong rate lasts several
+    lowest = body.foot_low.min(axis=0)
+    floor = float(np.percentile(lowest, 5))
+    falls, weights = [], []
+    for a, b in runs(lowest - floor > CONTACT_HEIGHT * body.leg):
+        if a == 0 or b >= body.n or (b - a) * step < FLIGHT_FRAMES or b - a < 4:
+            continue   # a flight cut by the take's ends has no take-off or landing
+        if body.p[a:b, [J["LW"], J["RW"]], 1].min() - floor < HANDS_CLEAR * body.leg:
+            continue   # on the hands (a cartwheel, a handstand): held up, not falling
+        y = centre_of_mass21(body.p[a:b])[:, 1] / body.leg
+        k = np.arange(b - a, dtype=float)
+        coef = np.polyfit(k, y, 2)
+        spread = float(np.var(y))
+        if coef[0] >= 0 or spread <= 0 or \
+                not APEX[0] < -coef[1] / (2 * coef[0]) / (b - a - 1) < APEX[1]:
+            continue   # it does not rise and fall: held up, on a step, on a seat
+        fit = 1.0 - float(np.mean((np.polyval(coef, k) - y) ** 2)) / spread
+        if fit < FLIGHT_FIT:
+            continue
+        falls.append(-2.0 * float(coef[0]))   # leg lengths per body frame squared
+        weights.append(b - a)
+    if not falls:
+        return None
+    order = np.argsort(falls)
+    cum = np.cumsum(np.asarray(weights)[order])
+    fall = falls[int(order[np.searchsorted(cum, cum[-1] / 2.0)])]
+    if any(abs(math.sqrt(fall / f) - 1.0) > FALL_TOLERANCE for f in falls):
+        return None   # flights that disagree: not all of them were flights
+    rate = math.sqrt(G_LEGS / fall) * step   # body frames a second at g, in p21's frames
+    return rate, len(falls), float(sum(weights)) * step / rate
+
+
 def rate_hint(p21: np.ndarray, fps: float) -> RateHint | None:
     """A :class:`RateHint` where the 21-joint positions ``p21`` (T, 21, 3) metres, declared
-    at ``fps`` Hz, step like people only at other capture rates (module docstring); else
-    None. Where several rates fit, all are named: the steps alone cannot tell them apart."""
+    at ``fps`` Hz, step or fall like people only at other capture rates (module
+    docstring); else None."""
     if not 0 < fps <= SUSPECT_BELOW or len(p21) < 2:
         return None
+    try:
+        # gravity first: it gives the rate itself, steps only a range of rates
+        return _by_flights(p21, fps) or _by_steps(p21, fps)
+    except MotionlangError:   # no body to read: nothing to say about its rate
+        return None
+
+
+def _by_steps(p21: np.ndarray, fps: float) -> RateHint | None:
     steps, seconds = _steps(p21, fps)
     if steps >= MIN_STEPS and seconds > 0 and steps / seconds >= SLOWEST:
         return None   # it steps as people do at its own rate
     fits: list[tuple[float, float, int]] = []
     for rate in RATES:
-        if rate <= fps * 1.5:
+        if rate <= fps * SUSPECT_RATIO:
             continue
         n, seconds = _steps(p21, rate)
         if n < MIN_STEPS or seconds < COVER * len(p21) / rate:
@@ -90,20 +192,52 @@ def rate_hint(p21: np.ndarray, fps: float) -> RateHint | None:
             fits.append((rate, cadence, n))
     if not fits:
         return None
+    middle = math.sqrt(CADENCE[0] * CADENCE[1])
+    fits.sort(key=lambda f: abs(math.log(f[1] / middle)))
     rate, cadence, n = fits[0]
     return RateHint(fps, tuple(f[0] for f in fits), tuple(f[1] for f in fits), n,
                     cadence * fps / rate)
 
 
-def warn_if_rate_looks_wrong(motion: Motion, where: str) -> None:
-    """One warning (:meth:`RateHint.line`) where ``motion``'s rate looks wrong; nothing for
-    a motion on a rig the body map cannot read (its command says so itself)."""
+def _by_flights(p21: np.ndarray, fps: float) -> RateHint | None:
+    fall = fall_rate(p21, fps)
+    if fall is None:
+        return None
+    rate, flights, seconds = fall
+    if rate < fps * SUSPECT_RATIO or seconds < FLIGHT_SECONDS:
+        return None   # it falls as bodies do at its own rate, or too little to tell
+    near = sorted((r for r in RATES if abs(r / rate - 1.0) <= FALL_TOLERANCE),
+                  key=lambda r: abs(math.log(r / rate)))
+    if not near:
+        return None
+    return RateHint(fps, tuple(near), fall_rate=rate, flights=flights)
+
+
+def hint_of(motion: Motion) -> RateHint | None:
+    """:func:`rate_hint` of a motion of any rig (None for a rig the body map cannot read:
+    its command says so itself)."""
     if not 0 < motion.fps <= SUSPECT_BELOW:
-        return
+        return None
     try:
         p21 = positions21(motion)
     except MotionlangError:
-        return
-    hint = rate_hint(p21, motion.fps)
+        return None
+    return rate_hint(p21, motion.fps)
+
+
+def at_its_rate(motion: Motion, where: str) -> Motion:
+    """``motion`` at the rate its body's steps or flights say it was captured at, with one
+    warning that says so, where its declared rate looks wrong (:class:`RateHint`); the
+    motion as it is elsewhere. The declared rate is kept in ``meta["declared_fps"]``."""
+    hint = hint_of(motion)
+    if hint is None:
+        return motion
+    warnings.warn(hint.line(where, read=True), UserWarning, stacklevel=2)
+    return motion.replace(fps=hint.rate, meta={**motion.meta, "declared_fps": motion.fps})
+
+
+def warn_if_rate_looks_wrong(motion: Motion, where: str) -> None:
+    """One warning (:meth:`RateHint.line`) where ``motion``'s rate looks wrong."""
+    hint = hint_of(motion)
     if hint is not None:
         warnings.warn(hint.line(where), UserWarning, stacklevel=2)

@@ -12,7 +12,7 @@ import json
 from pathlib import Path
 
 from motionlang.analysis.check import printed
-from motionlang.analysis.rate import warn_if_rate_looks_wrong
+from motionlang.analysis.rate import at_its_rate
 from motionlang.api import check, load_rig, read_mapped, render, retarget
 from motionlang.cli.options import int_range, output_file, positive_int, rate_float, seconds_float
 from motionlang.errors import MotionlangError
@@ -58,8 +58,7 @@ def load_input(args: argparse.Namespace, path: str | None = None) -> Motion:
                          fps=args.source_fps if ext == ".amc" else None)
     if args.source_fps is not None:
         return motion.replace(fps=args.source_fps)
-    warn_if_rate_looks_wrong(motion, str(path))
-    return motion
+    return at_its_rate(motion, str(path))
 
 
 def add_clip_args(p: argparse.ArgumentParser) -> None:

@@ -18,6 +18,13 @@ nodes differently, which moves the estimate by a few per cent: CMU subject 35 co
 direction, and scales its root path by the ratio of the legs: the same motion on another
 body (HumanML3D's "uniform skeleton" step does the same with joint angles). A classifier
 that reads motions this way reads what the body does, not whose body it is.
+
+:func:`centre_of_mass21` places the body's centre of mass from the 21 joints with Winter's
+segment masses and centres (*Biomechanics and Motor Control of Human Movement*, table 4.1:
+trunk with head and neck 0.578 of the body's mass, thigh 0.100, shank 0.0465, foot 0.0145,
+upper arm 0.028, forearm 0.016, hand 0.006; a limb segment's centre 0.436/0.430/0.433 of
+the way from its proximal joint): a body in flight moves it along a parabola, whatever its
+limbs do.
 """
 from __future__ import annotations
 
@@ -44,6 +51,24 @@ def _check(p21) -> np.ndarray:
         raise MotionlangError(f"21-joint positions must be (T, 21, 3) with T >= 1, got "
                               f"{p.shape}")
     return p
+
+
+#: (share of the body's mass, proximal joint, distal joint, centre's share of the way)
+_SEGMENTS = [(0.497, "root", "BLN", 0.5), (0.081, "BUN", "BUN", 0.0)] + [
+    seg for s in "LR" for seg in (
+        (0.028, f"{s}S", f"{s}E", 0.436), (0.016, f"{s}E", f"{s}W", 0.430),
+        (0.006, f"{s}W", f"{s}W", 0.0), (0.100, f"{s}H", f"{s}K", 0.433),
+        (0.0465, f"{s}K", f"{s}A", 0.433), (0.0145, f"{s}A", f"{s}F", 0.5))]
+_J = {n: i for i, n in enumerate(KIT21_NAMES)}
+
+
+def centre_of_mass21(p21) -> np.ndarray:
+    """(T, 21, 3) positions -> (T, 3) the centre of mass, same unit (module docstring)."""
+    p = _check(p21)
+    out = np.zeros((len(p), 3))
+    for mass, a, b, along in _SEGMENTS:
+        out += mass * (p[:, _J[a]] + along * (p[:, _J[b]] - p[:, _J[a]]))
+    return out
 
 
 def stature21(p21) -> float:

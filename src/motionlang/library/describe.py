@@ -26,6 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from motionlang.analysis import analyse
+from motionlang.analysis.rate import at_its_rate
 from motionlang.errors import MotionlangError
 from motionlang.features.joint_map import match_rig
 from motionlang.formats import read_motion
@@ -62,6 +63,8 @@ class ReadOptions:
         motion = read_motion(path, joint_map=self.joint_map, **kw)
         if self.fps is not None and ext != ".amc":   # the file's own rate is wrong
             motion = motion.replace(fps=self.fps)
+        elif self.fps is None:
+            motion = at_its_rate(motion, str(path))
         if self.joint_map is not None:   # a map that does not fit this rig: this file's error
             match_rig(motion.skeleton, joint_map=motion.meta["joint_map"])
         return motion

@@ -11,9 +11,11 @@ import hashlib
 import os
 import re
 import stat
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
+from motionlang.analysis.rate import at_its_rate
 from motionlang.datasets.download import sha256_file
 from motionlang.errors import MotionlangError
 from motionlang.features.joint_map import match_rig
@@ -101,14 +103,17 @@ def file_facts(root: Path, path: Path) -> FileFacts:
 
 
 def read_takes(path: Path) -> list[Motion]:
-    """The takes of a motion file: one, or each sequence of a MIT ``.mat`` file.
+    """The takes of a motion file: one, or each sequence of a MIT ``.mat`` file (a file
+    whose header's rate the body contradicts read at the body's, ``analysis.rate``).
 
     Raises:
         MotionlangError: the reader's one-line reason.
     """
     if path.suffix.lower() == ".mat":
         return read_mit(path)
-    return [read_motion(path)]
+    with warnings.catch_warnings():   # one line a file is too many for a library
+        warnings.simplefilter("ignore")
+        return [at_its_rate(read_motion(path), str(path))]
 
 
 def rig_of(motion: Motion) -> dict:
