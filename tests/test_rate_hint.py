@@ -14,6 +14,7 @@ from helpers.data import shared_file
 from helpers.grounded import walking
 from motionlang.analysis.rate import at_its_rate, fall_rate, rate_hint
 from motionlang.cli.main import main
+from motionlang.features.body21 import centre_of_mass21
 from motionlang.features.joint_map import positions21
 from motionlang.formats import read_motion, write_motion
 from motionlang.library.scan import read_takes
@@ -110,3 +111,19 @@ def test_a_file_is_read_at_the_rate_its_body_says_and_the_user_can_say_otherwise
         warnings.simplefilter("error")
         assert main(["info", str(path), "--source-fps", "25"]) == 0
     assert read_takes(path)[0].fps == 120.0            # the index reads it so too
+
+
+def test_the_centre_of_mass_of_a_standing_body_and_of_one_that_lifts_a_leg():
+    stand = pose()[None]
+    com = centre_of_mass21(stand)[0]
+    # a little above half a standing adult's height (this body's hips are at 0.54 of its
+    # 1.7 m: 0.60 here), between the feet
+    assert 0.52 * 1.7 < com[1] < 0.62 * 1.7 and abs(com[0]) < 1e-9
+    lifted = pose(LK=(0.09, 0.7, 0.3), LA=(0.09, 0.35, 0.25), LMrot=(0.09, 0.3, 0.2),
+                  LF=(0.09, 0.28, 0.37))[None]
+    moved = centre_of_mass21(lifted)[0] - com
+    # one leg is 0.161 of the body's mass: raising it lifts the centre by a fraction of its
+    # own rise, and toward its side and front
+    assert 0.0 < moved[1] < 0.161 * 0.35 and moved[0] == 0.0 and moved[2] > 0.0
+    shifted = centre_of_mass21(stand + np.array([1.0, 2.0, 3.0]))[0]
+    assert np.allclose(shifted - com, [1.0, 2.0, 3.0])
