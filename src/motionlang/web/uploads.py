@@ -14,6 +14,7 @@ import tempfile
 from collections.abc import Sequence
 from pathlib import Path
 
+from motionlang.analysis.rate import at_its_rate
 from motionlang.api import read_mapped
 from motionlang.errors import MotionlangError
 from motionlang.formats import READ_EXTENSIONS
@@ -108,4 +109,6 @@ def read_upload(files: Sequence[Upload], max_bytes: int) -> Motion:
         except (ValueError, OSError) as exc:   # a reader's slip: still one line, no trace
             raise MotionlangError(f"{motion_path.name}: cannot read it ({exc})") from None
     motion.meta.pop("path", None)
-    return motion.replace(name=motion_path.stem)
+    # a header's rate its body contradicts: read at the body's, as the command line does
+    # (``meta["declared_fps"]`` keeps the header's)
+    return at_its_rate(motion, motion_path.name).replace(name=motion_path.stem)
