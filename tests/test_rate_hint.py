@@ -127,3 +127,16 @@ def test_the_centre_of_mass_of_a_standing_body_and_of_one_that_lifts_a_leg():
     assert 0.0 < moved[1] < 0.161 * 0.35 and moved[0] == 0.0 and moved[2] > 0.0
     shifted = centre_of_mass21(stand + np.array([1.0, 2.0, 3.0]))[0]
     assert np.allclose(shifted - com, [1.0, 2.0, 3.0])
+
+
+def test_a_walk_over_a_bridge_and_a_lift_on_a_bar_are_no_flights():
+    walk = walking(8.0).copy()                  # 30 Hz, as people walk
+    t = np.arange(len(walk)) / FPS
+    arc = (t > 2.0) & (t < 5.0)
+    walk[arc, :, 1] += (0.4 * np.sin(np.pi * (t[arc] - 2.0) / 3.0))[:, None]
+    assert rate_hint(walk, FPS) is None         # it steps as people do: its rate is right
+    lift = _jumps(120.0)
+    up = lift[:, I["root"], 1] > lift[0, I["root"], 1] + 1e-6
+    # the hands held still on a bar above the head while the body rises and falls
+    lift[np.ix_(up, [I["LW"], I["RW"]])] = lift[0, [I["LW"], I["RW"]]] + [0.0, 1.2, 0.0]
+    assert rate_hint(lift, 25.0) is None

@@ -14,9 +14,11 @@ The evidence is the body's own, two clocks that are the same in every lab:
 - **gravity**: a body in flight (both feet off the floor) falls at g whatever the lab.
   The fitted fall of its centre of mass in flight (``features.body21.centre_of_mass21``;
   :data:`FLIGHT_FRAMES` or more frames each, parabolas that fit with their apex inside,
-  the hands clear of the floor, :data:`FLIGHT_SECONDS` in all, flights that agree) gives the rate at which they fall at g; where that is
-  well above the declared rate, the capture rates within :data:`FALL_TOLERANCE` of it are
-  named, nearest first.
+  the hands clear of the floor, no foot or hand held still while the body moves,
+  :data:`FLIGHT_SECONDS` in all, flights that agree) gives the rate at which they fall at
+  g; where that is well above the declared rate, the capture rates within
+  :data:`FALL_TOLERANCE` of it are named, nearest first. A take that steps as people do at
+  its declared rate is never named (a walk over a bridge rises and falls too).
 
 Nothing is said where the take already steps or falls as people do at its own rate, nor for
 files that declare more than :data:`SUSPECT_BELOW` Hz (the misdeclared rates seen are
@@ -63,6 +65,10 @@ APEX = (0.2, 0.8)
 #: leg lengths above the floor both hands stay through a flight (a body on its hands is
 #: held up, not falling)
 HANDS_CLEAR = 0.3
+#: a foot or hand moving at under this share of the centre of mass's speed is held still
+HELD_SPEED = 0.2
+#: share of a flight's moving frames in which one held still makes it no flight
+HELD = 0.3
 #: capture rates named from the flights lie within this share of the rate they give
 FALL_TOLERANCE = 0.25
 #: a declared rate is suspect where the evidence gives at least this many times it
@@ -139,6 +145,8 @@ def fall_rate(p21: np.ndarray, fps: float) -> tuple[float, int, float] | None:
             continue   # a flight cut by the take's ends has no take-off or landing
         if body.p[a:b, [J["LW"], J["RW"]], 1].min() - floor < HANDS_CLEAR * body.leg:
             continue   # on the hands (a cartwheel, a handstand): held up, not falling
+        if _held(body.p[a:b]):
+            continue   # a foot or a hand held still on something (a bridge, a bar)
         y = centre_of_mass21(body.p[a:b])[:, 1] / body.leg
         k = np.arange(b - a, dtype=float)
         coef = np.polyfit(k, y, 2)
@@ -162,6 +170,22 @@ def fall_rate(p21: np.ndarray, fps: float) -> tuple[float, int, float] | None:
     return rate, len(falls), float(sum(weights)) * step / rate
 
 
+def _held(p: np.ndarray) -> bool:
+    """Whether, over a span (T, 21, 3) with the feet off the floor, a foot or a hand stays
+    still in the world while the centre of mass moves (:data:`HELD`): the body stands or
+    hangs on something (a raised floor, a bar), it does not fly. In flight nothing is
+    still: the limbs go with the body."""
+    com = np.linalg.norm(np.diff(centre_of_mass21(p), axis=0), axis=-1)
+    moving = com > np.median(com)   # the apex, where the body is still, says nothing
+    if moving.sum() < 2:
+        return False
+    for j in ("LF", "RF", "LW", "RW"):
+        speed = np.linalg.norm(np.diff(p[:, J[j]], axis=0), axis=-1)
+        if np.mean(speed[moving] < HELD_SPEED * com[moving]) >= HELD:
+            return True
+    return False
+
+
 def rate_hint(p21: np.ndarray, fps: float) -> RateHint | None:
     """A :class:`RateHint` where the 21-joint positions ``p21`` (T, 21, 3) metres, declared
     at ``fps`` Hz, step or fall like people only at other capture rates (module
@@ -169,16 +193,16 @@ def rate_hint(p21: np.ndarray, fps: float) -> RateHint | None:
     if not 0 < fps <= SUSPECT_BELOW or len(p21) < 2:
         return None
     try:
-        # gravity first: it gives the rate itself, steps only a range of rates
+        steps, seconds = _steps(p21, fps)
+        if steps >= MIN_STEPS and seconds > 0 and steps / seconds >= SLOWEST:
+            return None   # it steps as people do at its own rate
+        # gravity next: it gives the rate itself, steps only a range of rates
         return _by_flights(p21, fps) or _by_steps(p21, fps)
     except MotionlangError:   # no body to read: nothing to say about its rate
         return None
 
 
 def _by_steps(p21: np.ndarray, fps: float) -> RateHint | None:
-    steps, seconds = _steps(p21, fps)
-    if steps >= MIN_STEPS and seconds > 0 and steps / seconds >= SLOWEST:
-        return None   # it steps as people do at its own rate
     fits: list[tuple[float, float, int]] = []
     for rate in RATES:
         if rate <= fps * SUSPECT_RATIO:

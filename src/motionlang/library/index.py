@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from motionlang.analysis import VERSION as ANALYSIS
+from motionlang.analysis.rate import SUSPECT_BELOW
 from motionlang.errors import MotionlangError
 from motionlang.library.embedder import Embedder
 from motionlang.library.grounded import take_findings
@@ -32,6 +33,11 @@ from motionlang.library.scan import file_facts, motion_files, read_takes, reason
 from motionlang.library.store import Entry, Failure, IndexData, load_index, save_index
 from motionlang.library.windows import motion_windows, span
 from motionlang.utils.progress import progress
+
+#: the analysis version from which takes are read at the rate their body says
+#: (``analysis.rate.at_its_rate``): a take of an older index declaring a low rate is
+#: embedded anew, its timeline may change
+RATE_READ = 8
 
 
 @dataclass
@@ -104,6 +110,8 @@ class _Builder:
             for i, e in enumerate(old.entries):
                 rows = slice(first[i], first[i + 1])
                 if old.analysis != ANALYSIS:   # findings of other detectors: made anew
+                    if old.analysis < RATE_READ and e.fps <= SUSPECT_BELOW:
+                        continue   # read before a body could set its rate: embedded anew
                     e = Entry(**{**asdict(e), "findings": None})
                 self.takes.setdefault(e.sha256, []).append((e, old.vectors[rows],
                                                             old.spans[rows]))
