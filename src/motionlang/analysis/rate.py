@@ -259,9 +259,3 @@ def at_its_rate(motion: Motion, where: str) -> Motion:
     warnings.warn(hint.line(where, read=True), UserWarning, stacklevel=2)
     return motion.replace(fps=hint.rate, meta={**motion.meta, "declared_fps": motion.fps})
 
-
-def warn_if_rate_looks_wrong(motion: Motion, where: str) -> None:
-    """One warning (:meth:`RateHint.line`) where ``motion``'s rate looks wrong."""
-    hint = hint_of(motion)
-    if hint is not None:
-        warnings.warn(hint.line(where), UserWarning, stacklevel=2)
