@@ -228,6 +228,67 @@ def test_climbing_a_ladder_up_and_down():
     assert "step_up" in kerb and "climb" not in kerb
 
 
+def _monkey_bars(seconds: float = 4.0, distance: float = 2.0, lift: float = 0.35) -> np.ndarray:
+    """Hands up on a bar, pulled up off the floor, hand over hand along it while the body
+    swings under the grip (the legs most), then let go: a short fall onto the feet."""
+    up = pose()
+    for w, e, s in (("LW", "LE", "LS"), ("RW", "RE", "RS")):
+        up[I[e]] = up[I[s]] + np.array([0, 0.3, 0])
+        up[I[w]] = up[I[s]] + np.array([0, 0.6, 0])
+    hung = up + np.array([0, lift, 0])
+    t = np.arange(int(seconds * FPS)) / FPS
+    along = np.repeat(hung[None], len(t), axis=0)
+    along[:, :, 2] += (distance * t / seconds)[:, None]
+    swing = np.sin(2 * np.pi * t / 1.2)
+    for w, e, sign in (("LW", "LE", 1), ("RW", "RE", -1)):
+        along[:, I[w], 2] += 0.2 * sign * swing
+        along[:, I[e], 2] += 0.1 * sign * swing
+    legs = [I[n] for n in ("LK", "LA", "LMrot", "LF", "RK", "RA", "RMrot", "RF")]
+    along[:, legs, 2] += (0.25 * swing)[:, None]
+    along[:, [I[n] for n in ("root", "BP", "BT", "LH", "RH")], 2] += (0.1 * swing)[:, None]
+    tf = np.arange(int(np.sqrt(2 * lift / 9.81) * FPS) + 1) / FPS
+    fall = np.repeat(along[-1][None], len(tf), axis=0)
+    fall[:, :, 1] -= (4.905 * tf ** 2)[:, None]
+    end = pose() + np.array([0, 0, along[-1, 0, 2]])
+    return take(hold(pose(), 1.0), blend(pose(), up, 0.5), blend(up, hung, 0.5), along, fall,
+                blend(fall[-1], end, 0.5), hold(end, 1.0))
+
+
+def test_hand_over_hand_along_a_bar_is_no_walk():
+    """The swinging legs of a body hanging from a bar are neither a floor nor steps: the
+    floor stays under them, and nothing walks."""
+    a = analyse_positions(_monkey_bars(), FPS)
+    found = {f.label for f in a.findings}
+    assert "walk" not in found and "run" not in found and "step_up" not in found
+    hang = [f for f in a.findings if f.label == "hang"]
+    assert len(hang) == 1 and hang[0].value > 0.3 and hang[0].detail["travelled"]
+    assert a.main_action() == "climb"
+    assert a.sentence() == "a person hangs by the hands, moving along hand over hand"
+    # hanging still from the bar moves nowhere along it
+    still = analyse_positions(_monkey_bars(distance=0.0), FPS)
+    assert [f.detail["travelled"] for f in still.findings if f.label == "hang"] == [False]
+
+
+def test_walking_with_the_hands_overhead_walks_on_its_floor():
+    """Hands overhead do not make a walk a hang: the feet still stand on the floor."""
+    from motionlang.datasets.synth import Primitive
+    from motionlang.datasets.synth.compose import build_motion, random_style
+    from motionlang.features.joint_map import positions21
+    rng = np.random.default_rng(4)
+    motion, _, _ = build_motion([Primitive("walk", count=8, direction="forward")],
+                                random_style(rng), rng)
+    p = positions21(motion).copy()
+    for w, e, s in (("LW", "LE", "LS"), ("RW", "RE", "RS")):
+        p[:, I[e]] = p[:, I[s]] + np.array([0, 0.3, 0])
+        p[:, I[w]] = p[:, I[s]] + np.array([0, 0.6, 0])
+    body = Body.from_positions(p, motion.fps)
+    assert body.hands_overhead.mean() > 0.9
+    assert np.abs(body.local_floor - Body.from_positions(positions21(motion),
+                                                         motion.fps).local_floor).max() < 0.02
+    a = analyse_positions(p, motion.fps)
+    assert a.main_action() == "walk" and "hang" not in {f.label for f in a.findings}
+
+
 def _drop(height: float, seconds_on_top: float = 1.0) -> np.ndarray:
     """Standing on a box ``height`` m high, then a jump off it: a thrown body's fall
     (0.5 m/s up, 1 m/s forward) onto the floor, and standing there."""

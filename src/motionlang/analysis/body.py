@@ -40,6 +40,13 @@ CONTACT_SPEED = 1.3
 #: apex is still for far less than that
 SUPPORT_SPEED = 0.3
 SUPPORT_HOLD = 0.15
+#: leg lengths both wrists are above the head by when the hands may carry the body (a bar,
+#: the rungs above, a climbing frame)
+HANDS_OVERHEAD = 0.1
+#: seconds a foot is held still, while the hands are overhead, before it is taken to stand
+#: on something: a hanging body's legs swing and pause at each end of the swing for less,
+#: a foot on a rung stands there while the other climbs
+HANGING_HOLD = 0.3
 
 J = {n: i for i, n in enumerate(KIT21_NAMES)}
 FOOT_JOINTS = ((J["LA"], J["LMrot"], J["LF"]), (J["RA"], J["RMrot"], J["RF"]))
@@ -220,7 +227,25 @@ class Body:
         # lowest foot is held still above it, it stands on that higher support
         speed = self.foot_speed3d[np.argmin(self.foot_low, axis=0), np.arange(self.n)]
         held = clean_mask(speed < SUPPORT_SPEED, self.fps, min_len=SUPPORT_HOLD, max_gap=0.0)
-        return np.where(held & (low > floor), low, floor)
+        floor = np.where(held & (low > floor), low, floor)
+        # hands overhead may carry the body: the feet hang in the air there, and the window's
+        # low percentile would follow them up; the floor is only where a foot stands still,
+        # and holds where the body left it in between
+        stands = clean_mask(speed < SUPPORT_SPEED, self.fps, min_len=HANGING_HOLD, max_gap=0.0)
+        known = ~self.hands_overhead | stands
+        if known.any() and not known.all():
+            idx = np.flatnonzero(known)
+            last = idx[np.clip(np.searchsorted(idx, np.arange(self.n), side="right") - 1,
+                               0, None)]
+            floor = np.where(known, floor, floor[last])
+        return floor
+
+    @cached_property
+    def hands_overhead(self) -> np.ndarray:
+        """(T,) bool: both wrists above the head by :data:`HANDS_OVERHEAD` leg lengths."""
+        head = self.p[:, J["BUN"], 1]
+        return np.asarray(np.stack([self.p[:, w, 1] - head > HANDS_OVERHEAD * self.leg
+                                    for _, _, w in ARMS]).all(axis=0))
 
     @cached_property
     def foot_speed3d(self) -> np.ndarray:

@@ -33,6 +33,7 @@ TRAVEL = 0.25              # L/s: slower than this the root is not travelling
 MIN_TRAVEL = 0.8           # s
 MIN_DISTANCE = 0.5         # L: a travel covers at least this...
 MIN_LIFTS = 2              # ...and the feet leave the floor and land again this often
+FOOT_BORNE = 0.25          # share of its frames a walk or run has a foot on the floor at least
 UPRIGHT = 45.0             # deg: a walk's or run's trunk is at most this far from vertical
 UPRIGHT_PELVIS = 0.6       # standing pelvis heights: and its pelvis at least this high
 CURVE_DISTANCE = 2.0       # L: a path shorter than this is too short to curve
@@ -133,6 +134,8 @@ def travel(body: Body) -> list[Finding]:
         distance = float(body.ground_speed[a:b].sum()) / body.fps    # path length, L
         if distance < MIN_DISTANCE or lifts < MIN_LIFTS:
             continue    # swaying, shuffling on the spot, a glide without steps
+        if float(body.contacts[:, a:b].any(axis=0).mean()) < FOOT_BORNE:
+            continue    # carried by something else: hand over hand along a bar, a swing
         if float(np.median(body.trunk_tilt[a:b])) > UPRIGHT or \
                 float(np.median(body.pelvis_height[a:b])) < UPRIGHT_PELVIS:
             continue    # walking and running are upright: a roll or a crawl travels too

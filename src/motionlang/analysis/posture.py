@@ -40,8 +40,8 @@ STILL = 0.3                # L/s: root slower than this is still
 CROUCH_PELVIS = 0.8        # sph: a crouching pelvis is below this
 SQUAT_PELVIS = 0.6         # sph: below this a crouch is a squat
 CROUCH_KNEE = 50.0         # deg of knee flexion (0 straight)
-HANG_HANDS = 0.1           # L: both wrists above the head by this
 FOOT_OFF = 0.3             # L: a foot this far above the local floor is off it
+HAND_OVER_HAND = 1.0       # L: a hang whose root goes this far moves along hand over hand
 ONE_LEG_RAISE = 0.15       # L: the free foot above the standing one's level
 ONE_LEG_MIN = 1.0          # s: longer than any single support of a walk
 OUTSTRETCHED_ELEV = 30.0   # deg: arms within this of horizontal
@@ -130,9 +130,7 @@ def crouching(body: Body) -> np.ndarray:
 
 
 def hanging(body: Body) -> np.ndarray:
-    head = body.p[:, J["BUN"], 1]
-    hands_up = np.stack([body.p[:, w, 1] - head > HANG_HANDS * body.leg
-                         for _, _, w in ARMS]).all(axis=0)
+    hands_up = body.hands_overhead
     off = (body.foot_low - body.local_floor[None] > FOOT_OFF * body.leg).all(axis=0)
     start_floor = np.percentile(body.foot_low.min(axis=0), 5)
     above_start = body.foot_low.min(axis=0) - start_floor > FOOT_OFF * body.leg
@@ -209,9 +207,11 @@ def postures(body: Body) -> list[Finding]:
         add("squat" if v < SQUAT_PELVIS else "crouch", a, b, "pelvis height (standing = 1)",
             v, CROUCH_PELVIS, -0.15)
     for a, b in _spans(body, hanging(body)):
+        # hand over hand along a bar: the root goes somewhere while the hands carry it
+        along = float(np.linalg.norm(body.p[b - 1, 0, [0, 2]] - body.p[a, 0, [0, 2]])) / body.leg
         add("hang", a, b, "lowest foot over the floor (L)",
             float(np.median((body.foot_low.min(axis=0)[a:b] - body.local_floor[a:b])
-                            / body.leg)), 0.0, 0.3)
+                            / body.leg)), 0.0, 0.3, travelled=along >= HAND_OVER_HAND)
     ol = one_leg(body)
     for a, b in _spans(body, ol, ONE_LEG_MIN):
         c = body.contacts[:, a:b]
