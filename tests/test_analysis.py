@@ -269,6 +269,21 @@ def test_hand_over_hand_along_a_bar_is_no_walk():
     assert [f.detail["travelled"] for f in still.findings if f.label == "hang"] == [False]
 
 
+def test_a_leap_with_the_hands_overhead_is_no_hang():
+    """Feet off the floor under hands held high is a hang only where the body does not fall
+    as thrown bodies do: a 0.7 s flight (0.6 m high) with the arms up is a jump."""
+    up = pose()
+    for w, e, s in (("LW", "LE", "LS"), ("RW", "RE", "RS")):
+        up[I[e]] = up[I[s]] + np.array([0, 0.3, 0])
+        up[I[w]] = up[I[s]] + np.array([0, 0.6, 0])
+    p = take(hold(pose(), 1.0), blend(pose(), up, 0.3), hold(up, 2.5))
+    t = np.arange(len(p)) / FPS
+    flight = (t > 1.8) & (t < 2.5)
+    p[flight, :, 1] += (4.905 * (t[flight] - 1.8) * (2.5 - t[flight]))[:, None]
+    found = {f.label for f in analyse_positions(p, FPS).findings}
+    assert "jump" in found and "hang" not in found
+
+
 def test_walking_with_the_hands_overhead_walks_on_its_floor():
     """Hands overhead do not make a walk a hang: the feet still stand on the floor."""
     from motionlang.datasets.synth import Primitive

@@ -25,6 +25,7 @@ import numpy as np
 
 from motionlang.analysis.body import ARMS, LEGS, Body, J
 from motionlang.analysis.evidence import MIN_CONFIDENCE, Finding, clean_mask, confidence, runs
+from motionlang.analysis.locomotion import ballistic
 
 # thresholds (standing pelvis heights "sph", leg lengths "L", degrees, seconds)
 LYING_TILT = 60.0          # deg: trunk this far from vertical
@@ -207,6 +208,8 @@ def postures(body: Body) -> list[Finding]:
         add("squat" if v < SQUAT_PELVIS else "crouch", a, b, "pelvis height (standing = 1)",
             v, CROUCH_PELVIS, -0.15)
     for a, b in _spans(body, hanging(body)):
+        if ballistic(body, a, b):
+            continue    # the hands overhead in a flight (a back flip) carry nothing
         # hand over hand along a bar: the root goes somewhere while the hands carry it
         along = float(np.linalg.norm(body.p[b - 1, 0, [0, 2]] - body.p[a, 0, [0, 2]])) / body.leg
         add("hang", a, b, "lowest foot over the floor (L)",
