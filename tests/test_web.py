@@ -419,3 +419,21 @@ def test_serve_checks_its_address_before_loading_models(capsys):
         port = busy.getsockname()[1]
         assert main(["serve", "--port", str(port)]) == 2
         assert f"--port {port}" in capsys.readouterr().err
+
+
+def test_a_take_declaring_a_wrong_rate_is_described_at_its_bodys_with_a_note(server,
+                                                                            tmp_path):
+    from motionlang.formats import write_motion
+    from motionlang.rendering.output import body_motion
+    from test_rate_hint import _jumps
+    motion, _ = body_motion(_jumps(120.0), 120.0)
+    path = tmp_path / "jump.bvh"
+    write_motion(motion.replace(fps=25.0), path)   # 120 Hz frames, a 25 Hz header
+    status, view = post_files(server + "api/describe", [(path.name, path.read_bytes())])
+    assert status == 200, view
+    assert view["seconds"] == pytest.approx(4.0, abs=0.05)   # 19.2 s at the header's rate
+    assert len(view["notes"]) == 1
+    assert view["notes"][0].startswith("jump.bvh: its header says 25 Hz") and \
+        view["notes"][0].endswith("read at 120 Hz")   # no command-line flag on a page
+    bvh = write(RIGS["mixamo"], tmp_path, T=40)
+    assert post_files(server + "api/describe", [(bvh.name, bvh.read_bytes())])[1]["notes"] == []

@@ -49,6 +49,8 @@ CADENCE = (1.4, 3.2)
 SLOWEST = 0.7
 #: fewest steps that count as evidence
 MIN_STEPS = 6
+#: leg lengths one ankle leads the other by, along the way the body goes, in a step
+PASS_LEAD = 0.1
 #: share of the take that must be walking or running at the other rate
 COVER = 0.5
 #: only files that declare at most this rate are checked (Hz)
@@ -107,23 +109,49 @@ class RateHint:
         return (f"its {self.flights} flight(s) fall at {share:.2f} of gravity (at g at "
                 f"{self.fall_rate:.0f} Hz)")
 
-    def line(self, where: str, *, read: bool = False) -> str:
-        """The warning; ``read``: the take is read at :attr:`rate` (said so)."""
+    def line(self, where: str, *, read: bool = False, advice: bool = True) -> str:
+        """The warning; ``read``: the take is read at :attr:`rate` (said so), with the
+        command line's advice unless not ``advice`` (a page has no flags)."""
         said = f"{where}: its header says {self.declared:g} Hz, but at that rate " \
                f"{self.evidence()}"
         if read:
-            return (f"{said}: read at {self.rate:g} Hz (--source-fps HZ reads it at "
-                    "another rate)")
+            return f"{said}: read at {self.rate:g} Hz" + (
+                " (--source-fps HZ reads it at another rate)" if advice else "")
         rate = f"{self.rates[0]:g}" if len(self.rates) == 1 else "RATE"
         which = "at that rate" if len(self.rates) == 1 else "at one of these rates"
         return f"{said}: if it was captured {which}, pass --source-fps {rate}"
 
 
-def _steps(p21: np.ndarray, fps: float) -> tuple[int, float]:
-    """(steps, seconds) of walking or running the analysis finds at ``fps``."""
-    found = [f for f in travel(Body.from_positions(p21, fps)) if f.label in LOCOMOTION]
-    return sum(int(f.detail.get("steps") or 0) for f in found), \
-        sum(f.end - f.start for f in found)
+def _steps(p21: np.ndarray, fps: float, *, passes: bool = False) -> tuple[int, float]:
+    """(steps, seconds) of walking or running the analysis finds at ``fps``: its feet's
+    contacts, or with ``passes`` one more than the times one foot passes the other along
+    the way the body goes (:func:`_passes`), which no rate changes. A take read slower
+    than it was captured drags its feet, and each drag splits a contact: its own rate is
+    judged by the passes."""
+    body = Body.from_positions(p21, fps)
+    found = [f for f in travel(body) if f.label in LOCOMOTION]
+    seconds = sum(f.end - f.start for f in found)
+    if not passes:
+        return sum(int(f.detail.get("steps") or 0) for f in found), seconds
+    counts = [_passes(body, int(round(f.start * body.fps)), int(round(f.end * body.fps)))
+              for f in found]
+    return sum(n + 1 for n in counts if n), seconds
+
+
+def _passes(body: Body, a: int, b: int) -> int:
+    """How often, in frames ``a:b``, the leading foot along the direction of travel
+    changes: the ankles' horizontal lead crossing :data:`PASS_LEAD` leg lengths one way,
+    then the other."""
+    v = body.ground_velocity[a:b]
+    way = v / np.maximum(np.linalg.norm(v, axis=1, keepdims=True), 1e-9)
+    ankles = body.p[a:b][:, [J["LA"], J["RA"]]][:, :, [0, 2]]
+    lead = ((ankles[:, 0] - ankles[:, 1]) * way).sum(axis=1) / body.leg
+    side, passes = 0, 0
+    for x in lead:
+        now = 1 if x > PASS_LEAD else -1 if x < -PASS_LEAD else side
+        passes += int(side != 0 and now != side)
+        side = now
+    return passes
 
 
 def fall_rate(p21: np.ndarray, fps: float) -> tuple[float, int, float] | None:
@@ -190,16 +218,35 @@ def rate_hint(p21: np.ndarray, fps: float) -> RateHint | None:
     """A :class:`RateHint` where the 21-joint positions ``p21`` (T, 21, 3) metres, declared
     at ``fps`` Hz, step or fall like people only at other capture rates (module
     docstring); else None."""
+    return rate_verdict(p21, fps).hint
+
+
+@dataclass(frozen=True)
+class RateVerdict:
+    """What a body says of its declared rate: a :class:`RateHint` where it looks wrong;
+    ``own`` where the body confirms it (it steps as people do, or its flights fall at g, at
+    that rate); neither where nothing in it can tell."""
+
+    hint: RateHint | None = None
+    own: bool = False
+
+
+def rate_verdict(p21: np.ndarray, fps: float) -> RateVerdict:
+    """:func:`rate_hint`, and whether the body confirms its declared rate instead."""
     if not 0 < fps <= SUSPECT_BELOW or len(p21) < 2:
-        return None
+        return RateVerdict()
     try:
-        steps, seconds = _steps(p21, fps)
+        steps, seconds = _steps(p21, fps, passes=True)
         if steps >= MIN_STEPS and seconds > 0 and steps / seconds >= SLOWEST:
-            return None   # it steps as people do at its own rate
+            return RateVerdict(own=True)   # it steps as people do at its own rate
         # gravity next: it gives the rate itself, steps only a range of rates
-        return _by_flights(p21, fps) or _by_steps(p21, fps)
+        fall = fall_rate(p21, fps)
+        if fall is not None and abs(fall[0] / fps - 1.0) <= FALL_TOLERANCE and \
+                fall[2] >= FLIGHT_SECONDS:
+            return RateVerdict(own=True)   # its flights fall at g at its own rate
+        return RateVerdict(_by_flights(p21, fps, fall) or _by_steps(p21, fps))
     except MotionlangError:   # no body to read: nothing to say about its rate
-        return None
+        return RateVerdict()
 
 
 def _by_steps(p21: np.ndarray, fps: float) -> RateHint | None:
@@ -223,8 +270,8 @@ def _by_steps(p21: np.ndarray, fps: float) -> RateHint | None:
                     cadence * fps / rate)
 
 
-def _by_flights(p21: np.ndarray, fps: float) -> RateHint | None:
-    fall = fall_rate(p21, fps)
+def _by_flights(p21: np.ndarray, fps: float,
+                fall: tuple[float, int, float] | None) -> RateHint | None:
     if fall is None:
         return None
     rate, flights, seconds = fall
@@ -240,22 +287,29 @@ def _by_flights(p21: np.ndarray, fps: float) -> RateHint | None:
 def hint_of(motion: Motion) -> RateHint | None:
     """:func:`rate_hint` of a motion of any rig (None for a rig the body map cannot read:
     its command says so itself)."""
+    return verdict_of(motion).hint
+
+
+def verdict_of(motion: Motion) -> RateVerdict:
+    """:func:`rate_verdict` of a motion of any rig (nothing said for a rig the body map
+    cannot read)."""
     if not 0 < motion.fps <= SUSPECT_BELOW:
-        return None
+        return RateVerdict()
     try:
         p21 = positions21(motion)
     except MotionlangError:
-        return None
-    return rate_hint(p21, motion.fps)
+        return RateVerdict()
+    return rate_verdict(p21, motion.fps)
 
 
-def at_its_rate(motion: Motion, where: str) -> Motion:
+def at_its_rate(motion: Motion, where: str, *, advice: bool = True) -> Motion:
     """``motion`` at the rate its body's steps or flights say it was captured at, with one
-    warning that says so, where its declared rate looks wrong (:class:`RateHint`); the
-    motion as it is elsewhere. The declared rate is kept in ``meta["declared_fps"]``."""
+    warning that says so (with the command line's flag unless not ``advice``), where its
+    declared rate looks wrong (:class:`RateHint`); the motion as it is elsewhere. The
+    declared rate is kept in ``meta["declared_fps"]``."""
     hint = hint_of(motion)
     if hint is None:
         return motion
-    warnings.warn(hint.line(where, read=True), UserWarning, stacklevel=2)
+    warnings.warn(hint.line(where, read=True, advice=advice), UserWarning, stacklevel=2)
     return motion.replace(fps=hint.rate, meta={**motion.meta, "declared_fps": motion.fps})
 

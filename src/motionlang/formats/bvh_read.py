@@ -231,6 +231,44 @@ def _open(path: Path):
     return fh
 
 
+def _header(tk: _Tokens) -> tuple[list[dict], int, float, float]:
+    """``(nodes, frames, frame time s, fps)`` of the header ``tk`` reads, up to the first
+    frame's line."""
+    path = tk.path
+    nodes = _parse_hierarchy(tk)
+    tk.expect("MOTION")
+    tk.expect("Frames:")
+    n_frames = int(tk.number("the frame count", integer=True))
+    tk.expect("Frame")
+    ln = tk.expect("Time:")
+    dt = tk.number("the frame time")
+    if tk.buf:
+        raise MotionFormatError(path, "unexpected text after the frame time", line=ln)
+    if dt <= 0:
+        raise MotionFormatError(path, f"frame time must be positive, got {dt}", line=ln)
+    if n_frames <= 0:
+        raise MotionFormatError(path, "no frames (Frames: 0)", line=ln)
+    fps = 1.0 / dt
+    if not math.isfinite(fps):
+        raise MotionFormatError(path, f"frame time too small: {dt}", line=ln)
+    if round(fps) >= 1 and abs(fps - round(fps)) <= FPS_TOLERANCE * fps:
+        fps = float(round(fps))   # 0.0333333 s -> 30 fps, not 30.00003
+    return nodes, n_frames, dt, fps
+
+
+def bvh_header(path: str | Path) -> tuple[tuple[str, ...], float]:
+    """``(joint names in file order, fps)`` of a BVH file, from its header alone (none of
+    its frames are read).
+
+    Raises:
+        MotionFormatError: as :func:`read_bvh`, for the header.
+    """
+    path = Path(path)
+    with _open(path) as fh:
+        nodes, _, _, fps = _header(_Tokens(path, fh))
+    return tuple(n["name"] for n in nodes if not n["end"]), fps
+
+
 def read_bvh(path: str | Path, unit: float | str | None = None) -> Motion:
     """Read a BVH file.
 
@@ -253,24 +291,7 @@ def read_bvh(path: str | Path, unit: float | str | None = None) -> Motion:
     given = None if unit is None else resolve_unit(unit)
     with _open(path) as fh:
         tk = _Tokens(path, fh)
-        nodes = _parse_hierarchy(tk)
-        tk.expect("MOTION")
-        tk.expect("Frames:")
-        n_frames = int(tk.number("the frame count", integer=True))
-        tk.expect("Frame")
-        ln = tk.expect("Time:")
-        dt = tk.number("the frame time")
-        if tk.buf:
-            raise MotionFormatError(path, "unexpected text after the frame time", line=ln)
-        if dt <= 0:
-            raise MotionFormatError(path, f"frame time must be positive, got {dt}", line=ln)
-        if n_frames <= 0:
-            raise MotionFormatError(path, "no frames (Frames: 0)", line=ln)
-        fps = 1.0 / dt
-        if not math.isfinite(fps):
-            raise MotionFormatError(path, f"frame time too small: {dt}", line=ln)
-        if round(fps) >= 1 and abs(fps - round(fps)) <= FPS_TOLERANCE * fps:
-            fps = float(round(fps))   # 0.0333333 s -> 30 fps, not 30.00003
+        nodes, n_frames, dt, fps = _header(tk)
         C = sum(len(n["channels"]) for n in nodes)
         limits.check_motion(path, n_frames, len(nodes), C)  # before asking for the memory
         data = _read_frames(path, fh, tk.ln + 1, n_frames, C)

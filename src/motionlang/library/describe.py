@@ -20,8 +20,8 @@ import json
 import math
 import os
 import warnings
-from collections.abc import Iterable, Iterator, Sequence
-from dataclasses import dataclass
+from collections.abc import Iterable, Iterator, Mapping, Sequence
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -33,6 +33,7 @@ from motionlang.formats import read_motion
 from motionlang.library.bank import SentenceBank, default_bank_model, embed_bank, read_bank
 from motionlang.library.embedder import Embedder
 from motionlang.library.options import DescribeOptions
+from motionlang.library.rates import SharedRate, shared_rates
 from motionlang.library.scan import motion_files
 from motionlang.library.timeline import Segment, merge_windows
 from motionlang.library.windows import Window, cut, motion_windows, span
@@ -49,12 +50,14 @@ LONG_TAKE_S = 600.0
 class ReadOptions:
     """How files are read: the ``read_motion`` options that apply to some formats only
     (``skeleton``: AMC; ``sequence``: MAT), ``fps`` (AMC's rate, or the rate that replaces
-    any other file's own), and a joint map for every file."""
+    any other file's own), and a joint map for every file; ``shared``: the rates of exports
+    that declare a wrong one (``library.rates``, by path), where ``fps`` is not given."""
 
     skeleton: str | None = None
     fps: float | None = None
     sequence: int = 1
     joint_map: dict | str | Path | None = None
+    shared: Mapping[str, SharedRate] = field(default_factory=dict)
 
     def read(self, path: Path):
         ext = path.suffix.lower()
@@ -63,6 +66,11 @@ class ReadOptions:
         motion = read_motion(path, joint_map=self.joint_map, **kw)
         if self.fps is not None and ext != ".amc":   # the file's own rate is wrong
             motion = motion.replace(fps=self.fps)
+        elif self.fps is None and str(path) in self.shared:
+            rate = self.shared[str(path)]
+            warnings.warn(rate.line(str(path)), UserWarning, stacklevel=2)
+            motion = motion.replace(fps=rate.rate,
+                                    meta={**motion.meta, "declared_fps": motion.fps})
         elif self.fps is None:
             motion = at_its_rate(motion, str(path))
         if self.joint_map is not None:   # a map that does not fit this rig: this file's error
@@ -403,6 +411,9 @@ def describe_run(paths: Iterable[str | Path], model: Any = None,
     options = options or DescribeOptions()
     loaded, where = load_describer_model(model, options)
     files = motion_paths(paths)
+    read = read or ReadOptions()
+    if read.fps is None:   # one export, one rate: the files its bodies could not time
+        read = replace(read, shared=shared_rates(files, show_progress=show_progress))
     bank = _bank(loaded, options, show_progress)
     return DescribeRun(files, Describer(loaded, options, bank, read), where)
 

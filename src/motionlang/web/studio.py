@@ -191,8 +191,11 @@ class Studio:
         """An uploaded motion described: the viewer's JSON of it on the 21-joint body with
         ``name``, ``seconds``, ``sentences`` ([{"text", "log_p"}], best first) and, for a
         take longer than :data:`TIMELINE_FROM_S`, ``timeline`` ([{"start", "end",
-        "text"}]). ``width``: as ``motionlang describe -w`` (None: its default)."""
-        motion = read_upload(files, self.options.max_upload_bytes)
+        "text"}]) and ``notes``: what reading it warned of (a rate its body contradicts).
+        ``width``: as ``motionlang describe -w`` (None: its default)."""
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            motion = read_upload(files, self.options.max_upload_bytes)
         most = self.options.max_describe_minutes
         if motion.duration > most * 60:   # checked before the models are held
             raise MotionlangError(
@@ -212,7 +215,8 @@ class Studio:
                            sentences=[{"text": t, "log_p": None if math.isnan(s) else
                                        round(float(s), 3)} for t, s in sentences],
                            timeline=[{"start": round(s.start, 2), "end": round(s.end, 2),
-                                      "text": s.text} for s in segments])
+                                      "text": s.text} for s in segments],
+                           notes=[page_message(w.message) for w in caught])
 
     def search(self, query: str, k: int = 10, where: str | None = None,
                min_duration: str | None = None) -> list[dict[str, Any]]:

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import re
 import tempfile
+import warnings
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -78,7 +79,7 @@ def check_upload(files: Sequence[Upload], max_bytes: int) -> None:
                               "skeleton: upload both files together")
 
 
-def page_message(exc: Exception, folder: Path | None = None) -> str:
+def page_message(exc: BaseException | str, folder: Path | None = None) -> str:
     """An error's line as the page shows it: without the temporary ``folder``, and with
     the command line's advice about joint maps said as the page's."""
     text = str(exc).replace(f"{folder}/", "") if folder is not None else str(exc)
@@ -103,12 +104,16 @@ def read_upload(files: Sequence[Upload], max_bytes: int) -> Motion:
         extra = {".asf": "skeleton", ".json": "joint_map"}
         kw = {extra[p.suffix.lower()]: p for p in paths if p.suffix.lower() in extra}
         try:
-            motion = read_mapped(motion_path, **kw)
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                motion = read_mapped(motion_path, **kw)
         except MotionlangError as exc:   # the reader names the file by its temporary path
             raise MotionlangError(page_message(exc, folder)) from None
         except (ValueError, OSError) as exc:   # a reader's slip: still one line, no trace
             raise MotionlangError(f"{motion_path.name}: cannot read it ({exc})") from None
+    for w in caught:   # the reader's notes, without the temporary folder, for the page
+        warnings.warn(page_message(w.message, folder), w.category, stacklevel=2)
     motion.meta.pop("path", None)
     # a header's rate its body contradicts: read at the body's, as the command line does
-    # (``meta["declared_fps"]`` keeps the header's)
-    return at_its_rate(motion, motion_path.name).replace(name=motion_path.stem)
+    # (``meta["declared_fps"]`` keeps the header's), with a warning the page can show
+    return at_its_rate(motion, motion_path.name, advice=False).replace(name=motion_path.stem)

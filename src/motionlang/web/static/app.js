@@ -149,7 +149,8 @@ async function describe() {
   try {
     const view = await (await call("/api/describe", { method: "POST", body: filesForm($("describe-file")) })).json();
     show(view);
-    status("describe-status", `${view.name}: ${view.seconds.toFixed(1)} s`);
+    status("describe-status", `${view.name}: ${view.seconds.toFixed(1)} s` +
+      (view.notes.length ? ` (${view.notes.join("; ")})` : ""));
     for (const s of view.sentences) {
       const li = document.createElement("li");
       li.textContent = s.text;

@@ -1,0 +1,117 @@
+"""One export, one rate: the BVH files of one folder that share a rig and a declared frame
+rate came out of one export, and an exporter that writes a wrong rate writes it into all
+of them (MakeHuman's BVH of CMU trials declare 25 Hz for 120 Hz frames).
+
+The body can time a take only where it steps or flies (``analysis.rate``); a punch, a climb
+or a bow says nothing of its rate. Where such files sit in an export whose other files
+the body did time, they are read at the rate those showed:
+
+- files are grouped by folder, the rig's joint names and the declared rate (from the
+  header alone, ``formats.bvh_read.bvh_header``), for declared rates of at most
+  ``analysis.rate.SUSPECT_BELOW`` Hz;
+- a group is read at a shared rate only where at least :data:`MIN_TIMED` of its files name
+  rates (``RateHint``), :data:`AGREE` of them the same one (the rate their flights fall at g
+  at, where there are flights; else the rate most name first), and none of its files
+  confirms the declared rate (it steps, or its flights fall at g, at that rate): one such
+  file settles the group, and the rest of it is not read twice;
+- every file of the group is then read at that rate, the timed ones too, so that an export's
+  takes keep one clock.
+
+A file given with ``--source-fps`` is read at that rate, whatever its folder.
+"""
+from __future__ import annotations
+
+import math
+import random
+from collections import Counter, defaultdict
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from motionlang.analysis.rate import RATES, SUSPECT_BELOW, RateHint, verdict_of
+from motionlang.errors import MotionlangError
+from motionlang.formats import read_motion
+from motionlang.formats.bvh_read import bvh_header
+from motionlang.utils.progress import progress
+
+#: files of one export whose bodies must name a rate before the others follow
+MIN_TIMED = 2
+#: share of those files that must name the export's rate among theirs
+AGREE = 0.75
+
+
+@dataclass(frozen=True)
+class SharedRate:
+    """The rate a file is read at because of its export: ``rate`` (Hz) where its header says
+    ``declared``; ``timed``: the files of its folder and rig whose bodies named it."""
+
+    rate: float
+    declared: float
+    timed: int
+
+    def line(self, where: str) -> str:
+        return (f"{where}: its header says {self.declared:g} Hz; read at {self.rate:g} Hz, "
+                f"the rate the steps or flights of {self.timed} files of its folder and rig "
+                "showed (--source-fps HZ reads it at another rate)")
+
+
+def _export_rate(hints: Sequence[RateHint]) -> float | None:
+    """The rate the hints of one export give: where flights were fitted, the capture rate
+    nearest their median fall (gravity gives the rate itself), else the rate most hints
+    name first; None unless at least :data:`AGREE` of the hints name it among theirs."""
+    falls = [h.fall_rate for h in hints if h.fall_rate is not None]
+    named = sorted({r for h in hints for r in h.rates})
+    if falls:
+        middle = float(np.median(falls))
+        rate = min(named, key=lambda r: abs(math.log(r / middle)))
+    else:
+        firsts = Counter(h.rate for h in hints)
+        rate = min(named, key=lambda r: (-firsts[r], sum(
+            h.rates.index(r) if r in h.rates else len(RATES) for h in hints), r))
+    support = sum(rate in h.rates for h in hints) / len(hints)
+    return rate if support >= AGREE else None
+
+
+def shared_rates(files: Sequence[Path], *, show_progress: bool | None = None
+                 ) -> dict[str, SharedRate]:
+    """``{str(path): SharedRate}`` for the files of ``files`` an export's rate applies to
+    (module docstring); files that do not read are left to their reader to name."""
+    groups: dict[tuple, list[Path]] = defaultdict(list)
+    for path in files:
+        if path.suffix.lower() != ".bvh":
+            continue
+        try:
+            joints, fps = bvh_header(path)
+        except MotionlangError:
+            continue
+        if 0 < fps <= SUSPECT_BELOW:
+            groups[(path.parent, joints, fps)].append(path)
+    todo = [(key, members) for key, members in groups.items() if len(members) > MIN_TIMED]
+    out: dict[str, SharedRate] = {}
+    with progress(total=sum(len(m) for _, m in todo), desc="frame rates", unit="files",
+                  disable=None if show_progress is None else not show_progress) as bar:
+        for (_, _, declared), members in todo:
+            hints: list[RateHint] = []
+            # in an order that mixes the folder's kinds of take (names sort walks with
+            # walks): the first file that confirms the declared rate ends the group soonest
+            order = list(members)
+            random.Random(len(order)).shuffle(order)
+            for i, path in enumerate(order):
+                try:
+                    verdict = verdict_of(read_motion(path))
+                except MotionlangError:
+                    bar.update(1)
+                    continue
+                bar.update(1)
+                if verdict.own:   # the export's rate is right: no file of it is read anew
+                    hints = []
+                    bar.update(len(members) - i - 1)
+                    break
+                if verdict.hint is not None:
+                    hints.append(verdict.hint)
+            rate = _export_rate(hints) if len(hints) >= MIN_TIMED else None
+            if rate is not None:
+                out.update((str(p), SharedRate(rate, declared, len(hints))) for p in members)
+    return out

@@ -1,0 +1,97 @@
+"""One export, one rate (``library/rates.py``): the files of one folder, rig and declared
+rate that the body cannot time (no steps, no flights) are read at the rate the others of
+that export showed, by ``describe DIR``; one file that confirms the declared rate, another
+folder, or too few timed files leave every file as it is."""
+from __future__ import annotations
+
+import json
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from helpers.bodies import FPS, blend, hold, pose, take
+from helpers.grounded import walking
+from motionlang.cli.main import main
+from motionlang.formats import write_motion
+from motionlang.formats.bvh_read import bvh_header
+from motionlang.library.describe import ReadOptions, describe_run
+from motionlang.library.rates import shared_rates
+from motionlang.rendering.output import body_motion
+from test_rate_hint import _four_times_as_many, _jumps
+
+
+def _write(p: np.ndarray, fps: float, declared: float, path: Path) -> Path:
+    motion, _ = body_motion(p, fps)
+    write_motion(motion.replace(fps=declared), path)
+    return path
+
+
+def _arms_up() -> np.ndarray:
+    """A body raising both arms overhead and lowering them, in 30 Hz frames: nothing in
+    it steps or flies."""
+    up = pose(LE=(0.2, 1.7, 0), LW=(0.2, 1.95, 0), RE=(-0.2, 1.7, 0), RW=(-0.2, 1.95, 0))
+    return take(hold(pose(), 1.0), blend(pose(), up, 0.8), hold(up, 1.0), blend(up, pose(), 0.8),
+                hold(pose(), 1.0))
+
+
+@pytest.fixture(scope="module")
+def export(tmp_path_factory) -> Path:
+    """An export that declares 25 Hz for 120 Hz frames: two jumps and a raise of the arms."""
+    folder = tmp_path_factory.mktemp("export")
+    for i in (1, 2):
+        _write(_jumps(120.0), 120.0, 25.0, folder / f"jump{i}.bvh")
+    _write(_four_times_as_many(_arms_up()), 120.0, 25.0, folder / "arms.bvh")
+    return folder
+
+
+def test_the_untimed_file_of_an_export_is_read_at_its_siblings_rate(export):
+    files = sorted(export.glob("*.bvh"))
+    assert {bvh_header(f)[1] for f in files} == {25.0}
+    shared = shared_rates(files, show_progress=False)
+    assert {Path(k).name: (v.rate, v.timed) for k, v in shared.items()} == {
+        "arms.bvh": (120.0, 2), "jump1.bvh": (120.0, 2), "jump2.bvh": (120.0, 2)}
+    run = describe_run([export], options=None, show_progress=False)
+    with pytest.warns(UserWarning, match="arms.bvh: its header says 25 Hz; read at 120 Hz, "
+                                         "the rate .* 2 files of its folder and rig"):
+        motion = run.describer.reading.read(export / "arms.bvh")
+    assert motion.fps == 120.0 and motion.meta["declared_fps"] == 25.0
+    # the user's rate wins, and no folder is read for it
+    given = describe_run([export], read=ReadOptions(fps=25.0), show_progress=False)
+    assert dict(given.describer.reading.shared) == {}
+
+
+def test_describe_dir_says_so_and_times_the_take_at_that_rate(export, tmp_path):
+    out = tmp_path / "out.jsonl"
+    with pytest.warns(UserWarning, match="arms.bvh: .*read at 120 Hz"):
+        assert main(["describe", str(export), "--segments", "-o", str(out)]) == 0
+    records = {Path(r["file"]).name: r for r in map(json.loads, out.read_text().splitlines())
+               if "file" in r}
+    segments = records["arms.bvh"]["segments"]
+    # 4.6 s of motion at 120 Hz (22 s at the header's 25 Hz), and what it does
+    assert segments[-1]["end"] == pytest.approx(4.6, abs=0.1)
+    assert any("raises both hands" in s["text"] for s in segments)
+
+
+def test_one_file_that_steps_at_its_declared_rate_settles_the_export(export, tmp_path):
+    folder = tmp_path / "mixed"
+    folder.mkdir()
+    for f in export.glob("*.bvh"):
+        (folder / f.name).write_bytes(f.read_bytes())
+    # a walk whose steps at 25 Hz are as people walk: the header is right for it
+    _write(walking(8.0), FPS, 25.0, folder / "walk.bvh")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        assert shared_rates(sorted(folder.glob("*.bvh")), show_progress=False) == {}
+
+
+def test_too_few_files_or_other_folders_share_nothing(export, tmp_path):
+    files = sorted(export.glob("*.bvh"))
+    assert shared_rates([f for f in files if f.name != "jump2.bvh"], show_progress=False) == {}
+    apart = []
+    for i, f in enumerate(files):   # the same files, each in a folder of its own
+        (tmp_path / str(i)).mkdir()
+        apart.append(tmp_path / str(i) / f.name)
+        apart[-1].write_bytes(f.read_bytes())
+    assert shared_rates(apart, show_progress=False) == {}
