@@ -468,3 +468,12 @@ def test_spans_of_another_dtype_say_so(folder, tmp_path):
     with pytest.raises(MotionlangError, match=r"spans \(\d+, 2\) int64, expected \(\d+, 2\) "
                                               "float"):
         load_index(out)
+
+
+def test_scores_that_differ_by_float32_rounding_rank_in_the_index_order():
+    """Cosines summed with another thread count differ in their 7th or 8th decimal: such
+    windows tie, and keep the index's order, so the API and the command line agree."""
+    from motionlang.library.search import ranked
+    scores = np.array([0.5, 0.50000006, 0.49, 0.50000012], dtype=np.float32)
+    assert list(np.argsort(-ranked(scores), kind="stable")) == [0, 1, 3, 2]
+    assert list(np.argsort(-ranked(np.array([0.3, 0.3001], np.float32)), kind="stable")) == [1, 0]

@@ -95,3 +95,11 @@ def test_too_few_files_or_other_folders_share_nothing(export, tmp_path):
         apart.append(tmp_path / str(i) / f.name)
         apart[-1].write_bytes(f.read_bytes())
     assert shared_rates(apart, show_progress=False) == {}
+
+
+def test_the_api_reads_an_export_at_the_rate_given(export):
+    import motionlang as ml
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")   # the rate given: nothing to say about it
+        records = ml.describe_many(export / "arms.bvh", source_fps=25.0, segments=True)
+    assert records[0]["segments"][-1]["end"] == pytest.approx(22.0, abs=0.3)   # 552 frames

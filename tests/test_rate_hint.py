@@ -140,3 +140,25 @@ def test_a_walk_over_a_bridge_and_a_lift_on_a_bar_are_no_flights():
     # the hands held still on a bar above the head while the body rises and falls
     lift[np.ix_(up, [I["LW"], I["RW"]])] = lift[0, [I["LW"], I["RW"]]] + [0.0, 1.2, 0.0]
     assert rate_hint(lift, 25.0) is None
+
+
+def test_the_index_says_which_takes_it_read_at_their_bodys_rate(tmp_path):
+    import motionlang as ml
+    from motionlang.library.store import load_index
+    from test_library_index import fake
+    folder = tmp_path / "lib"
+    folder.mkdir()
+    motion, _ = body_motion(_jumps(120.0), 120.0)
+    write_motion(motion.replace(fps=25.0), folder / "jump.bvh")
+    write_motion(motion, folder / "right.bvh")                # its header is right
+    s = ml.index(folder, tmp_path / "lib.idx", fake(), show_progress=False)
+    assert s.retimed == [("jump.bvh", 25.0, 120.0)]
+    assert "1 read at the rate their bodies say, not their header's" in s.text() and \
+        "jump.bvh (25 -> 120 Hz)" in s.text()
+    assert s.as_dict()["retimed"] == [{"take": "jump.bvh", "declared_fps": 25.0,
+                                       "fps": 120.0}]
+    entries = {e.path: e for e in load_index(tmp_path / "lib.idx").entries}
+    assert (entries["jump.bvh"].fps, entries["jump.bvh"].declared_fps) == (120.0, 25.0)
+    assert (entries["right.bvh"].fps, entries["right.bvh"].declared_fps) == (120.0, None)
+    again = ml.index(folder, tmp_path / "lib.idx", fake(), show_progress=False)
+    assert again.reused == 2 and again.retimed == []         # said when it was embedded

@@ -131,6 +131,22 @@ def test_the_page_generates_plays_describes_and_downloads(page, tmp_path):
     assert text.startswith("walk: 2.0") and not error
     browser.save_screenshot(str(shots / "4-described.png"))
 
+    # a take whose header's rate its body contradicts: read at the body's, and said so
+    from motionlang.formats import write_motion
+    from motionlang.rendering.output import body_motion
+    from test_rate_hint import _jumps
+    jump = tmp_path / "jump.bvh"
+    write_motion(body_motion(_jumps(120.0), 120.0)[0].replace(fps=25.0), jump)
+    find("id", "describe-file").clear()
+    find("id", "describe-file").send_keys(str(jump))
+    find("id", "describe").click()
+    wait_for(lambda: status_of(browser, "describe-status")[0].startswith("jump:"),
+             what="the rate's note")
+    text, error = status_of(browser, "describe-status")
+    assert text.startswith("jump: 4.0 s (jump.bvh: its header says 25 Hz") and \
+        text.endswith("read at 120 Hz)") and not error
+    browser.save_screenshot(str(shots / "4b-described-at-its-rate.png"))
+
     # a broken file: the reader's one line in the page
     bad = tmp_path / "broken.bvh"
     bad.write_text("HIERARCHY\nROOT Hips\n{\n  OFFSET 0 0\n")

@@ -128,13 +128,17 @@ def check_map(motion: Motion, joint_map) -> None:
                               else f"{where}: {said}") from None
 
 
+#: how a user of the API reads a file at another rate than the one its body names
+API_RATE_ADVICE = "ml.read_mapped(path).replace(fps=HZ) reads it at another rate"
+
+
 def _motion(motion: Motion | str | Path, joint_map) -> Motion:
     if isinstance(motion, Motion):
         if joint_map is not None:
             check_map(motion, joint_map)
             motion = motion.replace(meta={**motion.meta, "joint_map": as_joint_map(joint_map)})
         return motion
-    return at_its_rate(read_mapped(motion, joint_map), str(motion))
+    return at_its_rate(read_mapped(motion, joint_map), str(motion), advice=API_RATE_ADVICE)
 
 
 def load_rig(rig: Motion | str | Path, joint_map: dict | str | Path | None = None) -> Motion:
@@ -192,15 +196,19 @@ def describe(motion: Motion | str | Path, model: Any = None, width: int | None =
 
 
 def describe_many(paths: Any, model: Any = None, *, joint_map: dict | str | Path | None = None,
-                  show_progress: bool | None = False, **options: Any) -> list[dict]:
+                  source_fps: float | None = None, show_progress: bool | None = False,
+                  **options: Any) -> list[dict]:
     """One record per motion file of ``paths`` (a file or folder, or a list of them; folders
     recursively), what ``motionlang describe PATHS -o FILE.jsonl`` writes a line of:
     ``{"file", "sentences": [{"text", "log_p"}, ...]}``, ``"segments"`` instead with
     ``segments=True``, ``"cos"`` scores with a ``bank``, ``{"file", "error"}`` for a file that
     cannot be read. ``options``: the fields of ``library.describe.DescribeOptions``
-    (``width``, ``rank``, ``segments``, ``window``, ``hop``, ``merge``, ``bank``, ``workers``)."""
+    (``width``, ``rank``, ``segments``, ``window``, ``hop``, ``merge``, ``bank``, ``workers``).
+    ``source_fps``: the rate every file is read at (as ``--source-fps``; None: each file's
+    own, or the one its body or its export's other files say, ``library.rates``)."""
     run = describe_run([paths] if isinstance(paths, (str, Path)) else paths, model,
-                       DescribeOptions(**options), read=ReadOptions(joint_map=joint_map))
+                       DescribeOptions(**options),
+                       read=ReadOptions(fps=source_fps, joint_map=joint_map))
     return list(run.records(show_progress=show_progress))
 
 

@@ -76,6 +76,8 @@ FALL_TOLERANCE = 0.25
 #: a declared rate is suspect where the evidence gives at least this many times it
 SUSPECT_RATIO = 1.5
 LOCOMOTION = ("walk", "run")
+#: how a command-line user reads a file at another rate than the one named
+CLI_ADVICE = "--source-fps HZ reads it at another rate"
 
 
 @dataclass(frozen=True)
@@ -109,14 +111,14 @@ class RateHint:
         return (f"its {self.flights} flight(s) fall at {share:.2f} of gravity (at g at "
                 f"{self.fall_rate:.0f} Hz)")
 
-    def line(self, where: str, *, read: bool = False, advice: bool = True) -> str:
-        """The warning; ``read``: the take is read at :attr:`rate` (said so), with the
-        command line's advice unless not ``advice`` (a page has no flags)."""
+    def line(self, where: str, *, read: bool = False, advice: str | None = CLI_ADVICE) -> str:
+        """The warning; ``read``: the take is read at :attr:`rate` (said so), with
+        ``advice`` on reading it otherwise (the command line's; None: none, a page has no
+        flags)."""
         said = f"{where}: its header says {self.declared:g} Hz, but at that rate " \
                f"{self.evidence()}"
         if read:
-            return f"{said}: read at {self.rate:g} Hz" + (
-                " (--source-fps HZ reads it at another rate)" if advice else "")
+            return f"{said}: read at {self.rate:g} Hz" + (f" ({advice})" if advice else "")
         rate = f"{self.rates[0]:g}" if len(self.rates) == 1 else "RATE"
         which = "at that rate" if len(self.rates) == 1 else "at one of these rates"
         return f"{said}: if it was captured {which}, pass --source-fps {rate}"
@@ -302,11 +304,11 @@ def verdict_of(motion: Motion) -> RateVerdict:
     return rate_verdict(p21, motion.fps)
 
 
-def at_its_rate(motion: Motion, where: str, *, advice: bool = True) -> Motion:
+def at_its_rate(motion: Motion, where: str, *, advice: str | None = CLI_ADVICE) -> Motion:
     """``motion`` at the rate its body's steps or flights say it was captured at, with one
-    warning that says so (with the command line's flag unless not ``advice``), where its
-    declared rate looks wrong (:class:`RateHint`); the motion as it is elsewhere. The
-    declared rate is kept in ``meta["declared_fps"]``."""
+    warning that says so (and ``advice`` on reading it at another, :meth:`RateHint.line`),
+    where its declared rate looks wrong (:class:`RateHint`); the motion as it is elsewhere.
+    The declared rate is kept in ``meta["declared_fps"]``."""
     hint = hint_of(motion)
     if hint is None:
         return motion

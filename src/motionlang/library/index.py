@@ -38,6 +38,8 @@ from motionlang.utils.progress import progress
 #: (``analysis.rate.at_its_rate``): a take of an older index declaring a low rate is
 #: embedded anew, its timeline may change
 RATE_READ = 8
+#: takes named in the summary's line about the takes read at their bodies' rate
+RETIMED_SHOWN = 5
 
 
 @dataclass
@@ -56,6 +58,8 @@ class IndexSummary:
         vectors: windows embedded by this run.
         failed: ``[(path, reason)]`` of the files skipped.
         seconds: wall time of the run.
+        retimed: ``[(take, declared Hz, read Hz)]`` of the takes embedded by this run at
+            the rate their bodies say rather than their header's (``analysis.rate``).
     """
 
     index: str
@@ -71,10 +75,12 @@ class IndexSummary:
     vectors: int = 0
     failed: list[tuple[str, str]] = field(default_factory=list)
     seconds: float = 0.0
+    retimed: list[tuple[str, float, float]] = field(default_factory=list)
 
     def as_dict(self) -> dict[str, Any]:
         d = asdict(self)
         d["failed"] = [{"path": p, "reason": r} for p, r in self.failed]
+        d["retimed"] = [{"take": t, "declared_fps": a, "fps": b} for t, a, b in self.retimed]
         return d
 
     def text(self) -> str:
@@ -84,7 +90,12 @@ class IndexSummary:
                 f"  this run: {self.embedded} files embedded ({self.vectors} windows), "
                 f"{self.reused} unchanged"
                 + (f" ({self.analysed} analysed anew)" if self.analysed else "")
-                + f", {self.removed} removed, {len(self.failed)} skipped, {self.seconds:.1f} s")
+                + f", {self.removed} removed, {len(self.failed)} skipped, {self.seconds:.1f} s"
+                + (f"\n  {len(self.retimed)} read at the rate their bodies say, not their "
+                   "header's (analysis.rate): " + ", ".join(
+                       f"{t} ({a:g} -> {b:g} Hz)" for t, a, b in self.retimed[:RETIMED_SHOWN])
+                   + (", ..." if len(self.retimed) > RETIMED_SHOWN else "")
+                   if self.retimed else ""))
 
 
 def embed_take(embedder: Embedder, motion, window: float, hop: float
@@ -319,9 +330,12 @@ def embed_file(embedder: Embedder, job: _Job) -> list[tuple[Entry, np.ndarray, n
         for i, motion in enumerate(takes, 1):
             rig = rig_of(motion)   # a rig no map fits fails before any embedding
             vectors, spans = embed_take(embedder, motion, job.window, job.hop)
+            declared = motion.meta.get("declared_fps")
             done.append((Entry(job.rel, f.size, f.mtime, f.sha256, rig, float(motion.fps),
                                float(span(motion)), len(vectors), i, len(takes),
-                               take_findings(motion)), vectors, spans))
+                               take_findings(motion),
+                               None if declared is None else float(declared)),
+                         vectors, spans))
     except Exception as exc:   # noqa: BLE001 (one file's failure, whatever it is, is its own)
         return reason(exc, job.path, job.rel)
     return done
@@ -335,6 +349,8 @@ def _add(b: _Builder, summary: IndexSummary, job: _Job, result) -> None:
     for entry, vectors, spans in result:
         b.add(entry, vectors, spans, job.at)
         summary.vectors += len(vectors)
+        if entry.declared_fps is not None:
+            summary.retimed.append((entry.name, entry.declared_fps, entry.fps))
     summary.embedded += 1
 
 

@@ -51,6 +51,8 @@ ANN_MIN_ROWS = 1_000_000
 EPS = 1e-6   # seconds: windows that touch are one span
 #: windows whose median score is the typical one (a sample: the median of millions costs)
 TYPICAL_SAMPLE = 4096
+#: decimals of the cosines that rank windows (float32 sums differ in the 7th or 8th)
+RANK_DECIMALS = 5
 
 
 class Hit(NamedTuple):
@@ -230,7 +232,7 @@ class Library:
                               stacklevel=3)
         if len(hits) < k:
             order = np.flatnonzero(allowed)
-            order = order[np.argsort(-scores[order], kind="stable")]
+            order = order[np.argsort(-ranked(scores[order]), kind="stable")]
             typical = float(np.median(scores[order[::max(1, len(order) // TYPICAL_SAMPLE)]]))
             merged, _ = merge_windows(order, scores, self.entry_of, data.spans,
                                       k + len(shown), typical)
@@ -294,7 +296,7 @@ class Library:
             scores = self.unit @ q
             top = np.argpartition(-scores, m - 1)[:m] if m < len(scores) else \
                 np.arange(len(scores))
-            top = top[np.lexsort((top, -scores[top]))]   # best first, ties by row
+            top = top[np.lexsort((top, -ranked(scores[top])))]   # best first, ties by row
             return top, scores[top]
         return by_numpy
 
@@ -329,6 +331,13 @@ class Library:
         folder."""
         entry = self.entry_named(name)
         return read_takes(Path(self.data.root) / entry.path)[entry.sequence - 1]
+
+
+def ranked(scores: np.ndarray) -> np.ndarray:
+    """Scores as they are ranked: rounded to :data:`RANK_DECIMALS`, so that two windows
+    whose cosines differ only by float32 rounding (which the thread count changes) tie,
+    and ties keep the index's order, whatever the machine."""
+    return np.round(scores.astype(np.float64), RANK_DECIMALS)
 
 
 def _overlapping(spans: np.ndarray, allowed: list[tuple[float, float]]) -> np.ndarray:

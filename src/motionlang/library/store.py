@@ -8,7 +8,8 @@ Arrays (no pickled objects: read with ``allow_pickle=False``):
   the indexed folder (``root``), the windows' ``window`` and ``hop`` (seconds), ``entries``
   (one per take, in row order: path relative to the root, ``sequence`` / ``sequences`` of a
   file holding several, size, mtime, ``sha256``, ``rig`` (joint count and map name),
-  ``fps``, ``duration`` (seconds), ``rows``, its number of windows, and ``findings``,
+  ``fps``, ``declared_fps`` (the header's rate where the body's was read instead; null
+  else, or absent), ``duration`` (seconds), ``rows``, its number of windows, and ``findings``,
   what the analysis saw in it, ``library.grounded.FIELDS`` each; null in an index of
   format 1, which is read as it is and analysed on its next update) and ``failed`` (files
   skipped: path, size, mtime, sha256, one-line ``reason``), and ``analysis``, the version
@@ -56,6 +57,8 @@ class Entry:
     sequence: int = 1
     sequences: int = 1
     findings: list[dict] | None = None
+    #: the header's rate where the take was read at the one its body says (``fps``)
+    declared_fps: float | None = None
 
     @property
     def name(self) -> str:
@@ -171,7 +174,8 @@ def _declared_bytes(zf: zipfile.ZipFile, name: str) -> int:
 _ENTRY_TYPES: dict[str, tuple[type, ...]] = {
     "path": (str,), "size": (int,), "mtime": (int, float), "sha256": (str,), "rig": (dict,),
     "fps": (int, float), "duration": (int, float), "rows": (int,), "sequence": (int,),
-    "sequences": (int,), "findings": (list, type(None))}
+    "sequences": (int,), "findings": (list, type(None)),
+    "declared_fps": (int, float, type(None))}
 _FAILURE_TYPES: dict[str, tuple[type, ...]] = {
     "path": (str,), "size": (int,), "mtime": (int, float), "sha256": (str,), "reason": (str,)}
 

@@ -116,4 +116,4 @@ def read_upload(files: Sequence[Upload], max_bytes: int) -> Motion:
     motion.meta.pop("path", None)
     # a header's rate its body contradicts: read at the body's, as the command line does
     # (``meta["declared_fps"]`` keeps the header's), with a warning the page can show
-    return at_its_rate(motion, motion_path.name, advice=False).replace(name=motion_path.stem)
+    return at_its_rate(motion, motion_path.name, advice=None).replace(name=motion_path.stem)
