@@ -16,7 +16,9 @@ after writing).
 
 ``--add-model NAME`` adds one newly packaged model's outputs to the existing file, every
 other array kept byte for byte (checked after writing): a new model is pinned without
-recomputing the others on another machine.
+recomputing the others on another machine. ``--renew-model NAME`` recomputes one model's
+outputs in place, for a change of code meant to move them (its commit says why), every
+other model's arrays kept byte for byte.
 """
 from __future__ import annotations
 
@@ -96,6 +98,24 @@ def add_model(recipe, path: Path, name: str) -> None:
     print(f"{path}: {len(new)} arrays of {name} added, {len(old)} kept", file=sys.stderr)
 
 
+def renew_model(recipe, path: Path, name: str) -> None:
+    """Recompute the outputs of the packaged model ``name`` in the fixture ``path``."""
+    with np.load(path, allow_pickle=False) as z:
+        old = {k: z[k] for k in z.files}
+    if name not in recipe.MODELS:
+        raise SystemExit(f"{name}: not in the recipe's MODELS")
+    motion = recipe.stored_motion(old)
+    new = recipe.outputs(name, recipe.MODELS[name], motion, old["input/judge_p21"])
+    if not set(new) <= set(old):
+        raise SystemExit(f"{path}: {name} is not pinned yet (--add-model)")
+    kept = {k: a for k, a in old.items() if k not in new}
+    rewrite(recipe, path, kept, {**old, **new})
+    moved = [k for k in new if not (new[k].shape == old[k].shape and
+                                    np.array_equal(new[k], old[k]))]
+    print(f"{path}: {name} recomputed, {len(moved)} of its {len(new)} arrays moved "
+          f"({', '.join(moved) or 'none'}), {len(kept)} others kept", file=sys.stderr)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("-o", "--out", type=Path, default=HERE / "packaged_outputs.npz")
@@ -104,6 +124,9 @@ def main() -> None:
                              "keeping its outputs")
     parser.add_argument("--add-model", metavar="NAME",
                         help="add one packaged model's outputs to the existing file -o")
+    parser.add_argument("--renew-model", metavar="NAME", action="append",
+                        help="recompute one packaged model's outputs in the existing file "
+                             "-o (again for more)")
     args = parser.parse_args()
 
     import torch
@@ -120,6 +143,10 @@ def main() -> None:
         return
     if args.add_model:
         add_model(recipe, args.out, args.add_model)
+        return
+    if args.renew_model:
+        for name in args.renew_model:
+            renew_model(recipe, args.out, name)
         return
 
     motion = recipe.synth_motion()

@@ -26,8 +26,9 @@ describer):
    probability per word of at least ``LEAD_LOGP``) and the motion is like its training
    motion (:func:`familiarity` at most ``FAMILIAR_RMS``). Otherwise the grounded sentence
    comes first (its score NaN: no model gave it) and the model's follow as alternatives.
-   Style and mood words stay only where the model knows the motion well (``STYLE_RMS``)
-   and is confident (``STYLE_LOGP``); sentences that repeat themselves are left out.
+   Style and mood words, and the person's gender ("a woman", "his"), stay only where the
+   model knows the motion well (``STYLE_RMS``) and is confident (``STYLE_LOGP``);
+   sentences that repeat themselves are left out.
 """
 from __future__ import annotations
 
@@ -67,6 +68,13 @@ STYLE_RMS = 1.2
 #: mean log probability per word below which the model's sentence does not lead: far below
 #: its sentences of motion it knows, where a forced verb left it stumbling ("jumps the way")
 LEAD_LOGP = -1.5
+
+#: a person's gender as captions name it, and the words that say no more than a person: no
+#: motion shows it (the models learnt it from the actors of their training takes)
+GENDERED = {"woman": "person", "man": "person", "women": "people", "men": "people",
+            "lady": "person", "gentleman": "person", "girl": "person", "boy": "person",
+            "guy": "person", "female": "person", "male": "person", "his": "their",
+            "her": "their"}
 
 #: the words that name each gait, in every form a caption uses
 GAIT_WORDS: dict[str, frozenset[str]] = {
@@ -198,6 +206,15 @@ def familiarity(model: Any, frames) -> float:
 
 
 
+def ungendered(text: str) -> str:
+    """``text`` with the person it names neither a woman nor a man (:data:`GENDERED`):
+    "a woman walks forward and raises her hand" -> "a person walks forward and raises
+    their hand"."""
+    words = text.split()
+    return " ".join(GENDERED.get(w.lower(), w) for w in words) if any(
+        w.lower() in GENDERED for w in words) else text
+
+
 def per_word(text: str, score: float) -> float:
     """Mean log probability per word, the end of the sentence counted."""
     return score / (len(text.split()) + 1)
@@ -211,11 +228,13 @@ def reconcile(hyps: list[tuple[str, float]], analysis: Analysis | None,
     motion well and is confident."""
     out = []
     for t, s in hyps:
-        if t != UNFAMILIAR and styles_named(t) and not (
-                rms <= STYLE_RMS and per_word(t, s) >= STYLE_LOGP):
+        knows = rms <= STYLE_RMS and per_word(t, s) >= STYLE_LOGP
+        if t != UNFAMILIAR and styles_named(t) and not knows:
             t = without_style(t)
             if styles_named(t) or not has_verb(t):
                 continue
+        if not knows:   # a woman, a man: the model's training actors, not this body
+            t = ungendered(t)
         t = tidy(t)
         if not repeats(t):   # "3 squats 3 times squats": the model stumbling
             out.append((t, s))
