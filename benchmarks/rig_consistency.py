@@ -83,7 +83,7 @@ def main() -> None:
             sources.append((f"bandai/{take}", path))
             bandai_rig = bandai_rig or path
     if args.deepmimic is not None:
-        sources += [(f"deepmimic/{p.stem}", p) for p in sorted(Path(args.deepmimic).glob("*.txt"))]
+        sources += [(f"deepmimic/{p.stem}", p) for p in sorted(Path(args.deepmimic).glob("humanoid3d_*.txt"))]
         sources += [(f"bandai/{p.stem}", p) for p in sorted(Path(args.bandai).glob(
             "**/dataset-1_*[kp]*_normal_00*.bvh")) if p.stem.split("_")[1] in ("kick", "punch")]
     sources = sources[::args.every]

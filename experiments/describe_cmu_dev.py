@@ -24,12 +24,12 @@ def main() -> None:
     import motionlang as ml
     from motionlang.analysis import repeats
     from motionlang.datasets.bandai_text import styles_named
-    from motionlang.models.seq2seq.decode.grounded import has_verb
+    from motionlang.models.seq2seq.decode.grounded import GENDERED, has_verb
     torch.set_num_threads(1)
     model = ml.load_model(args.model)
     rows = [line.split("\t") for line in
             (args.folder / "trials.tsv").read_text().splitlines()[1:]]
-    n = style = rep = verbless = 0
+    n = style = rep = verbless = gendered = 0
     for r in rows:
         motion = ml.read_motion(args.folder / r[1])
         raw = ml.describe(motion, model, 5, raw=True)[0][0]
@@ -38,9 +38,10 @@ def main() -> None:
         style += bool(styles_named(first))
         rep += repeats(first)
         verbless += not has_verb(first)
+        gendered += any(w in GENDERED for w in first.lower().split())
         print(f"{r[1]}\t{r[5]}\t{raw}\t{first}", flush=True)
     print(f"files {n}; first sentences with a style word {style}; repeated {rep}; "
-          f"without a verb {verbless}")
+          f"without a verb {verbless}; naming a gender {gendered}")
 
 
 if __name__ == "__main__":

@@ -229,8 +229,9 @@ def test_climbing_a_ladder_up_and_down():
 
 
 def _monkey_bars(seconds: float = 4.0, distance: float = 2.0, lift: float = 0.35) -> np.ndarray:
-    """Hands up on a bar, pulled up off the floor, hand over hand along it while the body
-    swings under the grip (the legs most), then let go: a short fall onto the feet."""
+    """Hands up on a bar, pulled up off the floor, hand over hand along the bars (each hand
+    holds still while the other reaches ahead) while the body swings under the grip (the
+    legs most), then let go: a short fall onto the feet."""
     up = pose()
     for w, e, s in (("LW", "LE", "LS"), ("RW", "RE", "RS")):
         up[I[e]] = up[I[s]] + np.array([0, 0.3, 0])
@@ -238,11 +239,17 @@ def _monkey_bars(seconds: float = 4.0, distance: float = 2.0, lift: float = 0.35
     hung = up + np.array([0, lift, 0])
     t = np.arange(int(seconds * FPS)) / FPS
     along = np.repeat(hung[None], len(t), axis=0)
-    along[:, :, 2] += (distance * t / seconds)[:, None]
+    body = distance * t / seconds
+    along[:, :, 2] += body[:, None]
+    v, period = distance / seconds, 0.8   # m/s; s between two moves of one hand
+    for k, (w, e) in enumerate((("LW", "LE"), ("RW", "RE"))):
+        # each hand still on a bar half the time, then moved on by the body's way in a
+        # period (the two in turn): the place it grips, metres along the bars
+        u = t / period - k / 2
+        grip = v * period * (np.floor(u) + np.clip(2 * (u % 1.0), 0.0, 1.0))
+        along[:, I[w], 2] += grip - body + 0.1
+        along[:, I[e], 2] += (grip - body) / 2
     swing = np.sin(2 * np.pi * t / 1.2)
-    for w, e, sign in (("LW", "LE", 1), ("RW", "RE", -1)):
-        along[:, I[w], 2] += 0.2 * sign * swing
-        along[:, I[e], 2] += 0.1 * sign * swing
     legs = [I[n] for n in ("LK", "LA", "LMrot", "LF", "RK", "RA", "RMrot", "RF")]
     along[:, legs, 2] += (0.25 * swing)[:, None]
     along[:, [I[n] for n in ("root", "BP", "BT", "LH", "RH")], 2] += (0.1 * swing)[:, None]

@@ -146,13 +146,15 @@ def test_an_index_without_findings_is_searched_and_brought_up_to_date(library, t
     again = ml.index(library[0], old, emb, show_progress=False)
     assert (again.analysed, again.embedded, load_index(old).analysis) == (
         3, 0, index_module.ANALYSIS)
-    # takes of 30 Hz or less in an index from before a body could set their rate are
-    # embedded anew: one read at another rate has another timeline
+    # a take an older index read at another rate than the rate check now gives (its
+    # header's, where its body now says otherwise) is embedded anew: its timeline moved
     data = load_index(old)
-    data.analysis = index_module.RATE_READ - 1
+    data.analysis = index_module.ANALYSIS - 1
+    data.entries[0].fps = 25.0
     save_index(data, old)
     again = ml.index(library[0], old, emb, show_progress=False)
-    assert (again.embedded, again.reused) == (3, 0)
+    assert (again.embedded, again.reused, again.analysed) == (1, 2, 2)
+    assert [e.fps for e in load_index(old).entries] == [e.fps for e in load_index(out).entries]
 
 
 def test_the_cli_prints_why_and_takes_the_filters(library, capsys, monkeypatch):

@@ -103,3 +103,27 @@ def test_the_api_reads_an_export_at_the_rate_given(export):
         warnings.simplefilter("error")   # the rate given: nothing to say about it
         records = ml.describe_many(export / "arms.bvh", source_fps=25.0, segments=True)
     assert records[0]["segments"][-1]["end"] == pytest.approx(22.0, abs=0.3)   # 552 frames
+
+
+def test_an_export_of_a_rig_that_needs_a_joint_map_shares_its_rate(export, tmp_path):
+    import re
+
+    from motionlang.features.joint_map import KIT21_NAMES
+    folder = tmp_path / "mapped"
+    folder.mkdir()
+    for f in export.glob("*.bvh"):   # the same export, its joints named as no map knows
+        (folder / f.name).write_text(re.sub(r"^(\s*(?:ROOT|JOINT) )(\S+)$",
+                                            lambda m: m.group(1) + "zz_" + m.group(2),
+                                            f.read_text(), flags=re.M))
+    ends = {"BUN": "BLN_end", "LW": "LE_end", "RW": "RE_end", "LF": "LMrot_end",
+            "RF": "RMrot_end"}
+    joint_map = tmp_path / "map.json"
+    joint_map.write_text(json.dumps({"name": "zz", "joints": {
+        k: "zz_" + ends.get(k, k) for k in KIT21_NAMES}}))
+    files = sorted(folder.glob("*.bvh"))
+    assert shared_rates(files, show_progress=False) == {}   # no body to time without it
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        run = describe_run([folder], read=ReadOptions(joint_map=str(joint_map)),
+                           show_progress=False)
+        assert [run.describer.reading.read(f).fps for f in files] == [120.0] * 3

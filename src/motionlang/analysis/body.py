@@ -47,6 +47,8 @@ HANDS_OVERHEAD = 0.1
 #: on something: a hanging body's legs swing and pause at each end of the swing for less,
 #: a foot on a rung stands there while the other climbs
 HANGING_HOLD = 0.3
+#: seconds both gripping hands may move at once (one takes over from the other)
+GRIP_GAP = 0.3
 
 J = {n: i for i, n in enumerate(KIT21_NAMES)}
 FOOT_JOINTS = ((J["LA"], J["LMrot"], J["LF"]), (J["RA"], J["RMrot"], J["RF"]))
@@ -228,16 +230,17 @@ class Body:
         speed = self.foot_speed3d[np.argmin(self.foot_low, axis=0), np.arange(self.n)]
         held = clean_mask(speed < SUPPORT_SPEED, self.fps, min_len=SUPPORT_HOLD, max_gap=0.0)
         floor = np.where(held & (low > floor), low, floor)
-        # hands overhead may carry the body: the feet hang in the air there, and the window's
-        # low percentile would follow them up; the floor is only where a foot stands still,
-        # and holds where the body left it in between
+        # hands that grip something overhead may carry the body: the feet hang in the air
+        # there, and the window's low percentile would follow them up; the floor is only
+        # where a foot stands still, and holds where the body left it in between (never
+        # above the feet: a body held by its hands may be lowered, or let go)
         stands = clean_mask(speed < SUPPORT_SPEED, self.fps, min_len=HANGING_HOLD, max_gap=0.0)
-        known = ~self.hands_overhead | stands
+        known = ~self.gripping | stands
         if known.any() and not known.all():
             idx = np.flatnonzero(known)
             last = idx[np.clip(np.searchsorted(idx, np.arange(self.n), side="right") - 1,
                                0, None)]
-            floor = np.where(known, floor, floor[last])
+            floor = np.where(known, floor, np.minimum(floor[last], low))
         return floor
 
     @cached_property
@@ -246,6 +249,20 @@ class Body:
         head = self.p[:, J["BUN"], 1]
         return np.asarray(np.stack([self.p[:, w, 1] - head > HANDS_OVERHEAD * self.leg
                                     for _, _, w in ARMS]).all(axis=0))
+
+    @cached_property
+    def gripping(self) -> np.ndarray:
+        """(T,) bool: both hands overhead and one of them still in the world (slower than
+        :data:`SUPPORT_SPEED`; both may move for :data:`GRIP_GAP` s), as on a bar, a rung or
+        a frame; arms raised while walking, running or dancing go with the body."""
+        if self.n < 2:
+            return np.zeros(self.n, dtype=bool)
+        wrists = [w for _, _, w in ARMS]
+        speed = np.linalg.norm(np.gradient(self.p[:, wrists], axis=0), axis=-1).min(axis=1)
+        speed = uniform_filter1d(speed * self.fps, _odd(0.1 * self.fps), mode="nearest")
+        # hand over hand, the holding hand changes: both move for a moment
+        return clean_mask(self.hands_overhead & (speed / self.leg < SUPPORT_SPEED), self.fps,
+                          min_len=0.0, max_gap=GRIP_GAP) & self.hands_overhead
 
     @cached_property
     def foot_speed3d(self) -> np.ndarray:

@@ -25,7 +25,7 @@ import numpy as np
 
 from motionlang.analysis.body import ARMS, LEGS, Body, J
 from motionlang.analysis.evidence import MIN_CONFIDENCE, Finding, clean_mask, confidence, runs
-from motionlang.analysis.locomotion import ballistic
+from motionlang.analysis.locomotion import BALLISTIC_FRAMES, ballistic
 
 # thresholds (standing pelvis heights "sph", leg lengths "L", degrees, seconds)
 LYING_TILT = 60.0          # deg: trunk this far from vertical
@@ -131,11 +131,10 @@ def crouching(body: Body) -> np.ndarray:
 
 
 def hanging(body: Body) -> np.ndarray:
-    hands_up = body.hands_overhead
+    # the floor under a body held by its hands stays where its feet last stood
+    # (``Body.local_floor``): feet off it are off the floor, whatever the floor's height
     off = (body.foot_low - body.local_floor[None] > FOOT_OFF * body.leg).all(axis=0)
-    start_floor = np.percentile(body.foot_low.min(axis=0), 5)
-    above_start = body.foot_low.min(axis=0) - start_floor > FOOT_OFF * body.leg
-    return hands_up & (off | above_start)
+    return body.hands_overhead & off
 
 
 def one_leg(body: Body) -> np.ndarray:
@@ -208,7 +207,7 @@ def postures(body: Body) -> list[Finding]:
         add("squat" if v < SQUAT_PELVIS else "crouch", a, b, "pelvis height (standing = 1)",
             v, CROUCH_PELVIS, -0.15)
     for a, b in _spans(body, hanging(body)):
-        if ballistic(body, a, b):
+        if b - a >= BALLISTIC_FRAMES and ballistic(body, a, b):
             continue    # the hands overhead in a flight (a back flip) carry nothing
         # hand over hand along a bar: the root goes somewhere while the hands carry it
         along = float(np.linalg.norm(body.p[b - 1, 0, [0, 2]] - body.p[a, 0, [0, 2]])) / body.leg

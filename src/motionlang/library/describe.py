@@ -413,7 +413,8 @@ def describe_run(paths: Iterable[str | Path], model: Any = None,
     files = motion_paths(paths)
     read = read or ReadOptions()
     if read.fps is None:   # one export, one rate: the files its bodies could not time
-        read = replace(read, shared=shared_rates(files, show_progress=show_progress))
+        read = replace(read, shared=shared_rates(files, joint_map=read.joint_map,
+                                                 show_progress=show_progress))
     bank = _bank(loaded, options, show_progress)
     return DescribeRun(files, Describer(loaded, options, bank, read), where)
 

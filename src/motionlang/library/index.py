@@ -23,7 +23,6 @@ from typing import Any
 import numpy as np
 
 from motionlang.analysis import VERSION as ANALYSIS
-from motionlang.analysis.rate import SUSPECT_BELOW
 from motionlang.errors import MotionlangError
 from motionlang.library.embedder import Embedder
 from motionlang.library.grounded import take_findings
@@ -34,10 +33,6 @@ from motionlang.library.store import Entry, Failure, IndexData, load_index, save
 from motionlang.library.windows import motion_windows, span
 from motionlang.utils.progress import progress
 
-#: the analysis version from which takes are read at the rate their body says
-#: (``analysis.rate.at_its_rate``): a take of an older index declaring a low rate is
-#: embedded anew, its timeline may change
-RATE_READ = 8
 #: takes named in the summary's line about the takes read at their bodies' rate
 RETIMED_SHOWN = 5
 
@@ -121,8 +116,8 @@ class _Builder:
             for i, e in enumerate(old.entries):
                 rows = slice(first[i], first[i + 1])
                 if old.analysis != ANALYSIS:   # findings of other detectors: made anew
-                    if old.analysis < RATE_READ and e.fps <= SUSPECT_BELOW:
-                        continue   # read before a body could set its rate: embedded anew
+                    # (and the take embedded anew where it now reads at another rate,
+                    # ``_analysed``: the rate check is the analysis' too)
                     e = Entry(**{**asdict(e), "findings": None})
                 self.takes.setdefault(e.sha256, []).append((e, old.vectors[rows],
                                                             old.spans[rows]))
@@ -305,12 +300,15 @@ def _known(b: _Builder, summary: IndexSummary, root: Path, path: Path, rel: str,
         return None
     stamp = {"path": rel, "size": facts.size, "mtime": facts.mtime}
     if facts.sha256 in b.takes:
-        b.used.add(facts.sha256)
         old = b.takes[facts.sha256]
         found: list[list[dict] | None] = [e.findings for e, _, _ in old]
         if any(f is None for f in found):
-            found = list(_analysed(path, len(old)))
+            again = _analysed(path, [e.fps for e, _, _ in old])
+            if again is None:   # read at another rate now (analysis.rate): its windows too
+                return facts
+            found = list(again)
             summary.analysed += 1
+        b.used.add(facts.sha256)
         for (e, v, s), f in zip(old, found):
             b.add(Entry(**{**asdict(e), **stamp, "findings": f}), v, s, at)
         summary.reused += 1
@@ -400,13 +398,17 @@ def _embedded(jobs: list[_Job], embedder: Embedder, model: Any, workers: int):
                                   "run the same command again to go on") from None
 
 
-def _analysed(path: Path, takes: int) -> list[list[dict]]:
-    """The findings of each of a file's ``takes`` (an entry of an older index reused):
-    ``[]`` each where the file no longer reads as it did."""
+def _analysed(path: Path, rates: list[float]) -> list[list[dict]] | None:
+    """The findings of each take of a file whose entries an older index made, at the
+    ``rates`` it read them at: ``[]`` each where the file no longer reads as it did; None
+    where it now reads at another rate (the rate check changed: its windows are embedded
+    anew)."""
     try:
         motions = read_takes(path)
     except MotionlangError:
         motions = []
-    if len(motions) != takes:
-        return [[] for _ in range(takes)]
+    if len(motions) != len(rates):
+        return [[] for _ in rates]
+    if any(abs(m.fps - r) > 1e-6 * r for m, r in zip(motions, rates)):
+        return None
     return [take_findings(m) for m in motions]

@@ -74,10 +74,11 @@ def _export_rate(hints: Sequence[RateHint]) -> float | None:
     return rate if support >= AGREE else None
 
 
-def shared_rates(files: Sequence[Path], *, show_progress: bool | None = None
-                 ) -> dict[str, SharedRate]:
+def shared_rates(files: Sequence[Path], *, joint_map: dict | str | Path | None = None,
+                 show_progress: bool | None = None) -> dict[str, SharedRate]:
     """``{str(path): SharedRate}`` for the files of ``files`` an export's rate applies to
-    (module docstring); files that do not read are left to their reader to name."""
+    (module docstring), read with ``joint_map`` (a rig no built-in map fits); files that do
+    not read are left to their reader to name."""
     groups: dict[tuple, list[Path]] = defaultdict(list)
     for path in files:
         if path.suffix.lower() != ".bvh":
@@ -100,7 +101,7 @@ def shared_rates(files: Sequence[Path], *, show_progress: bool | None = None
             random.Random(len(order)).shuffle(order)
             for i, path in enumerate(order):
                 try:
-                    verdict = verdict_of(read_motion(path))
+                    verdict = verdict_of(read_motion(path, joint_map=joint_map))
                 except MotionlangError:
                     bar.update(1)
                     continue

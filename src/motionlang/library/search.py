@@ -53,6 +53,8 @@ EPS = 1e-6   # seconds: windows that touch are one span
 TYPICAL_SAMPLE = 4096
 #: decimals of the cosines that rank windows (float32 sums differ in the 7th or 8th)
 RANK_DECIMALS = 5
+#: windows past the m best that the exact search orders too (ties at the cut)
+TIE_MARGIN = 16
 
 
 class Hit(NamedTuple):
@@ -218,7 +220,8 @@ class Library:
                     best = float(scores[near].max()) if near.size else float(
                         scores[own].max())
                     found.append((len(m.actions), m.direct, best + m.confidence, i, m, best))
-            found.sort(key=lambda x: (-x[0], -x[1], -x[2], x[3], x[4].start))
+            found.sort(key=lambda x: (-x[0], -x[1], -round(x[2], RANK_DECIMALS), x[3],
+                                      x[4].start))
             for *_, i, m, best in found[:k]:
                 hits.append(Hit(names[i], m.start, m.end, best, m.why, m.shows))
                 shown.append((i, m.start, m.end))
@@ -275,7 +278,11 @@ class Library:
         if backend == "usearch":
             if self._ann is None:
                 self._ann = ann.Approximate(self.unit, self.cache)
-            return self._ann.best
+            graph = self._ann
+
+            def by_graph(q: np.ndarray, m: int):
+                return in_rank_order(*graph.best(q, m))
+            return by_graph
         if backend == "faiss":
             if self._faiss is None:
                 try:
@@ -289,14 +296,16 @@ class Library:
             def by_faiss(q: np.ndarray, m: int):
                 got, rows = self._faiss.search(q[None], m)
                 keep = rows[0] >= 0
-                return rows[0][keep], got[0][keep]
+                return in_rank_order(rows[0][keep], got[0][keep])
             return by_faiss
 
         def by_numpy(q: np.ndarray, m: int):
             scores = self.unit @ q
-            top = np.argpartition(-scores, m - 1)[:m] if m < len(scores) else \
-                np.arange(len(scores))
-            top = top[np.lexsort((top, -ranked(scores[top])))]   # best first, ties by row
+            # a margin past m, so that windows tied at the cut are ordered by row too
+            wide = m + m // 2 + TIE_MARGIN
+            top = np.argpartition(-ranked(scores), wide - 1)[:wide] if wide < len(scores) \
+                else np.arange(len(scores))
+            top = in_rank_order(top, scores[top])[0][:m]
             return top, scores[top]
         return by_numpy
 
@@ -335,9 +344,16 @@ class Library:
 
 def ranked(scores: np.ndarray) -> np.ndarray:
     """Scores as they are ranked: rounded to :data:`RANK_DECIMALS`, so that two windows
-    whose cosines differ only by float32 rounding (which the thread count changes) tie,
-    and ties keep the index's order, whatever the machine."""
+    whose cosines differ only by float32 rounding (which the thread count changes) nearly
+    always tie (unless the noise straddles a rounding step), and ties keep the index's
+    order."""
     return np.round(scores.astype(np.float64), RANK_DECIMALS)
+
+
+def in_rank_order(rows: np.ndarray, scores: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(rows, scores)`` best first by :func:`ranked` score, ties by row."""
+    order = np.lexsort((rows, -ranked(scores)))
+    return rows[order], scores[order]
 
 
 def _overlapping(spans: np.ndarray, allowed: list[tuple[float, float]]) -> np.ndarray:

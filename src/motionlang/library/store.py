@@ -38,7 +38,9 @@ from motionlang.utils.atomic import atomic_write
 from motionlang.utils.sidecar import parse_json
 
 WHAT = "motionlang index"
-FORMAT = 2
+#: 1: no findings; 2: findings; 3: each entry's ``declared_fps`` (an older motionlang names
+#: the newer format rather than an unknown field)
+FORMAT = 3
 
 
 @dataclass

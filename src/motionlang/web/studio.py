@@ -162,7 +162,7 @@ class Studio:
         if method is not None and method not in METHODS:
             raise MotionlangError(f"decoding must be one of {', '.join(METHODS)}")
         rig_motion = None if rig is None else self.rigs.find(rig, "rig")
-        with warnings.catch_warnings(record=True) as caught, self.lock:
+        with self.lock, warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", UserWarning)
             hyps, fps = ml.generate_hypotheses(
                 text, t2m, seed=seed, method=method, max_frames=frames,
@@ -181,7 +181,8 @@ class Studio:
     def add_rig(self, files: list[Upload]) -> dict[str, Any]:
         """An uploaded rig (a BVH-like skeleton) to retarget takes onto: ``{"id", "name",
         "joints"}``."""
-        motion = read_upload(files, self.options.max_upload_bytes)
+        with self.lock:   # the reader's warnings are caught while no other call runs
+            motion = read_upload(files, self.options.max_upload_bytes)
         with self.lock, _for_page():
             rig = ml.load_rig(motion[:1])
         key = self.rigs.add(rig, self._ids)
@@ -193,7 +194,8 @@ class Studio:
         take longer than :data:`TIMELINE_FROM_S`, ``timeline`` ([{"start", "end",
         "text"}]) and ``notes``: what reading it warned of (a rate its body contradicts).
         ``width``: as ``motionlang describe -w`` (None: its default)."""
-        with warnings.catch_warnings(record=True) as caught:
+        # warnings are the process's: caught only while no other call runs (the lock)
+        with self.lock, warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             motion = read_upload(files, self.options.max_upload_bytes)
         most = self.options.max_describe_minutes
