@@ -126,7 +126,7 @@ RIG_MAPS: tuple[RigMap, ...] = (
           "Foot_{s}", "Toes_{s}"), s=("L", "R")),
     # Reallusion iClone / Character Creator (CC3, CC4) base skeleton.
     _rig("cc", "iClone Character Creator rig (CC_Base_*)",
-         ("CC_Base_Waist", "CC_Base_Spine01", "CC_Base_NeckTwist01", "CC_Base_Head"),
+         ("CC_Base_Spine01", "CC_Base_Spine02", "CC_Base_NeckTwist01", "CC_Base_Head"),
          ("CC_Base_{s}_Upperarm", "CC_Base_{s}_Forearm", "CC_Base_{s}_Hand",
           "CC_Base_{s}_Thigh", "CC_Base_{s}_Calf", "CC_Base_{s}_Foot",
           "CC_Base_{s}_ToeBase"), s=("L", "R")),
