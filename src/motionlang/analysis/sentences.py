@@ -76,7 +76,7 @@ def phrase(f: Finding, *, level: str = "terse", first: bool = False) -> str:
     if lab == "step_down":
         return "steps down"
     if lab == "hang":
-        return "hangs by the hands, moving along hand over hand" if d.get("travelled") else \
+        return "hangs by the hands, moving along" if d.get("travelled") else \
             "hangs by the hands"
     held = first and f.start < 0.5
     if lab == "sit":
