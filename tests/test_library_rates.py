@@ -17,7 +17,7 @@ from motionlang.cli.main import main
 from motionlang.formats import write_motion
 from motionlang.formats.bvh_read import bvh_header
 from motionlang.library.describe import ReadOptions, describe_run
-from motionlang.library.rates import shared_rates
+from motionlang.library.rates import SharedRate, shared_rates
 from motionlang.rendering.output import body_motion
 from test_rate_hint import _four_times_as_many, _jumps
 
@@ -127,3 +127,28 @@ def test_an_export_of_a_rig_that_needs_a_joint_map_shares_its_rate(export, tmp_p
         run = describe_run([folder], read=ReadOptions(joint_map=str(joint_map)),
                            show_progress=False)
         assert [run.describer.reading.read(f).fps for f in files] == [120.0] * 3
+
+
+def test_a_single_file_its_body_cannot_time_is_read_at_its_exports_rate(export, tmp_path,
+                                                                         capsys):
+    from motionlang.formats import read_motion
+    from motionlang.library.rates import at_export_rate, export_rate
+    arms = export / "arms.bvh"
+    assert export_rate(arms) == SharedRate(120.0, 25.0, 2)
+    with pytest.warns(UserWarning, match="arms.bvh: its header says 25 Hz; read at 120 Hz, "
+                                         "the rate .* of 2 files"):
+        assert at_export_rate(read_motion(arms), arms).fps == 120.0
+    with pytest.warns(UserWarning, match="read at 120 Hz, the rate"):
+        assert main(["info", str(arms), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["fps"] == 120.0
+    # alone in its folder, or beside a file that steps at 25 Hz: as its header says
+    alone = tmp_path / "alone"
+    alone.mkdir()
+    (alone / "arms.bvh").write_bytes(arms.read_bytes())
+    assert export_rate(alone / "arms.bvh") is None
+    _write(walking(8.0), FPS, 25.0, alone / "walk.bvh")
+    for f in export.glob("jump*.bvh"):
+        (alone / f.name).write_bytes(f.read_bytes())
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        assert export_rate(alone / "arms.bvh") is None

@@ -28,7 +28,6 @@ from typing import Any
 import numpy as np
 
 from motionlang.analysis import analyse, check  # noqa: F401  (the API's, re-exported)
-from motionlang.analysis.rate import at_its_rate
 from motionlang.analysis.words import warn_never_learnt
 from motionlang.errors import MotionlangError
 from motionlang.features.body21 import body21 as _body21
@@ -42,6 +41,7 @@ from motionlang.library.describe import ReadOptions, describe_run
 from motionlang.library.describe import describer as timeline_describer
 from motionlang.library.index import build_index
 from motionlang.library.options import DescribeOptions
+from motionlang.library.rates import at_export_rate
 from motionlang.library.search import search as run_search
 from motionlang.models.family import load_object
 from motionlang.models.inbetween import fill_between
@@ -138,7 +138,8 @@ def _motion(motion: Motion | str | Path, joint_map) -> Motion:
             check_map(motion, joint_map)
             motion = motion.replace(meta={**motion.meta, "joint_map": as_joint_map(joint_map)})
         return motion
-    return at_its_rate(read_mapped(motion, joint_map), str(motion), advice=API_RATE_ADVICE)
+    return at_export_rate(read_mapped(motion, joint_map), motion, joint_map=joint_map,
+                          advice=API_RATE_ADVICE)
 
 
 def load_rig(rig: Motion | str | Path, joint_map: dict | str | Path | None = None) -> Motion:

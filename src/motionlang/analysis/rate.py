@@ -312,6 +312,12 @@ def at_its_rate(motion: Motion, where: str, *, advice: str | None = CLI_ADVICE) 
     hint = hint_of(motion)
     if hint is None:
         return motion
-    warnings.warn(hint.line(where, read=True, advice=advice), UserWarning, stacklevel=2)
-    return motion.replace(fps=hint.rate, meta={**motion.meta, "declared_fps": motion.fps})
+    return read_at(motion, hint.rate, hint.line(where, read=True, advice=advice))
+
+
+def read_at(motion: Motion, rate: float, line: str) -> Motion:
+    """``motion`` at ``rate`` Hz, its declared rate kept in ``meta["declared_fps"]``, with
+    the warning ``line`` (what the body showed)."""
+    warnings.warn(line, UserWarning, stacklevel=3)
+    return motion.replace(fps=rate, meta={**motion.meta, "declared_fps": motion.fps})
 

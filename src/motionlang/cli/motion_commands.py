@@ -12,12 +12,12 @@ import json
 from pathlib import Path
 
 from motionlang.analysis.check import printed
-from motionlang.analysis.rate import at_its_rate
 from motionlang.api import check, load_rig, read_mapped, render, retarget
 from motionlang.cli.options import int_range, output_file, positive_int, rate_float, seconds_float
 from motionlang.errors import MotionlangError
 from motionlang.formats import info_text, motion_info, write_motion
 from motionlang.kinematics import Motion
+from motionlang.library.rates import at_export_rate
 from motionlang.rendering.output import check_drawable
 from motionlang.rendering.scene import RENDER_MAX_FRAMES
 
@@ -58,7 +58,7 @@ def load_input(args: argparse.Namespace, path: str | None = None) -> Motion:
                          fps=args.source_fps if ext == ".amc" else None)
     if args.source_fps is not None:
         return motion.replace(fps=args.source_fps)
-    return at_its_rate(motion, str(path))
+    return at_export_rate(motion, path, joint_map=args.joint_map)
 
 
 def add_clip_args(p: argparse.ArgumentParser) -> None:

@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from motionlang.analysis import analyse
-from motionlang.analysis.rate import at_its_rate
+from motionlang.analysis.rate import at_its_rate, read_at
 from motionlang.errors import MotionlangError
 from motionlang.features.joint_map import match_rig
 from motionlang.formats import read_motion
@@ -67,10 +67,8 @@ class ReadOptions:
         if self.fps is not None and ext != ".amc":   # the file's own rate is wrong
             motion = motion.replace(fps=self.fps)
         elif self.fps is None and str(path) in self.shared:
-            rate = self.shared[str(path)]
-            warnings.warn(rate.line(str(path)), UserWarning, stacklevel=2)
-            motion = motion.replace(fps=rate.rate,
-                                    meta={**motion.meta, "declared_fps": motion.fps})
+            shared = self.shared[str(path)]
+            motion = read_at(motion, shared.rate, shared.line(str(path)))
         elif self.fps is None:
             motion = at_its_rate(motion, str(path))
         if self.joint_map is not None:   # a map that does not fit this rig: this file's error

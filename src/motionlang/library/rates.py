@@ -17,6 +17,8 @@ the body did time, they are read at the rate those showed:
 - every file of the group is then read at that rate, the timed ones too, so that an export's
   takes keep one clock.
 
+A single file (``describe FILE``, ``check``, ``ml.describe(path)``) that its body cannot time
+is judged so on a sample of its folder's files of its rig and rate (:func:`at_export_rate`).
 A file given with ``--source-fps`` is read at that rate, whatever its folder.
 """
 from __future__ import annotations
@@ -30,16 +32,29 @@ from pathlib import Path
 
 import numpy as np
 
-from motionlang.analysis.rate import RATES, SUSPECT_BELOW, RateHint, verdict_of
+from motionlang.analysis.rate import (
+    CLI_ADVICE,
+    RATES,
+    SUSPECT_BELOW,
+    RateHint,
+    read_at,
+    verdict_of,
+)
 from motionlang.errors import MotionlangError
 from motionlang.formats import read_motion
 from motionlang.formats.bvh_read import bvh_header
+from motionlang.kinematics.motion import Motion
 from motionlang.utils.progress import progress
 
 #: files of one export whose bodies must name a rate before the others follow
 MIN_TIMED = 2
 #: share of those files that must name the export's rate among theirs
 AGREE = 0.75
+#: a single file's folder mates whose headers are read (a sample, in a fixed shuffled
+#: order), and of those of its rig and declared rate, the files read, where its own body
+#: cannot time it
+SIBLINGS = 64
+SIBLINGS_READ = 12
 
 
 @dataclass(frozen=True)
@@ -51,10 +66,10 @@ class SharedRate:
     declared: float
     timed: int
 
-    def line(self, where: str) -> str:
+    def line(self, where: str, *, advice: str | None = CLI_ADVICE) -> str:
         return (f"{where}: its header says {self.declared:g} Hz; read at {self.rate:g} Hz, "
                 f"the rate the steps or flights of {self.timed} files of its folder and rig "
-                "showed (--source-fps HZ reads it at another rate)")
+                "showed" + (f" ({advice})" if advice else ""))
 
 
 def _export_rate(hints: Sequence[RateHint]) -> float | None:
@@ -72,6 +87,32 @@ def _export_rate(hints: Sequence[RateHint]) -> float | None:
             h.rates.index(r) if r in h.rates else len(RATES) for h in hints), r))
     support = sum(rate in h.rates for h in hints) / len(hints)
     return rate if support >= AGREE else None
+
+
+def _hints_of(members: Sequence[Path], joint_map, tick) -> list[RateHint] | None:
+    """The rate hints of ``members`` (one export), read in an order that mixes the folder's
+    kinds of take (names sort walks with walks); None as soon as one confirms the declared
+    rate (the export's rate is right: the rest is not read). ``tick(n)``: n files done."""
+    order = list(members)
+    random.Random(len(order)).shuffle(order)
+    hints: list[RateHint] = []
+    for i, path in enumerate(order):
+        tick(1)
+        try:
+            verdict = verdict_of(read_motion(path, joint_map=joint_map))
+        except MotionlangError:
+            continue
+        if verdict.own:
+            tick(len(order) - i - 1)
+            return None
+        if verdict.hint is not None:
+            hints.append(verdict.hint)
+    return hints
+
+
+def _shared(hints: list[RateHint] | None, declared: float) -> SharedRate | None:
+    rate = _export_rate(hints) if hints is not None and len(hints) >= MIN_TIMED else None
+    return None if rate is None or hints is None else SharedRate(rate, declared, len(hints))
 
 
 def shared_rates(files: Sequence[Path], *, joint_map: dict | str | Path | None = None,
@@ -94,25 +135,52 @@ def shared_rates(files: Sequence[Path], *, joint_map: dict | str | Path | None =
     with progress(total=sum(len(m) for _, m in todo), desc="frame rates", unit="files",
                   disable=None if show_progress is None else not show_progress) as bar:
         for (_, _, declared), members in todo:
-            hints: list[RateHint] = []
-            # in an order that mixes the folder's kinds of take (names sort walks with
-            # walks): the first file that confirms the declared rate ends the group soonest
-            order = list(members)
-            random.Random(len(order)).shuffle(order)
-            for i, path in enumerate(order):
-                try:
-                    verdict = verdict_of(read_motion(path, joint_map=joint_map))
-                except MotionlangError:
-                    bar.update(1)
-                    continue
-                bar.update(1)
-                if verdict.own:   # the export's rate is right: no file of it is read anew
-                    hints = []
-                    bar.update(len(members) - i - 1)
-                    break
-                if verdict.hint is not None:
-                    hints.append(verdict.hint)
-            rate = _export_rate(hints) if len(hints) >= MIN_TIMED else None
-            if rate is not None:
-                out.update((str(p), SharedRate(rate, declared, len(hints))) for p in members)
+            shared = _shared(_hints_of(members, joint_map, bar.update), declared)
+            if shared is not None:
+                out.update((str(p), shared) for p in members)
     return out
+
+
+def export_rate(path: Path, *, joint_map: dict | str | Path | None = None
+                ) -> SharedRate | None:
+    """The rate of the export one BVH file ``path`` belongs to, where its header declares
+    30 Hz or less: a sample of its folder's other files (:data:`SIBLINGS` headers read, of
+    those of its rig and declared rate :data:`SIBLINGS_READ` files) judged as
+    :func:`shared_rates` judges a folder; None where they do not settle one."""
+    if path.suffix.lower() != ".bvh":
+        return None
+    try:
+        head = bvh_header(path)
+        others = sorted(p for p in path.parent.iterdir()
+                        if p.suffix.lower() == ".bvh" and p.name != path.name)
+    except (MotionlangError, OSError):
+        return None
+    if not 0 < head[1] <= SUSPECT_BELOW:
+        return None
+    random.Random(len(others)).shuffle(others)
+    same = []
+    for other in others[:SIBLINGS]:
+        try:
+            if bvh_header(other) == head:
+                same.append(other)
+        except MotionlangError:
+            continue
+    return _shared(_hints_of(same[:SIBLINGS_READ], joint_map, lambda n: None), head[1])
+
+
+def at_export_rate(motion: Motion, path: str | Path, *,
+                   joint_map: dict | str | Path | None = None,
+                   advice: str | None = CLI_ADVICE) -> Motion:
+    """``motion``, read from the file ``path``, at the rate its body says
+    (``analysis.rate.at_its_rate``), or where its body cannot tell, at the rate of its
+    export (:func:`export_rate`), with one warning that says so (and ``advice``)."""
+    verdict = verdict_of(motion)
+    if verdict.hint is not None:
+        return read_at(motion, verdict.hint.rate, verdict.hint.line(
+            str(path), read=True, advice=advice))
+    if verdict.own or not 0 < motion.fps <= SUSPECT_BELOW:
+        return motion
+    shared = export_rate(Path(path), joint_map=joint_map)
+    if shared is None:
+        return motion
+    return read_at(motion, shared.rate, shared.line(str(path), advice=advice))
