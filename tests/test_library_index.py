@@ -477,3 +477,29 @@ def test_scores_that_differ_by_float32_rounding_rank_in_the_index_order():
     scores = np.array([0.5, 0.50000006, 0.49, 0.50000012], dtype=np.float32)
     assert list(np.argsort(-ranked(scores), kind="stable")) == [0, 1, 3, 2]
     assert list(np.argsort(-ranked(np.array([0.3, 0.3001], np.float32)), kind="stable")) == [1, 0]
+
+
+def test_an_interrupted_update_that_embeds_retimed_takes_anew_keeps_one_copy(folder,
+                                                                             tmp_path):
+    """Takes an older index read at another rate than the file now reads at are embedded
+    anew; a save cut short inside that keeps the new take, not the old one beside it."""
+    import motionlang.library.index as index_module
+    from motionlang.library.store import save_index
+    out, emb = tmp_path / "library.idx", fake()
+    ml.index(folder, out, emb, show_progress=False)
+    data = load_index(out)
+    data.analysis = index_module.ANALYSIS - 1
+    for e in data.entries:
+        if e.path in ("jump.bvh", "sub/long.bvh"):
+            e.fps = 25.0   # as if read at its header's rate before
+    save_index(data, out)
+    real = stopped_inside_long(emb)
+    with pytest.raises(KeyboardInterrupt):
+        ml.index(folder, out, emb, show_progress=False, save_every=1e-9)
+    saved = [(e.path, e.fps) for e in load_index(out).entries]
+    assert sorted(saved) == [("jump.bvh", FPS), ("walk.bvh", FPS)]
+    emb.encode_motion = real
+    s = ml.index(folder, out, emb, show_progress=False)
+    assert (s.embedded, s.reused) == (1, 2)
+    assert sorted(e.path for e in load_index(out).entries) == ["jump.bvh", "sub/long.bvh",
+                                                               "walk.bvh"]

@@ -83,7 +83,8 @@ def test_one_file_that_steps_at_its_declared_rate_settles_the_export(export, tmp
     _write(walking(8.0), FPS, 25.0, folder / "walk.bvh")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        assert shared_rates(sorted(folder.glob("*.bvh")), show_progress=False) == {}
+        judged = shared_rates(sorted(folder.glob("*.bvh")), show_progress=False)
+    assert len(judged) == 4 and set(judged.values()) == {None}   # judged: each as it says
 
 
 def test_too_few_files_or_other_folders_share_nothing(export, tmp_path):
@@ -121,7 +122,8 @@ def test_an_export_of_a_rig_that_needs_a_joint_map_shares_its_rate(export, tmp_p
     joint_map.write_text(json.dumps({"name": "zz", "joints": {
         k: "zz_" + ends.get(k, k) for k in KIT21_NAMES}}))
     files = sorted(folder.glob("*.bvh"))
-    assert shared_rates(files, show_progress=False) == {}   # no body to time without it
+    # no body to time without it: judged, nothing shared
+    assert set(shared_rates(files, show_progress=False).values()) == {None}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         run = describe_run([folder], read=ReadOptions(joint_map=str(joint_map)),
@@ -152,3 +154,53 @@ def test_a_single_file_its_body_cannot_time_is_read_at_its_exports_rate(export, 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         assert export_rate(alone / "arms.bvh") is None
+
+
+def test_too_few_files_of_an_export_given_are_judged_on_their_folder(export):
+    """``describe FILE -o``, ``describe F1 F2`` and ``ml.describe_many([FILE])`` read a file
+    as ``describe FILE`` does."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        run = describe_run([export / "arms.bvh"], show_progress=False)
+        assert run.describer.reading.read(export / "arms.bvh").fps == 120.0
+
+
+def test_a_timed_file_alone_takes_its_exports_rate_where_its_own_allows_it(tmp_path):
+    """Two jumps (120 Hz by their flights) and a walk whose steps fit 100 Hz best but allow
+    120, all declared 25: the walk alone is read at 120, as in its folder."""
+    from motionlang.formats import read_motion
+    from motionlang.library.rates import at_export_rate
+    for i in (1, 2):
+        _write(_jumps(120.0), 120.0, 25.0, tmp_path / f"jump{i}.bvh")
+    w = walking(8.0)   # three times as many frames: steps that fit 100 Hz best
+    fine = np.arange(0, len(w) - 1 + 1e-9, 1 / 3)
+    flat = w.reshape(len(w), -1)
+    dense = np.stack([np.interp(fine, np.arange(len(w)), flat[:, j])
+                      for j in range(flat.shape[1])], axis=1).reshape(len(fine), 21, 3)
+    walk = _write(dense, 90.0, 25.0, tmp_path / "walk.bvh")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        from motionlang.analysis.rate import hint_of
+        own = hint_of(read_motion(walk))
+        assert own is not None and own.rate == 100.0 and 120.0 in own.rates
+        assert at_export_rate(read_motion(walk), walk).fps == 120.0
+        assert shared_rates(sorted(tmp_path.glob("*.bvh")), show_progress=False)[
+            str(walk)].rate == 120.0
+
+
+def test_a_rig_or_a_single_frame_beside_an_export_is_not_retimed(export, tmp_path):
+    """A rig's file (one frame) in an export's folder: no body to time, no warning, and
+    ``load_rig`` never asks its folder."""
+    import motionlang as ml
+    from motionlang.formats import read_motion
+    from motionlang.library.rates import at_export_rate
+    folder = tmp_path / "withrig"
+    folder.mkdir()
+    for f in export.glob("*.bvh"):
+        (folder / f.name).write_bytes(f.read_bytes())
+    rig = folder / "rig.bvh"
+    write_motion(read_motion(export / "arms.bvh")[:1], rig)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert at_export_rate(read_motion(rig), rig).fps == 25.0
+        assert ml.load_rig(rig).fps == 25.0

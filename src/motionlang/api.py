@@ -132,14 +132,17 @@ def check_map(motion: Motion, joint_map) -> None:
 API_RATE_ADVICE = "ml.read_mapped(path).replace(fps=HZ) reads it at another rate"
 
 
-def _motion(motion: Motion | str | Path, joint_map) -> Motion:
+def _motion(motion: Motion | str | Path, joint_map, *, timed: bool = True) -> Motion:
+    """A Motion, or a file read (at the rate its body or export says, unless not
+    ``timed``: a rig's rate is never used)."""
     if isinstance(motion, Motion):
         if joint_map is not None:
             check_map(motion, joint_map)
             motion = motion.replace(meta={**motion.meta, "joint_map": as_joint_map(joint_map)})
         return motion
-    return at_export_rate(read_mapped(motion, joint_map), motion, joint_map=joint_map,
-                          advice=API_RATE_ADVICE)
+    read = read_mapped(motion, joint_map)
+    return at_export_rate(read, motion, joint_map=joint_map, advice=API_RATE_ADVICE) \
+        if timed else read
 
 
 def load_rig(rig: Motion | str | Path, joint_map: dict | str | Path | None = None) -> Motion:
@@ -151,7 +154,7 @@ def load_rig(rig: Motion | str | Path, joint_map: dict | str | Path | None = Non
         MotionlangError: naming the rig file and the problem.
     """
     where = rig if isinstance(rig, (str, Path)) else rig.meta.get("path", rig.name)
-    motion = _motion(rig, joint_map)
+    motion = _motion(rig, joint_map, timed=False)
     try:
         W = kit21_weights(motion.skeleton, joint_map=motion.meta.get("joint_map"))[1]
         retarget_positions(positions21(motion[:1]), motion.fps, motion, weights=W)  # one-frame trial

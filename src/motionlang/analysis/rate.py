@@ -227,16 +227,19 @@ def rate_hint(p21: np.ndarray, fps: float) -> RateHint | None:
 class RateVerdict:
     """What a body says of its declared rate: a :class:`RateHint` where it looks wrong;
     ``own`` where the body confirms it (it steps as people do, or its flights fall at g, at
-    that rate); neither where nothing in it can tell."""
+    that rate); neither where nothing in it can tell. ``read``: whether a body of two or
+    more frames was read at all (not: a rig no map fits, one frame, a rate above
+    :data:`SUSPECT_BELOW`)."""
 
     hint: RateHint | None = None
     own: bool = False
+    read: bool = True
 
 
 def rate_verdict(p21: np.ndarray, fps: float) -> RateVerdict:
     """:func:`rate_hint`, and whether the body confirms its declared rate instead."""
     if not 0 < fps <= SUSPECT_BELOW or len(p21) < 2:
-        return RateVerdict()
+        return RateVerdict(read=False)
     try:
         steps, seconds = _steps(p21, fps, passes=True)
         if steps >= MIN_STEPS and seconds > 0 and steps / seconds >= SLOWEST:
@@ -248,7 +251,7 @@ def rate_verdict(p21: np.ndarray, fps: float) -> RateVerdict:
             return RateVerdict(own=True)   # its flights fall at g at its own rate
         return RateVerdict(_by_flights(p21, fps, fall) or _by_steps(p21, fps))
     except MotionlangError:   # no body to read: nothing to say about its rate
-        return RateVerdict()
+        return RateVerdict(read=False)
 
 
 def _by_steps(p21: np.ndarray, fps: float) -> RateHint | None:
@@ -296,11 +299,11 @@ def verdict_of(motion: Motion) -> RateVerdict:
     """:func:`rate_verdict` of a motion of any rig (nothing said for a rig the body map
     cannot read)."""
     if not 0 < motion.fps <= SUSPECT_BELOW:
-        return RateVerdict()
+        return RateVerdict(read=False)
     try:
         p21 = positions21(motion)
     except MotionlangError:
-        return RateVerdict()
+        return RateVerdict(read=False)
     return rate_verdict(p21, motion.fps)
 
 

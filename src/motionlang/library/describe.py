@@ -33,7 +33,7 @@ from motionlang.formats import read_motion
 from motionlang.library.bank import SentenceBank, default_bank_model, embed_bank, read_bank
 from motionlang.library.embedder import Embedder
 from motionlang.library.options import DescribeOptions
-from motionlang.library.rates import SharedRate, shared_rates
+from motionlang.library.rates import SharedRate, at_export_rate, shared_rates
 from motionlang.library.scan import motion_files
 from motionlang.library.timeline import Segment, merge_windows
 from motionlang.library.windows import Window, cut, motion_windows, span
@@ -51,13 +51,15 @@ class ReadOptions:
     """How files are read: the ``read_motion`` options that apply to some formats only
     (``skeleton``: AMC; ``sequence``: MAT), ``fps`` (AMC's rate, or the rate that replaces
     any other file's own), and a joint map for every file; ``shared``: the rates of exports
-    that declare a wrong one (``library.rates``, by path), where ``fps`` is not given."""
+    that declare a wrong one (``library.rates.shared_rates``, by path; None: its export was
+    judged right), where ``fps`` is not given; a file of no judged export is judged on its
+    folder (``library.rates.at_export_rate``)."""
 
     skeleton: str | None = None
     fps: float | None = None
     sequence: int = 1
     joint_map: dict | str | Path | None = None
-    shared: Mapping[str, SharedRate] = field(default_factory=dict)
+    shared: Mapping[str, SharedRate | None] = field(default_factory=dict)
 
     def read(self, path: Path):
         ext = path.suffix.lower()
@@ -66,11 +68,14 @@ class ReadOptions:
         motion = read_motion(path, joint_map=self.joint_map, **kw)
         if self.fps is not None and ext != ".amc":   # the file's own rate is wrong
             motion = motion.replace(fps=self.fps)
-        elif self.fps is None and str(path) in self.shared:
+        elif self.fps is None and self.shared.get(str(path)) is not None:
             shared = self.shared[str(path)]
+            assert shared is not None
             motion = read_at(motion, shared.rate, shared.line(str(path)))
-        elif self.fps is None:
+        elif self.fps is None and str(path) in self.shared:   # its export judged: its own
             motion = at_its_rate(motion, str(path))
+        elif self.fps is None:   # too few of its export given: judged on its folder
+            motion = at_export_rate(motion, path, joint_map=self.joint_map)
         if self.joint_map is not None:   # a map that does not fit this rig: this file's error
             match_rig(motion.skeleton, joint_map=motion.meta["joint_map"])
         return motion

@@ -305,6 +305,7 @@ def _known(b: _Builder, summary: IndexSummary, root: Path, path: Path, rel: str,
         if any(f is None for f in found):
             again = _analysed(path, [e.fps for e, _, _ in old])
             if again is None:   # read at another rate now (analysis.rate): its windows too
+                del b.takes[facts.sha256]   # not kept beside the new ones by a save
                 return facts
             found = list(again)
             summary.analysed += 1

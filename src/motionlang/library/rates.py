@@ -116,9 +116,11 @@ def _shared(hints: list[RateHint] | None, declared: float) -> SharedRate | None:
 
 
 def shared_rates(files: Sequence[Path], *, joint_map: dict | str | Path | None = None,
-                 show_progress: bool | None = None) -> dict[str, SharedRate]:
-    """``{str(path): SharedRate}`` for the files of ``files`` an export's rate applies to
-    (module docstring), read with ``joint_map`` (a rig no built-in map fits); files that do
+                 show_progress: bool | None = None) -> dict[str, SharedRate | None]:
+    """``{str(path): SharedRate or None}`` for the files of ``files`` judged with an export
+    of theirs (module docstring; None: as each file's own body says), read with
+    ``joint_map`` (a rig no built-in map fits); files of exports too small to judge among
+    ``files`` are not keys (:func:`at_export_rate` judges each on its folder); files that do
     not read are left to their reader to name."""
     groups: dict[tuple, list[Path]] = defaultdict(list)
     for path in files:
@@ -131,13 +133,12 @@ def shared_rates(files: Sequence[Path], *, joint_map: dict | str | Path | None =
         if 0 < fps <= SUSPECT_BELOW:
             groups[(path.parent, joints, fps)].append(path)
     todo = [(key, members) for key, members in groups.items() if len(members) > MIN_TIMED]
-    out: dict[str, SharedRate] = {}
+    out: dict[str, SharedRate | None] = {}
     with progress(total=sum(len(m) for _, m in todo), desc="frame rates", unit="files",
                   disable=None if show_progress is None else not show_progress) as bar:
         for (_, _, declared), members in todo:
             shared = _shared(_hints_of(members, joint_map, bar.update), declared)
-            if shared is not None:
-                out.update((str(p), shared) for p in members)
+            out.update((str(p), shared) for p in members)
     return out
 
 
@@ -171,16 +172,19 @@ def export_rate(path: Path, *, joint_map: dict | str | Path | None = None
 def at_export_rate(motion: Motion, path: str | Path, *,
                    joint_map: dict | str | Path | None = None,
                    advice: str | None = CLI_ADVICE) -> Motion:
-    """``motion``, read from the file ``path``, at the rate its body says
-    (``analysis.rate.at_its_rate``), or where its body cannot tell, at the rate of its
-    export (:func:`export_rate`), with one warning that says so (and ``advice``)."""
+    """``motion``, read from the file ``path``, at the rate of its export
+    (:func:`export_rate`) where its body cannot tell or allows it, else at the rate its
+    body says (``analysis.rate.at_its_rate``), with one warning that says so (and
+    ``advice``); as it is where its body confirms its rate or no body can be read (a rig
+    no map fits, one frame)."""
     verdict = verdict_of(motion)
-    if verdict.hint is not None:
-        return read_at(motion, verdict.hint.rate, verdict.hint.line(
-            str(path), read=True, advice=advice))
-    if verdict.own or not 0 < motion.fps <= SUSPECT_BELOW:
+    if verdict.own or not verdict.read:   # its rate is right, or there is no body to time
         return motion
     shared = export_rate(Path(path), joint_map=joint_map)
+    hint = verdict.hint
+    if hint is not None and (shared is None or shared.rate not in hint.rates):
+        return read_at(motion, hint.rate, hint.line(str(path), read=True, advice=advice))
     if shared is None:
         return motion
+    # the export's rate, where the file's own steps or flights allow it: one clock for all
     return read_at(motion, shared.rate, shared.line(str(path), advice=advice))

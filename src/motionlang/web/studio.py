@@ -181,7 +181,9 @@ class Studio:
     def add_rig(self, files: list[Upload]) -> dict[str, Any]:
         """An uploaded rig (a BVH-like skeleton) to retarget takes onto: ``{"id", "name",
         "joints"}``."""
-        with self.lock:   # the reader's warnings are caught while no other call runs
+        # a rig's rate is never used: what reading it warns of is not said
+        with self.lock, warnings.catch_warnings():
+            warnings.simplefilter("ignore")
             motion = read_upload(files, self.options.max_upload_bytes)
         with self.lock, _for_page():
             rig = ml.load_rig(motion[:1])
