@@ -85,27 +85,26 @@ def add_inputs(recipe, path: Path) -> None:
     print(f"{path}: input motion stored by value, {len(old)} arrays kept", file=sys.stderr)
 
 
-def add_model(recipe, path: Path, name: str) -> None:
-    """Add the outputs of the packaged model ``name`` to the fixture ``path``."""
+def model_outputs(recipe, path: Path, name: str) -> tuple[dict, dict]:
+    """``(the fixture's arrays, the packaged model name's outputs on its stored inputs)``."""
     with np.load(path, allow_pickle=False) as z:
         old = {k: z[k] for k in z.files}
     if name not in recipe.MODELS:
         raise SystemExit(f"{name}: not in the recipe's MODELS")
     motion = recipe.stored_motion(old)
-    new = recipe.outputs(name, recipe.MODELS[name], motion, old["input/judge_p21"])
-    arrays = {**old, **new}
-    rewrite(recipe, path, old, arrays)
+    return old, recipe.outputs(name, recipe.MODELS[name], motion, old["input/judge_p21"])
+
+
+def add_model(recipe, path: Path, name: str) -> None:
+    """Add the outputs of the packaged model ``name`` to the fixture ``path``."""
+    old, new = model_outputs(recipe, path, name)
+    rewrite(recipe, path, old, {**old, **new})
     print(f"{path}: {len(new)} arrays of {name} added, {len(old)} kept", file=sys.stderr)
 
 
 def renew_model(recipe, path: Path, name: str) -> None:
     """Recompute the outputs of the packaged model ``name`` in the fixture ``path``."""
-    with np.load(path, allow_pickle=False) as z:
-        old = {k: z[k] for k in z.files}
-    if name not in recipe.MODELS:
-        raise SystemExit(f"{name}: not in the recipe's MODELS")
-    motion = recipe.stored_motion(old)
-    new = recipe.outputs(name, recipe.MODELS[name], motion, old["input/judge_p21"])
+    old, new = model_outputs(recipe, path, name)
     if not set(new) <= set(old):
         raise SystemExit(f"{path}: {name} is not pinned yet (--add-model)")
     kept = {k: a for k, a in old.items() if k not in new}
