@@ -5,6 +5,7 @@ folder, or too few timed files leave every file as it is."""
 from __future__ import annotations
 
 import json
+import re
 import warnings
 from pathlib import Path
 
@@ -107,7 +108,6 @@ def test_the_api_reads_an_export_at_the_rate_given(export):
 
 
 def test_an_export_of_a_rig_that_needs_a_joint_map_shares_its_rate(export, tmp_path):
-    import re
 
     from motionlang.features.joint_map import KIT21_NAMES
     folder = tmp_path / "mapped"
@@ -142,7 +142,11 @@ def test_a_single_file_its_body_cannot_time_is_read_at_its_exports_rate(export, 
         assert at_export_rate(read_motion(arms), arms).fps == 120.0
     with pytest.warns(UserWarning, match="read at 120 Hz, the rate"):
         assert main(["info", str(arms), "--json"]) == 0
-    assert json.loads(capsys.readouterr().out)["fps"] == 120.0
+    info = json.loads(capsys.readouterr().out)
+    assert (info["fps"], info["declared_fps"]) == (120.0, 25.0)
+    with pytest.warns(UserWarning, match="read at 120 Hz"):
+        assert main(["info", str(arms)]) == 0
+    assert re.search(r"549 at 120 Hz = 4.5\d s \(its header says 25 Hz\)", capsys.readouterr().out)
     # alone in its folder, or beside a file that steps at 25 Hz: as its header says
     alone = tmp_path / "alone"
     alone.mkdir()

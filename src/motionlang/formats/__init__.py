@@ -193,7 +193,8 @@ def motion_info(motion: Motion) -> dict:
     ``source_format``, ``skeleton``, ``unit`` (the file's length unit: what a BVH reader
     decided, e.g. ``"cm"`` or ``"BVH units"``, else the one the format defines: ``"mm"``
     for MMM, ``"1/0.45 inch"`` for a CMU ASF), ``stature_m`` (the body's stature in metres,
-    :func:`motionlang.formats.units.estimate_stature`).
+    :func:`motionlang.formats.units.estimate_stature`), and ``declared_fps`` where the
+    motion is read at another rate than its header's (``analysis.rate``; None else).
     """
 
     sk = motion.skeleton
@@ -205,7 +206,8 @@ def motion_info(motion: Motion) -> dict:
             "joint_names": moving, "dofs": int(sk.ndof), "nodes": len(sk),
             "node_names": list(sk.names), "source_format": motion.source_format,
             "skeleton": sk.name, "unit": str(unit or unit_name(sk.file_unit)),
-            "stature_m": float(stature if stature is not None else motion_stature(motion))}
+            "stature_m": float(stature if stature is not None else motion_stature(motion)),
+            "declared_fps": motion.meta.get("declared_fps")}
 
 
 def info_text(info: dict) -> str:
@@ -215,7 +217,9 @@ def info_text(info: dict) -> str:
     return "\n".join([
         f"{info['path']}",
         f"  format    {info['source_format']}  (skeleton {info.get('skeleton', '?')})",
-        f"  frames    {info['frames']} at {info['fps']:g} Hz = {info['duration_s']:.2f} s",
+        f"  frames    {info['frames']} at {info['fps']:g} Hz = {info['duration_s']:.2f} s"
+        + (f" (its header says {info['declared_fps']:g} Hz)"
+           if info.get("declared_fps") is not None else ""),
         f"  joints    {info['joints']} with {info['dofs']} DOFs (+ root), "
         f"{info['nodes']} skeleton nodes",
         f"  body      {info['stature_m']:.2f} m tall; lengths in {info['unit']}",
