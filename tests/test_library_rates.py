@@ -108,7 +108,6 @@ def test_the_api_reads_an_export_at_the_rate_given(export):
 
 
 def test_an_export_of_a_rig_that_needs_a_joint_map_shares_its_rate(export, tmp_path):
-
     from motionlang.features.joint_map import KIT21_NAMES
     folder = tmp_path / "mapped"
     folder.mkdir()
