@@ -60,7 +60,8 @@ SIBLINGS_READ = 12
 @dataclass(frozen=True)
 class SharedRate:
     """The rate a file is read at because of its export: ``rate`` (Hz) where its header says
-    ``declared``; ``timed``: the files of its folder and rig whose bodies named it."""
+    ``declared``; ``timed``: the files of its folder and rig whose bodies allow it (their
+    steps or flights name it among their rates)."""
 
     rate: float
     declared: float
@@ -112,7 +113,9 @@ def _hints_of(members: Sequence[Path], joint_map, tick) -> list[RateHint] | None
 
 def _shared(hints: list[RateHint] | None, declared: float) -> SharedRate | None:
     rate = _export_rate(hints) if hints is not None and len(hints) >= MIN_TIMED else None
-    return None if rate is None or hints is None else SharedRate(rate, declared, len(hints))
+    if rate is None or hints is None:
+        return None
+    return SharedRate(rate, declared, sum(rate in h.rates for h in hints))
 
 
 def shared_rates(files: Sequence[Path], *, joint_map: dict | str | Path | None = None,
