@@ -276,6 +276,32 @@ def test_hand_over_hand_along_a_bar_is_no_walk():
     assert [f.detail["travelled"] for f in still.findings if f.label == "hang"] == [False]
 
 
+@pytest.mark.parametrize("kind, slope", [("run", 0.04), ("run", 0.08), ("walk", 0.08)])
+def test_arms_raised_on_a_slope_keep_the_floor_and_the_steps(kind, slope):
+    """Hands overhead that grip nothing (a run with raised arms, up a ramp) leave the floor
+    to the feet: the same contacts and steps as with the arms down, and no hang."""
+    from motionlang.datasets.synth import Primitive
+    from motionlang.datasets.synth.compose import build_motion, random_style
+    from motionlang.features.joint_map import positions21
+    rng = np.random.default_rng(4)
+    motion, _, _ = build_motion([Primitive(kind, count=12, direction="forward")],
+                                random_style(rng), rng)
+    down = positions21(motion).copy()
+    down[:, :, 1] += slope * (down[:, :, 2] - down[:, :, 2].min())
+    up = down.copy()
+    for w, e, s in (("LW", "LE", "LS"), ("RW", "RE", "RS")):
+        up[:, I[e]] = up[:, I[s]] + np.array([0, 0.3, 0])
+        up[:, I[w]] = up[:, I[s]] + np.array([0, 0.6, 0])
+    got = []
+    for p in (down, up):
+        body = Body.from_positions(p, motion.fps)
+        a = analyse_positions(p, motion.fps)
+        got.append((round(float(body.contacts.any(axis=0).mean()), 2),
+                    [f.detail["steps"] for f in a.findings if f.label == kind]))
+        assert "hang" not in {f.label for f in a.findings}
+    assert got[0] == got[1] and got[0][1]
+
+
 def test_a_leap_with_the_hands_overhead_is_no_hang():
     """Feet off the floor under hands held high is a hang only where the body does not fall
     as thrown bodies do: a 0.7 s flight (0.6 m high) with the arms up is a jump."""
