@@ -26,7 +26,7 @@ from motionlang.features.body21 import body21
 from motionlang.kinematics.motion import concatenate
 from motionlang.library.embedder import Embedder
 from motionlang.library.search import Library, merge_windows
-from motionlang.library.store import IndexData, load_index
+from motionlang.library.store import IndexData, load_index, save_index
 
 FPS = 20.0
 
@@ -103,6 +103,31 @@ def test_index_embeds_only_what_changed_and_lists_what_does_not_read(folder, tmp
     assert (s3.embedded, s3.reused, s3.removed) == (1, 2, 2)   # jump.bvh, notes.xml gone
     assert {x.path for x in load_index(out).entries} == {"walk.bvh", "sub/hop.bvh",
                                                          "sub/long.bvh"}
+
+
+def test_copies_of_one_file_keep_one_take_each_run_after_run(folder, tmp_path):
+    out, emb = tmp_path / "library.idx", fake()
+    (folder / "copy").mkdir()
+    (folder / "copy" / "walk.bvh").write_bytes((folder / "walk.bvh").read_bytes())
+    for _ in range(3):   # the old index holds two takes of one digest: each path keeps its own
+        ml.index(folder, out, emb, show_progress=False)
+        paths = [e.path for e in load_index(out).entries]
+        assert sorted(paths) == ["copy/walk.bvh", "jump.bvh", "sub/long.bvh", "walk.bvh"]
+    (folder / "copy" / "walk.bvh").unlink()
+    s = ml.index(folder, out, emb, show_progress=False)
+    assert (s.takes, s.removed) == (3, 1)
+    (folder / "walk.bvh").rename(folder / "copy" / "again.bvh")   # moved: its copy's takes
+    s = ml.index(folder, out, emb, show_progress=False)
+    assert (s.takes, s.embedded) == (3, 0)
+    assert "copy/again.bvh" in {e.path for e in load_index(out).entries}
+    # an index in which an older motionlang gave a file its copy's takes too: kept once
+    data = load_index(out)
+    twice = IndexData(data.model, data.root, data.window, data.hop, data.entries * 2,
+                      data.failed, np.concatenate([data.vectors] * 2),
+                      np.concatenate([data.spans] * 2), data.analysis, data.shard)
+    save_index(twice, out)
+    s = ml.index(folder, out, emb, show_progress=False)
+    assert (s.takes, s.embedded) == (3, 0)
 
 
 def test_search_finds_the_take_and_the_span_a_query_was_built_to_match(folder, tmp_path):
@@ -277,7 +302,7 @@ def test_api_and_cli_give_the_same_results(folder, tmp_path, capsys):
 @pytest.mark.skipif(importlib.util.find_spec("usearch") is None, reason="usearch not installed")
 def test_the_approximate_graph_finds_the_numpy_hits_and_is_kept_beside_the_index(tmp_path):
     rng = np.random.default_rng(1)
-    from motionlang.library.store import Entry, save_index
+    from motionlang.library.store import Entry
     entries = [Entry(f"f{i}.bvh", 1, 0.0, "0" * 64, {}, 30.0, 20.0, 18) for i in range(20)]
     spans = np.tile(np.array([[s, s + 3.0] for s in range(18)]), (20, 1))
     data = IndexData({"name": "x", "digest": "r"}, "/", 3.0, 1.0, entries, [],

@@ -207,3 +207,61 @@ def test_a_rig_or_a_single_frame_beside_an_export_is_not_retimed(export, tmp_pat
         warnings.simplefilter("error")
         assert at_export_rate(read_motion(rig), rig).fps == 25.0
         assert ml.load_rig(rig).fps == 25.0
+
+
+def _index(folder: Path, out: Path):
+    import motionlang as ml
+    from test_library_index import fake
+    return ml.index(folder, out, fake(), show_progress=False)
+
+
+def test_the_index_reads_an_export_at_one_rate_and_search_reads_it_back(export, tmp_path):
+    from motionlang.library.search import Library
+    from motionlang.library.store import load_index
+    from test_library_index import fake
+    s = _index(export, tmp_path / "lib.idx")
+    entries = {e.path: e for e in load_index(tmp_path / "lib.idx").entries}
+    # the raise of the arms cannot be timed by itself: read at its jumping siblings' rate
+    assert {p: (e.fps, e.declared_fps) for p, e in entries.items()} == {
+        "arms.bvh": (120.0, 25.0), "jump1.bvh": (120.0, 25.0), "jump2.bvh": (120.0, 25.0)}
+    assert sorted(t for t, _, _ in s.retimed) == ["arms.bvh", "jump1.bvh", "jump2.bvh"]
+    assert entries["arms.bvh"].duration == pytest.approx(4.6, abs=0.1)
+    take = Library.open(tmp_path / "lib.idx", fake()).take_named("arms.bvh")
+    assert take.fps == 120.0 and take.meta["declared_fps"] == 25.0
+
+
+def test_an_index_brought_up_to_date_keeps_an_export_on_one_clock(export, tmp_path):
+    from motionlang.library.store import load_index
+    folder, out = tmp_path / "lib", tmp_path / "lib.idx"
+    folder.mkdir()
+    for name in ("jump1.bvh", "arms.bvh"):   # too few to judge: each read as it says
+        (folder / name).write_bytes((export / name).read_bytes())
+    _index(folder, out)
+    fps = {e.path: e.fps for e in load_index(out).entries}
+    assert fps == {"arms.bvh": 25.0, "jump1.bvh": 120.0}
+    # (a byte more than jump1, which it copies: a digest of its own)
+    (folder / "jump2.bvh").write_bytes((export / "jump2.bvh").read_bytes() + b"\n")
+    s = _index(folder, out)   # now an export: the arms, unchanged, are embedded anew
+    assert (s.embedded, s.reused) == (2, 1)
+    fps = {e.path: e.fps for e in load_index(out).entries}
+    assert fps == {"arms.bvh": 120.0, "jump1.bvh": 120.0, "jump2.bvh": 120.0}
+    # a walk whose steps say its header is right: the export is read as each file says
+    _write(walking(8.0), FPS, 25.0, folder / "walk.bvh")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        s = _index(folder, out)
+    assert (s.embedded, s.reused) == (2, 2)   # the walk, and the arms at 25 Hz again
+    fps = {e.path: e.fps for e in load_index(out).entries}
+    assert fps == {"arms.bvh": 25.0, "jump1.bvh": 120.0, "jump2.bvh": 120.0, "walk.bvh": 25.0}
+    assert _index(folder, out).embedded == 0   # and nothing more to do
+
+
+def test_every_shard_reads_an_export_as_the_whole_folder_does(export, tmp_path):
+    import motionlang as ml
+    from motionlang.library.store import load_index
+    from test_library_index import fake
+    fps = {}
+    for k in (1, 2):
+        ml.index(export, tmp_path / f"s{k}.idx", fake(), shard=f"{k}/2", show_progress=False)
+        fps.update({e.path: e.fps for e in load_index(tmp_path / f"s{k}.idx").entries})
+    assert fps == {"arms.bvh": 120.0, "jump1.bvh": 120.0, "jump2.bvh": 120.0}

@@ -6,7 +6,11 @@ sentences and motions in one space (:mod:`.embedder`). A second run reads the fi
 digests and embeds only what is new or changed; files gone are dropped. A file that does
 not read is listed with its one-line reason and skipped: one bad file never ends a run.
 Every take is also analysed (:mod:`.grounded`), and the findings stored with it; a take
-of an older index that holds none is read and analysed again, its vectors kept.
+of an older index that holds none is read and analysed again, its vectors kept. The files
+of one export (a folder's BVH files of one rig and declared rate, ``library.rates``) are
+read at one rate, as ``describe DIR`` reads them: the exports that hold a file to be read
+are judged whole (the other shards' files too), and an unchanged take of such an export
+read at another rate before is embedded anew.
 """
 from __future__ import annotations
 
@@ -27,6 +31,7 @@ from motionlang.errors import MotionlangError
 from motionlang.library.embedder import Embedder
 from motionlang.library.grounded import take_findings
 from motionlang.library.options import IndexOptions, shard_of
+from motionlang.library.rates import SharedRate, shared_rates
 from motionlang.library.ray_engine import embedded_on_ray
 from motionlang.library.scan import file_facts, motion_files, read_takes, reason, rig_of
 from motionlang.library.store import Entry, Failure, IndexData, load_index, save_index
@@ -54,7 +59,8 @@ class IndexSummary:
         failed: ``[(path, reason)]`` of the files skipped.
         seconds: wall time of the run.
         retimed: ``[(take, declared Hz, read Hz)]`` of the takes embedded by this run at
-            the rate their bodies say rather than their header's (``analysis.rate``).
+            the rate their bodies say rather than their header's (``analysis.rate``), or
+            their export's (``library.rates``).
     """
 
     index: str
@@ -86,8 +92,8 @@ class IndexSummary:
                 f"{self.reused} unchanged"
                 + (f" ({self.analysed} analysed anew)" if self.analysed else "")
                 + f", {self.removed} removed, {len(self.failed)} skipped, {self.seconds:.1f} s"
-                + (f"\n  {len(self.retimed)} read at the rate their bodies say, not their "
-                   "header's (analysis.rate): " + ", ".join(
+                + (f"\n  {len(self.retimed)} read at the rate their bodies (or their "
+                   "export's) say, not their header's (analysis.rate, library.rates): " + ", ".join(
                        f"{t} ({a:g} -> {b:g} Hz)" for t, a, b in self.retimed[:RETIMED_SHOWN])
                    + (", ..." if len(self.retimed) > RETIMED_SHOWN else "")
                    if self.retimed else ""))
@@ -109,7 +115,9 @@ class _Builder:
         self.blocks: list[tuple[np.ndarray, np.ndarray]] = []
         self.order: list[int] = []     # each entry's file's place in the folder's listing
         self.failed_at: list[int] = []
-        self.takes: dict[str, list[tuple[Entry, np.ndarray, np.ndarray]]] = {}
+        #: the old index's takes by digest, then by the file they were read from (copies
+        #: of one file at several paths hold one digest: each path keeps its own takes)
+        self.takes: dict[str, dict[str, list[tuple[Entry, np.ndarray, np.ndarray]]]] = {}
         self.bad: dict[str, Failure] = {}
         if old is not None:
             first = old.first_rows
@@ -119,12 +127,20 @@ class _Builder:
                     # (and the take embedded anew where it now reads at another rate,
                     # ``_analysed``: the rate check is the analysis' too)
                     e = Entry(**{**asdict(e), "findings": None})
-                self.takes.setdefault(e.sha256, []).append((e, old.vectors[rows],
-                                                            old.spans[rows]))
+                mine = self.takes.setdefault(e.sha256, {}).setdefault(e.path, [])
+                if all(t.sequence != e.sequence for t, _, _ in mine):   # an older
+                    # motionlang gave each copy of a file every copy's takes: kept once
+                    mine.append((e, old.vectors[rows], old.spans[rows]))
             self.bad = {f.sha256: f for f in old.failed if f.sha256}
         self.old_paths = {e.path for e in old.entries} | {f.path for f in old.failed} \
             if old is not None else set()
-        self.used: set[str] = set()
+        self.used: set[tuple[str, str]] = set()   # (digest, old path) of the takes reused
+
+    def reusable(self, digest: str, rel: str) -> list[tuple[Entry, np.ndarray, np.ndarray]]:
+        """The old takes a file of ``digest`` at ``rel`` reuses: its own where the old
+        index had this path, else those of a copy at another path ([] where none)."""
+        paths = self.takes.get(digest, {})
+        return paths.get(rel) or next(iter(paths.values()), [])
 
     def add(self, entry: Entry, vectors: np.ndarray, spans: np.ndarray, at: int) -> None:
         self.data.entries.append(entry)
@@ -145,10 +161,11 @@ class _Builder:
         failed = [d.failed[i] for i in sorted(range(len(d.failed)),
                                               key=lambda i: self.failed_at[i])]
         if not final:
-            for digest, takes in self.takes.items():
-                if digest not in self.used:
-                    entries += [e for e, _, _ in takes]
-                    blocks += [(v, s) for _, v, s in takes]
+            for digest, paths in self.takes.items():
+                for path, takes in paths.items():
+                    if (digest, path) not in self.used:
+                        entries += [e for e, _, _ in takes]
+                        blocks += [(v, s) for _, v, s in takes]
         dim = next((v.shape[1] for v, _ in blocks if v.size), 0)
         vectors = np.concatenate([v for v, _ in blocks]) if blocks else np.zeros((0, dim))
         spans = np.concatenate([s for _, s in blocks]) if blocks else np.zeros((0, 2))
@@ -220,7 +237,7 @@ def build_index(folder: str | Path, out: str | Path, model: Any = None,
     opts = IndexOptions(**options)
     root, out = Path(folder).resolve(), Path(out)
     unlisted: list[tuple[str, str]] = []
-    paths = motion_files(root, unlisted)
+    paths = every = motion_files(root, unlisted)
     if opts.shard:
         k, n = shard_of(opts.shard)
         paths = [p for p in paths if in_shard(p.relative_to(root).as_posix(), k, n)]
@@ -237,17 +254,27 @@ def build_index(folder: str | Path, out: str | Path, model: Any = None,
         b.fail(Failure(rel, 0, 0.0, "", why), -1 - at)
     summary = IndexSummary(str(out), embedder.name)
     last_save = time.monotonic()
-    bar = progress(total=len(paths), desc="index", unit="files",
-                   disable=None if opts.show_progress is None else not opts.show_progress)
+    hide = None if opts.show_progress is None else not opts.show_progress
+    known = [(at, path, path.relative_to(root).as_posix()) for at, path in enumerate(paths)]
+    facts = [_facts(b, root, path, rel, at) for at, path, rel in progress(
+        known, desc="digests", unit="files", disable=hide)]
+    # one export, one rate (library.rates): the exports of the files to be read judged
+    # whole, the files of other shards too, so that every shard reads them alike
+    reading = [p for (_, p, rel), f in zip(known, facts) if f is not None and (
+        f.sha256 not in b.takes and f.sha256 not in b.bad
+        or any(e.findings is None for e, _, _ in b.reusable(f.sha256, rel)))]
+    exports = shared_rates(every, only=reading, show_progress=opts.show_progress) \
+        if reading else {}
+    bar = progress(total=len(paths), desc="index", unit="files", disable=hide)
     with bar:
         todo = []
-        for at, path in enumerate(paths):
-            rel = path.relative_to(root).as_posix()
-            facts = _known(b, summary, root, path, rel, at)
-            if facts is None:
-                bar.update(1)
+        for (at, path, rel), f in zip(known, facts):
+            export = exports.get(str(path))
+            if f is not None and _known(b, summary, path, rel, at, f, export,
+                                        judged=str(path) in exports):
+                todo.append(_Job(at, path, rel, f, opts.window, opts.hop, export))
             else:
-                todo.append(_Job(at, path, rel, facts, opts.window, opts.hop))
+                bar.update(1)
         if opts.engine == "ray":
             sent = model if isinstance(model, (str, Path)) or model is None else embedder
             done = embedded_on_ray(todo, sent, opts.workers, embed_file) if todo else iter(())
@@ -288,43 +315,56 @@ class _Job:
     facts: Any
     window: float
     hop: float
+    export: SharedRate | None = None
 
 
-def _known(b: _Builder, summary: IndexSummary, root: Path, path: Path, rel: str, at: int):
-    """A file the index can settle without embedding (reused by its digest, skipped again
-    for the reason it had, or unreadable), settled; else its facts, to be embedded."""
+def _facts(b: _Builder, root: Path, path: Path, rel: str, at: int):
+    """The file's facts (size, time, digest), or None where it cannot be read (listed as
+    failed)."""
     try:
-        facts = file_facts(root, path)
+        return file_facts(root, path)
     except MotionlangError as exc:
         b.fail(Failure(rel, 0, 0.0, "", reason(exc, path, rel)), at)
         return None
+
+
+def _known(b: _Builder, summary: IndexSummary, path: Path, rel: str, at: int, facts,
+           export: SharedRate | None, *, judged: bool) -> bool:
+    """Whether the file must be embedded; where not, its entries (reused by its digest) or
+    its failure (skipped again for the reason it had) are settled. ``export``: the rate
+    its export is read at (``library.rates.shared_rates``) where ``judged``; a reused take
+    read at another rate is embedded anew."""
     stamp = {"path": rel, "size": facts.size, "mtime": facts.mtime}
     if facts.sha256 in b.takes:
-        old = b.takes[facts.sha256]
+        old = b.reusable(facts.sha256, rel)
         found: list[list[dict] | None] = [e.findings for e, _, _ in old]
-        if any(f is None for f in found):
-            again = _analysed(path, [e.fps for e, _, _ in old])
+        rates = [e.fps for e, _, _ in old]
+        stale = judged and (any(abs(r - export.rate) > 1e-6 * r for r in rates)
+                            if export is not None
+                            else any(e.declared_fps is not None for e, _, _ in old))
+        if stale or any(f is None for f in found):
+            again = _analysed(path, rates, export)
             if again is None:   # read at another rate now (analysis.rate): its windows too
                 del b.takes[facts.sha256]   # not kept beside the new ones by a save
-                return facts
+                return True
             found = list(again)
             summary.analysed += 1
-        b.used.add(facts.sha256)
+        b.used.add((facts.sha256, old[0][0].path))
         for (e, v, s), f in zip(old, found):
             b.add(Entry(**{**asdict(e), **stamp, "findings": f}), v, s, at)
         summary.reused += 1
-        return None
+        return False
     if facts.sha256 in b.bad:
         b.fail(Failure(**{**asdict(b.bad[facts.sha256]), **stamp}), at)
-        return None
-    return facts
+        return False
+    return True
 
 
 def embed_file(embedder: Embedder, job: _Job) -> list[tuple[Entry, np.ndarray, np.ndarray]] | str:
     """A file's takes as (entry, vectors, spans), or the one-line reason it is skipped."""
     f = job.facts
     try:
-        takes = read_takes(job.path)
+        takes = read_takes(job.path, job.export)
         done = []
         for i, motion in enumerate(takes, 1):
             rig = rig_of(motion)   # a rig no map fits fails before any embedding
@@ -399,13 +439,14 @@ def _embedded(jobs: list[_Job], embedder: Embedder, model: Any, workers: int):
                                   "run the same command again to go on") from None
 
 
-def _analysed(path: Path, rates: list[float]) -> list[list[dict]] | None:
+def _analysed(path: Path, rates: list[float], export: SharedRate | None = None
+              ) -> list[list[dict]] | None:
     """The findings of each take of a file whose entries an older index made, at the
     ``rates`` it read them at: ``[]`` each where the file no longer reads as it did; None
-    where it now reads at another rate (the rate check changed: its windows are embedded
-    anew)."""
+    where it now reads at another rate (the rate check changed, or the rate of its
+    ``export``: its windows are embedded anew)."""
     try:
-        motions = read_takes(path)
+        motions = read_takes(path, export)
     except MotionlangError:
         motions = []
     if len(motions) != len(rates):

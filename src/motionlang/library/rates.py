@@ -26,7 +26,7 @@ from __future__ import annotations
 import math
 import random
 from collections import Counter, defaultdict
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -119,12 +119,14 @@ def _shared(hints: list[RateHint] | None, declared: float) -> SharedRate | None:
 
 
 def shared_rates(files: Sequence[Path], *, joint_map: dict | str | Path | None = None,
+                 only: Collection[Path] | None = None,
                  show_progress: bool | None = None) -> dict[str, SharedRate | None]:
     """``{str(path): SharedRate or None}`` for the files of ``files`` judged with an export
     of theirs (module docstring; None: as each file's own body says), read with
     ``joint_map`` (a rig no built-in map fits); files of exports too small to judge among
     ``files`` are not keys (:func:`at_export_rate` judges each on its folder); files that do
-    not read are left to their reader to name."""
+    not read are left to their reader to name. ``only``: judge only the exports that hold
+    one of these files (an index's new files: the others' exports were judged before)."""
     groups: dict[tuple, list[Path]] = defaultdict(list)
     for path in files:
         if path.suffix.lower() != ".bvh":
@@ -135,7 +137,9 @@ def shared_rates(files: Sequence[Path], *, joint_map: dict | str | Path | None =
             continue
         if 0 < fps <= SUSPECT_BELOW:
             groups[(path.parent, joints, fps)].append(path)
-    todo = [(key, members) for key, members in groups.items() if len(members) > MIN_TIMED]
+    wanted = None if only is None else set(only)
+    todo = [(key, members) for key, members in groups.items() if len(members) > MIN_TIMED
+            and (wanted is None or not wanted.isdisjoint(members))]
     out: dict[str, SharedRate | None] = {}
     with progress(total=sum(len(m) for _, m in todo), desc="frame rates", unit="files",
                   disable=None if show_progress is None else not show_progress) as bar:

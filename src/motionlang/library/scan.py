@@ -15,13 +15,14 @@ import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
-from motionlang.analysis.rate import at_its_rate
+from motionlang.analysis.rate import at_its_rate, read_at
 from motionlang.datasets.download import sha256_file
 from motionlang.errors import MotionlangError
 from motionlang.features.joint_map import match_rig
 from motionlang.formats import READ_EXTENSIONS, find_asf, is_motion_file, read_motion
 from motionlang.formats.mit import read_mit
 from motionlang.kinematics.motion import Motion
+from motionlang.library.rates import SharedRate
 
 
 def motion_files(root: str | Path, unlisted: list[tuple[str, str]] | None = None
@@ -102,18 +103,30 @@ def file_facts(root: Path, path: Path) -> FileFacts:
                      digest)
 
 
-def read_takes(path: Path) -> list[Motion]:
-    """The takes of a motion file: one, or each sequence of a MIT ``.mat`` file (a file
-    whose header's rate the body contradicts read at the body's, ``analysis.rate``).
+def read_takes(path: Path, export: SharedRate | None = None, *,
+               fps: float | None = None) -> list[Motion]:
+    """The takes of a motion file: one, or each sequence of a MIT ``.mat`` file; read at
+    ``fps`` Hz where given (the rate an index read them at), else at the rate of the
+    file's ``export`` (``library.rates.shared_rates``) where given, else at its header's
+    rate unless its body contradicts it (``analysis.rate``).
 
     Raises:
         MotionlangError: the reader's one-line reason.
     """
-    if path.suffix.lower() == ".mat":
-        return read_mit(path)
     with warnings.catch_warnings():   # one line a file is too many for a library
         warnings.simplefilter("ignore")
-        return [at_its_rate(read_motion(path), str(path))]
+        if path.suffix.lower() == ".mat":
+            motions = read_mit(path)
+        else:
+            motion = read_motion(path)
+            motions = [motion if fps is not None
+                       else read_at(motion, export.rate, export.line(str(path)))
+                       if export is not None else at_its_rate(motion, str(path))]
+    if fps is None:
+        return motions
+    return [m if m.fps == fps else m.replace(
+        fps=fps, meta={**m.meta, "declared_fps": m.meta.get("declared_fps", m.fps)})
+        for m in motions]
 
 
 def rig_of(motion: Motion) -> dict:

@@ -337,9 +337,11 @@ class Library:
 
     def take_named(self, name: str):
         """The motion of the take ``name`` (as hits name it), read again from the indexed
-        folder."""
+        folder at the rate the index read it at (its body's or its export's,
+        ``library.rates``)."""
         entry = self.entry_named(name)
-        return read_takes(Path(self.data.root) / entry.path)[entry.sequence - 1]
+        return read_takes(Path(self.data.root) / entry.path,
+                          fps=entry.fps)[entry.sequence - 1]
 
 
 def ranked(scores: np.ndarray) -> np.ndarray:
