@@ -89,9 +89,21 @@ _MANNER = {"circle": ("path", "in a circle"), "circles": ("path", "in a circle")
            "sideways": ("direction", ("left", "right"))}
 
 
+#: findings of a hand held up, which the wave detector looked at for a wave
+_ARM_UP = ("raise", "reach")
+
+
 def contradicted(text: str, analysis: Analysis) -> bool:
     """Whether ``text`` says how the body travels ("in a circle", "backwards", "sideways")
-    where the analysis saw it travel otherwise; False where it saw no travel at all."""
+    where the analysis saw it travel otherwise (False where it saw no travel at all), or
+    says it waves where the analysis saw a hand held up and no wave: the hand was up, and
+    it did not swing (a raise answers for a wave in :func:`check_sentence`, where a wave too
+    small to see must not be called absent; here the sentence is weighed against what was
+    seen)."""
+    labels = {f.label for f in analysis.findings} | {
+        m for f in analysis.findings if f.label == "dance" for m in f.detail.get("moves", ())}
+    if "wave" in actions_named(text) and "wave" not in labels and labels & set(_ARM_UP):
+        return True
     travel = [f for f in analysis.findings if f.label in ("walk", "run")]
     if not travel:
         return False
