@@ -112,6 +112,24 @@ def test_a_slow_reach_is_no_punch():
     assert "punch" not in labels(_punches(1, 1.5))
 
 
+def _thrust_held(seconds: float, back: bool = True) -> np.ndarray:
+    """The right fist driven forward as fast as a punch, then held out ``seconds`` (and
+    drawn back where ``back``: else the take ends with the arm out)."""
+    bent = pose(RE=(-0.22, 1.2, 0.15), RW=(-0.2, 1.38, 0.18))
+    straight = pose(RE=(-0.18, 1.42, 0.28), RW=(-0.18, 1.42, 0.54))
+    parts = [hold(bent, 0.5), blend(bent, straight, 0.12), hold(straight, seconds)]
+    return take(*parts, *((blend(straight, bent, 0.3), hold(bent, 0.5)) if back else ()))
+
+
+def test_a_punch_is_drawn_back_and_an_arm_held_out_is_none():
+    # a jab held out a moment is still a punch; held out 2 s, a push, a point or a shot's
+    # follow-through, whether it is drawn back or the take ends with it out
+    assert "punch" in labels(_thrust_held(0.5))
+    assert "punch" not in labels(_thrust_held(2.0))
+    assert "punch" not in labels(_thrust_held(2.0, back=False))
+    assert "punch" in labels(_thrust_held(0.3, back=False))
+
+
 def _sweep(seconds: float, turn: float) -> np.ndarray:
     """The right arm straightening from bent in front while the fist swings ``turn`` radians
     round the shoulder to the side at chest height (a dancer's port de bras; ``turn`` 0: a

@@ -4,7 +4,8 @@
   held;
 - **waves**: a raised hand swinging from side to side (:data:`WAVE_SWINGS` swings or more);
 - **punches**: a fast straightening of the arm away from the shoulder, at chest height, the
-  fist driven along the line of the arm (:data:`PUNCH_LINE`);
+  fist driven along the line of the arm (:data:`PUNCH_LINE`) and drawn back
+  (:data:`PUNCH_HOLD`);
 - **kicks**: a fast, high swing of a nearly straight leg;
 - **reaches**: an arm held straight out in front;
 - **bends over**: the trunk tilted far forward on straight legs;
@@ -52,6 +53,8 @@ PUNCH_OUT = 0.55           # arm lengths: the fist this far out horizontally
 PUNCH_LINE = 0.7           # share of the fist's speed (from the shoulder) along the arm when
                            # it straightens fastest: a punch drives the fist out along the
                            # arm, a sweep (a dancer's port de bras, a wave) carries it round
+PUNCH_HOLD = 1.2           # s: a punch is withdrawn; an arm that stays straight out longer
+                           # pushed, reached or followed a shot or throw through
 KICK_HELD = 0.8            # s: a leg held high longer than this is a pose, not a kick
 KICK_HEIGHT = 0.3          # L: ankle over the floor
 KICK_AWAY = 0.45           # L: ankle away from the hip, horizontally
@@ -183,10 +186,13 @@ def punches(body: Body) -> list[Finding]:
                     top = lo + int(np.argmax(rate[lo:i + 1]))
                     peak = float(rate[top])
                     if peak >= PUNCH_SPEED and along[top] >= PUNCH_LINE:
-                        events.append((int(lo + np.argmin(d[lo:i + 1])), i + 1, peak))
+                        start = i
                         # wait for the arm to bend again before the next punch
                         while i < body.n and d[i] > PUNCH_FROM + 0.1:
                             i += 1
+                        if i - start <= body.frames(PUNCH_HOLD):   # (or the take ends)
+                            events.append((int(lo + np.argmin(d[lo:start + 1])), start + 1,
+                                           peak))
                         continue
             i += 1
         if events:
