@@ -141,9 +141,11 @@ def _walking(path: str = "straight") -> Analysis:
 def test_reconcile_keeps_an_agreeing_familiar_sentence_first():
     from motionlang.models.seq2seq.decode.grounded import reconcile
     got = reconcile([("a man walks forward", -2.0), ("a man walks", -2.5)], _walking(), 1.0)
-    # the second is a guess (-0.83 a word): no gender without the model's confidence
-    assert [t for t, _ in got] == ["a man walks forward", "a person walks",
-                                   "a person walks forward"]
+    # no gender: the training captions drew it by chance; the grounded sentence, the same
+    # as the model's first, is not said twice
+    assert [t for t, _ in got] == ["a person walks forward", "a person walks"]
+    got = reconcile([("a person walks", -2.0)], _walking(), 1.0)
+    assert [t for t, _ in got] == ["a person walks", "a person walks forward"]
     assert math.isnan(got[-1][1])        # the grounded sentence has no model score
 
 
@@ -184,16 +186,20 @@ def test_a_wave_is_no_answer_where_the_hands_were_up_and_did_not_swing():
 def test_reconcile_keeps_style_words_only_where_the_model_knows_the_motion():
     from motionlang.models.seq2seq.decode.grounded import reconcile
     hyps = [("an angry man walks forward in a rage", -1.0)]
-    assert reconcile(hyps, _walking(), 1.0)[0][0] == hyps[0][0]
+    assert reconcile(hyps, _walking(), 1.0)[0][0] == "an angry person walks forward in a rage"
     assert reconcile(hyps, _walking(), 1.5)[0][0] == "a person walks forward"
-    # nor the gender of the model's training actors
-    assert reconcile([("a woman walks forward and raises her hand", -1.0)], _walking(),
-                     1.5)[0][0] == "a person walks forward and raises their hand"
-    assert reconcile([("a woman walks forward and raises her hand", -1.0)], _walking(),
-                     1.0)[0][0] == "a woman walks forward and raises her hand"
+    # never the gender, which the training captions drew by chance, however sure the model
+    for rms in (1.0, 1.5):
+        assert reconcile([("a woman walks forward and raises her hand", -1.0)], _walking(),
+                         rms)[0][0] == "a person walks forward and raises their hand"
     stutter = [("a person takes 6 steps 6 steps", -1.0), ("a man walks forward", -1.5)]
     assert [t for t, _ in reconcile(stutter, _walking(), 1.0)][:2] == [
-        "a person takes 6 steps", "a man walks forward"]
+        "a person takes 6 steps", "a person walks forward"]
+    # broken English is left out; "man is way" is the captions' "man's way"
+    broken = [("a walks forward", -1.0), ("a person jumps bows", -1.0),
+              ("a man walks forward in an old man is way", -1.0)]
+    assert [t for t, _ in reconcile(broken, _walking(), 1.0)][:1] == [
+        "a person walks forward in an old person's way"]
 
 
 def test_reconcile_without_an_analysis_says_it_cannot_tell():

@@ -16,13 +16,13 @@ from motionlang.analysis.analyse import ACTION, VERSION, Analysis, analyse_posit
 from motionlang.analysis.body import Body
 from motionlang.analysis.check import ActionCheck, check_sentence
 from motionlang.analysis.evidence import Finding
-from motionlang.analysis.sentences import CANNOT_TELL, repeats, tidy
+from motionlang.analysis.sentences import CANNOT_TELL, garbled, repeats, tidy
 from motionlang.features.joint_map import positions21
 from motionlang.formats import read_motion
 from motionlang.kinematics.motion import Motion
 
 __all__ = ["ACTION", "CANNOT_TELL", "VERSION", "ActionCheck", "Analysis", "Body", "Finding", "analyse",
-           "analyse_positions", "check", "repeats", "salience", "tidy"]
+           "analyse_positions", "check", "garbled", "repeats", "salience", "tidy"]
 
 
 def analyse(motion: Motion | str | Path, *,

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from motionlang.analysis.evidence import Finding
 from motionlang.analysis.locomotion import JOG_UPTO
+from motionlang.analysis.words import ACTION_WORDS
 
 SUBJECT = "a person"
 #: what is said when the analysis finds nothing it is sure of
@@ -194,3 +195,24 @@ def repeats(text: str) -> bool:
         return True
     return any(w.isalpha() and w not in _FREE and w in words[i + 1:i + 4]
                for i, w in enumerate(words))
+
+
+#: the forms of the action words a subject can take ("walks", "bows", "squats")
+_THIRD_PERSON = frozenset(w for ws in ACTION_WORDS.values() for w in ws
+                          if w.endswith("s") and not w.endswith("ss"))
+
+
+#: verbs that never follow an action verb ("a person jumps does some squats")
+_AUXILIARY = frozenset("does did is was has makes takes goes gets".split())
+
+
+def garbled(text: str) -> bool:
+    """Whether a sentence is broken English a model stumbled into: no subject before its
+    verb ("a walks forward"), or two verbs in a row ("a person jumps bows", "jumps
+    squats", "jumps does some squats"); a comma between them is a list ("walks, turns
+    around")."""
+    words = text.lower().split()
+    if len(words) >= 2 and words[0] in ("a", "an", "the") and words[1] in _THIRD_PERSON:
+        return True
+    return any(a in _THIRD_PERSON and (b in _THIRD_PERSON or b in _AUXILIARY)
+               for a, b in zip(words, words[1:]))

@@ -22,6 +22,17 @@ from motionlang.datasets.bandai_text import STYLES, styles_named
 _ARTICLE = re.compile(r"\ban (?=[^aeiou\s])")
 _MANNER = re.compile(r" (?:in|with) (?:a|an|the)(?: \w+){0,3} (?:way|manner) | at speed ")
 _DANGLING = re.compile(r"(?: (?:in|like|with|at|a|an|the|is|of))+$")
+#: the article that opens a sentence and the word after it
+_BARE_ARTICLE = re.compile(r"^(a|an|the)\s+([a-z]+)\b")
+#: every form of the action words that can stand after a subject ("runs", "sprints")
+_ACTION_FORMS = frozenset(w for ws in ACTION_WORDS.values() for w in ws if w.endswith("s"))
+
+
+def _verb_like(word: str) -> bool:
+    """Whether a word after a sentence's article is a verb in the third person ("runs",
+    "takes"): an action word's form, or an -s word that is not -ss."""
+    return word in _ACTION_FORMS or (word.endswith("s") and not word.endswith("ss")
+                                     and len(word) > 3)
 _STYLE_SUBJECTS = sorted({s for st in STYLES.values() for s, _ in st.subjects}, key=len,
                          reverse=True)
 _STYLE_PHRASES = sorted({p for st in STYLES.values() for p in (*st.phrases, *st.synonyms)
@@ -45,6 +56,10 @@ def without_style(text: str) -> str:
     # sentence left ending on an article or a preposition
     out = _MANNER.sub(" ", f" {out} ")
     out = _DANGLING.sub("", out.strip())
+    # a subject that was all style ("an old woman runs" -> "an runs"): a person is left
+    if out.split() != text.lower().split():
+        out = _BARE_ARTICLE.sub(lambda m: f"{m.group(1)} person {m.group(2)}" if
+                                _verb_like(m.group(2)) else m.group(0), out, count=1)
     return _ARTICLE.sub("a ", out).strip()
 
 

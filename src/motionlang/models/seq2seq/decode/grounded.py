@@ -26,17 +26,27 @@ describer):
    probability per word of at least ``LEAD_LOGP``) and the motion is like its training
    motion (:func:`familiarity` at most ``FAMILIAR_RMS``). Otherwise the grounded sentence
    comes first (its score NaN: no model gave it) and the model's follow as alternatives.
-   Style and mood words, and the person's gender ("a woman", "his"), stay only where the
-   model knows the motion well (``STYLE_RMS``) and is confident (``STYLE_LOGP``);
-   sentences that repeat themselves are left out.
+   Style and mood words stay only where the model knows the motion well (``STYLE_RMS``)
+   and is confident (``STYLE_LOGP``); the person's gender ("a woman", "his") never does
+   (the training captions drew it by chance);
+   sentences that repeat themselves or are broken English ("a walks", "jumps bows":
+   ``analysis.garbled``) are left out.
 """
 from __future__ import annotations
 
+import re
 from typing import Any
 
 import numpy as np
 
-from motionlang.analysis import CANNOT_TELL, Analysis, analyse_positions, repeats, tidy
+from motionlang.analysis import (
+    CANNOT_TELL,
+    Analysis,
+    analyse_positions,
+    garbled,
+    repeats,
+    tidy,
+)
 from motionlang.analysis.check import contradicted
 from motionlang.analysis.words import actions_named, agrees
 from motionlang.datasets.bandai_text import styles_named
@@ -70,11 +80,15 @@ STYLE_RMS = 1.2
 LEAD_LOGP = -1.5
 
 #: a person's gender as captions name it, and the words that say no more than a person: no
-#: motion shows it (the models learnt it from the actors of their training takes)
+#: motion shows it (the Bandai captions the models learnt from drew it by chance)
 GENDERED = {"woman": "person", "man": "person", "women": "people", "men": "people",
             "lady": "person", "gentleman": "person", "girl": "person", "boy": "person",
             "guy": "person", "female": "person", "male": "person", "his": "their",
             "her": "their"}
+
+#: "in an old man is way": the training captions' "man's", read as "man is"
+_POSSESSIVE = re.compile(r"\b(man|woman|person|child|kid|lady|performer|actor) is "
+                         r"(way|manner|gait|style)\b")
 
 #: the words that name each gait, in every form a caption uses
 GAIT_WORDS: dict[str, frozenset[str]] = {
@@ -233,10 +247,11 @@ def reconcile(hyps: list[tuple[str, float]], analysis: Analysis | None,
             t = without_style(t)
             if styles_named(t) or not has_verb(t):
                 continue
-        if not knows:   # a woman, a man: the model's training actors, not this body
-            t = ungendered(t)
-        t = tidy(t)
-        if not repeats(t):   # "3 squats 3 times squats": the model stumbling
+        # a woman, a man: its training captions drew them by chance (``bandai_text``
+        # NEUTRAL), so that no motion, not even its own, shows which
+        t = tidy(_POSSESSIVE.sub(r"\1's \2", ungendered(t)))
+        # "3 squats 3 times squats", "a person jumps bows": the model stumbling
+        if not repeats(t) and not garbled(t):
             out.append((t, s))
     hyps = list({t: (t, s) for t, s in reversed(out)}.values())[::-1]   # each once
     if analysis is None:   # one frame, no body: what the model says of it rests on nothing
@@ -250,6 +265,7 @@ def reconcile(hyps: list[tuple[str, float]], analysis: Analysis | None,
     agree = (main in (None, "stand") or agrees(actions_named(first), main)) and \
         not contradicted(first, analysis)
     sure = per_word(first, first_score) >= LEAD_LOGP
+    others = [(t, s) for t, s in hyps if t != grounded]   # the same sentence said once
     if first != UNFAMILIAR and agree and sure and (rms <= FAMILIAR_RMS or main is None):
-        return hyps + [(grounded, float("nan"))]
-    return [(grounded, float("nan"))] + [(t, s) for t, s in hyps if t != UNFAMILIAR]
+        return hyps if len(others) < len(hyps) else hyps + [(grounded, float("nan"))]
+    return [(grounded, float("nan"))] + [(t, s) for t, s in others if t != UNFAMILIAR]
