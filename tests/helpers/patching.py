@@ -11,7 +11,6 @@ import sys
 from types import ModuleType
 from typing import Any
 
-
 #: the attribute a replacement carries: the object it replaced
 PATCHED = "__patched_original__"
 
