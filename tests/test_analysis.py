@@ -463,6 +463,17 @@ def test_actions_named_in_words():
     assert agrees(["crouch"], "bend") and not agrees(["walk"], "punch")
 
 
+def test_mentions_read_each_actions_side_direction_negation_and_order():
+    from motionlang.analysis.words import mentions
+    got = mentions("A man kicks twice with the left leg, then walks backwards without running")
+    assert [(m.action, m.side, m.direction, m.negated, m.after_previous) for m in got] == [
+        ("kick", "left", None, False, False), ("walk", None, "backwards", False, True),
+        ("run", None, None, True, False)]
+    assert [m.side for m in mentions("a person balances on the right leg")] == ["right"]
+    assert not mentions("someone never stops walking")[0].negated   # "never" is the stop's
+    assert mentions("the person is not jumping")[0].negated
+
+
 def test_check_says_yes_no_and_cannot_tell():
     from motionlang.analysis.check import check_sentence
     p = take(hold(pose(), 1.0), blend(pose(), SIT, 1.0), hold(SIT, 2.0))
@@ -471,6 +482,44 @@ def test_check_says_yes_no_and_cannot_tell():
                                                  ("throw", None)]
     assert got[0].findings[0].label == "sit" and got[0].line().startswith("sit: yes (")
     assert got[1].line() == "punch: no" and "cannot tell" in got[2].line()
+
+
+def _seen(*findings: tuple) -> Analysis:
+    """An analysis of the findings ``(label, start, end, side, detail)``."""
+    return Analysis(findings=tuple(
+        Finding("test", lab, a, b, "measure", 1.0, 0.5, 0.9, side=side, detail=detail or {})
+        for lab, a, b, side, detail in findings), duration=10.0, leg=0.9, stature=1.75)
+
+
+def test_check_reads_the_side_the_direction_the_order_and_a_no():
+    from motionlang.analysis.check import check_sentence
+    a = _seen(("walk", 0.0, 3.0, None, {"direction": "forward", "path": "straight"}),
+              ("kick", 3.0, 4.0, "right", None), ("turn", 4.0, 5.0, "left", None),
+              ("jump", 5.0, 5.5, None, {"direction": "up"}),
+              ("raise", 6.0, 8.0, "right", None))
+
+    def said(text):
+        return [(c.action, c.shown, c.met) for c in check_sentence(text, a)]
+
+    assert said("a person kicks with the right leg") == [("kick", True, True)]
+    got = check_sentence("a person kicks with the left leg", a)
+    assert (got[0].shown, got[0].line()) == (False, "kick: no (seen on the right side, "
+                                                    "3.0-4.0 s)")
+    assert said("a person turns left") == [("turn", True, True)]
+    assert said("a person turns right") == [("turn", False, False)]
+    assert said("a person walks backwards") == [("walk", False, False)]
+    assert said("a person walks forward and then jumps up") == [("walk", True, True),
+                                                               ("jump", True, True)]
+    got = check_sentence("a person jumps, then walks forward", a)
+    assert [(c.action, c.shown) for c in got] == [("jump", True), ("walk", False)]
+    assert got[1].note == "only before the jump, 0.0-3.0 s"
+    assert said("a person raises both hands") == [("raise", False, False)]
+    assert said("a person raises the right hand") == [("raise", True, True)]
+    # what the sentence says the body does not do
+    assert said("a person does not sit") == [("sit", False, True)]
+    got = check_sentence("a person doesn't jump", a)
+    assert (got[0].shown, got[0].met) == (True, False) and got[0].line().startswith(
+        "jump (the sentence says not): yes (")
 
 
 def test_the_open_world_check_as_a_share():

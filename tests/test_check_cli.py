@@ -30,10 +30,12 @@ def test_check_prints_each_action_of_the_sentence(walk_file, capsys):
     assert lines[0].startswith("walk: yes (") and lines[1] == "sit: no"
     assert main(["check", "someone throws a ball", str(walk_file), "--json"]) == 0
     got = json.loads(capsys.readouterr().out)
-    assert got == [{"action": "throw", "shown": None, "findings": []}]     # cannot tell
+    assert got == [{"action": "throw", "shown": None, "negated": False, "met": None,
+                    "note": "", "findings": []}]     # cannot tell
     assert main(["check", "someone dances", str(walk_file), "--json"]) == 0
     assert json.loads(capsys.readouterr().out) == [{"action": "dance", "shown": False,
-                                                    "findings": []}]
+                                                    "negated": False, "met": False,
+                                                    "note": "", "findings": []}]
     assert [c.shown for c in ml.check("a person walks", walk_file)] == [True]
 
 

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 from motionlang.analysis.analyse import ACTION, Analysis
 from motionlang.analysis.evidence import Finding
-from motionlang.analysis.words import COMPATIBLE, actions_named
+from motionlang.analysis.words import COMPATIBLE, actions_named, mentions
 from motionlang.errors import MotionlangError
 
 #: the coarse actions some detector can find (others are "cannot tell")
@@ -25,51 +25,122 @@ class ActionCheck:
 
     Attributes:
         action: the coarse action the sentence names (``analysis.words.ACTION_WORDS``).
-        shown: True (seen), False (a detector for it exists and saw nothing) or None
-            (no detector: the analysis cannot tell).
+        shown: True (seen as the sentence says it: on its side, in its direction, after the
+            action named before it where it says "then"), False (a detector for it exists
+            and saw nothing so) or None (no detector: the analysis cannot tell).
         findings: the findings that show it, most confident first.
+        negated: the sentence says the body does not do it ("does not jump").
+        note: where ``shown`` is False though the action was seen: how it was seen
+            otherwise ("with the right leg", "forward", "only before the jump").
     """
 
     action: str
     shown: bool | None
     findings: tuple[Finding, ...] = ()
+    negated: bool = False
+    note: str = ""
+
+    @property
+    def met(self) -> bool | None:
+        """Whether the motion does what the sentence says of this action (shows it, or,
+        where the sentence says not, does not); None where the analysis cannot tell."""
+        return None if self.shown is None else self.shown != self.negated
 
     def line(self) -> str:
-        """``sit: yes (1.9-4.1 s, confidence 0.97)`` / ``sit: no`` / ``throw: cannot tell``."""
+        """``sit: yes (1.9-4.1 s, confidence 0.97)`` / ``sit: no`` / ``throw: cannot tell``;
+        ``jump (the sentence says not): yes (...)``; ``kick: no (seen with the right leg:
+        0.9-2.9 s)``."""
+        name = f"{self.action} (the sentence says not)" if self.negated else self.action
         if self.shown is None:
-            return f"{self.action}: cannot tell (no detector for it)"
+            return f"{name}: cannot tell (no detector for it)"
         if not self.shown:
-            return f"{self.action}: no"
+            return f"{name}: no" + (f" (seen {self.note})" if self.note else "")
         f = self.findings[0]
-        return (f"{self.action}: yes ({f.start:.1f}-{f.end:.1f} s, {f.measure} {f.value:.2f}, "
+        return (f"{name}: yes ({f.start:.1f}-{f.end:.1f} s, {f.measure} {f.value:.2f}, "
                 f"confidence {f.confidence:.2f})")
 
     def as_dict(self) -> dict:
-        return {"action": self.action, "shown": self.shown,
+        return {"action": self.action, "shown": self.shown, "negated": self.negated,
+                "met": self.met, "note": self.note,
                 "findings": [f.as_dict() for f in self.findings]}
 
 
+#: actions of the hands, of which "both" says something
+_HANDS = frozenset({"raise", "wave", "punch", "reach"})
+#: how each direction a sentence says is seen in a travel's or a jump's ``direction``
+_DIRECTION_SEEN = {"forward": ("forward",), "backwards": ("backwards",),
+                   "sideways": ("left", "right")}
+
+
+def _answers(action: str, f: Finding) -> bool:
+    """Whether the finding ``f`` shows ``action`` (or one that answers for it)."""
+    accept = {action, *COMPATIBLE.get(action, ())}
+    return (ACTION[f.label] in accept or (
+        action == "turn" and f.label in ("walk", "run") and
+        f.detail.get("path", "straight") != "straight") or (   # a walk that turns
+        # a dance says the kicks and spins it is made of
+        f.label == "dance" and bool({ACTION[m] for m in f.detail.get("moves", ())} & accept)))
+
+
+def _on_side(f: Finding, side: str) -> bool:
+    """Whether ``f`` is on ``side`` ("left", "right", "both"): a finding of both sides
+    answers for either, one of no side for any, a walk that turns by the way its path
+    curves."""
+    if f.label in ("walk", "run") and f.detail.get("path", "straight") != "straight":
+        return side in str(f.detail["path"]) or f.detail["path"] == "in a circle"
+    return f.side in (None, side, "both") if side != "both" else f.side in (None, "both")
+
+
+def _went(f: Finding, direction: str) -> bool:
+    seen = f.detail.get("direction")
+    return seen is None or seen in _DIRECTION_SEEN[direction] or (
+        direction == "forward" and seen == "up")
+
+
+def _how(f: Finding) -> str:
+    """A finding's side or direction, for a note: "with the right side", "backwards"."""
+    if f.label in ("walk", "run", "jump") and f.detail.get("direction"):
+        return f"{f.detail['direction']}, {f.start:.1f}-{f.end:.1f} s"
+    return f"on the {f.side} side, {f.start:.1f}-{f.end:.1f} s" if f.side else \
+        f"{f.start:.1f}-{f.end:.1f} s"
+
+
 def check_sentence(text: str, analysis: Analysis) -> list[ActionCheck]:
-    """Every action ``text`` names, in its order, against ``analysis``.
+    """Every action ``text`` names, in its order, against ``analysis``: seen at all, then on
+    the side and in the direction the sentence gives it, going on past the end of the
+    action named before it where the sentence says "then" (``analysis.words.mentions``).
 
     Raises:
         MotionlangError: an empty sentence.
     """
     if not text.strip():
         raise MotionlangError("the sentence to check is empty")
-    out = []
-    for action in actions_named(text):
-        if action not in DETECTABLE and not COMPATIBLE.get(action, set()) & DETECTABLE:
-            out.append(ActionCheck(action, None))
+    out: list[ActionCheck] = []
+    previous: tuple[str, float] | None = None   # the action named before, where it ended
+    for m in mentions(text):
+        if m.action not in DETECTABLE and not COMPATIBLE.get(m.action, set()) & DETECTABLE:
+            out.append(ActionCheck(m.action, None, negated=m.negated))
+            previous = None
             continue
-        accept = {action, *COMPATIBLE.get(action, ())}
-        hits = sorted((f for f in analysis.findings if ACTION[f.label] in accept or (
-            action == "turn" and f.label in ("walk", "run") and
-            f.detail.get("path", "straight") != "straight") or (   # a walk that turns
-            # a dance says the kicks and spins it is made of
-            f.label == "dance" and {ACTION[m] for m in f.detail.get("moves", ())} & accept)),
+        seen = sorted((f for f in analysis.findings if _answers(m.action, f)),
                       key=lambda f: -f.confidence)
-        out.append(ActionCheck(action, bool(hits), tuple(hits)))
+        hits, note = seen, ""
+        # "both" asked of the hands only ("jumps with both feet" says no more than a jump)
+        if m.side in ("left", "right") or m.side == "both" and m.action in _HANDS:
+            hits = [f for f in hits if _on_side(f, m.side)]
+        if m.direction is not None and m.action in ("walk", "run", "jump"):
+            hits = [f for f in hits if _went(f, m.direction)]
+        if seen and not hits:
+            note = _how(seen[0])
+        if m.after_previous and previous is not None and hits:
+            later = [f for f in hits if f.end > previous[1]]
+            if not later:
+                note = f"only before the {previous[0]}, {hits[0].start:.1f}-{hits[0].end:.1f} s"
+            hits = later
+        out.append(ActionCheck(m.action, bool(hits), tuple(hits), m.negated, note))
+        # the next action must go on past where this one was first seen to end
+        first = min(hits, key=lambda f: f.start, default=None)
+        previous = (m.action, first.end) if first is not None and not m.negated else None
     return out
 
 

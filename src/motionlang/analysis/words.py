@@ -10,6 +10,7 @@ from __future__ import annotations
 import re
 import warnings
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 #: coarse action -> the words that name it (every form a caption uses)
 ACTION_WORDS: dict[str, tuple[str, ...]] = {
@@ -78,25 +79,79 @@ COMPATIBLE = {"spin": {"turn"}, "turn": {"spin"}, "raise": {"wave", "reach"},
               "crawl": {"kneel"}}
 
 
-def actions_named(text: str) -> list[str]:
-    """The coarse actions a sentence names, in the order it names them, each once: its
-    :data:`PHRASES` first, then the words of :data:`ACTION_WORDS` outside them."""
-    text = text.lower()
-    found: list[tuple[int, str]] = []
+def _found(text: str) -> list[tuple[int, int, str]]:
+    """``(start, end, action)`` of every phrase and word of ``text`` (lower case) that names
+    an action, in order: its :data:`PHRASES` first, then the words outside them."""
+    found: list[tuple[int, int, str]] = []
     taken = [False] * len(text)
     for pattern, action in PHRASES:
         for m in pattern.finditer(text):
             if not any(taken[m.start():m.end()]):
-                found.append((m.start(), action))
+                found.append((m.start(), m.end(), action))
                 taken[m.start():m.end()] = [True] * (m.end() - m.start())
     for m in _TOKEN.finditer(text):
         a = _INDEX.get(m.group())
         if a is not None and not taken[m.start()]:
-            found.append((m.start(), a))
+            found.append((m.start(), m.end(), a))
+    return sorted(found)
+
+
+def actions_named(text: str) -> list[str]:
+    """The coarse actions a sentence names, in the order it names them, each once: its
+    :data:`PHRASES` first, then the words of :data:`ACTION_WORDS` outside them."""
     out: list[str] = []
-    for _, a in sorted(found):
+    for _, _, a in _found(text.lower()):
         if a not in out:
             out.append(a)
+    return out
+
+
+@dataclass(frozen=True)
+class Mention:
+    """How a sentence names one action: ``side`` ("left", "right", "both" or None) and
+    ``direction`` ("forward", "backwards", "sideways" or None) from the words after it up
+    to the next action or clause; ``negated``: "not", "never", "without" just before it;
+    ``after_previous``: "then", "after that", "followed by" between it and the action
+    named before it."""
+
+    action: str
+    side: str | None = None
+    direction: str | None = None
+    negated: bool = False
+    after_previous: bool = False
+
+
+_CLAUSE_END = re.compile(r"[,;.]|\band\b|\bthen\b|\bwhile\b")
+_SIDE = re.compile(r"\b(left|right|both)\b")
+_DIRECTION = {"forward": "forward", "forwards": "forward", "ahead": "forward",
+              "backward": "backwards", "backwards": "backwards", "back": "backwards",
+              "sideways": "sideways", "sidewards": "sideways"}
+_NEGATION = re.compile(r"(?:\b(?:not|never|without|no longer)|n't)\s+$")
+_SEQUENCE = re.compile(r"\bthen\b|\bafter(?:wards| that)\b|\bfollowed by\b")
+
+
+def mentions(text: str) -> list[Mention]:
+    """Each action ``text`` names, once (its first naming), with the side, direction,
+    negation and order the sentence gives it (:class:`Mention`)."""
+    low = text.lower()
+    found = _found(low)
+    out: list[Mention] = []
+    seen: set[str] = set()
+    for i, (start, end, action) in enumerate(found):
+        if action in seen:
+            continue
+        seen.add(action)
+        nxt = found[i + 1][0] if i + 1 < len(found) else len(low)
+        after = low[end:nxt]
+        cut = _CLAUSE_END.search(after)
+        clause = after[:cut.start()] if cut else after
+        sides = _SIDE.findall(low[start:end] + clause)   # "balances on the left leg"
+        words = _TOKEN.findall(clause)
+        direction = next((_DIRECTION[w] for w in words if w in _DIRECTION), None)
+        before = low[found[i - 1][1] if i else 0:start]
+        out.append(Mention(action, sides[0] if sides else None, direction,
+                           bool(_NEGATION.search(before)),
+                           bool(i and _SEQUENCE.search(before))))
     return out
 
 

@@ -14,14 +14,16 @@ from motionlang.errors import MotionlangError
 
 
 def shown(text: str, p21: np.ndarray, fps: float) -> bool | None:
-    """Whether the motion (T, 21, 3) shows every action of ``text`` that the analysis can
-    tell; None where the sentence names none it can tell (or the motion cannot be read)."""
+    """Whether the motion (T, 21, 3) does every action of ``text`` that the analysis can
+    tell, as the sentence says it (its side, direction, order; not where it says not:
+    ``ActionCheck.met``); None where the sentence names none it can tell (or the motion
+    cannot be read)."""
     try:
         checks = [c for c in check_sentence(text, analyse_positions(p21, fps))
-                  if c.shown is not None]
+                  if c.met is not None]
     except MotionlangError:
         return None
-    return all(c.shown for c in checks) if checks else None
+    return all(c.met for c in checks) if checks else None
 
 
 def check_share(texts: Sequence[str], motions: Sequence[np.ndarray], fps: float) -> float:

@@ -174,7 +174,7 @@ def _shows(part: str, p: np.ndarray) -> bool:
     """Whether the analysis sees every action ``part`` names in ``p`` (T, 21, 3) at
     :data:`FPS` (an action it has no detector for counts as seen)."""
     try:
-        return all(c.shown is not False for c in check_sentence(part, analyse_positions(p, FPS)))
+        return all(c.met is not False for c in check_sentence(part, analyse_positions(p, FPS)))
     except MotionlangError:
         return False
 
