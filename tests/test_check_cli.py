@@ -115,3 +115,18 @@ def test_a_joint_map_with_nothing_to_map_is_refused(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "--joint-map maps the motion of --start-from or --keep" in err
     assert err.count("\n") == 1 and not (tmp_path / "o.bvh").exists()
+
+
+def test_a_motion_made_without_an_asked_action_is_named_in_one_warning(walk_file):
+    import warnings
+
+    from motionlang.api import _warn_not_shown
+    walk = ml.body21(walk_file)
+    fps = ml.read_motion(walk_file).fps
+    with pytest.warns(UserWarning, match="does not show sit as the sentence asks"):
+        _warn_not_shown("a person walks forward, then sits down", walk, fps)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        _warn_not_shown("a person walks forward", walk, fps)      # all there: nothing said
+        _warn_not_shown("a person throws a ball", walk, fps)      # cannot tell: nothing said
+        _warn_not_shown("a person walks", walk[:1], fps)          # one frame: nothing to say

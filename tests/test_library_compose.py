@@ -124,6 +124,13 @@ def test_the_command_line_writes_the_motion_and_lists_its_clips(library, tmp_pat
                  str(index), "-o", str(out)]) == 0
     printed = capsys.readouterr().out
     assert "chairs/sit.bvh" in printed and "sits: " in printed
+    assert "warning" not in printed   # both actions there
+    # no take of the library kicks: said, after the clip the learned model put instead
+    assert main(["generate", "a person walks forward, then kicks", "--library", str(index),
+                 "-o", str(tmp_path / "kick.bvh")]) == 0
+    assert capsys.readouterr().out.splitlines()[-1] == (
+        "warning: the motion made does not show kick as the sentence asks (motionlang check "
+        "says why)")
     side = json.loads((tmp_path / "made.bvh.json").read_text())
     assert [c["file"] for c in side["clips"]] == ["walk.bvh", "chairs/sit.bvh"]
     assert side["method"].startswith("clips of the library") and side["frames"] > 100

@@ -27,7 +27,8 @@ from typing import Any
 
 import numpy as np
 
-from motionlang.analysis import analyse, check  # noqa: F401  (the API's, re-exported)
+from motionlang.analysis import analyse, analyse_positions, check  # noqa: F401  (re-exported)
+from motionlang.analysis.check import not_shown_line, unmet
 from motionlang.analysis.words import warn_never_learnt
 from motionlang.errors import MotionlangError
 from motionlang.features.body21 import body21 as _body21
@@ -274,7 +275,26 @@ def generate_hypotheses(text: str, model: Any = None, *, seed: int = 0,
         kw["first_frame"] = first_frame(t2m, start_from, joint_map)
     hyps = t2m.hypotheses(text, seed=seed, max_frames=max_frames, min_frames=min_frames,
                           foot_lock=foot_lock, **kw)
+    if hyps:
+        _warn_not_shown(text, hyps[0][0], t2m.fps)
     return hyps, t2m.fps
+
+
+def _warn_not_shown(text: str, result: Any, fps: float, *, hint: bool = True) -> None:
+    """One warning where the motion made for ``text`` (a Motion, or (T, 21, 3) positions at
+    ``fps``) does not do an action of it as the sentence says (the open-world check,
+    ``analysis.check.unmet``), naming them: a model asked for two things in a row often
+    makes one."""
+    import warnings
+    try:
+        missed = unmet(text, analyse(result) if isinstance(result, Motion) else
+                       analyse_positions(np.asarray(result), fps))
+    except MotionlangError:   # too short to analyse, or nothing it can read
+        return
+    if missed:
+        warnings.warn(not_shown_line(missed) + ("; --library composes a sentence from the "
+                                                "takes of your own index" if hint else ""),
+                      UserWarning, stacklevel=3)
 
 
 def read_words(text: str, model: Any = None):
@@ -300,6 +320,7 @@ def generate(text: str, model: Any = None, *, rig: Motion | str | Path | None = 
     rig_motion = None if rig is None else load_rig(rig, rig_joint_map)
     if library is not None:
         made = compose(text, library, model=model)
+        _warn_not_shown(text, made.positions, made.fps, hint=False)
         return body_motion(made.positions, made.fps, rig_motion)[0]
     hyps, fps = generate_hypotheses(text, model, **options)
     return body_motion(hyps[0][0], fps, rig_motion)[0]

@@ -144,6 +144,21 @@ def check_sentence(text: str, analysis: Analysis) -> list[ActionCheck]:
     return out
 
 
+def unmet(text: str, analysis: Analysis) -> list[str]:
+    """The actions of ``text`` the motion of ``analysis`` does not do as the sentence says
+    (:attr:`ActionCheck.met` False), in the sentence's order; [] for a sentence that names
+    none (an empty one too)."""
+    if not text.strip():
+        return []
+    return [c.action for c in check_sentence(text, analysis) if c.met is False]
+
+
+def not_shown_line(missed: list[str]) -> str:
+    """The line that says a motion made for a sentence misses ``missed``."""
+    return (f"the motion made does not show {', '.join(missed)} as the sentence asks "
+            "(motionlang check says why)")
+
+
 def printed(text: str, checks: list[ActionCheck], *, as_json: bool = False) -> str:
     """What ``motionlang check`` prints: a line per action (:meth:`ActionCheck.line`), or
     the JSON list of :meth:`ActionCheck.as_dict`."""

@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from motionlang.analysis import analyse_positions, check_sentence
+from motionlang.analysis.check import not_shown_line, unmet
 from motionlang.analysis.words import actions_named
 from motionlang.errors import MotionlangError
 from motionlang.features.body21 import body21, stature21, uniform_bones21
@@ -357,4 +358,7 @@ def compose_to(text: str, library: str | Path | Library, out: str | Path, *,
     lines += [f"  {c.part!r}: {c.file} {c.start:.1f}-{c.end:.1f} s"
               + (f" ({c.why})" if c.why else " (the learned model's nearest)")
               for c in made.clips]
+    missed = unmet(text, analyse_positions(made.positions, made.fps))
+    if missed:   # no take of the library shows it, or the join lost it
+        lines.append(f"warning: {not_shown_line(missed)}")
     return "\n".join(lines)
