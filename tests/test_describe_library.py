@@ -91,6 +91,14 @@ def test_a_folder_gives_one_line_per_motion_file_and_the_reason_of_a_bad_one(lib
                    for s in r["sentences"])
 
 
+def test_an_output_in_a_folder_not_made_yet_is_written_there(library, described, tmp_path,
+                                                               capsys):
+    out = tmp_path / "new" / "folder" / "captions.jsonl"   # as every other command's -o
+    _run(["describe", str(library), "-o", str(out), *WIDTH, "--threads", "1"], capsys)
+    assert out.read_text().splitlines() == described
+    assert sorted(p.name for p in out.parent.iterdir()) == ["captions.jsonl"]
+
+
 def test_two_workers_write_the_same_lines_as_one(library, described, tmp_path, capsys):
     out = tmp_path / "captions.jsonl"
     printed = _run(["describe", str(library / "more"), str(library / "a.bvh"),

@@ -171,6 +171,13 @@ def test_the_cli_prints_why_and_takes_the_filters(library, capsys, monkeypatch):
                  "soon"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "--min-duration must be a duration" in err
+    # filters that leave nothing: said, with the rigs the index does hold
+    assert main(["search", "someone walks", "--index", str(out), "--rig", "flibber"]) == 0
+    said = capsys.readouterr().out.strip()
+    assert said.startswith(f"no take of {out} matches --rig flibber (the rigs of its takes: ")
+    assert main(["search", "someone walks", "--index", str(out), "--rig", "flibber",
+                 "--json"]) == 0
+    assert json.loads(capsys.readouterr().out) == []
 
 
 def test_workers_give_the_index_one_process_gives(library, tmp_path):

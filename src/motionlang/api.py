@@ -264,8 +264,9 @@ def generate_hypotheses(text: str, model: Any = None, *, seed: int = 0,
     unknown = reading.unknown
     if unknown:   # a warning, not an error: the rest of the sentence still steers
         vocab = getattr(t2m.model, "vocab", None)
-        warnings.warn(f"the model does not know {', '.join(repr(w) for w in unknown)}; each "
-                      f"is read as an unknown word (its vocabulary: {len(vocab or ())} words)",
+        each = "each is" if len(unknown) > 1 else "it is"
+        warnings.warn(f"the model does not know {', '.join(repr(w) for w in unknown)}; {each} "
+                      f"read as an unknown word (its vocabulary: {len(vocab or ())} words)",
                       UserWarning, stacklevel=2)
     warn_never_learnt(text, t2m.model)
     if keep is not None:   # the kept seconds of a motion, the rest from the text

@@ -183,6 +183,8 @@ def warn_never_learnt(text: str, model) -> None:
     can make."""
     never, learnt = never_learnt(text, caption_words(model))
     if never and learnt:
+        low = text.lower()   # the sentence's own words for them ("backflip", not cartwheel)
+        said = [next(low[a:b] for a, b, act in _found(low) if act == n) for n in never]
         warnings.warn(f"this {getattr(model, 'kind', 'model')} model never learnt to "
-                      f"{' or '.join(never)} (it can make: "
+                      f"{' or '.join(repr(w) for w in said)} (the actions it can make: "
                       f"{', '.join(sorted(learnt - {'stand'}))})", UserWarning, stacklevel=3)

@@ -76,8 +76,25 @@ def cmd_info(args: argparse.Namespace) -> int:
 
 
 # ------------------------------------------------------------------ render
-def cmd_render(args: argparse.Namespace) -> int:
+def _add_out(p: argparse.ArgumentParser, what: str) -> None:
+    """OUT, given after IN or as ``-o OUT`` (as the other commands take it)."""
+    p.add_argument("output", metavar="OUT", type=output_file, nargs="?", help=what)
+    p.add_argument("-o", "--output", dest="output_flag", type=output_file, metavar="OUT",
+                   help="the same as OUT")
 
+
+def _output(args: argparse.Namespace) -> str:
+    """The one OUT of the command line (:func:`_add_out`)."""
+    given = {o for o in (args.output, args.output_flag) if o is not None}
+    if not given:
+        raise MotionlangError("an output is needed: OUT after the input, or -o OUT")
+    if len(given) > 1:
+        raise MotionlangError(f"two outputs given ({', '.join(sorted(given))}): give one")
+    return given.pop()
+
+
+def cmd_render(args: argparse.Namespace) -> int:
+    args.output = _output(args)
     check_drawable(args.output)   # before the (slow) read
     motion = load_input(args).between(args.start, args.end)
     render(motion, args.output, title=args.title, n_poses=args.strip, fps=args.fps,
@@ -88,7 +105,7 @@ def cmd_render(args: argparse.Namespace) -> int:
 
 # ------------------------------------------------------------------ convert
 def cmd_convert(args: argparse.Namespace) -> int:
-
+    args.output = _output(args)
     out = Path(args.output)
     if out.resolve() == Path(args.input).resolve():
         raise MotionlangError(f"{out}: output would overwrite the input")
@@ -102,7 +119,14 @@ def cmd_convert(args: argparse.Namespace) -> int:
 
 
 def cmd_check(args: argparse.Namespace) -> int:
-    print(printed(args.text, check(args.text, load_input(args)), as_json=args.json))
+    if not args.text.strip():
+        raise MotionlangError("the sentence to check is empty")
+    motion = load_input(args)
+    try:
+        checks = check(args.text, motion)
+    except MotionlangError as exc:   # the analysis' reason, with the file it is about
+        raise MotionlangError(f"{args.input}: {exc}") from None
+    print(printed(args.text, checks, as_json=args.json))
     return 0
 
 
@@ -127,7 +151,7 @@ def register(subparsers) -> None:
         description="Render a stick figure. OUT's extension picks the output: .gif or .mp4 "
                     "animation, .png strip of poses (or trajectory with --trajectory).")
     add_input_args(p)
-    p.add_argument("output", metavar="OUT", type=output_file, help="output .gif, .mp4 or .png")
+    _add_out(p, "output .gif, .mp4 or .png")
     p.add_argument("--fps", type=rate_float, default=None,
                    help="animation frame rate (default: min(25, source rate))")
     p.add_argument("--max-frames", type=int_range(1, 10**7), default=RENDER_MAX_FRAMES, metavar="N",
@@ -147,7 +171,7 @@ def register(subparsers) -> None:
         description="Read IN and write OUT in the format of OUT's extension (.bvh, .glb or "
                     ".gltf for any skeleton; .xml for MMM and .amc for ASF skeletons).")
     add_input_args(p)
-    p.add_argument("output", metavar="OUT", type=output_file, help="output file, e.g. out.bvh")
+    _add_out(p, "output file, e.g. out.bvh")
     add_clip_args(p)
     p.add_argument("--rig", metavar="RIG", help="retarget onto this character's skeleton "
                    "(a BVH file of it) through the 21-joint body; OUT then has its joints")

@@ -60,7 +60,8 @@ def find_asf(amc_path: str | Path) -> Path:
         return found[0]
     why = "none" if not found else f"{len(found)} ({', '.join(p.name for p in found[:4])})"
     raise MotionFormatError(amc_path, f"cannot choose the ASF skeleton: no {subject}.asf and "
-                                      f"{why} .asf files in {folder}; pass skeleton=")
+                                      f"{why} .asf files in {folder}; name it (--asf FILE, "
+                                      f"or skeleton= in Python)")
 
 
 def is_motion_file(path: str | Path) -> bool:

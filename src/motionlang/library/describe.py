@@ -339,6 +339,7 @@ class DescribeRun:
         interrupted run, a killed worker, loses nothing; the same command goes on from
         there), then ``out`` at once when every file is done; returns (records, errors)."""
         out = Path(out)
+        out.parent.mkdir(parents=True, exist_ok=True)   # as every other output's folder
         partial = out.with_name(out.name + ".partial")
         done = _done_before(partial, self.header())
         todo = [p for p in self.files if str(p) not in done]
