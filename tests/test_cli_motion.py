@@ -134,11 +134,13 @@ def test_demo_main_job_offline_with_packaged_models(tmp_path, capsys, monkeypatc
                 and "grounded" in line]     # the analysis' sentence, no model score
     assert 1 <= len(desc) + len(grounded) <= 3 and desc   # one procedural motion described
     assert all(s < 0 for s in desc)
-    # ordered as 'motionlang describe' orders them: minimum Bayes risk over the beam
-    from motionlang.models.seq2seq.decode.mbr import mbr_rank
-    shown = [(m[2], float(m[1])) for m in re.finditer(r"log P =\s*(-?[\d.]+)  (.+)", out)]
-    assert len(shown) == len(desc) and all(t.split() for t, _ in shown)
-    assert [t for t, _ in mbr_rank(sorted(shown, key=lambda h: -h[1]))] == [t for t, _ in shown]
+    # as 'motionlang describe' gives them: each once, no gender (its captions drew one by
+    # chance), none broken
+    from motionlang.analysis import garbled
+    from motionlang.models.seq2seq.decode.grounded import GENDERED
+    shown = [m[2] for m in re.finditer(r"log P =\s*(-?[\d.]+)  (.+)", out)]
+    assert len(shown) == len(desc) == len(set(shown)) and all(t.split() for t in shown)
+    assert not any(garbled(t) or set(t.split()) & set(GENDERED) for t in shown)
     assert gen == sorted(gen, reverse=True)
     written = out.split("written:")[1].split()
     assert [p.rsplit("/", 1)[1] for p in written] == ["generated.gif", "generated_strip.png",

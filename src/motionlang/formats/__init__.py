@@ -32,6 +32,7 @@ from motionlang.formats.mit import read_mit
 from motionlang.formats.mmm import read_mmm, write_mmm
 from motionlang.formats.units import motion_stature, unit_name
 from motionlang.kinematics.motion import Motion
+from motionlang.kinematics.reference_pose import leading_reference_frames
 from motionlang.kinematics.skeleton import Skeleton
 from motionlang.utils.sidecar import load_json
 
@@ -136,6 +137,10 @@ def read_motion(path: str | Path, *, skeleton: Skeleton | str | Path | None = No
         return read_amc(path, skeleton, fps=120.0 if fps is None else fps)
     if ext == ".bvh":
         motion = read_bvh(path)
+        lead = leading_reference_frames(motion)
+        if lead:   # an exporter's T-pose and its blend into the take: not the subject's
+            motion = motion[lead:]
+            motion.meta["reference_frames"] = lead
     elif ext == ".txt":
         motion = read_deepmimic(path)
     elif ext in (".glb", ".gltf"):
@@ -194,8 +199,10 @@ def motion_info(motion: Motion) -> dict:
     ``source_format``, ``skeleton``, ``unit`` (the file's length unit: what a BVH reader
     decided, e.g. ``"cm"`` or ``"BVH units"``, else the one the format defines: ``"mm"``
     for MMM, ``"1/0.45 inch"`` for a CMU ASF), ``stature_m`` (the body's stature in metres,
-    :func:`motionlang.formats.units.estimate_stature`), and ``declared_fps`` where the
-    motion is read at another rate than its header's (``analysis.rate``; None else).
+    :func:`motionlang.formats.units.estimate_stature`), ``declared_fps`` where the
+    motion is read at another rate than its header's (``analysis.rate``; None else), and
+    ``reference_frames``: the frames of an exporter's T-pose left out at the start
+    (``kinematics.reference_pose``; 0 where none).
     """
 
     sk = motion.skeleton
@@ -208,7 +215,8 @@ def motion_info(motion: Motion) -> dict:
             "node_names": list(sk.names), "source_format": motion.source_format,
             "skeleton": sk.name, "unit": str(unit or unit_name(sk.file_unit)),
             "stature_m": float(stature if stature is not None else motion_stature(motion)),
-            "declared_fps": motion.meta.get("declared_fps")}
+            "declared_fps": motion.meta.get("declared_fps"),
+            "reference_frames": int(motion.meta.get("reference_frames", 0))}
 
 
 def info_text(info: dict) -> str:
@@ -220,7 +228,9 @@ def info_text(info: dict) -> str:
         f"  format    {info['source_format']}  (skeleton {info.get('skeleton', '?')})",
         f"  frames    {info['frames']} at {info['fps']:g} Hz = {info['duration_s']:.2f} s"
         + (f" (its header says {info['declared_fps']:g} Hz)"
-           if info.get("declared_fps") is not None else ""),
+           if info.get("declared_fps") is not None else "")
+        + (f"; the {info['reference_frames']} frames before them, the rig's T-pose and the "
+           "exporter's blend out of it, left out" if info.get("reference_frames") else ""),
         f"  joints    {info['joints']} with {info['dofs']} DOFs (+ root), "
         f"{info['nodes']} skeleton nodes",
         f"  body      {info['stature_m']:.2f} m tall; lengths in {info['unit']}",

@@ -343,7 +343,7 @@ def _known(b: _Builder, summary: IndexSummary, path: Path, rel: str, at: int, fa
                             if export is not None
                             else any(e.declared_fps is not None for e, _, _ in old))
         if stale or any(f is None for f in found):
-            again = _analysed(path, rates, export)
+            again = _analysed(path, [(e.fps, e.duration) for e, _, _ in old], export)
             if again is None:   # read at another rate now (analysis.rate): its windows too
                 del b.takes[facts.sha256]   # not kept beside the new ones by a save
                 return True
@@ -439,18 +439,21 @@ def _embedded(jobs: list[_Job], embedder: Embedder, model: Any, workers: int):
                                   "run the same command again to go on") from None
 
 
-def _analysed(path: Path, rates: list[float], export: SharedRate | None = None
+def _analysed(path: Path, read: list[tuple[float, float]], export: SharedRate | None = None
               ) -> list[list[dict]] | None:
-    """The findings of each take of a file whose entries an older index made, at the
-    ``rates`` it read them at: ``[]`` each where the file no longer reads as it did; None
-    where it now reads at another rate (the rate check changed, or the rate of its
-    ``export``: its windows are embedded anew)."""
+    """The findings of each take of a file whose entries an older index made, read at the
+    rate and for the span ``read`` gives each (Hz, s): ``[]`` each where the file no
+    longer reads as it did; None where it now reads at another rate (the rate check
+    changed, or the rate of its ``export``) or for another span (a reader now leaves out
+    frames that are not the take's, ``kinematics.reference_pose``): its windows are
+    embedded anew."""
     try:
         motions = read_takes(path, export)
     except MotionlangError:
         motions = []
-    if len(motions) != len(rates):
-        return [[] for _ in rates]
-    if any(abs(m.fps - r) > 1e-6 * r for m, r in zip(motions, rates)):
+    if len(motions) != len(read):
+        return [[] for _ in read]
+    if any(abs(m.fps - r) > 1e-6 * r or abs(span(m) - d) > 0.5 / m.fps
+           for m, (r, d) in zip(motions, read)):
         return None
     return [take_findings(m) for m in motions]
