@@ -522,6 +522,16 @@ def test_check_reads_the_side_the_direction_the_order_and_a_no():
         "jump (the sentence says not): yes (")
 
 
+def test_a_span_holding_part_of_a_series_counts_its_share():
+    spins = Analysis(findings=(Finding("turn", "spin", 0.0, 4.4, "facing turned (deg)", 1080.0,
+                                       45.0, 1.0, side="left", count=3,
+                                       detail={"angle": 1080.0, "rounded": 1080}),),
+                     duration=4.4, leg=0.9, stature=1.75)
+    assert [f.count for f in spins.within(0.0, 4.4).findings] == [3]
+    assert [f.count for f in spins.within(3.4, 4.4).findings] == [1]   # a quarter of it
+    assert [f.count for f in spins.within(0.0, 3.0).findings] == [2]
+
+
 def test_the_open_world_check_as_a_share():
     from motionlang.evaluation.open_world import check_share, shown
     sat = take(hold(pose(), 1.0), blend(pose(), SIT, 1.0), hold(SIT, 2.0))

@@ -281,12 +281,20 @@ def generate_hypotheses(text: str, model: Any = None, *, seed: int = 0,
     return hyps, t2m.fps
 
 
+#: s: a motion made shorter than this (a cap on its frames) is not checked against its
+#: sentence: too short for the analysis to see a walk (0.8 s of travel) or a wave's swings
+CHECK_SHORTEST = 1.5
+
+
 def _warn_not_shown(text: str, result: Any, fps: float, *, hint: bool = True) -> None:
     """One warning where the motion made for ``text`` (a Motion, or (T, 21, 3) positions at
     ``fps``) does not do an action of it as the sentence says (the open-world check,
     ``analysis.check.unmet``), naming them: a model asked for two things in a row often
     makes one."""
     import warnings
+    seconds = (result.n_frames if isinstance(result, Motion) else len(result)) / fps
+    if seconds < CHECK_SHORTEST:
+        return
     try:
         missed = unmet(text, analyse(result) if isinstance(result, Motion) else
                        analyse_positions(np.asarray(result), fps))

@@ -226,11 +226,18 @@ class Analysis:
         return [(phrase(f, level=level, first=i == 0), f) for i, f in enumerate(chosen)]
 
     def within(self, start: float, end: float) -> Analysis:
-        """The findings that fall mostly within [start, end), times kept."""
-        inside = tuple(f for f in self.findings
-                       if max(0.0, min(end, f.end) - max(start, f.start)) >=
-                       0.5 * min(max(f.duration, 1e-6), end - start))
-        return replace(self, findings=inside)
+        """The findings that fall mostly within [start, end), times kept; a repeated one
+        (``count``) that the span holds only part of counts its share of the repeats (a
+        4.4-s series of 3 spins, 1 s of it in the span: 1)."""
+        inside = []
+        for f in self.findings:
+            held = max(0.0, min(end, f.end) - max(start, f.start))
+            if held < 0.5 * min(max(f.duration, 1e-6), end - start):
+                continue
+            if f.count > 1 and held < f.duration:
+                f = replace(f, count=max(1, int(round(f.count * held / f.duration))))
+            inside.append(f)
+        return replace(self, findings=tuple(inside))
 
     def timeline(self, min_segment: float = MIN_SEGMENT) -> list[tuple[float, float, str]]:
         """[(start, end, sentence), ...] covering the take: cut where the most salient

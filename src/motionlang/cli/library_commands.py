@@ -11,7 +11,7 @@ from motionlang.cli.config_options import add_config_options, config_from_args, 
 from motionlang.cli.options import output_file
 from motionlang.library.merge import merge_indexes
 from motionlang.library.options import IndexOptions, SearchOptions  # torch-free
-from motionlang.library.store import load_index
+from motionlang.library.search import nothing_found
 
 
 def cmd_index(args: argparse.Namespace) -> int:
@@ -27,23 +27,11 @@ def cmd_search(args: argparse.Namespace) -> int:
     opts = config_values(config_from_args(SearchOptions, args))
     hits = search(args.query, args.index, model=args.model, render=args.render, **opts)
     if not hits and not args.json:
-        print(_nothing_found(args.index, opts))
+        print(nothing_found(args.index, opts))
         return 0
     print(json.dumps([h._asdict() for h in hits], indent=1) if args.json else
           "\n".join(h.line(i) for i, h in enumerate(hits, 1)))
     return 0
-
-
-def _nothing_found(index: str, opts: dict) -> str:
-    """The line ``search`` prints for no hits: which filters left nothing, and for
-    ``--rig`` the rigs the index holds."""
-    given = [f"--{k.replace('_', '-')} {v}" for k, v in opts.items()
-             if k in ("where", "rig", "path_glob", "min_duration") and v]
-    line = f"no take of {index} matches" + (f" {', '.join(given)}" if given else "")
-    if opts.get("rig"):
-        rigs = sorted({e.rig.get("map", "?") for e in load_index(index).entries})
-        line += f" (the rigs of its takes: {', '.join(rigs) or 'none'})"
-    return line
 
 
 def cmd_merge(args: argparse.Namespace) -> int:

@@ -344,6 +344,19 @@ class Library:
                           fps=entry.fps)[entry.sequence - 1]
 
 
+def nothing_found(index: str | Path, options: dict) -> str:
+    """The line for a search with no hits: the filters of ``options`` (the fields of
+    :class:`SearchOptions` given) that left nothing, and for ``rig`` the rigs the index
+    holds."""
+    given = [f"--{k.replace('_', '-')} {v}" for k, v in options.items()
+             if k in ("where", "rig", "path_glob", "min_duration") and v]
+    line = f"no take of {index} matches" + (f" {', '.join(given)}" if given else "")
+    if options.get("rig"):
+        rigs = sorted({e.rig.get("map", "?") for e in load_index(index).entries})
+        line += f" (the rigs of its takes: {', '.join(rigs) or 'none'})"
+    return line
+
+
 def ranked(scores: np.ndarray) -> np.ndarray:
     """Scores as they are ranked: rounded to :data:`RANK_DECIMALS`, so that two windows
     whose cosines differ only by float32 rounding (which the thread count changes) nearly
