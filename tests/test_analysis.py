@@ -514,6 +514,18 @@ def test_check_reads_the_side_the_direction_the_order_and_a_no():
     assert [(c.action, c.shown) for c in got] == [("jump", True), ("walk", False)]
     assert got[1].note == "only before the jump, 0.0-3.0 s"
     assert said("a person raises both hands") == [("raise", False, False)]
+    # "then" of things done together: a turn while walking, a wave within the raise
+    during = _seen(("walk", 0.0, 3.0, None, {"direction": "forward", "path": "straight"}),
+                   ("turn", 1.0, 2.0, "left", None), ("raise", 4.0, 7.0, "right", None),
+                   ("wave", 5.0, 6.0, "right", None))
+    assert [c.met for c in check_sentence("a person walks forward, then turns left", during)
+            ] == [True, True]
+    assert [c.met for c in check_sentence("a person raises the right hand, then waves",
+                                          during)] == [True, True]
+    # "not": its own findings only (a raised hand is no wave)
+    assert said("a person raises the right hand and does not wave") == [
+        ("raise", True, True), ("wave", False, True)]
+    assert said("a person walks back and forth") == [("walk", True, True)]
     assert said("a person raises the right hand") == [("raise", True, True)]
     # what the sentence says the body does not do
     assert said("a person does not sit") == [("sit", False, True)]

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 from motionlang.analysis.analyse import ACTION, Analysis
 from motionlang.analysis.evidence import Finding
-from motionlang.analysis.words import COMPATIBLE, actions_named, mentions
+from motionlang.analysis.words import COMPATIBLE, mentions
 from motionlang.errors import MotionlangError
 
 #: the coarse actions some detector can find (others are "cannot tell")
@@ -72,9 +72,10 @@ _DIRECTION_SEEN = {"forward": ("forward",), "backwards": ("backwards",),
                    "sideways": ("left", "right")}
 
 
-def _answers(action: str, f: Finding) -> bool:
-    """Whether the finding ``f`` shows ``action`` (or one that answers for it)."""
-    accept = {action, *COMPATIBLE.get(action, ())}
+def _answers(action: str, f: Finding, *, exact: bool = False) -> bool:
+    """Whether the finding ``f`` shows ``action`` (or, unless ``exact``, one that answers
+    for it)."""
+    accept = {action} if exact else {action, *COMPATIBLE.get(action, ())}
     return (ACTION[f.label] in accept or (
         action == "turn" and f.label in ("walk", "run") and
         f.detail.get("path", "straight") != "straight") or (   # a walk that turns
@@ -107,8 +108,9 @@ def _how(f: Finding) -> str:
 
 def check_sentence(text: str, analysis: Analysis) -> list[ActionCheck]:
     """Every action ``text`` names, in its order, against ``analysis``: seen at all, then on
-    the side and in the direction the sentence gives it, going on past the end of the
-    action named before it where the sentence says "then" (``analysis.words.mentions``).
+    the side and in the direction the sentence gives it, not all over before the action
+    named before it began where the sentence says "then" (``analysis.words.mentions``);
+    an action it says the body does not do is looked for by its own findings only.
 
     Raises:
         MotionlangError: an empty sentence.
@@ -116,31 +118,34 @@ def check_sentence(text: str, analysis: Analysis) -> list[ActionCheck]:
     if not text.strip():
         raise MotionlangError("the sentence to check is empty")
     out: list[ActionCheck] = []
-    previous: tuple[str, float] | None = None   # the action named before, where it ended
+    previous: tuple[str, float] | None = None   # the action named before, where it began
     for m in mentions(text):
         if m.action not in DETECTABLE and not COMPATIBLE.get(m.action, set()) & DETECTABLE:
             out.append(ActionCheck(m.action, None, negated=m.negated))
             previous = None
             continue
-        seen = sorted((f for f in analysis.findings if _answers(m.action, f)),
-                      key=lambda f: -f.confidence)
+        # "does not wave" asks that no wave be seen, not that no hand be up
+        seen = sorted((f for f in analysis.findings
+                       if _answers(m.action, f, exact=m.negated)), key=lambda f: -f.confidence)
         hits, note = seen, ""
         # "both" asked of the hands only ("jumps with both feet" says no more than a jump)
         if m.side in ("left", "right") or m.side == "both" and m.action in _HANDS:
             hits = [f for f in hits if _on_side(f, m.side)]
-        if m.direction is not None and m.action in ("walk", "run", "jump"):
+        # a jump's direction is only up, down or away (no side, no back): not asked of it
+        if m.direction is not None and m.action in ("walk", "run"):
             hits = [f for f in hits if _went(f, m.direction)]
         if seen and not hits:
             note = _how(seen[0])
         if m.after_previous and previous is not None and hits:
+            # "then": not all over before the action named before it began (a turn made
+            # while walking, a wave within a raise, a walk after a jump all are)
             later = [f for f in hits if f.end > previous[1]]
             if not later:
                 note = f"only before the {previous[0]}, {hits[0].start:.1f}-{hits[0].end:.1f} s"
             hits = later
         out.append(ActionCheck(m.action, bool(hits), tuple(hits), m.negated, note))
-        # the next action must go on past where this one was first seen to end
-        first = min(hits, key=lambda f: f.start, default=None)
-        previous = (m.action, first.end) if first is not None and not m.negated else None
+        first = min((f.start for f in hits), default=None)
+        previous = (m.action, first) if first is not None and not m.negated else None
     return out
 
 
@@ -175,21 +180,9 @@ _MANNER = {"circle": ("path", "in a circle"), "circles": ("path", "in a circle")
            "sideways": ("direction", ("left", "right"))}
 
 
-#: findings of a hand held up, which the wave detector looked at for a wave
-_ARM_UP = ("raise", "reach")
-
-
 def contradicted(text: str, analysis: Analysis) -> bool:
     """Whether ``text`` says how the body travels ("in a circle", "backwards", "sideways")
-    where the analysis saw it travel otherwise (False where it saw no travel at all), or
-    says it waves where the analysis saw a hand held up and no wave: the hand was up, and
-    it did not swing (a raise answers for a wave in :func:`check_sentence`, where a wave too
-    small to see must not be called absent; here the sentence is weighed against what was
-    seen)."""
-    labels = {f.label for f in analysis.findings} | {
-        m for f in analysis.findings if f.label == "dance" for m in f.detail.get("moves", ())}
-    if "wave" in actions_named(text) and "wave" not in labels and labels & set(_ARM_UP):
-        return True
+    where the analysis saw it travel otherwise; False where it saw no travel at all."""
     travel = [f for f in analysis.findings if f.label in ("walk", "run")]
     if not travel:
         return False

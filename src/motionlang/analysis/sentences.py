@@ -202,6 +202,10 @@ _THIRD_PERSON = frozenset(w for ws in ACTION_WORDS.values() for w in ws
                           if w.endswith("s") and not w.endswith("ss"))
 
 
+#: action verbs that take an object, which may be an action's noun ("throws punches",
+#: "turns cartwheels", "lifts boxes")
+_TRANSITIVE = frozenset("throws tosses turns lifts raises grabs picks hits strikes touches "
+                        "swings kicks punches".split())
 #: verbs that never follow an action verb ("a person jumps does some squats")
 _AUXILIARY = frozenset("does did is was has makes takes goes gets".split())
 
@@ -214,5 +218,5 @@ def garbled(text: str) -> bool:
     words = text.lower().split()
     if len(words) >= 2 and words[0] in ("a", "an", "the") and words[1] in _THIRD_PERSON:
         return True
-    return any(a in _THIRD_PERSON and (b in _THIRD_PERSON or b in _AUXILIARY)
-               for a, b in zip(words, words[1:]))
+    return any(a in _THIRD_PERSON and a not in _TRANSITIVE and (
+        b in _THIRD_PERSON or b in _AUXILIARY) for a, b in zip(words, words[1:]))

@@ -124,7 +124,7 @@ class Mention:
 _CLAUSE_END = re.compile(r"[,;.]|\band\b|\bthen\b|\bwhile\b")
 _SIDE = re.compile(r"\b(left|right|both)\b")
 _DIRECTION = {"forward": "forward", "forwards": "forward", "ahead": "forward",
-              "backward": "backwards", "backwards": "backwards", "back": "backwards",
+              "backward": "backwards", "backwards": "backwards",
               "sideways": "sideways", "sidewards": "sideways"}
 _NEGATION = re.compile(r"(?:\b(?:not|never|without|no longer)|n't)\s+$")
 _SEQUENCE = re.compile(r"\bthen\b|\bafter(?:wards| that)\b|\bfollowed by\b")

@@ -114,7 +114,9 @@ def cmd_convert(args: argparse.Namespace) -> int:
     rig = None if args.rig is None else load_rig(args.rig, args.rig_joint_map)  # before reading
     motion = load_input(args).between(args.start, args.end)
     write_motion(motion if rig is None else retarget(motion, rig), out)
-    print(out)
+    lead = motion.meta.get("reference_frames")
+    print(out if not lead else f"{out} (without the input's first {lead} frames: the rig's "
+                               "T-pose and the exporter's blend out of it)")
     return 0
 
 

@@ -28,11 +28,15 @@ _BARE_ARTICLE = re.compile(r"^(a|an|the)\s+([a-z]+)\b")
 _ACTION_FORMS = frozenset(w for ws in ACTION_WORDS.values() for w in ws if w.endswith("s"))
 
 
+#: other verbs a caption's subject takes ("an old man takes a bow")
+_OTHER_VERBS = frozenset("takes does makes goes gets moves performs holds keeps shows "
+                         "stands".split())
+
+
 def _verb_like(word: str) -> bool:
     """Whether a word after a sentence's article is a verb in the third person ("runs",
-    "takes"): an action word's form, or an -s word that is not -ss."""
-    return word in _ACTION_FORMS or (word.endswith("s") and not word.endswith("ss")
-                                     and len(word) > 3)
+    "takes"), not a plural subject ("the arms swing")."""
+    return word in _ACTION_FORMS or word in _OTHER_VERBS
 _STYLE_SUBJECTS = sorted({s for st in STYLES.values() for s, _ in st.subjects}, key=len,
                          reverse=True)
 _STYLE_PHRASES = sorted({p for st in STYLES.values() for p in (*st.phrases, *st.synonyms)

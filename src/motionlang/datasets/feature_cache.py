@@ -27,8 +27,9 @@ from motionlang.formats import find_asf
 from motionlang.kinematics.from_positions import mirror_motion
 from motionlang.utils.progress import progress
 
-#: bump when any feature encoding changes, so that older cache entries are not reused
-CACHE_VERSION = 1
+#: bump when any feature encoding, or what a reader makes of a file, changes, so that older
+#: cache entries are not reused (2: the BVH reader leaves out an exporter's T-pose)
+CACHE_VERSION = 2
 
 
 @dataclass

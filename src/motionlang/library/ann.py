@@ -57,7 +57,10 @@ class Approximate:
                     return
             except (MotionlangError, RuntimeError, ValueError):
                 pass   # a damaged or foreign graph: built again below
-        self.graph.add(np.arange(self.n), np.ascontiguousarray(unit, dtype=np.float32))
+        # one thread: the graph (and so every approximate answer) is the same on every run;
+        # threads adding at once link the rows in whatever order they come
+        self.graph.add(np.arange(self.n), np.ascontiguousarray(unit, dtype=np.float32),
+                       threads=1)
         if cache is not None and meta is not None:
             self._save(cache, meta, key)
 

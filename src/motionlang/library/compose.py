@@ -358,7 +358,10 @@ def compose_to(text: str, library: str | Path | Library, out: str | Path, *,
     lines += [f"  {c.part!r}: {c.file} {c.start:.1f}-{c.end:.1f} s"
               + (f" ({c.why})" if c.why else " (the learned model's nearest)")
               for c in made.clips]
-    missed = unmet(text, analyse_positions(made.positions, made.fps))
+    try:
+        missed = unmet(text, analyse_positions(made.positions, made.fps))
+    except MotionlangError:   # a motion the analysis cannot read: nothing to say of it
+        missed = []
     if missed:   # no take of the library shows it, or the join lost it
         lines.append(f"warning: {not_shown_line(missed)}")
     return "\n".join(lines)

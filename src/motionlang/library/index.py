@@ -8,9 +8,9 @@ not read is listed with its one-line reason and skipped: one bad file never ends
 Every take is also analysed (:mod:`.grounded`), and the findings stored with it; a take
 of an older index that holds none is read and analysed again, its vectors kept. The files
 of one export (a folder's BVH files of one rig and declared rate, ``library.rates``) are
-read at one rate, as ``describe DIR`` reads them: the exports that hold a file to be read
-are judged whole (the other shards' files too), and an unchanged take of such an export
-read at another rate before is embedded anew.
+read at one rate, as ``describe DIR`` reads them: every export that holds a file of the
+run is judged whole on every run (the other shards' files too), and an unchanged take of
+such an export read at another rate before is embedded anew.
 """
 from __future__ import annotations
 
@@ -258,13 +258,11 @@ def build_index(folder: str | Path, out: str | Path, model: Any = None,
     known = [(at, path, path.relative_to(root).as_posix()) for at, path in enumerate(paths)]
     facts = [_facts(b, root, path, rel, at) for at, path, rel in progress(
         known, desc="digests", unit="files", disable=hide)]
-    # one export, one rate (library.rates): the exports of the files to be read judged
-    # whole, the files of other shards too, so that every shard reads them alike
-    reading = [p for (_, p, rel), f in zip(known, facts) if f is not None and (
-        f.sha256 not in b.takes and f.sha256 not in b.bad
-        or any(e.findings is None for e, _, _ in b.reusable(f.sha256, rel)))]
-    exports = shared_rates(every, only=reading, show_progress=opts.show_progress) \
-        if reading else {}
+    # one export, one rate (library.rates): every export of this run's files judged whole,
+    # the files of other shards too, on every run, so that every shard reads them alike
+    # and a file come or gone moves the rest of its export with it
+    exports = shared_rates(every, only=paths, show_progress=opts.show_progress) \
+        if paths else {}
     bar = progress(total=len(paths), desc="index", unit="files", disable=hide)
     with bar:
         todo = []
@@ -345,7 +343,11 @@ def _known(b: _Builder, summary: IndexSummary, path: Path, rel: str, at: int, fa
         if stale or any(f is None for f in found):
             again = _analysed(path, [(e.fps, e.duration) for e, _, _ in old], export)
             if again is None:   # read at another rate now (analysis.rate): its windows too
-                del b.takes[facts.sha256]   # not kept beside the new ones by a save
+                paths = b.takes[facts.sha256]   # its own not kept beside the new ones by a
+                if paths.get(rel) is old:       # save (a copy's stay the copy's)
+                    del paths[rel]
+                    if not paths:
+                        del b.takes[facts.sha256]
                 return True
             found = list(again)
             summary.analysed += 1
