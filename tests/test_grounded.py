@@ -177,6 +177,7 @@ def test_reconcile_keeps_style_words_only_where_the_model_knows_the_motion():
         "a person takes 6 steps", "a person walks forward"]
     # broken English is left out; "man is way" is the captions' "man's way"
     broken = [("a walks forward", -1.0), ("a person jumps bows", -1.0),
+              ("a person jumps the way", -1.0),
               ("a man walks forward in an old man is way", -1.0)]
     assert [t for t, _ in reconcile(broken, _walking(), 1.0)][:1] == [
         "a person walks forward in an old person's way"]

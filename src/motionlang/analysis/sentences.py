@@ -212,11 +212,15 @@ _AUXILIARY = frozenset("does did is was has makes takes goes gets".split())
 
 def garbled(text: str) -> bool:
     """Whether a sentence is broken English a model stumbled into: no subject before its
-    verb ("a walks forward"), or two verbs in a row ("a person jumps bows", "jumps
-    squats", "jumps does some squats"); a comma between them is a list ("walks, turns
-    around")."""
+    verb ("a walks forward"), two verbs in a row ("a person jumps bows", "jumps squats",
+    "jumps does some squats"; a comma between them is a list: "walks, turns around"), or a
+    verb of going with "the way" ("a person jumps the way"; one shows or points the
+    way)."""
     words = text.lower().split()
     if len(words) >= 2 and words[0] in ("a", "an", "the") and words[1] in _THIRD_PERSON:
+        return True
+    if any(a in _THIRD_PERSON and a not in _TRANSITIVE and b == "the" and c in ("way", "way,")
+           for a, b, c in zip(words, words[1:], words[2:])):   # "jumps the way" (not "shows")
         return True
     return any(a in _THIRD_PERSON and a not in _TRANSITIVE and (
         b in _THIRD_PERSON or b in _AUXILIARY) for a, b in zip(words, words[1:]))
