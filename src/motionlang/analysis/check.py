@@ -25,13 +25,15 @@ class ActionCheck:
 
     Attributes:
         action: the coarse action the sentence names (``analysis.words.ACTION_WORDS``).
-        shown: True (seen as the sentence says it: on its side, in its direction, after the
-            action named before it where it says "then"), False (a detector for it exists
-            and saw nothing so) or None (no detector: the analysis cannot tell).
+        shown: True (seen as the sentence says it: on its side, in its direction for a
+            walk or run, not all over before the action named before it where it says
+            "then"), False (a detector for it exists and saw nothing so) or None (no
+            detector: the analysis cannot tell).
         findings: the findings that show it, most confident first.
         negated: the sentence says the body does not do it ("does not jump").
         note: where ``shown`` is False though the action was seen: how it was seen
-            otherwise ("with the right leg", "forward", "only before the jump").
+            otherwise ("on the right side, 0.9-2.9 s", "forward, 3.0-6.0 s", "only before
+            the walk, 0.0-0.5 s").
     """
 
     action: str
@@ -48,7 +50,7 @@ class ActionCheck:
 
     def line(self) -> str:
         """``sit: yes (1.9-4.1 s, confidence 0.97)`` / ``sit: no`` / ``throw: cannot tell``;
-        ``jump (the sentence says not): yes (...)``; ``kick: no (seen with the right leg:
+        ``jump (the sentence says not): yes (...)``; ``kick: no (seen on the right side,
         0.9-2.9 s)``."""
         name = f"{self.action} (the sentence says not)" if self.negated else self.action
         if self.shown is None:
@@ -67,7 +69,7 @@ class ActionCheck:
 
 #: actions of the hands, of which "both" says something
 _HANDS = frozenset({"raise", "wave", "punch", "reach"})
-#: how each direction a sentence says is seen in a travel's or a jump's ``direction``
+#: how each direction a sentence says is seen in a walk's or a run's ``direction``
 _DIRECTION_SEEN = {"forward": ("forward",), "backwards": ("backwards",),
                    "sideways": ("left", "right")}
 
@@ -94,12 +96,12 @@ def _on_side(f: Finding, side: str) -> bool:
 
 def _went(f: Finding, direction: str) -> bool:
     seen = f.detail.get("direction")
-    return seen is None or seen in _DIRECTION_SEEN[direction] or (
-        direction == "forward" and seen == "up")
+    return seen is None or seen in _DIRECTION_SEEN[direction]
 
 
 def _how(f: Finding) -> str:
-    """A finding's side or direction, for a note: "with the right side", "backwards"."""
+    """A finding's side or direction and its span, for a note: "on the right side, 0.9-2.9
+    s", "backwards, 0.0-3.0 s"."""
     if f.label in ("walk", "run", "jump") and f.detail.get("direction"):
         return f"{f.detail['direction']}, {f.start:.1f}-{f.end:.1f} s"
     return f"on the {f.side} side, {f.start:.1f}-{f.end:.1f} s" if f.side else \
@@ -108,7 +110,8 @@ def _how(f: Finding) -> str:
 
 def check_sentence(text: str, analysis: Analysis) -> list[ActionCheck]:
     """Every action ``text`` names, in its order, against ``analysis``: seen at all, then on
-    the side and in the direction the sentence gives it, not all over before the action
+    the side the sentence gives it ("both" asked of the hands only) and, for a walk or a
+    run, in its direction, not all over before the action
     named before it began where the sentence says "then" (``analysis.words.mentions``);
     an action it says the body does not do is looked for by its own findings only.
 

@@ -213,9 +213,9 @@ _AUXILIARY = frozenset("does did is was has makes takes goes gets".split())
 def garbled(text: str) -> bool:
     """Whether a sentence is broken English a model stumbled into: no subject before its
     verb ("a walks forward"), two verbs in a row ("a person jumps bows", "jumps squats",
-    "jumps does some squats"; a comma between them is a list: "walks, turns around"), or a
-    verb of going with "the way" ("a person jumps the way"; one shows or points the
-    way)."""
+    "jumps does some squats"; a comma between them is a list: "walks, turns around"), or
+    an action verb that takes no object followed by "the way" ("a person jumps the way";
+    one shows or points the way)."""
     words = text.lower().split()
     if len(words) >= 2 and words[0] in ("a", "an", "the") and words[1] in _THIRD_PERSON:
         return True

@@ -5,13 +5,16 @@ its T-pose (arms out level, the body as wide as it is tall) and blend from it in
 capture's first pose within a few frames, far faster than a body moves. Those frames are
 the exporter's, not the subject's: a render of them pops, a clip composed from the take's
 start opens with a T-pose. :func:`leading_reference_frames` finds them from the joints'
-positions alone, whatever the rig, its units or its declared frame rate:
+positions alone, whatever the rig or its units:
 
 - the first frame is spread like a T-pose: its horizontal extent at least
   :data:`T_SPREAD` of the body's height;
 - the frames that follow move at least :data:`BLEND_RATIO` times faster than the body does
-  over the next second (the median of its largest joint speed there), for at most
+  over the next second (the median of its largest joint speed there), for less than
   :data:`MAX_BLEND` s, and the body is :data:`NARROWER` once they end.
+
+The windows are seconds at the declared rate: a header that misstates it (MakeHuman's 25 Hz
+for 120 Hz frames) makes a long blend look longer, which may then be kept.
 """
 from __future__ import annotations
 
@@ -26,7 +29,7 @@ T_SPREAD = 0.75
 NARROWER = 0.1
 #: how much faster than the take's next second the blend out of it moves
 BLEND_RATIO = 3.0
-#: s: the longest blend out of the reference pose
+#: s: blends out of the reference pose are shorter than this
 MAX_BLEND = 0.25
 #: s of the take after the blend that give its own speed
 AFTER = 1.0

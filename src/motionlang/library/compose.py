@@ -172,8 +172,9 @@ def _clip_positions(lib: Library, clip: Clip, stature: float | None) -> np.ndarr
 
 
 def _shows(part: str, p: np.ndarray) -> bool:
-    """Whether the analysis sees every action ``part`` names in ``p`` (T, 21, 3) at
-    :data:`FPS` (an action it has no detector for counts as seen)."""
+    """Whether ``p`` (T, 21, 3) at :data:`FPS` does every action ``part`` names as it
+    says (``ActionCheck.met``; an action the analysis has no detector for counts as
+    done)."""
     try:
         return all(c.met is not False for c in check_sentence(part, analyse_positions(p, FPS)))
     except MotionlangError:

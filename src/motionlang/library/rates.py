@@ -126,7 +126,8 @@ def shared_rates(files: Sequence[Path], *, joint_map: dict | str | Path | None =
     ``joint_map`` (a rig no built-in map fits); files of exports too small to judge among
     ``files`` are not keys (:func:`at_export_rate` judges each on its folder); files that do
     not read are left to their reader to name. ``only``: judge only the exports that hold
-    one of these files (an index's new files: the others' exports were judged before)."""
+    one of these files (an index's files of this run, its shard: the exports that hold
+    them are judged whole)."""
     groups: dict[tuple, list[Path]] = defaultdict(list)
     for path in files:
         if path.suffix.lower() != ".bvh":
