@@ -121,6 +121,12 @@ def test_packaged_twostream_generates_out_of_the_box(tmp_path):
     assert p.shape == (16, 21, 3) and np.isfinite(p).all()
 
 
+def test_a_text_that_is_no_sentence_is_one_clear_error():
+    for bad in (5, None, ["a person walks"]):
+        with pytest.raises(MotionlangError, match="must be a sentence"):
+            ml.generate(bad)
+
+
 def test_unknown_words_are_named():
     with pytest.warns(UserWarning, match="does not know 'dances', 'tango'"):
         m = ml.generate("a person dances a tango", max_frames=10)

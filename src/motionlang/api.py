@@ -251,6 +251,9 @@ def generate_hypotheses(text: str, model: Any = None, *, seed: int = 0,
 
     Raises: MotionlangError: options that contradict each other or the model (checked first).
     """
+    if not isinstance(text, str):
+        raise MotionlangError(f"the text to generate from must be a sentence (a str), got "
+                              f"{type(text).__name__}")
     if max_frames is not None and min_frames > max_frames:
         raise MotionlangError(f"--min-frames {min_frames} exceeds --max-frames {max_frames}")
     t2m = with_options(text_to_motion(model), options)
