@@ -198,7 +198,7 @@ def repeats(text: str) -> bool:
 
 
 #: the forms of the action words a subject can take ("walks", "bows", "squats")
-_THIRD_PERSON = frozenset(w for ws in ACTION_WORDS.values() for w in ws
+THIRD_PERSON = frozenset(w for ws in ACTION_WORDS.values() for w in ws
                           if w.endswith("s") and not w.endswith("ss"))
 
 
@@ -217,10 +217,10 @@ def garbled(text: str) -> bool:
     an action verb that takes no object followed by "the way" ("a person jumps the way";
     one shows or points the way)."""
     words = text.lower().split()
-    if len(words) >= 2 and words[0] in ("a", "an", "the") and words[1] in _THIRD_PERSON:
+    if len(words) >= 2 and words[0] in ("a", "an", "the") and words[1] in THIRD_PERSON:
         return True
-    if any(a in _THIRD_PERSON and a not in _TRANSITIVE and b == "the" and c in ("way", "way,")
+    if any(a in THIRD_PERSON and a not in _TRANSITIVE and b == "the" and c in ("way", "way,")
            for a, b, c in zip(words, words[1:], words[2:])):   # "jumps the way" (not "shows")
         return True
-    return any(a in _THIRD_PERSON and a not in _TRANSITIVE and (
-        b in _THIRD_PERSON or b in _AUXILIARY) for a, b in zip(words, words[1:]))
+    return any(a in THIRD_PERSON and a not in _TRANSITIVE and (
+        b in THIRD_PERSON or b in _AUXILIARY) for a, b in zip(words, words[1:]))

@@ -16,6 +16,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
+from motionlang.analysis.sentences import THIRD_PERSON
 from motionlang.analysis.words import ACTION_WORDS
 from motionlang.datasets.bandai_text import STYLES, styles_named
 
@@ -24,8 +25,6 @@ _MANNER = re.compile(r" (?:in|with) (?:a|an|the)(?: \w+){0,3} (?:way|manner) | a
 _DANGLING = re.compile(r"(?: (?:in|like|with|at|a|an|the|is|of))+$")
 #: the article that opens a sentence and the word after it
 _BARE_ARTICLE = re.compile(r"^(a|an|the)\s+([a-z]+)\b")
-#: every form of the action words that can stand after a subject ("runs", "sprints")
-_ACTION_FORMS = frozenset(w for ws in ACTION_WORDS.values() for w in ws if w.endswith("s"))
 
 
 #: other verbs a caption's subject takes ("an old man takes a bow")
@@ -36,7 +35,7 @@ _OTHER_VERBS = frozenset("takes does makes goes gets moves performs holds keeps 
 def _verb_like(word: str) -> bool:
     """Whether a word after a sentence's article is a verb in the third person ("runs",
     "takes"), not a plural subject ("the arms swing")."""
-    return word in _ACTION_FORMS or word in _OTHER_VERBS
+    return word in THIRD_PERSON or word in _OTHER_VERBS
 _STYLE_SUBJECTS = sorted({s for st in STYLES.values() for s, _ in st.subjects}, key=len,
                          reverse=True)
 _STYLE_PHRASES = sorted({p for st in STYLES.values() for p in (*st.phrases, *st.synonyms)
