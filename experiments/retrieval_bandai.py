@@ -4,7 +4,7 @@ the same pairs, and search queries in words the training captions do not use.
 
     OMP_NUM_THREADS=2 .venv/bin/python experiments/retrieval_bandai.py \
         --retrieval RUN/model.pt --evaluator EVAL_RUN [--data bandai:../shared/data/bandai] \
-        [--corpus CORPUS] [--json out.json]
+        [--corpus CORPUS] [--queries FILE] [--reading written|verbs|canonical] [--json out.json]
 
 Pairs: one caption per test take (dataset 2, take numbers 0 mod 5), drawn as the yardstick
 draws them (``evaluation.t2m.yardstick.test_pairs``, seed 0). Each caption ranks every test
@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 import motionlang as ml
+from motionlang.datasets.canonical import READINGS
 from motionlang.datasets.evaluator_items import build_evaluator_data
 from motionlang.evaluation.metrics.t2m import euclidean_distance_matrix, retrieval_scores
 from motionlang.evaluation.t2m.guo import load_evaluator
@@ -102,14 +103,15 @@ def main(argv=None) -> int:
     ap.add_argument("--json", help="also write the figures here")
     ap.add_argument("--queries", help="a file of action<TAB>query lines instead of the ten "
                                       "fixed queries (each action's P@5: its queries' mean)")
-    ap.add_argument("--canonical", action="store_true",
-                    help="read captions and queries in their canonical form "
-                         "(datasets.canonical) even where the model was trained without")
+    ap.add_argument("--reading", choices=READINGS,
+                    help="read captions and queries so (datasets.canonical.read_as) instead "
+                         "of as the model does (its config's use_reading)")
     args = ap.parse_args(argv)
 
     model = ml.load_model(args.retrieval, kind="retrieval")
-    if args.canonical:
-        model.text.canonical = True
+    if args.reading:
+        model.text.reading = args.reading
+    print(f"sentences read: {model.text.reading}")
     evaluator = load_evaluator(args.evaluator) if args.evaluator else None
     from motionlang.datasets.seq2seq_pairs import load_records
     tests = [r for r in load_records(args.data, 30.0) if r.split == "test"]

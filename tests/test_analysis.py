@@ -627,3 +627,23 @@ def test_a_pause_beside_a_jump_is_the_jumps_and_a_walk_ends_where_it_ends():
     long_pause = Analysis((_finding("walk", 0.0, 4.0), _finding("jump", 6.0, 6.4)),
                           duration=7.0, leg=0.84, stature=1.7)
     assert [a for a, _, _ in long_pause.timeline()] == [0.0, 4.0, 5.4]
+
+
+@pytest.mark.parametrize("text, want", [
+    ("a person puts the left hand up high", [("raise", "left")]),
+    ("someone throwing both hands up over their head", [("raise", "both")]),
+    ("somebody reaches skyward with the right arm", [("raise", "right")]),
+    ("a person signals goodbye using only the right arm", [("wave", "right")]),
+    ("someone greets with both palms", [("wave", "both")]),
+    ("shakes the left hand from side to side", [("wave", "left")]),
+    ("ambles ahead and then bears to the left", [("walk", None), ("turn", "left")]),
+    ("heading forward on foot, then taking a right", [("walk", None), ("turn", "right")]),
+    ("goes round the corner", [("turn", None)]),
+    ("a person racing ahead", [("run", None)]),
+    ("throws a punch", [("punch", None)]),
+    ("bends to the left", [("bend", "left")]),   # a bend of the trunk, not a turn
+    ("throws a ball", [("throw", None)]),
+])
+def test_actions_named_in_other_words(text, want):
+    from motionlang.analysis.words import mentions
+    assert [(m.action, m.side) for m in mentions(text)] == want

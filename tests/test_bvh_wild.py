@@ -396,3 +396,12 @@ def test_motion_info_of_other_formats():
     amc = read_asf_amc(shared_file("cmu35/35.asf"), shared_file("cmu35/35_01.amc"))
     info = motion_info(amc)
     assert info["unit"] == "1/0.45 inch" and 1.6 < info["stature_m"] < 1.9
+
+
+def test_binary_data_is_named_not_echoed(tmp_path):
+    """Random bytes in a .bvh: the error says it is not text, without printing the bytes."""
+    path = tmp_path / "noise.bvh"
+    path.write_bytes(bytes(np.random.default_rng(0).integers(0, 256, 3000, dtype=np.uint8)))
+    with pytest.raises(MotionFormatError, match="binary data") as info:
+        read_bvh(path)
+    assert "\ufffd" not in str(info.value) and all(c.isprintable() for c in str(info.value))

@@ -6,8 +6,10 @@ import pytest
 
 from motionlang.datasets.canonical import (
     Canonical,
+    action_verbs,
     canonical,
     canonical_text,
+    read_as,
     styles_in,
     without_style,
 )
@@ -19,6 +21,10 @@ from motionlang.datasets.canonical import (
     ("somebody jogs in a circle", "A person is running in a circle", "he runs in a circle"),
     ("a person waves his left hand twice", "Someone is waving the left hand two times"),
     ("A human squats down", "the person crouches down"),
+    ("someone puts the left hand up", "a person raises the left hand",
+     "a man sticking his left hand up in the air"),
+    ("somebody takes a left", "a person turns left"),
+    ("someone says hello with the right hand", "a person waves with the right hand"),
 ])
 def test_wordings_of_one_motion_meet(wordings):
     assert len({canonical_text(w) for w in wordings}) == 1, [canonical_text(w)
@@ -33,7 +39,7 @@ def test_what_the_body_does_is_kept():
     assert canonical_text("jumps three times") == "a person jumps 3 times"
     # a noun stays a noun: "at a trot" is a running pace
     assert canonical_text("somebody hurries along at a trot") == (
-        "a person hurries along at a run")
+        "a person runs along at a run")
 
 
 def test_style_and_mood_are_set_apart():
@@ -54,3 +60,14 @@ def test_style_and_mood_are_set_apart():
 def test_a_repeated_word_left_after_the_fillers_is_said_once():
     assert canonical_text("a person is walking walking") == "a person walks"
     assert canonical_text("") == "a person"
+
+
+def test_action_verbs_change_the_verb_alone():
+    """The reading for a model trained on captions as written: other words for an action
+    become its verb; subject, style, articles and sides stay as written."""
+    assert action_verbs("An old man slowly strolls and puts his left hand up") == \
+        "an old man slowly walks and raises his left hand"
+    assert action_verbs("someone greets using both palms") == "someone waves using both palms"
+    assert action_verbs("a person sits down") == "a person sits down"
+    assert read_as("Someone strolls", "written") == "Someone strolls"
+    assert read_as("Someone strolls", "canonical") == canonical_text("Someone strolls")

@@ -140,3 +140,11 @@ def test_a_motion_made_without_an_asked_action_is_named_in_one_warning(walk_file
         _warn_not_shown("a person walks forward", walk, fps)      # all there: nothing said
         _warn_not_shown("a person throws a ball", walk, fps)      # cannot tell: nothing said
         _warn_not_shown("a person walks", walk[:1], fps)          # one frame: nothing to say
+
+
+def test_a_sentence_that_names_no_action_is_refused(walk_file, capsys):
+    """Nothing checked is no answer: one line, exit 2, not an empty "all met"."""
+    assert main(["check", "qwzx blorp", str(walk_file)]) == 2
+    err = capsys.readouterr().err
+    assert "names no action motionlang can read: 'qwzx blorp'" in err
+    assert "Traceback" not in err and len(err.strip().splitlines()) == 1

@@ -528,3 +528,12 @@ def test_an_interrupted_update_that_embeds_retimed_takes_anew_keeps_one_copy(fol
     assert (s.embedded, s.reused) == (1, 2)
     assert sorted(e.path for e in load_index(out).entries) == ["jump.bvh", "sub/long.bvh",
                                                                "walk.bvh"]
+
+
+def test_a_folder_without_motion_files_is_refused_and_nothing_written(tmp_path, capsys):
+    (tmp_path / "notes.md").write_text("not a motion\n")
+    out = tmp_path / "lib.idx"
+    assert main(["index", str(tmp_path), "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "no motion files under it" in err and "Traceback" not in err
+    assert not out.exists() and sorted(p.name for p in tmp_path.iterdir()) == ["notes.md"]

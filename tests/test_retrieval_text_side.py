@@ -137,6 +137,29 @@ def test_canonical_captions_read_wordings_of_one_motion_alike():
     assert not np.allclose(*canon.embed_texts(["walks left", "walks right"]))
 
 
+def test_a_trained_model_reads_queries_with_each_actions_own_verb():
+    """``query_reading``: "verbs" (the default, and what files without the field read) makes
+    "puts the left hand up" the "raises the left hand" the captions said; "written" leaves
+    it; a model trained canonical reads canonically whatever it says."""
+    a, b = "someone puts the left hand up", "someone raises the left hand"
+    verbs, written = tiny(), tiny(query_reading="written")
+    assert verbs.config.query_reading == "verbs" and verbs.text.reading == "verbs"
+    np.testing.assert_allclose(*verbs.embed_texts([a, b]), rtol=1e-6)
+    assert not np.allclose(*written.embed_texts([a, b]))
+    assert not np.allclose(*verbs.embed_texts([b, "someone raises the right hand"]))
+    assert tiny(canonical=True, query_reading="written").text.reading == "canonical"
+    with pytest.raises(MotionlangError, match="RetrievalConfig.query_reading"):
+        RetrievalConfig(query_reading="loose")
+
+
+def test_training_reads_captions_as_the_config_says():
+    from motionlang.models.retrieval.text import SentenceVectors
+    assert RetrievalConfig().training_reading == "written"
+    assert RetrievalConfig(canonical=True).training_reading == "canonical"
+    with pytest.raises(MotionlangError, match="sentence reading"):
+        SentenceVectors(HashTokens(), reading="loose")
+
+
 def test_caption_vectors_kept_on_disk_are_read_back(tmp_path):
     from motionlang.models.retrieval.text import SentenceVectors, cache_file
     first = SentenceVectors(HashTokens())

@@ -16,11 +16,21 @@ from dataclasses import dataclass
 ACTION_WORDS: dict[str, tuple[str, ...]] = {
     "walk": ("walk", "walks", "walking", "walked", "stroll", "strolls", "strolling",
              "march", "marches", "marching", "steps", "step", "stepping", "paces", "pacing",
-             "wanders", "wandering", "strides", "striding", "shuffles", "shuffling"),
+             "wanders", "wandering", "strides", "striding", "shuffles", "shuffling",
+             "wander", "wandered", "stride", "strode", "amble", "ambles", "ambling",
+             "ambled", "saunter", "saunters", "sauntering", "sauntered", "trudge", "trudges",
+             "trudging", "trudged", "plod", "plods", "plodding", "plodded", "meander",
+             "meanders", "meandering", "meandered", "promenade", "promenades",
+             "promenading", "traipse", "traipses", "traipsing", "mosey", "moseys",
+             "moseying", "hike", "hikes", "hiking", "tiptoe", "tiptoes", "tiptoeing"),
     "run": ("run", "runs", "running", "ran", "jog", "jogs", "jogging", "jogged", "sprint",
-            "sprints", "sprinting", "dash", "dashes", "dashing", "trot", "trots", "trotting"),
+            "sprints", "sprinting", "dash", "dashes", "dashing", "trot", "trots", "trotting",
+            "sprinted", "dashed", "trotted", "races", "racing", "raced", "rush", "rushes",
+            "rushing", "rushed", "hurry", "hurries", "hurrying", "hurried", "scurry",
+            "scurries", "scurrying", "scurried", "scamper", "scampers", "scampering",
+            "gallop", "gallops", "galloping", "lope", "lopes", "loping"),
     "jump": ("jump", "jumps", "jumping", "jumped", "hop", "hops", "hopping", "hopped", "leap",
-             "leaps", "leaping", "leapt"),
+             "leaps", "leaping", "leapt", "leaped", "vault", "vaults", "vaulting"),
     "climb": ("climb", "climbs", "climbing", "climbed", "hang", "hangs", "hanging", "scale",
               "scales", "scaling", "clambers", "clambering"),
     "punch": ("punch", "punches", "punching", "punched", "box", "boxes", "boxing", "jab",
@@ -34,10 +44,14 @@ ACTION_WORDS: dict[str, tuple[str, ...]] = {
     "kneel": ("kneel", "kneels", "kneeling", "knelt"),
     "crawl": ("crawl", "crawls", "crawling", "crawled"),
     "balance": ("balance", "balances", "balancing", "balanced"),
-    "wave": ("wave", "waves", "waving", "waved"),
-    "raise": ("raise", "raises", "raising", "raised", "lift", "lifts", "lifting", "lifted"),
-    "clap": ("clap", "claps", "clapping", "clapped"),
-    "turn": ("turn", "turns", "turning", "turned", "rotate", "rotates", "rotating"),
+    "wave": ("wave", "waves", "waving", "waved", "greet", "greets", "greeting", "greeted",
+             "hail", "hails", "hailing", "hailed"),
+    "raise": ("raise", "raises", "raising", "raised", "lift", "lifts", "lifting", "lifted",
+              "hoist", "hoists", "hoisting", "hoisted"),
+    "clap": ("clap", "claps", "clapping", "clapped", "applaud", "applauds", "applauding"),
+    "turn": ("turn", "turns", "turning", "turned", "rotate", "rotates", "rotating", "veer",
+             "veers", "veering", "veered", "swerve", "swerves", "swerving", "swerved",
+             "pivot", "pivots", "pivoting", "pivoted"),
     "spin": ("spin", "spins", "spinning", "spun", "pirouette", "pirouettes", "twirl",
              "twirls", "twirling"),
     "bow": ("bow", "bows", "bowing", "bowed"),
@@ -53,6 +67,15 @@ ACTION_WORDS: dict[str, tuple[str, ...]] = {
                   "backflip", "backflips"),
 }
 _POSSESSIVE = r"(?:his|her|their|its|the|a|one|both|\s)*"
+#: a hand or arm as a sentence names it, with its side ("the left hand", "both arms")
+_LIMB = (r"(?:(?:his|her|their|its|the|a|one|both|left|right|just|only)\s+)*"
+         r"(?:hands?|arms?|palms?|fists?)")
+#: upward, as a sentence says it of a hand
+_HIGH = (r"(?:overhead|high|skywards?|in(?:to)?\s+the\s+air|(?:above|over)\s+(?:his|her|their|"
+         r"the)\s+head|to(?:wards?)?\s+the\s+(?:sky|ceiling))")
+_UP = rf"(?:straight\s+)?(?:up(?:wards?)?(?:\s+{_HIGH})?|{_HIGH})"
+#: a side a path bends to ("to the left", "toward her right", "leftward")
+_BEND = r"(?:\s+(?:off|round|around|away))?\s+(?:(?:to|towards?)\s+)?(?:the\s+|his\s+|her\s+|their\s+)?(?:left|right)"
 #: phrases that name an action their words alone do not (or name another: "standing on one
 #: leg" is balancing, not standing); read before the single words, whose words they take
 PHRASES: tuple[tuple[re.Pattern[str], str], ...] = tuple(
@@ -69,6 +92,37 @@ PHRASES: tuple[tuple[re.Pattern[str], str], ...] = tuple(
         (r"\b(?:goes|going|went|walks?|walking)\s+up\s+(?:the\s+)?(?:stairs|steps|ladder)\b",
          "climb"),
     ))
+#: phrases in other words for an action its own verb names: read as :data:`PHRASES` are,
+#: and said with the action's verb in a canonical caption (``datasets.canonical``); a
+#: group ``keep`` holds the words that stay (the hand and its side)
+PARAPHRASES: tuple[tuple[re.Pattern[str], str], ...] = tuple(
+    (re.compile(p), a) for p, a in (
+        (rf"\b(?:puts?|putting|sticks?|sticking|stuck|shoots?|shooting|shot|throws?|throwing|"
+         rf"threw|holds?|holding|held|thrusts?|thrusting|gets?|getting|got|brings?|bringing|"
+         rf"brought|stretch(?:es)?|stretching|stretched|extends?|extending|extended|pokes?|"
+         rf"poking)\s+(?P<keep>{_LIMB})\s+{_UP}", "raise"),
+        (rf"\breach(?:es|ing|ed)?\s+(?:{_UP}|for\s+the\s+(?:sky|ceiling))", "raise"),
+        (r"\b(?:says?|saying|said|signals?|signall?ing|signall?ed|waves?|waving|waved)\s+"
+         r"(?:hello|hi|goodbye|good-bye|bye|farewell)\b", "wave"),
+        (r"\bbids?\s+(?:\w+\s+)?(?:farewell|goodbye|good-bye)\b", "wave"),
+        (r"\bflag(?:s|ging|ged)?\s+(?:\w+\s+)?down\b", "wave"),
+        (rf"\b(?:swings?|swinging|swung|shakes?|shaking|shook|sways?|swaying|swayed|wags?|"
+         rf"wagging|wagged|moves?|moving|moved)\s+(?P<keep>{_LIMB})\s+(?:from\s+)?"
+         rf"(?:side\s+to\s+side|back\s+and\s+forth|to\s+and\s+fro)", "wave"),
+        (r"\b(?:takes?|taking|took|makes?|making|made|hangs?|hanging|hung)\s+a\s+"
+         r"(?P<keep>left|right|u-turn)\b", "turn"),
+        (r"\bchang(?:es|ing|ed|e)\s+(?:of\s+)?directions?\b", "turn"),
+        (r"\b(?:goes|going|went|heads?|heading|headed|comes?|coming|came)\s+(?:round|around)\s+"
+         r"(?:a|the)\s+(?:corner|bend)\b", "turn"),
+        (rf"\b(?:bears?|bearing|bore|curves?|curving|curved|wheels?|wheeling|wheeled)"
+         rf"(?={_BEND})", "turn"),
+        (r"\bone\s+foot\s+(?:after|in\s+front\s+of)\s+the\s+other\b", "walk"),
+        (r"\b(?:heads?|heading|headed|goes|going|went|moves?|moving|moved|travels?|"
+         r"travell?ing|travell?ed|crosses|crossing|crossed|proceeds?|proceeding|proceeded|"
+         r"makes?\s+(?:his|her|their|its)\s+way|making\s+(?:his|her|their|its)\s+way)"
+         r"(?=(?:\s+\w+){0,4}?\s+on\s+foot\b)", "walk"),
+        (r"\bthrows?\s+(?:a\s+)?(?:punch|punches|jabs?|hooks?|uppercuts?)\b", "punch"),
+    ))
 _INDEX = {w: a for a, ws in ACTION_WORDS.items() for w in ws}
 _TOKEN = re.compile(r"[a-z]+")
 #: actions that answer for one another when two readers compare (a hop is a jump, a squat is
@@ -84,7 +138,7 @@ def _found(text: str) -> list[tuple[int, int, str]]:
     an action, in order: its :data:`PHRASES` first, then the words outside them."""
     found: list[tuple[int, int, str]] = []
     taken = [False] * len(text)
-    for pattern, action in PHRASES:
+    for pattern, action in (*PHRASES, *PARAPHRASES):
         for m in pattern.finditer(text):
             if not any(taken[m.start():m.end()]):
                 found.append((m.start(), m.end(), action))

@@ -128,6 +128,8 @@ def cmd_check(args: argparse.Namespace) -> int:
         checks = check(args.text, motion)
     except MotionlangError as exc:   # the analysis' reason, with the file it is about
         raise MotionlangError(f"{args.input}: {exc}") from None
+    if not checks:   # nothing was checked: not an answer a script may take for "all met"
+        raise MotionlangError(printed(args.text, checks))
     print(printed(args.text, checks, as_json=args.json))
     return 0
 

@@ -17,7 +17,7 @@ import re
 from dataclasses import dataclass
 
 from motionlang.analysis.sentences import THIRD_PERSON
-from motionlang.analysis.words import ACTION_WORDS
+from motionlang.analysis.words import ACTION_WORDS, PARAPHRASES
 from motionlang.datasets.bandai_text import STYLES, styles_named
 
 _ARTICLE = re.compile(r"\ban (?=[^aeiou\s])")
@@ -94,6 +94,7 @@ _NUMBERS = {"one": "1", "two": "2", "three": "3", "four": "4", "five": "5", "six
             "seven": "7", "eight": "8", "nine": "9", "ten": "10", "twice": "2 times",
             "thrice": "3 times", "once": "1 time"}
 _TOKEN = re.compile(r"[a-z0-9]+(?:'[a-z]+)?|,")
+_WORD = re.compile(r"[a-z]+")
 
 
 @dataclass(frozen=True)
@@ -128,6 +129,7 @@ def canonical(text: str) -> Canonical:
     style = styles_in(text)
     plain = without_style(text).lower()
     plain = _SUBJECT.sub("", plain.strip())
+    plain = _paraphrased(plain)   # "puts the left hand up" -> "raises the left hand"
     out: list[str] = []
     before = ""
     for raw in _TOKEN.findall(plain):
@@ -145,6 +147,40 @@ def canonical(text: str) -> Canonical:
         out.append(tok)
     body = " ".join(out).replace(" ,", ",").strip(" ,")
     return Canonical(f"a person {body}".strip(), style)
+
+
+def action_verbs(text: str) -> str:
+    """A sentence as written (lower case), but each action it names in other words said
+    with its action's own verb: the phrases of ``analysis.words.PARAPHRASES`` ("puts the
+    left hand up" -> "raises the left hand") and the other verbs of an action ("strolls",
+    "is jogging" -> "walks", "is runs"). Subject, style, articles and word order stay, so
+    that a model trained on captions as written reads what it knows around the verb."""
+    low = _paraphrased(" ".join(text.lower().split()))
+    return _WORD.sub(lambda m: _CANON.get(m.group(), m.group()), low)
+
+
+def _paraphrased(text: str) -> str:
+    """``text`` (lower case) with every phrase of ``PARAPHRASES`` said with its action's
+    verb and the words of its group ``keep``."""
+    for pattern, action in PARAPHRASES:
+        text = pattern.sub(lambda m, a=action: " ".join(
+            (_VERB[a], *([m.group("keep")] if "keep" in m.re.groupindex and m.group("keep")
+                         else []))), text)
+    return text
+
+
+#: how a sentence encoder may be given a sentence: as written, with each action's own verb
+#: (:func:`action_verbs`), or in canonical form (:func:`canonical_text`)
+READINGS = ("written", "verbs", "canonical")
+
+
+def read_as(text: str, reading: str) -> str:
+    """``text`` as ``reading`` (one of :data:`READINGS`) gives it to an encoder."""
+    if reading == "verbs":
+        return action_verbs(text)
+    if reading == "canonical":
+        return canonical_text(text)
+    return text
 
 
 def canonical_text(text: str) -> str:

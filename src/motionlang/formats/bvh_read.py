@@ -24,6 +24,14 @@ FPS_TOLERANCE = 2e-3  # 0.0333 s is 30 fps (30.03); 0.033 s is not (30.3)
 
 
 # ------------------------------------------------------------------------------ hierarchy
+def _shown(tok: str) -> str:
+    """A token as an error line quotes it: the first 40 characters, or "binary data" for
+    bytes that are not text (a terminal would print them as noise)."""
+    if any(c == "\ufffd" or not c.isprintable() for c in tok):
+        return "binary data (this is not a text file)"
+    return repr(tok[:40])
+
+
 class _Tokens:
     """Whitespace tokens of the header, read lazily line by line with 1-based line numbers."""
 
@@ -52,7 +60,7 @@ class _Tokens:
     def expect(self, word: str) -> int:
         tok, ln = self.next(repr(word))
         if tok.upper() != word.upper():
-            raise MotionFormatError(self.path, f"expected {word!r}, got {tok[:40]!r}", line=ln)
+            raise MotionFormatError(self.path, f"expected {word!r}, got {_shown(tok)}", line=ln)
         return ln
 
     def number(self, what: str, integer: bool = False) -> float:
@@ -60,7 +68,7 @@ class _Tokens:
         try:
             v = int(tok) if integer else float(tok)
         except ValueError:
-            raise MotionFormatError(self.path, f"malformed number {tok[:40]!r} for {what}",
+            raise MotionFormatError(self.path, f"malformed number {_shown(tok)} for {what}",
                                     line=ln) from None
         if not integer and not math.isfinite(v):
             raise MotionFormatError(self.path, f"non-finite {what}: {tok!r}", line=ln)
@@ -85,7 +93,7 @@ def _parse_hierarchy(tk: _Tokens) -> list[dict]:
     stack: list[int] = []   # the open nodes, outermost first
     tok, ln = tk.next("ROOT")
     if tok.upper() != "ROOT":
-        raise MotionFormatError(tk.path, f"expected 'ROOT', got {tok[:40]!r}", line=ln)
+        raise MotionFormatError(tk.path, f"expected 'ROOT', got {_shown(tok)}", line=ln)
     while True:
         _open_node(tk, tok, ln, nodes, stack)
         child = _node_body(tk, nodes, stack)
@@ -115,7 +123,7 @@ def _open_node(tk: _Tokens, tok: str, ln: int, nodes: list[dict], stack: list[in
             site_name = tk.next("an End Site name")[0]
         name, kind = site_name or f"{nodes[stack[-1]]['name']}_end", "end"
     else:
-        raise MotionFormatError(tk.path, f"unexpected {tok[:40]!r} in HIERARCHY", line=ln)
+        raise MotionFormatError(tk.path, f"unexpected {_shown(tok)} in HIERARCHY", line=ln)
     tk.expect("{")
     nodes.append({"name": name, "parent": stack[-1] if stack else -1, "offset": None,
                   "channels": [], "line": ln, "end": kind == "end", "site_name": site_name})

@@ -238,6 +238,9 @@ def build_index(folder: str | Path, out: str | Path, model: Any = None,
     root, out = Path(folder).resolve(), Path(out)
     unlisted: list[tuple[str, str]] = []
     paths = every = motion_files(root, unlisted)
+    if not every and not unlisted:   # a mistyped folder, not a library to keep empty
+        raise MotionlangError(f"{folder}: no motion files under it (.bvh, .amc with its "
+                              ".asf, .xml MMM, .mat, DeepMimic .txt): nothing indexed")
     if opts.shard:
         k, n = shard_of(opts.shard)
         paths = [p for p in paths if in_shard(p.relative_to(root).as_posix(), k, n)]

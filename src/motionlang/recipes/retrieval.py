@@ -211,7 +211,12 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
     import torch
 
     from motionlang.models.retrieval.model import RetrievalModel
-    from motionlang.models.retrieval.text import CHUNK, cache_file, sentence_vectors
+    from motionlang.models.retrieval.text import (
+        CHUNK,
+        SentenceVectors,
+        cache_file,
+        sentence_vectors,
+    )
 
     out = Path(out_dir)
     data_cfg = data_cfg if data_cfg is not None else RetrievalOptions()
@@ -220,9 +225,11 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
     if data_cfg.init is not None:   # before any data is read: a wrong model is one line
         init = load_model(data_cfg.init, kind="retrieval")
         config = init.config
-    # before any data is read
-    text = init.text if init is not None else sentence_vectors(
-        config.text_model, config.text_layer, config.canonical)
+    # before any data is read; captions are read as training reads them, queries later as
+    # the trained model does (config.use_reading)
+    text = SentenceVectors(init.text.tokens, reading=config.training_reading,
+                           head=init.text.head) if init is not None else sentence_vectors(
+        config.text_model, config.text_layer, config.training_reading)
     paths = [s.path for s in sources]
     data = build_twostream_data(paths if len(paths) > 1 else paths[0], seed=train_cfg.seed,
                                 max_seconds=data_cfg.max_seconds, mirror=data_cfg.mirror)

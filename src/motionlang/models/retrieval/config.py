@@ -17,6 +17,8 @@ from motionlang.utils.checks import check_numbers
 #: layer widths, bounded by ``utils.checks.MAX_SIZE`` so a mistyped size fails at once
 SIZES = ("hidden", "embed", "text_hidden")
 TEXT_ANCHORS = ("none", "pca")
+#: how a model reads a sentence once trained (``datasets.canonical.read_as``)
+QUERY_READINGS = ("written", "verbs", "canonical")
 
 
 def _opt(default: Any, help_: str, **meta: Any) -> Any:
@@ -41,6 +43,12 @@ class RetrievalConfig:
             the last one, the sentence-transformers vector; MiniLM-L6's is 6).
         canonical: captions and queries are read in their canonical form
             (``datasets.canonical``), training and search alike.
+        query_reading: how a model trained on captions as written reads a sentence once
+            trained (a query, a caption to rank): ``"verbs"``, with each action it names in
+            other words said with its action's verb ("puts the left hand up" -> "raises the
+            left hand", ``datasets.canonical.action_verbs``), the rest as written; ``"written"``
+            as it is; ``"canonical"`` in canonical form. Files written before the field read
+            ``"verbs"``. A model trained ``canonical`` reads canonically whatever this says.
         hidden, layers, heads: width, depth and attention heads of the motion encoder (a
             transformer over the frames, masked mean pooling).
         text_hidden: hidden units of the text side's projection (two linear layers over the
@@ -75,6 +83,9 @@ class RetrievalConfig:
     canonical: bool = _opt(False, "read every caption and query in its canonical form "
                                   "(datasets.canonical: one verb per action, subject 'a "
                                   "person', digits, fillers and style words out)")
+    query_reading: str = _opt("verbs", "how the trained model reads a query: 'verbs' (each "
+                                       "action named in other words said with its own verb), "
+                                       "'written' or 'canonical'", choices=QUERY_READINGS)
     hidden: int = _opt(128, "width of the motion encoder (a transformer over the frames)")
     layers: int = _opt(2, "transformer layers of the motion encoder")
     heads: int = _opt(4, "attention heads of the motion encoder (divides --hidden)")
@@ -101,6 +112,9 @@ class RetrievalConfig:
                       nonneg_ints=("text_dim", "text_layer"), sizes=SIZES,
                       layers=("layers", "heads"), positive=("fps", "temperature", "window"),
                       unit=("dropout",), nonneg=("text_noise",))
+        if self.query_reading not in QUERY_READINGS:
+            raise MotionlangError(f"RetrievalConfig.query_reading must be one of "
+                                  f"{', '.join(QUERY_READINGS)}, got {self.query_reading!r}")
         if self.text_anchor not in TEXT_ANCHORS:
             raise MotionlangError(f"RetrievalConfig.text_anchor must be one of "
                                   f"{', '.join(TEXT_ANCHORS)}, got {self.text_anchor!r}")
@@ -119,3 +133,14 @@ class RetrievalConfig:
     def to_dict(self) -> dict[str, Any]:
         from dataclasses import asdict
         return asdict(self)
+
+    @property
+    def training_reading(self) -> str:
+        """How training reads its captions (``datasets.canonical.read_as``)."""
+        return "canonical" if self.canonical else "written"
+
+    @property
+    def use_reading(self) -> str:
+        """How the trained model reads a sentence (``query_reading``, or ``"canonical"``
+        for a model trained so)."""
+        return "canonical" if self.canonical else self.query_reading

@@ -104,7 +104,7 @@ class RetrievalModel(Checkpointed, nn.Module):
                                   f"{getattr(features, 'kind', type(features).__name__)!r}")
         self._text = None if text_encoder is None else (
             text_encoder if isinstance(text_encoder, SentenceVectors)
-            else SentenceVectors(text_encoder, canonical=config.canonical))
+            else SentenceVectors(text_encoder, reading=config.use_reading))
         self.features = features
         if config.text_dim <= 0:   # a copy: the caller's config is left as given
             config = replace(config, text_dim=self.text.dim)
@@ -136,7 +136,7 @@ class RetrievalModel(Checkpointed, nn.Module):
         """The frozen sentence encoder (built from the config on first use)."""
         if self._text is None:
             self._text = sentence_vectors(self.config.text_model, self.config.text_layer,
-                                          self.config.canonical)
+                                          self.config.use_reading)
         return self._text
 
     @property

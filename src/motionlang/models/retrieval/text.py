@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 import torch
 
-from motionlang.datasets.canonical import canonical_text
+from motionlang.datasets.canonical import READINGS, read_as
 from motionlang.errors import MotionlangError
 from motionlang.models.encoders import ENCODERS, cache_root, head_file
 from motionlang.models.text_tokens import TransformerTokens
@@ -37,13 +37,16 @@ CHUNK = 256
 class SentenceVectors:
     """``vectors(sentences) -> (B, D)`` float32: the mean of each sentence's token
     features from ``tokens`` (a ``models.text_tokens.CachedTokens``), cached; with
-    ``canonical``, of each sentence's canonical form (``datasets.canonical``), so that
-    training captions and queries are read alike."""
+    ``reading``, of each sentence as ``datasets.canonical.read_as`` gives it ("written",
+    "verbs": each action said with its own verb, "canonical")."""
 
-    def __init__(self, tokens: Any, cache_size: int = 200_000, canonical: bool = False,
+    def __init__(self, tokens: Any, cache_size: int = 200_000, reading: str = "written",
                  head: TextHead | None = None):
+        if reading not in READINGS:
+            raise MotionlangError(f"a sentence reading must be one of {', '.join(READINGS)}, "
+                                  f"got {reading!r}")
         self.tokens = tokens
-        self.canonical = canonical
+        self.reading = reading
         self.head = head
         self.dim = int(tokens.dim) if head is None else head.dim
         self.cache_size = cache_size
@@ -51,8 +54,8 @@ class SentenceVectors:
 
     def vectors(self, sentences: Sequence[str]) -> torch.Tensor:
         """(B, D) float32 sentence vectors (B >= 0)."""
-        if self.canonical:
-            sentences = [canonical_text(s) for s in sentences]
+        if self.reading != "written":
+            sentences = [read_as(s, self.reading) for s in sentences]
         todo = list(dict.fromkeys(s for s in sentences if s not in self._cache))
         fresh = {}
         for i in range(0, len(todo), CHUNK):
@@ -125,11 +128,11 @@ def cache_file(text_model: str, layer: int) -> Path:
     return cache_root().parent / "sentences" / f"{name}-L{layer}-{key}.npz"
 
 
-def sentence_vectors(text_model: str = "minilm", layer: int = 0, canonical: bool = False
+def sentence_vectors(text_model: str = "minilm", layer: int = 0, reading: str = "written"
                      ) -> SentenceVectors:
     """The sentence vectors of ``text_model`` (an encoder's name, ``models.encoders``, or a
     local Hugging Face folder), hidden state ``layer`` mean-pooled (0: the last), of the
-    sentences' canonical forms with ``canonical``.
+    sentences as ``reading`` gives them (:class:`SentenceVectors`).
 
     Raises:
         MotionlangError: transformers or the model's package is missing, the folder is not
@@ -143,6 +146,6 @@ def sentence_vectors(text_model: str = "minilm", layer: int = 0, canonical: bool
                                   "from this install")
         return SentenceVectors(TransformerTokens(known.base, (layer or -1,),
                                                  cache_size=4 * CHUNK),
-                               canonical=canonical, head=TextHead(path))
+                               reading=reading, head=TextHead(path))
     return SentenceVectors(TransformerTokens(text_model, (layer or -1,),
-                                             cache_size=4 * CHUNK), canonical=canonical)
+                                             cache_size=4 * CHUNK), reading=reading)
