@@ -169,6 +169,7 @@ def main(argv=None) -> int:
     per_action = {a: float(np.mean([p for b, p in zip(actions, precision["retrieval"])
                                     if b == a])) for a in dict.fromkeys(actions)}
     report["per_action"] = per_action
+    print(f"mean P@5 over the {len(queries)} queries: {np.mean(precision['retrieval']):.3f}")
     for bar in (0.9, 0.8):
         print(f"actions at P@5 >= {bar}: {sum(p >= bar for p in per_action.values())} "
               f"of {len(per_action)}")

@@ -472,6 +472,7 @@ def test_mentions_read_each_actions_side_direction_negation_and_order():
     assert [m.side for m in mentions("a person balances on the right leg")] == ["right"]
     assert not mentions("someone never stops walking")[0].negated   # "never" is the stop's
     assert mentions("the person is not jumping")[0].negated
+    assert [m.after_previous for m in mentions("walks twice before jumping")] == [False, True]
 
 
 def test_check_says_yes_no_and_cannot_tell():
@@ -647,3 +648,27 @@ def test_a_pause_beside_a_jump_is_the_jumps_and_a_walk_ends_where_it_ends():
 def test_actions_named_in_other_words(text, want):
     from motionlang.analysis.words import mentions
     assert [(m.action, m.side) for m in mentions(text)] == want
+
+
+def test_a_walk_with_its_travel_taken_out_does_not_stand_still():
+    """On a treadmill (or a take whose root's travel was removed, as the MIT walking data)
+    the feet stride past each other while the root stays: no "stands still"."""
+    from motionlang.analysis.posture import striding
+    from motionlang.datasets.synth import Primitive
+    from motionlang.datasets.synth.compose import build_motion, random_style
+    from motionlang.features.joint_map import positions21
+    rng = np.random.default_rng(4)
+    motion, _, _ = build_motion([Primitive("walk", count=10, direction="forward")],
+                                random_style(rng), rng)
+    p = positions21(motion).copy()
+    p[:, :, [0, 2]] -= p[:, :1, [0, 2]]   # the root held at the origin, the body facing on
+    fps = motion.fps / 2   # a slow walk: the feet slide slowly enough to be read as down
+    body = Body.from_positions(p, fps)
+    assert float(body.ground_speed.max()) < 0.3 and body.contacts.any(axis=0).all()
+    assert striding(body).mean() > 0.5   # all but the start and the end (0.65)
+    mid = len(p) / fps / 2
+    stands = [f for f in analyse_positions(p, fps).findings if f.label == "stand"]
+    assert stands and not [f for f in stands if f.start < mid + 2 and f.end > mid - 2]
+    still = np.repeat(p[:1], len(p), axis=0)               # the same body, not moving
+    assert not striding(Body.from_positions(still, fps)).any()
+    assert "stand" in labels(still, fps)

@@ -297,6 +297,9 @@ def test_api_and_cli_give_the_same_results(folder, tmp_path, capsys):
     assert main(["search", "a person jumps in place", "--index", str(out), "-k", "3"]) == 0
     lines = capsys.readouterr().out.splitlines()
     assert len(lines) == 3 and all(h.file in line for h, line in zip(hits, lines))
+    # the span is one right-aligned column with its unit: the files start in one column
+    assert len({line.index(h.file) for h, line in zip(hits, lines)}) == 1
+    assert all(f"{h.start:.1f}-{h.end:.1f} s  {h.file}" in line for h, line in zip(hits, lines))
 
 
 @pytest.mark.skipif(importlib.util.find_spec("usearch") is None, reason="usearch not installed")

@@ -25,7 +25,7 @@ from motionlang.errors import MotionlangError
 
 #: the detectors' version: raised whenever what they find changes, so that an index made
 #: with older findings analyses its takes again on its next update
-VERSION = 11
+VERSION = 12
 #: how much each label is worth saying, before confidence and duration
 WEIGHT = {
     "dance": 3.2, "punch": 3.0, "kick": 3.0, "climb": 3.0, "hang": 2.6, "wave": 2.5, "clap": 2.5,

@@ -17,11 +17,14 @@ degrees, distances in leg lengths.
 - **hanging / climbing**: both hands above the head and neither foot on the floor;
 - **on one leg**: one foot down and the other clearly raised, for longer than any step;
 - **arms outstretched**: both arms straight and near horizontal;
-- **standing**: upright, feet down, not travelling.
+- **standing**: upright, feet down, not travelling, and the feet not striding in place
+  (on a treadmill, or a take with the root's travel taken out, the feet swing past each
+  other while the root stays).
 """
 from __future__ import annotations
 
 import numpy as np
+from scipy.ndimage import maximum_filter1d, minimum_filter1d
 
 from motionlang.analysis.body import ARMS, LEGS, Body, J
 from motionlang.analysis.evidence import MIN_CONFIDENCE, Finding, clean_mask, confidence, runs
@@ -49,6 +52,8 @@ OUTSTRETCHED_ELEV = 30.0   # deg: arms within this of horizontal
 OUTSTRETCHED_REACH = 0.85  # share of the arm's length from shoulder to wrist
 UPRIGHT_TILT = 30.0        # deg
 STAND_PELVIS = 0.88        # sph
+STRIDE_SWING = 1.0         # L: feet that change places fore and aft by this...
+STRIDE_WINDOW = 2.0        # s: ...within this are striding (a walking stride is ~1.5 L)
 MIN_POSTURE = 0.4          # s: a posture held for less is not reported
 GAP = 0.2                  # s: flickers of at most this are closed
 
@@ -158,9 +163,21 @@ def outstretched(body: Body) -> np.ndarray:
     return np.asarray(np.stack(ok).all(axis=0) & ~lying(body))
 
 
+def striding(body: Body) -> np.ndarray:
+    """(T,) frames within :data:`STRIDE_WINDOW` s of which the left ankle's place ahead of
+    the right (in the facing direction, leg lengths) changes by :data:`STRIDE_SWING` or
+    more: legs that walk, whether or not the root goes anywhere."""
+    ahead = [body.to_body_frame(body.joint(a) - body.joint("root"))[:, 2] / body.leg
+             for a in ("LA", "RA")]
+    d = ahead[0] - ahead[1]
+    w = body.frames(STRIDE_WINDOW)
+    return np.asarray(maximum_filter1d(d, w, mode="nearest") -
+                      minimum_filter1d(d, w, mode="nearest") >= STRIDE_SWING)
+
+
 def standing(body: Body) -> np.ndarray:
     return (body.trunk_tilt < UPRIGHT_TILT) & (body.pelvis_height > STAND_PELVIS) & \
-        body.contacts.any(axis=0) & (body.ground_speed < 2 * STILL)
+        body.contacts.any(axis=0) & (body.ground_speed < 2 * STILL) & ~striding(body)
 
 
 def _spans(body: Body, mask: np.ndarray, min_len: float = MIN_POSTURE) -> list[tuple[int, int]]:

@@ -165,8 +165,8 @@ class Mention:
     """How a sentence names one action: ``side`` ("left", "right", "both" or None) and
     ``direction`` ("forward", "backwards", "sideways" or None) from the words after it up
     to the next action or clause; ``negated``: "not", "never", "without" just before it;
-    ``after_previous``: "then", "after that", "followed by" between it and the action
-    named before it."""
+    ``after_previous``: "then", "after that", "followed by", "before" between it and the
+    action named before it ("walks before jumping": the jump comes after the walk)."""
 
     action: str
     side: str | None = None
@@ -181,7 +181,7 @@ _DIRECTION = {"forward": "forward", "forwards": "forward", "ahead": "forward",
               "backward": "backwards", "backwards": "backwards",
               "sideways": "sideways", "sidewards": "sideways"}
 _NEGATION = re.compile(r"(?:\b(?:not|never|without|no longer)|n't)\s+$")
-_SEQUENCE = re.compile(r"\bthen\b|\bafter(?:wards| that)\b|\bfollowed by\b")
+_SEQUENCE = re.compile(r"\bthen\b|\bafter(?:wards| that)\b|\bfollowed by\b|\bbefore\b")
 
 
 def mentions(text: str) -> list[Mention]:

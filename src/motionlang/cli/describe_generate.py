@@ -119,7 +119,10 @@ def register(subparsers) -> None:
                         "\"log_p\"}]}, with --segments {\"file\", \"segments\": [{\"start\", "
                         "\"end\", \"text\", \"log_p\"}]}, or {\"file\", \"error\"}; several files "
                         "or a folder without -o: the same lines to stdout")
-    p.add_argument("--json", action="store_true", help="print the hypotheses as JSON")
+    p.add_argument("--json", action="store_true",
+                   help="print JSON: a list of the sentences ({rank, text, log_p}; with "
+                        "--segments of the segments), with --explain an object {sentences, "
+                        "evidence}")
     p.set_defaults(func=cmd_describe)
     p = subparsers.add_parser("generate", help="generate a motion from English (L2M)")
     p.add_argument("text", help="sentence, e.g. \"a person waves with the left hand\"")

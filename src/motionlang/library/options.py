@@ -197,9 +197,12 @@ class DescribeOptions:
     explain: bool = _opt(False, "after the sentences, the evidence of each phrase of the "
                             "grounded sentence: time span, what was measured, against which "
                             "threshold, with what confidence (motionlang.analysis)")
-    raw: bool = _opt(False, "the model's sentences as its beam ranks them: not checked "
-                        "against the gait the feet show (walk, run, jump), verbless ones "
-                        "kept, no 'unfamiliar movement' line")
+    raw: bool = _opt(False, "the model's own sentences as its beam ranks them, none of "
+                            "the default's checks (models/seq2seq/decode/grounded.py): no "
+                            "sentence of what the body does put first, none re-searched for "
+                            "the gait the feet show, none left out for being verbless, "
+                            "broken or repeated, style and gender words kept, no "
+                            "'unfamiliar movement' line")
 
     def __post_init__(self) -> None:
         check_numbers("DescribeOptions", self, positive_ints=("workers", "width"),

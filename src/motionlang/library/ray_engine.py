@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import importlib.util
 import os
+import shutil
+import tempfile
 from collections.abc import Callable, Iterator
 from typing import Any
 
@@ -51,10 +53,15 @@ def embedded_on_ray(jobs: list, model: Any, workers: int, embed: Callable[[Any, 
         raise MotionlangError("--engine ray needs the ray package (pip install "
                               "'motionlang[ray]')") from None
     started = not ray.is_initialized()
+    scratch = None
     if started:
         address = os.environ.get("RAY_ADDRESS")
+        # a Ray started for this run keeps its session files in a folder of its own, removed
+        # after it (Ray's default, /tmp/ray, keeps every session's logs and sockets)
+        scratch = None if address else tempfile.mkdtemp(prefix="motionlang-ray-")
         ray.init(address=address, num_cpus=None if address else workers,
-                 include_dashboard=False, log_to_driver=False, ignore_reinit_error=True)
+                 include_dashboard=False, log_to_driver=False, ignore_reinit_error=True,
+                 **({"_temp_dir": scratch} if scratch else {}))
     try:
         actor = ray.remote(num_cpus=1)(_Worker)
         pool = ActorPool([actor.remote(model, 1, embed) for _ in range(max(1, workers))])
@@ -62,3 +69,5 @@ def embedded_on_ray(jobs: list, model: Any, workers: int, embed: Callable[[Any, 
     finally:
         if started:
             ray.shutdown()
+        if scratch:
+            shutil.rmtree(scratch, ignore_errors=True)

@@ -73,8 +73,9 @@ class Hit(NamedTuple):
 
     def line(self, rank: int) -> str:
         """How ``motionlang search`` prints the hit ranked ``rank``."""
-        return (f"{rank:3d}. {self.score:6.3f}  {self.start:7.1f}-{self.end:<7.1f} s  "
-                f"{self.file}" + (f"  ({self.why})" if self.why else ""))
+        span = f"{self.start:.1f}-{self.end:.1f} s"   # one column, its unit beside it
+        return (f"{rank:3d}. {self.score:6.3f}  {span:>15}  {self.file}"
+                + (f"  ({self.why})" if self.why else ""))
 
 
 def unit_rows(x: np.ndarray) -> np.ndarray:

@@ -141,7 +141,7 @@ PACKAGED_SHA256: dict[str, str] = {
     "retrieval": "c4a589d890161d0923f59ac502ee28d9376239204b3d582c91b4f17e80e67f8a",
     "judge": "53e34ff070150aa1f7926a6e4ce62e3a87fd29c10fb0d576631337c70b801e74",
     "masked": "7b139a08eeec9463572ae974e1d16822761f162274643539647b287df55733ad",
-    "retrieval-mpnet": "ad92fe3489cca410f62043ef631787d4a842406ac0323f8d5dd790d30297cb3d",
+    "retrieval-mpnet": "bcd6aa9fb5ea597df5fd06c1a9da99302372786d0de1b6c9d0ce62b54b163c6a",
 }
 
 PACKAGED: dict[str, Packaged] = {k: replace(p, sha256=PACKAGED_SHA256.get(k, "")) for k, p in {
