@@ -59,9 +59,10 @@ def embedded_on_ray(jobs: list, model: Any, workers: int, embed: Callable[[Any, 
         # a Ray started for this run keeps its session files in a folder of its own, removed
         # after it (Ray's default, /tmp/ray, keeps every session's logs and sockets)
         scratch = None if address else tempfile.mkdtemp(prefix="motionlang-ray-")
+        extra: dict[str, Any] = {"_temp_dir": scratch} if scratch else {}
         ray.init(address=address, num_cpus=None if address else workers,
                  include_dashboard=False, log_to_driver=False, ignore_reinit_error=True,
-                 **({"_temp_dir": scratch} if scratch else {}))
+                 **extra)
     try:
         actor = ray.remote(num_cpus=1)(_Worker)
         pool = ActorPool([actor.remote(model, 1, embed) for _ in range(max(1, workers))])
