@@ -18,7 +18,7 @@ from motionlang.analysis.body import Body, pieces
 from motionlang.analysis.dance import dances, said_by_dance
 from motionlang.analysis.evidence import Finding, merge_series, overlap
 from motionlang.analysis.limbs import limb_actions
-from motionlang.analysis.locomotion import jumps, levels, travel, turns
+from motionlang.analysis.locomotion import in_place, jumps, levels, travel, turns
 from motionlang.analysis.posture import postures
 from motionlang.analysis.sentences import CANNOT_TELL, LEVELS, MAX_CLAUSES, join, phrase
 from motionlang.errors import MotionlangError
@@ -352,6 +352,7 @@ def _findings(body: Body) -> list[Finding]:
     found: list[Finding] = []
     found += _series_of_squats(postures(body))
     found += travel(body)
+    found += in_place(body)
     found += jumps(body)
     found += turns(body)
     found += levels(body)

@@ -95,6 +95,8 @@ def _on_side(f: Finding, side: str) -> bool:
 
 
 def _went(f: Finding, direction: str) -> bool:
+    if f.detail.get("in_place"):
+        return False   # a walk in place goes nowhere: not forward, not backwards
     seen = f.detail.get("direction")
     return seen is None or seen in _DIRECTION_SEEN[direction]
 
@@ -102,6 +104,8 @@ def _went(f: Finding, direction: str) -> bool:
 def _how(f: Finding) -> str:
     """A finding's side or direction and its span, for a note: "on the right side, 0.9-2.9
     s", "backwards, 0.0-3.0 s"."""
+    if f.detail.get("in_place"):
+        return f"in place, {f.start:.1f}-{f.end:.1f} s"
     if f.label in ("walk", "run", "jump") and f.detail.get("direction"):
         return f"{f.detail['direction']}, {f.start:.1f}-{f.end:.1f} s"
     return f"on the {f.side} side, {f.start:.1f}-{f.end:.1f} s" if f.side else \

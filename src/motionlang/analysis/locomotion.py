@@ -8,6 +8,9 @@
   Alexander 1989), its direction from the angle between travel and facing (forward,
   backwards, sideways left or right), and its path from how much the direction of travel
   turns (straight, curving left or right, a circle).
+- **In place**: where the root stays but the feet swing past each other by a stride
+  (:func:`striding`: a treadmill, or a take whose root's travel was taken out), the body
+  walks (or runs, by its feet) in place; each pass of one foot by the other is a step.
 - **Jumps** are flights from both feet (or long flights from one), forward, up or down by
   where they land; a flight is one only where the body falls as thrown bodies fall (its
   mean point's fitted vertical acceleration near gravity's, :func:`ballistic`), which a
@@ -23,7 +26,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
-from scipy.ndimage import median_filter, uniform_filter1d
+from scipy.ndimage import maximum_filter1d, median_filter, minimum_filter1d, uniform_filter1d
 
 from motionlang.analysis.body import Body
 from motionlang.analysis.evidence import MIN_CONFIDENCE, Finding, clean_mask, confidence, runs
@@ -31,6 +34,10 @@ from motionlang.features.gait import GRAVITY, gait
 
 TRAVEL = 0.25              # L/s: slower than this the root is not travelling
 MIN_TRAVEL = 0.8           # s
+STRIDE_SWING = 1.0         # L: feet that change places fore and aft by this...
+STRIDE_WINDOW = 2.0        # s: ...within this are striding (a walking stride is ~1.5 L)
+IN_PLACE_MIN = 2.0         # s: striding in place at least this long is a walk in place
+PASS_MARGIN = 0.25         # L: in place, a foot passes the other once this far ahead of it
 MIN_DISTANCE = 0.5         # L: a travel covers at least this...
 MIN_LIFTS = 2              # ...and the feet leave the floor and land again this often
 FOOT_BORNE = 0.25          # share of its frames a walk or run has a foot on the floor at least
@@ -151,6 +158,62 @@ def travel(body: Body) -> list[Finding]:
                                "froude": fr,
                                "direction": direction, "angle": angle, "path": path,
                                "turned": turned, "steps": steps}))
+    return out
+
+
+def _ahead(body: Body) -> np.ndarray:
+    """(T,) how far the left ankle is ahead of the right, in the facing direction, L."""
+    ahead = [body.to_body_frame(body.joint(a) - body.joint("root"))[:, 2] / body.leg
+             for a in ("LA", "RA")]
+    return np.asarray(ahead[0] - ahead[1])
+
+
+def striding(body: Body) -> np.ndarray:
+    """(T,) frames within :data:`STRIDE_WINDOW` s of which the left ankle's place ahead of
+    the right changes by :data:`STRIDE_SWING` or more: legs that walk, whether or not the
+    root goes anywhere."""
+    d, w = _ahead(body), body.frames(STRIDE_WINDOW)
+    return np.asarray(maximum_filter1d(d, w, mode="nearest") -
+                      minimum_filter1d(d, w, mode="nearest") >= STRIDE_SWING)
+
+
+def foot_passes(lead: np.ndarray, margin: float) -> int:
+    """How often the leading foot changes in ``lead`` (T,), how far the left ankle is ahead
+    of the right (L): crossing ``margin`` one way, then the other (so that a tremor about
+    0 is no step)."""
+    side, passes = 0, 0
+    for x in lead:
+        now = 1 if x > margin else -1 if x < -margin else side
+        passes += int(side != 0 and now != side)
+        side = now
+    return passes
+
+
+def in_place(body: Body) -> list[Finding]:
+    """Walks (or runs) in place: upright, the root not travelling, the feet striding
+    (:func:`striding`) for :data:`IN_PLACE_MIN` s or more, with steps."""
+    still = body.ground_speed < TRAVEL
+    upright = (body.trunk_tilt < UPRIGHT) & (body.pelvis_height > UPRIGHT_PELVIS)
+    mask = clean_mask(striding(body) & still & upright, body.fps, min_len=IN_PLACE_MIN,
+                      max_gap=0.3)
+    out = []
+    d = _ahead(body)
+    for a, b in runs(mask):
+        # a step where one foot passes the other, and the first step (as rate._steps counts)
+        steps = foot_passes(d[a:b] - np.median(d[a:b]), PASS_MARGIN) + 1
+        if steps < 2 * MIN_LIFTS:
+            continue
+        swing = float(np.percentile(d[a:b], 95) - np.percentile(d[a:b], 5))
+        g = gait(body.p[a:b], body.fps)
+        c = confidence(swing, STRIDE_SWING, 0.5, duration=(b - a) / body.fps,
+                       full_after=IN_PLACE_MIN)
+        if c < MIN_CONFIDENCE:
+            continue
+        out.append(Finding("locomotion", "run" if g.run_score > 0 else "walk", body.t(a),
+                           body.t(b), "fore-aft swing of the feet past each other, the "
+                           "root still (L)", swing, STRIDE_SWING, c, detail={
+                               "speed": None, "direction": None, "path": "straight",
+                               "in_place": True, "steps": steps}))
     return out
 
 

@@ -24,11 +24,10 @@ degrees, distances in leg lengths.
 from __future__ import annotations
 
 import numpy as np
-from scipy.ndimage import maximum_filter1d, minimum_filter1d
 
 from motionlang.analysis.body import ARMS, LEGS, Body, J
 from motionlang.analysis.evidence import MIN_CONFIDENCE, Finding, clean_mask, confidence, runs
-from motionlang.analysis.locomotion import BALLISTIC_FRAMES, ballistic
+from motionlang.analysis.locomotion import BALLISTIC_FRAMES, ballistic, striding
 
 # thresholds (standing pelvis heights "sph", leg lengths "L", degrees, seconds)
 LYING_TILT = 60.0          # deg: trunk this far from vertical
@@ -52,8 +51,6 @@ OUTSTRETCHED_ELEV = 30.0   # deg: arms within this of horizontal
 OUTSTRETCHED_REACH = 0.85  # share of the arm's length from shoulder to wrist
 UPRIGHT_TILT = 30.0        # deg
 STAND_PELVIS = 0.88        # sph
-STRIDE_SWING = 1.0         # L: feet that change places fore and aft by this...
-STRIDE_WINDOW = 2.0        # s: ...within this are striding (a walking stride is ~1.5 L)
 MIN_POSTURE = 0.4          # s: a posture held for less is not reported
 GAP = 0.2                  # s: flickers of at most this are closed
 
@@ -161,18 +158,6 @@ def outstretched(body: Body) -> np.ndarray:
         ok.append((reach > OUTSTRETCHED_REACH) & (np.abs(elev) < OUTSTRETCHED_ELEV))
     # lying, arms along the body are level too: that is no holding them out
     return np.asarray(np.stack(ok).all(axis=0) & ~lying(body))
-
-
-def striding(body: Body) -> np.ndarray:
-    """(T,) frames within :data:`STRIDE_WINDOW` s of which the left ankle's place ahead of
-    the right (in the facing direction, leg lengths) changes by :data:`STRIDE_SWING` or
-    more: legs that walk, whether or not the root goes anywhere."""
-    ahead = [body.to_body_frame(body.joint(a) - body.joint("root"))[:, 2] / body.leg
-             for a in ("LA", "RA")]
-    d = ahead[0] - ahead[1]
-    w = body.frames(STRIDE_WINDOW)
-    return np.asarray(maximum_filter1d(d, w, mode="nearest") -
-                      minimum_filter1d(d, w, mode="nearest") >= STRIDE_SWING)
 
 
 def standing(body: Body) -> np.ndarray:

@@ -35,7 +35,7 @@ import numpy as np
 
 from motionlang.analysis.body import CONTACT_HEIGHT, Body, J
 from motionlang.analysis.evidence import runs
-from motionlang.analysis.locomotion import G_LEGS, travel
+from motionlang.analysis.locomotion import G_LEGS, foot_passes, travel
 from motionlang.errors import MotionlangError
 from motionlang.features.body21 import centre_of_mass21
 from motionlang.features.joint_map import positions21
@@ -148,12 +148,7 @@ def _passes(body: Body, a: int, b: int) -> int:
     way = v / np.maximum(np.linalg.norm(v, axis=1, keepdims=True), 1e-9)
     ankles = body.p[a:b][:, [J["LA"], J["RA"]]][:, :, [0, 2]]
     lead = ((ankles[:, 0] - ankles[:, 1]) * way).sum(axis=1) / body.leg
-    side, passes = 0, 0
-    for x in lead:
-        now = 1 if x > PASS_LEAD else -1 if x < -PASS_LEAD else side
-        passes += int(side != 0 and now != side)
-        side = now
-    return passes
+    return foot_passes(lead, PASS_LEAD)
 
 
 def fall_rate(p21: np.ndarray, fps: float) -> tuple[float, int, float] | None:

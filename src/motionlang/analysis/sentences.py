@@ -39,6 +39,8 @@ def phrase(f: Finding, *, level: str = "terse", first: bool = False) -> str:
     lab = f.label
     if lab in ("walk", "run"):
         verb = "walks" if lab == "walk" else "jogs" if _froude(f) < JOG_UPTO else "runs"
+        if d.get("in_place"):
+            return f"{verb} in place" + (f" ({d['steps']} steps)" if detailed else "")
         direction = d.get("direction", "forward")
         path = d.get("path", "straight")
         if direction in ("left", "right"):
