@@ -56,8 +56,8 @@ def embedded_on_ray(jobs: list, model: Any, workers: int, embed: Callable[[Any, 
     scratch = None
     if started:
         address = os.environ.get("RAY_ADDRESS")
-        # a Ray started for this run keeps its session files in a folder of its own, removed
-        # after it (Ray's default, /tmp/ray, keeps every session's logs and sockets)
+        # a Ray started for this run keeps its logs and sockets in a folder of its own,
+        # removed after it (Ray's default folder, /tmp/ray, keeps those of every start)
         scratch = None if address else tempfile.mkdtemp(prefix="motionlang-ray-")
         extra: dict[str, Any] = {"_temp_dir": scratch} if scratch else {}
         ray.init(address=address, num_cpus=None if address else workers,
