@@ -650,6 +650,32 @@ def test_actions_named_in_other_words(text, want):
     assert [(m.action, m.side) for m in mentions(text)] == want
 
 
+@pytest.mark.parametrize("text, want", [
+    ("walks forward swinging the arms back and forth", ["walk"]),   # a walk's arm swing
+    ("takes a left step forward", ["walk"]),
+    ("makes a right angle with both arms", []),
+    ("curves his left arm", []),
+    ("brings the left hand up to his mouth", []),
+    ("brings both arms up and down repeatedly", []),
+    ("walks forward in a hurry", ["walk"]),
+    ("stands on tiptoes", ["stand"]),
+    ("hikes his shoulders", []),
+    ("greets a friend with a bow", ["bow"]),
+    ("bows in greeting", ["bow"]),
+    ("puts the flag down", []),
+    ("reaches up to a shelf", ["reach"]),
+    ("walks a 90 degree curve to the left", ["walk"]),
+])
+def test_other_words_name_no_action_the_sentence_does_not(text, want):
+    assert actions_named(text) == want
+
+
+def test_before_that_looks_back():
+    from motionlang.analysis.words import mentions
+    got = mentions("a person walks forward, but before that he waves")
+    assert [(m.action, m.after_previous) for m in got] == [("walk", False), ("wave", False)]
+
+
 def test_a_walk_with_its_travel_taken_out_walks_in_place():
     """On a treadmill (or a take whose root's travel was removed, as the MIT walking data)
     the feet stride past each other while the root stays: a walk in place, no "stands

@@ -405,3 +405,11 @@ def test_binary_data_is_named_not_echoed(tmp_path):
     with pytest.raises(MotionFormatError, match="binary data") as info:
         read_bvh(path)
     assert "\ufffd" not in str(info.value) and all(c.isprintable() for c in str(info.value))
+
+
+def test_one_odd_byte_in_a_text_file_is_quoted_not_called_binary(tmp_path):
+    path = tmp_path / "latin1.bvh"
+    path.write_bytes(b"HIERARCHY\nROOT Hips\n{\n  OFFSET 0 0 1\xe9\n")
+    with pytest.raises(MotionFormatError) as info:
+        read_bvh(path)
+    assert "binary" not in str(info.value) and "malformed number" in str(info.value)

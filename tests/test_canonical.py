@@ -69,5 +69,10 @@ def test_action_verbs_change_the_verb_alone():
         "an old man slowly walks and raises his left hand"
     assert action_verbs("someone greets using both palms") == "someone waves using both palms"
     assert action_verbs("a person sits down") == "a person sits down"
+    # a noun after an article stays a noun
+    assert action_verbs("an old man takes a bow") == "an old man takes a bow"
+    assert action_verbs("somebody hurries along at a trot") == "somebody runs along at a run"
+    assert action_verbs("takes a right turn") == "turns right"
+    assert action_verbs("throws a left jab") == "punches left"
     assert read_as("Someone strolls", "written") == "Someone strolls"
     assert read_as("Someone strolls", "canonical") == canonical_text("Someone strolls")

@@ -148,3 +148,9 @@ def test_a_sentence_that_names_no_action_is_refused(walk_file, capsys):
     err = capsys.readouterr().err
     assert "names no action motionlang can read: 'qwzx blorp'" in err
     assert "Traceback" not in err and len(err.strip().splitlines()) == 1
+
+
+def test_no_action_with_json_prints_an_empty_list_and_exits_2(walk_file, capsys):
+    assert main(["check", "qwzx blorp", str(walk_file), "--json"]) == 2
+    out = capsys.readouterr()
+    assert json.loads(out.out) == [] and "names no action" in out.err

@@ -540,3 +540,17 @@ def test_a_folder_without_motion_files_is_refused_and_nothing_written(tmp_path, 
     err = capsys.readouterr().err
     assert "no motion files under it" in err and "Traceback" not in err
     assert not out.exists() and sorted(p.name for p in tmp_path.iterdir()) == ["notes.md"]
+
+
+def test_an_index_whose_files_are_all_gone_is_emptied(tmp_path, capsys):
+    """Refusing a folder without motion files is for a new index: one made before follows
+    its folder down to nothing, so that search no longer lists files that are gone."""
+    folder = tmp_path / "lib"
+    folder.mkdir()
+    take = folder / "walk.bvh"
+    ml.write_motion(synthetic_mmm(60), take)
+    out = tmp_path / "lib.idx"
+    assert main(["index", str(folder), "-o", str(out)]) == 0
+    take.unlink()
+    assert main(["index", str(folder), "-o", str(out)]) == 0
+    assert load_index(out).entries == []

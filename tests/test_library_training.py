@@ -87,8 +87,17 @@ def test_fine_tuning_keeps_the_models_normaliser_and_sizes(library, tmp_path, mo
     write_corpus(corpus, n=8, seed=3, workers=1, show_progress=False)
     first = ml.train("retrieval", str(corpus), tmp_path / "a", **TINY, epochs=1,
                      batch_size=8, progress=False, plot=False)
+    from motionlang.models.retrieval.text import SentenceVectors
+    readings, vectors = [], SentenceVectors.vectors
+
+    def spy(self, sentences):
+        readings.append(self.reading)
+        return vectors(self, sentences)
+    monkeypatch.setattr(SentenceVectors, "vectors", spy)
     tuned = ml.train("retrieval", f"library:{library}", tmp_path / "b", init=str(first),
                      epochs=2, batch_size=4, lr=1e-3, progress=False, plot=False)
+    # the loaded model reads queries "verbs"; fine-tuning reads its captions as written
+    assert readings and set(readings) == {"written"}
     a, b = RetrievalModel.load(first), RetrievalModel.load(tuned)
     assert b.config == a.config
     np.testing.assert_array_equal(b.features.normalizer.mean, a.features.normalizer.mean)

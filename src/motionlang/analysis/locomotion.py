@@ -10,7 +10,8 @@
   turns (straight, curving left or right, a circle).
 - **In place**: where the root stays but the feet swing past each other by a stride
   (:func:`striding`: a treadmill, or a take whose root's travel was taken out), the body
-  walks (or runs, by its feet) in place; each pass of one foot by the other is a step.
+  walks in place, or runs where its lower foot leaves the floor and its cadence is a
+  runner's; each pass of one foot by the other is a step.
 - **Jumps** are flights from both feet (or long flights from one), forward, up or down by
   where they land; a flight is one only where the body falls as thrown bodies fall (its
   mean point's fitted vertical acceleration near gravity's, :func:`ballistic`), which a
@@ -38,6 +39,10 @@ STRIDE_SWING = 1.0         # L: feet that change places fore and aft by this...
 STRIDE_WINDOW = 2.0        # s: ...within this are striding (a walking stride is ~1.5 L)
 IN_PLACE_MIN = 2.0         # s: striding in place at least this long is a walk in place
 PASS_MARGIN = 0.25         # L: in place, a foot passes the other once this far ahead of it
+# in place the root's speed says nothing of the gait: a run has flights (the lower foot
+# leaves the floor) and a quick cadence; walks stay below both
+IN_PLACE_FLIGHT = 0.025    # L: the lower foot's 90th minus 10th height percentile, at least
+IN_PLACE_CADENCE = 2.1     # steps a second, at least
 MIN_DISTANCE = 0.5         # L: a travel covers at least this...
 MIN_LIFTS = 2              # ...and the feet leave the floor and land again this often
 FOOT_BORNE = 0.25          # share of its frames a walk or run has a foot on the floor at least
@@ -204,16 +209,20 @@ def in_place(body: Body) -> list[Finding]:
         if steps < 2 * MIN_LIFTS:
             continue
         swing = float(np.percentile(d[a:b], 95) - np.percentile(d[a:b], 5))
-        g = gait(body.p[a:b], body.fps)
+        low = body.foot_low.min(axis=0)[a:b] / body.leg
+        rise = float(np.percentile(low, 90) - np.percentile(low, 10))
+        cadence = steps * body.fps / (b - a)
+        running = rise >= IN_PLACE_FLIGHT and cadence >= IN_PLACE_CADENCE
         c = confidence(swing, STRIDE_SWING, 0.5, duration=(b - a) / body.fps,
                        full_after=IN_PLACE_MIN)
         if c < MIN_CONFIDENCE:
             continue
-        out.append(Finding("locomotion", "run" if g.run_score > 0 else "walk", body.t(a),
+        out.append(Finding("locomotion", "run" if running else "walk", body.t(a),
                            body.t(b), "fore-aft swing of the feet past each other, the "
                            "root still (L)", swing, STRIDE_SWING, c, detail={
                                "speed": None, "direction": None, "path": "straight",
-                               "in_place": True, "steps": steps}))
+                               "in_place": True, "steps": steps, "cadence": cadence,
+                               "flight_rise": rise}))
     return out
 
 

@@ -17,16 +17,16 @@ ACTION_WORDS: dict[str, tuple[str, ...]] = {
     "walk": ("walk", "walks", "walking", "walked", "stroll", "strolls", "strolling",
              "march", "marches", "marching", "steps", "step", "stepping", "paces", "pacing",
              "wanders", "wandering", "strides", "striding", "shuffles", "shuffling",
-             "wander", "wandered", "stride", "strode", "amble", "ambles", "ambling",
+             "wander", "wandered", "strode", "amble", "ambles", "ambling",
              "ambled", "saunter", "saunters", "sauntering", "sauntered", "trudge", "trudges",
              "trudging", "trudged", "plod", "plods", "plodding", "plodded", "meander",
              "meanders", "meandering", "meandered", "promenade", "promenades",
              "promenading", "traipse", "traipses", "traipsing", "mosey", "moseys",
-             "moseying", "hike", "hikes", "hiking", "tiptoe", "tiptoes", "tiptoeing"),
+             "moseying", "hiking", "tiptoeing"),
     "run": ("run", "runs", "running", "ran", "jog", "jogs", "jogging", "jogged", "sprint",
             "sprints", "sprinting", "dash", "dashes", "dashing", "trot", "trots", "trotting",
-            "sprinted", "dashed", "trotted", "races", "racing", "raced", "rush", "rushes",
-            "rushing", "rushed", "hurry", "hurries", "hurrying", "hurried", "scurry",
+            "sprinted", "dashed", "trotted", "races", "racing", "raced", "rushes",
+            "rushing", "rushed", "hurries", "hurrying", "hurried", "scurry",
             "scurries", "scurrying", "scurried", "scamper", "scampers", "scampering",
             "gallop", "gallops", "galloping", "lope", "lopes", "loping"),
     "jump": ("jump", "jumps", "jumping", "jumped", "hop", "hops", "hopping", "hopped", "leap",
@@ -44,8 +44,7 @@ ACTION_WORDS: dict[str, tuple[str, ...]] = {
     "kneel": ("kneel", "kneels", "kneeling", "knelt"),
     "crawl": ("crawl", "crawls", "crawling", "crawled"),
     "balance": ("balance", "balances", "balancing", "balanced"),
-    "wave": ("wave", "waves", "waving", "waved", "greet", "greets", "greeting", "greeted",
-             "hail", "hails", "hailing", "hailed"),
+    "wave": ("wave", "waves", "waving", "waved", "hail", "hails", "hailing", "hailed"),
     "raise": ("raise", "raises", "raising", "raised", "lift", "lifts", "lifting", "lifted",
               "hoist", "hoists", "hoisting", "hoisted"),
     "clap": ("clap", "claps", "clapping", "clapped", "applaud", "applauds", "applauding"),
@@ -70,12 +69,24 @@ _POSSESSIVE = r"(?:his|her|their|its|the|a|one|both|\s)*"
 #: a hand or arm as a sentence names it, with its side ("the left hand", "both arms")
 _LIMB = (r"(?:(?:his|her|their|its|the|a|one|both|left|right|just|only)\s+)*"
          r"(?:hands?|arms?|palms?|fists?)")
+#: the same of hands alone: arms swung back and forth are a walk's, hands so are a wave
+_HAND = (r"(?:(?:his|her|their|its|the|a|one|both|left|right|just|only)\s+)*"
+         r"(?:hands?|palms?)")
 #: upward, as a sentence says it of a hand
 _HIGH = (r"(?:overhead|high|skywards?|in(?:to)?\s+the\s+air|(?:above|over)\s+(?:his|her|their|"
          r"the)\s+head|to(?:wards?)?\s+the\s+(?:sky|ceiling))")
-_UP = rf"(?:straight\s+)?(?:up(?:wards?)?(?:\s+{_HIGH})?|{_HIGH})"
-#: a side a path bends to ("to the left", "toward her right", "leftward")
-_BEND = r"(?:\s+(?:off|round|around|away))?\s+(?:(?:to|towards?)\s+)?(?:the\s+|his\s+|her\s+|their\s+)?(?:left|right)"
+#: ... where a bare "up" is no raise when a place follows ("up to his mouth", "up in front
+#: of the face": a guard) or it goes down again ("up and down")
+_UP = (rf"(?:straight\s+)?(?:up(?:wards?)?(?:\s+{_HIGH}|(?!\s+(?:to|towards?|in\s+front|in\s+a|"
+       rf"into|at|by|near|against|before|and\s+down|or\s+down)\b))|{_HIGH})")
+#: a side a path bends to ("to the left", "toward her right", "off to the right"), not a
+#: limb's ("curves his left arm")
+_BEND = (r"(?:\s+(?:off|round|around|away))?\s+(?:(?:to|towards?)\s+(?:the\s+|his\s+|her\s+|"
+         r"their\s+)?|the\s+)?(?:left|right)(?!\s+(?:arms?|hands?|legs?|feet|foot|knees?|"
+         r"elbows?|shoulders?|hips?)\b)")
+#: what can follow "takes a left": the end of a clause, a joint or a place, not a noun
+_CLAUSE_GOES_ON = (r"(?=\s*(?:$|[,;.]|(?:and|then|at|into|onto|to|towards?|after|before|while|"
+                   r"here|there|again)\b))")
 #: phrases that name an action their words alone do not (or name another: "standing on one
 #: leg" is balancing, not standing); read before the single words, whose words they take
 PHRASES: tuple[tuple[re.Pattern[str], str], ...] = tuple(
@@ -105,23 +116,31 @@ PARAPHRASES: tuple[tuple[re.Pattern[str], str], ...] = tuple(
         (r"\b(?:says?|saying|said|signals?|signall?ing|signall?ed|waves?|waving|waved)\s+"
          r"(?:hello|hi|goodbye|good-bye|bye|farewell)\b", "wave"),
         (r"\bbids?\s+(?:\w+\s+)?(?:farewell|goodbye|good-bye)\b", "wave"),
-        (r"\bflag(?:s|ging|ged)?\s+(?:\w+\s+)?down\b", "wave"),
+        # a greeting is a wave unless the sentence says how it is made ("with a bow")
+        (r"(?<!\bin )(?<!\ba )\bgreet(?:s|ing|ed)?\b(?![^,;.]*\b(?:bows?|bowing|nods?|nodding|"
+         r"handshakes?|shak\w*\s+hands?|hugs?|hugging|kiss\w*)\b)", "wave"),
+        (r"(?<!\bthe )(?<!\ba )\bflag(?:s|ging|ged)?\s+(?:\w+\s+)?down\b", "wave"),
         (rf"\b(?:swings?|swinging|swung|shakes?|shaking|shook|sways?|swaying|swayed|wags?|"
-         rf"wagging|wagged|moves?|moving|moved)\s+(?P<keep>{_LIMB})\s+(?:from\s+)?"
+         rf"wagging|wagged|moves?|moving|moved)\s+(?P<keep>{_HAND})\s+(?:from\s+)?"
          rf"(?:side\s+to\s+side|back\s+and\s+forth|to\s+and\s+fro)", "wave"),
-        (r"\b(?:takes?|taking|took|makes?|making|made|hangs?|hanging|hung)\s+a\s+"
-         r"(?P<keep>left|right|u-turn)\b", "turn"),
+        (rf"\b(?:takes?|taking|took|makes?|making|made|hangs?|hanging|hung)\s+a\s+"
+         rf"(?P<keep>left|right)(?:\s+turn)?{_CLAUSE_GOES_ON}", "turn"),
         (r"\bchang(?:es|ing|ed|e)\s+(?:of\s+)?directions?\b", "turn"),
         (r"\b(?:goes|going|went|heads?|heading|headed|comes?|coming|came)\s+(?:round|around)\s+"
          r"(?:a|the)\s+(?:corner|bend)\b", "turn"),
-        (rf"\b(?:bears?|bearing|bore|curves?|curving|curved|wheels?|wheeling|wheeled)"
-         rf"(?={_BEND})", "turn"),
-        (r"\bone\s+foot\s+(?:after|in\s+front\s+of)\s+the\s+other\b", "walk"),
+        (rf"(?<!\ba )(?<!\bthe )(?<!degree )\b(?:bears|bearing|bore|curves|curving|curved|wheels|"
+         rf"wheeling|wheeled)(?={_BEND})", "turn"),
+        (r"\b(?:(?:puts?|putting|places?|placing|sets?|setting)\s+)?one\s+foot\s+(?:after|"
+         r"in\s+front\s+of)\s+the\s+other\b", "walk"),
         (r"\b(?:heads?|heading|headed|goes|going|went|moves?|moving|moved|travels?|"
          r"travell?ing|travell?ed|crosses|crossing|crossed|proceeds?|proceeding|proceeded|"
          r"makes?\s+(?:his|her|their|its)\s+way|making\s+(?:his|her|their|its)\s+way)"
          r"(?=(?:\s+\w+){0,4}?\s+on\s+foot\b)", "walk"),
-        (r"\bthrows?\s+(?:a\s+)?(?:punch|punches|jabs?|hooks?|uppercuts?)\b", "punch"),
+        (r"\bthrows?\s+(?:(?:a|an|the|his|her|some|few|two|three|quick|fast|hard|straight)\s+)"
+         r"{0,3}(?:(?P<keep>left|right)\s+)?(?:(?:quick|fast|hard|straight)\s+)?(?:punch|"
+         r"punches|jabs?|hooks?|uppercuts?|crosses)\b", "punch"),
+        (r"\b(?:makes?|making|made|does|doing|did|takes?|taking|took|pulls?|pulling|pulled)\s+"
+         r"an?\s+u[\s-]?turns?\b", "turn"),
     ))
 _INDEX = {w: a for a, ws in ACTION_WORDS.items() for w in ws}
 _TOKEN = re.compile(r"[a-z]+")
@@ -166,7 +185,8 @@ class Mention:
     ``direction`` ("forward", "backwards", "sideways" or None) from the words after it up
     to the next action or clause; ``negated``: "not", "never", "without" just before it;
     ``after_previous``: "then", "after that", "followed by", "before" between it and the
-    action named before it ("walks before jumping": the jump comes after the walk)."""
+    action named before it ("walks before jumping": the jump comes after the walk; "before
+    that" looks back, and is no order)."""
 
     action: str
     side: str | None = None
@@ -181,7 +201,8 @@ _DIRECTION = {"forward": "forward", "forwards": "forward", "ahead": "forward",
               "backward": "backwards", "backwards": "backwards",
               "sideways": "sideways", "sidewards": "sideways"}
 _NEGATION = re.compile(r"(?:\b(?:not|never|without|no longer)|n't)\s+$")
-_SEQUENCE = re.compile(r"\bthen\b|\bafter(?:wards| that)\b|\bfollowed by\b|\bbefore\b")
+_SEQUENCE = re.compile(r"\bthen\b|\bafter(?:wards| that)\b|\bfollowed by\b|"
+                       r"\bbefore\b(?!\s+(?:that|this|it|then|so)\b)")
 
 
 def mentions(text: str) -> list[Mention]:

@@ -120,9 +120,9 @@ def register(subparsers) -> None:
                         "\"end\", \"text\", \"log_p\"}]}, or {\"file\", \"error\"}; several files "
                         "or a folder without -o: the same lines to stdout")
     p.add_argument("--json", action="store_true",
-                   help="print JSON: a list of the sentences ({rank, text, log_p}; with "
-                        "--segments of the segments), with --explain an object {sentences, "
-                        "evidence}")
+                   help="print JSON: a list of the sentences ({rank, text, log_p}), with "
+                        "--explain an object {sentences, evidence}; with --segments a list "
+                        "of the segments")
     p.set_defaults(func=cmd_describe)
     p = subparsers.add_parser("generate", help="generate a motion from English (L2M)")
     p.add_argument("text", help="sentence, e.g. \"a person waves with the left hand\"")

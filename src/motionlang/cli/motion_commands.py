@@ -129,6 +129,8 @@ def cmd_check(args: argparse.Namespace) -> int:
     except MotionlangError as exc:   # the analysis' reason, with the file it is about
         raise MotionlangError(f"{args.input}: {exc}") from None
     if not checks:   # nothing was checked: not an answer a script may take for "all met"
+        if args.json:
+            print("[]")
         raise MotionlangError(printed(args.text, checks))
     print(printed(args.text, checks, as_json=args.json))
     return 0

@@ -94,7 +94,7 @@ _NUMBERS = {"one": "1", "two": "2", "three": "3", "four": "4", "five": "5", "six
             "seven": "7", "eight": "8", "nine": "9", "ten": "10", "twice": "2 times",
             "thrice": "3 times", "once": "1 time"}
 _TOKEN = re.compile(r"[a-z0-9]+(?:'[a-z]+)?|,")
-_WORD = re.compile(r"[a-z]+")
+_ARTICLE_WORD = re.compile(r"\b((?:a|an|the)\s+)?([a-z]+)\b")
 
 
 @dataclass(frozen=True)
@@ -156,7 +156,13 @@ def action_verbs(text: str) -> str:
     "is jogging" -> "walks", "is runs"). Subject, style, articles and word order stay, so
     that a model trained on captions as written reads what it knows around the verb."""
     low = _paraphrased(" ".join(text.lower().split()))
-    return _WORD.sub(lambda m: _CANON.get(m.group(), m.group()), low)
+
+    def said(m: re.Match[str]) -> str:
+        article, word = m.group(1), m.group(2)
+        if article:   # a noun after an article stays a noun: "takes a bow", "at a trot"
+            return article + _NOUN.get(word, word)
+        return _CANON.get(word, word)
+    return _ARTICLE_WORD.sub(said, low)
 
 
 def _paraphrased(text: str) -> str:

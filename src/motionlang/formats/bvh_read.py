@@ -27,7 +27,8 @@ FPS_TOLERANCE = 2e-3  # 0.0333 s is 30 fps (30.03); 0.033 s is not (30.3)
 def _shown(tok: str) -> str:
     """A token as an error line quotes it: the first 40 characters, or "binary data" for
     bytes that are not text (a terminal would print them as noise)."""
-    if any(c == "\ufffd" or not c.isprintable() for c in tok):
+    odd = sum(c == "\ufffd" for c in tok)
+    if any(c != "\ufffd" and not c.isprintable() for c in tok) or odd > 1 and 4 * odd > len(tok):
         return "binary data (this is not a text file)"
     return repr(tok[:40])
 

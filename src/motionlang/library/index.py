@@ -238,7 +238,8 @@ def build_index(folder: str | Path, out: str | Path, model: Any = None,
     root, out = Path(folder).resolve(), Path(out)
     unlisted: list[tuple[str, str]] = []
     paths = every = motion_files(root, unlisted)
-    if not every and not unlisted:   # a mistyped folder, not a library to keep empty
+    if not every and not unlisted and not out.exists():   # a mistyped folder (an index
+        # made before may be emptied: its files were removed)
         raise MotionlangError(f"{folder}: no motion files under it (.bvh, .amc with its "
                               ".asf, .xml MMM, .mat, DeepMimic .txt): nothing indexed")
     if opts.shard:

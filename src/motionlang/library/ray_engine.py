@@ -12,8 +12,8 @@ from __future__ import annotations
 import importlib.util
 import os
 import shutil
-import tempfile
 from collections.abc import Callable, Iterator
+from pathlib import Path
 from typing import Any
 
 from motionlang.errors import MotionlangError
@@ -53,16 +53,13 @@ def embedded_on_ray(jobs: list, model: Any, workers: int, embed: Callable[[Any, 
         raise MotionlangError("--engine ray needs the ray package (pip install "
                               "'motionlang[ray]')") from None
     started = not ray.is_initialized()
-    scratch = None
+    session = None
     if started:
         address = os.environ.get("RAY_ADDRESS")
-        # a Ray started for this run keeps its logs and sockets in a folder of its own,
-        # removed after it (Ray's default folder, /tmp/ray, keeps those of every start)
-        scratch = None if address else tempfile.mkdtemp(prefix="motionlang-ray-")
-        extra: dict[str, Any] = {"_temp_dir": scratch} if scratch else {}
         ray.init(address=address, num_cpus=None if address else workers,
-                 include_dashboard=False, log_to_driver=False, ignore_reinit_error=True,
-                 **extra)
+                 include_dashboard=False, log_to_driver=False, ignore_reinit_error=True)
+        # a Ray started here for this run: its session folder (logs, sockets) goes with it
+        session = None if address else _session_folder(ray)
     try:
         actor = ray.remote(num_cpus=1)(_Worker)
         pool = ActorPool([actor.remote(model, 1, embed) for _ in range(max(1, workers))])
@@ -70,5 +67,24 @@ def embedded_on_ray(jobs: list, model: Any, workers: int, embed: Callable[[Any, 
     finally:
         if started:
             ray.shutdown()
-        if scratch:
-            shutil.rmtree(scratch, ignore_errors=True)
+        if session is not None:
+            _remove_session(session)
+
+
+def _session_folder(ray: Any) -> Path | None:
+    """The folder of the Ray session this process started, where this Ray version says
+    (no public call tells it; None where the private one is gone: the folder is kept)."""
+    try:
+        return Path(ray._private.worker._global_node.get_session_dir_path())
+    except Exception:   # noqa: BLE001 - a Ray without it keeps its folder, as Ray does
+        return None
+
+
+def _remove_session(folder: Path) -> None:
+    """Remove a finished session's folder, and Ray's ``session_latest`` link to it."""
+    if not folder.name.startswith("session_") or not folder.is_dir():
+        return   # not what a Ray session folder looks like: left alone
+    latest = folder.parent / "session_latest"
+    if latest.is_symlink() and Path(os.readlink(latest)).name == folder.name:
+        latest.unlink(missing_ok=True)
+    shutil.rmtree(folder, ignore_errors=True)

@@ -124,7 +124,11 @@ class Library:
     """
 
     def __init__(self, data: IndexData, embedder: Embedder, where: str = "index"):
-        embedder.check(data.model, where)
+        try:
+            embedder.check(data.model, where)
+        except MotionlangError as exc:   # a model file that changed since: say how to go on
+            raise MotionlangError(f"{exc}; run 'motionlang index {data.root} -o {where} "
+                                  f"--rebuild' to embed its takes with this model") from None
         self.data, self.embedder, self.where = data, embedder, where
         self.unit = unit_rows(data.vectors)
         self.entry_of = data.entry_of_rows()

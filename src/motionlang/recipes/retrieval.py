@@ -261,6 +261,7 @@ def run(sources: Sequence, out_dir: Path, model_cfg: dict[str, Any], train_cfg: 
     torch.manual_seed(train_cfg.seed)
     if init is not None:
         model = init
+        model.read_with(text)   # captions as training reads them, not as queries are read
         renormalise([*train_items, *(it for part in data.items.values() for it in part)],
                     data.features, init.features)
     else:

@@ -139,6 +139,14 @@ class RetrievalModel(Checkpointed, nn.Module):
                                           self.config.use_reading)
         return self._text
 
+    def read_with(self, text: SentenceVectors) -> None:
+        """Read sentences with ``text`` from now on (training gives its captions' reading,
+        ``config.training_reading``, to a model loaded to fine-tune)."""
+        if text.dim != self.config.text_dim:
+            raise MotionlangError(f"the sentence encoder gives {text.dim} values, the "
+                                  f"model reads {self.config.text_dim}")
+        self._text = text
+
     @property
     def fps(self) -> float:
         """Frame rate of the frames the motion encoder reads, Hz."""
