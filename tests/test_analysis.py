@@ -706,3 +706,37 @@ def test_a_walk_with_its_travel_taken_out_walks_in_place():
     still = np.repeat(p[:1], len(p), axis=0)               # the same body, not moving
     assert not striding(Body.from_positions(still, motion.fps)).any()
     assert labels(still, motion.fps) == ["stand"]
+
+
+def test_side_steps_with_their_travel_taken_out_do_not_stand_still():
+    """Feet that step, each raised in turn, are no standing body even where they do not
+    stride past each other (side steps held in place): the analysis cannot tell, rather
+    than "stands still"."""
+    from motionlang.analysis.locomotion import stepping
+    from motionlang.datasets.synth import Primitive
+    from motionlang.datasets.synth.compose import build_motion, random_style
+    from motionlang.features.joint_map import positions21
+    rng = np.random.default_rng(4)
+    motion, _, _ = build_motion([Primitive("walk", count=8, direction="left")],
+                                random_style(rng), rng)
+    p = positions21(motion).copy()
+    p[:, :, [0, 2]] -= p[:, :1, [0, 2]]
+    assert stepping(Body.from_positions(p, motion.fps)).mean() > 0.5
+    assert "stand" not in labels(p, motion.fps)
+    still = np.repeat(p[:1], len(p), axis=0)
+    assert not stepping(Body.from_positions(still, motion.fps)).any()
+
+
+@pytest.mark.parametrize("seed", [4, 5])
+def test_a_run_with_its_travel_taken_out_runs_in_place(seed):
+    """In place the root's speed says nothing of the gait: the flights of the lower foot
+    and the cadence do."""
+    from motionlang.datasets.synth import Primitive
+    from motionlang.datasets.synth.compose import build_motion, random_style
+    from motionlang.features.joint_map import positions21
+    rng = np.random.default_rng(seed)
+    motion, _, _ = build_motion([Primitive("run", count=12, direction="forward")],
+                                random_style(rng), rng)
+    p = positions21(motion).copy()
+    p[:, :, [0, 2]] -= p[:, :1, [0, 2]]
+    assert analyse_positions(p, motion.fps).sentence() == "a person runs in place"

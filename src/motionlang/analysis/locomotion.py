@@ -38,11 +38,13 @@ MIN_TRAVEL = 0.8           # s
 STRIDE_SWING = 1.0         # L: feet that change places fore and aft by this...
 STRIDE_WINDOW = 2.0        # s: ...within this are striding (a walking stride is ~1.5 L)
 IN_PLACE_MIN = 2.0         # s: striding in place at least this long is a walk in place
+STEP_LIFT = 0.03           # L: each foot raised this far above the other within a stride
+                           # window is stepping (in place, sideways or back), not standing
 PASS_MARGIN = 0.25         # L: in place, a foot passes the other once this far ahead of it
 # in place the root's speed says nothing of the gait: a run has flights (the lower foot
 # leaves the floor) and a quick cadence; walks stay below both
 IN_PLACE_FLIGHT = 0.025    # L: the lower foot's 90th minus 10th height percentile, at least
-IN_PLACE_CADENCE = 2.1     # steps a second, at least
+IN_PLACE_CADENCE = 1.9     # steps a second, at least
 MIN_DISTANCE = 0.5         # L: a travel covers at least this...
 MIN_LIFTS = 2              # ...and the feet leave the floor and land again this often
 FOOT_BORNE = 0.25          # share of its frames a walk or run has a foot on the floor at least
@@ -180,6 +182,17 @@ def striding(body: Body) -> np.ndarray:
     d, w = _ahead(body), body.frames(STRIDE_WINDOW)
     return np.asarray(maximum_filter1d(d, w, mode="nearest") -
                       minimum_filter1d(d, w, mode="nearest") >= STRIDE_SWING)
+
+
+def stepping(body: Body) -> np.ndarray:
+    """(T,) frames within :data:`STRIDE_WINDOW` s of which each foot in turn was raised
+    :data:`STEP_LIFT` leg lengths or more above the other: feet that step, forward or not
+    (marching on the spot, side steps held in place), which no standing body does."""
+    lift = (body.foot_low - body.foot_low.min(axis=0)[None]) / body.leg
+    w = body.frames(STRIDE_WINDOW)
+    up = [maximum_filter1d((lift[i] > STEP_LIFT).astype(np.uint8), w, mode="nearest") > 0
+          for i in range(2)]
+    return np.asarray(up[0] & up[1])
 
 
 def foot_passes(lead: np.ndarray, margin: float) -> int:

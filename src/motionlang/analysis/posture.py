@@ -17,9 +17,9 @@ degrees, distances in leg lengths.
 - **hanging / climbing**: both hands above the head and neither foot on the floor;
 - **on one leg**: one foot down and the other clearly raised, for longer than any step;
 - **arms outstretched**: both arms straight and near horizontal;
-- **standing**: upright, feet down, not travelling, and the feet not striding in place
-  (on a treadmill, or a take with the root's travel taken out, the feet swing past each
-  other while the root stays).
+- **standing**: upright, feet down, not travelling, and the feet neither striding nor
+  stepping in place (on a treadmill, or a take with the root's travel taken out, the feet
+  swing past each other or step while the root stays).
 """
 from __future__ import annotations
 
@@ -27,7 +27,7 @@ import numpy as np
 
 from motionlang.analysis.body import ARMS, LEGS, Body, J
 from motionlang.analysis.evidence import MIN_CONFIDENCE, Finding, clean_mask, confidence, runs
-from motionlang.analysis.locomotion import BALLISTIC_FRAMES, ballistic, striding
+from motionlang.analysis.locomotion import BALLISTIC_FRAMES, ballistic, stepping, striding
 
 # thresholds (standing pelvis heights "sph", leg lengths "L", degrees, seconds)
 LYING_TILT = 60.0          # deg: trunk this far from vertical
@@ -162,7 +162,8 @@ def outstretched(body: Body) -> np.ndarray:
 
 def standing(body: Body) -> np.ndarray:
     return (body.trunk_tilt < UPRIGHT_TILT) & (body.pelvis_height > STAND_PELVIS) & \
-        body.contacts.any(axis=0) & (body.ground_speed < 2 * STILL) & ~striding(body)
+        body.contacts.any(axis=0) & (body.ground_speed < 2 * STILL) & ~striding(body) & \
+        ~stepping(body)
 
 
 def _spans(body: Body, mask: np.ndarray, min_len: float = MIN_POSTURE) -> list[tuple[int, int]]:
