@@ -119,10 +119,8 @@ def register(subparsers) -> None:
                         "\"log_p\"}]}, with --segments {\"file\", \"segments\": [{\"start\", "
                         "\"end\", \"text\", \"log_p\"}]}, or {\"file\", \"error\"}; several files "
                         "or a folder without -o: the same lines to stdout")
-    p.add_argument("--json", action="store_true",
-                   help="print JSON: a list of the sentences ({rank, text, log_p}), with "
-                        "--explain an object {sentences, evidence}; with --segments a list "
-                        "of the segments")
+    p.add_argument("--json", action="store_true", help="print JSON: a list of the sentences "
+                   "(or --segments), with --explain an object {sentences, evidence}")
     p.set_defaults(func=cmd_describe)
     p = subparsers.add_parser("generate", help="generate a motion from English (L2M)")
     p.add_argument("text", help="sentence, e.g. \"a person waves with the left hand\"")

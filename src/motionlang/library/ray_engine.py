@@ -58,8 +58,8 @@ def embedded_on_ray(jobs: list, model: Any, workers: int, embed: Callable[[Any, 
         address = os.environ.get("RAY_ADDRESS")
         ray.init(address=address, num_cpus=None if address else workers,
                  include_dashboard=False, log_to_driver=False, ignore_reinit_error=True)
-        # a Ray started here for this run: its session folder (logs, sockets) goes with it
-        session = None if address else _session_folder(ray)
+        # a Ray started here for this run: its folder of logs and sockets goes with it
+        session = None if address else _run_folder(ray)
     try:
         actor = ray.remote(num_cpus=1)(_Worker)
         pool = ActorPool([actor.remote(model, 1, embed) for _ in range(max(1, workers))])
@@ -68,22 +68,23 @@ def embedded_on_ray(jobs: list, model: Any, workers: int, embed: Callable[[Any, 
         if started:
             ray.shutdown()
         if session is not None:
-            _remove_session(session)
+            _remove_run_folder(session)
 
 
-def _session_folder(ray: Any) -> Path | None:
-    """The folder of the Ray session this process started, where this Ray version says
-    (no public call tells it; None where the private one is gone: the folder is kept)."""
+def _run_folder(ray: Any) -> Path | None:
+    """The folder of logs and sockets of the Ray this process started, where this Ray
+    version says (no public call tells it; None where the private one is gone: the folder
+    is kept)."""
     try:
         return Path(ray._private.worker._global_node.get_session_dir_path())
     except Exception:   # noqa: BLE001 - a Ray without it keeps its folder, as Ray does
         return None
 
 
-def _remove_session(folder: Path) -> None:
-    """Remove a finished session's folder, and Ray's ``session_latest`` link to it."""
+def _remove_run_folder(folder: Path) -> None:
+    """Remove the folder of a Ray that has shut down, and Ray's link to it as the latest."""
     if not folder.name.startswith("session_") or not folder.is_dir():
-        return   # not what a Ray session folder looks like: left alone
+        return   # not a name Ray gives such folders: left alone
     latest = folder.parent / "session_latest"
     if latest.is_symlink() and Path(os.readlink(latest)).name == folder.name:
         latest.unlink(missing_ok=True)
