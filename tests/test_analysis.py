@@ -740,3 +740,18 @@ def test_a_run_with_its_travel_taken_out_runs_in_place(seed):
     p = positions21(motion).copy()
     p[:, :, [0, 2]] -= p[:, :1, [0, 2]]
     assert analyse_positions(p, motion.fps).sentence() == "a person runs in place"
+
+
+def test_nobody_negates_and_in_place_is_a_way_of_walking():
+    from motionlang.analysis.words import mentions
+    assert mentions("nobody walks")[0].negated and mentions("no one waves")[0].negated
+    assert mentions("a person walks in place")[0].direction == "in place"
+    assert mentions("jogs on the spot")[0].direction == "in place"
+    assert actions_named("a person gets up") == ["stand"]
+    assert actions_named("someone sidesteps to the left") == ["walk"]
+
+
+def test_broken_openings_are_garbled():
+    from motionlang.analysis.sentences import garbled
+    assert garbled("an is walking forward") and garbled("both person raises both hands")
+    assert not garbled("a person is walking forward") and not garbled("a person raises both hands")

@@ -154,3 +154,29 @@ def test_no_action_with_json_prints_an_empty_list_and_exits_2(walk_file, capsys)
     assert main(["check", "qwzx blorp", str(walk_file), "--json"]) == 2
     out = capsys.readouterr()
     assert json.loads(out.out) == [] and "names no action" in out.err
+
+
+def test_walking_in_place_is_asked_as_a_way_of_walking(walk_file, capsys):
+    """"walks in place" on a walk that goes forward is a no, with how it was seen."""
+    assert main(["check", "a person walks in place", str(walk_file)]) == 0
+    line = capsys.readouterr().out.strip()
+    assert line.startswith("walk: no (seen forward")
+
+
+def test_describe_segments_explain_gives_the_evidence_too(walk_file, capsys):
+    assert main(["describe", str(walk_file), "--segments", "--explain"]) == 0
+    out = capsys.readouterr().out
+    assert " walks straight ahead" in out and "\nevidence:" in out and "walks forward:" in out
+    assert main(["describe", str(walk_file), "--segments", "--explain", "--json"]) == 0
+    got = json.loads(capsys.readouterr().out)
+    assert set(got) == {"segments", "evidence"} and got["segments"] and got["evidence"]
+
+
+def test_a_query_that_names_no_action_is_said_to_be_unchecked(tmp_path, walk_file):
+    folder = tmp_path / "lib"
+    folder.mkdir()
+    (folder / "walk.bvh").symlink_to(walk_file)
+    index = tmp_path / "lib.idx"
+    ml.index(folder, index, show_progress=False)
+    with pytest.warns(UserWarning, match="names no action motionlang reads"):
+        ml.search("xqzv plorf", index, k=1)

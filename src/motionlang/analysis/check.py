@@ -71,7 +71,7 @@ class ActionCheck:
 _HANDS = frozenset({"raise", "wave", "punch", "reach"})
 #: how each direction a sentence says is seen in a walk's or a run's ``direction``
 _DIRECTION_SEEN = {"forward": ("forward",), "backwards": ("backwards",),
-                   "sideways": ("left", "right")}
+                   "sideways": ("left", "right"), "in place": ()}
 
 
 def _answers(action: str, f: Finding, *, exact: bool = False) -> bool:
@@ -95,8 +95,9 @@ def _on_side(f: Finding, side: str) -> bool:
 
 
 def _went(f: Finding, direction: str) -> bool:
-    if f.detail.get("in_place"):
-        return False   # a walk in place goes nowhere: not forward, not backwards
+    if f.detail.get("in_place") or direction == "in place":
+        # a walk in place goes nowhere (not forward, not backwards); one that goes is none
+        return bool(f.detail.get("in_place")) == (direction == "in place")
     seen = f.detail.get("direction")
     return seen is None or seen in _DIRECTION_SEEN[direction]
 

@@ -214,12 +214,15 @@ _AUXILIARY = frozenset("does did is was has makes takes goes gets".split())
 
 def garbled(text: str) -> bool:
     """Whether a sentence is broken English a model stumbled into: no subject before its
-    verb ("a walks forward"), two verbs in a row ("a person jumps bows", "jumps squats",
+    verb ("a walks forward", "an is walking"), two verbs in a row ("a person jumps bows", "jumps squats",
     "jumps does some squats"; a comma between them is a list: "walks, turns around"), or
     an action verb that takes no object followed by "the way" ("a person jumps the way";
     one shows or points the way)."""
     words = text.lower().split()
-    if len(words) >= 2 and words[0] in ("a", "an", "the") and words[1] in THIRD_PERSON:
+    if len(words) >= 2 and words[0] in ("a", "an", "the") and (
+            words[1] in THIRD_PERSON or words[1] in _AUXILIARY):   # "an is walking"
+        return True
+    if words[:2] == ["both", "person"]:   # "both person raises both hands"
         return True
     if any(a in THIRD_PERSON and a not in _TRANSITIVE and b == "the" and c in ("way", "way,")
            for a, b, c in zip(words, words[1:], words[2:])):   # "jumps the way" (not "shows")

@@ -22,7 +22,8 @@ ACTION_WORDS: dict[str, tuple[str, ...]] = {
              "trudging", "trudged", "plod", "plods", "plodding", "plodded", "meander",
              "meanders", "meandering", "meandered", "promenade", "promenades",
              "promenading", "traipse", "traipses", "traipsing", "mosey", "moseys",
-             "moseying", "hiking", "tiptoeing"),
+             "moseying", "hiking", "tiptoeing", "sidestep", "sidesteps", "sidestepping",
+             "sidestepped"),
     "run": ("run", "runs", "running", "ran", "jog", "jogs", "jogging", "jogged", "sprint",
             "sprints", "sprinting", "dash", "dashes", "dashing", "trot", "trots", "trotting",
             "sprinted", "dashed", "trotted", "races", "racing", "raced", "rushes",
@@ -99,6 +100,8 @@ PHRASES: tuple[tuple[re.Pattern[str], str], ...] = tuple(
          rf"{_POSSESSIVE}knees?\b", "kneel"),
         (rf"\bon\s+{_POSSESSIVE}knees?\b", "kneel"),
         (r"\b(?:takes?|taking|took|has|have)\s+a\s+seat\b", "sit"),
+        (r"\b(?:gets?|getting|got)\s+up\b|\b(?:rises?|rising|rose)\s+to\s+(?:his|her|their|"
+         r"the)\s+feet\b", "stand"),
         (rf"\bon\s+{_POSSESSIVE}(?:back|belly|stomach|side)\b", "lie"),
         (r"\b(?:goes|going|went|walks?|walking)\s+up\s+(?:the\s+)?(?:stairs|steps|ladder)\b",
          "climb"),
@@ -182,7 +185,7 @@ def actions_named(text: str) -> list[str]:
 @dataclass(frozen=True)
 class Mention:
     """How a sentence names one action: ``side`` ("left", "right", "both" or None) and
-    ``direction`` ("forward", "backwards", "sideways" or None) from the words after it up
+    ``direction`` ("forward", "backwards", "sideways", "in place" or None) from the words after it up
     to the next action or clause; ``negated``: "not", "never", "without" just before it;
     ``after_previous``: "then", "after that", "followed by", "before" between it and the
     action named before it ("walks before jumping": the jump comes after the walk; "before
@@ -200,7 +203,9 @@ _SIDE = re.compile(r"\b(left|right|both)\b")
 _DIRECTION = {"forward": "forward", "forwards": "forward", "ahead": "forward",
               "backward": "backwards", "backwards": "backwards",
               "sideways": "sideways", "sidewards": "sideways"}
-_NEGATION = re.compile(r"(?:\b(?:not|never|without|no longer)|n't)\s+$")
+_IN_PLACE = re.compile(r"\b(?:in place|on the spot|on the treadmill|on a treadmill)\b")
+_NEGATION = re.compile(r"(?:\b(?:not|never|without|no longer|no one|no-one|nobody|noone)|"
+                       r"n't)\s+$")
 _SEQUENCE = re.compile(r"\bthen\b|\bafter(?:wards| that)\b|\bfollowed by\b|"
                        r"\bbefore\b(?!\s+(?:that|this|it|then|so)\b)")
 
@@ -222,7 +227,8 @@ def mentions(text: str) -> list[Mention]:
         clause = after[:cut.start()] if cut else after
         sides = _SIDE.findall(low[start:end] + clause)   # "balances on the left leg"
         words = _TOKEN.findall(clause)
-        direction = next((_DIRECTION[w] for w in words if w in _DIRECTION), None)
+        direction = "in place" if _IN_PLACE.search(clause) else next(
+            (_DIRECTION[w] for w in words if w in _DIRECTION), None)
         before = low[found[i - 1][1] if i else 0:start]
         out.append(Mention(action, sides[0] if sides else None, direction,
                            bool(_NEGATION.search(before)),

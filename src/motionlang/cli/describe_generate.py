@@ -120,7 +120,7 @@ def register(subparsers) -> None:
                         "\"end\", \"text\", \"log_p\"}]}, or {\"file\", \"error\"}; several files "
                         "or a folder without -o: the same lines to stdout")
     p.add_argument("--json", action="store_true", help="print JSON: a list of the sentences "
-                   "(or --segments), with --explain an object {sentences, evidence}")
+                   "(or --segments), with --explain an object {sentences|segments, evidence}")
     p.set_defaults(func=cmd_describe)
     p = subparsers.add_parser("generate", help="generate a motion from English (L2M)")
     p.add_argument("text", help="sentence, e.g. \"a person waves with the left hand\"")

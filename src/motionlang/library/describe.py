@@ -185,8 +185,8 @@ class Describer:
             else:
                 out["sentences"] = [{"text": t, self.score_key: _rounded(s)}
                                     for t, s in self.sentences(motion)]
-                if self.options.explain:
-                    out["evidence"] = evidence(motion)
+            if self.options.explain:
+                out["evidence"] = evidence(motion)
         except MotionlangError as exc:
             out["error"] = " ".join(str(exc).split())
         except Exception as exc:   # noqa: BLE001 - one odd take must not end a long run
@@ -236,20 +236,24 @@ def score_text(label: str, score: float, fmt: str = "8.3f") -> str:
 def printed(d: Describer, motion, *, as_json: bool = False) -> str:
     """What ``motionlang describe FILE`` prints of one motion: ``1. log P =   -3.210  a
     person walks`` lines (a bank's: ``cos =``), or with segments ``0.0-4.0 s  a person
-    walks`` lines; ``as_json``: a JSON list of the sentences (with their rank) or segments."""
+    walks`` lines; ``as_json``: a JSON list of the sentences (with their rank) or segments;
+    with ``explain`` the evidence of the whole take after them (JSON: ``{"sentences" or
+    "segments", "evidence"}``)."""
+    key = "segments" if d.options.segments else "sentences"
     if d.options.segments:
         segments = d.timeline(motion)
-        return json.dumps(d.segment_dicts(segments), indent=1) if as_json else \
-            "\n".join(s.line() for s in segments)
-    hyps, label = d.sentences(motion), "log P" if d.bank is None else "cos"
+        rows: Any = d.segment_dicts(segments)
+        lines = [s.line() for s in segments]
+    else:
+        hyps, label = d.sentences(motion), "log P" if d.bank is None else "cos"
+        rows = [{"rank": i + 1, "text": t, d.score_key: _rounded(s)}
+                for i, (t, s) in enumerate(hyps)]
+        lines = [f"{i}. {score_text(label, score)}  {text}"
+                 for i, (text, score) in enumerate(hyps, 1)]
     if as_json:
-        rows: Any = [{"rank": i + 1, "text": t, d.score_key: _rounded(s)}
-                     for i, (t, s) in enumerate(hyps)]
         if d.options.explain:
-            rows = {"sentences": rows, "evidence": evidence(motion)}
+            rows = {key: rows, "evidence": evidence(motion)}
         return json.dumps(rows, indent=1)
-    lines = [f"{i}. {score_text(label, score)}  {text}"
-             for i, (text, score) in enumerate(hyps, 1)]
     if d.options.explain:
         found = evidence(motion)
         lines.append("evidence:" if found else "evidence: the analysis found nothing it is "

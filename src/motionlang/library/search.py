@@ -28,6 +28,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from motionlang.analysis.words import actions_named
 from motionlang.errors import MotionlangError
 from motionlang.library import ann
 from motionlang.library.embedder import Embedder
@@ -165,6 +166,10 @@ class Library:
         if not isinstance(query, str) or not query.split():
             raise MotionlangError(f"the query has no words: {query!r}")
         vector = self.embedder.text(query)
+        if not actions_named(query):   # gibberish scores as high as anything: say so
+            warnings.warn(f"{query!r} names no action motionlang reads: the hits are the "
+                          "learned model's nearest, which need not mean anything",
+                          UserWarning, stacklevel=2)
         actions = query_actions(query) if opts.grounded else []
         unanalysed = any(e.findings is None for e in self.data.entries)
         if opts.where and unanalysed:
