@@ -44,10 +44,10 @@ def cmd_merge(args: argparse.Namespace) -> int:
 def register(subparsers) -> None:
     p = subparsers.add_parser(
         "index", help="make a folder of motion files searchable by text",
-        description="Cut every motion file under DIR (recursively; .bvh, .amc with its .asf, "
-                    ".xml MMM, .mat, DeepMimic .txt; any rig the 21-joint body maps) into "
-                    "overlapping windows and embed each; run it again to embed only new or changed files. Files "
-                    "that do not read are listed with their reason and skipped.")
+        description="Cut every motion file under DIR (recursively; .bvh, .amc + .asf, .xml "
+                    "MMM, .mat, DeepMimic .txt; any rig) into overlapping windows and embed "
+                    "each; run it again to embed only new or changed files. Files that do not "
+                    "read are listed with their reason and skipped.")
     p.add_argument("dir", metavar="DIR", help="the folder of motion files")
     p.add_argument("-o", "--output", required=True, type=output_file, metavar="FILE",
                    help="the index file (made, or brought up to date)")
