@@ -85,7 +85,7 @@ def test_the_help_lists_each_familys_options_from_its_dataclass():
                 text = action.help
                 assert "l2m: method (sample|beam|mean, default none)" in text, leaf.prog
                 assert all(f.name in text for f in dataclasses.fields(L2MOptions))
-                assert "twostream: none" in text
+                assert "twostream: reading (default verbs)" in text
 
 
 def test_the_round_trip_needs_ranked_motions_of_the_models_own_features():

@@ -134,3 +134,17 @@ def test_the_packaged_vectors_read_synonyms_as_the_vocabulary_words():
     assert dict((w, k) for w, k, _ in r.mapped) == {"individual": "person", "strolls": "walks",
                                                    "rapidly": "quickly"}
     assert r.text == "an person walks forward quickly"
+
+
+@pytest.mark.parametrize("name", ["masked", "twostream"])
+def test_a_pretrained_encoders_family_reads_other_words_as_their_verb(name):
+    """``reading`` (``ReadingOptions``): by default "puts the left hand up" reaches the model
+    as "raises the left hand"; ``reading=written`` leaves the sentence as it is."""
+    from motionlang.errors import MotionlangError
+    assert ml.text_to_motion(name).read_words("someone puts the left hand up").text == \
+        "someone raises the left hand"
+    written = ml.text_to_motion(f"{name}:reading=written")
+    assert written.read_words("someone puts the left hand up").text == \
+        "someone puts the left hand up"
+    with pytest.raises(MotionlangError, match="reading must be one of"):
+        ml.text_to_motion(f"{name}:reading=loose")

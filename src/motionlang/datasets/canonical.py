@@ -15,10 +15,12 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
+from typing import Any
 
 from motionlang.analysis.sentences import THIRD_PERSON
 from motionlang.analysis.words import ACTION_WORDS, PARAPHRASES
 from motionlang.datasets.bandai_text import STYLES, styles_named
+from motionlang.errors import MotionlangError
 
 _ARTICLE = re.compile(r"\ban (?=[^aeiou\s])")
 _MANNER = re.compile(r" (?:in|with) (?:a|an|the)(?: \w+){0,3} (?:way|manner) | at speed ")
@@ -178,6 +180,12 @@ def _paraphrased(text: str) -> str:
 #: how a sentence encoder may be given a sentence: as written, with each action's own verb
 #: (:func:`action_verbs`), or in canonical form (:func:`canonical_text`)
 READINGS = ("written", "verbs", "canonical")
+
+
+def check_reading(reading: Any) -> None:
+    """Refuse a reading that is not one of :data:`READINGS`, by name."""
+    if reading not in READINGS:
+        raise MotionlangError(f"reading must be one of {', '.join(READINGS)}, got {reading!r}")
 
 
 def read_as(text: str, reading: str) -> str:

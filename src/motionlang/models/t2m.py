@@ -23,6 +23,7 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
+from motionlang.datasets.canonical import check_reading, read_as
 from motionlang.datasets.text import tokenize
 from motionlang.errors import MotionlangError
 from motionlang.features.foot_lock import lock_feet
@@ -30,7 +31,7 @@ from motionlang.features.positions import PositionsConfig, join_global, split_gl
 from motionlang.models.family import load_object
 from motionlang.models.options import build_options
 from motionlang.models.registry import families, kinds_with
-from motionlang.models.word_map import WordMapper, WordOptions, WordReading
+from motionlang.models.word_map import ReadingOptions, WordMapper, WordOptions, WordReading
 
 #: frame rate of the comparison: the positions features' rate
 FPS = PositionsConfig.fps
@@ -117,7 +118,23 @@ class SamplingModel(Protocol):
 
 @dataclass
 class NoOptions:
-    """A model that samples one way (the two-stream model: deterministic)."""
+    """A model that samples one way."""
+
+
+@dataclass
+class ReadOptions:
+    """A model that samples one way (the two-stream model: deterministic) and reads its
+    sentences with a pretrained encoder (``word_map.ReadingOptions``).
+
+    Attributes:
+        reading: how a sentence is given to the encoder (``datasets.canonical.read_as``):
+            ``verbs``, each action named in other words said with its verb; or ``written``.
+    """
+
+    reading: str = "verbs"
+
+    def __post_init__(self) -> None:
+        check_reading(self.reading)
 
 
 def _check_words(sentence: str) -> None:
@@ -201,7 +218,10 @@ class Text2MotionAdapter:
 
     def read_words(self, sentence: str) -> Any:
         """How the model reads ``sentence`` (``models.word_map.WordReading``; ``.text`` is
-        what it decodes): with ``map_words`` on (``WordOptions``), unknown words as known."""
+        what it decodes): as its ``reading`` option gives it (``ReadingOptions``), and with
+        ``map_words`` on (``WordOptions``) unknown words as known."""
+        if isinstance(self.options, ReadingOptions) and self.options.reading != "written":
+            sentence = read_as(sentence, self.options.reading)
         unknown = self._unknown_words(sentence)
         if not (unknown and isinstance(self.options, WordOptions) and self.options.map_words):
             return WordReading(sentence, (), tuple(unknown))

@@ -72,6 +72,16 @@ class WordOptions(Protocol):
     map_words: bool
 
 
+@runtime_checkable
+class ReadingOptions(Protocol):
+    """The sampling option of a family that reads sentences with a pretrained encoder: its
+    ``Options`` dataclass has a field ``reading: str`` (``--model masked:reading=verbs``),
+    how a sentence is given to the encoder (``datasets.canonical.read_as``: ``written``,
+    ``verbs``, ``canonical``)."""
+
+    reading: str
+
+
 def _word_class(word: str) -> str:
     return "ly" if word.endswith("ly") else "ing" if word.endswith("ing") else ""
 

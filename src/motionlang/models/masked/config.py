@@ -9,6 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+from motionlang.datasets.canonical import check_reading
 from motionlang.errors import MotionlangError
 from motionlang.features.positions import DEFAULT_FPS
 from motionlang.features.positions import DIM as POSITIONS_DIM
@@ -143,6 +144,11 @@ class MaskedOptions:
             arrives closest to the kept frames after each gap (``inbetween.arrival_miss``);
             more drafts arrive closer and slide less, at about 30 ms each for 10 s
             (``benchmarks/bench_masked_inbetween.py``).
+        reading: how a sentence is given to the sentence encoder
+            (``datasets.canonical.read_as``): ``verbs``, each action named in other words
+            said with its verb ("puts the left hand up" -> "raises the left hand"; the
+            sentences as written were as well read, those in other words better); or
+            ``written``.
     """
 
     steps: int = 6
@@ -152,8 +158,10 @@ class MaskedOptions:
     top_k: int = 0
     width: int = 1
     drafts: int = 32
+    reading: str = "verbs"
 
     def __post_init__(self) -> None:
+        check_reading(self.reading)
         check_numbers("masked options", self, positive_ints=("steps", "drafts", "width"),
                       nonneg_ints=("top_k",),
                       nonneg=("guidance", "res_guidance", "temperature"))

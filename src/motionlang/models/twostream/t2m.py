@@ -10,7 +10,7 @@ import torch
 from motionlang.errors import MotionlangError
 from motionlang.features.base import downsample
 from motionlang.features.body21 import body21
-from motionlang.models.t2m import FPS, Text2MotionAdapter, _check_words
+from motionlang.models.t2m import FPS, ReadOptions, Text2MotionAdapter, _check_words
 
 
 class TwoStreamText2Motion(Text2MotionAdapter):
@@ -19,6 +19,7 @@ class TwoStreamText2Motion(Text2MotionAdapter):
 
     deterministic = True
     capabilities = frozenset({"reconstruct", "positions_start"})
+    Options = ReadOptions
 
     @property
     def fps(self) -> float:
