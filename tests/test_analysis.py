@@ -755,3 +755,29 @@ def test_broken_openings_are_garbled():
     from motionlang.analysis.sentences import garbled
     assert garbled("an is walking forward") and garbled("both person raises both hands")
     assert not garbled("a person is walking forward") and not garbled("a person raises both hands")
+
+
+def test_check_asks_a_walks_path_and_pace():
+    """"walks in a circle" is no on a straight walk; "walks quickly" no on a slow one and
+    "slowly" no on a brisk one (by the Froude number), each with how it was seen."""
+    from motionlang.analysis import check_sentence
+    from motionlang.analysis.words import mentions
+    from motionlang.datasets.synth import Primitive
+    from motionlang.datasets.synth.compose import build_motion, random_style
+    from motionlang.features.joint_map import positions21
+
+    def walk(**kw):
+        rng = np.random.default_rng(4)
+        motion, _, _ = build_motion([Primitive("walk", **kw)], random_style(rng), rng)
+        return analyse_positions(positions21(motion), motion.fps)
+
+    assert [(m.path, m.pace) for m in mentions("a man slowly walks in a circle")] == [
+        ("in a circle", "slow")]
+    slow, brisk = (walk(count=8, direction="forward", speed=s) for s in ("slow", "fast"))
+    circle = walk(count=16, direction="circle", side="left")
+    asked = [check_sentence(t, a)[0] for t, a in (
+        ("a person walks in a circle", slow), ("a person walks in a circle", circle),
+        ("a person walks quickly", slow), ("a person walks slowly", slow),
+        ("a person walks slowly", brisk), ("a person walks briskly", brisk))]
+    assert [c.shown for c in asked] == [False, True, False, True, False, True]
+    assert "slower than most walks" in asked[2].note and "briskly" in asked[4].note

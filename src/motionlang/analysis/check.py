@@ -102,13 +102,34 @@ def _went(f: Finding, direction: str) -> bool:
     return seen is None or seen in _DIRECTION_SEEN[direction]
 
 
+#: Froude number that parts a slow walk from a quick one: the middle of an ordinary walk's
+#: (``locomotion.WALK_SLOW`` .. ``WALK_BRISK``)
+PACE_SPLIT = 0.2
+
+
+def _paced(f: Finding, pace: str) -> bool:
+    """Whether a walk is at ``pace`` ("slow", "fast"), by its Froude number (a walk without
+    one answers either)."""
+    fr = f.detail.get("froude")
+    if fr is None:
+        return True
+    return fr < PACE_SPLIT if pace == "slow" else fr >= PACE_SPLIT
+
+
 def _how(f: Finding) -> str:
     """A finding's side or direction and its span, for a note: "on the right side, 0.9-2.9
     s", "backwards, 0.0-3.0 s"."""
     if f.detail.get("in_place"):
         return f"in place, {f.start:.1f}-{f.end:.1f} s"
     if f.label in ("walk", "run", "jump") and f.detail.get("direction"):
-        return f"{f.detail['direction']}, {f.start:.1f}-{f.end:.1f} s"
+        how = " ".join([f.detail["direction"]] + ([f.detail["speed"]] if f.detail.get("speed")
+                                                   else []))
+        if f.detail.get("path") not in (None, "straight"):
+            how += f" {f.detail['path']}"
+        if f.label == "walk" and f.detail.get("froude") is not None and not f.detail.get("speed"):
+            how += ", slower than most walks" if f.detail["froude"] < PACE_SPLIT else \
+                ", quicker than most walks"
+        return f"{how}, {f.start:.1f}-{f.end:.1f} s"
     return f"on the {f.side} side, {f.start:.1f}-{f.end:.1f} s" if f.side else \
         f"{f.start:.1f}-{f.end:.1f} s"
 
@@ -142,6 +163,10 @@ def check_sentence(text: str, analysis: Analysis) -> list[ActionCheck]:
         # a jump's direction is only up, down or away (no side, no back): not asked of it
         if m.direction is not None and m.action in ("walk", "run"):
             hits = [f for f in hits if _went(f, m.direction)]
+        if m.path is not None and m.action in ("walk", "run"):
+            hits = [f for f in hits if f.detail.get("path") == m.path]
+        if m.pace is not None and m.action == "walk":
+            hits = [f for f in hits if _paced(f, m.pace)]
         if seen and not hits:
             note = _how(seen[0])
         if m.after_previous and previous is not None and hits:

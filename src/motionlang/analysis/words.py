@@ -189,13 +189,16 @@ class Mention:
     to the next action or clause; ``negated``: "not", "never", "without" just before it;
     ``after_previous``: "then", "after that", "followed by", "before" between it and the
     action named before it ("walks before jumping": the jump comes after the walk; "before
-    that" looks back, and is no order)."""
+    that" looks back, and is no order); ``path``: "in a circle" where the sentence says
+    so; ``pace``: "slow" or "fast" from its words of speed ("slowly walks", "runs fast")."""
 
     action: str
     side: str | None = None
     direction: str | None = None
     negated: bool = False
     after_previous: bool = False
+    path: str | None = None
+    pace: str | None = None
 
 
 _CLAUSE_END = re.compile(r"[,;.]|\band\b|\bthen\b|\bwhile\b")
@@ -204,6 +207,10 @@ _DIRECTION = {"forward": "forward", "forwards": "forward", "ahead": "forward",
               "backward": "backwards", "backwards": "backwards",
               "sideways": "sideways", "sidewards": "sideways"}
 _IN_PLACE = re.compile(r"\b(?:in place|on the spot|on the treadmill|on a treadmill)\b")
+_CIRCLE = re.compile(r"\bin (?:a |one )?(?:full |big |small |wide )?circles?\b")
+_PACE = {"slowly": "slow", "slow": "slow", "leisurely": "slow", "unhurriedly": "slow",
+         "sluggishly": "slow", "quickly": "fast", "quick": "fast", "fast": "fast",
+         "briskly": "fast", "rapidly": "fast", "hurriedly": "fast", "swiftly": "fast"}
 _NEGATION = re.compile(r"(?:\b(?:not|never|without|no longer|no one|no-one|nobody|noone)|"
                        r"n't)\s+$")
 _SEQUENCE = re.compile(r"\bthen\b|\bafter(?:wards| that)\b|\bfollowed by\b|"
@@ -230,9 +237,13 @@ def mentions(text: str) -> list[Mention]:
         direction = "in place" if _IN_PLACE.search(clause) else next(
             (_DIRECTION[w] for w in words if w in _DIRECTION), None)
         before = low[found[i - 1][1] if i else 0:start]
+        # "slowly walks" and "walks slowly": the words just before it in its clause too
+        lead = re.split(r"[,;.]|\band\b|\bthen\b|\bwhile\b", before)[-1]
+        pace = next((_PACE[w] for w in _TOKEN.findall(lead) + words if w in _PACE), None)
         out.append(Mention(action, sides[0] if sides else None, direction,
                            bool(_NEGATION.search(before)),
-                           bool(i and _SEQUENCE.search(before))))
+                           bool(i and _SEQUENCE.search(before)),
+                           "in a circle" if _CIRCLE.search(clause) else None, pace))
     return out
 
 
