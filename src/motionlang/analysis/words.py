@@ -238,7 +238,7 @@ def mentions(text: str) -> list[Mention]:
             (_DIRECTION[w] for w in words if w in _DIRECTION), None)
         before = low[found[i - 1][1] if i else 0:start]
         # "slowly walks" and "walks slowly": the words just before it in its clause too
-        lead = re.split(r"[,;.]|\band\b|\bthen\b|\bwhile\b", before)[-1]
+        lead = _CLAUSE_END.split(before)[-1]
         pace = next((_PACE[w] for w in _TOKEN.findall(lead) + words if w in _PACE), None)
         out.append(Mention(action, sides[0] if sides else None, direction,
                            bool(_NEGATION.search(before)),
